@@ -1,0 +1,280 @@
+#include "common/config.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "common/errors.h"
+
+namespace rbcd {
+
+std::uint64_t ClockConfig::period_ps() const {
+    return static_cast<std::uint64_t>(std::llround(1e6 / mhz));
+}
+
+const char* to_string(TiePolicy t) { return t == TiePolicy::FrontFirst ? "front_first" : "arrival"; }
+const char* to_string(OutputMode m) {
+    switch (m) {
+    case OutputMode::Raw: return "raw";
+    case OutputMode::Pixel: return "pixel";
+    case OutputMode::Tile: return "tile";
+    }
+    return "?";
+}
+const char* to_string(HazardPolicy h) { return h == HazardPolicy::Forward ? "forward" : "stall"; }
+
+namespace {
+
+std::string where_of(const std::string& where, const toml::node& n) {
+    const auto& src = n.source();
+    if (src.begin.line != 0 && src.path && !src.path->empty())
+        return *src.path + ":" + std::to_string(src.begin.line);
+    if (src.begin.line != 0 && !where.empty() && where.rfind("--set", 0) != 0)
+        return where + ":" + std::to_string(src.begin.line);
+    return where;
+}
+
+[[noreturn]] void fail(const std::string& where, const toml::node& n, const std::string& key, const std::string& what) {
+    throw InputError(where_of(where, n) + ": " + key + ": " + what);
+}
+
+template <class T, class Get>
+ConfigKey int_key(std::string name, std::string block, std::string unit, std::string help,
+                  std::uint64_t lo, std::uint64_t hi, Get get) {
+    ConfigKey k;
+    k.name = name; k.block = std::move(block); k.unit = std::move(unit); k.help = std::move(help);
+    k.type = "integer";
+    k.set = [name, lo, hi, get](SimConfig& c, const toml::node& n, const std::string& where) {
+        auto v = n.value_exact<std::int64_t>();
+        if (!n.is_integer() || !v) fail(where, n, name, "expected an integer");
+        if (*v < 0 || static_cast<std::uint64_t>(*v) < lo || static_cast<std::uint64_t>(*v) > hi)
+            fail(where, n, name, "out of range " + std::to_string(lo) + ".." + std::to_string(hi) +
+                                      ", got " + std::to_string(*v));
+        get(c) = static_cast<T>(*v);
+    };
+    k.to_toml = [get](const SimConfig& c) { return std::to_string(get(const_cast<SimConfig&>(c))); };
+    return k;
+}
+
+template <class Get>
+ConfigKey real_key(std::string name, std::string block, std::string unit, std::string help,
+                   double lo, double hi, Get get) {
+    ConfigKey k;
+    k.name = name; k.block = std::move(block); k.unit = std::move(unit); k.help = std::move(help);
+    k.type = "float";
+    k.set = [name, lo, hi, get](SimConfig& c, const toml::node& n, const std::string& where) {
+        if (!n.is_number()) fail(where, n, name, "expected a number");
+        double v = n.is_integer() ? static_cast<double>(*n.value<std::int64_t>()) : *n.value<double>();
+        if (!(v >= lo && v <= hi)) {
+            std::ostringstream os;
+            os << "out of range " << lo << ".." << hi << ", got " << v;
+            fail(where, n, name, os.str());
+        }
+        get(c) = v;
+    };
+    k.to_toml = [get](const SimConfig& c) {
+        std::ostringstream os;
+        os.precision(17);
+        os << get(const_cast<SimConfig&>(c));
+        std::string s = os.str();
+        if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+        return s;
+    };
+    return k;
+}
+
+template <class E, class Get>
+ConfigKey enum_key(std::string name, std::string block, std::string help,
+                   std::vector<std::pair<std::string, E>> choices, Get get) {
+    ConfigKey k;
+    std::string list;
+    for (auto& ch : choices) list += (list.empty() ? "" : " | ") + ch.first;
+    k.name = name; k.block = std::move(block); k.unit = list; k.help = std::move(help);
+    k.type = "string";
+    k.set = [name, choices, list, get](SimConfig& c, const toml::node& n, const std::string& where) {
+        auto v = n.value_exact<std::string>();
+        if (!v) fail(where, n, name, "expected a string (" + list + ")");
+        for (auto& ch : choices)
+            if (ch.first == *v) { get(c) = ch.second; return; }
+        fail(where, n, name, "unknown value \"" + *v + "\", expected " + list);
+    };
+    k.to_toml = [choices, get](const SimConfig& c) {
+        for (auto& ch : choices)
+            if (ch.second == get(const_cast<SimConfig&>(c))) return "\"" + ch.first + "\"";
+        return std::string("\"?\"");
+    };
+    return k;
+}
+
+std::vector<ConfigKey> make_keys() {
+    constexpr std::uint64_t big = std::uint64_t(1) << 40;
+    std::vector<ConfigKey> k;
+    k.push_back(real_key("clock.mhz", "all", "MHz", "unit clock; cycles convert to time with an integer ps period",
+                         1.0, 10000.0, [](SimConfig& c) -> double& { return c.clock.mhz; }));
+    k.push_back(int_key<unsigned>("tile.width", "zeb_bank", "pixels", "tile width", 1, 256,
+                                  [](SimConfig& c) -> unsigned& { return c.tile.width; }));
+    k.push_back(int_key<unsigned>("tile.height", "zeb_bank", "pixels", "tile height", 1, 256,
+                                  [](SimConfig& c) -> unsigned& { return c.tile.height; }));
+    k.push_back(int_key<unsigned>("zeb.banks", "zeb_bank", "banks", "ZEB banks: tiles filled while earlier ones are tested",
+                                  1, 16, [](SimConfig& c) -> unsigned& { return c.zeb.banks; }));
+    k.push_back(int_key<unsigned>("zeb.list_length", "zeb_bank", "elements", "M, elements per pixel list", 1, 64,
+                                  [](SimConfig& c) -> unsigned& { return c.zeb.list_length; }));
+    k.push_back(int_key<unsigned>("zeb.z_bits", "zeb_bank", "bits", "quantized depth bits of an element", 1, 32,
+                                  [](SimConfig& c) -> unsigned& { return c.zeb.z_bits; }));
+    k.push_back(int_key<unsigned>("zeb.id_bits", "zeb_bank", "bits", "object id bits of an element", 1, 16,
+                                  [](SimConfig& c) -> unsigned& { return c.zeb.id_bits; }));
+    k.push_back(enum_key<TiePolicy>("zeb.tie", "insertion_sorter",
+                                    "sort key: (dq, facing) or dq alone (the paper's less-than comparators)",
+                                    {{"front_first", TiePolicy::FrontFirst}, {"arrival", TiePolicy::Arrival}},
+                                    [](SimConfig& c) -> TiePolicy& { return c.zeb.tie; }));
+    k.push_back(int_key<unsigned>("feed.fragments_per_cycle", "rasterizer_feed", "fragments/cycle",
+                                  "rasterizer output rate", 1, 64,
+                                  [](SimConfig& c) -> unsigned& { return c.feed.fragments_per_cycle; }));
+    k.push_back(int_key<unsigned>("feed.queue_depth", "insertion_sorter", "fragments",
+                                  "the unit's input queue between rasterizer and sorter", 1, 65536,
+                                  [](SimConfig& c) -> unsigned& { return c.feed.queue_depth; }));
+    k.push_back(enum_key<HazardPolicy>("sorter.hazard", "insertion_sorter",
+                                       "same-pixel read-after-write in the sorter pipeline: forward the merged list, or stall until written",
+                                       {{"forward", HazardPolicy::Forward}, {"stall", HazardPolicy::Stall}},
+                                       [](SimConfig& c) -> HazardPolicy& { return c.sorter.hazard; }));
+    k.push_back(int_key<unsigned>("tester.stack_depth", "zoverlap_tester", "entries", "T, FF-stack entries", 1, 64,
+                                  [](SimConfig& c) -> unsigned& { return c.tester.stack_depth; }));
+    k.push_back(enum_key<OutputMode>("tester.output", "zoverlap_tester", "which hits are written",
+                                     {{"raw", OutputMode::Raw}, {"pixel", OutputMode::Pixel}, {"tile", OutputMode::Tile}},
+                                     [](SimConfig& c) -> OutputMode& { return c.tester.output; }));
+    k.push_back(int_key<unsigned>("output.buffer_records", "output_buffer", "records",
+                                  "output buffer capacity (16-byte records); the tester stalls when full", 1, 65536,
+                                  [](SimConfig& c) -> unsigned& { return c.output.buffer_records; }));
+    k.push_back(int_key<unsigned>("output.burst_records", "output_buffer", "records", "records per memory write burst",
+                                  1, 4096, [](SimConfig& c) -> unsigned& { return c.output.burst_records; }));
+    k.push_back(int_key<unsigned>("output.max_outstanding", "output_buffer", "transactions",
+                                  "memory writes in flight at once", 1, 256,
+                                  [](SimConfig& c) -> unsigned& { return c.output.max_outstanding; }));
+    k.push_back(int_key<std::uint64_t>("output.region_offset", "output_buffer", "bytes",
+                                       "start of the output region inside the memory", 0, big,
+                                       [](SimConfig& c) -> std::uint64_t& { return c.output.region_offset; }));
+    k.push_back(int_key<std::uint64_t>("output.region_bytes", "output_buffer", "bytes",
+                                       "size of the output region; when full the unit waits for the CPU to read it",
+                                       16, big, [](SimConfig& c) -> std::uint64_t& { return c.output.region_bytes; }));
+    k.push_back(int_key<std::uint64_t>("memory.base", "memory_controller", "address", "first address of the memory",
+                                       0, big, [](SimConfig& c) -> std::uint64_t& { return c.memory.base; }));
+    k.push_back(int_key<std::uint64_t>("memory.size_bytes", "memory_controller", "bytes", "size of the memory model",
+                                       16, std::uint64_t(1) << 32,
+                                       [](SimConfig& c) -> std::uint64_t& { return c.memory.size_bytes; }));
+    k.push_back(int_key<unsigned>("memory.latency_min", "memory_controller", "cycles", "shortest access latency",
+                                  0, 1000000, [](SimConfig& c) -> unsigned& { return c.memory.latency_min; }));
+    k.push_back(int_key<unsigned>("memory.latency_max", "memory_controller", "cycles", "longest access latency",
+                                  0, 1000000, [](SimConfig& c) -> unsigned& { return c.memory.latency_max; }));
+    k.push_back(int_key<unsigned>("memory.bytes_per_cycle", "memory_controller", "bytes/cycle", "channel bandwidth",
+                                  1, 4096, [](SimConfig& c) -> unsigned& { return c.memory.bytes_per_cycle; }));
+    k.push_back(int_key<std::uint64_t>("memory.seed", "memory_controller", "", "seed of the latency draw", 0,
+                                       std::uint64_t(std::numeric_limits<std::int64_t>::max()),
+                                       [](SimConfig& c) -> std::uint64_t& { return c.memory.seed; }));
+    k.push_back(int_key<std::uint64_t>("host.readback_cycles", "host", "cycles",
+                                       "the unit's output waits this long while the CPU reads the region back", 0, big,
+                                       [](SimConfig& c) -> std::uint64_t& { return c.host.readback_cycles; }));
+    return k;
+}
+
+const ConfigKey* find_key(const std::string& name) {
+    for (const auto& k : config_keys())
+        if (k.name == name) return &k;
+    return nullptr;
+}
+
+void apply_table(SimConfig& cfg, const toml::table& tbl, const std::string& prefix, const std::string& file) {
+    for (const auto& [key, node] : tbl) {
+        std::string name = prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
+        if (const auto* sub = node.as_table()) {
+            apply_table(cfg, *sub, name, file);
+            continue;
+        }
+        const ConfigKey* k = find_key(name);
+        if (!k) fail(file, node, name, "unknown configuration key");
+        k->set(cfg, node, file);
+    }
+}
+
+} // namespace
+
+const std::vector<ConfigKey>& config_keys() {
+    static const std::vector<ConfigKey> keys = make_keys();
+    return keys;
+}
+
+void SimConfig::validate() const {
+    auto bad = [](const std::string& key, const std::string& what) { throw InputError("config: " + key + ": " + what); };
+    if (zeb.z_bits + zeb.id_bits + 1 > 49) bad("zeb.z_bits", "element wider than 49 bits");
+    if (memory.latency_min > memory.latency_max)
+        bad("memory.latency_min", "greater than memory.latency_max (" + std::to_string(memory.latency_max) + ")");
+    if (output.burst_records > output.buffer_records)
+        bad("output.burst_records", "greater than output.buffer_records (" + std::to_string(output.buffer_records) + ")");
+    if (output.region_bytes % 16u != 0)
+        bad("output.region_bytes", "not a multiple of the 16-byte record");
+    if (output.region_bytes < std::uint64_t(output.burst_records) * 16u)
+        bad("output.region_bytes", "smaller than one burst (output.burst_records x 16 bytes)");
+    if (output.region_offset + output.region_bytes > memory.size_bytes)
+        bad("output.region_bytes", "region (offset + size) does not fit in memory.size_bytes (" +
+                                       std::to_string(memory.size_bytes) + ")");
+    if (clock.period_ps() == 0) bad("clock.mhz", "period rounds to 0 ps");
+}
+
+void apply_config_table(SimConfig& cfg, const toml::table& tbl, const std::string& file) {
+    apply_table(cfg, tbl, "", file);
+}
+
+void apply_config_file(SimConfig& cfg, const std::string& path) {
+    toml::table tbl;
+    try {
+        tbl = toml::parse_file(path);
+    } catch (const toml::parse_error& e) {
+        const auto& src = e.source();
+        std::string msg(e.description());
+        if (src.begin.line == 0) throw InputError(path + ": " + msg);
+        throw InputError(path + ":" + std::to_string(src.begin.line) + ": " + msg);
+    }
+    apply_config_table(cfg, tbl, path);
+}
+
+void apply_config_set(SimConfig& cfg, const std::string& assignment) {
+    auto eq = assignment.find('=');
+    if (eq == std::string::npos || eq == 0)
+        throw InputError("--set " + assignment + ": expected KEY=VALUE");
+    std::string key = assignment.substr(0, eq);
+    std::string value = assignment.substr(eq + 1);
+    const ConfigKey* k = find_key(key);
+    if (!k) throw InputError("--set " + key + ": unknown configuration key");
+    const std::string where = "--set " + key;
+    toml::table tbl;
+    try {
+        tbl = toml::parse("v = " + value);
+    } catch (const toml::parse_error&) {
+        if (k->type != "string" || value.empty())
+            throw InputError(where + ": cannot parse value \"" + value + "\" as " + k->type);
+        toml::table t;
+        t.insert("v", value);
+        k->set(cfg, *t.get("v"), where);
+        return;
+    }
+    if (tbl.size() != 1) throw InputError(where + ": cannot parse value \"" + value + "\"");
+    k->set(cfg, *tbl.get("v"), where);
+}
+
+std::string dump_config_toml(const SimConfig& cfg) {
+    std::string out;
+    std::string section;
+    for (const auto& k : config_keys()) {
+        auto dot = k.name.find('.');
+        std::string sec = k.name.substr(0, dot);
+        if (sec != section) {
+            out += (out.empty() ? "[" : "\n[") + sec + "]\n";
+            section = sec;
+        }
+        out += k.name.substr(dot + 1) + " = " + k.to_toml(cfg) + "   # " + k.help +
+               (k.unit.empty() ? "" : " [" + k.unit + "]") + "\n";
+    }
+    return out;
+}
+
+} // namespace rbcd

@@ -1,0 +1,110 @@
+// Hardware and run parameters: one struct per block, validated once, plus the
+// key registry that maps TOML keys onto them. docs/config.md lists every key.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/element.h"
+
+namespace toml { inline namespace v3 { class table; class node; } }
+
+namespace rbcd {
+
+struct ClockConfig {
+    double mhz = 400.0;
+    // Integer picoseconds so that cycles <-> sc_time conversions are exact.
+    std::uint64_t period_ps() const;
+};
+
+struct TileConfig {
+    unsigned width = 16, height = 16;
+    unsigned pixels() const { return width * height; }
+};
+
+struct ZebConfig {
+    unsigned banks = 2;
+    unsigned list_length = 8;   // M
+    unsigned z_bits = 24;
+    unsigned id_bits = 7;
+    TiePolicy tie = TiePolicy::FrontFirst;
+    ElementLayout layout() const { return {z_bits, id_bits}; }
+};
+
+struct FeedConfig {
+    unsigned fragments_per_cycle = 4;   // rasterizer output rate
+    unsigned queue_depth = 32;          // the unit's input queue, fragments
+};
+
+enum class HazardPolicy { Forward, Stall };
+struct SorterConfig {
+    HazardPolicy hazard = HazardPolicy::Forward;
+};
+
+struct TesterConfig {
+    unsigned stack_depth = 8;           // T
+    OutputMode output = OutputMode::Raw;
+};
+
+struct OutputBufferConfig {
+    unsigned buffer_records = 16;       // capacity, records of 16 bytes
+    unsigned burst_records = 4;         // records per memory write
+    unsigned max_outstanding = 4;       // writes in flight
+    std::uint64_t region_offset = 0;    // output region inside the memory, bytes
+    std::uint64_t region_bytes = 65536;
+};
+
+struct MemoryConfig {
+    std::uint64_t base = 0x80000000ull;
+    std::uint64_t size_bytes = 1ull << 20;
+    unsigned latency_min = 50, latency_max = 100;   // cycles
+    unsigned bytes_per_cycle = 4;
+    std::uint64_t seed = 1;
+};
+
+struct HostConfig {
+    // Cycles the unit's output waits while the CPU reads the output region back
+    // (at each frame end and whenever the region is full).
+    std::uint64_t readback_cycles = 500;
+};
+
+struct SimConfig {
+    ClockConfig clock;
+    TileConfig tile;
+    ZebConfig zeb;
+    FeedConfig feed;
+    SorterConfig sorter;
+    TesterConfig tester;
+    OutputBufferConfig output;
+    MemoryConfig memory;
+    HostConfig host;
+
+    // Cross-key checks (ranges are checked as keys are set). Throws InputError.
+    void validate() const;
+};
+
+struct ConfigKey {
+    std::string name;      // "zeb.list_length"
+    std::string block;     // which block reads it
+    std::string unit;      // "cycles", "elements", "" ...
+    std::string help;
+    std::string type;      // "integer", "float", "string", "boolean"
+    std::function<void(SimConfig&, const toml::node&, const std::string& where)> set;
+    std::function<std::string(const SimConfig&)> to_toml;   // value as TOML text
+};
+
+const std::vector<ConfigKey>& config_keys();
+
+// Every key of `tbl` must be known; `file` names the source in messages.
+void apply_config_table(SimConfig& cfg, const toml::table& tbl, const std::string& file);
+void apply_config_file(SimConfig& cfg, const std::string& path);
+// KEY=VALUE where VALUE is TOML; a bare word is taken as a string for string keys.
+void apply_config_set(SimConfig& cfg, const std::string& assignment);
+std::string dump_config_toml(const SimConfig& cfg);
+
+const char* to_string(TiePolicy);
+const char* to_string(OutputMode);
+const char* to_string(HazardPolicy);
+
+} // namespace rbcd

@@ -1,0 +1,51 @@
+// What the rasterizer hands to the unit, and the stream interface every input
+// (trace file, 3D scene, test generator) implements.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace rbcd {
+
+enum class Facing : std::uint8_t { Front = 0, Back = 1 };
+
+struct Fragment {
+    std::uint32_t x = 0, y = 0;   // screen coordinates, inside the fragment's tile
+    std::uint32_t depth = 0;      // unsigned, depth_bits wide; smaller = nearer
+    std::uint32_t id = 0;         // object id, fits zeb.id_bits (checked by the source)
+    Facing facing = Facing::Front;
+    bool culled = false;          // 'c': face culling would have removed it
+};
+
+struct Tile {
+    std::uint64_t frame = 0;
+    std::uint32_t col = 0, row = 0;
+    std::uint64_t other = 0;       // non-collisionable fragments of the tile (timing only)
+    bool has_base = false;
+    std::uint64_t base = 0;        // baseline GPU cycles of the tile, when a simulator measured it
+    std::vector<Fragment> frags;   // in rasterization order
+};
+
+struct StreamHeader {
+    std::uint32_t screen_w = 800, screen_h = 480;
+    std::uint32_t tile_w = 16, tile_h = 16;
+    unsigned depth_bits = 24;
+};
+
+// A stream of frames and tiles in rasterization order. Frames count up from 0;
+// every frame of the input is announced, also one without tiles.
+class FragmentSource {
+public:
+    enum class Event { Frame, Tile, End };
+    virtual ~FragmentSource() = default;
+    // Valid once the constructor returned (headers precede the first frame).
+    virtual const StreamHeader& header() const = 0;
+    // Frame: `tile.frame` holds the new frame number, other fields untouched.
+    // Tile: `tile` is overwritten with the next tile (its vector's capacity is reused).
+    // Throws InputError naming file:line on malformed input.
+    virtual Event next(Tile& tile) = 0;
+    // Name used in messages (file path, "<scene>", ...).
+    virtual std::string name() const = 0;
+};
+
+} // namespace rbcd

@@ -1,0 +1,33 @@
+// Cycle <-> sc_time conversion. Blocks compute their timelines in integer
+// cycles and touch sc_time only to synchronise, so the conversion is exact.
+#pragma once
+#include <cstdint>
+#include <systemc>
+
+namespace rbcd {
+
+class Clocking {
+public:
+    explicit Clocking(std::uint64_t period_ps)
+        : period_ps_(period_ps), period_(static_cast<double>(period_ps), sc_core::SC_PS), ticks_(period_.value()) {}
+    std::uint64_t period_ps() const { return period_ps_; }
+    const sc_core::sc_time& period() const { return period_; }
+    sc_core::sc_time time(std::uint64_t cycles) const { return sc_core::sc_time::from_value(cycles * ticks_); }
+    std::uint64_t cycles(const sc_core::sc_time& t) const { return t.value() / ticks_; }
+    std::uint64_t now() const { return cycles(sc_core::sc_time_stamp()); }
+    // Suspends the calling thread until cycle `c` (no-op if already there).
+    void wait_until(std::uint64_t c) const {
+        const std::uint64_t n = now();
+        if (c > n) sc_core::wait(time(c - n));
+    }
+
+private:
+    std::uint64_t period_ps_;
+    sc_core::sc_time period_;
+    std::uint64_t ticks_;   // period in kernel time resolution units
+};
+
+// Named counter enumeration shared by every block's stats struct: f(name, value, description).
+#define RBCD_STAT(f, s, name, desc) f(#name, (s).name, desc)
+
+} // namespace rbcd

@@ -1,0 +1,124 @@
+#include "hw/output_buffer.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace rbcd {
+
+output_buffer::output_buffer(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk,
+                             host_reader& host)
+    : sc_module(name),
+      mem("mem"),
+      clk_(clk),
+      host_(host),
+      capacity_(cfg.output.buffer_records),
+      burst_(cfg.output.burst_records),
+      max_outstanding_(cfg.output.max_outstanding),
+      region_addr_(cfg.memory.base + cfg.output.region_offset),
+      region_bytes_(cfg.output.region_bytes),
+      data_(std::size_t(cfg.output.burst_records) * kRecordBytes) {
+    pending_.reserve(capacity_);
+    inflight_.reserve(max_outstanding_);
+}
+
+void output_buffer::retire(std::uint64_t cycle) {
+    // Latencies are drawn per transaction, so completions can overtake each other.
+    auto it = std::remove_if(inflight_.begin(), inflight_.end(), [&](const Inflight& w) {
+        if (w.done > cycle) return false;
+        inflight_records_ -= w.records;
+        return true;
+    });
+    inflight_.erase(it, inflight_.end());
+}
+
+std::uint64_t output_buffer::issue(std::uint64_t cycle, unsigned n) {
+    std::uint64_t t = std::max(cycle, engine_cycle_);
+    const std::uint64_t bytes = std::uint64_t(n) * kRecordBytes;
+    if (write_offset_ + bytes > region_bytes_) {
+        // The CPU reads only what has landed: let every write complete first.
+        std::uint64_t all_done = t;
+        for (const auto& w : inflight_) all_done = std::max(all_done, w.done);
+        retire(all_done);
+        ++stats_.region_full_events;
+        t = host_.read_back(write_offset_, all_done, true);
+        write_offset_ = 0;
+    }
+    while (inflight_.size() >= max_outstanding_) {
+        std::uint64_t first_done = inflight_.front().done;
+        for (const auto& w : inflight_) first_done = std::min(first_done, w.done);
+        if (first_done > t) {
+            stats_.outstanding_stall_cycles += first_done - t;
+            t = first_done;
+        }
+        retire(t);
+    }
+
+    for (unsigned i = 0; i < n; ++i) pending_[i].store(&data_[std::size_t(i) * kRecordBytes]);
+    gp_.set_command(tlm::TLM_WRITE_COMMAND);
+    gp_.set_address(region_addr_ + write_offset_);
+    gp_.set_data_ptr(data_.data());
+    gp_.set_data_length(static_cast<unsigned>(bytes));
+    gp_.set_streaming_width(static_cast<unsigned>(bytes));
+    gp_.set_byte_enable_ptr(nullptr);
+    gp_.set_byte_enable_length(0);
+    gp_.set_dmi_allowed(false);
+    gp_.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
+    // Loosely timed: the annotated delay carries the local offset from sc_time_stamp().
+    sc_core::sc_time delay = clk_.time(t - clk_.now());
+    mem->b_transport(gp_, delay);
+    if (gp_.is_response_error())
+        throw std::runtime_error("output_buffer: memory write at 0x" + std::to_string(gp_.get_address()) +
+                                 " failed: " + gp_.get_response_string());
+    const std::uint64_t done = clk_.now() + clk_.cycles(delay);
+
+    inflight_.push_back({done, n});
+    inflight_records_ += n;
+    pending_.erase(pending_.begin(), pending_.begin() + n);
+    write_offset_ += bytes;
+    engine_cycle_ = t;
+    ++stats_.bursts;
+    stats_.bytes += bytes;
+    stats_.write_latency_cycles += done - t;
+    return t;
+}
+
+std::uint64_t output_buffer::push(const MemRecord& r, std::uint64_t cycle) {
+    std::uint64_t t = cycle;
+    retire(t);
+    while (occupancy() >= capacity_) {
+        // Full means every slot is pending or in flight; pending never reaches a
+        // burst without being issued, so something is in flight here.
+        std::uint64_t first_done = ~0ull;
+        for (const auto& w : inflight_) first_done = std::min(first_done, w.done);
+        if (first_done == ~0ull) first_done = issue(t, static_cast<unsigned>(pending_.size()));
+        stats_.full_stall_cycles += std::max(first_done, t) - t;
+        t = std::max(first_done, t);
+        retire(t);
+    }
+    pending_.push_back(r);
+    ++stats_.records;
+    stats_.max_occupancy = std::max<std::uint64_t>(stats_.max_occupancy, occupancy());
+    if (pending_.size() >= burst_) issue(t, burst_);
+    return t;
+}
+
+std::uint64_t output_buffer::flush(std::uint64_t cycle) {
+    std::uint64_t t = cycle;
+    while (!pending_.empty()) {
+        const unsigned n = static_cast<unsigned>(std::min<std::size_t>(pending_.size(), burst_));
+        issue(t, n);
+    }
+    std::uint64_t all_done = std::max(t, engine_cycle_);
+    for (const auto& w : inflight_) all_done = std::max(all_done, w.done);
+    retire(all_done);
+    return all_done;
+}
+
+std::uint64_t output_buffer::end_frame(std::uint64_t cycle) {
+    const std::uint64_t t = flush(cycle);
+    const std::uint64_t ready = host_.read_back(write_offset_, t, false);
+    write_offset_ = 0;
+    return ready;
+}
+
+} // namespace rbcd

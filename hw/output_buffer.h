@@ -1,0 +1,83 @@
+// Collects hit and overflow records from the z-overlap tester and writes them
+// to the output region in memory in bursts (TLM-2.0 b_transport, loosely
+// timed: each write is annotated with the buffer's local time and the memory
+// controller answers with its completion time; no wait() per record).
+//
+// A record holds its slot from the cycle it is accepted until the burst that
+// carries it completes; the tester stalls while every slot is held. When the
+// region cannot take the next burst, the buffer lets its writes complete, has
+// the host read the region back, and starts again at the region's start.
+#pragma once
+#include <cstdint>
+#include <systemc>
+#include <tlm>
+#include <tlm_utils/simple_initiator_socket.h>
+#include <vector>
+
+#include "common/config.h"
+#include "common/records.h"
+#include "hw/clocking.h"
+#include "hw/host_reader.h"
+
+namespace rbcd {
+
+class output_buffer : public sc_core::sc_module {
+public:
+    tlm_utils::simple_initiator_socket<output_buffer> mem;
+
+    struct stats_t {
+        std::uint64_t records = 0;            // records accepted from the tester
+        std::uint64_t bursts = 0;             // write transactions issued
+        std::uint64_t bytes = 0;              // bytes written
+        std::uint64_t full_stall_cycles = 0;  // cycles the tester waited for a slot
+        std::uint64_t outstanding_stall_cycles = 0;  // cycles a ready burst waited for a free transaction slot
+        std::uint64_t region_full_events = 0;
+        std::uint64_t max_occupancy = 0;
+        std::uint64_t write_latency_cycles = 0;  // sum over bursts of issue-to-completion cycles
+        template <class F> void for_each(F f) const {
+            RBCD_STAT(f, *this, records, "records accepted from the tester");
+            RBCD_STAT(f, *this, bursts, "burst writes issued to memory");
+            RBCD_STAT(f, *this, bytes, "bytes written to memory");
+            RBCD_STAT(f, *this, full_stall_cycles, "cycles the tester waited on a full buffer");
+            RBCD_STAT(f, *this, outstanding_stall_cycles, "cycles bursts waited for a free write slot");
+            RBCD_STAT(f, *this, region_full_events, "times the output region filled up");
+            RBCD_STAT(f, *this, max_occupancy, "most records held at once");
+            RBCD_STAT(f, *this, write_latency_cycles, "sum of burst issue-to-completion cycles");
+        }
+    };
+
+    output_buffer(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk, host_reader& host);
+
+    // Offers a record at cycle `cycle`; returns the cycle it was accepted (later when full).
+    std::uint64_t push(const MemRecord& r, std::uint64_t cycle);
+    // Writes everything held; returns the cycle all writes have completed.
+    std::uint64_t flush(std::uint64_t cycle);
+    // flush + the host reads the region back; returns when the region is free again.
+    std::uint64_t end_frame(std::uint64_t cycle);
+
+    const stats_t& stats() const { return stats_; }
+
+private:
+    struct Inflight {
+        std::uint64_t done;
+        unsigned records;
+    };
+    void retire(std::uint64_t cycle);
+    std::uint64_t issue(std::uint64_t cycle, unsigned n);
+    std::uint64_t occupancy() const { return pending_.size() + inflight_records_; }
+
+    const Clocking& clk_;
+    host_reader& host_;
+    unsigned capacity_, burst_, max_outstanding_;
+    std::uint64_t region_addr_, region_bytes_;
+    std::uint64_t write_offset_ = 0;
+    std::uint64_t engine_cycle_ = 0;   // the write engine issues in order, never back in time
+    std::vector<MemRecord> pending_;
+    std::vector<Inflight> inflight_;
+    std::uint64_t inflight_records_ = 0;
+    std::vector<unsigned char> data_;
+    tlm::tlm_generic_payload gp_;
+    stats_t stats_;
+};
+
+} // namespace rbcd

@@ -1,0 +1,43 @@
+#include "hw/rbcd_system.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace rbcd {
+
+std::vector<std::unique_ptr<zeb_bank>> rbcd_system::make_banks(const SimConfig& cfg) {
+    std::vector<std::unique_ptr<zeb_bank>> v;
+    for (unsigned i = 0; i < cfg.zeb.banks; ++i)
+        v.push_back(std::make_unique<zeb_bank>(("zeb_bank" + std::to_string(i)).c_str(), cfg.zeb, cfg.tile, i));
+    return v;
+}
+
+std::vector<zeb_bank*> rbcd_system::bank_ptrs() const {
+    std::vector<zeb_bank*> v;
+    for (const auto& b : banks) v.push_back(b.get());
+    return v;
+}
+
+rbcd_system::rbcd_system(sc_core::sc_module_name name, const SimConfig& c, FragmentSource& src, CollisionSink& sink)
+    : sc_module(name),
+      cfg(c),
+      clk(c.clock.period_ps()),
+      banks(make_banks(c)),
+      memory("memory_controller", c.memory, clk.period()),
+      host("host", c, sink),
+      outbuf("output_buffer", c, clk, host),
+      sorter("insertion_sorter", c),
+      tester("zoverlap_tester", c, clk, outbuf, host),
+      feed("rasterizer_feed", c, clk, src, bank_ptrs(), sorter, tester) {
+    outbuf.mem.bind(memory.unit_port);
+    host.mem.bind(memory.host_port);
+}
+
+void rbcd_system::run() {
+    sc_core::sc_start();
+    if (feed.error()) std::rethrow_exception(feed.error());
+    if (!tester.finished())
+        throw std::runtime_error("simulation ended before the z-overlap tester finished (internal error)");
+}
+
+} // namespace rbcd

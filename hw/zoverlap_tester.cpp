@@ -1,0 +1,169 @@
+#include "hw/zoverlap_tester.h"
+
+#include <algorithm>
+
+namespace rbcd {
+
+zoverlap_tester::zoverlap_tester(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk,
+                                 output_buffer& out, host_reader& host)
+    : sc_module(name),
+      clk_(clk),
+      out_(out),
+      host_(host),
+      t_depth_(cfg.tester.stack_depth),
+      tile_w_(cfg.tile.width),
+      tile_h_(cfg.tile.height),
+      id_shift_(cfg.zeb.id_bits + 1),
+      id_mask_((1u << cfg.zeb.id_bits) - 1),
+      mode_(cfg.tester.output),
+      layout_(cfg.zeb.layout()),
+      stack_id_(cfg.tester.stack_depth),
+      stack_matched_(cfg.tester.stack_depth) {
+    SC_THREAD(run);
+}
+
+std::uint64_t zoverlap_tester::emit_hit(std::uint32_t x, std::uint32_t y, std::uint32_t id1, std::uint32_t id2,
+                                        std::uint32_t dq, std::uint64_t t) {
+    ++stats_.raw_hits;
+    HitRecord h{x, y, std::min(id1, id2), std::max(id1, id2), dq};
+    if (mode_ != OutputMode::Raw) {
+        const std::uint32_t pair = (h.id_a << 16) | h.id_b;
+        bool seen;
+        if (mode_ == OutputMode::Pixel) {
+            seen = std::find(pixel_pairs_.begin(), pixel_pairs_.end(), pair) != pixel_pairs_.end();
+            if (!seen) pixel_pairs_.push_back(pair);
+        } else {
+            seen = !tile_pairs_.insert(pair).second;
+        }
+        if (seen) {
+            ++stats_.filtered_hits;
+            return t;
+        }
+    }
+    ++stats_.hits;
+    const std::uint64_t accepted = out_.push(MemRecord::hit(h), t);
+    stats_.output_stall_cycles += accepted - t;
+    return accepted;
+}
+
+std::uint64_t zoverlap_tester::test_tile(zeb_bank& bank, std::uint64_t t) {
+    ++stats_.tiles;
+    tile_pairs_.clear();
+    const std::uint32_t x0 = bank.tile_col() * tile_w_, y0 = bank.tile_row() * tile_h_;
+    const auto& occ = bank.occupancy();
+    bool first_list = true;
+
+    for (std::size_t wi = 0; wi < occ.size(); ++wi) {
+        for (std::uint64_t bits = occ[wi]; bits; bits &= bits - 1) {
+            const unsigned li = static_cast<unsigned>(wi * 64 + __builtin_ctzll(bits));
+            const unsigned n = bank.count(li);
+            const std::uint64_t* row = bank.list(li);
+            bank.note_read();
+            ++stats_.lists;
+            if (first_list) {
+                ++t;   // the first row read is not hidden behind a previous walk
+                first_list = false;
+            }
+            const std::uint32_t x = x0 + li % tile_w_, y = y0 + li / tile_w_;
+            unsigned sp = 0;
+            pixel_pairs_.clear();
+
+            for (unsigned e = 0; e < n; ++e) {
+                const std::uint64_t w = row[e];
+                const std::uint32_t id = static_cast<std::uint32_t>(w >> 1) & id_mask_;
+                ++stats_.elements;
+                if ((w & 1u) == 0) {   // front face
+                    if (sp == t_depth_) {
+                        ++stats_.stack_overflows;
+                    } else {
+                        stack_id_[sp] = id;
+                        stack_matched_[sp] = 0;
+                        ++sp;
+                        ++stats_.pushes;
+                    }
+                    ++t;
+                    continue;
+                }
+                // Back face: equality comparators on every entry, the lowest
+                // unmatched match wins (priority encoder).
+                stats_.id_compares += t_depth_;
+                unsigned m = 0;
+                while (m < sp && !(stack_id_[m] == id && !stack_matched_[m])) ++m;
+                if (m == sp) {
+                    ++stats_.orphan_back_faces;
+                    ++t;
+                    continue;
+                }
+                ++stats_.matches;
+                const std::uint32_t dq = static_cast<std::uint32_t>(w >> id_shift_);
+                unsigned emitted = 0;
+                for (unsigned i = m + 1; i < sp; ++i) {
+                    if (stack_id_[i] == id) continue;
+                    t = emit_hit(x, y, stack_id_[i], id, dq, t) + 1;
+                    ++emitted;
+                }
+                if (emitted == 0) ++t;
+                stack_matched_[m] = 1;
+            }
+        }
+    }
+
+    if (bank.lists_overflowed() > 0) {
+        OverflowRecord o{bank.tile_col(), bank.tile_row(), bank.lists_overflowed(), bank.fragments_dropped()};
+        ++stats_.overflow_records;
+        const std::uint64_t accepted = out_.push(MemRecord::overflow(o), t);
+        stats_.output_stall_cycles += accepted - t;
+        t = accepted + 1;
+    }
+    return t;
+}
+
+void zoverlap_tester::run() {
+    std::uint64_t t = 0;
+    for (;;) {
+        while (jobs_.empty()) {
+            const std::uint64_t before = clk_.now();
+            wait(job_posted_);
+            stats_.idle_cycles += clk_.now() - before;
+        }
+        const Job job = jobs_.front();
+        jobs_.pop_front();
+        t = std::max(t, clk_.now());
+        switch (job.kind) {
+        case Job::FrameStart:
+            host_.begin_frame(job.frame);
+            frames_.push_back({job.frame, 0, 0});
+            break;
+        case Job::TileJob: {
+            if (job.ready > t) {
+                stats_.idle_cycles += job.ready - t;
+                t = job.ready;
+            }
+            clk_.wait_until(t);
+            if (!frames_.empty() && frames_.back().first_tile_start == 0) frames_.back().first_tile_start = t;
+            job.bank->begin_test(t);
+            const std::uint64_t start = t;
+            t = test_tile(*job.bank, t);
+            stats_.busy_cycles += t - start;
+            // The bank is reusable only once its last list has been read.
+            clk_.wait_until(t);
+            job.bank->release(t);
+            break;
+        }
+        case Job::FrameEnd: {
+            const std::uint64_t before = t;
+            t = out_.end_frame(t);
+            stats_.readback_cycles += t - before;
+            if (!frames_.empty()) frames_.back().done = t;
+            clk_.wait_until(t);
+            break;
+        }
+        case Job::Finish:
+            finish_cycle_ = t;
+            finished_ = true;
+            return;
+        }
+    }
+}
+
+} // namespace rbcd

@@ -1,0 +1,120 @@
+// The z-overlap tester: walks each non-empty list of a filled ZEB bank front
+// to back through an FF-stack of T entries (id, matched bit), finds the
+// interval overlaps the contract defines, and hands hit and overflow records
+// to the output buffer. Banks are tested in tile (rasterization) order.
+//
+// Per tile: the occupancy bitmap skips empty lists for free; one list row is
+// read (1 cycle, overlapped with the previous list's walk after the first);
+// each element takes one cycle, except a back face whose match leaves k > 1
+// hits above it: the hit priority encoder emits one hit per cycle, so it takes
+// k cycles. Records wait for a free output-buffer slot (tester stall).
+#pragma once
+#include <cstdint>
+#include <deque>
+#include <systemc>
+#include <unordered_set>
+#include <vector>
+
+#include "common/config.h"
+#include "hw/clocking.h"
+#include "hw/output_buffer.h"
+#include "hw/zeb_bank.h"
+
+namespace rbcd {
+
+class zoverlap_tester : public sc_core::sc_module {
+public:
+    SC_HAS_PROCESS(zoverlap_tester);
+
+    struct Job {
+        enum Kind { FrameStart, TileJob, FrameEnd, Finish } kind;
+        std::uint64_t frame = 0;
+        zeb_bank* bank = nullptr;
+        std::uint64_t ready = 0;   // cycle the bank holds the whole tile
+    };
+
+    struct stats_t {
+        std::uint64_t tiles = 0;
+        std::uint64_t lists = 0;                // non-empty lists walked
+        std::uint64_t elements = 0;             // list elements walked
+        std::uint64_t pushes = 0;               // front faces pushed
+        std::uint64_t stack_overflows = 0;      // pushes dropped by a full stack
+        std::uint64_t id_compares = 0;          // equality comparators fired (T per back face)
+        std::uint64_t orphan_back_faces = 0;
+        std::uint64_t matches = 0;              // back faces that matched an entry
+        std::uint64_t raw_hits = 0;             // hits produced before output filtering
+        std::uint64_t hits = 0;                 // hit records written
+        std::uint64_t filtered_hits = 0;        // hits removed by tester.output
+        std::uint64_t overflow_records = 0;
+        std::uint64_t busy_cycles = 0;          // cycles walking lists (incl. encoder cycles)
+        std::uint64_t output_stall_cycles = 0;  // cycles held by a full output buffer
+        std::uint64_t readback_cycles = 0;      // cycles waiting for the host at frame ends
+        std::uint64_t idle_cycles = 0;          // cycles with no filled bank to test
+        template <class F> void for_each(F f) const {
+            RBCD_STAT(f, *this, tiles, "tiles tested");
+            RBCD_STAT(f, *this, lists, "non-empty lists walked");
+            RBCD_STAT(f, *this, elements, "list elements walked");
+            RBCD_STAT(f, *this, pushes, "front faces pushed onto the FF-stack");
+            RBCD_STAT(f, *this, stack_overflows, "pushes dropped by a full FF-stack");
+            RBCD_STAT(f, *this, id_compares, "id equality comparators fired (T per back face)");
+            RBCD_STAT(f, *this, orphan_back_faces, "back faces with no unmatched entry of their id");
+            RBCD_STAT(f, *this, matches, "back faces that matched an entry");
+            RBCD_STAT(f, *this, raw_hits, "hits found before output filtering");
+            RBCD_STAT(f, *this, hits, "hit records written");
+            RBCD_STAT(f, *this, filtered_hits, "hits dropped by the pixel/tile output filter");
+            RBCD_STAT(f, *this, overflow_records, "overflow records written");
+            RBCD_STAT(f, *this, busy_cycles, "cycles walking lists");
+            RBCD_STAT(f, *this, output_stall_cycles, "cycles held by a full output buffer");
+            RBCD_STAT(f, *this, readback_cycles, "cycles waiting for the host's readback at frame ends");
+            RBCD_STAT(f, *this, idle_cycles, "cycles with no filled bank to test");
+        }
+    };
+
+    zoverlap_tester(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk, output_buffer& out,
+                    host_reader& host);
+
+    void post(const Job& j) {
+        jobs_.push_back(j);
+        job_posted_.notify(sc_core::SC_ZERO_TIME);
+    }
+    // Cycle the last job (Finish) completed.
+    std::uint64_t finish_cycle() const { return finish_cycle_; }
+    bool finished() const { return finished_; }
+    const stats_t& stats() const { return stats_; }
+
+    // Per-frame outcome, for the stats' per-frame series.
+    struct FrameTiming {
+        std::uint64_t frame = 0;
+        std::uint64_t first_tile_start = 0;   // tester start of the frame's first tile
+        std::uint64_t done = 0;               // cycle the frame's records were read back
+    };
+    const std::vector<FrameTiming>& frames() const { return frames_; }
+
+private:
+    void run();
+    std::uint64_t test_tile(zeb_bank& bank, std::uint64_t t);
+    std::uint64_t emit_hit(std::uint32_t x, std::uint32_t y, std::uint32_t id1, std::uint32_t id2,
+                           std::uint32_t dq, std::uint64_t t);
+
+    const Clocking& clk_;
+    output_buffer& out_;
+    host_reader& host_;
+    unsigned t_depth_, tile_w_, tile_h_, id_shift_;
+    std::uint32_t id_mask_;
+    OutputMode mode_;
+    ElementLayout layout_;
+
+    std::deque<Job> jobs_;
+    sc_core::sc_event job_posted_;
+    std::vector<std::uint32_t> stack_id_;
+    std::vector<std::uint8_t> stack_matched_;
+    // Pairs already written in this pixel (pixel mode) or tile (tile mode).
+    std::vector<std::uint32_t> pixel_pairs_;
+    std::unordered_set<std::uint32_t> tile_pairs_;
+    std::vector<FrameTiming> frames_;
+    std::uint64_t finish_cycle_ = 0;
+    bool finished_ = false;
+    stats_t stats_;
+};
+
+} // namespace rbcd

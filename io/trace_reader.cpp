@@ -1,0 +1,555 @@
+// .rbt reader. The hot path is the fragment line: it is parsed in one pass over
+// the chunk buffer (no per-line allocation, no iostreams, no per-line memchr);
+// anything unusual on a line falls back to a general tokenizer that either
+// accepts the line or says precisely what is wrong with it.
+#include "io/trace_reader.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
+#include <string_view>
+#include <unordered_set>
+#include <vector>
+
+#include "common/errors.h"
+
+namespace rbcd {
+namespace {
+
+// Big reads keep syscall and zlib call overhead per fragment negligible.
+constexpr std::size_t kChunk = std::size_t(1) << 20;
+constexpr unsigned kGzInputBuffer = 256u << 10;
+// Above this many tiles in the screen grid a bitmap per frame would be too big
+// (1x1-pixel tiles on a 65535x65535 screen): fall back to a hash set.
+constexpr std::uint64_t kMaxBitmapTiles = std::uint64_t(1) << 27;
+
+struct CharTable {
+    bool tok_end[256] = {};
+    constexpr CharTable() {
+        tok_end[unsigned(' ')] = tok_end[unsigned('\t')] = true;
+        tok_end[unsigned('\n')] = tok_end[unsigned('\r')] = tok_end[unsigned('#')] = true;
+    }
+};
+constexpr CharTable kChars{};
+
+inline bool tok_end(char c) { return kChars.tok_end[static_cast<unsigned char>(c)]; }
+inline void skip_ws(const char*& p) { while (*p == ' ' || *p == '\t') ++p; }
+
+// A token quoted for a message: printable, and short enough for one line.
+std::string show(std::string_view s) {
+    std::string out = "'";
+    std::size_t n = 0;
+    for (char c : s) {
+        if (++n > 40) { out += "..."; break; }
+        unsigned char u = static_cast<unsigned char>(c);
+        if (u >= 0x20 && u < 0x7f) {
+            out += c;
+        } else {
+            static const char hex[] = "0123456789abcdef";
+            out += "\\x";
+            out += hex[u >> 4];
+            out += hex[u & 15];
+        }
+    }
+    return out + "'";
+}
+
+std::string num_str(std::uint64_t v) { return std::to_string(v); }
+
+enum class NumResult { Ok, NotNumber, TooBig };
+
+NumResult parse_u64(std::string_view s, std::uint64_t& v) {
+    if (s.empty()) return NumResult::NotNumber;
+    std::uint64_t acc = 0;
+    for (char c : s) {
+        unsigned d = static_cast<unsigned char>(c) - unsigned('0');
+        if (d > 9) return NumResult::NotNumber;
+        if (__builtin_mul_overflow(acc, 10u, &acc) || __builtin_add_overflow(acc, d, &acc)) {
+            // Keep scanning: "99999999999999999999x" is not a number at all.
+            for (char r : s)
+                if (static_cast<unsigned char>(r) - unsigned('0') > 9) return NumResult::NotNumber;
+            return NumResult::TooBig;
+        }
+    }
+    v = acc;
+    return NumResult::Ok;
+}
+
+// The fields of one record; more than kMax fields is always an error, so the
+// rest need not be kept.
+struct Fields {
+    static constexpr int kMax = 8;
+    std::string_view f[kMax];
+    int n = 0;
+    const char* next = nullptr;   // start of the following line
+};
+
+const char* const kFragmentShape = "expected 'f x y depth id F|B [c]'";
+const char* const kTileShape = "expected 'tile C R [other=N] [base=N]'";
+
+} // namespace
+
+struct TraceReader::Impl {
+    std::string path;
+    TraceLimits lim;
+    StreamHeader hdr;
+    gzFile gz = nullptr;
+
+    // Buffer invariants: [cur, data_end) is unread data; [cur, lines_end) holds
+    // only whole lines, lines_end being just past a '\n'. One byte is kept spare
+    // so a last line without '\n' can be given one.
+    std::vector<char> buf;
+    char* cur = nullptr;
+    char* lines_end = nullptr;
+    char* data_end = nullptr;
+    bool eof = false;
+    unsigned long long line = 1;   // number of the line at cur
+
+    std::uint64_t depth_max = 0, id_max = 0;
+    std::uint64_t cols = 0, rows = 0;
+
+    bool seen_frame = false;
+    std::uint64_t next_frame = 0;
+    std::uint64_t frame = 0;
+    bool ended = false;
+
+    // Current tile's pixel window, clipped to the screen.
+    std::uint64_t x0 = 0, xw = 0, y0 = 0, yh = 0;
+    std::uint64_t tcol = 0, trow = 0;
+
+    bool use_set = false;
+    std::vector<std::uint64_t> tile_bits;
+    std::vector<std::uint64_t> tiles_in_frame;
+    std::unordered_set<std::uint64_t> tile_set;
+
+    [[noreturn]] void fail(const std::string& what) const { throw input_error_at(path, line, what); }
+
+    void open();
+    bool fill();
+    void tokenize(const char* p, Fields& fl) const;
+    void advance(const char* next) { cur = const_cast<char*>(next); ++line; }
+    std::uint64_t num(std::string_view tok, const std::string& what) const;
+    void read_headers();
+    void header_record(const Fields& fl, unsigned long long first_line[3]);
+    bool fast_fragment(std::vector<Fragment>& out);
+    void slow_fragment(const Fields& fl, std::vector<Fragment>& out, bool in_tile);
+    void start_tile(const Fields& fl, Tile& t);
+    std::uint64_t start_frame(const Fields& fl);
+    bool mark_tile(std::uint64_t idx);
+};
+
+void TraceReader::Impl::open() {
+    int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
+    struct stat st;
+    if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
+        ::close(fd);
+        throw InputError(path + ": cannot open: " + std::strerror(EISDIR));
+    }
+    // gzdopen looks at the first two bytes (1f 8b) and reads anything else as
+    // plain text, so the file name plays no part.
+    gz = gzdopen(fd, "rb");
+    if (!gz) {
+        ::close(fd);
+        throw InputError(path + ": cannot open: out of memory");
+    }
+    gzbuffer(gz, kGzInputBuffer);
+    buf.resize(kChunk);
+    cur = lines_end = data_end = buf.data();
+}
+
+// Makes at least one whole line available at cur; false at the end of input.
+bool TraceReader::Impl::fill() {
+    for (;;) {
+        if (eof) {
+            if (cur == data_end) return false;
+            *data_end++ = '\n';
+            lines_end = data_end;
+            return true;
+        }
+        std::size_t rem = static_cast<std::size_t>(data_end - cur);
+        if (rem && cur != buf.data()) std::memmove(buf.data(), cur, rem);
+        // A line longer than half the buffer: grow, so memory follows the
+        // longest line, never the trace length.
+        if (buf.size() - 1 - rem < buf.size() / 2) buf.resize(buf.size() * 2);
+        cur = buf.data();
+        data_end = cur + rem;
+        lines_end = cur;
+        std::size_t room = buf.size() - 1 - rem;
+        if (room > INT_MAX) room = INT_MAX;
+        int n = gzread(gz, data_end, static_cast<unsigned>(room));
+        if (n <= 0) {
+            int err = Z_OK;
+            const char* msg = gzerror(gz, &err);
+            if (n < 0 || err != Z_OK) {
+                if (err == Z_ERRNO) fail(std::string("read error: ") + std::strerror(errno));
+                std::string why = msg ? msg : "unknown zlib error";
+                // zlib prefixes the name it was opened under, "<fd:N>" here.
+                if (why.compare(0, 4, "<fd:") == 0 && why.find(": ") != std::string::npos)
+                    why.erase(0, why.find(": ") + 2);
+                fail("corrupt or truncated gzip stream: " + why);
+            }
+            eof = true;
+            continue;
+        }
+        char* fresh = data_end;
+        data_end += n;
+        if (const void* nl = memrchr(fresh, '\n', static_cast<std::size_t>(n))) {
+            lines_end = static_cast<char*>(const_cast<void*>(nl)) + 1;
+            return true;
+        }
+    }
+}
+
+void TraceReader::Impl::tokenize(const char* p, Fields& fl) const {
+    fl.n = 0;
+    for (;;) {
+        skip_ws(p);
+        char c = *p;
+        if (c == '\n') { fl.next = p + 1; return; }
+        if (c == '#') {
+            p = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(lines_end - p)));
+            fl.next = p + 1;
+            return;
+        }
+        if (c == '\r') {
+            if (p[1] == '\n') { fl.next = p + 2; return; }
+            fail("stray carriage return (CR is allowed only right before the end of a line)");
+        }
+        const char* s = p;
+        while (!tok_end(*p)) ++p;
+        if (fl.n < Fields::kMax) fl.f[fl.n++] = std::string_view(s, static_cast<std::size_t>(p - s));
+    }
+}
+
+std::uint64_t TraceReader::Impl::num(std::string_view tok, const std::string& what) const {
+    std::uint64_t v = 0;
+    switch (parse_u64(tok, v)) {
+    case NumResult::Ok: return v;
+    case NumResult::NotNumber: fail(what + " " + show(tok) + " is not an unsigned decimal number");
+    case NumResult::TooBig: fail(what + " " + show(tok) + " does not fit in 64 bits");
+    }
+    return v;
+}
+
+// Header records before the first frame; stops, without consuming it, at the
+// first record that is not a header.
+void TraceReader::Impl::read_headers() {
+    unsigned long long magic_line = 0;
+    Fields fl;
+    for (;;) {
+        if (cur == lines_end && !fill()) {
+            // Point at the last line there is (line 1 of an empty file).
+            if (line > 1) --line;
+            fail("end of file before the magic record 'rbcd-trace 1': not an .rbt trace");
+        }
+        tokenize(cur, fl);
+        if (fl.n) break;
+        advance(fl.next);
+    }
+    magic_line = line;
+    if (fl.f[0] != "rbcd-trace")
+        fail("not an .rbt trace: the first record must be 'rbcd-trace 1', found " + show(fl.f[0]));
+    if (fl.n < 2) fail("magic record lacks the format version (expected 'rbcd-trace 1')");
+    if (fl.n > 2) fail("magic record has an extra field " + show(fl.f[2]) + " (expected 'rbcd-trace 1')");
+    std::uint64_t version = num(fl.f[1], "format version");
+    if (version != 1) fail("unsupported trace format version " + num_str(version) + " (this reader reads version 1)");
+    advance(fl.next);
+
+    unsigned long long first_line[3] = {0, 0, 0};
+    for (;;) {
+        if (cur == lines_end && !fill()) break;
+        tokenize(cur, fl);
+        if (fl.n == 0) { advance(fl.next); continue; }
+        if (fl.f[0] != "screen" && fl.f[0] != "tile_size" && fl.f[0] != "depth_bits") break;
+        header_record(fl, first_line);
+        advance(fl.next);
+    }
+
+    if (!first_line[1] && (hdr.tile_w != lim.tile_w || hdr.tile_h != lim.tile_h)) {
+        throw input_error_at(path, magic_line,
+                             "trace has no tile_size header, so its tiles are " + num_str(hdr.tile_w) + " x " +
+                                 num_str(hdr.tile_h) + ", but the unit's tile.width x tile.height is " +
+                                 num_str(lim.tile_w) + " x " + num_str(lim.tile_h));
+    }
+    depth_max = (std::uint64_t(1) << hdr.depth_bits) - 1;
+    id_max = lim.id_bits >= 32 ? 0xffffffffull : (std::uint64_t(1) << lim.id_bits) - 1;
+    cols = (std::uint64_t(hdr.screen_w) + hdr.tile_w - 1) / hdr.tile_w;
+    rows = (std::uint64_t(hdr.screen_h) + hdr.tile_h - 1) / hdr.tile_h;
+    use_set = cols * rows > kMaxBitmapTiles;
+    if (!use_set) tile_bits.assign((cols * rows + 63) / 64, 0);
+}
+
+void TraceReader::Impl::header_record(const Fields& fl, unsigned long long first_line[3]) {
+    const std::string_view key = fl.f[0];
+    const int which = key == "screen" ? 0 : key == "tile_size" ? 1 : 2;
+    const std::string name(key);
+    if (first_line[which])
+        fail("header '" + name + "' repeated (first at line " + std::to_string(first_line[which]) + ")");
+    first_line[which] = line;
+    const int want = which == 2 ? 2 : 3;
+    const std::string shape = which == 0 ? "expected 'screen W H'" : which == 1 ? "expected 'tile_size W H'"
+                                                                               : "expected 'depth_bits D'";
+    if (fl.n < want) fail("header '" + name + "' has too few fields (" + shape + ")");
+    if (fl.n > want) fail("header '" + name + "' has an extra field " + show(fl.f[want]) + " (" + shape + ")");
+    if (which == 0) {
+        std::uint64_t w = num(fl.f[1], "screen width");
+        std::uint64_t h = num(fl.f[2], "screen height");
+        if (w < 1 || w > 65535) fail("screen width " + num_str(w) + " out of range 1..65535");
+        if (h < 1 || h > 65535) fail("screen height " + num_str(h) + " out of range 1..65535");
+        hdr.screen_w = static_cast<std::uint32_t>(w);
+        hdr.screen_h = static_cast<std::uint32_t>(h);
+    } else if (which == 1) {
+        std::uint64_t w = num(fl.f[1], "tile_size width");
+        std::uint64_t h = num(fl.f[2], "tile_size height");
+        if (w != lim.tile_w || h != lim.tile_h)
+            fail("tile_size " + num_str(w) + " " + num_str(h) + " does not match the unit's tile.width x tile.height " +
+                 num_str(lim.tile_w) + " x " + num_str(lim.tile_h));
+        hdr.tile_w = static_cast<std::uint32_t>(w);
+        hdr.tile_h = static_cast<std::uint32_t>(h);
+    } else {
+        std::uint64_t d = num(fl.f[1], "depth_bits");
+        if (d < 1 || d > 32) fail("depth_bits " + num_str(d) + " out of range 1..32");
+        hdr.depth_bits = static_cast<unsigned>(d);
+    }
+}
+
+namespace {
+// One number of a fragment line on the fast path: false means "let the slow
+// path look at this line" (not a number, too long to be safe from overflow,
+// glued to another character, missing).
+inline bool fast_num(const char*& p, std::uint64_t& out) {
+    skip_ws(p);
+    const char* s = p;
+    std::uint64_t v = 0;
+    unsigned d;
+    while ((d = static_cast<unsigned char>(*p) - unsigned('0')) < 10) {
+        v = v * 10 + d;
+        ++p;
+    }
+    // 19 digits never overflow 64 bits; longer ones (leading zeros) go slow.
+    if (p == s || p - s > 19 || !tok_end(*p)) return false;
+    out = v;
+    return true;
+}
+} // namespace
+
+bool TraceReader::Impl::fast_fragment(std::vector<Fragment>& out) {
+    const char* p = cur + 2;
+    std::uint64_t x, y, d, id;
+    if (!fast_num(p, x) || !fast_num(p, y) || !fast_num(p, d) || !fast_num(p, id)) return false;
+    skip_ws(p);
+    Facing facing;
+    if (*p == 'F') facing = Facing::Front;
+    else if (*p == 'B') facing = Facing::Back;
+    else return false;
+    ++p;
+    if (!tok_end(*p)) return false;
+    skip_ws(p);
+    bool culled = false;
+    if (*p == 'c' && tok_end(p[1])) {
+        culled = true;
+        ++p;
+        skip_ws(p);
+    }
+    if (*p == '\n') ++p;
+    else if (*p == '\r' && p[1] == '\n') p += 2;
+    else if (*p == '#') p = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(lines_end - p))) + 1;
+    else return false;
+    // Unsigned differences also reject values below the window's start.
+    if (x - x0 >= xw || y - y0 >= yh || d > depth_max || id > id_max) return false;
+    out.push_back(Fragment{static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y), static_cast<std::uint32_t>(d),
+                           static_cast<std::uint32_t>(id), facing, culled});
+    cur = const_cast<char*>(p);
+    ++line;
+    return true;
+}
+
+void TraceReader::Impl::slow_fragment(const Fields& fl, std::vector<Fragment>& out, bool in_tile) {
+    if (!in_tile) {
+        if (seen_frame) fail("fragment before any tile of frame " + num_str(frame));
+        fail("fragment before any frame and tile");
+    }
+    static const char* const names[] = {"x", "y", "depth", "object id", "facing"};
+    if (fl.n < 6)
+        fail(std::string("fragment has too few fields: missing ") + names[fl.n - 1] + " (" + kFragmentShape + ")");
+    if (fl.n > 7) fail("fragment has an extra field " + show(fl.f[7]) + " (" + kFragmentShape + ")");
+    std::uint64_t x = num(fl.f[1], "fragment x");
+    std::uint64_t y = num(fl.f[2], "fragment y");
+    std::uint64_t d = num(fl.f[3], "fragment depth");
+    std::uint64_t id = num(fl.f[4], "fragment object id");
+    Facing facing;
+    if (fl.f[5] == "F") facing = Facing::Front;
+    else if (fl.f[5] == "B") facing = Facing::Back;
+    else fail("fragment facing " + show(fl.f[5]) + " is not F or B");
+    if (fl.n == 7 && fl.f[6] != "c")
+        fail("fragment field " + show(fl.f[6]) + " after the facing is not the cull tag 'c' (" + kFragmentShape + ")");
+
+    const bool clipped_x = xw < hdr.tile_w, clipped_y = yh < hdr.tile_h;
+    const std::string where = "tile " + num_str(tcol) + " " + num_str(trow);
+    const std::string scr = "the tile's part inside the " + num_str(hdr.screen_w) + "x" + num_str(hdr.screen_h) + " screen";
+    if (x - x0 >= xw)
+        fail("fragment x=" + num_str(x) + " outside " + where + " (x " + num_str(x0) + ".." + num_str(x0 + xw - 1) +
+             (clipped_x ? ", " + scr : std::string()) + ")");
+    if (y - y0 >= yh)
+        fail("fragment y=" + num_str(y) + " outside " + where + " (y " + num_str(y0) + ".." + num_str(y0 + yh - 1) +
+             (clipped_y ? ", " + scr : std::string()) + ")");
+    if (d > depth_max)
+        fail("fragment depth=" + num_str(d) + " does not fit depth_bits " + num_str(hdr.depth_bits) + " (max " +
+             num_str(depth_max) + ")");
+    if (id > id_max)
+        fail("fragment object id=" + num_str(id) + " does not fit zeb.id_bits " + num_str(lim.id_bits) + " (max " +
+             num_str(id_max) + ")");
+    out.push_back(Fragment{static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y), static_cast<std::uint32_t>(d),
+                           static_cast<std::uint32_t>(id), facing, fl.n == 7});
+}
+
+bool TraceReader::Impl::mark_tile(std::uint64_t idx) {
+    if (use_set) return tile_set.insert(idx).second;
+    std::uint64_t& word = tile_bits[idx >> 6];
+    const std::uint64_t bit = std::uint64_t(1) << (idx & 63);
+    if (word & bit) return false;
+    word |= bit;
+    tiles_in_frame.push_back(idx);
+    return true;
+}
+
+void TraceReader::Impl::start_tile(const Fields& fl, Tile& t) {
+    if (!seen_frame) fail("tile before any frame");
+    if (fl.n < 3) fail(std::string("tile has too few fields: missing ") + (fl.n < 2 ? "column" : "row") + " (" +
+                       kTileShape + ")");
+    const std::uint64_t c = num(fl.f[1], "tile column");
+    const std::uint64_t r = num(fl.f[2], "tile row");
+    bool have_other = false, have_base = false;
+    std::uint64_t other = 0, base = 0;
+    for (int i = 3; i < fl.n; ++i) {
+        const std::string_view kv = fl.f[i];
+        const std::size_t eq = kv.find('=');
+        if (eq == std::string_view::npos || eq == 0)
+            fail("tile field " + show(kv) + " is not key=value (" + kTileShape + ")");
+        const std::string_view key = kv.substr(0, eq), val = kv.substr(eq + 1);
+        bool* have;
+        std::uint64_t* dst;
+        if (key == "other") { have = &have_other; dst = &other; }
+        else if (key == "base") { have = &have_base; dst = &base; }
+        else fail("tile has unknown key " + show(key) + " (known keys: other, base)");
+        const std::string k(key);
+        if (*have) fail("tile key '" + k + "' given twice");
+        if (val.empty()) fail("tile field '" + k + "=' has no value");
+        *dst = num(val, "tile " + k + "=");
+        *have = true;
+    }
+    if (c >= cols)
+        fail("tile column " + num_str(c) + " outside the screen (" + num_str(hdr.screen_w) + " px wide = " +
+             num_str(cols) + " tile columns, 0.." + num_str(cols - 1) + ")");
+    if (r >= rows)
+        fail("tile row " + num_str(r) + " outside the screen (" + num_str(hdr.screen_h) + " px high = " +
+             num_str(rows) + " tile rows, 0.." + num_str(rows - 1) + ")");
+    if (!mark_tile(r * cols + c))
+        fail("tile " + num_str(c) + " " + num_str(r) + " appears twice in frame " + num_str(frame));
+
+    tcol = c;
+    trow = r;
+    x0 = c * hdr.tile_w;
+    y0 = r * hdr.tile_h;
+    xw = std::min<std::uint64_t>(hdr.tile_w, hdr.screen_w - x0);
+    yh = std::min<std::uint64_t>(hdr.tile_h, hdr.screen_h - y0);
+
+    t.frame = frame;
+    t.col = static_cast<std::uint32_t>(c);
+    t.row = static_cast<std::uint32_t>(r);
+    t.other = other;
+    t.has_base = have_base;
+    t.base = base;
+    t.frags.clear();
+}
+
+std::uint64_t TraceReader::Impl::start_frame(const Fields& fl) {
+    if (fl.n < 2) fail("frame has too few fields: missing its number (expected 'frame N')");
+    if (fl.n > 2) fail("frame has an extra field " + show(fl.f[2]) + " (expected 'frame N')");
+    const std::uint64_t n = num(fl.f[1], "frame number");
+    if (n != next_frame)
+        fail("frame " + num_str(n) + " out of sequence: expected frame " + num_str(next_frame));
+    if (use_set) {
+        tile_set.clear();
+    } else {
+        for (std::uint64_t idx : tiles_in_frame) tile_bits[idx >> 6] = 0;
+        tiles_in_frame.clear();
+    }
+    seen_frame = true;
+    frame = n;
+    ++next_frame;
+    return n;
+}
+
+TraceReader::TraceReader(const std::string& path, const TraceLimits& limits) : impl_(std::make_unique<Impl>()) {
+    if (limits.tile_w < 1 || limits.tile_h < 1 || limits.id_bits < 1)
+        throw std::invalid_argument("TraceReader: tile size and id_bits must be at least 1");
+    impl_->path = path;
+    impl_->lim = limits;
+    impl_->open();
+    impl_->read_headers();
+}
+
+TraceReader::~TraceReader() {
+    if (impl_ && impl_->gz) gzclose(impl_->gz);
+}
+
+const StreamHeader& TraceReader::header() const { return impl_->hdr; }
+
+std::string TraceReader::name() const { return impl_->path; }
+
+FragmentSource::Event TraceReader::next(Tile& t) {
+    Impl& m = *impl_;
+    if (m.ended) return Event::End;
+    bool in_tile = false;
+    Fields fl;
+    for (;;) {
+        if (m.cur == m.lines_end && !m.fill()) {
+            if (in_tile) return Event::Tile;
+            m.ended = true;
+            return Event::End;
+        }
+        if (in_tile && m.cur[0] == 'f' && (m.cur[1] == ' ' || m.cur[1] == '\t') && m.fast_fragment(t.frags)) continue;
+
+        m.tokenize(m.cur, fl);
+        if (fl.n == 0) {
+            m.advance(fl.next);
+            continue;
+        }
+        const std::string_view key = fl.f[0];
+        if (key == "f") {
+            m.slow_fragment(fl, t.frags, in_tile);
+            m.advance(fl.next);
+            continue;
+        }
+        // The record that ends a tile stays unread until the next call.
+        if (key == "tile") {
+            if (in_tile) return Event::Tile;
+            m.start_tile(fl, t);
+            m.advance(fl.next);
+            in_tile = true;
+            continue;
+        }
+        if (key == "frame") {
+            if (in_tile) return Event::Tile;
+            t.frame = m.start_frame(fl);
+            m.advance(fl.next);
+            return Event::Frame;
+        }
+        if (key == "screen" || key == "tile_size" || key == "depth_bits")
+            m.fail("header '" + std::string(key) + "' after the first frame (headers must come before it)");
+        if (key == "rbcd-trace") m.fail("magic record 'rbcd-trace' repeated (it must be only the first record)");
+        m.fail("unknown record " + show(key));
+    }
+}
+
+} // namespace rbcd

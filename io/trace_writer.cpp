@@ -1,0 +1,117 @@
+#include "io/trace_writer.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+
+#include "common/errors.h"
+
+namespace rbcd {
+namespace {
+
+constexpr std::size_t kFlushAt = std::size_t(1) << 20;
+// Longest fragment line: "f " + 4 numbers of up to 10 digits + separators + " F c\n".
+constexpr std::size_t kMaxFragmentLine = 2 + 4 * 11 + 6;
+constexpr std::size_t kMaxTileLine = 128;
+
+inline char* put(char* p, std::uint64_t v) { return std::to_chars(p, p + 20, v).ptr; }
+inline char* put(char* p, const char* s) {
+    while (*s) *p++ = *s++;
+    return p;
+}
+
+void flush(std::FILE* f, std::string& buf, const std::string& path) {
+    if (std::fwrite(buf.data(), 1, buf.size(), f) != buf.size())
+        throw InputError(path + ": write error: " + std::strerror(errno));
+    buf.clear();
+}
+
+} // namespace
+
+TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header) : path_(path) {
+    f_ = std::fopen(path.c_str(), "wb");
+    if (!f_) throw InputError(path + ": cannot create: " + std::strerror(errno));
+    buf_.reserve(kFlushAt + kMaxTileLine);
+    buf_ += "rbcd-trace 1\nscreen " + std::to_string(header.screen_w) + " " + std::to_string(header.screen_h) +
+            "\ntile_size " + std::to_string(header.tile_w) + " " + std::to_string(header.tile_h) + "\ndepth_bits " +
+            std::to_string(header.depth_bits) + "\n";
+}
+
+TraceWriter::~TraceWriter() {
+    // close() reports errors; a writer dropped without it (an exception on the
+    // way) just releases the file.
+    if (f_) std::fclose(f_);
+}
+
+void TraceWriter::frame(std::uint64_t n) {
+    if (!f_) throw InputError(path_ + ": write after close");
+    buf_ += "frame ";
+    buf_ += std::to_string(n);
+    buf_ += '\n';
+}
+
+void TraceWriter::tile(const Tile& t) {
+    if (!f_) throw InputError(path_ + ": write after close");
+    std::size_t at = buf_.size();
+    // Written in slices so the buffer stays near kFlushAt however big the tile.
+    buf_.resize(at + kMaxTileLine);
+    char* p = &buf_[at];
+    p = put(p, "tile ");
+    p = put(p, t.col);
+    *p++ = ' ';
+    p = put(p, t.row);
+    p = put(p, " other=");
+    p = put(p, t.other);
+    if (t.has_base) {
+        p = put(p, " base=");
+        p = put(p, t.base);
+    }
+    *p++ = '\n';
+    buf_.resize(static_cast<std::size_t>(p - buf_.data()));
+
+    std::size_t i = 0;
+    const std::size_t n = t.frags.size();
+    while (i < n) {
+        if (buf_.size() >= kFlushAt) flush(f_, buf_, path_);
+        const std::size_t slice = std::min<std::size_t>(n - i, 4096);
+        at = buf_.size();
+        buf_.resize(at + slice * kMaxFragmentLine);
+        p = &buf_[at];
+        for (std::size_t e = i + slice; i < e; ++i) {
+            const Fragment& f = t.frags[i];
+            *p++ = 'f';
+            *p++ = ' ';
+            p = put(p, f.x);
+            *p++ = ' ';
+            p = put(p, f.y);
+            *p++ = ' ';
+            p = put(p, f.depth);
+            *p++ = ' ';
+            p = put(p, f.id);
+            *p++ = ' ';
+            *p++ = f.facing == Facing::Front ? 'F' : 'B';
+            if (f.culled) {
+                *p++ = ' ';
+                *p++ = 'c';
+            }
+            *p++ = '\n';
+        }
+        buf_.resize(static_cast<std::size_t>(p - buf_.data()));
+    }
+    if (buf_.size() >= kFlushAt) flush(f_, buf_, path_);
+}
+
+void TraceWriter::close() {
+    if (!f_) return;
+    std::FILE* f = f_;
+    f_ = nullptr;
+    bool ok = buf_.empty() || std::fwrite(buf_.data(), 1, buf_.size(), f) == buf_.size();
+    int err = ok ? 0 : errno;
+    buf_.clear();
+    if (ok && std::fflush(f) != 0) { ok = false; err = errno; }
+    if (std::fclose(f) != 0 && ok) { ok = false; err = errno; }
+    if (!ok) throw InputError(path_ + ": write error: " + std::strerror(err));
+}
+
+} // namespace rbcd

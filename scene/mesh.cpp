@@ -1,0 +1,175 @@
+#include "scene/mesh.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+namespace rbcd::scene {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Adds triangle (a, b, c) wound so that its normal points away from `inside`:
+// deriving the winding from geometry rather than from index order keeps every
+// shape outward counter-clockwise by construction.
+void add_tri(Mesh& m, std::uint32_t a, std::uint32_t b, std::uint32_t c, const Eigen::Vector3d& inside) {
+    const Eigen::Vector3d& pa = m.verts[a];
+    const Eigen::Vector3d& pb = m.verts[b];
+    const Eigen::Vector3d& pc = m.verts[c];
+    Eigen::Vector3d n = (pb - pa).cross(pc - pa);
+    Eigen::Vector3d centroid = (pa + pb + pc) / 3.0;
+    if (n.dot(centroid - inside) >= 0.0) m.tris.push_back({a, b, c});
+    else m.tris.push_back({a, c, b});
+}
+
+void add_quad(Mesh& m, std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d, const Eigen::Vector3d& inside) {
+    add_tri(m, a, b, c, inside);
+    add_tri(m, a, c, d, inside);
+}
+
+std::uint32_t add_vert(Mesh& m, double x, double y, double z) {
+    m.verts.emplace_back(x, y, z);
+    return static_cast<std::uint32_t>(m.verts.size() - 1);
+}
+
+Mesh make_sphere(unsigned slices) {
+    const unsigned stacks = std::max(2u, slices / 2);
+    Mesh m;
+    const Eigen::Vector3d o = Eigen::Vector3d::Zero();
+    const std::uint32_t north = add_vert(m, 0.0, 1.0, 0.0);
+    std::vector<std::uint32_t> ring_start;
+    for (unsigned i = 1; i < stacks; ++i) {
+        const double th = kPi * i / stacks;
+        ring_start.push_back(static_cast<std::uint32_t>(m.verts.size()));
+        for (unsigned j = 0; j < slices; ++j) {
+            const double ph = 2.0 * kPi * j / slices;
+            add_vert(m, std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
+        }
+    }
+    const std::uint32_t south = add_vert(m, 0.0, -1.0, 0.0);
+    auto at = [&](unsigned ring, unsigned j) { return ring_start[ring] + (j % slices); };
+    for (unsigned j = 0; j < slices; ++j) {
+        add_tri(m, north, at(0, j), at(0, j + 1), o);
+        for (unsigned r = 0; r + 1 < ring_start.size(); ++r) add_quad(m, at(r, j), at(r + 1, j), at(r + 1, j + 1), at(r, j + 1), o);
+        add_tri(m, south, at(static_cast<unsigned>(ring_start.size()) - 1, j + 1), at(static_cast<unsigned>(ring_start.size()) - 1, j), o);
+    }
+    return m;
+}
+
+Mesh make_box() {
+    Mesh m;
+    for (int i = 0; i < 8; ++i) add_vert(m, (i & 1) ? 1.0 : -1.0, (i & 2) ? 1.0 : -1.0, (i & 4) ? 1.0 : -1.0);
+    const Eigen::Vector3d o = Eigen::Vector3d::Zero();
+    add_quad(m, 0, 1, 3, 2, o);   // z = -1
+    add_quad(m, 4, 5, 7, 6, o);   // z = +1
+    add_quad(m, 0, 1, 5, 4, o);   // y = -1
+    add_quad(m, 2, 3, 7, 6, o);   // y = +1
+    add_quad(m, 0, 2, 6, 4, o);   // x = -1
+    add_quad(m, 1, 3, 7, 5, o);   // x = +1
+    return m;
+}
+
+Mesh make_torus(unsigned major_seg) {
+    const unsigned minor_seg = std::max(3u, major_seg / 2);
+    const double R = 1.0, r = 0.25;
+    Mesh m;
+    for (unsigned i = 0; i < major_seg; ++i) {
+        const double th = 2.0 * kPi * i / major_seg;
+        for (unsigned j = 0; j < minor_seg; ++j) {
+            const double ph = 2.0 * kPi * j / minor_seg;
+            const double rad = R + r * std::cos(ph);
+            add_vert(m, rad * std::cos(th), r * std::sin(ph), rad * std::sin(th));
+        }
+    }
+    auto at = [&](unsigned i, unsigned j) { return (i % major_seg) * minor_seg + (j % minor_seg); };
+    for (unsigned i = 0; i < major_seg; ++i) {
+        // The tube's axis at this quad: "inside" for winding purposes.
+        const double th = 2.0 * kPi * (i + 0.5) / major_seg;
+        const Eigen::Vector3d axis(R * std::cos(th), 0.0, R * std::sin(th));
+        for (unsigned j = 0; j < minor_seg; ++j) add_quad(m, at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1), axis);
+    }
+    return m;
+}
+
+Mesh make_cylinder(unsigned slices) {
+    Mesh m;
+    const Eigen::Vector3d o = Eigen::Vector3d::Zero();
+    const std::uint32_t bottom_c = add_vert(m, 0.0, -1.0, 0.0);
+    const std::uint32_t top_c = add_vert(m, 0.0, 1.0, 0.0);
+    const std::uint32_t base = static_cast<std::uint32_t>(m.verts.size());
+    for (unsigned j = 0; j < slices; ++j) {
+        const double ph = 2.0 * kPi * j / slices;
+        add_vert(m, std::cos(ph), -1.0, std::sin(ph));
+        add_vert(m, std::cos(ph), 1.0, std::sin(ph));
+    }
+    auto bot = [&](unsigned j) { return base + 2 * (j % slices); };
+    auto top = [&](unsigned j) { return base + 2 * (j % slices) + 1; };
+    for (unsigned j = 0; j < slices; ++j) {
+        add_quad(m, bot(j), bot(j + 1), top(j + 1), top(j), o);
+        add_tri(m, bottom_c, bot(j), bot(j + 1), o);
+        add_tri(m, top_c, top(j), top(j + 1), o);
+    }
+    return m;
+}
+
+void append_node(const aiScene* s, const aiNode* node, const aiMatrix4x4& parent, Mesh& out) {
+    const aiMatrix4x4 xf = parent * node->mTransformation;
+    // A mirroring node transform turns the outward winding inward; undo it so
+    // the mesh stays outward counter-clockwise (glTF's rule as well).
+    const bool mirror = xf.Determinant() < 0.0f;
+    for (unsigned mi = 0; mi < node->mNumMeshes; ++mi) {
+        const aiMesh* mesh = s->mMeshes[node->mMeshes[mi]];
+        const std::uint32_t base = static_cast<std::uint32_t>(out.verts.size());
+        for (unsigned v = 0; v < mesh->mNumVertices; ++v) {
+            const aiVector3D p = xf * mesh->mVertices[v];
+            out.verts.emplace_back(p.x, p.y, p.z);
+        }
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+            const aiFace& face = mesh->mFaces[f];
+            if (face.mNumIndices != 3) continue;   // points and lines cover nothing
+            std::uint32_t a = base + face.mIndices[0], b = base + face.mIndices[1], c = base + face.mIndices[2];
+            if (mirror) std::swap(b, c);
+            out.tris.push_back({a, b, c});
+        }
+    }
+    for (unsigned ci = 0; ci < node->mNumChildren; ++ci) append_node(s, node->mChildren[ci], xf, out);
+}
+
+} // namespace
+
+Mesh builtin_mesh(const std::string& shape, unsigned segments) {
+    if (shape == "sphere") return make_sphere(segments);
+    if (shape == "box") return make_box();
+    if (shape == "torus") return make_torus(segments);
+    if (shape == "cylinder") return make_cylinder(segments);
+    throw std::logic_error("builtin_mesh: unknown shape " + shape);
+}
+
+bool load_mesh_file(const std::string& path, Mesh& out, std::string& error) {
+    Assimp::Importer imp;
+    const aiScene* s = imp.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+    if (!s || !s->mRootNode || (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
+        error = imp.GetErrorString();
+        if (error.empty()) error = "assimp could not import it";
+        return false;
+    }
+    out = Mesh{};
+    append_node(s, s->mRootNode, aiMatrix4x4(), out);
+    if (out.tris.empty()) {
+        error = "it holds no triangles";
+        return false;
+    }
+    for (const auto& v : out.verts) {
+        if (!v.allFinite()) {
+            error = "it holds a vertex that is not a finite number";
+            return false;
+        }
+    }
+    return true;
+}
+
+} // namespace rbcd::scene

@@ -1,0 +1,111 @@
+#include "scene/scene_source.h"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/errors.h"
+#include "scene/renderer.h"
+
+namespace rbcd::scene {
+
+namespace {
+
+std::string read_text_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path + ": cannot open scene file");
+    std::ostringstream s;
+    s << in.rdbuf();
+    if (in.bad()) throw InputError(path + ": cannot read scene file");
+    return s.str();
+}
+
+} // namespace
+
+SceneSource::SceneSource(const std::string& path, const SceneLimits& limits)
+    : SceneSource(std::make_unique<SceneRenderer>(
+                      parse_scene(read_text_file(path), path, std::filesystem::path(path).parent_path().string(), limits),
+                      limits),
+                  path, limits) {}
+
+SceneSource::SceneSource(std::unique_ptr<SceneRenderer> r, std::string name, const SceneLimits& limits)
+    : r_(std::move(r)), name_(std::move(name)) {
+    const SceneDesc& d = r_->desc();
+    header_.screen_w = d.width;
+    header_.screen_h = d.height;
+    header_.tile_w = limits.tile_w;
+    header_.tile_h = limits.tile_h;
+    header_.depth_bits = kDepthBits;
+}
+
+std::unique_ptr<SceneSource> SceneSource::from_text(const std::string& toml_text, const std::string& base_dir,
+                                                    const std::string& display_name, const SceneLimits& limits) {
+    auto r = std::make_unique<SceneRenderer>(parse_scene(toml_text, display_name, base_dir, limits), limits);
+    return std::unique_ptr<SceneSource>(new SceneSource(std::move(r), display_name, limits));
+}
+
+SceneSource::~SceneSource() = default;
+
+const StreamHeader& SceneSource::header() const { return header_; }
+std::string SceneSource::name() const { return name_; }
+std::uint64_t SceneSource::frame_count() const { return r_->desc().frames; }
+const std::vector<SceneSource::ObjectInfo>& SceneSource::objects() const { return r_->objects(); }
+
+void SceneSource::enable_images(bool on) { images_ = on; }
+
+std::optional<SceneSource::FrameImage> SceneSource::take_frame_image(std::uint64_t frame) {
+    auto it = ready_images_.find(frame);
+    if (it == ready_images_.end()) return std::nullopt;
+    FrameImage img = std::move(it->second);
+    ready_images_.erase(it);
+    return img;
+}
+
+void SceneSource::finish_frame() {
+    if (current_image_) {
+        ready_images_.emplace(current_image_->frame, std::move(*current_image_));
+        current_image_.reset();
+    }
+    ++frame_;
+    state_ = State::BeforeFrame;
+}
+
+FragmentSource::Event SceneSource::next(Tile& tile) {
+    for (;;) {
+        switch (state_) {
+        case State::Done:
+            return Event::End;
+        case State::BeforeFrame:
+            if (frame_ >= r_->desc().frames) {
+                state_ = State::Done;
+                if (total_fragments_ == 0)
+                    throw InputError(name_ +
+                                     ": nothing in view in any frame (no object's triangle covers a pixel; check "
+                                     "camera.eye, camera.target, near/far and the objects' positions)");
+                return Event::End;
+            }
+            r_->begin_frame(frame_);
+            if (images_) {
+                FrameImage img;
+                img.frame = frame_;
+                img.width = header_.screen_w;
+                img.height = header_.screen_h;
+                img.pixels.assign(std::size_t(img.width) * img.height, ImagePixel{});
+                img.objects = r_->objects();
+                current_image_ = std::move(img);
+            }
+            state_ = State::InFrame;
+            tile.frame = frame_;
+            return Event::Frame;
+        case State::InFrame:
+            if (r_->next_tile(tile, current_image_ ? &*current_image_ : nullptr)) {
+                total_fragments_ += tile.frags.size() + tile.other;
+                return Event::Tile;
+            }
+            finish_frame();
+            break;
+        }
+    }
+}
+
+} // namespace rbcd::scene

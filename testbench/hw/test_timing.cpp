@@ -1,0 +1,150 @@
+// The timing model's worked example (docs/timing.md) and the stall behaviour
+// of banks, queue and output buffer, checked cycle for cycle.
+#include <catch2/catch.hpp>
+
+#include "testbench/hw/tb_util.h"
+
+using namespace rbcd;
+using rbcd::tb::frag;
+
+namespace {
+
+// docs/timing.md, "Worked example": one tile, six fragments on three pixels.
+MemorySource worked_example() {
+    MemorySource src(StreamHeader{});
+    src.add_frame(0);
+    src.add_tile(tb::tile(0, 0, 0,
+                          {frag(0, 0, 100, 1, 'F'),    // pixel A
+                           frag(0, 0, 200, 2, 'F'),    // pixel A, right behind: same-pixel hazard
+                           frag(1, 0, 50, 3, 'F'),     // pixel B
+                           frag(1, 0, 60, 3, 'B'),     // pixel B, hazard again
+                           frag(2, 0, 10, 4, 'B'),     // pixel C: an orphan back face
+                           frag(0, 0, 300, 1, 'B')},   // pixel A: closes id 1 around id 2's front face
+                          8));
+    return src;
+}
+
+SimConfig worked_config() {
+    SimConfig cfg;
+    cfg.memory.latency_min = cfg.memory.latency_max = 50;
+    return cfg;
+}
+
+} // namespace
+
+TEST_CASE("hw timing: worked example with forwarding takes 570 cycles", "[timing]") {
+    auto src = worked_example();
+    tb::SystemRun run(worked_config(), src);
+    const auto& s = *run.sys;
+    // Feed: 4 fragments in cycle 0, 2 in cycle 1; then 8 other fragments take 2 cycles.
+    CHECK(s.feed.stats().busy_cycles == 4);
+    CHECK(s.feed.stats().stall_queue_full_cycles == 0);
+    // Sorter issues at cycles 1..6 (one per cycle, hazards forwarded): fill done at 6 + 3 = 9.
+    CHECK(s.sorter.stats().hazard_forwards == 2);
+    CHECK(s.sorter.stats().hazard_stall_cycles == 0);
+    // Tester: starts at 9, first row read 1 cycle, 6 elements of 1 cycle each (the one hit
+    // takes the element's cycle): 16. Flush at 16: 16 bytes take 4 channel cycles, 50 latency: 70.
+    // Host readback: 500 cycles. End: 570.
+    CHECK(s.tester.stats().busy_cycles == 7);
+    CHECK(s.tester.stats().idle_cycles == 9);
+    CHECK(s.total_cycles() == 570);
+    REQUIRE(run.hits().size() == 1);
+    CHECK(run.hits()[0] == HitRecord{0, 0, 1, 2, 300});
+    CHECK(s.tester.stats().orphan_back_faces == 1);
+    CHECK(s.memory.stats().writes == 1);
+}
+
+TEST_CASE("hw timing: worked example stalling on hazards takes 574 cycles", "[timing]") {
+    auto src = worked_example();
+    SimConfig cfg = worked_config();
+    cfg.sorter.hazard = HazardPolicy::Stall;
+    tb::SystemRun run(cfg, src);
+    const auto& s = *run.sys;
+    // Issues 1, 4 (waits for row A's write), 5, 8 (row B), 9, 10: fill done 13.
+    CHECK(s.sorter.stats().hazard_stall_cycles == 4);
+    CHECK(s.sorter.stats().hazard_forwards == 0);
+    CHECK(s.tester.stats().idle_cycles == 13);
+    CHECK(s.total_cycles() == 574);
+    REQUIRE(run.hits().size() == 1);
+}
+
+TEST_CASE("hw timing: a full input queue holds the rasterizer back", "[timing]") {
+    // 40 fragments on 40 distinct pixels, queue of 4: the feed emits 4 per cycle,
+    // the sorter drains 1 per cycle. Fragment i (i >= 4) enters when fragment i-4 issues.
+    MemorySource src(StreamHeader{});
+    src.add_frame(0);
+    std::vector<Fragment> fs;
+    for (unsigned i = 0; i < 40; ++i) fs.push_back(frag(i % 16, i / 16, 1000 + i, 1, 'F'));
+    src.add_tile(tb::tile(0, 0, 0, fs));
+    SimConfig cfg = worked_config();
+    cfg.feed.queue_depth = 4;
+    tb::SystemRun run(cfg, src);
+    const auto& s = *run.sys;
+    // Issues at 1..40. Fragments 0-3 enqueue at 0; fragment i >= 4 enqueues at issue(i-4) = i-3,
+    // so the feed's last emission is at cycle 36: it finished at 37 instead of 10.
+    CHECK(s.sorter.stats().insertions == 40);
+    CHECK(s.feed.stats().stall_queue_full_cycles == 37 - 10);
+    CHECK(s.sorter.stats().queue_max_occupancy == 4);
+    CHECK(s.sorter.stats().starved_cycles == 0);
+}
+
+namespace {
+// Two tiles, each 16 fragments on distinct pixels, front faces only.
+MemorySource two_tiles() {
+    MemorySource src(StreamHeader{});
+    src.add_frame(0);
+    for (unsigned t = 0; t < 2; ++t) {
+        std::vector<Fragment> fs;
+        for (unsigned i = 0; i < 16; ++i) fs.push_back(frag(t * 16 + i, 0, 500, 1, 'F'));
+        src.add_tile(tb::tile(0, t, 0, fs));
+    }
+    return src;
+}
+} // namespace
+
+// Tile 0: enqueued cycles 0-3, issued 1..16, filled at 19; tested 19..36 (1 row read + 16
+// elements), bank free at 36. The feed finishes tile 0 at cycle 4.
+TEST_CASE("hw timing: with one bank the second tile waits for the first test", "[timing]") {
+    auto src = two_tiles();
+    SimConfig cfg = worked_config();
+    cfg.zeb.banks = 1;
+    tb::SystemRun run(cfg, src);
+    CHECK(run.sys->feed.stats().stall_no_bank_cycles == 32);
+    // Tile 1: issued 37..52, filled 55, tested 55..72; readback at frame end: 72 + 500.
+    CHECK(run.sys->total_cycles() == 572);
+}
+
+TEST_CASE("hw timing: with two banks the second tile fills during the first test", "[timing]") {
+    auto src = two_tiles();
+    tb::SystemRun run(worked_config(), src);
+    CHECK(run.sys->feed.stats().stall_no_bank_cycles == 0);
+    // Tile 1: enqueued 4-7, issued 17..32 (behind tile 0), filled 35; the tester is busy with
+    // tile 0 until 36, then 36..53; 53 + 500.
+    CHECK(run.sys->total_cycles() == 553);
+}
+
+TEST_CASE("hw timing: a small output buffer stalls the tester", "[timing]") {
+    // One pixel, ids 1..5 front, then id 1 back: 4 hits from one back face.
+    MemorySource src(StreamHeader{});
+    src.add_frame(0);
+    std::vector<Fragment> fs;
+    for (unsigned id = 1; id <= 5; ++id) fs.push_back(frag(0, 0, 100 * id, id, 'F'));
+    fs.push_back(frag(0, 0, 1000, 1, 'B'));
+    src.add_tile(tb::tile(0, 0, 0, fs));
+    SimConfig cfg = worked_config();
+    cfg.output.buffer_records = 1;
+    cfg.output.burst_records = 1;
+    cfg.output.max_outstanding = 1;
+    tb::SystemRun run(cfg, src);
+    const auto& s = *run.sys;
+    REQUIRE(run.hits().size() == 4);
+    // Each record: written alone, 4 channel cycles + 50 latency = 54 cycles until its slot frees.
+    // Hits offered at cycles 12, 13.. but each waits for the previous write: 3 stalls.
+    CHECK(s.outbuf.stats().bursts == 4);
+    CHECK(s.tester.stats().output_stall_cycles > 0);
+    // Fill: issues 1..6, done 9. Tester: row read 9->10, 5 fronts 10..15, hits at 15, then
+    // 15+54=69, 69+54=123, 123+54=177; last accepted at 177, tile done 178. Flush: last write
+    // completes at 177+54 = 231, + 500 readback.
+    CHECK(s.tester.stats().output_stall_cycles == 3 * 53);
+    CHECK(s.total_cycles() == 731);
+}
