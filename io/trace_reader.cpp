@@ -130,6 +130,11 @@ struct TraceReader::Impl {
     std::vector<std::uint64_t> tiles_in_frame;
     std::unordered_set<std::uint64_t> tile_set;
 
+    // Here, not in ~TraceReader: a constructor that throws must close too.
+    ~Impl() {
+        if (gz) gzclose(gz);
+    }
+
     [[noreturn]] void fail(const std::string& what) const { throw input_error_at(path, line, what); }
 
     void open();
@@ -499,9 +504,7 @@ TraceReader::TraceReader(const std::string& path, const TraceLimits& limits) : i
     impl_->read_headers();
 }
 
-TraceReader::~TraceReader() {
-    if (impl_ && impl_->gz) gzclose(impl_->gz);
-}
+TraceReader::~TraceReader() = default;
 
 const StreamHeader& TraceReader::header() const { return impl_->hdr; }
 

@@ -8,26 +8,42 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <systemc>
+#include <unistd.h>
 
 #include "common/config.h"
 #include "common/errors.h"
 #include "io/trace_reader.h"
+#include "io/trace_writer.h"
 #include "sc_main/collision_file.h"
-#include "sc_main/default_input.h"
+#include "sc_main/image_sink.h"
 #include "sc_main/output_file.h"
 #include "sc_main/stats_report.h"
 #include "hw/rbcd_system.h"
 
 namespace {
 
+// The kernel prints its banner before sc_main runs; it would precede every
+// summary and --dump-config. Static initialisation of the program comes first.
+const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0) == 0; }();
+
 struct Options {
     std::string config_file;
     std::vector<std::string> sets;
-    std::string trace, collisions, stats;
+    std::string trace, scene, collisions, stats, write_trace, images;
     bool dump_config = false;
     bool quiet = false;
 };
+
+void make_directory(const std::string& dir) {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec || !std::filesystem::is_directory(dir))
+        throw rbcd::InputError(dir + ": cannot create directory: " + (ec ? ec.message() : "not a directory"));
+}
 
 void quiet_kernel() {
     // sc_stop() and end-of-simulation notes are not the user's business.
@@ -51,33 +67,77 @@ int run(const Options& opt) {
     if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions);
     if (!opt.stats.empty()) stats_out = OutputFile(opt.stats);
 
-    const TraceLimits limits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits};
     std::unique_ptr<FragmentSource> src;
-    std::string input_name;
+    scene::SceneSource* scene_src = nullptr;
+    const scene::SceneLimits scene_limits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits};
     if (!opt.trace.empty()) {
-        src = std::make_unique<TraceReader>(opt.trace, limits);
-        input_name = opt.trace;
+        src = std::make_unique<TraceReader>(opt.trace, TraceLimits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits});
     } else {
-        src = open_default_input(limits);
-        input_name = src->name();
+        auto s = opt.scene.empty()
+                     ? scene::SceneSource::from_text(scene::default_scene_text(), "", "<default scene>", scene_limits)
+                     : std::make_unique<scene::SceneSource>(opt.scene, scene_limits);
+        scene_src = s.get();
+        src = std::move(s);
     }
+    const std::string input_name = src->name();
 
     std::unique_ptr<CollisionFileSink> file_sink;
-    struct NullSink final : CollisionSink {
-        void frame(std::uint64_t) override {}
-        void hit(const HitRecord&) override {}
-        void overflow(const OverflowRecord&) override {}
-    } null_sink;
-    CollisionSink* sink = &null_sink;
+    TeeSink tee;
     if (collisions_out.active()) {
         file_sink = std::make_unique<CollisionFileSink>(collisions_out);
-        sink = file_sink.get();
+        tee.add(file_sink.get());
     }
+    std::unique_ptr<ImageSink> images;
+    if (!opt.images.empty()) {
+        if (!scene_src) throw InputError("--images: needs a scene (--scene, or no --trace)");
+        make_directory(opt.images);
+        scene_src->enable_images(true);
+        images = std::make_unique<ImageSink>(*scene_src, opt.images, cfg.tile.width, cfg.tile.height);
+        tee.add(images.get());
+    }
+    CollisionSink* sink = &tee;
+
+    // --write-trace: the stream the unit saw, replayable with --trace.
+    std::unique_ptr<TraceWriter> trace_out;
+    std::string trace_tmp;
+    if (!opt.write_trace.empty()) {
+        trace_tmp = opt.write_trace + ".tmp." + std::to_string(::getpid());
+        trace_out = std::make_unique<TraceWriter>(trace_tmp, src->header());
+    }
+    struct TraceTmpGuard {
+        std::string tmp, path;
+        bool keep = false;
+        ~TraceTmpGuard() {
+            if (keep || tmp.empty()) return;
+            std::remove(tmp.c_str());
+            std::remove(path.c_str());
+        }
+    } trace_guard{trace_tmp, opt.write_trace};
+    struct ImageGuard {
+        ImageSink* sink;
+        bool keep = false;
+        ~ImageGuard() {
+            if (keep || !sink) return;
+            for (const auto& f : sink->written()) std::remove(f.c_str());
+        }
+    } image_guard{images.get()};
 
     quiet_kernel();
     const auto t0 = std::chrono::steady_clock::now();
     rbcd_system sys("rbcd", cfg, *src, *sink);
+    if (trace_out) {
+        sys.feed.on_frame = [&](std::uint64_t n) { trace_out->frame(n); };
+        sys.feed.on_tile = [&](const Tile& t) { trace_out->tile(t); };
+    }
     sys.run();
+    if (images) images->finish();
+    if (trace_out) {
+        trace_out->close();
+        if (std::rename(trace_tmp.c_str(), opt.write_trace.c_str()) != 0)
+            throw InputError(opt.write_trace + ": cannot create: " + std::strerror(errno));
+        trace_guard.keep = true;
+    }
+    image_guard.keep = true;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     const nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall});
@@ -100,7 +160,11 @@ int sc_main(int argc, char* argv[]) {
     CLI::App app{"rbcd-sim: SystemC/TLM-2.0 model of the RBCD collision-detection unit"};
     app.add_option("--config", opt.config_file, "TOML configuration file");
     app.add_option("--set", opt.sets, "KEY=VALUE, applied after --config in order (repeatable)")->take_all();
-    app.add_option("--trace", opt.trace, "fragment trace (.rbt, plain or gzip)");
+    auto* trace_opt = app.add_option("--trace", opt.trace, "fragment trace (.rbt, plain or gzip)");
+    app.add_option("--scene", opt.scene, "3D scene (TOML) rendered by the tile-based rasterizer feed")
+        ->excludes(trace_opt);
+    app.add_option("--write-trace", opt.write_trace, "also save the fragment stream the unit saw as a .rbt trace");
+    app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");
     app.add_option("--collisions", opt.collisions, "write the collision records here");
     app.add_option("--stats", opt.stats, "write statistics JSON here");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
