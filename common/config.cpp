@@ -107,6 +107,19 @@ ConfigKey enum_key(std::string name, std::string block, std::string help,
     return k;
 }
 
+ConfigKey bool_key(std::string name, std::string block, std::string help, std::function<bool&(SimConfig&)> get) {
+    ConfigKey k;
+    k.name = name; k.block = std::move(block); k.unit = "true | false"; k.help = std::move(help);
+    k.type = "boolean";
+    k.set = [name, get](SimConfig& c, const toml::node& n, const std::string& where) {
+        auto v = n.value_exact<bool>();
+        if (!v) fail(where, n, name, "expected true or false");
+        get(c) = *v;
+    };
+    k.to_toml = [get](const SimConfig& c) { return std::string(get(const_cast<SimConfig&>(c)) ? "true" : "false"); };
+    return k;
+}
+
 std::vector<ConfigKey> make_keys() {
     constexpr std::uint64_t big = std::uint64_t(1) << 40;
     std::vector<ConfigKey> k;
@@ -174,6 +187,59 @@ std::vector<ConfigKey> make_keys() {
     k.push_back(int_key<std::uint64_t>("host.readback_cycles", "host", "cycles",
                                        "the unit's output waits this long while the CPU reads the region back", 0, big,
                                        [](SimConfig& c) -> std::uint64_t& { return c.host.readback_cycles; }));
+
+    k.push_back(int_key<unsigned>("gpu.raster_fragments_per_cycle", "gpu_model", "fragments/cycle",
+                                  "baseline rasterizer rate", 1, 64,
+                                  [](SimConfig& c) -> unsigned& { return c.gpu.raster_fragments_per_cycle; }));
+    k.push_back(int_key<unsigned>("gpu.fragment_processors", "gpu_model", "processors", "fragment processors", 1, 256,
+                                  [](SimConfig& c) -> unsigned& { return c.gpu.fragment_processors; }));
+    k.push_back(int_key<unsigned>("gpu.cycles_per_fragment", "gpu_model", "cycles",
+                                  "cycles one fragment processor spends per fragment", 1, 100000,
+                                  [](SimConfig& c) -> unsigned& { return c.gpu.cycles_per_fragment; }));
+    k.push_back(int_key<unsigned>("gpu.tile_overhead_cycles", "gpu_model", "cycles",
+                                  "fixed baseline cost per tile (setup, colour buffer flush)", 0, 1000000,
+                                  [](SimConfig& c) -> unsigned& { return c.gpu.tile_overhead_cycles; }));
+
+    auto energy = [&](const char* name, const char* unit, const char* help, double EnergyConfig::*m) {
+        k.push_back(real_key(std::string("energy.") + name, "energy_model", unit, help, 0.0, 1e9,
+                             [m](SimConfig& c) -> double& { return c.energy.*m; }));
+    };
+    energy("sram_read_pj_per_bit", "pJ/bit", "ZEB row read, 8 KiB bank; scales with sqrt(bank size / 8 KiB)",
+           &EnergyConfig::sram_read_pj_per_bit);
+    energy("sram_write_pj_per_bit", "pJ/bit", "ZEB row write, 8 KiB bank; scales like reads",
+           &EnergyConfig::sram_write_pj_per_bit);
+    energy("sram_leakage_mw_per_kib", "mW/KiB", "ZEB leakage per KiB of each bank",
+           &EnergyConfig::sram_leakage_mw_per_kib);
+    energy("comparator_pj_per_bit", "pJ/bit", "sorter key comparator, per key bit",
+           &EnergyConfig::comparator_pj_per_bit);
+    energy("mux_pj_per_bit", "pJ/bit", "sorter mux moving one element bit", &EnergyConfig::mux_pj_per_bit);
+    energy("stack_pj_per_bit", "pJ/bit", "FF-stack entry bit written", &EnergyConfig::stack_pj_per_bit);
+    energy("id_compare_pj_per_bit", "pJ/bit", "tester id equality comparator, per id bit",
+           &EnergyConfig::id_compare_pj_per_bit);
+    energy("queue_pj_per_bit", "pJ/bit", "input queue entry bit written", &EnergyConfig::queue_pj_per_bit);
+    energy("buffer_pj_per_bit", "pJ/bit", "output buffer record bit written", &EnergyConfig::buffer_pj_per_bit);
+    energy("memory_pj_per_byte", "pJ/byte", "system memory access through the controller",
+           &EnergyConfig::memory_pj_per_byte);
+    energy("logic_leakage_mw", "mW", "leakage of the unit's logic (sorter, tester, queue, buffer)",
+           &EnergyConfig::logic_leakage_mw);
+
+    k.push_back(bool_key("trace.feed", "vcd", "trace the rasterizer feed in --vcd",
+                         [](SimConfig& c) -> bool& { return c.trace.feed; }));
+    k.push_back(bool_key("trace.zeb", "vcd", "trace the ZEB banks in --vcd", [](SimConfig& c) -> bool& { return c.trace.zeb; }));
+    k.push_back(bool_key("trace.sorter", "vcd", "trace the insertion sorter and input queue in --vcd",
+                         [](SimConfig& c) -> bool& { return c.trace.sorter; }));
+    k.push_back(bool_key("trace.tester", "vcd", "trace the z-overlap tester in --vcd",
+                         [](SimConfig& c) -> bool& { return c.trace.tester; }));
+    k.push_back(bool_key("trace.output", "vcd", "trace the output buffer in --vcd",
+                         [](SimConfig& c) -> bool& { return c.trace.output; }));
+    k.push_back(bool_key("trace.memory", "vcd", "trace the memory controller in --vcd",
+                         [](SimConfig& c) -> bool& { return c.trace.memory; }));
+    k.push_back(int_key<std::uint64_t>("trace.start", "vcd", "cycles", "first cycle dumped to --vcd", 0,
+                                       std::uint64_t(1) << 62,
+                                       [](SimConfig& c) -> std::uint64_t& { return c.trace.start; }));
+    k.push_back(int_key<std::uint64_t>("trace.end", "vcd", "cycles", "last cycle dumped to --vcd", 0,
+                                       std::uint64_t(1) << 62,
+                                       [](SimConfig& c) -> std::uint64_t& { return c.trace.end; }));
     return k;
 }
 
@@ -218,6 +284,7 @@ void SimConfig::validate() const {
         bad("output.region_bytes", "region (offset + size) does not fit in memory.size_bytes (" +
                                        std::to_string(memory.size_bytes) + ")");
     if (clock.period_ps() == 0) bad("clock.mhz", "period rounds to 0 ps");
+    if (trace.start > trace.end) bad("trace.start", "after trace.end (" + std::to_string(trace.end) + ")");
 }
 
 void apply_config_table(SimConfig& cfg, const toml::table& tbl, const std::string& file) {

@@ -69,6 +69,36 @@ struct HostConfig {
     std::uint64_t readback_cycles = 500;
 };
 
+// The rest of the tile-based GPU, for the overhead figures (docs/gpu-model.md).
+struct GpuConfig {
+    unsigned raster_fragments_per_cycle = 4;   // the baseline rasterizer, same as the feed's by default
+    unsigned fragment_processors = 4;
+    unsigned cycles_per_fragment = 4;          // per fragment processor
+    unsigned tile_overhead_cycles = 0;         // fixed cost per tile (setup, colour flush)
+};
+
+// Per-event dynamic energy (pJ) and leakage (mW); 32 nm, 1 V (docs/energy.md).
+struct EnergyConfig {
+    double sram_read_pj_per_bit = 0.020;       // for an 8 KiB bank; scaled by sqrt(size / 8 KiB)
+    double sram_write_pj_per_bit = 0.025;
+    double sram_leakage_mw_per_kib = 0.040;
+    double comparator_pj_per_bit = 0.0015;     // one magnitude comparator bit
+    double mux_pj_per_bit = 0.0020;            // one element bit moved by a mux
+    double stack_pj_per_bit = 0.0020;          // FF-stack flop written
+    double id_compare_pj_per_bit = 0.0010;     // equality comparator bit
+    double queue_pj_per_bit = 0.0020;          // input queue entry written
+    double buffer_pj_per_bit = 0.0020;         // output buffer entry written
+    double memory_pj_per_byte = 40.0;          // LPDDR access incl. I/O
+    double logic_leakage_mw = 0.10;            // sorter + tester + buffers
+};
+
+// --vcd: which blocks are traced and the window, in cycles.
+struct TraceConfig {
+    bool feed = true, zeb = true, sorter = true, tester = true, output = true, memory = true;
+    std::uint64_t start = 0;
+    std::uint64_t end = std::uint64_t(1) << 62;
+};
+
 struct SimConfig {
     ClockConfig clock;
     TileConfig tile;
@@ -79,6 +109,9 @@ struct SimConfig {
     OutputBufferConfig output;
     MemoryConfig memory;
     HostConfig host;
+    GpuConfig gpu;
+    EnergyConfig energy;
+    TraceConfig trace;
 
     // Cross-key checks (ranges are checked as keys are set). Throws InputError.
     void validate() const;

@@ -1,5 +1,7 @@
 #include "hw/rasterizer_feed.h"
 
+#include <algorithm>
+
 namespace rbcd {
 
 rasterizer_feed::rasterizer_feed(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk,
@@ -11,7 +13,8 @@ rasterizer_feed::rasterizer_feed(sc_core::sc_module_name name, const SimConfig& 
       banks_(std::move(banks)),
       sorter_(sorter),
       tester_(tester),
-      rate_(cfg.feed.fragments_per_cycle) {
+      rate_(cfg.feed.fragments_per_cycle),
+      gpu_(cfg.gpu) {
     SC_THREAD(run);
 }
 
@@ -31,6 +34,18 @@ void rasterizer_feed::feed_tile(const Tile& tile, unsigned depth_bits) {
     fs.fragments += tile.frags.size();
     fs.culled += culled;
     fs.other += tile.other;
+    {
+        // Baseline: rasterizer and fragment processors overlapped as a pipeline,
+        // over what survives culling; the slower of the two sets the tile's time.
+        const std::uint64_t shaded = tile.other + (tile.frags.size() - culled);
+        const std::uint64_t raster = (shaded + gpu_.raster_fragments_per_cycle - 1) / gpu_.raster_fragments_per_cycle;
+        const std::uint64_t shading =
+            (shaded * gpu_.cycles_per_fragment + gpu_.fragment_processors - 1) / gpu_.fragment_processors;
+        fs.baseline_cycles += tile.has_base ? tile.base : gpu_.tile_overhead_cycles + std::max(raster, shading);
+        const std::uint64_t with_culled =
+            (shaded + culled + gpu_.raster_fragments_per_cycle - 1) / gpu_.raster_fragments_per_cycle;
+        fs.extra_raster_cycles += with_culled - raster;
+    }
     if (on_tile) on_tile(tile);
 
     std::uint64_t t = clk_.now();

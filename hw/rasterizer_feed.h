@@ -55,6 +55,12 @@ public:
         std::uint64_t stall_no_bank = 0, stall_queue_full = 0;
         std::uint64_t base = 0;             // sum of base= of the frame's tiles
         std::uint64_t tiles_with_base = 0;
+        // Baseline GPU cycles of the frame's tiles without the unit: base= where
+        // given, else the estimate of docs/gpu-model.md.
+        std::uint64_t baseline_cycles = 0;
+        // Extra rasterizer cycles for the c-tagged fragments, which the baseline
+        // culled before rasterization.
+        std::uint64_t extra_raster_cycles = 0;
     };
 
     rasterizer_feed(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk, FragmentSource& src,
@@ -79,6 +85,7 @@ private:
     insertion_sorter& sorter_;
     zoverlap_tester& tester_;
     unsigned rate_;
+    GpuConfig gpu_;
     unsigned next_bank_ = 0;
     std::exception_ptr error_;
     std::vector<FrameStats> frames_;

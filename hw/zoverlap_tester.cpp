@@ -132,7 +132,7 @@ void zoverlap_tester::run() {
         switch (job.kind) {
         case Job::FrameStart:
             host_.begin_frame(job.frame);
-            frames_.push_back({job.frame, 0, 0});
+            frames_.push_back({job.frame, 0, 0, 0, 0});
             break;
         case Job::TileJob: {
             if (job.ready > t) {
@@ -148,13 +148,18 @@ void zoverlap_tester::run() {
             // The bank is reusable only once its last list has been read.
             clk_.wait_until(t);
             job.bank->release(t);
+            if (!frames_.empty()) frames_.back().last_tile_done = t;
             break;
         }
         case Job::FrameEnd: {
             const std::uint64_t before = t;
-            t = out_.end_frame(t);
+            const std::uint64_t flushed = out_.flush(t);
+            t = out_.end_frame(flushed);
             stats_.readback_cycles += t - before;
-            if (!frames_.empty()) frames_.back().done = t;
+            if (!frames_.empty()) {
+                frames_.back().flushed = flushed;
+                frames_.back().done = t;
+            }
             clk_.wait_until(t);
             break;
         }

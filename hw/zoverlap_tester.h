@@ -86,7 +86,9 @@ public:
     struct FrameTiming {
         std::uint64_t frame = 0;
         std::uint64_t first_tile_start = 0;   // tester start of the frame's first tile
-        std::uint64_t done = 0;               // cycle the frame's records were read back
+        std::uint64_t last_tile_done = 0;     // tester end of the frame's last tile
+        std::uint64_t flushed = 0;            // the frame's records all in memory
+        std::uint64_t done = 0;               // ... and read back by the host
     };
     const std::vector<FrameTiming>& frames() const { return frames_; }
 

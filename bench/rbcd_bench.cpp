@@ -1,0 +1,115 @@
+// The speed and memory benchmark (never a timed test: CI machines are noisy).
+//   rbcd-bench [--dir DIR] [--fragments N]
+// 1. generates the busy-frame trace (gen_busy_trace) of N fragments and one of 2N;
+// 2. runs rbcd-sim end to end on each as a child process: wall time and peak
+//    memory (ru_maxrss of the child), so the two show whether memory grows
+//    with the trace's length;
+// 3. loads the N-fragment trace into memory and runs the model alone in this
+//    process: the model's own fragments/s, parsing excluded.
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <spawn.h>
+#include <string>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <systemc>
+#include <unistd.h>
+#include <vector>
+
+#include "hw/rbcd_system.h"
+#include "io/memory_source.h"
+#include "io/trace_reader.h"
+
+extern char** environ;
+
+namespace {
+
+struct ChildRun {
+    int status = -1;
+    double seconds = 0;
+    long max_rss_kb = 0;
+};
+
+ChildRun run_child(const std::vector<std::string>& args) {
+    std::vector<char*> argv;
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ChildRun r;
+    const auto t0 = std::chrono::steady_clock::now();
+    pid_t pid;
+    if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return r;
+    int status = 0;
+    struct rusage ru {};
+    wait4(pid, &status, 0, &ru);
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.max_rss_kb = ru.ru_maxrss;
+    return r;
+}
+
+std::string sibling(const char* argv0, const std::string& name) {
+    std::string self = argv0;
+    const auto slash = self.rfind('/');
+    return (slash == std::string::npos ? std::string(".") : self.substr(0, slash)) + "/" + name;
+}
+
+} // namespace
+
+int sc_main(int argc, char* argv[]) {
+    std::string dir = "/tmp";
+    std::uint64_t fragments = 5000000;
+    CLI::App app{"rbcd-bench: end-to-end and model-only speed, peak memory"};
+    app.add_option("--dir", dir, "where the generated traces go");
+    app.add_option("--fragments", fragments, "fragments of the base trace");
+    CLI11_PARSE(app, argc, argv);
+    sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
+
+    const std::string gen = sibling(argv[0], "gen_busy_trace"), sim = sibling(argv[0], "rbcd-sim");
+    const std::string t1 = dir + "/rbcd-bench-1x.rbt", t2 = dir + "/rbcd-bench-2x.rbt";
+    std::printf("generating %llu and %llu fragment traces in %s ...\n", (unsigned long long)fragments,
+                (unsigned long long)(2 * fragments), dir.c_str());
+    if (run_child({gen, t1, std::to_string(fragments), "8"}).status != 0 ||
+        run_child({gen, t2, std::to_string(2 * fragments), "16"}).status != 0) {
+        std::fprintf(stderr, "rbcd-bench: trace generation failed\n");
+        return 1;
+    }
+
+    std::printf("\n%-34s %12s %10s %14s %12s\n", "run", "fragments", "seconds", "fragments/s", "peak MiB");
+    for (const auto& [trace, n] : {std::pair{t1, fragments}, std::pair{t2, 2 * fragments}}) {
+        const ChildRun best = [&] {
+            ChildRun b;
+            for (int rep = 0; rep < 3; ++rep) {
+                ChildRun r = run_child({sim, "--trace", trace, "-q"});
+                if (r.status != 0) return r;
+                if (b.status != 0 || r.seconds < b.seconds) b = r;
+            }
+            return b;
+        }();
+        if (best.status != 0) {
+            std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on %s\n", trace.c_str());
+            return 1;
+        }
+        std::printf("%-34s %12llu %10.3f %14.0f %12.1f\n", ("rbcd-sim end to end, " + std::to_string(n / 1000000) + "M").c_str(),
+                    (unsigned long long)n, best.seconds, double(n) / best.seconds, best.max_rss_kb / 1024.0);
+    }
+
+    // Model alone: the trace is parsed into memory first, then only the SystemC run is timed.
+    rbcd::SimConfig cfg;
+    rbcd::TraceReader reader(t1, {cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits});
+    rbcd::MemorySource mem(reader.header(), t1);
+    mem.read_all(reader);
+    rbcd::RecordingSink sink;
+    rbcd::rbcd_system sys("rbcd", cfg, mem, sink);
+    const auto t0 = std::chrono::steady_clock::now();
+    sys.run();
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const auto n = sys.feed.stats().fragments;
+    std::printf("%-34s %12llu %10.3f %14.0f %12s\n", "model only (trace in memory)", (unsigned long long)n, secs,
+                double(n) / secs, "-");
+    std::printf("\nsimulated: %llu cycles, %llu hits, %llu overflows\n", (unsigned long long)sys.total_cycles(),
+                (unsigned long long)sys.tester.stats().hits, (unsigned long long)sys.sorter.stats().overflows);
+    std::remove(t1.c_str());
+    std::remove(t2.c_str());
+    return 0;
+}
