@@ -345,3 +345,15 @@ std::string dump_config_toml(const SimConfig& cfg) {
 }
 
 } // namespace rbcd
+
+namespace rbcd {
+
+std::string config_reference_markdown() {
+    const SimConfig defaults;
+    std::string out = "| key | default | unit / values | read by | meaning |\n|---|---|---|---|---|\n";
+    for (const auto& k : config_keys())
+        out += "| `" + k.name + "` | `" + k.to_toml(defaults) + "` | " + k.unit + " | " + k.block + " | " + k.help + " |\n";
+    return out;
+}
+
+} // namespace rbcd

@@ -135,6 +135,8 @@ void apply_config_file(SimConfig& cfg, const std::string& path);
 // KEY=VALUE where VALUE is TOML; a bare word is taken as a string for string keys.
 void apply_config_set(SimConfig& cfg, const std::string& assignment);
 std::string dump_config_toml(const SimConfig& cfg);
+// docs/config.md's key table (every key: name, default, unit, block, meaning).
+std::string config_reference_markdown();
 
 const char* to_string(TiePolicy);
 const char* to_string(OutputMode);

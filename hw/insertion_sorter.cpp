@@ -18,6 +18,14 @@ insertion_sorter::insertion_sorter(sc_core::sc_module_name name, const SimConfig
       layout_(cfg.zeb.layout()),
       issue_ring_(cfg.feed.queue_depth, 0) {}
 
+void insertion_sorter::attach_vcd(VcdWriter& vcd, const std::string& scope) {
+    vcd_ = &vcd;
+    vcd_occupancy_ = vcd.add(scope, "queue_occupancy", 17);
+    vcd_issue_ = vcd.add(scope, "issue", 1);
+    vcd_hazard_ = vcd.add(scope, "hazard_stall", 1);
+    vcd_bank_ = vcd.add(scope, "bank", 4);
+}
+
 void insertion_sorter::insert(zeb_bank& bank, unsigned li, std::uint64_t word, std::uint64_t key) {
     std::uint64_t* row = bank.list(li);
     std::uint8_t& n = bank.count(li);
@@ -75,6 +83,10 @@ insertion_sorter::FillResult insertion_sorter::fill_tile(const Tile& tile, zeb_b
         std::uint64_t& ring = issue_ring_[seq_ % queue_depth_];
         if (seq_ >= queue_depth_ && ring > feed_cycle) {
             // Same-cycle pop and push are allowed: the slot is usable in the issue cycle.
+            if (vcd_feed_) {
+                vcd_feed_->set(vcd_queue_full_, emitted_this_cycle ? feed_cycle + 1 : feed_cycle, 1);
+                vcd_feed_->set(vcd_queue_full_, ring, 0);
+            }
             feed_cycle = ring;
             emitted_this_cycle = 0;
         }
@@ -94,7 +106,17 @@ insertion_sorter::FillResult insertion_sorter::fill_tile(const Tile& tile, zeb_b
         }
         if (hazard && !stall_on_hazard_) ++stats_.hazard_forwards;
         stats_.hazard_stall_cycles += issue - unhindered;
-        if (!first) stats_.starved_cycles += unhindered - (last_issue_ + 1);
+        if (vcd_) {
+            vcd_->add_delta(vcd_occupancy_, enq, +1);
+            vcd_->add_delta(vcd_occupancy_, issue, -1);
+            vcd_->set(vcd_issue_, issue, 1);
+            vcd_->set(vcd_issue_, issue + 1, 0);
+            if (issue > unhindered) {
+                vcd_->set(vcd_hazard_, unhindered, 1);
+                vcd_->set(vcd_hazard_, issue, 0);
+            }
+            if (first) vcd_->set(vcd_bank_, issue, bank.index());
+        }
 
         // Occupancy seen by this enqueue: older fragments not yet issued, plus this one.
         // Read before the ring slot of fragment seq_-Q is overwritten below.

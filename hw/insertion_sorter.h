@@ -21,6 +21,7 @@
 #include "common/config.h"
 #include "common/fragment.h"
 #include "hw/clocking.h"
+#include "common/vcd_writer.h"
 #include "hw/zeb_bank.h"
 
 namespace rbcd {
@@ -38,7 +39,6 @@ public:
         std::uint64_t dropped_last = 0;          // ... of which a shifted-out last element
         std::uint64_t hazard_forwards = 0;       // same-pixel hazards resolved by forwarding
         std::uint64_t hazard_stall_cycles = 0;   // cycles lost to same-pixel hazards (stall policy)
-        std::uint64_t starved_cycles = 0;        // cycles a tile's pipeline waited on an empty queue
         std::uint64_t busy_cycles = 0;           // cycles with an insertion issued
         std::uint64_t queue_full_cycles = 0;     // cycles the feed was held by a full queue
         std::uint64_t queue_max_occupancy = 0;
@@ -51,7 +51,6 @@ public:
             RBCD_STAT(f, *this, dropped_last, "overflows where the last element was shifted out");
             RBCD_STAT(f, *this, hazard_forwards, "same-pixel hazards bypassed by forwarding");
             RBCD_STAT(f, *this, hazard_stall_cycles, "issue cycles lost to same-pixel hazards");
-            RBCD_STAT(f, *this, starved_cycles, "cycles the pipeline waited for the queue within a tile");
             RBCD_STAT(f, *this, busy_cycles, "cycles with an insertion issued");
             RBCD_STAT(f, *this, queue_full_cycles, "cycles the rasterizer was held by a full input queue");
             RBCD_STAT(f, *this, queue_max_occupancy, "deepest input-queue occupancy seen");
@@ -73,6 +72,14 @@ public:
 
     const stats_t& stats() const { return stats_; }
 
+    // Waveforms: queue occupancy, issue and hazard activity; the feed's
+    // queue-full stall flag lives in the feed's scope but is known here.
+    void attach_vcd(VcdWriter& vcd, const std::string& scope);
+    void attach_feed_stall(VcdWriter& vcd, VcdWriter::Sig queue_full) {
+        vcd_feed_ = &vcd;
+        vcd_queue_full_ = queue_full;
+    }
+
 private:
     void insert(zeb_bank& bank, unsigned list, std::uint64_t word, std::uint64_t key);
 
@@ -91,6 +98,9 @@ private:
     std::uint64_t last_issue_ = 0;
     bool any_issued_ = false;
     stats_t stats_;
+    VcdWriter* vcd_ = nullptr;
+    VcdWriter* vcd_feed_ = nullptr;
+    VcdWriter::Sig vcd_occupancy_ = 0, vcd_issue_ = 0, vcd_hazard_ = 0, vcd_bank_ = 0, vcd_queue_full_ = 0;
 };
 
 } // namespace rbcd

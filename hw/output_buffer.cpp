@@ -42,6 +42,7 @@ std::uint64_t output_buffer::issue(std::uint64_t cycle, unsigned n) {
         ++stats_.region_full_events;
         t = host_.read_back(write_offset_, all_done, true);
         write_offset_ = 0;
+        if (vcd_) vcd_->set(vcd_offset_, t, 0);
     }
     while (inflight_.size() >= max_outstanding_) {
         std::uint64_t first_done = inflight_.front().done;
@@ -71,6 +72,12 @@ std::uint64_t output_buffer::issue(std::uint64_t cycle, unsigned n) {
                                  " failed: " + gp_.get_response_string());
     const std::uint64_t done = clk_.now() + clk_.cycles(delay);
 
+    if (vcd_) {
+        vcd_->add_delta(vcd_in_flight_, t, +1);
+        vcd_->add_delta(vcd_in_flight_, done, -1);
+        vcd_->add_delta(vcd_occupancy_, done, -static_cast<std::int64_t>(n));
+        vcd_->set(vcd_offset_, t, write_offset_ + bytes);
+    }
     inflight_.push_back({done, n});
     inflight_records_ += n;
     pending_.erase(pending_.begin(), pending_.begin() + n);
@@ -97,6 +104,7 @@ std::uint64_t output_buffer::push(const MemRecord& r, std::uint64_t cycle) {
     }
     pending_.push_back(r);
     ++stats_.records;
+    if (vcd_) vcd_->add_delta(vcd_occupancy_, t, +1);
     stats_.max_occupancy = std::max<std::uint64_t>(stats_.max_occupancy, occupancy());
     if (pending_.size() >= burst_) issue(t, burst_);
     return t;
@@ -118,6 +126,7 @@ std::uint64_t output_buffer::end_frame(std::uint64_t cycle) {
     const std::uint64_t t = flush(cycle);
     const std::uint64_t ready = host_.read_back(write_offset_, t, false);
     write_offset_ = 0;
+    if (vcd_) vcd_->set(vcd_offset_, ready, 0);
     return ready;
 }
 

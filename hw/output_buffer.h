@@ -18,6 +18,7 @@
 #include "common/records.h"
 #include "hw/clocking.h"
 #include "hw/host_reader.h"
+#include "common/vcd_writer.h"
 
 namespace rbcd {
 
@@ -56,6 +57,12 @@ public:
     std::uint64_t end_frame(std::uint64_t cycle);
 
     const stats_t& stats() const { return stats_; }
+    void attach_vcd(VcdWriter& vcd, const std::string& scope) {
+        vcd_ = &vcd;
+        vcd_occupancy_ = vcd.add(scope, "occupancy", 17);
+        vcd_in_flight_ = vcd.add(scope, "writes_in_flight", 9);
+        vcd_offset_ = vcd.add(scope, "region_offset", 40);
+    }
 
 private:
     struct Inflight {
@@ -78,6 +85,8 @@ private:
     std::vector<unsigned char> data_;
     tlm::tlm_generic_payload gp_;
     stats_t stats_;
+    VcdWriter* vcd_ = nullptr;
+    VcdWriter::Sig vcd_occupancy_ = 0, vcd_in_flight_ = 0, vcd_offset_ = 0;
 };
 
 } // namespace rbcd

@@ -18,6 +18,16 @@ rasterizer_feed::rasterizer_feed(sc_core::sc_module_name name, const SimConfig& 
     SC_THREAD(run);
 }
 
+void rasterizer_feed::attach_vcd(VcdWriter& vcd, const std::string& scope) {
+    vcd_ = &vcd;
+    vcd_frame_ = vcd.add(scope, "frame", 32);
+    vcd_col_ = vcd.add(scope, "tile_col", 16);
+    vcd_row_ = vcd.add(scope, "tile_row", 16);
+    vcd_emit_ = vcd.add(scope, "rasterizing", 1);
+    vcd_no_bank_ = vcd.add(scope, "stall_no_bank", 1);
+    sorter_.attach_feed_stall(vcd, vcd.add(scope, "stall_queue_full", 1));
+}
+
 void rasterizer_feed::feed_tile(const Tile& tile, unsigned depth_bits) {
     FrameStats& fs = frames_.back();
     ++stats_.tiles;
@@ -49,6 +59,12 @@ void rasterizer_feed::feed_tile(const Tile& tile, unsigned depth_bits) {
     if (on_tile) on_tile(tile);
 
     std::uint64_t t = clk_.now();
+    if (vcd_flush_) vcd_flush_->flush_before(t);
+    if (vcd_) {
+        vcd_->set(vcd_frame_, t, tile.frame);
+        vcd_->set(vcd_col_, t, tile.col);
+        vcd_->set(vcd_row_, t, tile.row);
+    }
     if (!tile.frags.empty()) {
         zeb_bank& bank = *banks_[next_bank_];
         next_bank_ = (next_bank_ + 1) % banks_.size();
@@ -56,6 +72,10 @@ void rasterizer_feed::feed_tile(const Tile& tile, unsigned depth_bits) {
         const std::uint64_t got = clk_.now();
         stats_.stall_no_bank_cycles += got - t;
         fs.stall_no_bank += got - t;
+        if (vcd_ && got > t) {
+            vcd_->set(vcd_no_bank_, t, 1);
+            vcd_->set(vcd_no_bank_, got, 0);
+        }
         t = got;
 
         ++stats_.tiles_with_fragments;
@@ -69,7 +89,10 @@ void rasterizer_feed::feed_tile(const Tile& tile, unsigned depth_bits) {
     }
     const std::uint64_t other_cycles = (tile.other + rate_ - 1) / rate_;
     stats_.busy_cycles += other_cycles;
+    // Rasterizing from the cycle a bank was had (or the tile began) to its last fragment.
+    if (vcd_) vcd_->set(vcd_emit_, clk_.now(), 1);
     t += other_cycles;
+    if (vcd_) vcd_->set(vcd_emit_, t, 0);
     clk_.wait_until(t);
 }
 

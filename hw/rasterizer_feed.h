@@ -16,6 +16,7 @@
 #include "hw/clocking.h"
 #include "hw/insertion_sorter.h"
 #include "hw/zeb_bank.h"
+#include "common/vcd_writer.h"
 #include "hw/zoverlap_tester.h"
 
 namespace rbcd {
@@ -75,6 +76,10 @@ public:
     std::function<void(const Tile&)> on_tile;
     std::function<void(std::uint64_t)> on_frame;
 
+    // Waveforms; the feed also retires the writer's settled events at each tile.
+    void attach_vcd(VcdWriter& vcd, const std::string& scope);
+    void set_vcd_flush(VcdWriter* vcd) { vcd_flush_ = vcd; }
+
 private:
     void run();
     void feed_tile(const Tile& tile, unsigned depth_bits);
@@ -90,6 +95,9 @@ private:
     std::exception_ptr error_;
     std::vector<FrameStats> frames_;
     stats_t stats_;
+    VcdWriter* vcd_ = nullptr;
+    VcdWriter* vcd_flush_ = nullptr;
+    VcdWriter::Sig vcd_frame_ = 0, vcd_col_ = 0, vcd_row_ = 0, vcd_emit_ = 0, vcd_no_bank_ = 0;
 };
 
 } // namespace rbcd

@@ -33,8 +33,22 @@ rbcd_system::rbcd_system(sc_core::sc_module_name name, const SimConfig& c, Fragm
     host.mem.bind(memory.host_port);
 }
 
+void rbcd_system::attach_vcd(VcdWriter& vcd) {
+    vcd_ = &vcd;
+    const std::string top = basename();
+    if (cfg.trace.feed) feed.attach_vcd(vcd, top + ".rasterizer_feed");
+    if (cfg.trace.zeb)
+        for (auto& b : banks) b->attach_vcd(vcd, top + "." + b->basename());
+    if (cfg.trace.sorter) sorter.attach_vcd(vcd, top + ".insertion_sorter");
+    if (cfg.trace.tester) tester.attach_vcd(vcd, top + ".zoverlap_tester");
+    if (cfg.trace.output) outbuf.attach_vcd(vcd, top + ".output_buffer");
+    if (cfg.trace.memory) memory.attach_vcd(vcd, top + ".memory_controller");
+    feed.set_vcd_flush(&vcd);
+}
+
 void rbcd_system::run() {
     sc_core::sc_start();
+    if (vcd_ && !feed.error()) vcd_->finish(tester.finish_cycle());
     if (feed.error()) std::rethrow_exception(feed.error());
     if (!tester.finished())
         throw std::runtime_error("simulation ended before the z-overlap tester finished (internal error)");

@@ -20,6 +20,7 @@
 #include "hw/output_buffer.h"
 #include "hw/rasterizer_feed.h"
 #include "hw/zeb_bank.h"
+#include "common/vcd_writer.h"
 #include "hw/zoverlap_tester.h"
 #include "tlm/memory_controller.h"
 
@@ -32,6 +33,8 @@ public:
     // Runs to the end of the stream. Rethrows the source's InputError.
     void run();
     std::uint64_t total_cycles() const { return tester.finish_cycle(); }
+    // Before run(): the blocks that cfg.trace enables record into `vcd`.
+    void attach_vcd(VcdWriter& vcd);
 
     const SimConfig cfg;
     Clocking clk;
@@ -45,6 +48,7 @@ public:
 
 private:
     static std::vector<std::unique_ptr<zeb_bank>> make_banks(const SimConfig& cfg);
+    VcdWriter* vcd_ = nullptr;
     std::vector<zeb_bank*> bank_ptrs() const;
 };
 

@@ -15,6 +15,22 @@ zeb_bank::zeb_bank(sc_core::sc_module_name name, const ZebConfig& zeb, const Til
       occupancy_((lists_ + 63) / 64, 0),
       overflowed_((lists_ + 63) / 64, 0) {}
 
+void zeb_bank::attach_vcd(VcdWriter& vcd, const std::string& scope) {
+    vcd_ = &vcd;
+    vcd_state_ = vcd.add(scope, "state", 2);   // 0 free, 1 filling, 2 testing
+    vcd_frame_ = vcd.add(scope, "frame", 32);
+    vcd_col_ = vcd.add(scope, "tile_col", 16);
+    vcd_row_ = vcd.add(scope, "tile_row", 16);
+}
+
+void zeb_bank::trace_state(std::uint64_t cycle) {
+    if (!vcd_) return;
+    vcd_->set(vcd_state_, cycle, static_cast<std::uint64_t>(state_));
+    vcd_->set(vcd_frame_, cycle, frame_);
+    vcd_->set(vcd_col_, cycle, col_);
+    vcd_->set(vcd_row_, cycle, row_);
+}
+
 void zeb_bank::clear() {
     // Counts and bitmaps are flops beside the SRAM, reset in one cycle; the
     // element rows themselves are never cleared, a count of 0 makes them dead.
@@ -35,6 +51,7 @@ void zeb_bank::begin_fill(std::uint64_t frame, std::uint32_t col, std::uint32_t 
     state_ = State::Filling;
     state_since_ = cycle;
     ++stats_.tiles;
+    trace_state(cycle);
 }
 
 void zeb_bank::begin_test(std::uint64_t cycle) {
@@ -42,6 +59,7 @@ void zeb_bank::begin_test(std::uint64_t cycle) {
     stats_.filling_cycles += cycle - state_since_;
     state_ = State::Testing;
     state_since_ = cycle;
+    trace_state(cycle);
 }
 
 void zeb_bank::release(std::uint64_t cycle) {
@@ -49,6 +67,7 @@ void zeb_bank::release(std::uint64_t cycle) {
     stats_.testing_cycles += cycle - state_since_;
     state_ = State::Free;
     state_since_ = cycle;
+    trace_state(cycle);
     freed.notify(sc_core::SC_ZERO_TIME);
 }
 

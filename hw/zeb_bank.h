@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/config.h"
+#include "common/vcd_writer.h"
 
 namespace rbcd {
 
@@ -30,7 +31,7 @@ public:
             RBCD_STAT(f, *this, row_reads, "list rows read (sorter and tester ports)");
             RBCD_STAT(f, *this, row_writes, "list rows written by the sorter");
             RBCD_STAT(f, *this, tiles, "tiles held");
-            RBCD_STAT(f, *this, flash_clears, "occupancy flash clears between tiles");
+            RBCD_STAT(f, *this, flash_clears, "occupancy flash clears (one per tile taken)");
             RBCD_STAT(f, *this, filling_cycles, "cycles filling");
             RBCD_STAT(f, *this, testing_cycles, "cycles being tested");
         }
@@ -71,6 +72,8 @@ public:
     const stats_t& stats() const { return stats_; }
     sc_core::sc_event freed;
 
+    void attach_vcd(VcdWriter& vcd, const std::string& scope);
+
 private:
     void clear();
 
@@ -87,6 +90,9 @@ private:
     std::uint64_t frame_ = 0;
     std::uint32_t col_ = 0, row_ = 0;
     stats_t stats_;
+    VcdWriter* vcd_ = nullptr;
+    VcdWriter::Sig vcd_state_ = 0, vcd_frame_ = 0, vcd_col_ = 0, vcd_row_ = 0;
+    void trace_state(std::uint64_t cycle);
 };
 
 } // namespace rbcd

@@ -22,6 +22,18 @@ zoverlap_tester::zoverlap_tester(sc_core::sc_module_name name, const SimConfig& 
     SC_THREAD(run);
 }
 
+void zoverlap_tester::attach_vcd(VcdWriter& vcd, const std::string& scope) {
+    vcd_ = &vcd;
+    vcd_busy_ = vcd.add(scope, "busy", 1);
+    vcd_bank_ = vcd.add(scope, "bank", 4);
+    vcd_frame_ = vcd.add(scope, "frame", 32);
+    vcd_list_ = vcd.add(scope, "list", 16);
+    vcd_stack_ = vcd.add(scope, "stack_depth", 7);
+    vcd_hit_ = vcd.add(scope, "hit", 1);
+    vcd_stall_ = vcd.add(scope, "output_stall", 1);
+    vcd_readback_ = vcd.add(scope, "readback_wait", 1);
+}
+
 std::uint64_t zoverlap_tester::emit_hit(std::uint32_t x, std::uint32_t y, std::uint32_t id1, std::uint32_t id2,
                                         std::uint32_t dq, std::uint64_t t) {
     ++stats_.raw_hits;
@@ -43,6 +55,14 @@ std::uint64_t zoverlap_tester::emit_hit(std::uint32_t x, std::uint32_t y, std::u
     ++stats_.hits;
     const std::uint64_t accepted = out_.push(MemRecord::hit(h), t);
     stats_.output_stall_cycles += accepted - t;
+    if (vcd_) {
+        if (accepted > t) {
+            vcd_->set(vcd_stall_, t, 1);
+            vcd_->set(vcd_stall_, accepted, 0);
+        }
+        vcd_->set(vcd_hit_, accepted, 1);
+        vcd_->set(vcd_hit_, accepted + 1, 0);
+    }
     return accepted;
 }
 
@@ -66,6 +86,10 @@ std::uint64_t zoverlap_tester::test_tile(zeb_bank& bank, std::uint64_t t) {
             }
             const std::uint32_t x = x0 + li % tile_w_, y = y0 + li / tile_w_;
             unsigned sp = 0;
+            if (vcd_) {
+                vcd_->set(vcd_list_, t, li);
+                vcd_->set(vcd_stack_, t, 0);
+            }
             pixel_pairs_.clear();
 
             for (unsigned e = 0; e < n; ++e) {
@@ -80,6 +104,7 @@ std::uint64_t zoverlap_tester::test_tile(zeb_bank& bank, std::uint64_t t) {
                         stack_matched_[sp] = 0;
                         ++sp;
                         ++stats_.pushes;
+                        if (vcd_) vcd_->set(vcd_stack_, t + 1, sp);
                     }
                     ++t;
                     continue;
@@ -132,7 +157,8 @@ void zoverlap_tester::run() {
         switch (job.kind) {
         case Job::FrameStart:
             host_.begin_frame(job.frame);
-            frames_.push_back({job.frame, 0, 0, 0, 0});
+            frames_.push_back({});
+            frames_.back().frame = job.frame;
             break;
         case Job::TileJob: {
             if (job.ready > t) {
@@ -140,10 +166,19 @@ void zoverlap_tester::run() {
                 t = job.ready;
             }
             clk_.wait_until(t);
-            if (!frames_.empty() && frames_.back().first_tile_start == 0) frames_.back().first_tile_start = t;
+            if (!frames_.empty() && !frames_.back().started) {
+                frames_.back().first_tile_start = t;
+                frames_.back().started = true;
+            }
             job.bank->begin_test(t);
             const std::uint64_t start = t;
+            if (vcd_) {
+                vcd_->set(vcd_busy_, t, 1);
+                vcd_->set(vcd_bank_, t, job.bank->index());
+                vcd_->set(vcd_frame_, t, job.bank->frame());
+            }
             t = test_tile(*job.bank, t);
+            if (vcd_) vcd_->set(vcd_busy_, t, 0);
             stats_.busy_cycles += t - start;
             // The bank is reusable only once its last list has been read.
             clk_.wait_until(t);
@@ -155,6 +190,10 @@ void zoverlap_tester::run() {
             const std::uint64_t before = t;
             const std::uint64_t flushed = out_.flush(t);
             t = out_.end_frame(flushed);
+            if (vcd_ && t > before) {
+                vcd_->set(vcd_readback_, before, 1);
+                vcd_->set(vcd_readback_, t, 0);
+            }
             stats_.readback_cycles += t - before;
             if (!frames_.empty()) {
                 frames_.back().flushed = flushed;

@@ -18,6 +18,7 @@
 #include "common/config.h"
 #include "hw/clocking.h"
 #include "hw/output_buffer.h"
+#include "common/vcd_writer.h"
 #include "hw/zeb_bank.h"
 
 namespace rbcd {
@@ -81,6 +82,7 @@ public:
     std::uint64_t finish_cycle() const { return finish_cycle_; }
     bool finished() const { return finished_; }
     const stats_t& stats() const { return stats_; }
+    void attach_vcd(VcdWriter& vcd, const std::string& scope);
 
     // Per-frame outcome, for the stats' per-frame series.
     struct FrameTiming {
@@ -89,6 +91,7 @@ public:
         std::uint64_t last_tile_done = 0;     // tester end of the frame's last tile
         std::uint64_t flushed = 0;            // the frame's records all in memory
         std::uint64_t done = 0;               // ... and read back by the host
+        bool started = false;                 // a tile of the frame has been tested
     };
     const std::vector<FrameTiming>& frames() const { return frames_; }
 
@@ -117,6 +120,9 @@ private:
     std::uint64_t finish_cycle_ = 0;
     bool finished_ = false;
     stats_t stats_;
+    VcdWriter* vcd_ = nullptr;
+    VcdWriter::Sig vcd_busy_ = 0, vcd_bank_ = 0, vcd_list_ = 0, vcd_stack_ = 0, vcd_hit_ = 0, vcd_stall_ = 0,
+                   vcd_readback_ = 0, vcd_frame_ = 0;
 };
 
 } // namespace rbcd

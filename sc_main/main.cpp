@@ -33,8 +33,9 @@ const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE"
 struct Options {
     std::string config_file;
     std::vector<std::string> sets;
-    std::string trace, scene, collisions, stats, write_trace, images;
+    std::string trace, scene, collisions, stats, write_trace, images, vcd;
     bool dump_config = false;
+    bool config_reference = false;
     bool quiet = false;
 };
 
@@ -57,15 +58,20 @@ int run(const Options& opt) {
     for (const auto& s : opt.sets) apply_config_set(cfg, s);
     cfg.validate();
 
+    if (opt.config_reference) {
+        std::fputs(config_reference_markdown().c_str(), stdout);
+        return 0;
+    }
     if (opt.dump_config) {
         std::fputs(dump_config_toml(cfg).c_str(), stdout);
         return 0;
     }
 
     // Outputs are created before the run so an uncreatable path fails fast.
-    OutputFile collisions_out, stats_out;
+    OutputFile collisions_out, stats_out, vcd_out;
     if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions);
     if (!opt.stats.empty()) stats_out = OutputFile(opt.stats);
+    if (!opt.vcd.empty()) vcd_out = OutputFile(opt.vcd);
 
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
@@ -125,6 +131,12 @@ int run(const Options& opt) {
     quiet_kernel();
     const auto t0 = std::chrono::steady_clock::now();
     rbcd_system sys("rbcd", cfg, *src, *sink);
+    std::unique_ptr<VcdWriter> vcd;
+    if (vcd_out.active()) {
+        vcd = std::make_unique<VcdWriter>([&](const std::string& s) { vcd_out.write(s); }, sys.clk.period_ps(),
+                                          cfg.trace.start, cfg.trace.end);
+        sys.attach_vcd(*vcd);
+    }
     if (trace_out) {
         sys.feed.on_frame = [&](std::uint64_t n) { trace_out->frame(n); };
         sys.feed.on_tile = [&](const Tile& t) { trace_out->tile(t); };
@@ -145,12 +157,36 @@ int run(const Options& opt) {
         file_sink->finish();
         collisions_out.commit();
     }
+    if (vcd_out.active()) vcd_out.commit();
     if (stats_out.active()) {
         stats_out.write(stats.dump(2) + "\n");
         stats_out.commit();
     }
     if (!opt.quiet) std::fputs(make_summary(stats).c_str(), stdout);
     return 0;
+}
+
+// The output paths named on the command line, found without CLI11 so that they
+// are known even when the command line itself is what failed.
+std::vector<std::string> output_paths(int argc, char* argv[]) {
+    static const char* const flags[] = {"--collisions", "--stats", "--vcd"};
+    std::vector<std::string> paths;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        for (const char* f : flags) {
+            const std::string flag = f;
+            if (a == flag && i + 1 < argc) paths.push_back(argv[i + 1]);
+            else if (a.rfind(flag + "=", 0) == 0) paths.push_back(a.substr(flag.size() + 1));
+        }
+    }
+    return paths;
+}
+
+int fail(int status, const std::string& msg, int argc, char* argv[]) {
+    std::fprintf(stderr, "rbcd-sim: %s\n", msg.c_str());
+    // formats.md: on a non-zero exit nothing stands at an output path, not even an older file.
+    for (const auto& p : output_paths(argc, argv)) rbcd::discard_output(p);
+    return status;
 }
 
 } // namespace
@@ -167,8 +203,10 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");
     app.add_option("--collisions", opt.collisions, "write the collision records here");
     app.add_option("--stats", opt.stats, "write statistics JSON here");
+    app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
+    app.add_flag("--config-reference", opt.config_reference, "print the table of configuration keys (docs/config.md)");
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
@@ -176,16 +214,13 @@ int sc_main(int argc, char* argv[]) {
     } catch (const CLI::CallForAllHelp& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        std::fprintf(stderr, "rbcd-sim: %s (see --help)\n", e.what());
-        return 2;
+        return fail(2, std::string(e.what()) + " (see --help)", argc, argv);
     }
     try {
         return run(opt);
     } catch (const rbcd::InputError& e) {
-        std::fprintf(stderr, "rbcd-sim: %s\n", e.what());
-        return 2;
+        return fail(2, e.what(), argc, argv);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "rbcd-sim: internal error: %s\n", e.what());
-        return 1;
+        return fail(1, std::string("internal error: ") + e.what(), argc, argv);
     }
 }

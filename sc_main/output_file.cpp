@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <utility>
 
@@ -10,7 +11,19 @@
 
 namespace rbcd {
 
+namespace {
+// unlink, not remove: a path that names a directory is never deleted.
+void unlink_file(const std::string& p) { ::unlink(p.c_str()); }
+} // namespace
+
+void discard_output(const std::string& path) {
+    if (!path.empty()) unlink_file(path);
+}
+
 OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
+    struct stat st {};
+    if (::stat(path_.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+        throw InputError(path_ + ": cannot create: is a directory");
     tmp_ = path_ + ".tmp." + std::to_string(::getpid());
     f_ = std::fopen(tmp_.c_str(), "wb");
     if (!f_) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
@@ -43,14 +56,14 @@ void OutputFile::commit() {
     f_ = nullptr;
     if (failed_ || !flushed || !closed) {
         const std::string why = std::strerror(errno);
-        std::remove(tmp_.c_str());
-        std::remove(path_.c_str());
+        unlink_file(tmp_);
+        unlink_file(path_);
         throw std::runtime_error(path_ + ": write failed: " + why);
     }
     if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
         const std::string why = std::strerror(errno);
-        std::remove(tmp_.c_str());
-        std::remove(path_.c_str());
+        unlink_file(tmp_);
+        unlink_file(path_);
         throw std::runtime_error(path_ + ": cannot rename into place: " + why);
     }
     tmp_.clear();
@@ -62,8 +75,8 @@ void OutputFile::abandon() {
         f_ = nullptr;
     }
     if (!tmp_.empty()) {
-        std::remove(tmp_.c_str());
-        std::remove(path_.c_str());
+        unlink_file(tmp_);
+        unlink_file(path_);
         tmp_.clear();
     }
 }

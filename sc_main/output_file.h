@@ -7,6 +7,9 @@
 
 namespace rbcd {
 
+// Removes a file left at an output path by an earlier run (never a directory).
+void discard_output(const std::string& path);
+
 class OutputFile {
 public:
     OutputFile() = default;

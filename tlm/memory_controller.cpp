@@ -123,6 +123,13 @@ void memory_controller::b_transport(tlm_generic_payload& t, sc_time& delay) {
     stats_.max_completion_cycle = std::max(stats_.max_completion_cycle, completion);
 
     // completion >= floor(arrival) + 1 cycle > now + delay >= now: never negative.
+    if (vcd_) {
+        vcd_->add_delta(vcd_in_flight_, arrival, +1);
+        vcd_->add_delta(vcd_in_flight_, completion, -1);
+        vcd_->set(vcd_channel_busy_, start, 1);
+        vcd_->set(vcd_channel_busy_, end, 0);
+    }
+
     delay = to_time(completion) - now;
     t.set_dmi_allowed(true);
     t.set_response_status(tlm::TLM_OK_RESPONSE);

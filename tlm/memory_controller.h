@@ -43,6 +43,7 @@
 #include <tlm_utils/simple_target_socket.h>
 
 #include "common/config.h"
+#include "common/vcd_writer.h"
 
 namespace rbcd {
 
@@ -100,6 +101,13 @@ public:
     const char* kind() const override { return "rbcd::memory_controller"; }
 
     const memory_stats& stats() const { return stats_; }
+
+    // Waveforms: requests in flight and channel activity, at their computed cycles.
+    void attach_vcd(VcdWriter& vcd, const std::string& scope) {
+        vcd_ = &vcd;
+        vcd_in_flight_ = vcd.add(scope, "requests_in_flight", 8);
+        vcd_channel_busy_ = vcd.add(scope, "channel_busy", 1);
+    }
     // The backing store; data()[0] is the byte at base().
     unsigned char* data() { return store_.data(); }
     const unsigned char* data() const { return store_.data(); }
@@ -137,6 +145,8 @@ private:
     std::uint64_t channel_free_ = 0;
     std::uint64_t last_completion_ = 0;
     memory_stats stats_;
+    VcdWriter* vcd_ = nullptr;
+    VcdWriter::Sig vcd_in_flight_ = 0, vcd_channel_busy_ = 0;
 };
 
 } // namespace rbcd

@@ -58,10 +58,11 @@ SimConfig small_config(unsigned m) {
     return cfg;
 }
 
-// Fragments for pixel (x, 0) of tile (0, 0): one per depth, ids 1, 2, ..., all front faces.
-std::vector<Fragment> column(std::uint32_t x, std::vector<std::uint32_t> depths, std::uint32_t first_id = 1) {
+// Fragments for pixel (x, y) of tile (0, 0): one per depth, ids 1, 2, ..., all front faces.
+std::vector<Fragment> column(std::uint32_t x, std::vector<std::uint32_t> depths, std::uint32_t y = 0) {
     std::vector<Fragment> v;
-    for (std::uint32_t d : depths) v.push_back(frag(x, 0, d, first_id++, 'F'));
+    std::uint32_t id = 1;
+    for (std::uint32_t d : depths) v.push_back(frag(x, y, d, id++, 'F'));
     return v;
 }
 
@@ -121,10 +122,9 @@ TEST_CASE("hw sorter: insertion at every position of a full list of 4 with M=4",
     // Pixel p (p = 0..4) holds 10 20 30 40, then the new element (id 9) sorts at position p.
     const std::uint32_t new_depth[5] = {5, 15, 25, 35, 45};
     std::vector<Fragment> fs;
-    for (std::uint32_t p = 0; p < 5; ++p) {
-        append(fs, column(p % 4, {10, 20, 30, 40}));   // pixels 0..3 on row 0 ...
-        if (p == 4) for (auto& f : fs) if (f.x == 0 && f.y == 0 && &f >= &fs[fs.size() - 4]) f.y = 1;
-        fs.push_back(frag(p % 4, p / 4, new_depth[p], 9, 'F'));   // ... pixel 4 is (0, 1)
+    for (std::uint32_t p = 0; p < 5; ++p) {   // list p is pixel (p % 4, p / 4)
+        append(fs, column(p % 4, {10, 20, 30, 40}, p / 4));
+        fs.push_back(frag(p % 4, p / 4, new_depth[p], 9, 'F'));
     }
     b.fill(*b.bank0, tb::tile(0, 0, 0, fs));
     CHECK(b.row(*b.bank0, 0) == "5:9F 10:1F 20:2F 30:3F");     // 40 shifted out
@@ -325,7 +325,6 @@ TEST_CASE("hw sorter: timing at rate 4 with a deep queue", "[sorter][timing]") {
     CHECK(r.queue_stall == 0);
     const auto& s = b.sorter->stats();
     CHECK(s.busy_cycles == 10);
-    CHECK(s.starved_cycles == 0);
     CHECK(s.queue_full_cycles == 0);
     CHECK(s.hazard_forwards == 0);
     CHECK(s.hazard_stall_cycles == 0);
@@ -346,7 +345,6 @@ TEST_CASE("hw sorter: timing at rate 1 with a deep queue", "[sorter][timing]") {
     CHECK(r.fill_done == 113);
     CHECK(r.queue_stall == 0);
     CHECK(b.sorter->stats().queue_max_occupancy == 1);
-    CHECK(b.sorter->stats().starved_cycles == 0);
 }
 
 TEST_CASE("hw sorter: timing with a queue of depth 1", "[sorter][timing]") {
@@ -478,7 +476,6 @@ TEST_CASE("hw sorter: pipeline and queue state carry over between tiles", "[sort
     CHECK(s.busy_cycles == 32);
     CHECK(s.queue_full_cycles == 9 + 12);
     CHECK(s.queue_max_occupancy == 4);
-    CHECK(s.starved_cycles == 0);
 }
 
 TEST_CASE("hw sorter: a later tile issues behind the previous one or after its own enqueue", "[sorter][timing]") {
@@ -506,7 +503,6 @@ TEST_CASE("hw sorter: a later tile issues behind the previous one or after its o
     CHECK(b.row(*b.bank0, 0) == "1000:1F");
     CHECK(b.row(*b.bank0, 3) == "");   // cleared by begin_fill: tile 0's list 3 is gone
     // Starvation is counted within a tile only: none here.
-    CHECK(b.sorter->stats().starved_cycles == 0);
 }
 
 TEST_CASE("hw sorter: hazards do not reach across tiles", "[sorter][timing]") {

@@ -85,7 +85,6 @@ TEST_CASE("hw timing: a full input queue holds the rasterizer back", "[timing]")
     CHECK(s.sorter.stats().insertions == 40);
     CHECK(s.feed.stats().stall_queue_full_cycles == 37 - 10);
     CHECK(s.sorter.stats().queue_max_occupancy == 4);
-    CHECK(s.sorter.stats().starved_cycles == 0);
 }
 
 namespace {

@@ -200,7 +200,8 @@ struct Totals {
     std::uint64_t frames, tiles, fragments, overflows, stack_overflows, orphan_back_faces, hits;
 };
 
-void check_stats(const std::string& path, const Totals& t) {
+// Cycles cannot be derived from a vector; a run that did any work took some.
+void check_stats(const std::string& path, const Totals& t, bool some_cycles = true) {
     REQUIRE(fs::exists(path));
     const std::string text = slurp(path);
     INFO("stats: " << text);
@@ -228,7 +229,8 @@ void check_stats(const std::string& path, const Totals& t) {
     }
     REQUIRE(tot.contains("cycles"));
     CHECK(tot["cycles"].is_number_integer());
-    if (tot["cycles"].is_number_integer()) CHECK(tot["cycles"].get<std::int64_t>() > 0);
+    CHECK(tot["cycles"].is_number_unsigned());
+    if (tot["cycles"].is_number_integer() && some_cycles) CHECK(tot["cycles"].get<std::uint64_t>() > 0);
 }
 
 void expect_success(const TempDir& td, const Result& r) {
@@ -308,7 +310,7 @@ TEST_CASE("cli: trace of only the magic line gives zero frames") {
     const Result r = run_with_outputs(td, {"--trace", p, "-q"});
     expect_success(td, r);
     CHECK(slurp(td.collisions()) == "rbcd-collisions 1\n");
-    check_stats(td.stats(), Totals{0, 0, 0, 0, 0, 0, 0});
+    check_stats(td.stats(), Totals{0, 0, 0, 0, 0, 0, 0}, false);
 }
 
 TEST_CASE("cli: only the requested outputs are written") {
