@@ -1,0 +1,180 @@
+// Runs rbcd-sim as a subprocess for the command-line tests: temp dirs, capture
+// of stdout/stderr, and the checks every failing run must pass.
+#pragma once
+#include <catch2/catch.hpp>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#ifndef RBCD_SIM
+#error "RBCD_SIM must name the rbcd-sim executable"
+#endif
+
+extern char** environ;
+
+namespace rbcd::cli_test {
+
+using Catch::Matchers::Contains;
+using Catch::Matchers::EndsWith;
+using Catch::Matchers::StartsWith;
+namespace fs = std::filesystem;
+
+inline const std::string kVectors = std::string(RBCD_SOURCE_DIR) + "/vectors";
+inline const std::string kOld = "older output that must not survive a failed run\n";
+
+inline std::string slurp(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream os;
+    os << in.rdbuf();
+    return os.str();
+}
+
+struct TempDir {
+    std::string dir;
+    TempDir() {
+        std::string tmpl = (fs::temp_directory_path() / "rbcd_cli_test_XXXXXX").string();
+        std::vector<char> b(tmpl.begin(), tmpl.end());
+        b.push_back('\0');
+        REQUIRE(mkdtemp(b.data()) != nullptr);
+        dir = b.data();
+        fs::create_directory(out_dir());
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(dir, ec);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+
+    std::string path(const std::string& name) const { return dir + "/" + name; }
+    // Outputs go to their own directory, so that a stray temporary shows.
+    std::string out_dir() const { return dir + "/out"; }
+    std::string collisions() const { return out_dir() + "/collisions.txt"; }
+    std::string stats() const { return out_dir() + "/stats.json"; }
+
+    std::string write(const std::string& name, const std::string& content) const {
+        std::string p = path(name);
+        std::ofstream out(p, std::ios::binary);
+        out.write(content.data(), static_cast<std::streamsize>(content.size()));
+        out.close();
+        REQUIRE(out.good());
+        return p;
+    }
+    std::string write_gz(const std::string& name, const std::string& content) const {
+        std::string p = path(name);
+        gzFile g = gzopen(p.c_str(), "wb6");
+        REQUIRE(g != nullptr);
+        REQUIRE(gzwrite(g, content.data(), static_cast<unsigned>(content.size())) == static_cast<int>(content.size()));
+        REQUIRE(gzclose(g) == Z_OK);
+        return p;
+    }
+    // Older files at both output paths, as a previous run would have left.
+    void plant_old_outputs() const {
+        std::ofstream(collisions(), std::ios::binary) << kOld;
+        std::ofstream(stats(), std::ios::binary) << kOld;
+        REQUIRE(fs::exists(collisions()));
+        REQUIRE(fs::exists(stats()));
+    }
+    std::vector<std::string> out_entries() const {
+        std::vector<std::string> v;
+        for (const auto& e : fs::directory_iterator(out_dir())) v.push_back(e.path().filename().string());
+        return v;
+    }
+};
+
+struct Result {
+    int status = -1;       // exit status, or -signal when killed by a signal
+    std::string out, err;
+    std::string cmd;       // for messages
+};
+
+inline Result run_sim(const TempDir& td, const std::vector<std::string>& args) {
+    Result r;
+    const std::string out_path = td.path("stdout.txt"), err_path = td.path("stderr.txt");
+    std::vector<std::string> argv_s{RBCD_SIM};
+    argv_s.insert(argv_s.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& a : argv_s) {
+        argv.push_back(a.data());
+        r.cmd += (r.cmd.empty() ? "" : " ") + a;
+    }
+    argv.push_back(nullptr);
+
+    std::vector<std::string> env_s;
+    for (char** e = environ; *e; ++e)
+        if (std::strncmp(*e, "SYSTEMC_DISABLE_COPYRIGHT_MESSAGE=", 34) != 0) env_s.emplace_back(*e);
+    env_s.emplace_back("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE=1");
+    std::vector<char*> envp;
+    for (auto& e : env_s) envp.push_back(e.data());
+    envp.push_back(nullptr);
+
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&fa, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    pid_t pid = 0;
+    const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), envp.data());
+    posix_spawn_file_actions_destroy(&fa);
+    INFO(r.cmd);
+    REQUIRE(rc == 0);
+    int st = 0;
+    REQUIRE(waitpid(pid, &st, 0) == pid);
+    if (WIFEXITED(st)) r.status = WEXITSTATUS(st);
+    else if (WIFSIGNALED(st)) r.status = -WTERMSIG(st);
+    r.out = slurp(out_path);
+    r.err = slurp(err_path);
+    return r;
+}
+
+// Runs with --collisions and --stats into td's out directory, over older files.
+inline Result run_with_outputs(const TempDir& td, std::vector<std::string> args, bool plant_old = true) {
+    if (plant_old) td.plant_old_outputs();
+    args.insert(args.end(), {"--collisions", td.collisions(), "--stats", td.stats()});
+    return run_sim(td, args);
+}
+
+inline std::size_t count_lines(const std::string& s) {
+    std::size_t n = 0;
+    for (char c : s) n += c == '\n';
+    if (!s.empty() && s.back() != '\n') ++n;
+    return n;
+}
+
+// Exit status, one line on stderr holding every needle, and nothing at the
+// output paths (nor any temporary beside them).
+inline void expect_error(const TempDir& td, const Result& r, int status, const std::vector<std::string>& needles) {
+    INFO("command: " << r.cmd);
+    INFO("stderr: " << r.err);
+    INFO("stdout: " << r.out);
+    CHECK(r.status == status);
+    CHECK(count_lines(r.err) == 1);
+    CHECK_THAT(r.err, EndsWith("\n"));
+    for (const auto& n : needles) CHECK_THAT(r.err, Contains(n));
+    CHECK_FALSE(fs::exists(td.collisions()));
+    CHECK_FALSE(fs::exists(td.stats()));
+    const auto left = td.out_entries();
+    std::string names;
+    for (const auto& e : left) names += e + " ";
+    INFO("left in the output directory: " << names);
+    CHECK(left.empty());
+}
+
+inline void expect_input_error(const TempDir& td, const Result& r, const std::vector<std::string>& needles) {
+    expect_error(td, r, 2, needles);
+}
+
+} // namespace rbcd::cli_test

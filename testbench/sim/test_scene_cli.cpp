@@ -1,0 +1,177 @@
+// rbcd-sim on 3D scenes, as a user runs it: --scene against --write-trace
+// replayed with --trace, images, waveforms, and bad scenes failing cleanly.
+#include "testbench/sim/cli_util.h"
+
+#include <nlohmann/json.hpp>
+
+using namespace rbcd::cli_test;
+
+namespace {
+
+// Two overlapping spheres in front of the camera: collide in every frame.
+const std::string kTwoSpheres = R"(format = "rbcd-scene 1"
+frames = 3
+[screen]
+width = 96
+height = 64
+[camera]
+eye = [0.0, 0.0, 6.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 45.0
+near = 0.5
+far = 50.0
+[[object]]
+name = "a"
+id = 1
+mesh = "sphere"
+segments = 16
+position = [-0.5, 0.0, 0.0]
+[[object]]
+name = "b"
+id = 2
+mesh = "sphere"
+segments = 16
+position = [0.5, 0.0, 0.0]
+[[object]]
+name = "wall"
+mesh = "box"
+position = [0.0, 0.0, -3.0]
+scale = [4.0, 4.0, 0.1]
+)";
+
+std::size_t count(const std::string& s, const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
+    return n;
+}
+
+} // namespace
+
+TEST_CASE("cli scene: --write-trace replayed with --trace gives the same collisions and stats totals") {
+    TempDir td;
+    const std::string scene = td.write("s.toml", kTwoSpheres);
+    const std::string trace = td.path("s.rbt");
+    const std::string c1 = td.path("c1.txt"), c2 = td.path("c2.txt"), s1 = td.path("s1.json"), s2 = td.path("s2.json");
+    const Result a = run_sim(td, {"--scene", scene, "--write-trace", trace, "--collisions", c1, "--stats", s1, "-q"});
+    INFO(a.err);
+    REQUIRE(a.status == 0);
+    const Result b = run_sim(td, {"--trace", trace, "--collisions", c2, "--stats", s2, "-q"});
+    INFO(b.err);
+    REQUIRE(b.status == 0);
+    const std::string out = slurp(c1);
+    CHECK(out == slurp(c2));
+    CHECK(count(out, "frame ") == 3);
+    CHECK(count(out, "hit ") > 0);   // the spheres overlap in every frame
+    const auto j1 = nlohmann::json::parse(slurp(s1)), j2 = nlohmann::json::parse(slurp(s2));
+    CHECK(j1["totals"] == j2["totals"]);
+    CHECK(j1["totals"]["cycles"].get<std::uint64_t>() > 0);
+}
+
+TEST_CASE("cli scene: the embedded default scene runs with no arguments and matches its written trace") {
+    TempDir td;
+    const std::string trace = td.path("default.rbt"), c1 = td.path("c1.txt"), c2 = td.path("c2.txt");
+    const Result a = run_sim(td, {"--write-trace", trace, "--collisions", c1});
+    INFO(a.err);
+    REQUIRE(a.status == 0);
+    CHECK_THAT(a.out, Contains("<default scene>"));
+    CHECK_THAT(a.out, Contains("frames 60"));
+    REQUIRE(run_sim(td, {"--trace", trace, "--collisions", c2, "-q"}).status == 0);
+    const std::string out = slurp(c1);
+    CHECK(out == slurp(c2));
+    // The scene's plan: balls 1-2 and drop/pedestal 7-8 collide; cube/post 3-4
+    // and ring/rod 5-6 never do.
+    CHECK_THAT(out, Contains(" 1 2 "));
+    CHECK_THAT(out, Contains(" 7 8 "));
+    CHECK_THAT(out, !Contains(" 3 4 "));
+    CHECK_THAT(out, !Contains(" 5 6 "));
+}
+
+TEST_CASE("cli scene: --images writes one PNG per frame") {
+    TempDir td;
+    const std::string scene = td.write("s.toml", kTwoSpheres);
+    const std::string dir = td.path("png");
+    const Result r = run_sim(td, {"--scene", scene, "--images", dir, "-q"});
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    for (const char* f : {"frame_00000.png", "frame_00001.png", "frame_00002.png"}) {
+        INFO(f);
+        REQUIRE(fs::exists(dir + "/" + f));
+        const std::string png = slurp(dir + "/" + f);
+        CHECK(png.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0);
+    }
+}
+
+TEST_CASE("cli scene: --images with a trace is a command-line error") {
+    TempDir td;
+    const Result r = run_with_outputs(td, {"--trace", kVectors + "/rule-fig5-case2.rbt", "--images", td.path("png")});
+    expect_input_error(td, r, {"--images"});
+    CHECK_FALSE(fs::exists(td.path("png")));
+}
+
+TEST_CASE("cli scene: --scene and --trace together are a command-line error") {
+    TempDir td;
+    const std::string scene = td.write("s.toml", kTwoSpheres);
+    const Result r = run_with_outputs(td, {"--scene", scene, "--trace", kVectors + "/rule-fig5-case2.rbt"});
+    expect_input_error(td, r, {"--scene"});
+}
+
+TEST_CASE("cli scene: a missing mesh file exits 2 naming the scene and key and leaves nothing") {
+    TempDir td;
+    std::string text = kTwoSpheres;
+    text.replace(text.find("mesh = \"box\""), 12, "mesh = \"nowhere.obj\"");
+    const std::string scene = td.write("bad.toml", text);
+    const std::string vcd = td.out_dir() + "/w.vcd", trace = td.out_dir() + "/w.rbt";
+    std::ofstream(vcd) << kOld;
+    const Result r = run_with_outputs(td, {"--scene", scene, "--vcd", vcd, "--write-trace", trace});
+    expect_input_error(td, r, {scene + ":", "mesh"});
+}
+
+TEST_CASE("cli scene: an unknown shape exits 2 naming file:line and the key") {
+    TempDir td;
+    std::string text = kTwoSpheres;
+    text.replace(text.find("mesh = \"box\""), 12, "mesh = \"cone\"");
+    const std::string scene = td.write("bad.toml", text);
+    const Result r = run_with_outputs(td, {"--scene", scene});
+    expect_input_error(td, r, {scene + ":", "mesh"});
+}
+
+TEST_CASE("cli scene: a singular transform exits 2") {
+    TempDir td;
+    std::string text = kTwoSpheres;
+    text.replace(text.find("scale = [4.0, 4.0, 0.1]"), 23, "scale = [4.0, 0.0, 0.1]");
+    const std::string scene = td.write("bad.toml", text);
+    const Result r = run_with_outputs(td, {"--scene", scene});
+    expect_input_error(td, r, {scene + ":", "scale"});
+}
+
+TEST_CASE("cli scene: a camera looking away from everything exits 2 and leaves nothing") {
+    TempDir td;
+    std::string text = kTwoSpheres;
+    text.replace(text.find("target = [0.0, 0.0, 0.0]"), 24, "target = [0.0, 0.0, 12.0]");
+    const std::string scene = td.write("bad.toml", text);
+    const std::string trace = td.out_dir() + "/w.rbt";
+    const Result r = run_with_outputs(td, {"--scene", scene, "--write-trace", trace});
+    expect_input_error(td, r, {"nothing in view"});
+}
+
+TEST_CASE("cli scene: an unknown scene key exits 2 naming it") {
+    TempDir td;
+    const std::string scene = td.write("bad.toml", kTwoSpheres + "colour = \"red\"\n");
+    const Result r = run_with_outputs(td, {"--scene", scene});
+    expect_input_error(td, r, {scene + ":", "colour"});
+}
+
+TEST_CASE("cli vcd: a failed run leaves no waveform and a good one a complete dump") {
+    TempDir td;
+    const std::string vcd = td.out_dir() + "/run.vcd";
+    std::ofstream(vcd) << kOld;
+    const Result bad = run_sim(td, {"--trace", td.write("bad.rbt", "rbcd-trace 1\nframe 1\n"), "--vcd", vcd});
+    CHECK(bad.status == 2);
+    CHECK_FALSE(fs::exists(vcd));
+    const Result good = run_sim(td, {"--trace", kVectors + "/rule-fig5-case2.rbt", "--vcd", vcd, "-q"});
+    REQUIRE(good.status == 0);
+    const std::string text = slurp(vcd);
+    CHECK_THAT(text, Contains("$enddefinitions $end"));
+    CHECK_THAT(text, Contains("$scope module zoverlap_tester $end"));
+    CHECK_THAT(text, Contains("$dumpvars"));
+}
