@@ -2,6 +2,8 @@
 // rejected one with its exact line number, gzip input and a writer round trip.
 #include <catch2/catch.hpp>
 
+#include "testbench/common/temp_dir.h"
+
 #include <stdlib.h>
 #include <zlib.h>
 
@@ -28,35 +30,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct TempDir {
-    std::string dir;
-    TempDir() {
-        std::string tmpl = (fs::temp_directory_path() / "rbcd_io_test_XXXXXX").string();
-        std::vector<char> b(tmpl.begin(), tmpl.end());
-        b.push_back('\0');
-        REQUIRE(mkdtemp(b.data()) != nullptr);
-        dir = b.data();
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(dir, ec);
-    }
-    std::string path(const std::string& name) const { return dir + "/" + name; }
-    std::string write(const std::string& name, const std::string& content) const {
-        std::string p = path(name);
-        std::ofstream out(p, std::ios::binary);
-        out.write(content.data(), static_cast<std::streamsize>(content.size()));
-        REQUIRE(out.good());
-        return p;
-    }
-    std::string write_gz(const std::string& name, const std::string& content) const {
-        std::string p = path(name);
-        gzFile g = gzopen(p.c_str(), "wb6");
-        REQUIRE(g != nullptr);
-        REQUIRE(gzwrite(g, content.data(), static_cast<unsigned>(content.size())) == static_cast<int>(content.size()));
-        REQUIRE(gzclose(g) == Z_OK);
-        return p;
-    }
+struct TempDir : rbcd::test::TempDir {
+    TempDir() : rbcd::test::TempDir("rbcd_io_test") {}
 };
 
 std::string slurp(const std::string& p) {

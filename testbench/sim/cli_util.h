@@ -3,6 +3,8 @@
 #pragma once
 #include <catch2/catch.hpp>
 
+#include "testbench/common/temp_dir.h"
+
 #include <fcntl.h>
 #include <spawn.h>
 #include <stdlib.h>
@@ -42,45 +44,14 @@ inline std::string slurp(const std::string& path) {
     return os.str();
 }
 
-struct TempDir {
-    std::string dir;
-    TempDir() {
-        std::string tmpl = (fs::temp_directory_path() / "rbcd_cli_test_XXXXXX").string();
-        std::vector<char> b(tmpl.begin(), tmpl.end());
-        b.push_back('\0');
-        REQUIRE(mkdtemp(b.data()) != nullptr);
-        dir = b.data();
-        fs::create_directory(out_dir());
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(dir, ec);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
+struct TempDir : rbcd::test::TempDir {
+    TempDir() : rbcd::test::TempDir("rbcd_cli_test") { fs::create_directory(out_dir()); }
 
-    std::string path(const std::string& name) const { return dir + "/" + name; }
     // Outputs go to their own directory, so that a stray temporary shows.
     std::string out_dir() const { return dir + "/out"; }
     std::string collisions() const { return out_dir() + "/collisions.txt"; }
     std::string stats() const { return out_dir() + "/stats.json"; }
 
-    std::string write(const std::string& name, const std::string& content) const {
-        std::string p = path(name);
-        std::ofstream out(p, std::ios::binary);
-        out.write(content.data(), static_cast<std::streamsize>(content.size()));
-        out.close();
-        REQUIRE(out.good());
-        return p;
-    }
-    std::string write_gz(const std::string& name, const std::string& content) const {
-        std::string p = path(name);
-        gzFile g = gzopen(p.c_str(), "wb6");
-        REQUIRE(g != nullptr);
-        REQUIRE(gzwrite(g, content.data(), static_cast<unsigned>(content.size())) == static_cast<int>(content.size()));
-        REQUIRE(gzclose(g) == Z_OK);
-        return p;
-    }
     // Older files at both output paths, as a previous run would have left.
     void plant_old_outputs() const {
         std::ofstream(collisions(), std::ios::binary) << kOld;

@@ -5,6 +5,8 @@
 // and the --dump-config round trip.
 #include <catch2/catch.hpp>
 
+#include "testbench/common/temp_dir.h"
+
 #include <stdlib.h>
 
 #include <cstdint>
@@ -25,30 +27,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct TempDir {
-    std::string dir;
-    TempDir() {
-        std::string tmpl = (fs::temp_directory_path() / "rbcd_config_test_XXXXXX").string();
-        std::vector<char> b(tmpl.begin(), tmpl.end());
-        b.push_back('\0');
-        REQUIRE(mkdtemp(b.data()) != nullptr);
-        dir = b.data();
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(dir, ec);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    std::string path(const std::string& name) const { return dir + "/" + name; }
-    std::string write(const std::string& name, const std::string& content) const {
-        std::string p = path(name);
-        std::ofstream out(p, std::ios::binary);
-        out.write(content.data(), static_cast<std::streamsize>(content.size()));
-        out.close();
-        REQUIRE(out.good());
-        return p;
-    }
+struct TempDir : rbcd::test::TempDir {
+    TempDir() : rbcd::test::TempDir("rbcd_config_test") {}
 };
 
 const ConfigKey& key(const std::string& name) {
