@@ -73,7 +73,7 @@ struct HostConfig {
 struct GpuConfig {
     unsigned raster_fragments_per_cycle = 4;   // the baseline rasterizer, same as the feed's by default
     unsigned fragment_processors = 4;
-    unsigned cycles_per_fragment = 4;          // per fragment processor
+    unsigned cycles_per_fragment = 8;          // per fragment processor (docs/gpu-model.md)
     unsigned tile_overhead_cycles = 0;         // fixed cost per tile (setup, colour flush)
 };
 

@@ -21,6 +21,7 @@
 #include "sc_main/collision_file.h"
 #include "sc_main/image_sink.h"
 #include "sc_main/output_file.h"
+#include "sc_main/progress.h"
 #include "sc_main/stats_report.h"
 #include "hw/rbcd_system.h"
 
@@ -137,11 +138,20 @@ int run(const Options& opt) {
                                           cfg.trace.start, cfg.trace.end);
         sys.attach_vcd(*vcd);
     }
-    if (trace_out) {
-        sys.feed.on_frame = [&](std::uint64_t n) { trace_out->frame(n); };
-        sys.feed.on_tile = [&](const Tile& t) { trace_out->tile(t); };
-    }
+    RunProbe probe(sys);                 // GPU overhead per tile, energy per frame
+    tee.add(&probe.unit_frames());       // the unit's frame boundaries reach the probe through the sink
+    Progress progress;                   // stderr, only on a terminal, only after a few seconds
+    sys.feed.on_tile = [&](const Tile& t) {
+        probe.on_tile(t);
+        if (trace_out) trace_out->tile(t);
+    };
+    sys.feed.on_frame = [&](std::uint64_t n) {
+        probe.on_frame(n);
+        progress.on_frame(n, sys.feed.stats().fragments);
+        if (trace_out) trace_out->frame(n);
+    };
     sys.run();
+    progress.finish();
     if (images) images->finish();
     if (trace_out) {
         trace_out->close();
@@ -152,7 +162,7 @@ int run(const Options& opt) {
     image_guard.keep = true;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-    const nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall});
+    const nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, &probe);
     if (file_sink) {
         file_sink->finish();
         collisions_out.commit();

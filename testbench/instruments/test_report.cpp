@@ -1,0 +1,153 @@
+// The --stats document, the stdout summary and the progress line.
+#include <catch2/catch.hpp>
+
+#include "sc_main/progress.h"
+#include "testbench/instruments/instruments_util.h"
+
+using namespace rbcd;
+using rbcd::tb::frag;
+
+namespace {
+
+// `frames` frames of one tile each; frame f has f + 1 front faces on distinct pixels
+// and other=40, so the baseline and the overhead vary from frame to frame.
+MemorySource growing_frames(unsigned frames) {
+    MemorySource src(StreamHeader{});
+    for (unsigned f = 0; f < frames; ++f) {
+        src.add_frame(f);
+        std::vector<Fragment> fs;
+        for (unsigned i = 0; i <= f; ++i) fs.push_back(frag(i % 16, i / 16, 100 + i, 1, 'F'));
+        src.add_tile(tb::tile(f, 0, 0, fs, 40));
+    }
+    return src;
+}
+
+} // namespace
+
+TEST_CASE("instruments: stats JSON has the totals keys and per-frame series", "[report]") {
+    auto src = growing_frames(3);
+    tb::ProbedRun run(tb::fixed_latency_config(), src);
+    const auto j = run.stats();
+
+    // "totals": exactly the contract's integer keys.
+    const auto& t = j["totals"];
+    REQUIRE(t.is_object());
+    CHECK(t.size() == 8);
+    for (const char* k : {"frames", "tiles", "fragments", "overflows", "stack_overflows", "orphan_back_faces", "hits",
+                          "cycles"}) {
+        INFO(k);
+        REQUIRE(t.contains(k));
+        CHECK(t[k].is_number_unsigned());
+    }
+    CHECK(t["frames"] == 3);
+    CHECK(t["fragments"] == 1 + 2 + 3);
+
+    const auto& g = j["gpu"];
+    for (const char* k : {"baseline_cycles", "cycles_with_unit", "overhead_pct", "stalls", "overhead_cycles",
+                          "extra_raster_cycles", "tail_cycles", "per_frame_overhead_pct", "additive_upper_bound"}) {
+        INFO(k);
+        CHECK(g.contains(k));
+    }
+    CHECK(g["stalls"].contains("no_bank_cycles"));
+    CHECK(g["stalls"].contains("queue_full_cycles"));
+    const auto& e = j["energy"];
+    for (const char* k : {"blocks", "dynamic_pj", "leakage_pj", "total_pj", "total_nj", "average_power_mw",
+                          "per_event_pj", "per_frame"}) {
+        INFO(k);
+        CHECK(e.contains(k));
+    }
+    for (const char* k : {"input_queue", "zeb_bank0", "zeb_bank1", "insertion_sorter", "zoverlap_tester",
+                          "output_buffer", "memory"}) {
+        INFO(k);
+        CHECK(e["blocks"].contains(k));
+    }
+
+    // Per frame: the entries and the series agree, and they add up to the totals.
+    const auto& fr = j["frames"];
+    REQUIRE(fr.size() == 3);
+    REQUIRE(j["series"]["overhead_pct"].size() == 3);
+    std::uint64_t base = 0, with = 0;
+    double nj = 0;
+    for (std::size_t i = 0; i < fr.size(); ++i) {
+        const auto& fg = fr[i]["gpu"];
+        CHECK(fr[i]["frame"] == i);
+        CHECK(j["series"]["frame"][i] == i);
+        CHECK(j["series"]["baseline_cycles"][i] == fg["baseline_cycles"]);
+        CHECK(j["series"]["cycles_with_unit"][i] == fg["cycles_with_unit"]);
+        CHECK(j["series"]["energy_nj"][i] == fr[i]["energy_nj"]);
+        // The frame's overhead is the sum of its causes.
+        const std::uint64_t over = fg["cycles_with_unit"].get<std::uint64_t>() - fg["baseline_cycles"].get<std::uint64_t>();
+        CHECK(over == fg["extra_raster_exposed"].get<std::uint64_t>() + fg["stalls"]["no_bank_exposed"].get<std::uint64_t>() +
+                          fg["stalls"]["queue_full_exposed"].get<std::uint64_t>() +
+                          fg["stalls"]["feed_excess"].get<std::uint64_t>() + fg["tail_cycles"].get<std::uint64_t>());
+        base += fg["baseline_cycles"].get<std::uint64_t>();
+        with += fg["cycles_with_unit"].get<std::uint64_t>();
+        nj += fr[i]["energy_nj"].get<double>();
+    }
+    CHECK(g["baseline_cycles"] == base);
+    CHECK(g["cycles_with_unit"] == with);
+    CHECK(g["overhead_pct"].get<double>() == Approx(100.0 * (double(with) - double(base)) / double(base)));
+    CHECK(nj == Approx(e["total_nj"].get<double>()));
+    // Frame f: other=40 plus f + 1 fragments shaded at 1 a cycle: B = 41, 42, 43.
+    CHECK(fr[2]["gpu"]["baseline_cycles"] == 43);
+}
+
+TEST_CASE("instruments: summary shows the first frames the worst and the mean", "[report]") {
+    auto src = growing_frames(12);
+    tb::ProbedRun run(tb::fixed_latency_config(), src);
+    const auto j = run.stats();
+    const std::string s = make_summary(j);
+    INFO(s);
+    CHECK(s.find("rbcd-sim: test") == 0);
+    CHECK(s.find("frames 12") != std::string::npos);
+    for (const char* block : {"rasterizer_feed", "input_queue", "zeb_bank0", "zeb_bank1", "insertion_sorter",
+                              "zoverlap_tester", "output_buffer", "memory"})
+        CHECK(s.find(std::string("\n  ") + block) != std::string::npos);
+    CHECK(s.find("GPU time") != std::string::npos);
+    CHECK(s.find("average power") != std::string::npos);
+    // Twelve frames: 0, 1, 2, then the worst and the mean; not frame 5 on its own row.
+    CHECK(s.find("\n         0 ") != std::string::npos);
+    CHECK(s.find("\n         2 ") != std::string::npos);
+    CHECK(s.find("\n         5 ") == std::string::npos);
+    const std::uint64_t worst = j["gpu"]["per_frame_overhead_pct"]["max_frame"].get<std::uint64_t>();
+    CHECK(s.find("worst " + std::to_string(worst)) != std::string::npos);
+    CHECK(s.find("\n      mean ") != std::string::npos);
+}
+
+TEST_CASE("instruments: progress waits for the delay then rate-limits and clears", "[report]") {
+    double now = 100.0;
+    std::string out;
+    Progress p(true, [&] { return now; }, [&](const std::string& s) { out += s; }, 3.0, 0.5);
+    p.on_frame(1, 1000);
+    now = 102.9;
+    p.on_frame(2, 2000);
+    CHECK(out.empty());   // a short run prints nothing
+    now = 104.0;
+    p.on_frame(3, 8000);
+    CHECK(out == "\rrbcd-sim: 3 frames done, 8000 fragments, 2000 fragments/s");
+    out.clear();
+    now = 104.2;
+    p.on_frame(4, 9000);
+    CHECK(out.empty());   // within the interval
+    now = 104.6;
+    p.on_frame(5, 9200);
+    CHECK(out.find("5 frames done") != std::string::npos);
+    CHECK(p.shown());
+    out.clear();
+    p.finish();
+    CHECK(out.size() > 2);
+    CHECK(out.front() == '\r');
+    CHECK(out.back() == '\r');
+    CHECK(out.find_first_not_of(" \r") == std::string::npos);
+    out.clear();
+    p.finish();
+    CHECK(out.empty());
+
+    // Disabled (stderr not a terminal): never prints.
+    std::string none;
+    Progress off(false, [&] { return now; }, [&](const std::string& s) { none += s; }, 0.0, 0.0);
+    now += 100;
+    off.on_frame(9, 9);
+    off.finish();
+    CHECK(none.empty());
+}
