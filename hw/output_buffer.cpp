@@ -36,22 +36,25 @@ std::uint64_t output_buffer::issue(std::uint64_t cycle, unsigned n) {
     const std::uint64_t bytes = std::uint64_t(n) * kRecordBytes;
     if (write_offset_ + bytes > region_bytes_) {
         // The CPU reads only what has landed: let every write complete first.
+        // Not retired here: slots free only as the tester's own time passes them.
         std::uint64_t all_done = t;
         for (const auto& w : inflight_) all_done = std::max(all_done, w.done);
-        retire(all_done);
         ++stats_.region_full_events;
         t = host_.read_back(write_offset_, all_done, true);
         write_offset_ = 0;
         if (vcd_) vcd_->set(vcd_offset_, t, 0);
     }
-    while (inflight_.size() >= max_outstanding_) {
-        std::uint64_t first_done = inflight_.front().done;
-        for (const auto& w : inflight_) first_done = std::min(first_done, w.done);
-        if (first_done > t) {
-            stats_.outstanding_stall_cycles += first_done - t;
-            t = first_done;
-        }
-        retire(t);
+    // The engine's time t may run ahead of the tester's: count the writes still
+    // in flight at t without retiring them, so that slots stay held for the
+    // tester until its own time passes their completion.
+    pending_done_.clear();
+    for (const auto& w : inflight_)
+        if (w.done > t) pending_done_.push_back(w.done);
+    if (pending_done_.size() >= max_outstanding_) {
+        std::sort(pending_done_.begin(), pending_done_.end());
+        const std::uint64_t slot_free = pending_done_[pending_done_.size() - max_outstanding_];
+        stats_.outstanding_stall_cycles += slot_free - t;
+        t = slot_free;
     }
 
     for (unsigned i = 0; i < n; ++i) pending_[i].store(&data_[std::size_t(i) * kRecordBytes]);

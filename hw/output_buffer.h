@@ -81,6 +81,7 @@ private:
     std::uint64_t engine_cycle_ = 0;   // the write engine issues in order, never back in time
     std::vector<MemRecord> pending_;
     std::vector<Inflight> inflight_;
+    std::vector<std::uint64_t> pending_done_;   // scratch: completions after the engine's time
     std::uint64_t inflight_records_ = 0;
     std::vector<unsigned char> data_;
     tlm::tlm_generic_payload gp_;

@@ -133,14 +133,18 @@ std::uint64_t zoverlap_tester::test_tile(zeb_bank& bank, std::uint64_t t) {
         }
     }
 
-    if (bank.lists_overflowed() > 0) {
-        OverflowRecord o{bank.tile_col(), bank.tile_row(), bank.lists_overflowed(), bank.fragments_dropped()};
-        ++stats_.overflow_records;
-        const std::uint64_t accepted = out_.push(MemRecord::overflow(o), t);
-        stats_.output_stall_cycles += accepted - t;
-        t = accepted + 1;
-    }
     return t;
+}
+
+std::uint64_t zoverlap_tester::emit_overflow(const OverflowRecord& o, std::uint64_t t) {
+    ++stats_.overflow_records;
+    const std::uint64_t accepted = out_.push(MemRecord::overflow(o), t);
+    stats_.output_stall_cycles += accepted - t;
+    if (vcd_ && accepted > t) {
+        vcd_->set(vcd_stall_, t, 1);
+        vcd_->set(vcd_stall_, accepted, 0);
+    }
+    return accepted + 1;
 }
 
 void zoverlap_tester::run() {
@@ -178,11 +182,17 @@ void zoverlap_tester::run() {
                 vcd_->set(vcd_frame_, t, job.bank->frame());
             }
             t = test_tile(*job.bank, t);
-            if (vcd_) vcd_->set(vcd_busy_, t, 0);
-            stats_.busy_cycles += t - start;
-            // The bank is reusable only once its last list has been read.
+            // The overflow notice is taken from the bank's flags before it is
+            // released: the bank is reusable once its last list has been read,
+            // whatever the output buffer makes the notice wait for.
+            const bool overflowed = job.bank->lists_overflowed() > 0;
+            const OverflowRecord o{job.bank->tile_col(), job.bank->tile_row(), job.bank->lists_overflowed(),
+                                   job.bank->fragments_dropped()};
             clk_.wait_until(t);
             job.bank->release(t);
+            if (overflowed) t = emit_overflow(o, t);
+            if (vcd_) vcd_->set(vcd_busy_, t, 0);
+            stats_.busy_cycles += t - start;
             if (!frames_.empty()) frames_.back().last_tile_done = t;
             break;
         }

@@ -98,6 +98,7 @@ public:
 private:
     void run();
     std::uint64_t test_tile(zeb_bank& bank, std::uint64_t t);
+    std::uint64_t emit_overflow(const OverflowRecord& o, std::uint64_t t);
     std::uint64_t emit_hit(std::uint32_t x, std::uint32_t y, std::uint32_t id1, std::uint32_t id2,
                            std::uint32_t dq, std::uint64_t t);
 

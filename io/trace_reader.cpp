@@ -22,6 +22,11 @@
 #include "common/errors.h"
 
 namespace rbcd {
+
+namespace {
+constexpr std::uint64_t kTileWorkLimit = std::uint64_t(1) << 40;
+}
+
 namespace {
 
 // Big reads keep syscall and zlib call overhead per fragment negligible.
@@ -450,6 +455,10 @@ void TraceReader::Impl::start_tile(const Fields& fl, Tile& t) {
         if (*have) fail("tile key '" + k + "' given twice");
         if (val.empty()) fail("tile field '" + k + "=' has no value");
         *dst = num(val, "tile " + k + "=");
+        // Far beyond any tile's work (2^40 fragments or cycles), and kept there so
+        // that the timing arithmetic over a whole run cannot overflow 64 bits.
+        if (*dst > kTileWorkLimit)
+            fail("tile " + k + "=" + num_str(*dst) + " too large (at most " + num_str(kTileWorkLimit) + ")");
         *have = true;
     }
     if (c >= cols)

@@ -1,5 +1,7 @@
 #include "io/trace_writer.h"
 
+#include <stdexcept>
+
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -23,7 +25,7 @@ inline char* put(char* p, const char* s) {
 
 void flush(std::FILE* f, std::string& buf, const std::string& path) {
     if (std::fwrite(buf.data(), 1, buf.size(), f) != buf.size())
-        throw InputError(path + ": write error: " + std::strerror(errno));
+        throw std::runtime_error(path + ": write error: " + std::strerror(errno));
     buf.clear();
 }
 
@@ -45,14 +47,14 @@ TraceWriter::~TraceWriter() {
 }
 
 void TraceWriter::frame(std::uint64_t n) {
-    if (!f_) throw InputError(path_ + ": write after close");
+    if (!f_) throw std::logic_error(path_ + ": write after close");
     buf_ += "frame ";
     buf_ += std::to_string(n);
     buf_ += '\n';
 }
 
 void TraceWriter::tile(const Tile& t) {
-    if (!f_) throw InputError(path_ + ": write after close");
+    if (!f_) throw std::logic_error(path_ + ": write after close");
     std::size_t at = buf_.size();
     // Written in slices so the buffer stays near kFlushAt however big the tile.
     buf_.resize(at + kMaxTileLine);
@@ -111,7 +113,7 @@ void TraceWriter::close() {
     buf_.clear();
     if (ok && std::fflush(f) != 0) { ok = false; err = errno; }
     if (std::fclose(f) != 0 && ok) { ok = false; err = errno; }
-    if (!ok) throw InputError(path_ + ": write error: " + std::strerror(err));
+    if (!ok) throw std::runtime_error(path_ + ": write error: " + std::strerror(err));
 }
 
 } // namespace rbcd

@@ -68,6 +68,15 @@ int run(const Options& opt) {
         return 0;
     }
 
+    // An output over an input would destroy it before it is read.
+    const std::pair<const char*, const std::string*> outs[] = {
+        {"--collisions", &opt.collisions}, {"--stats", &opt.stats}, {"--vcd", &opt.vcd},
+        {"--write-trace", &opt.write_trace}};
+    for (const std::string* in : {&opt.trace, &opt.scene, &opt.config_file})
+        for (const auto& [flag, path] : outs)
+            if (!in->empty() && !path->empty() && same_file(*path, *in))
+                throw InputError(std::string(flag) + ": " + *path + " is the input file " + *in);
+
     // Outputs are created before the run so an uncreatable path fails fast.
     OutputFile collisions_out, stats_out, vcd_out;
     if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions);
@@ -108,16 +117,19 @@ int run(const Options& opt) {
     std::unique_ptr<TraceWriter> trace_out;
     std::string trace_tmp;
     if (!opt.write_trace.empty()) {
+        if (std::filesystem::is_directory(opt.write_trace))
+            throw InputError(opt.write_trace + ": cannot create: is a directory");
         trace_tmp = opt.write_trace + ".tmp." + std::to_string(::getpid());
         trace_out = std::make_unique<TraceWriter>(trace_tmp, src->header());
     }
+    if (!trace_tmp.empty()) remove_on_interrupt(trace_tmp);
     struct TraceTmpGuard {
         std::string tmp, path;
         bool keep = false;
         ~TraceTmpGuard() {
             if (keep || tmp.empty()) return;
-            std::remove(tmp.c_str());
-            std::remove(path.c_str());
+            ::unlink(tmp.c_str());
+            ::unlink(path.c_str());
         }
     } trace_guard{trace_tmp, opt.write_trace};
     struct ImageGuard {
@@ -125,7 +137,7 @@ int run(const Options& opt) {
         bool keep = false;
         ~ImageGuard() {
             if (keep || !sink) return;
-            for (const auto& f : sink->written()) std::remove(f.c_str());
+            for (const auto& f : sink->written()) ::unlink(f.c_str());
         }
     } image_guard{images.get()};
 
@@ -176,26 +188,31 @@ int run(const Options& opt) {
     return 0;
 }
 
-// The output paths named on the command line, found without CLI11 so that they
-// are known even when the command line itself is what failed.
-std::vector<std::string> output_paths(int argc, char* argv[]) {
-    static const char* const flags[] = {"--collisions", "--stats", "--vcd"};
-    std::vector<std::string> paths;
+// The values of the given options on the command line, found without CLI11 so
+// that they are known even when the command line itself is what failed.
+std::vector<std::string> option_values(int argc, char* argv[], std::initializer_list<const char*> flags) {
+    std::vector<std::string> values;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         for (const char* f : flags) {
             const std::string flag = f;
-            if (a == flag && i + 1 < argc) paths.push_back(argv[i + 1]);
-            else if (a.rfind(flag + "=", 0) == 0) paths.push_back(a.substr(flag.size() + 1));
+            if (a == flag && i + 1 < argc) values.push_back(argv[i + 1]);
+            else if (a.rfind(flag + "=", 0) == 0) values.push_back(a.substr(flag.size() + 1));
         }
     }
-    return paths;
+    return values;
 }
 
 int fail(int status, const std::string& msg, int argc, char* argv[]) {
     std::fprintf(stderr, "rbcd-sim: %s\n", msg.c_str());
-    // formats.md: on a non-zero exit nothing stands at an output path, not even an older file.
-    for (const auto& p : output_paths(argc, argv)) rbcd::discard_output(p);
+    // formats.md: on a non-zero exit nothing stands at an output path, not even an
+    // older file; but an output path that names one of the inputs is the input.
+    const auto inputs = option_values(argc, argv, {"--trace", "--scene", "--config"});
+    for (const auto& p : option_values(argc, argv, {"--collisions", "--stats", "--vcd"})) {
+        bool is_input = false;
+        for (const auto& in : inputs) is_input = is_input || rbcd::same_file(p, in);
+        if (!is_input) rbcd::discard_output(p);
+    }
     return status;
 }
 

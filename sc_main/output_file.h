@@ -9,6 +9,11 @@ namespace rbcd {
 
 // Removes a file left at an output path by an earlier run (never a directory).
 void discard_output(const std::string& path);
+// On SIGINT, SIGTERM or SIGHUP the path is unlinked before the process exits.
+// Call before the simulation starts.
+void remove_on_interrupt(const std::string& path);
+// Both paths exist and name the same file.
+bool same_file(const std::string& a, const std::string& b);
 
 class OutputFile {
 public:

@@ -105,7 +105,7 @@ public:
     // Waveforms: requests in flight and channel activity, at their computed cycles.
     void attach_vcd(VcdWriter& vcd, const std::string& scope) {
         vcd_ = &vcd;
-        vcd_in_flight_ = vcd.add(scope, "requests_in_flight", 8);
+        vcd_in_flight_ = vcd.add(scope, "requests_in_flight", 9);   // up to 256 writes
         vcd_channel_busy_ = vcd.add(scope, "channel_busy", 1);
     }
     // The backing store; data()[0] is the byte at base().

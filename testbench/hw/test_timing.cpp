@@ -147,3 +147,31 @@ TEST_CASE("hw timing: a small output buffer stalls the tester", "[timing]") {
     CHECK(s.tester.stats().output_stall_cycles == 3 * 53);
     CHECK(s.total_cycles() == 731);
 }
+
+TEST_CASE("hw timing: with one write in flight the buffer's slots stay held until each write completes", "[timing]") {
+    // One pixel: 1F 2F 3F 4F then 1B: three hits from one back face. Two buffer slots,
+    // bursts of one record, one write in flight, latency 50.
+    MemorySource src(StreamHeader{});
+    src.add_frame(0);
+    std::vector<Fragment> fs;
+    for (unsigned id = 1; id <= 4; ++id) fs.push_back(frag(0, 0, 10 * id, id, 'F'));
+    fs.push_back(frag(0, 0, 50, 1, 'B'));
+    src.add_tile(tb::tile(0, 0, 0, fs));
+    SimConfig cfg = worked_config();
+    cfg.output.buffer_records = 2;
+    cfg.output.burst_records = 1;
+    cfg.output.max_outstanding = 1;
+    tb::SystemRun run(cfg, src);
+    const auto& s = *run.sys;
+    REQUIRE(run.hits().size() == 3);
+    // Fill: issues 1..5, done 8. Tester: row read 8->9, four pushes to 13.
+    // Hit 1 at 13: written 13..17, completes 67 (slot A held to 67).
+    // Hit 2 at 14: slot B; its write waits for the one in flight: issued 67, completes 121.
+    // Hit 3 at 15: both slots held, the first frees at 67: accepted 67 (52 cycles stalled);
+    //   its write waits for 121, completes 175. Tile done 68: the bank was tested 8..68.
+    CHECK(s.tester.stats().output_stall_cycles == 52);
+    CHECK(s.banks[0]->stats().testing_cycles == 60);
+    CHECK(s.outbuf.stats().outstanding_stall_cycles == (67 - 14) + (121 - 67));
+    // Frame end: everything complete at 175, then 500 cycles of readback.
+    CHECK(s.total_cycles() == 675);
+}
