@@ -2,15 +2,13 @@
 // (formats.md, "Command line"). Exit 0 done, 2 bad input/config/command line,
 // 1 anything else; on a non-zero exit no output file is left behind.
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <iostream>
-#include <memory>
-#include <optional>
-#include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <systemc>
 #include <unistd.h>
 
