@@ -42,7 +42,6 @@ public:
     // Reads `bytes` bytes of records from the start of the region; returns the
     // cycle from which the unit may overwrite the region.
     std::uint64_t read_back(std::uint64_t bytes, std::uint64_t cycle, bool because_full);
-    std::uint64_t region_address() const { return region_addr_; }
 
     const stats_t& stats() const { return stats_; }
 

@@ -31,10 +31,7 @@ private:
     void flush() {
         if (!open_) return;
         if (auto img = src_.take_frame_image(current_)) {
-            scene::write_frame_png(dir_, *img, hits_, tiles_, tile_w_, tile_h_);
-            char name[32];
-            std::snprintf(name, sizeof name, "/frame_%05llu.png", static_cast<unsigned long long>(current_));
-            written_.push_back(dir_ + name);
+            written_.push_back(scene::write_frame_png(dir_, *img, hits_, tiles_, tile_w_, tile_h_));
         }
         hits_.clear();
         tiles_.clear();

@@ -148,18 +148,15 @@ int run(const Options& opt) {
                                           cfg.trace.start, cfg.trace.end);
         sys.attach_vcd(*vcd);
     }
-    RunProbe probe(sys);                 // GPU overhead per tile, energy per frame
-    tee.add(&probe.unit_frames());       // the unit's frame boundaries reach the probe through the sink
     Progress progress;                   // stderr, only on a terminal, only after a few seconds
-    sys.feed.on_tile = [&](const Tile& t) {
-        probe.on_tile(t);
-        if (trace_out) trace_out->tile(t);
-    };
     sys.feed.on_frame = [&](std::uint64_t n) {
-        probe.on_frame(n);
         progress.on_frame(n, sys.feed.stats().fragments);
         if (trace_out) trace_out->frame(n);
     };
+    if (trace_out) sys.feed.on_tile = [&](const Tile& t) { trace_out->tile(t); };
+    RunProbe probe(sys);                 // GPU overhead per tile, energy per frame
+    probe.attach();                      // runs before the hooks above
+    tee.add(&probe.unit_frames());       // the unit's frame boundaries reach the probe through the sink
     sys.run();
     progress.finish();
     if (images) images->finish();

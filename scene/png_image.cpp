@@ -37,7 +37,7 @@ Rgb object_colour(const SceneSource::ObjectInfo& o, std::size_t index) {
 
 } // namespace
 
-void write_frame_png(const std::string& dir, const SceneSource::FrameImage& image,
+std::string write_frame_png(const std::string& dir, const SceneSource::FrameImage& image,
                      const std::vector<std::pair<std::uint32_t, std::uint32_t>>& hit_pixels,
                      const std::vector<std::pair<std::uint32_t, std::uint32_t>>& overflow_tiles, unsigned tile_w,
                      unsigned tile_h) {
@@ -114,6 +114,7 @@ void write_frame_png(const std::string& dir, const SceneSource::FrameImage& imag
         png_image_free(&img);
         throw InputError(path + ": cannot write image: " + msg);
     }
+    return path;
 }
 
 } // namespace rbcd::scene

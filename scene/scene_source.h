@@ -107,7 +107,8 @@ const char* default_scene_text();
 // shaded by depth (back faces seen from inside darker); pixels in hit_pixels
 // (x, y) in magenta; tiles in overflow_tiles (col, row) outlined in yellow.
 // Throws InputError when the file cannot be written.
-void write_frame_png(const std::string& dir, const SceneSource::FrameImage& image,
+// Returns the path written.
+std::string write_frame_png(const std::string& dir, const SceneSource::FrameImage& image,
                      const std::vector<std::pair<std::uint32_t, std::uint32_t>>& hit_pixels,
                      const std::vector<std::pair<std::uint32_t, std::uint32_t>>& overflow_tiles,
                      unsigned tile_w, unsigned tile_h);

@@ -7,6 +7,7 @@
 #include "common/config.h"
 #include "hw/collision_sink.h"
 #include "hw/rbcd_system.h"
+#include "io/collision_format.h"
 #include "io/memory_source.h"
 
 namespace rbcd::tb {
@@ -51,19 +52,14 @@ struct SystemRun {
     }
 };
 
+// The records as the --collisions file would list them (without the magic line).
 inline std::string to_text(const RecordingSink& s) {
     std::string out;
     for (const auto& f : s.frames) {
-        out += "frame " + std::to_string(f.frame) + "\n";
+        append_frame_line(out, f.frame);
         for (const auto& r : f.records) {
-            if (auto* h = std::get_if<HitRecord>(&r))
-                out += "hit " + std::to_string(h->x) + " " + std::to_string(h->y) + " " + std::to_string(h->id_a) +
-                       " " + std::to_string(h->id_b) + " " + std::to_string(h->dq) + "\n";
-            else {
-                const auto& o = std::get<OverflowRecord>(r);
-                out += "overflow " + std::to_string(o.col) + " " + std::to_string(o.row) + " " +
-                       std::to_string(o.lists) + " " + std::to_string(o.dropped) + "\n";
-            }
+            if (auto* h = std::get_if<HitRecord>(&r)) append_hit_line(out, *h);
+            else append_overflow_line(out, std::get<OverflowRecord>(r));
         }
     }
     return out;

@@ -73,20 +73,6 @@ private:
     Shape sh_;
 };
 
-ref::RefConfig ref_config(const SimConfig& c, unsigned depth_bits) {
-    ref::RefConfig r;
-    r.tile_w = c.tile.width;
-    r.tile_h = c.tile.height;
-    r.list_length = c.zeb.list_length;
-    r.z_bits = c.zeb.z_bits;
-    r.id_bits = c.zeb.id_bits;
-    r.tie = c.zeb.tie;
-    r.stack_depth = c.tester.stack_depth;
-    r.output = c.tester.output;
-    r.depth_bits = depth_bits;
-    return r;
-}
-
 std::string ref_text(const ref::RefResult& r) {
     RecordingSink s;
     for (const auto& f : r.frames) {
@@ -128,7 +114,7 @@ void differential(std::uint64_t seed, const SimConfig& cfg, const Shape& sh, uns
     REQUIRE(made == tiles);
 
     src.rewind();
-    const ref::RefResult expect = ref::run_reference(ref_config(cfg, sh.depth_bits), src);
+    const ref::RefResult expect = ref::run_reference(ref::ref_config_from(cfg, sh.depth_bits), src);
     src.rewind();
     tb::SystemRun run(cfg, src);
     const auto& s = *run.sys;
