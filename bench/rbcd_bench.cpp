@@ -104,7 +104,7 @@ int sc_main(int argc, char* argv[]) {
     const auto t0 = std::chrono::steady_clock::now();
     sys.run();
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const auto n = sys.feed.stats().fragments;
+    const auto n = sys.raster.stats().fragments;
     std::printf("%-34s %12llu %10.3f %14.0f %12s\n", "model only (trace in memory)", (unsigned long long)n, secs,
                 double(n) / secs, "-");
     std::printf("\nsimulated: %llu cycles, %llu hits, %llu overflows\n", (unsigned long long)sys.total_cycles(),

@@ -23,6 +23,15 @@ const char* to_string(OutputMode m) {
     return "?";
 }
 const char* to_string(HazardPolicy h) { return h == HazardPolicy::Forward ? "forward" : "stall"; }
+const char* to_string(BankWait b) { return b == BankWait::Tile ? "tile" : "unit"; }
+const char* to_string(ZebDevice z) {
+    switch (z) {
+    case ZebDevice::Lop: return "lop";
+    case ZebDevice::Lstp: return "lstp";
+    case ZebDevice::Hp: return "hp";
+    }
+    return "?";
+}
 
 namespace {
 
@@ -141,10 +150,10 @@ std::vector<ConfigKey> make_keys() {
                                     "sort key: (dq, facing) or dq alone (the paper's less-than comparators)",
                                     {{"front_first", TiePolicy::FrontFirst}, {"arrival", TiePolicy::Arrival}},
                                     [](SimConfig& c) -> TiePolicy& { return c.zeb.tie; }));
-    k.push_back(int_key<unsigned>("feed.fragments_per_cycle", "rasterizer_feed", "fragments/cycle",
+    k.push_back(int_key<unsigned>("feed.fragments_per_cycle", "rasterizer", "fragments/cycle",
                                   "rasterizer output rate", 1, 64,
                                   [](SimConfig& c) -> unsigned& { return c.feed.fragments_per_cycle; }));
-    k.push_back(int_key<unsigned>("feed.queue_depth", "insertion_sorter", "fragments",
+    k.push_back(int_key<unsigned>("feed.queue_depth", "input_queue", "fragments",
                                   "the unit's input queue between rasterizer and sorter", 1, 65536,
                                   [](SimConfig& c) -> unsigned& { return c.feed.queue_depth; }));
     k.push_back(enum_key<HazardPolicy>("sorter.hazard", "insertion_sorter",
@@ -168,8 +177,11 @@ std::vector<ConfigKey> make_keys() {
                                        "start of the output region inside the memory", 0, big,
                                        [](SimConfig& c) -> std::uint64_t& { return c.output.region_offset; }));
     k.push_back(int_key<std::uint64_t>("output.region_bytes", "output_buffer", "bytes",
-                                       "size of the output region; when full the unit waits for the CPU to read it",
+                                       "size of an output region; when full the unit waits for the CPU to read it",
                                        16, big, [](SimConfig& c) -> std::uint64_t& { return c.output.region_bytes; }));
+    k.push_back(bool_key("output.double_buffer", "output_buffer",
+                         "two output regions: the unit writes one while the host reads the other back",
+                         [](SimConfig& c) -> bool& { return c.output.double_buffer; }));
     k.push_back(int_key<std::uint64_t>("memory.base", "memory_controller", "address", "first address of the memory",
                                        0, big, [](SimConfig& c) -> std::uint64_t& { return c.memory.base; }));
     k.push_back(int_key<std::uint64_t>("memory.size_bytes", "memory_controller", "bytes", "size of the memory model",
@@ -188,28 +200,39 @@ std::vector<ConfigKey> make_keys() {
                                        "the unit's output waits this long while the CPU reads the region back", 0, big,
                                        [](SimConfig& c) -> std::uint64_t& { return c.host.readback_cycles; }));
 
-    k.push_back(int_key<unsigned>("gpu.raster_fragments_per_cycle", "gpu_model", "fragments/cycle",
-                                  "baseline rasterizer rate", 1, 64,
-                                  [](SimConfig& c) -> unsigned& { return c.gpu.raster_fragments_per_cycle; }));
-    k.push_back(int_key<unsigned>("gpu.fragment_processors", "gpu_model", "processors", "fragment processors", 1, 256,
+    k.push_back(int_key<unsigned>("gpu.setup_cycles_per_primitive", "rasterizer", "cycles",
+                                  "rasterizer cycles to set up one primitive of a tile (prims=, cprims=)", 0, 1000000,
+                                  [](SimConfig& c) -> unsigned& { return c.gpu.setup_cycles_per_primitive; }));
+    k.push_back(int_key<unsigned>("gpu.tile_overhead_cycles", "rasterizer", "cycles",
+                                  "rasterizer cycles at the start of every tile", 0, 1000000,
+                                  [](SimConfig& c) -> unsigned& { return c.gpu.tile_overhead_cycles; }));
+    k.push_back(int_key<unsigned>("gpu.fragment_queue_depth", "fragment_processors", "fragments",
+                                  "fragment queue between rasterizer and early-Z (paper, Table 2)", 1, 65536,
+                                  [](SimConfig& c) -> unsigned& { return c.gpu.fragment_queue_depth; }));
+    k.push_back(int_key<unsigned>("gpu.early_z_cycles", "fragment_processors", "cycles",
+                                  "early-Z latency from the queue to a fragment processor", 0, 1000,
+                                  [](SimConfig& c) -> unsigned& { return c.gpu.early_z_cycles; }));
+    k.push_back(int_key<unsigned>("gpu.fragment_processors", "fragment_processors", "processors",
+                                  "fragment processors", 1, 256,
                                   [](SimConfig& c) -> unsigned& { return c.gpu.fragment_processors; }));
-    k.push_back(int_key<unsigned>("gpu.cycles_per_fragment", "gpu_model", "cycles",
+    k.push_back(int_key<unsigned>("gpu.cycles_per_fragment", "fragment_processors", "cycles",
                                   "cycles one fragment processor spends per fragment", 1, 100000,
                                   [](SimConfig& c) -> unsigned& { return c.gpu.cycles_per_fragment; }));
-    k.push_back(int_key<unsigned>("gpu.tile_overhead_cycles", "gpu_model", "cycles",
-                                  "fixed baseline cost per tile (setup, colour buffer flush)", 0, 1000000,
-                                  [](SimConfig& c) -> unsigned& { return c.gpu.tile_overhead_cycles; }));
+    k.push_back(enum_key<BankWait>("gpu.bank_wait", "rasterizer",
+                                   "what waits for a free ZEB bank: the whole tile at the tile scheduler, or only "
+                                   "the unit's input",
+                                   {{"tile", BankWait::Tile}, {"unit", BankWait::Unit}},
+                                   [](SimConfig& c) -> BankWait& { return c.gpu.bank_wait; }));
 
     auto energy = [&](const char* name, const char* unit, const char* help, double EnergyConfig::*m) {
         k.push_back(real_key(std::string("energy.") + name, "energy_model", unit, help, 0.0, 1e9,
                              [m](SimConfig& c) -> double& { return c.energy.*m; }));
     };
-    energy("sram_read_pj_per_bit", "pJ/bit", "ZEB row read, 8 KiB bank; scales with sqrt(bank size / 8 KiB)",
-           &EnergyConfig::sram_read_pj_per_bit);
-    energy("sram_write_pj_per_bit", "pJ/bit", "ZEB row write, 8 KiB bank; scales like reads",
-           &EnergyConfig::sram_write_pj_per_bit);
-    energy("sram_leakage_mw_per_kib", "mW/KiB", "ZEB leakage per KiB of each bank",
-           &EnergyConfig::sram_leakage_mw_per_kib);
+    k.push_back(enum_key<ZebDevice>("energy.zeb_device", "energy_model",
+                                    "ZEB bank SRAM device type, 1R1W macro (CACTI 7, 32 nm, 8 KiB, 32-byte rows): "
+                                    "low operating power, low standby power, high performance",
+                                    {{"lop", ZebDevice::Lop}, {"lstp", ZebDevice::Lstp}, {"hp", ZebDevice::Hp}},
+                                    [](SimConfig& c) -> ZebDevice& { return c.energy.zeb_device; }));
     energy("comparator_pj_per_bit", "pJ/bit", "sorter key comparator, per key bit",
            &EnergyConfig::comparator_pj_per_bit);
     energy("mux_pj_per_bit", "pJ/bit", "sorter mux moving one element bit", &EnergyConfig::mux_pj_per_bit);
@@ -222,8 +245,21 @@ std::vector<ConfigKey> make_keys() {
            &EnergyConfig::memory_pj_per_byte);
     energy("logic_leakage_mw", "mW", "leakage of the unit's logic (sorter, tester, queue, buffer)",
            &EnergyConfig::logic_leakage_mw);
+    energy("gpu_fragment_pj", "pJ", "GPU: one fragment shaded by a fragment processor", &EnergyConfig::gpu_fragment_pj);
+    energy("gpu_raster_fragment_pj", "pJ", "GPU: one fragment rasterized and early-Z tested",
+           &EnergyConfig::gpu_raster_fragment_pj);
+    energy("gpu_primitive_pj", "pJ", "GPU: one primitive set up for a tile", &EnergyConfig::gpu_primitive_pj);
+    energy("gpu_tile_cache_pj_per_byte", "pJ/byte", "GPU: tile-cache read of the primitive lists",
+           &EnergyConfig::gpu_tile_cache_pj_per_byte);
+    energy("gpu_static_mw", "mW", "GPU leakage, charged over each frame's time", &EnergyConfig::gpu_static_mw);
+    k.push_back(int_key<unsigned>("energy.gpu_primitive_bytes", "energy_model", "bytes",
+                                  "GPU: bytes of one primitive read from the tile cache", 0, 1 << 20,
+                                  [](SimConfig& c) -> unsigned& { return c.energy.gpu_primitive_bytes; }));
+    k.push_back(int_key<unsigned>("energy.gpu_tile_flush_bytes", "energy_model", "bytes",
+                                  "GPU: colour buffer bytes written to memory per tile", 0, 1 << 24,
+                                  [](SimConfig& c) -> unsigned& { return c.energy.gpu_tile_flush_bytes; }));
 
-    k.push_back(bool_key("trace.feed", "vcd", "trace the rasterizer feed in --vcd",
+    k.push_back(bool_key("trace.feed", "vcd", "trace the rasterizer and fragment processors in --vcd",
                          [](SimConfig& c) -> bool& { return c.trace.feed; }));
     k.push_back(bool_key("trace.zeb", "vcd", "trace the ZEB banks in --vcd", [](SimConfig& c) -> bool& { return c.trace.zeb; }));
     k.push_back(bool_key("trace.sorter", "vcd", "trace the insertion sorter and input queue in --vcd",
@@ -280,9 +316,9 @@ void SimConfig::validate() const {
         bad("output.region_bytes", "not a multiple of the 16-byte record");
     if (output.region_bytes < std::uint64_t(output.burst_records) * 16u)
         bad("output.region_bytes", "smaller than one burst (output.burst_records x 16 bytes)");
-    if (output.region_offset + output.region_bytes > memory.size_bytes)
-        bad("output.region_bytes", "region (offset + size) does not fit in memory.size_bytes (" +
-                                       std::to_string(memory.size_bytes) + ")");
+    if (output.region_offset + output.region_bytes * output.regions() > memory.size_bytes)
+        bad("output.region_bytes", std::string(output.double_buffer ? "regions (offset + 2 x size)" : "region (offset + size)") +
+                                       " do not fit in memory.size_bytes (" + std::to_string(memory.size_bytes) + ")");
     if (clock.period_ps() == 0) bad("clock.mhz", "period rounds to 0 ps");
     if (trace.start > trace.end) bad("trace.start", "after trace.end (" + std::to_string(trace.end) + ")");
 }

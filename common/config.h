@@ -37,6 +37,10 @@ struct FeedConfig {
     unsigned queue_depth = 32;          // the unit's input queue, fragments
 };
 
+// What waits for a free ZEB bank (docs/timing.md): the whole tile at the tile
+// scheduler (paper, section 3.5), or only the unit's input (section 5.2).
+enum class BankWait { Tile, Unit };
+
 enum class HazardPolicy { Forward, Stall };
 struct SorterConfig {
     HazardPolicy hazard = HazardPolicy::Forward;
@@ -52,7 +56,10 @@ struct OutputBufferConfig {
     unsigned burst_records = 4;         // records per memory write
     unsigned max_outstanding = 4;       // writes in flight
     std::uint64_t region_offset = 0;    // output region inside the memory, bytes
-    std::uint64_t region_bytes = 65536;
+    std::uint64_t region_bytes = 65536; // each region, when double-buffered
+    // Two regions: the unit writes one while the host reads the other back.
+    bool double_buffer = true;
+    unsigned regions() const { return double_buffer ? 2u : 1u; }
 };
 
 struct MemoryConfig {
@@ -69,19 +76,25 @@ struct HostConfig {
     std::uint64_t readback_cycles = 500;
 };
 
-// The rest of the tile-based GPU, for the overhead figures (docs/gpu-model.md).
+// The raster pipeline of the tile-based GPU around the unit (paper, Figure 3
+// and Table 2; docs/gpu-model.md). The rasterizer's rate is feed.fragments_per_cycle.
 struct GpuConfig {
-    unsigned raster_fragments_per_cycle = 4;   // the baseline rasterizer, same as the feed's by default
+    unsigned setup_cycles_per_primitive = 1;   // rasterizer cycles to set up one primitive of a tile
+    unsigned tile_overhead_cycles = 0;         // rasterizer cycles at each tile's start
+    unsigned fragment_queue_depth = 64;        // the queue in front of early-Z (Table 2)
+    unsigned early_z_cycles = 1;               // queue exit to fragment processor start
     unsigned fragment_processors = 4;
     unsigned cycles_per_fragment = 8;          // per fragment processor (docs/gpu-model.md)
-    unsigned tile_overhead_cycles = 0;         // fixed cost per tile (setup, colour flush)
+    BankWait bank_wait = BankWait::Tile;
 };
+
+// The ZEB bank's SRAM device type: a 1R1W macro (the sorter reads and writes
+// a row every cycle), CACTI 7, 32 nm, 8 KiB, 32-byte rows (docs/energy.md).
+enum class ZebDevice { Lop, Lstp, Hp };
 
 // Per-event dynamic energy (pJ) and leakage (mW); 32 nm, 1 V (docs/energy.md).
 struct EnergyConfig {
-    double sram_read_pj_per_bit = 0.020;       // for an 8 KiB bank; scaled by sqrt(size / 8 KiB)
-    double sram_write_pj_per_bit = 0.025;
-    double sram_leakage_mw_per_kib = 0.040;
+    ZebDevice zeb_device = ZebDevice::Lop;
     double comparator_pj_per_bit = 0.0015;     // one magnitude comparator bit
     double mux_pj_per_bit = 0.0020;            // one element bit moved by a mux
     double stack_pj_per_bit = 0.0020;          // FF-stack flop written
@@ -90,6 +103,14 @@ struct EnergyConfig {
     double buffer_pj_per_bit = 0.0020;         // output buffer entry written
     double memory_pj_per_byte = 40.0;          // LPDDR access incl. I/O
     double logic_leakage_mw = 0.10;            // sorter + tester + buffers
+    // The GPU around the unit, for normalized energy (paper, Figure 9b).
+    double gpu_fragment_pj = 300.0;            // one fragment shaded
+    double gpu_raster_fragment_pj = 8.0;       // one fragment rasterized and depth-tested
+    double gpu_primitive_pj = 60.0;            // one primitive set up for a tile
+    double gpu_tile_cache_pj_per_byte = 0.5;   // tile-cache (polygon list) read
+    unsigned gpu_primitive_bytes = 64;         // bytes of one primitive read from the tile cache
+    unsigned gpu_tile_flush_bytes = 1024;      // colour buffer written to memory per tile
+    double gpu_static_mw = 60.0;               // GPU leakage over the frame's time
 };
 
 // --vcd: which blocks are traced and the window, in cycles.
@@ -141,5 +162,7 @@ std::string config_reference_markdown();
 const char* to_string(TiePolicy);
 const char* to_string(OutputMode);
 const char* to_string(HazardPolicy);
+const char* to_string(BankWait);
+const char* to_string(ZebDevice);
 
 } // namespace rbcd

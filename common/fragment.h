@@ -17,12 +17,27 @@ struct Fragment {
     bool culled = false;          // 'c': face culling would have removed it
 };
 
+// `o N` inside a tile: N non-collisionable fragments rasterized just before
+// frags[before] (before == frags.size(): after the last one).
+struct OtherRun {
+    std::uint32_t before = 0;
+    std::uint64_t count = 0;
+};
+
 struct Tile {
     std::uint64_t frame = 0;
     std::uint32_t col = 0, row = 0;
     std::uint64_t other = 0;       // non-collisionable fragments of the tile (timing only)
     bool has_base = false;
     std::uint64_t base = 0;        // baseline GPU cycles of the tile, when a simulator measured it
+    // Primitives the rasterizer sets up for the tile: in the baseline GPU
+    // (prims=), and only because face culling is deferred (cprims=).
+    bool has_prims = false, has_cprims = false;
+    std::uint64_t prims = 0, cprims = 0;
+    // Rasterization order of the non-collisionable fragments, from `o N`
+    // records. Empty: the trace did not say (docs/timing.md: spread evenly).
+    bool ordered_other = false;
+    std::vector<OtherRun> other_runs;
     std::vector<Fragment> frags;   // in rasterization order
 };
 

@@ -1,5 +1,6 @@
 #include "hw/host_reader.h"
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 
@@ -9,28 +10,32 @@ host_reader::host_reader(sc_core::sc_module_name name, const SimConfig& cfg, Col
     : sc_module(name),
       mem("mem"),
       sink_(sink),
-      region_addr_(cfg.memory.base + cfg.output.region_offset),
       readback_cycles_(cfg.host.readback_cycles) {}
 
-std::uint64_t host_reader::read_back(std::uint64_t bytes, std::uint64_t cycle, bool because_full) {
+std::uint64_t host_reader::read_back(std::uint64_t region_addr, std::uint64_t bytes, std::uint64_t cycle,
+                                     bool because_full) {
     ++stats_.readbacks;
     if (because_full) ++stats_.full_readbacks;
-    if (bytes == 0) return cycle + readback_cycles_;
+    // One CPU: a readback starts when the previous one is over.
+    const std::uint64_t start = std::max(cycle, busy_until_);
+    stats_.wait_cycles += start - cycle;
+    busy_until_ = start + readback_cycles_;
+    if (bytes == 0) return busy_until_;
     buf_.resize(bytes);
 
     // DMI first: the CPU reading through the cache costs the unit nothing but
     // the readback time charged below.
     tlm::tlm_generic_payload gp;
     gp.set_command(tlm::TLM_READ_COMMAND);
-    gp.set_address(region_addr_);
+    gp.set_address(region_addr);
     gp.set_data_length(static_cast<unsigned>(bytes));
     gp.set_data_ptr(buf_.data());
     gp.set_streaming_width(static_cast<unsigned>(bytes));
     tlm::tlm_dmi dmi;
     bool done = false;
-    if (mem->get_direct_mem_ptr(gp, dmi) && dmi.is_read_allowed() && dmi.get_start_address() <= region_addr_ &&
-        dmi.get_end_address() >= region_addr_ + bytes - 1) {
-        std::memcpy(buf_.data(), dmi.get_dmi_ptr() + (region_addr_ - dmi.get_start_address()), bytes);
+    if (mem->get_direct_mem_ptr(gp, dmi) && dmi.is_read_allowed() && dmi.get_start_address() <= region_addr &&
+        dmi.get_end_address() >= region_addr + bytes - 1) {
+        std::memcpy(buf_.data(), dmi.get_dmi_ptr() + (region_addr - dmi.get_start_address()), bytes);
         ++stats_.dmi_reads;
         done = true;
     }
@@ -58,7 +63,7 @@ std::uint64_t host_reader::read_back(std::uint64_t bytes, std::uint64_t cycle, b
         }
     }
     stats_.bytes += bytes;
-    return cycle + readback_cycles_;
+    return busy_until_;
 }
 
 } // namespace rbcd

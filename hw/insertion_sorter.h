@@ -1,5 +1,4 @@
-// The M-way comparator/mux insertion sorter (paper, Figure 4) and the unit's
-// input queue in front of it.
+// The M-way comparator/mux insertion sorter (paper, Figure 4).
 //
 // Pipeline, one insertion issued per cycle:
 //   READ  (cycle s)   the pixel's list row is read from the ZEB bank
@@ -10,9 +9,13 @@
 // row. sorter.hazard = "forward" bypasses the SORT output into the next SORT
 // (no stall); "stall" holds the READ until the older WRITE is done (s' >= s+3).
 //
-// Timing is computed per tile in one call, not ticked: the feed's emission
-// schedule (R fragments/cycle), the queue's capacity and the pipeline's issue
-// rule give each fragment's enqueue and issue cycle by a recurrence.
+// Timing is computed per fragment as the rasterizer hands it over, not
+// ticked: a fragment that entered the input queue at e issues at
+// max(e + 1, previous issue + 1, the bank's ready cycle, hazard rule).
+//
+//   sorter.begin_tile(bank, ready, tile);   // bank Filling, usable from `ready`
+//   std::uint64_t s = sorter.accept(frag, enqueue_cycle, depth_bits);
+//   std::uint64_t filled = sorter.end_tile();   // the bank holds the whole tile
 #pragma once
 #include <cstdint>
 #include <systemc>
@@ -39,9 +42,8 @@ public:
         std::uint64_t dropped_last = 0;          // ... of which a shifted-out last element
         std::uint64_t hazard_forwards = 0;       // same-pixel hazards resolved by forwarding
         std::uint64_t hazard_stall_cycles = 0;   // cycles lost to same-pixel hazards (stall policy)
+        std::uint64_t bank_wait_cycles = 0;      // issue cycles lost waiting for the tile's bank
         std::uint64_t busy_cycles = 0;           // cycles with an insertion issued
-        std::uint64_t queue_full_cycles = 0;     // cycles the feed was held by a full queue
-        std::uint64_t queue_max_occupancy = 0;
         template <class F> void for_each(F f) const {
             RBCD_STAT(f, *this, insertions, "fragments inserted (one per issue cycle)");
             RBCD_STAT(f, *this, comparator_activations, "key comparators fired (M per insertion)");
@@ -51,56 +53,78 @@ public:
             RBCD_STAT(f, *this, dropped_last, "overflows where the last element was shifted out");
             RBCD_STAT(f, *this, hazard_forwards, "same-pixel hazards bypassed by forwarding");
             RBCD_STAT(f, *this, hazard_stall_cycles, "issue cycles lost to same-pixel hazards");
+            RBCD_STAT(f, *this, bank_wait_cycles, "issue cycles lost waiting for the tile's ZEB bank (gpu.bank_wait = unit)");
             RBCD_STAT(f, *this, busy_cycles, "cycles with an insertion issued");
-            RBCD_STAT(f, *this, queue_full_cycles, "cycles the rasterizer was held by a full input queue");
-            RBCD_STAT(f, *this, queue_max_occupancy, "deepest input-queue occupancy seen");
         }
-    };
-
-    struct FillResult {
-        std::uint64_t feed_done = 0;       // cycle after the feed's last emission
-        std::uint64_t fill_done = 0;       // cycle from which the bank holds the whole tile
-        std::uint64_t queue_stall = 0;     // cycles the feed was held by the full queue
-        std::uint64_t first_issue = 0, last_issue = 0;
     };
 
     insertion_sorter(sc_core::sc_module_name name, const SimConfig& cfg);
 
-    // Inserts every fragment of `tile` into `bank` (already Filling), the feed
-    // starting to emit at cycle `start`. depth_bits is the input stream's.
-    FillResult fill_tile(const Tile& tile, zeb_bank& bank, std::uint64_t start, unsigned depth_bits);
+    // The tile's fragments go into `bank` (already Filling), which the READ
+    // stage may use from cycle `ready` on.
+    void begin_tile(zeb_bank& bank, std::uint64_t ready, const Tile& tile);
+    // A fragment of the tile entered the input queue at `enq`: returns its
+    // issue cycle and inserts it. depth_bits is the input stream's.
+    std::uint64_t accept(const Fragment& f, std::uint64_t enq, unsigned depth_bits) {
+        std::uint64_t issue = enq + 1;
+        if (any_issued_) issue = std::max(issue, last_issue_ + 1);
+        if (issue < bank_ready_) {
+            stats_.bank_wait_cycles += bank_ready_ - issue;
+            issue = bank_ready_;
+        }
+        const unsigned li = (f.y - y0_) * tile_w_ + (f.x - x0_);
+        if (li == prev_list_[0] || li == prev_list_[1]) issue = hazard(li, issue);
+        if (vcd_) trace_issue(issue);
+        prev_list_[1] = prev_list_[0];
+        prev_issue_[1] = prev_issue_[0];
+        prev_list_[0] = li;
+        prev_issue_[0] = issue;
+        last_issue_ = issue;
+        any_issued_ = true;
+        ++tile_frags_;
+
+        Element e;
+        e.dq = quantize_depth(f.depth, depth_bits, z_bits_);
+        e.id = f.id;
+        e.facing = f.facing;
+        const std::uint64_t key = sort_key(e, front_first_ ? TiePolicy::FrontFirst : TiePolicy::Arrival);
+        insert(*bank_, li, layout_.pack(e), key);
+        return issue;
+    }
+    // After the tile's last fragment: the cycle from which the bank holds the whole tile.
+    std::uint64_t end_tile();
+    // Frame barrier: the pipeline is empty from cycle t on.
+    void restart(std::uint64_t t);
 
     const stats_t& stats() const { return stats_; }
 
-    // Waveforms: queue occupancy, issue and hazard activity; the feed's
-    // queue-full stall flag lives in the feed's scope but is known here.
+    // Waveforms: issue and hazard activity, the bank being filled.
     void attach_vcd(VcdWriter& vcd, const std::string& scope);
-    void attach_feed_stall(VcdWriter& vcd, VcdWriter::Sig queue_full) {
-        vcd_feed_ = &vcd;
-        vcd_queue_full_ = queue_full;
-    }
 
 private:
     void insert(zeb_bank& bank, unsigned list, std::uint64_t word, std::uint64_t key);
+    std::uint64_t hazard(unsigned li, std::uint64_t issue);
+    void trace_issue(std::uint64_t issue);
 
-    unsigned m_, rate_, queue_depth_;
+    unsigned m_;
     unsigned tile_w_, tile_h_;
     unsigned z_bits_, id_shift_;
     bool front_first_;
     bool stall_on_hazard_;
     ElementLayout layout_;
 
-    // Issue cycle of each of the last queue_depth_ fragments (ring, global
-    // fragment order): a slot frees when the fragment queue_depth_ earlier issues.
-    std::vector<std::uint64_t> issue_ring_;
-    std::uint64_t seq_ = 0;
-    std::uint64_t queue_head_ = 0;   // oldest fragment not yet issued, as of the last enqueue
+    zeb_bank* bank_ = nullptr;
+    std::uint32_t x0_ = 0, y0_ = 0;
+    std::uint64_t bank_ready_ = 0;
+    std::uint64_t tile_frags_ = 0;
+    unsigned prev_list_[2] = {~0u, ~0u};   // pixels of the two previous insertions (hazard window)
+    std::uint64_t prev_issue_[2] = {0, 0};
     std::uint64_t last_issue_ = 0;
     bool any_issued_ = false;
+    bool first_of_tile_ = false;
     stats_t stats_;
     VcdWriter* vcd_ = nullptr;
-    VcdWriter* vcd_feed_ = nullptr;
-    VcdWriter::Sig vcd_occupancy_ = 0, vcd_issue_ = 0, vcd_hazard_ = 0, vcd_bank_ = 0, vcd_queue_full_ = 0;
+    VcdWriter::Sig vcd_issue_ = 0, vcd_hazard_ = 0, vcd_bank_ = 0;
 };
 
 } // namespace rbcd

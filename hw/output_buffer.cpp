@@ -16,6 +16,7 @@ output_buffer::output_buffer(sc_core::sc_module_name name, const SimConfig& cfg,
       max_outstanding_(cfg.output.max_outstanding),
       region_addr_(cfg.memory.base + cfg.output.region_offset),
       region_bytes_(cfg.output.region_bytes),
+      region_free_(cfg.output.regions(), 0),
       data_(std::size_t(cfg.output.burst_records) * kRecordBytes) {
     pending_.reserve(capacity_);
     inflight_.reserve(max_outstanding_);
@@ -40,9 +41,7 @@ std::uint64_t output_buffer::issue(std::uint64_t cycle, unsigned n) {
         std::uint64_t all_done = t;
         for (const auto& w : inflight_) all_done = std::max(all_done, w.done);
         ++stats_.region_full_events;
-        t = host_.read_back(write_offset_, all_done, true);
-        write_offset_ = 0;
-        if (vcd_) vcd_->set(vcd_offset_, t, 0);
+        t = switch_region(all_done, true);
     }
     // The engine's time t may run ahead of the tester's: count the writes still
     // in flight at t without retiring them, so that slots stay held for the
@@ -59,7 +58,7 @@ std::uint64_t output_buffer::issue(std::uint64_t cycle, unsigned n) {
 
     for (unsigned i = 0; i < n; ++i) pending_[i].store(&data_[std::size_t(i) * kRecordBytes]);
     gp_.set_command(tlm::TLM_WRITE_COMMAND);
-    gp_.set_address(region_addr_ + write_offset_);
+    gp_.set_address(region_addr_ + region_ * region_bytes_ + write_offset_);
     gp_.set_data_ptr(data_.data());
     gp_.set_data_length(static_cast<unsigned>(bytes));
     gp_.set_streaming_width(static_cast<unsigned>(bytes));
@@ -125,12 +124,21 @@ std::uint64_t output_buffer::flush(std::uint64_t cycle) {
     return all_done;
 }
 
-std::uint64_t output_buffer::end_frame(std::uint64_t cycle) {
-    const std::uint64_t t = flush(cycle);
-    const std::uint64_t ready = host_.read_back(write_offset_, t, false);
+std::uint64_t output_buffer::switch_region(std::uint64_t all_done, bool because_full) {
+    region_free_[region_] = host_.read_back(region_addr_ + region_ * region_bytes_, write_offset_, all_done, because_full);
+    region_ = (region_ + 1) % static_cast<unsigned>(region_free_.size());
     write_offset_ = 0;
-    if (vcd_) vcd_->set(vcd_offset_, ready, 0);
+    const std::uint64_t ready = std::max(all_done, region_free_[region_]);
+    stats_.region_wait_cycles += ready - all_done;
+    if (vcd_) {
+        vcd_->set(vcd_offset_, ready, 0);
+        vcd_->set(vcd_region_, ready, region_);
+    }
     return ready;
+}
+
+std::uint64_t output_buffer::end_frame(std::uint64_t cycle) {
+    return switch_region(flush(cycle), false);
 }
 
 } // namespace rbcd

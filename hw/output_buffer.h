@@ -4,9 +4,12 @@
 // controller answers with its completion time; no wait() per record).
 //
 // A record holds its slot from the cycle it is accepted until the burst that
-// carries it completes; the tester stalls while every slot is held. When the
-// region cannot take the next burst, the buffer lets its writes complete, has
-// the host read the region back, and starts again at the region's start.
+// carries it completes; the tester stalls while every slot is held. At each
+// frame end, and whenever the region cannot take the next burst, the buffer
+// lets its writes complete, hands the region to the host to read back, and
+// goes on in the next region (output.double_buffer: two, used in turn) as
+// soon as the host has read that one back; with one region it waits for the
+// readback it just started.
 #pragma once
 #include <cstdint>
 #include <systemc>
@@ -33,6 +36,7 @@ public:
         std::uint64_t full_stall_cycles = 0;  // cycles the tester waited for a slot
         std::uint64_t outstanding_stall_cycles = 0;  // cycles a ready burst waited for a free transaction slot
         std::uint64_t region_full_events = 0;
+        std::uint64_t region_wait_cycles = 0;  // cycles waiting for the host to read a region back
         std::uint64_t max_occupancy = 0;
         std::uint64_t write_latency_cycles = 0;  // sum over bursts of issue-to-completion cycles
         template <class F> void for_each(F f) const {
@@ -42,6 +46,7 @@ public:
             RBCD_STAT(f, *this, full_stall_cycles, "cycles the tester waited on a full buffer");
             RBCD_STAT(f, *this, outstanding_stall_cycles, "cycles bursts waited for a free write slot");
             RBCD_STAT(f, *this, region_full_events, "times the output region filled up");
+            RBCD_STAT(f, *this, region_wait_cycles, "cycles waiting for the host to read the next region back");
             RBCD_STAT(f, *this, max_occupancy, "most records held at once");
             RBCD_STAT(f, *this, write_latency_cycles, "sum of burst issue-to-completion cycles");
         }
@@ -53,7 +58,7 @@ public:
     std::uint64_t push(const MemRecord& r, std::uint64_t cycle);
     // Writes everything held; returns the cycle all writes have completed.
     std::uint64_t flush(std::uint64_t cycle);
-    // flush + the host reads the region back; returns when the region is free again.
+    // flush + hand the region to the host; returns when the unit may write again.
     std::uint64_t end_frame(std::uint64_t cycle);
 
     const stats_t& stats() const { return stats_; }
@@ -62,6 +67,7 @@ public:
         vcd_occupancy_ = vcd.add(scope, "occupancy", 17);
         vcd_in_flight_ = vcd.add(scope, "writes_in_flight", 9);
         vcd_offset_ = vcd.add(scope, "region_offset", 40);
+        vcd_region_ = vcd.add(scope, "region", 1);
     }
 
 private:
@@ -71,12 +77,15 @@ private:
     };
     void retire(std::uint64_t cycle);
     std::uint64_t issue(std::uint64_t cycle, unsigned n);
+    std::uint64_t switch_region(std::uint64_t all_done, bool because_full);
     std::uint64_t occupancy() const { return pending_.size() + inflight_records_; }
 
     const Clocking& clk_;
     host_reader& host_;
     unsigned capacity_, burst_, max_outstanding_;
     std::uint64_t region_addr_, region_bytes_;
+    std::vector<std::uint64_t> region_free_;   // per region: the host is done reading it back
+    unsigned region_ = 0;                      // the region being written
     std::uint64_t write_offset_ = 0;
     std::uint64_t engine_cycle_ = 0;   // the write engine issues in order, never back in time
     std::vector<MemRecord> pending_;
@@ -87,7 +96,7 @@ private:
     tlm::tlm_generic_payload gp_;
     stats_t stats_;
     VcdWriter* vcd_ = nullptr;
-    VcdWriter::Sig vcd_occupancy_ = 0, vcd_in_flight_ = 0, vcd_offset_ = 0;
+    VcdWriter::Sig vcd_occupancy_ = 0, vcd_in_flight_ = 0, vcd_offset_ = 0, vcd_region_ = 0;
 };
 
 } // namespace rbcd

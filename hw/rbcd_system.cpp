@@ -1,5 +1,6 @@
 #include "hw/rbcd_system.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -26,30 +27,40 @@ rbcd_system::rbcd_system(sc_core::sc_module_name name, const SimConfig& c, Fragm
       memory("memory_controller", c.memory, clk.period()),
       host("host", c, sink),
       outbuf("output_buffer", c, clk, host),
+      queue("input_queue", c.feed),
       sorter("insertion_sorter", c),
       tester("zoverlap_tester", c, clk, outbuf, host),
-      feed("rasterizer_feed", c, clk, src, bank_ptrs(), sorter, tester) {
+      fragments("fragment_processors", c.gpu),
+      raster("rasterizer", cfg, clk, src, bank_ptrs(), fragments, queue, sorter, tester),
+      reseed_(memory) {
     outbuf.mem.bind(memory.unit_port);
     host.mem.bind(memory.host_port);
+    raster.add_observer(&reseed_);
 }
 
 void rbcd_system::attach_vcd(VcdWriter& vcd) {
     vcd_ = &vcd;
     const std::string top = basename();
-    if (cfg.trace.feed) feed.attach_vcd(vcd, top + ".rasterizer_feed");
+    if (cfg.trace.feed) {
+        raster.attach_vcd(vcd, top + ".rasterizer");
+        fragments.attach_vcd(vcd, top + ".fragment_processors");
+    }
     if (cfg.trace.zeb)
         for (auto& b : banks) b->attach_vcd(vcd, top + "." + b->basename());
-    if (cfg.trace.sorter) sorter.attach_vcd(vcd, top + ".insertion_sorter");
+    if (cfg.trace.sorter) {
+        queue.attach_vcd(vcd, top + ".input_queue");
+        sorter.attach_vcd(vcd, top + ".insertion_sorter");
+    }
     if (cfg.trace.tester) tester.attach_vcd(vcd, top + ".zoverlap_tester");
     if (cfg.trace.output) outbuf.attach_vcd(vcd, top + ".output_buffer");
     if (cfg.trace.memory) memory.attach_vcd(vcd, top + ".memory_controller");
-    feed.set_vcd_flush(&vcd);
+    raster.set_vcd_flush(&vcd);
 }
 
 void rbcd_system::run() {
     sc_core::sc_start();
-    if (vcd_ && !feed.error()) vcd_->finish(tester.finish_cycle());
-    if (feed.error()) std::rethrow_exception(feed.error());
+    if (vcd_ && !raster.error()) vcd_->finish(std::max(tester.finish_cycle(), raster.end_cycle()));
+    if (raster.error()) std::rethrow_exception(raster.error());
     if (!tester.finished())
         throw std::runtime_error("simulation ended before the z-overlap tester finished (internal error)");
 }

@@ -45,6 +45,8 @@ public:
     std::uint64_t bits() const { return std::uint64_t(lists_) * m_ * width_bits_; }
 
     State state() const { return state_; }
+    // The cycle the bank entered its current state (for a Free bank: released).
+    std::uint64_t state_since() const { return state_since_; }
     std::uint64_t frame() const { return frame_; }
     std::uint32_t tile_col() const { return col_; }
     std::uint32_t tile_row() const { return row_; }

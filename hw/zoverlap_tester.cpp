@@ -161,8 +161,6 @@ void zoverlap_tester::run() {
         switch (job.kind) {
         case Job::FrameStart:
             host_.begin_frame(job.frame);
-            frames_.push_back({});
-            frames_.back().frame = job.frame;
             break;
         case Job::TileJob: {
             if (job.ready > t) {
@@ -170,10 +168,6 @@ void zoverlap_tester::run() {
                 t = job.ready;
             }
             clk_.wait_until(t);
-            if (!frames_.empty() && !frames_.back().started) {
-                frames_.back().first_tile_start = t;
-                frames_.back().started = true;
-            }
             job.bank->begin_test(t);
             const std::uint64_t start = t;
             if (vcd_) {
@@ -193,22 +187,19 @@ void zoverlap_tester::run() {
             if (overflowed) t = emit_overflow(o, t);
             if (vcd_) vcd_->set(vcd_busy_, t, 0);
             stats_.busy_cycles += t - start;
-            if (!frames_.empty()) frames_.back().last_tile_done = t;
             break;
         }
         case Job::FrameEnd: {
-            const std::uint64_t before = t;
             const std::uint64_t flushed = out_.flush(t);
             t = out_.end_frame(flushed);
-            if (vcd_ && t > before) {
-                vcd_->set(vcd_readback_, before, 1);
+            if (vcd_ && t > flushed) {
+                vcd_->set(vcd_readback_, flushed, 1);
                 vcd_->set(vcd_readback_, t, 0);
             }
-            stats_.readback_cycles += t - before;
-            if (!frames_.empty()) {
-                frames_.back().flushed = flushed;
-                frames_.back().done = t;
-            }
+            stats_.readback_cycles += t - flushed;
+            last_flushed_ = flushed;
+            ++frames_flushed_;
+            frame_flushed.notify(sc_core::SC_ZERO_TIME);
             clk_.wait_until(t);
             break;
         }

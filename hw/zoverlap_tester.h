@@ -66,7 +66,7 @@ public:
             RBCD_STAT(f, *this, overflow_records, "overflow records written");
             RBCD_STAT(f, *this, busy_cycles, "cycles walking lists");
             RBCD_STAT(f, *this, output_stall_cycles, "cycles held by a full output buffer");
-            RBCD_STAT(f, *this, readback_cycles, "cycles waiting for the host's readback at frame ends");
+            RBCD_STAT(f, *this, readback_cycles, "cycles waiting at frame ends for the host to free the next output region");
             RBCD_STAT(f, *this, idle_cycles, "cycles with no filled bank to test");
         }
     };
@@ -84,16 +84,11 @@ public:
     const stats_t& stats() const { return stats_; }
     void attach_vcd(VcdWriter& vcd, const std::string& scope);
 
-    // Per-frame outcome, for the stats' per-frame series.
-    struct FrameTiming {
-        std::uint64_t frame = 0;
-        std::uint64_t first_tile_start = 0;   // tester start of the frame's first tile
-        std::uint64_t last_tile_done = 0;     // tester end of the frame's last tile
-        std::uint64_t flushed = 0;            // the frame's records all in memory
-        std::uint64_t done = 0;               // ... and read back by the host
-        bool started = false;                 // a tile of the frame has been tested
-    };
-    const std::vector<FrameTiming>& frames() const { return frames_; }
+    // Frame ends: after each FrameEnd job, the cycle the frame's records were
+    // all in memory, announced by frame_flushed (the rasterizer's frame barrier).
+    std::uint64_t last_flushed() const { return last_flushed_; }
+    std::uint64_t frames_flushed() const { return frames_flushed_; }
+    sc_core::sc_event frame_flushed;
 
 private:
     void run();
@@ -117,7 +112,7 @@ private:
     // Pairs already written in this pixel (pixel mode) or tile (tile mode).
     std::vector<std::uint32_t> pixel_pairs_;
     std::unordered_set<std::uint32_t> tile_pairs_;
-    std::vector<FrameTiming> frames_;
+    std::uint64_t last_flushed_ = 0, frames_flushed_ = 0;
     std::uint64_t finish_cycle_ = 0;
     bool finished_ = false;
     stats_t stats_;

@@ -39,9 +39,7 @@ public:
         if (pos_ >= items_.size()) return Event::End;
         const Item& it = items_[pos_++];
         if (it.is_frame) { tile.frame = it.tile.frame; return Event::Frame; }
-        tile.frame = it.tile.frame; tile.col = it.tile.col; tile.row = it.tile.row;
-        tile.other = it.tile.other; tile.has_base = it.tile.has_base; tile.base = it.tile.base;
-        tile.frags.assign(it.tile.frags.begin(), it.tile.frags.end());
+        tile = it.tile;   // the vectors' capacity is reused
         return Event::Tile;
     }
     std::string name() const override { return name_; }

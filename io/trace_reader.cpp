@@ -98,7 +98,7 @@ struct Fields {
 };
 
 const char* const kFragmentShape = "expected 'f x y depth id F|B [c]'";
-const char* const kTileShape = "expected 'tile C R [other=N] [base=N]'";
+const char* const kTileShape = "expected 'tile C R [other=N] [base=N] [prims=N] [cprims=N]'";
 
 } // namespace
 
@@ -152,6 +152,8 @@ struct TraceReader::Impl {
     bool fast_fragment(std::vector<Fragment>& out);
     void slow_fragment(const Fields& fl, std::vector<Fragment>& out, bool in_tile);
     void start_tile(const Fields& fl, Tile& t);
+    void other_run(const Fields& fl, Tile& t, bool in_tile);
+    bool other_given = false;   // the current tile has other=
     std::uint64_t start_frame(const Fields& fl);
     bool mark_tile(std::uint64_t idx);
 };
@@ -438,8 +440,8 @@ void TraceReader::Impl::start_tile(const Fields& fl, Tile& t) {
                        kTileShape + ")");
     const std::uint64_t c = num(fl.f[1], "tile column");
     const std::uint64_t r = num(fl.f[2], "tile row");
-    bool have_other = false, have_base = false;
-    std::uint64_t other = 0, base = 0;
+    bool have_other = false, have_base = false, have_prims = false, have_cprims = false;
+    std::uint64_t other = 0, base = 0, prims = 0, cprims = 0;
     for (int i = 3; i < fl.n; ++i) {
         const std::string_view kv = fl.f[i];
         const std::size_t eq = kv.find('=');
@@ -450,7 +452,9 @@ void TraceReader::Impl::start_tile(const Fields& fl, Tile& t) {
         std::uint64_t* dst;
         if (key == "other") { have = &have_other; dst = &other; }
         else if (key == "base") { have = &have_base; dst = &base; }
-        else fail("tile has unknown key " + show(key) + " (known keys: other, base)");
+        else if (key == "prims") { have = &have_prims; dst = &prims; }
+        else if (key == "cprims") { have = &have_cprims; dst = &cprims; }
+        else fail("tile has unknown key " + show(key) + " (known keys: other, base, prims, cprims)");
         const std::string k(key);
         if (*have) fail("tile key '" + k + "' given twice");
         if (val.empty()) fail("tile field '" + k + "=' has no value");
@@ -483,7 +487,27 @@ void TraceReader::Impl::start_tile(const Fields& fl, Tile& t) {
     t.other = other;
     t.has_base = have_base;
     t.base = base;
+    t.has_prims = have_prims;
+    t.prims = prims;
+    t.has_cprims = have_cprims;
+    t.cprims = cprims;
+    t.ordered_other = false;
+    t.other_runs.clear();
+    other_given = have_other;
     t.frags.clear();
+}
+
+void TraceReader::Impl::other_run(const Fields& fl, Tile& t, bool in_tile) {
+    if (!in_tile) fail("'o' record outside a tile (expected 'o N' between a tile's fragments)");
+    if (fl.n < 2) fail("o has too few fields: missing its count (expected 'o N')");
+    if (fl.n > 2) fail("o has an extra field " + show(fl.f[2]) + " (expected 'o N')");
+    if (other_given) fail("tile has both other= and 'o' records (the o records give its non-collisionable count)");
+    const std::uint64_t n = num(fl.f[1], "o count");
+    if (n > kTileWorkLimit || t.other + n > kTileWorkLimit)
+        fail("tile's o records add up to more than " + num_str(kTileWorkLimit) + " fragments");
+    t.ordered_other = true;
+    t.other += n;
+    t.other_runs.push_back({static_cast<std::uint32_t>(t.frags.size()), n});
 }
 
 std::uint64_t TraceReader::Impl::start_frame(const Fields& fl) {
@@ -540,6 +564,11 @@ FragmentSource::Event TraceReader::next(Tile& t) {
         const std::string_view key = fl.f[0];
         if (key == "f") {
             m.slow_fragment(fl, t.frags, in_tile);
+            m.advance(fl.next);
+            continue;
+        }
+        if (key == "o") {
+            m.other_run(fl, t, in_tile);
             m.advance(fl.next);
             continue;
         }

@@ -63,20 +63,45 @@ void TraceWriter::tile(const Tile& t) {
     p = put(p, t.col);
     *p++ = ' ';
     p = put(p, t.row);
-    p = put(p, " other=");
-    p = put(p, t.other);
+    if (!t.ordered_other) {
+        p = put(p, " other=");
+        p = put(p, t.other);
+    }
     if (t.has_base) {
         p = put(p, " base=");
         p = put(p, t.base);
+    }
+    if (t.has_prims) {
+        p = put(p, " prims=");
+        p = put(p, t.prims);
+    }
+    if (t.has_cprims) {
+        p = put(p, " cprims=");
+        p = put(p, t.cprims);
     }
     *p++ = '\n';
     buf_.resize(static_cast<std::size_t>(p - buf_.data()));
 
     std::size_t i = 0;
     const std::size_t n = t.frags.size();
+    std::size_t run = 0;
+    const auto put_runs_before = [&](std::size_t frag) {
+        for (; run < t.other_runs.size() && t.other_runs[run].before <= frag; ++run) {
+            const std::size_t at2 = buf_.size();
+            buf_.resize(at2 + 24);
+            char* q = &buf_[at2];
+            q = put(q, "o ");
+            q = put(q, t.other_runs[run].count);
+            *q++ = '\n';
+            buf_.resize(static_cast<std::size_t>(q - buf_.data()));
+        }
+    };
     while (i < n) {
         if (buf_.size() >= kFlushAt) flush(f_, buf_, path_);
-        const std::size_t slice = std::min<std::size_t>(n - i, 4096);
+        // A slice ends at the next `o` run so runs land between the right fragments.
+        std::size_t slice = std::min<std::size_t>(n - i, 4096);
+        put_runs_before(i);
+        if (run < t.other_runs.size()) slice = std::min<std::size_t>(slice, t.other_runs[run].before - i);
         at = buf_.size();
         buf_.resize(at + slice * kMaxFragmentLine);
         p = &buf_[at];
@@ -101,6 +126,7 @@ void TraceWriter::tile(const Tile& t) {
         }
         buf_.resize(static_cast<std::size_t>(p - buf_.data()));
     }
+    put_runs_before(n);
     if (buf_.size() >= kFlushAt) flush(f_, buf_, path_);
 }
 

@@ -14,13 +14,15 @@
 
 #include "common/config.h"
 #include "common/errors.h"
+#include "io/prefetch_source.h"
 #include "io/trace_reader.h"
 #include "io/trace_writer.h"
 #include "sc_main/collision_file.h"
 #include "sc_main/image_sink.h"
 #include "sc_main/output_file.h"
 #include "sc_main/progress.h"
-#include "sc_main/stats_report.h"
+#include "report/run_report.h"
+#include "report/stats_report.h"
 #include "hw/rbcd_system.h"
 
 namespace {
@@ -32,7 +34,7 @@ const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE"
 struct Options {
     std::string config_file;
     std::vector<std::string> sets;
-    std::string trace, scene, collisions, stats, write_trace, images, vcd;
+    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd;
     bool dump_config = false;
     bool config_reference = false;
     bool quiet = false;
@@ -68,24 +70,27 @@ int run(const Options& opt) {
 
     // An output over an input would destroy it before it is read.
     const std::pair<const char*, const std::string*> outs[] = {
-        {"--collisions", &opt.collisions}, {"--stats", &opt.stats}, {"--vcd", &opt.vcd},
-        {"--write-trace", &opt.write_trace}};
+        {"--collisions", &opt.collisions}, {"--stats", &opt.stats}, {"--frame-stats", &opt.frame_stats},
+        {"--vcd", &opt.vcd}, {"--write-trace", &opt.write_trace}};
     for (const std::string* in : {&opt.trace, &opt.scene, &opt.config_file})
         for (const auto& [flag, path] : outs)
             if (!in->empty() && !path->empty() && same_file(*path, *in))
                 throw InputError(std::string(flag) + ": " + *path + " is the input file " + *in);
 
     // Outputs are created before the run so an uncreatable path fails fast.
-    OutputFile collisions_out, stats_out, vcd_out;
+    OutputFile collisions_out, stats_out, frame_stats_out, vcd_out;
     if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions);
     if (!opt.stats.empty()) stats_out = OutputFile(opt.stats);
+    if (!opt.frame_stats.empty()) frame_stats_out = OutputFile(opt.frame_stats);
     if (!opt.vcd.empty()) vcd_out = OutputFile(opt.vcd);
 
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
     const scene::SceneLimits scene_limits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits};
     if (!opt.trace.empty()) {
-        src = std::make_unique<TraceReader>(opt.trace, TraceLimits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits});
+        // Parsed a few tiles ahead on another core (io/prefetch_source.h).
+        src = std::make_unique<PrefetchSource>(
+            std::make_unique<TraceReader>(opt.trace, TraceLimits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits}));
     } else {
         auto s = opt.scene.empty()
                      ? scene::SceneSource::from_text(scene::default_scene_text(), "", "<default scene>", scene_limits)
@@ -148,16 +153,25 @@ int run(const Options& opt) {
                                           cfg.trace.start, cfg.trace.end);
         sys.attach_vcd(*vcd);
     }
-    Progress progress;                   // stderr, only on a terminal, only after a few seconds
-    sys.feed.on_frame = [&](std::uint64_t n) {
-        progress.on_frame(n, sys.feed.stats().fragments);
-        if (trace_out) trace_out->frame(n);
-    };
-    if (trace_out) sys.feed.on_tile = [&](const Tile& t) { trace_out->tile(t); };
-    RunProbe probe(sys);                 // GPU overhead per tile, energy per frame
-    probe.attach();                      // runs before the hooks above
-    tee.add(&probe.unit_frames());       // the unit's frame boundaries reach the probe through the sink
+    RunReport report(sys);               // GPU time and energy per frame, reduced as frames end
+    if (frame_stats_out.active()) report.stream_to([&](const std::string& line) { frame_stats_out.write(line); });
+    // Progress on stderr (only on a terminal, only after a few seconds) and --write-trace.
+    struct Watch final : RasterObserver {
+        rbcd_system& sys;
+        TraceWriter* trace;
+        Progress progress;
+        Watch(rbcd_system& s, TraceWriter* t) : sys(s), trace(t) {}
+        void frame_begin(std::uint64_t n) override {
+            progress.on_frame(n, sys.raster.stats().fragments);
+            if (trace) trace->frame(n);
+        }
+        void tile(const Tile& t) override {
+            if (trace) trace->tile(t);
+        }
+    } watch(sys, trace_out.get());
+    sys.raster.add_observer(&watch);
     sys.run();
+    Progress& progress = watch.progress;
     progress.finish();
     if (images) images->finish();
     if (trace_out) {
@@ -169,17 +183,18 @@ int run(const Options& opt) {
     image_guard.keep = true;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-    const nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, &probe);
+    const nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
     if (file_sink) {
         file_sink->finish();
         collisions_out.commit();
     }
     if (vcd_out.active()) vcd_out.commit();
+    if (frame_stats_out.active()) frame_stats_out.commit();
     if (stats_out.active()) {
         stats_out.write(stats.dump(2) + "\n");
         stats_out.commit();
     }
-    if (!opt.quiet) std::fputs(make_summary(stats).c_str(), stdout);
+    if (!opt.quiet) std::fputs(make_summary(stats, report).c_str(), stdout);
     return 0;
 }
 
@@ -203,7 +218,7 @@ int fail(int status, const std::string& msg, int argc, char* argv[]) {
     // formats.md: on a non-zero exit nothing stands at an output path, not even an
     // older file; but an output path that names one of the inputs is the input.
     const auto inputs = option_values(argc, argv, {"--trace", "--scene", "--config"});
-    for (const auto& p : option_values(argc, argv, {"--collisions", "--stats", "--vcd"})) {
+    for (const auto& p : option_values(argc, argv, {"--collisions", "--stats", "--frame-stats", "--vcd"})) {
         bool is_input = false;
         for (const auto& in : inputs) is_input = is_input || rbcd::same_file(p, in);
         if (!is_input) rbcd::discard_output(p);
@@ -225,6 +240,8 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");
     app.add_option("--collisions", opt.collisions, "write the collision records here");
     app.add_option("--stats", opt.stats, "write statistics JSON here");
+    app.add_option("--frame-stats", opt.frame_stats,
+                   "write per-frame figures here, one JSON object a line, as frames end (docs/stats.md)");
     app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");

@@ -311,7 +311,22 @@ void SceneRenderer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSou
     tile.other = 0;
     tile.has_base = false;
     tile.base = 0;
+    // Every binned triangle is set up, covered pixels or not; the culled ones
+    // are binned only because collision detection defers their culling.
+    tile.has_prims = tile.has_cprims = true;
+    tile.prims = tile.cprims = 0;
+    tile.ordered_other = true;
+    tile.other_runs.clear();
     tile.frags.clear();
+    // Non-collisionable fragments are emitted in primitive order between the
+    // collisionable ones: adjacent runs merge.
+    const auto add_other = [&tile](std::uint64_t n) {
+        if (n == 0) return;
+        tile.other += n;
+        const auto before = static_cast<std::uint32_t>(tile.frags.size());
+        if (!tile.other_runs.empty() && tile.other_runs.back().before == before) tile.other_runs.back().count += n;
+        else tile.other_runs.push_back({before, n});
+    };
 
     const std::int32_t tx0 = std::int32_t(col * tile_w_), ty0 = std::int32_t(row * tile_h_);
     const std::int32_t tx1 = std::min<std::int32_t>(tx0 + std::int32_t(tile_w_), std::int32_t(desc_.width)) - 1;
@@ -319,6 +334,7 @@ void SceneRenderer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSou
 
     for (std::uint32_t ti : bins_[std::size_t(row) * tiles_x_ + col]) {
         const Tri& t = tris_[ti];
+        ++(t.culled ? tile.cprims : tile.prims);
         const std::int32_t x0 = std::max(tx0, t.px0), x1 = std::min(tx1, t.px1);
         const std::int32_t y0 = std::max(ty0, t.py0), y1 = std::min(ty1, t.py1);
         if (x0 > x1 || y0 > y1) continue;
@@ -346,9 +362,10 @@ void SceneRenderer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSou
                 r1 += by1;
                 r2 += by2;
             }
-            tile.other += n;
+            add_other(n);
             continue;
         }
+        std::uint64_t other_here = 0;
 
         const bool displayed = !t.culled;
         for (std::int32_t y = y0; y <= y1; ++y) {
@@ -368,7 +385,7 @@ void SceneRenderer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSou
                         f.culled = t.culled;
                         tile.frags.push_back(f);
                     } else {
-                        ++tile.other;
+                        ++other_here;
                     }
                     if (image && displayed) {
                         SceneSource::ImagePixel& p = image->pixels[std::size_t(y) * image->width + std::size_t(x)];
@@ -389,6 +406,7 @@ void SceneRenderer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSou
             r2 += by2;
             zr += t.zy;
         }
+        add_other(other_here);
     }
 }
 

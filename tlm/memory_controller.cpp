@@ -35,6 +35,7 @@ memory_controller::memory_controller(sc_core::sc_module_name name, const MemoryC
       latency_max_(cfg.latency_max),
       bytes_per_cycle_(cfg.bytes_per_cycle),
       period_ticks_(clock_period.value()),
+      seed_(cfg.seed),
       prng_state_(cfg.seed) {
     const std::string who = std::string(this->name()) + ": ";
     // Checked here, once, so that b_transport can divide and index freely.
@@ -72,6 +73,12 @@ tlm::tlm_response_status memory_controller::check(const tlm_generic_payload& t) 
     // A narrower streaming width would mean a FIFO-style burst to one window.
     if (t.get_streaming_width() < t.get_data_length()) return tlm::TLM_BURST_ERROR_RESPONSE;
     return tlm::TLM_OK_RESPONSE;
+}
+
+void memory_controller::reseed_for_frame(std::uint64_t frame) {
+    // Frame 0 keeps memory.seed itself; others mix the frame number in.
+    std::uint64_t s = seed_ ^ (frame * 0xd1b54a32d192ed03ull);
+    prng_state_ = frame == 0 ? seed_ : splitmix64(s);
 }
 
 std::uint64_t memory_controller::draw_latency() {

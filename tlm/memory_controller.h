@@ -118,6 +118,10 @@ public:
     std::uint64_t last_completion_cycle() const { return last_completion_; }
     // Cycle from which the data channel is free.
     std::uint64_t channel_free_cycle() const { return channel_free_; }
+    // Frame barrier (docs/timing.md): the latency stream restarts from a seed
+    // derived from memory.seed and the frame number, so a frame's timing does
+    // not depend on how many transactions the frames before it made.
+    void reseed_for_frame(std::uint64_t frame);
 
     // The one place sc_time and cycles meet. to_cycles floors.
     std::uint64_t to_cycles(const sc_core::sc_time& t) const { return t.value() / period_ticks_; }
@@ -139,6 +143,7 @@ private:
     std::uint64_t latency_min_, latency_max_;
     std::uint64_t bytes_per_cycle_;
     std::uint64_t period_ticks_;          // clock period in sc_time resolution units
+    std::uint64_t seed_;
     std::uint64_t prng_state_;            // splitmix64
 
     std::uint64_t last_arrival_ = 0;

@@ -129,9 +129,9 @@ void differential(std::uint64_t seed, const SimConfig& cfg, const Shape& sh, uns
         FAIL("first difference at byte " << i << "\nreference: " << want.substr(from, 120)
                                          << "\nsystemc:   " << got.substr(from, 120));
     }
-    CHECK(s.feed.stats().frames == expect.counts.frames);
-    CHECK(s.feed.stats().tiles == expect.counts.tiles);
-    CHECK(s.feed.stats().fragments == expect.counts.fragments);
+    CHECK(s.raster.stats().frames == expect.counts.frames);
+    CHECK(s.raster.stats().tiles == expect.counts.tiles);
+    CHECK(s.raster.stats().fragments == expect.counts.fragments);
     CHECK(s.sorter.stats().overflows == expect.counts.overflows);
     CHECK(s.tester.stats().stack_overflows == expect.counts.stack_overflows);
     CHECK(s.tester.stats().orphan_back_faces == expect.counts.orphan_back_faces);

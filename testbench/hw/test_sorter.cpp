@@ -21,21 +21,53 @@ using rbcd::tb::frag;
 namespace {
 
 // A sorter and two banks built from one configuration, nothing bound, nothing run.
+// What a tile's fill did, seen from the driver.
+struct FillResult {
+    std::uint64_t feed_done = 0;       // cycle after the driver's last emission
+    std::uint64_t fill_done = 0;       // cycle from which the bank holds the whole tile
+    std::uint64_t queue_stall = 0;     // cycles lost against an unhindered driver
+    std::uint64_t first_issue = 0, last_issue = 0;
+};
+
+// The sorter between a driver that emits feed.fragments_per_cycle fragments a
+// cycle into the input queue (the rasterizer's rule, without fragment
+// processors) and the banks.
 struct SorterBench {
     SimConfig cfg;
     std::unique_ptr<zeb_bank> bank0, bank1;
+    std::unique_ptr<input_queue> queue;
     std::unique_ptr<insertion_sorter> sorter;
     explicit SorterBench(const SimConfig& c) : cfg(c) {
         sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
         bank0 = std::make_unique<zeb_bank>("zeb0", cfg.zeb, cfg.tile, 0);
         bank1 = std::make_unique<zeb_bank>("zeb1", cfg.zeb, cfg.tile, 1);
+        queue = std::make_unique<input_queue>("queue", cfg.feed);
         sorter = std::make_unique<insertion_sorter>("sorter", cfg);
     }
-    // begin_fill + fill_tile on `bank`, the feed starting at `start`.
-    insertion_sorter::FillResult fill(zeb_bank& bank, const Tile& t, std::uint64_t start = 0,
-                                      unsigned depth_bits = 24) {
+    // The tile into `bank`, the driver starting at `start`.
+    FillResult fill(zeb_bank& bank, const Tile& t, std::uint64_t start = 0, unsigned depth_bits = 24) {
+        FillResult r;
         bank.begin_fill(t.frame, t.col, t.row, start);
-        return sorter->fill_tile(t, bank, start, depth_bits);
+        sorter->begin_tile(bank, start, t);
+        rasterizer::Cursor c;
+        c.rate = cfg.feed.fragments_per_cycle;
+        c.restart(start);
+        bool first = true;
+        for (const Fragment& f : t.frags) {
+            const std::uint64_t e = queue->room(c.slot());
+            c.emit_at(e);
+            const std::uint64_t issue = sorter->accept(f, e, depth_bits);
+            queue->push(e, issue);
+            if (first) r.first_issue = issue;
+            first = false;
+            r.last_issue = issue;
+        }
+        const std::uint64_t n = t.frags.size();
+        r.fill_done = n ? sorter->end_tile() : start;
+        r.feed_done = n ? c.next_free() : start;
+        const std::uint64_t rate = cfg.feed.fragments_per_cycle;
+        if (n) r.queue_stall = (r.feed_done - start) - (n + rate - 1) / rate;
+        return r;
     }
     // List li of `bank` as "dq:idF dq:idB ...", front to back, from the packed words.
     std::string row(const zeb_bank& bank, unsigned li) const {
@@ -325,11 +357,10 @@ TEST_CASE("hw sorter: timing at rate 4 with a deep queue", "[sorter][timing]") {
     CHECK(r.queue_stall == 0);
     const auto& s = b.sorter->stats();
     CHECK(s.busy_cycles == 10);
-    CHECK(s.queue_full_cycles == 0);
     CHECK(s.hazard_forwards == 0);
     CHECK(s.hazard_stall_cycles == 0);
     // Fragment 9 enqueues at 102, when fragments 0 and 1 have issued: 8 held.
-    CHECK(s.queue_max_occupancy == 8);
+    CHECK(b.queue->stats().max_occupancy == 8);
 }
 
 TEST_CASE("hw sorter: timing at rate 1 with a deep queue", "[sorter][timing]") {
@@ -344,7 +375,7 @@ TEST_CASE("hw sorter: timing at rate 1 with a deep queue", "[sorter][timing]") {
     CHECK(r.last_issue == 110);
     CHECK(r.fill_done == 113);
     CHECK(r.queue_stall == 0);
-    CHECK(b.sorter->stats().queue_max_occupancy == 1);
+    CHECK(b.queue->stats().max_occupancy == 1);
 }
 
 TEST_CASE("hw sorter: timing with a queue of depth 1", "[sorter][timing]") {
@@ -359,8 +390,7 @@ TEST_CASE("hw sorter: timing with a queue of depth 1", "[sorter][timing]") {
     CHECK(r.fill_done == 9);
     CHECK(r.feed_done == 6);
     CHECK(r.queue_stall == 6 - 2);   // an unhindered feed needs ceil(6/4) = 2 cycles
-    CHECK(b.sorter->stats().queue_full_cycles == 4);
-    CHECK(b.sorter->stats().queue_max_occupancy == 1);
+    CHECK(b.queue->stats().max_occupancy == 1);
 }
 
 TEST_CASE("hw sorter: timing with a queue of depth 2", "[sorter][timing]") {
@@ -375,7 +405,7 @@ TEST_CASE("hw sorter: timing with a queue of depth 2", "[sorter][timing]") {
     CHECK(r.fill_done == 9);
     CHECK(r.feed_done == 5);
     CHECK(r.queue_stall == 3);
-    CHECK(b.sorter->stats().queue_max_occupancy == 2);
+    CHECK(b.queue->stats().max_occupancy == 2);
 }
 
 TEST_CASE("hw sorter: same-pixel hazards are forwarded without losing a cycle", "[sorter][timing]") {
@@ -474,8 +504,8 @@ TEST_CASE("hw sorter: pipeline and queue state carry over between tiles", "[sort
     const auto& s = b.sorter->stats();
     CHECK(s.insertions == 32);
     CHECK(s.busy_cycles == 32);
-    CHECK(s.queue_full_cycles == 9 + 12);
-    CHECK(s.queue_max_occupancy == 4);
+    CHECK(r0.queue_stall + r1.queue_stall == 9 + 12);
+    CHECK(b.queue->stats().max_occupancy == 4);
 }
 
 TEST_CASE("hw sorter: a later tile issues behind the previous one or after its own enqueue", "[sorter][timing]") {

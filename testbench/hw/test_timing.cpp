@@ -1,5 +1,7 @@
 // The timing model's worked example (docs/timing.md) and the stall behaviour
-// of banks, queue and output buffer, checked cycle for cycle.
+// of banks, queues and output buffer, checked cycle for cycle. Default GPU:
+// 4 fragments a cycle, fragment queue 64, early-Z 1 cycle, 4 fragment
+// processors at 8 cycles a fragment.
 #include <catch2/catch.hpp>
 
 #include "testbench/hw/tb_util.h"
@@ -32,29 +34,34 @@ SimConfig worked_config() {
 
 } // namespace
 
-TEST_CASE("hw timing: worked example with forwarding takes 570 cycles", "[timing]") {
+TEST_CASE("hw timing: worked example with forwarding takes 70 cycles", "[timing]") {
     auto src = worked_example();
     tb::SystemRun run(worked_config(), src);
     const auto& s = *run.sys;
-    // Feed: 4 fragments in cycle 0, 2 in cycle 1; then 8 other fragments take 2 cycles.
-    CHECK(s.feed.stats().busy_cycles == 4);
-    CHECK(s.feed.stats().stall_queue_full_cycles == 0);
+    // Rasterizer: other=8 spread over the 7 gaps around the 6 fragments (1 before each,
+    // 2 after the last): o f0 o f1 | o f2 o f3 | o f4 o f5 | o o, 4 a cycle: done at 4.
+    CHECK(s.raster.stats().busy_cycles == 4);
+    CHECK(s.raster.stats().stall_queue_full_cycles == 0);
+    CHECK(s.raster.stats().stall_fragment_queue_cycles == 0);
     // Sorter issues at cycles 1..6 (one per cycle, hazards forwarded): fill done at 6 + 3 = 9.
     CHECK(s.sorter.stats().hazard_forwards == 2);
     CHECK(s.sorter.stats().hazard_stall_cycles == 0);
     // Tester: starts at 9, first row read 1 cycle, 6 elements of 1 cycle each (the one hit
     // takes the element's cycle): 16. Flush at 16: 16 bytes take 4 channel cycles, 50 latency: 70.
-    // Host readback: 500 cycles. End: 570.
     CHECK(s.tester.stats().busy_cycles == 7);
     CHECK(s.tester.stats().idle_cycles == 9);
-    CHECK(s.total_cycles() == 570);
+    // Fragment processors: 14 fragments entering at 0 (4), 1 (4), 2 (4), 3 (2) start at
+    // 1, 9, 17, 25 (each processor busy 8 cycles): done at 33. The frame ends when its
+    // records are in memory, at 70; the host's readback goes on in the other region.
+    CHECK(s.fragments.stats().fragments == 14);
+    CHECK(s.total_cycles() == 70);
     REQUIRE(run.hits().size() == 1);
     CHECK(run.hits()[0] == HitRecord{0, 0, 1, 2, 300});
     CHECK(s.tester.stats().orphan_back_faces == 1);
     CHECK(s.memory.stats().writes == 1);
 }
 
-TEST_CASE("hw timing: worked example stalling on hazards takes 574 cycles", "[timing]") {
+TEST_CASE("hw timing: worked example stalling on hazards takes 74 cycles", "[timing]") {
     auto src = worked_example();
     SimConfig cfg = worked_config();
     cfg.sorter.hazard = HazardPolicy::Stall;
@@ -64,12 +71,25 @@ TEST_CASE("hw timing: worked example stalling on hazards takes 574 cycles", "[ti
     CHECK(s.sorter.stats().hazard_stall_cycles == 4);
     CHECK(s.sorter.stats().hazard_forwards == 0);
     CHECK(s.tester.stats().idle_cycles == 13);
-    CHECK(s.total_cycles() == 574);
+    CHECK(s.total_cycles() == 74);
     REQUIRE(run.hits().size() == 1);
 }
 
+TEST_CASE("hw timing: with one output region the frame-end readback waits, outside the frame", "[timing]") {
+    auto src = worked_example();
+    SimConfig cfg = worked_config();
+    cfg.output.double_buffer = false;
+    tb::SystemRun run(cfg, src);
+    const auto& s = *run.sys;
+    // The frame still ends at 70; the tester waits 500 cycles for the host before it
+    // could write again.
+    CHECK(s.total_cycles() == 70);
+    CHECK(s.tester.stats().readback_cycles == 500);
+    CHECK(s.host.stats().readbacks == 1);
+}
+
 TEST_CASE("hw timing: a full input queue holds the rasterizer back", "[timing]") {
-    // 40 fragments on 40 distinct pixels, queue of 4: the feed emits 4 per cycle,
+    // 40 fragments on 40 distinct pixels, queue of 4: the rasterizer emits 4 per cycle,
     // the sorter drains 1 per cycle. Fragment i (i >= 4) enters when fragment i-4 issues.
     MemorySource src(StreamHeader{});
     src.add_frame(0);
@@ -80,11 +100,12 @@ TEST_CASE("hw timing: a full input queue holds the rasterizer back", "[timing]")
     cfg.feed.queue_depth = 4;
     tb::SystemRun run(cfg, src);
     const auto& s = *run.sys;
-    // Issues at 1..40. Fragments 0-3 enqueue at 0; fragment i >= 4 enqueues at issue(i-4) = i-3,
-    // so the feed's last emission is at cycle 36: it finished at 37 instead of 10.
+    // Issues at 1..40. Fragments 0-3 enter at 0, fragment 4 at 1 (its slot), fragment i >= 5
+    // at issue(i-4) = i-3, one cycle after its slot: 35 cycles held, the last at cycle 36.
     CHECK(s.sorter.stats().insertions == 40);
-    CHECK(s.feed.stats().stall_queue_full_cycles == 37 - 10);
-    CHECK(s.sorter.stats().queue_max_occupancy == 4);
+    CHECK(s.raster.stats().stall_queue_full_cycles == 35);
+    CHECK(s.queue.stats().max_occupancy == 4);
+    CHECK(s.raster.stats().busy_cycles == 37 - 35);
 }
 
 namespace {
@@ -102,24 +123,41 @@ MemorySource two_tiles() {
 } // namespace
 
 // Tile 0: enqueued cycles 0-3, issued 1..16, filled at 19; tested 19..36 (1 row read + 16
-// elements), bank free at 36. The feed finishes tile 0 at cycle 4.
+// elements), bank free at 36. The rasterizer finishes tile 0 at cycle 4.
 TEST_CASE("hw timing: with one bank the second tile waits for the first test", "[timing]") {
     auto src = two_tiles();
     SimConfig cfg = worked_config();
     cfg.zeb.banks = 1;
     tb::SystemRun run(cfg, src);
-    CHECK(run.sys->feed.stats().stall_no_bank_cycles == 32);
-    // Tile 1: issued 37..52, filled 55, tested 55..72; readback at frame end: 72 + 500.
-    CHECK(run.sys->total_cycles() == 572);
+    // gpu.bank_wait = tile: the whole tile waits at the tile scheduler, 4..36.
+    CHECK(run.sys->raster.stats().stall_no_bank_cycles == 32);
+    // Tile 1: enqueued 36..39, issued 37..52, filled 55, tested 55..72 (no records: flushed
+    // at 72). Fragment processors: tile 0 starts 1, 9, 17, 25; tile 1 37, 45, 53, 61: done 69.
+    CHECK(run.sys->total_cycles() == 72);
+}
+
+TEST_CASE("hw timing: with one bank and bank_wait = unit only the sorter waits", "[timing]") {
+    auto src = two_tiles();
+    SimConfig cfg = worked_config();
+    cfg.zeb.banks = 1;
+    cfg.gpu.bank_wait = BankWait::Unit;
+    tb::SystemRun run(cfg, src);
+    // Tile 1's 16 fragments go into the input queue (32) at 4..7 while bank 0 is tested;
+    // the sorter, which could issue at 17 behind tile 0, waits for the bank (free at 36):
+    // issues 36..51, filled 54, tested 54..71.
+    CHECK(run.sys->raster.stats().stall_no_bank_cycles == 0);
+    CHECK(run.sys->sorter.stats().bank_wait_cycles == 36 - 17);
+    // Fragment processors: tile 1 enters at 4..7 and starts at 33, 41, 49, 57: done 65.
+    CHECK(run.sys->total_cycles() == 71);
 }
 
 TEST_CASE("hw timing: with two banks the second tile fills during the first test", "[timing]") {
     auto src = two_tiles();
     tb::SystemRun run(worked_config(), src);
-    CHECK(run.sys->feed.stats().stall_no_bank_cycles == 0);
+    CHECK(run.sys->raster.stats().stall_no_bank_cycles == 0);
     // Tile 1: enqueued 4-7, issued 17..32 (behind tile 0), filled 35; the tester is busy with
-    // tile 0 until 36, then 36..53; 53 + 500.
-    CHECK(run.sys->total_cycles() == 553);
+    // tile 0 until 36, then 36..53. Fragment processors: done 65 (33, 41, 49, 57 + 8).
+    CHECK(run.sys->total_cycles() == 65);
 }
 
 TEST_CASE("hw timing: a small output buffer stalls the tester", "[timing]") {
@@ -143,9 +181,9 @@ TEST_CASE("hw timing: a small output buffer stalls the tester", "[timing]") {
     CHECK(s.tester.stats().output_stall_cycles > 0);
     // Fill: issues 1..6, done 9. Tester: row read 9->10, 5 fronts 10..15, hits at 15, then
     // 15+54=69, 69+54=123, 123+54=177; last accepted at 177, tile done 178. Flush: last write
-    // completes at 177+54 = 231, + 500 readback.
+    // completes at 177+54 = 231: the frame's end.
     CHECK(s.tester.stats().output_stall_cycles == 3 * 53);
-    CHECK(s.total_cycles() == 731);
+    CHECK(s.total_cycles() == 231);
 }
 
 TEST_CASE("hw timing: with one write in flight the buffer's slots stay held until each write completes", "[timing]") {
@@ -172,6 +210,6 @@ TEST_CASE("hw timing: with one write in flight the buffer's slots stay held unti
     CHECK(s.tester.stats().output_stall_cycles == 52);
     CHECK(s.banks[0]->stats().testing_cycles == 60);
     CHECK(s.outbuf.stats().outstanding_stall_cycles == (67 - 14) + (121 - 67));
-    // Frame end: everything complete at 175, then 500 cycles of readback.
-    CHECK(s.total_cycles() == 675);
+    // Frame end: everything complete at 175.
+    CHECK(s.total_cycles() == 175);
 }

@@ -1,20 +1,24 @@
-// The energy model (docs/energy.md): per-event energies and a tiny run's
-// energy worked out by hand from its counters, with the default [energy] keys.
+// The energy model (docs/energy.md): per-event energies, and a tiny run's
+// unit and GPU energy worked out by hand from its counters and frame time.
 #include <catch2/catch.hpp>
+
+#include <cmath>
 
 #include "testbench/instruments/instruments_util.h"
 
 using namespace rbcd;
 using rbcd::tb::frag;
 
-TEST_CASE("instruments: per-event energies of the default configuration", "[energy]") {
+TEST_CASE("energy: per-event energies of the default configuration", "[energy]") {
     const EnergyCosts k = energy_costs(SimConfig{});
-    // Element 24 + 7 + 1 = 32 bits; row 8 x 32 = 256; bank 256 lists x 256 = 65536 bits: scale 1.
+    // Element 24 + 7 + 1 = 32 bits; row 8 x 32 = 256 bits = 32 bytes; bank 256 lists x 256
+    // bits = 8 KiB: exactly the CACTI reference macro (LOP, 1R1W).
     CHECK(k.row_bits == 256);
     CHECK(k.bank_bits == 65536);
     CHECK(k.sram_scale == Approx(1.0));
-    CHECK(k.row_read_pj == Approx(0.020 * 256));
-    CHECK(k.row_write_pj == Approx(0.025 * 256));
+    CHECK(k.row_read_pj == Approx(3.46));
+    CHECK(k.row_write_pj == Approx(6.70));
+    CHECK(k.bank_leakage_mw == Approx(1.20));
     CHECK(k.queue_entry_bits == 8 + 32);
     CHECK(k.queue_write_pj == Approx(0.002 * 40));
     CHECK(k.comparator_pj == Approx(0.0015 * 25));   // 24-bit depth + the facing bit (front-first)
@@ -22,37 +26,38 @@ TEST_CASE("instruments: per-event energies of the default configuration", "[ener
     CHECK(k.stack_push_pj == Approx(0.002 * 8));
     CHECK(k.id_compare_pj == Approx(0.001 * 7));
     CHECK(k.buffer_record_pj == Approx(0.002 * 128));
-    CHECK(k.bank_leakage_mw == Approx(0.040 * 8));
     CHECK(k.queue_leakage_mw + k.sorter_leakage_mw + k.tester_leakage_mw + k.buffer_leakage_mw == Approx(0.10));
-    // Logic leakage split by storage bits: queue 32 x 40, sorter 3 x 256, tester 8 x 8 + 256, buffer 16 x 128.
-    CHECK(k.queue_leakage_mw == Approx(0.10 * 1280 / 4416));
-    CHECK(k.buffer_leakage_mw == Approx(0.10 * 2048 / 4416));
     CHECK(k.period_ns == Approx(2.5));
+    // The GPU: a primitive costs its setup and its 64 bytes of tile cache; a tile flushes
+    // 1 KiB of colour buffer to memory.
+    CHECK(k.gpu_fragment_pj == Approx(300.0));
+    CHECK(k.gpu_primitive_pj == Approx(60.0 + 64 * 0.5));
+    CHECK(k.gpu_tile_flush_pj == Approx(1024 * 40.0));
 }
 
-TEST_CASE("instruments: a longer list costs more per SRAM access", "[energy]") {
+TEST_CASE("energy: the ZEB device types and sizes", "[energy]") {
     SimConfig cfg;
-    const double m8 = energy_costs(cfg).row_read_pj;
-    cfg.zeb.list_length = 16;
-    const EnergyCosts k16 = energy_costs(cfg);
-    // Row 512 bits, bank 131072 bits: sqrt(2) per bit.
-    CHECK(k16.row_read_pj == Approx(0.020 * 512 * std::sqrt(2.0)));
-    CHECK(k16.row_read_pj > 2 * m8);
-    CHECK(k16.row_write_pj == Approx(0.025 * 512 * std::sqrt(2.0)));
-    CHECK(k16.bank_leakage_mw == Approx(0.040 * 16));
-    cfg.zeb.list_length = 4;
-    CHECK(energy_costs(cfg).row_read_pj == Approx(0.020 * 128 * std::sqrt(0.5)));
-    // A narrower element: z_bits 16 gives 24-bit elements, a 192-bit row, a 49152-bit bank.
-    SimConfig z16;
-    z16.zeb.z_bits = 16;
-    CHECK(energy_costs(z16).row_read_pj == Approx(0.020 * 192 * std::sqrt(0.75)));
-    // The per-bit figure itself scales linearly.
-    SimConfig hot;
-    hot.energy.sram_read_pj_per_bit = 0.040;
-    CHECK(energy_costs(hot).row_read_pj == Approx(2 * m8));
+    cfg.energy.zeb_device = ZebDevice::Lstp;
+    CHECK(energy_costs(cfg).row_read_pj == Approx(8.43));
+    CHECK(energy_costs(cfg).row_write_pj == Approx(18.83));
+    CHECK(energy_costs(cfg).bank_leakage_mw == Approx(0.0024));
+    cfg.energy.zeb_device = ZebDevice::Hp;
+    CHECK(energy_costs(cfg).row_read_pj == Approx(6.46));
+    CHECK(energy_costs(cfg).row_write_pj == Approx(14.70));
+    CHECK(energy_costs(cfg).bank_leakage_mw == Approx(3.38));
+    // M = 16: a 512-bit row in a 16 KiB bank: twice the row, sqrt(2) for the array.
+    SimConfig m16;
+    m16.zeb.list_length = 16;
+    const EnergyCosts k = energy_costs(m16);
+    CHECK(k.row_read_pj == Approx(3.46 * 2 * std::sqrt(2.0)));
+    CHECK(k.row_write_pj == Approx(6.70 * 2 * std::sqrt(2.0)));
+    CHECK(k.bank_leakage_mw == Approx(1.20 * 2));
+    // Leakage scales with the bits, accesses more slowly than linearly.
+    m16.zeb.list_length = 4;
+    CHECK(energy_costs(m16).row_read_pj == Approx(3.46 * 0.5 * std::sqrt(0.5)));
 }
 
-TEST_CASE("instruments: energy of a tiny run by hand", "[energy]") {
+TEST_CASE("energy: a tiny run by hand for the unit and the GPU", "[energy]") {
     // One pixel: id 2 back at 300, id 1 front at 100, id 2 front at 200, id 1 back at 400.
     // Sorted insertion: 300 -> slot 0; 100 -> slot 0, shifts 1; 200 -> slot 1, shifts 1; 400 -> slot 3.
     // Tester: push 1, push 2, 2B matches (no hit), 1B matches with 2 above it: one hit.
@@ -61,46 +66,45 @@ TEST_CASE("instruments: energy of a tiny run by hand", "[energy]") {
     src.add_tile(tb::tile(0, 0, 0,
                           {frag(0, 0, 300, 2, 'B'), frag(0, 0, 100, 1, 'F'), frag(0, 0, 200, 2, 'F'),
                            frag(0, 0, 400, 1, 'B')}));
-    tb::ProbedRun run(tb::fixed_latency_config(), src);
+    tb::ReportedRun run(tb::fixed_latency_config(), src);
     const auto& s = *run.sys;
     REQUIRE(s.sorter.stats().insertions == 4);
     REQUIRE(s.sorter.stats().mux_shifts == 2);
-    REQUIRE(s.tester.stats().pushes == 2);
-    REQUIRE(s.tester.stats().matches == 2);
     REQUIRE(s.tester.stats().hits == 1);
-    // Fill: issues 1..4, filled 7; test 7 + 1 + 4 = 12 with the hit at 11; the flush writes
-    // 16 bytes at 12: 4 channel cycles + 50 latency = 66; readback 500: 566 cycles.
-    REQUIRE(s.total_cycles() == 566);
-    // The bank's reads are the sorter's (one per insertion) plus the tester's (one per list).
-    CHECK(s.banks[0]->stats().row_reads == 4 + 1);
-    CHECK(s.banks[0]->stats().row_writes == 4);
+    // Fill: issues 1..4, filled 7; test 7 + 1 + 4 = 12; the flush writes 16 bytes at 12:
+    // 4 channel cycles + 50 latency = 66. The fragment processors are done at 9.
+    REQUIRE(s.total_cycles() == 66);
+    REQUIRE(run.totals().t.baseline == 9);
 
     const auto j = run.stats();
     const auto& b = j["energy"]["blocks"];
     CHECK(b["input_queue"]["dynamic_pj"].get<double>() == Approx(4 * 0.08));
-    CHECK(b["zeb_bank0"]["dynamic_pj"].get<double>() == Approx(5 * 5.12 + 4 * 6.4));
+    CHECK(b["zeb_bank0"]["dynamic_pj"].get<double>() == Approx(5 * 3.46 + 4 * 6.70));
     CHECK(b["zeb_bank1"]["dynamic_pj"].get<double>() == 0.0);
-    // 32 comparators of 25 bits; 2 shifted + 4 placed elements of 32 bits.
     CHECK(b["insertion_sorter"]["dynamic_pj"].get<double>() == Approx(32 * 0.0375 + 6 * 0.064));
-    // 2 pushes of 8 bits, 2 matched bits, 2 back faces x 8 comparators of 7 bits.
     CHECK(b["zoverlap_tester"]["dynamic_pj"].get<double>() == Approx(2 * 0.016 + 2 * 0.002 + 16 * 0.007));
     CHECK(b["output_buffer"]["dynamic_pj"].get<double>() == Approx(0.256));
     CHECK(b["memory"]["dynamic_pj"].get<double>() == Approx(16 * 40.0));
-    const double dynamic = 0.32 + 51.2 + 1.584 + 0.148 + 0.256 + 640.0;
+    const double dynamic = 0.32 + 5 * 3.46 + 4 * 6.70 + 1.584 + 0.148 + 0.256 + 640.0;
     CHECK(j["energy"]["dynamic_pj"].get<double>() == Approx(dynamic));
-    // Leakage: 566 cycles x 2.5 ns = 1415 ns; two banks of 0.32 mW and 0.10 mW of logic.
-    CHECK(b["zeb_bank1"]["leakage_pj"].get<double>() == Approx(0.32 * 1415));
-    CHECK(j["energy"]["leakage_pj"].get<double>() == Approx(0.74 * 1415));
-    CHECK(j["energy"]["total_pj"].get<double>() == Approx(dynamic + 0.74 * 1415));
-    CHECK(j["energy"]["total_nj"].get<double>() == Approx((dynamic + 0.74 * 1415) / 1000));
-    CHECK(j["energy"]["average_power_mw"].get<double>() == Approx((dynamic + 0.74 * 1415) / 1415));
-    // One frame: it carries everything.
-    CHECK(j["frames"][0]["energy_nj"].get<double>() == Approx((dynamic + 0.74 * 1415) / 1000));
+    // Leakage over the frame's time with the unit: 66 cycles = 165 ns; 2 x 1.20 + 0.10 mW.
+    const double leak = 2.5 * 165;
+    CHECK(j["energy"]["leakage_pj"].get<double>() == Approx(leak));
+    CHECK(j["energy"]["total_pj"].get<double>() == Approx(dynamic + leak));
+    // The GPU: 4 fragments shaded and rasterized, one tile flushed; static power over 9
+    // cycles without the unit, 66 with it.
+    const double work = 4 * 300.0 + 4 * 8.0 + 1024 * 40.0;
+    const double base = work + 60.0 * 9 * 2.5;
+    const double with = work + 60.0 * 66 * 2.5 + dynamic + leak;
+    CHECK(j["energy"]["gpu"]["baseline_pj"].get<double>() == Approx(base));
+    CHECK(j["energy"]["gpu"]["with_unit_pj"].get<double>() == Approx(with));
+    CHECK(j["energy"]["gpu"]["overhead_pct"].get<double>() == Approx(100.0 * (with - base) / base));
+    CHECK(run.frames[0]["energy_pj"]["unit"].get<double>() == Approx(dynamic + leak));
 }
 
-TEST_CASE("instruments: per-frame energy from counter snapshots at the frame boundaries", "[energy]") {
-    // Two frames of one 16-fragment tile; one bank, so frame 1's tile is filled while the
-    // tester still works on frame 0's: the tester's work must stay with frame 0.
+TEST_CASE("energy: per frame from the counters at each frame barrier", "[energy]") {
+    // Two frames of one 16-fragment tile: each frame's unit energy is its own work plus
+    // leakage over its own time, and the frames add up to the run.
     MemorySource src(StreamHeader{});
     for (unsigned f = 0; f < 2; ++f) {
         src.add_frame(f);
@@ -110,29 +114,15 @@ TEST_CASE("instruments: per-frame energy from counter snapshots at the frame bou
     }
     SimConfig cfg = tb::fixed_latency_config();
     cfg.zeb.banks = 1;
-    tb::ProbedRun run(cfg, src);
-    REQUIRE(run.probe->energy.unit_boundaries_seen());
-    const auto acts = run.probe->energy.frames();
-    REQUIRE(acts.size() == 2);
-    for (const auto& a : acts) {
-        CHECK(a.queue_writes == 16);
-        CHECK(a.sorter_row_reads == 16);
-        CHECK(a.row_writes == 16);
-        CHECK(a.tester_row_reads == 16);
-        CHECK(a.stack_pushes == 16);
-        CHECK(a.memory_bytes == 0);
+    tb::ReportedRun run(cfg, src);
+    REQUIRE(run.frames.size() == 2);
+    const double leak_mw = 1.20 + 0.10;
+    const double dyn = 16 * 0.08 + 32 * 3.46 + 16 * 6.70 + 16 * 8 * 0.0375 + 16 * 0.064 + 16 * 0.016;
+    double sum = 0;
+    for (const auto& f : run.frames) {
+        const double ns = f["cycles_with_unit"].get<double>() * 2.5;
+        CHECK(f["energy_pj"]["unit"].get<double>() == Approx(dyn + leak_mw * ns));
+        sum += f["energy_pj"]["unit"].get<double>();
     }
-    const auto j = run.stats();
-    const auto& fr = j["frames"];
-    // Frame 0's share of the timeline ends when the unit has read it back, frame 1's at the end.
-    const double ns0 = fr[0]["done_cycle"].get<double>() * 2.5;
-    const double ns1 = j["totals"]["cycles"].get<double>() * 2.5 - ns0;
-    const double leak_mw = 0.32 + 0.10;
-    const double dyn = 16 * 0.08 + 32 * 5.12 + 16 * 6.4 + 16 * 8 * 0.0375 + 16 * 0.064 + 16 * 0.016;
-    CHECK(fr[0]["energy_pj"]["total"].get<double>() == Approx(dyn + leak_mw * ns0));
-    CHECK(fr[1]["energy_pj"]["total"].get<double>() == Approx(dyn + leak_mw * ns1));
-    CHECK(fr[0]["energy_pj"]["zeb"].get<double>() == Approx(32 * 5.12 + 16 * 6.4 + 0.32 * ns0));
-    CHECK(fr[0]["energy_nj"].get<double>() + fr[1]["energy_nj"].get<double>() ==
-          Approx(j["energy"]["total_nj"].get<double>()));
-    CHECK(j["energy"]["per_frame"]["basis"].get<std::string>().find("unit's") != std::string::npos);
+    CHECK(sum == Approx(run.stats()["energy"]["total_pj"].get<double>()));
 }

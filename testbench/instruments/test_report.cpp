@@ -24,9 +24,9 @@ MemorySource growing_frames(unsigned frames) {
 
 } // namespace
 
-TEST_CASE("instruments: stats JSON has the totals keys and per-frame series", "[report]") {
+TEST_CASE("report: stats JSON has the totals keys, the GPU and energy figures", "[report]") {
     auto src = growing_frames(3);
-    tb::ProbedRun run(tb::fixed_latency_config(), src);
+    tb::ReportedRun run(tb::fixed_latency_config(), src);
     const auto j = run.stats();
 
     // "totals": exactly the contract's integer keys.
@@ -44,15 +44,17 @@ TEST_CASE("instruments: stats JSON has the totals keys and per-frame series", "[
 
     const auto& g = j["gpu"];
     for (const char* k : {"baseline_cycles", "cycles_with_unit", "overhead_pct", "stalls", "overhead_cycles",
-                          "extra_raster_cycles", "tail_cycles", "per_frame_overhead_pct", "additive_upper_bound"}) {
+                          "per_frame_overhead_pct", "bank_wait"}) {
         INFO(k);
         CHECK(g.contains(k));
     }
-    CHECK(g["stalls"].contains("no_bank_cycles"));
-    CHECK(g["stalls"].contains("queue_full_cycles"));
+    for (const char* k : {"extra_primitives", "extra_fragments", "unit_queue", "unit_no_bank", "tail"}) {
+        INFO(k);
+        CHECK(g["overhead_cycles"].contains(k));
+    }
     const auto& e = j["energy"];
     for (const char* k : {"blocks", "dynamic_pj", "leakage_pj", "total_pj", "total_nj", "average_power_mw",
-                          "per_event_pj", "per_frame"}) {
+                          "per_event_pj", "per_frame", "gpu", "zeb_device"}) {
         INFO(k);
         CHECK(e.contains(k));
     }
@@ -61,60 +63,59 @@ TEST_CASE("instruments: stats JSON has the totals keys and per-frame series", "[
         INFO(k);
         CHECK(e["blocks"].contains(k));
     }
+    for (const char* k : {"baseline_pj", "with_unit_pj", "unit_pj", "overhead_pct"}) {
+        INFO(k);
+        CHECK(e["gpu"].contains(k));
+    }
+    // No per-frame data in the document: it streams to --frame-stats.
+    CHECK_FALSE(j.contains("frames"));
+    CHECK_FALSE(j.contains("series"));
 
-    // Per frame: the entries and the series agree, and they add up to the totals.
-    const auto& fr = j["frames"];
-    REQUIRE(fr.size() == 3);
-    REQUIRE(j["series"]["overhead_pct"].size() == 3);
+    // The frame lines add up to the totals.
+    REQUIRE(run.frames.size() == 3);
     std::uint64_t base = 0, with = 0;
-    double nj = 0;
-    for (std::size_t i = 0; i < fr.size(); ++i) {
-        const auto& fg = fr[i]["gpu"];
-        CHECK(fr[i]["frame"] == i);
-        CHECK(j["series"]["frame"][i] == i);
-        CHECK(j["series"]["baseline_cycles"][i] == fg["baseline_cycles"]);
-        CHECK(j["series"]["cycles_with_unit"][i] == fg["cycles_with_unit"]);
-        CHECK(j["series"]["energy_nj"][i] == fr[i]["energy_nj"]);
-        // The frame's overhead is the sum of its causes.
-        const std::uint64_t over = fg["cycles_with_unit"].get<std::uint64_t>() - fg["baseline_cycles"].get<std::uint64_t>();
-        CHECK(over == fg["extra_raster_exposed"].get<std::uint64_t>() + fg["stalls"]["no_bank_exposed"].get<std::uint64_t>() +
-                          fg["stalls"]["queue_full_exposed"].get<std::uint64_t>() +
-                          fg["stalls"]["feed_excess"].get<std::uint64_t>() + fg["tail_cycles"].get<std::uint64_t>());
-        base += fg["baseline_cycles"].get<std::uint64_t>();
-        with += fg["cycles_with_unit"].get<std::uint64_t>();
-        nj += fr[i]["energy_nj"].get<double>();
+    double unit_pj = 0;
+    for (std::size_t i = 0; i < run.frames.size(); ++i) {
+        const auto& f = run.frames[i];
+        CHECK(f["frame"] == i);
+        base += f["baseline_cycles"].get<std::uint64_t>();
+        with += f["cycles_with_unit"].get<std::uint64_t>();
+        unit_pj += f["energy_pj"]["unit"].get<double>();
     }
     CHECK(g["baseline_cycles"] == base);
     CHECK(g["cycles_with_unit"] == with);
+    CHECK(t["cycles"] == with);
     CHECK(g["overhead_pct"].get<double>() == Approx(100.0 * (double(with) - double(base)) / double(base)));
-    CHECK(nj == Approx(e["total_nj"].get<double>()));
-    // Frame f: other=40 plus f + 1 fragments shaded at 1 a cycle: B = 41, 42, 43.
-    CHECK(fr[2]["gpu"]["baseline_cycles"] == 43);
+    CHECK(unit_pj == Approx(e["total_pj"].get<double>()));
+    // Frame 2: other=40 spread around 3 front faces, 43 fragments into 4 processors at 8
+    // cycles, 4 a cycle from the rasterizer: the 43rd (10 rounds) starts at 81: done at 89.
+    CHECK(run.frames[2]["baseline_cycles"] == 89);
 }
 
-TEST_CASE("instruments: summary shows the first frames the worst and the mean", "[report]") {
+TEST_CASE("report: summary shows the first frames the worst and the mean", "[report]") {
     auto src = growing_frames(12);
-    tb::ProbedRun run(tb::fixed_latency_config(), src);
+    tb::ReportedRun run(tb::fixed_latency_config(), src);
     const auto j = run.stats();
-    const std::string s = make_summary(j);
+    const std::string s = run.summary();
     INFO(s);
     CHECK(s.find("rbcd-sim: test") == 0);
     CHECK(s.find("frames 12") != std::string::npos);
-    for (const char* block : {"rasterizer_feed", "input_queue", "zeb_bank0", "zeb_bank1", "insertion_sorter",
-                              "zoverlap_tester", "output_buffer", "memory"})
-        CHECK(s.find(std::string("\n  ") + block) != std::string::npos);
+    for (const char* block : {"rasterizer", "fragment_processors", "input_queue", "zeb_bank0", "zeb_bank1",
+                              "insertion_sorter", "zoverlap_tester", "output_buffer", "memory"})
+        CHECK(s.find(std::string("\n  ") + block + " ") != std::string::npos);
     CHECK(s.find("GPU time") != std::string::npos);
+    CHECK(s.find("GPU energy") != std::string::npos);
     CHECK(s.find("average power") != std::string::npos);
     // Twelve frames: 0, 1, 2, then the worst and the mean; not frame 5 on its own row.
-    CHECK(s.find("\n         0 ") != std::string::npos);
-    CHECK(s.find("\n         2 ") != std::string::npos);
-    CHECK(s.find("\n         5 ") == std::string::npos);
+    CHECK(s.find("\n           0 ") != std::string::npos);
+    CHECK(s.find("\n           2 ") != std::string::npos);
+    CHECK(s.find("\n           5 ") == std::string::npos);
     const std::uint64_t worst = j["gpu"]["per_frame_overhead_pct"]["max_frame"].get<std::uint64_t>();
     CHECK(s.find("worst " + std::to_string(worst)) != std::string::npos);
-    CHECK(s.find("\n      mean ") != std::string::npos);
+    CHECK(s.find("\n        mean ") != std::string::npos);
 }
 
-TEST_CASE("instruments: progress waits for the delay then rate-limits and clears", "[report]") {
+TEST_CASE("report: progress waits for the delay then rate-limits and clears", "[report]") {
     double now = 100.0;
     std::string out;
     Progress p(true, [&] { return now; }, [&](const std::string& s) { out += s; }, 3.0, 0.5);

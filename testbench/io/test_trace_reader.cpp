@@ -658,7 +658,7 @@ TEST_CASE("io: error: tile records", "[io][reader][error]") {
     const std::string F0 = M + "frame 0\n";
     CHECK_ERR(F0 + "tile\n", 3, "tile has too few fields: missing column");
     CHECK_ERR(F0 + "tile 0\n", 3, "tile has too few fields: missing row");
-    CHECK_ERR(F0 + "tile 0 0 foo=1\n", 3, "tile has unknown key 'foo' (known keys: other, base)");
+    CHECK_ERR(F0 + "tile 0 0 foo=1\n", 3, "tile has unknown key 'foo' (known keys: other, base, prims, cprims)");
     CHECK_ERR(F0 + "tile 0 0 Other=1\n", 3, "tile has unknown key 'Other'");
     CHECK_ERR(F0 + "tile 0 0 other=1 other=2\n", 3, "tile key 'other' given twice");
     CHECK_ERR(F0 + "tile 0 0 base=1 other=2 base=3\n", 3, "tile key 'base' given twice");

@@ -470,6 +470,12 @@ TEST_CASE("config: validate accepts the limits of the cross-key checks") {
     c.output.region_bytes = std::uint64_t(c.output.burst_records) * 16;
     CHECK_NOTHROW(c.validate());
     c = SimConfig{};
+    // Double-buffered by default: two regions back to back.
+    c.output.region_offset = c.memory.size_bytes - 2 * c.output.region_bytes;
+    CHECK_NOTHROW(c.validate());
+    c.output.region_offset += 16;
+    CHECK_THROWS(c.validate());
+    c.output.double_buffer = false;
     c.output.region_offset = c.memory.size_bytes - c.output.region_bytes;
     CHECK_NOTHROW(c.validate());
 }

@@ -1,4 +1,4 @@
-#include "sc_main/energy_model.h"
+#include "report/energy_model.h"
 
 #include <cmath>
 
@@ -18,6 +18,16 @@ unsigned ceil_log2(std::uint64_t n) {
 
 } // namespace
 
+ZebSramFigures zeb_sram_figures(ZebDevice d) {
+    // CACTI 7, 32 nm, 8 KiB, 32-byte rows, 1R1W (docs/energy.md).
+    switch (d) {
+    case ZebDevice::Lop: return {3.46, 6.70, 1.20};
+    case ZebDevice::Lstp: return {8.43, 18.83, 0.0024};
+    case ZebDevice::Hp: return {6.46, 14.70, 3.38};
+    }
+    return {0, 0, 0};
+}
+
 EnergyCosts energy_costs(const SimConfig& cfg) {
     const EnergyConfig& e = cfg.energy;
     EnergyCosts k;
@@ -26,9 +36,12 @@ EnergyCosts energy_costs(const SimConfig& cfg) {
     k.banks = cfg.zeb.banks;
     k.row_bits = cfg.zeb.list_length * width;
     k.bank_bits = lists * k.row_bits;
-    k.sram_scale = std::sqrt(double(k.bank_bits) / 65536.0);
-    k.row_read_pj = e.sram_read_pj_per_bit * k.row_bits * k.sram_scale;
-    k.row_write_pj = e.sram_write_pj_per_bit * k.row_bits * k.sram_scale;
+    // The figures are for the reference macro; an access scales with the row's
+    // width and (bit lines, decoders) with the square root of the array size.
+    const ZebSramFigures z = zeb_sram_figures(e.zeb_device);
+    k.sram_scale = double(k.row_bits) / 256.0 * std::sqrt(double(k.bank_bits) / 65536.0);
+    k.row_read_pj = z.read_pj * k.sram_scale;
+    k.row_write_pj = z.write_pj * k.sram_scale;
     k.queue_entry_bits = ceil_log2(lists) + width;
     k.queue_write_pj = e.queue_pj_per_bit * k.queue_entry_bits;
     k.key_bits = cfg.zeb.z_bits + (cfg.zeb.tie == TiePolicy::FrontFirst ? 1 : 0);
@@ -40,7 +53,7 @@ EnergyCosts energy_costs(const SimConfig& cfg) {
     k.buffer_record_pj = e.buffer_pj_per_bit * (kRecordBytes * 8);
     k.memory_byte_pj = e.memory_pj_per_byte;
 
-    k.bank_leakage_mw = e.sram_leakage_mw_per_kib * double(k.bank_bits) / 8192.0;
+    k.bank_leakage_mw = z.leakage_mw * double(k.bank_bits) / 65536.0;
     // The logic's leakage, split by the storage each block holds.
     k.queue_bits = std::uint64_t(cfg.feed.queue_depth) * k.queue_entry_bits;
     k.sorter_bits = std::uint64_t(insertion_sorter::kStages) * k.row_bits;
@@ -52,6 +65,11 @@ EnergyCosts energy_costs(const SimConfig& cfg) {
     k.tester_leakage_mw = e.logic_leakage_mw * double(k.tester_bits) / all;
     k.buffer_leakage_mw = e.logic_leakage_mw * double(k.buffer_bits) / all;
     k.period_ns = double(cfg.clock.period_ps()) / 1000.0;
+    k.gpu_fragment_pj = e.gpu_fragment_pj;
+    k.gpu_raster_fragment_pj = e.gpu_raster_fragment_pj;
+    k.gpu_primitive_pj = e.gpu_primitive_pj + double(e.gpu_primitive_bytes) * e.gpu_tile_cache_pj_per_byte;
+    k.gpu_tile_flush_pj = double(e.gpu_tile_flush_bytes) * e.memory_pj_per_byte;
+    k.gpu_static_mw = e.gpu_static_mw;
     return k;
 }
 
@@ -75,7 +93,7 @@ Activity activity_of(const rbcd_system& sys) {
     Activity a;
     const auto& so = sys.sorter.stats();
     const auto& te = sys.tester.stats();
-    a.queue_writes = so.insertions;
+    a.queue_writes = sys.queue.stats().writes;
     a.comparator_activations = so.comparator_activations;
     a.mux_moves = so.mux_shifts + (so.insertions - so.dropped_new);
     a.sorter_row_reads = so.insertions;   // the READ stage fires once per insertion
@@ -130,53 +148,10 @@ EnergyReport energy_of(const EnergyCosts& k, const Activity& a, std::uint64_t cy
     return r;
 }
 
-FrameEnergyProbe::FrameEnergyProbe(const rbcd_system& sys) : sys_(sys) { sink_.probe = this; }
-
-void FrameEnergyProbe::on_feed_frame(std::uint64_t) {
-    // The k-th frame start ends feed frame k-1.
-    if (feed_calls_++ > 0) {
-        feed_snaps_.push_back(activity_of(sys_));
-        feed_snaps_.back().bank_reads.clear();
-        feed_snaps_.back().bank_writes.clear();
-    }
-}
-
-void FrameEnergyProbe::on_unit_frame(std::uint64_t) {
-    unit_seen_ = true;
-    if (unit_calls_++ > 0) {
-        unit_snaps_.push_back(activity_of(sys_));
-        unit_snaps_.back().bank_reads.clear();
-        unit_snaps_.back().bank_writes.clear();
-    }
-}
-
-std::vector<Activity> FrameEnergyProbe::frames() const {
-    const std::size_t n = sys_.feed.frames().size();
-    Activity total = activity_of(sys_);
-    total.bank_reads.clear();
-    total.bank_writes.clear();
-    auto cum = [&](const std::vector<Activity>& snaps, std::size_t i) -> const Activity& {
-        return i < snaps.size() ? snaps[i] : total;
-    };
-    const std::vector<Activity>& unit = unit_seen_ ? unit_snaps_ : feed_snaps_;
-    std::vector<Activity> out;
-    Activity prev_feed, prev_unit;
-    for (std::size_t i = 0; i < n; ++i) {
-        const Activity& f = cum(feed_snaps_, i);
-        const Activity& u = cum(unit, i);
-        const Activity df = f - prev_feed, du = u - prev_unit;
-        Activity a = df;   // feed side: queue, sorter, the sorter's row reads and writes
-        a.tester_row_reads = du.tester_row_reads;
-        a.stack_pushes = du.stack_pushes;
-        a.stack_matches = du.stack_matches;
-        a.id_compares = du.id_compares;
-        a.buffer_records = du.buffer_records;
-        a.memory_bytes = du.memory_bytes;
-        out.push_back(a);
-        prev_feed = f;
-        prev_unit = u;
-    }
-    return out;
+double gpu_energy_pj(const EnergyCosts& k, const GpuWork& w, std::uint64_t cycles) {
+    return double(w.shaded) * k.gpu_fragment_pj + double(w.rasterized) * k.gpu_raster_fragment_pj +
+           double(w.primitives) * k.gpu_primitive_pj + double(w.tiles) * k.gpu_tile_flush_pj +
+           k.gpu_static_mw * double(cycles) * k.period_ns;
 }
 
 } // namespace rbcd

@@ -1,32 +1,40 @@
-// Energy of the unit: per-event dynamic energy from the blocks' counters and
-// per-block leakage over the simulated time, with the [energy] section's
-// figures (docs/energy.md gives every formula and default).
+// Energy of the unit and of the GPU around it (docs/energy.md gives every
+// formula, default and source).
 //
-//   const EnergyCosts k = energy_costs(cfg);        // pJ per event, from the configuration
-//   const Activity a = activity_of(sys);            // event counts after the run
-//   const EnergyReport e = energy_of(k, a, cycles); // pJ per block
+// The unit: per-event dynamic energy from the blocks' counters, and per-block
+// leakage over the time it is charged for (each frame's GPU time with the
+// unit). The GPU: per shaded fragment, per rasterized fragment, per primitive
+// set up and its tile-cache bytes, the colour buffer flushed per tile, and
+// static power over the frame's time; computed for the baseline GPU and for
+// the GPU with the unit, so that the normalized energy (paper, Figure 9b) is
+// reported beside the normalized time.
 //
-// Per frame: FrameEnergyProbe snapshots the counters at each frame boundary:
-// the feed-side blocks (input queue, sorter, the sorter's bank accesses) when
-// the feed ends the frame, the unit-side blocks (tester, its bank reads, output
-// buffer, memory) when the unit has the frame's records in memory and read back.
+//   const EnergyCosts k = energy_costs(cfg);         // per event, from the configuration
+//   const Activity a = activity_of(sys);             // the unit's event counts so far
+//   const EnergyReport e = energy_of(k, a, cycles);  // pJ per block
+//   const double g = gpu_energy_pj(k, GpuWork{...}, cycles);
 #pragma once
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "common/config.h"
-#include "hw/collision_sink.h"
 
 namespace rbcd {
 
 class rbcd_system;
 
+// The ZEB macro's figures at its reference size (8 KiB, 32-byte rows).
+struct ZebSramFigures {
+    double read_pj, write_pj, leakage_mw;
+};
+ZebSramFigures zeb_sram_figures(ZebDevice d);
+
 // Energy of one event of each kind (pJ), and the leakage (mW) of each block.
 struct EnergyCosts {
     std::uint64_t bank_bits = 0;          // one ZEB bank: lists x M x element width
     unsigned row_bits = 0;                // one list row: M x element width
-    double sram_scale = 1.0;              // sqrt(bank_bits / 65536)
+    double sram_scale = 1.0;              // (row_bits / 256) x sqrt(bank_bits / 65536), for accesses
     double row_read_pj = 0, row_write_pj = 0;
     unsigned queue_entry_bits = 0;        // pixel index + element
     double queue_write_pj = 0;
@@ -44,12 +52,14 @@ struct EnergyCosts {
     std::uint64_t queue_bits = 0, sorter_bits = 0, tester_bits = 0, buffer_bits = 0;   // storage, for the split
     unsigned banks = 0;
     double period_ns = 0;
+    // The GPU.
+    double gpu_fragment_pj = 0, gpu_raster_fragment_pj = 0, gpu_primitive_pj = 0;   // primitive incl. its tile-cache read
+    double gpu_tile_flush_pj = 0, gpu_static_mw = 0;
 };
 
 EnergyCosts energy_costs(const SimConfig& cfg);
 
-// Event counts. Bank reads and writes per bank for the totals; per frame only
-// their sums (all banks cost the same per access).
+// The unit's event counts (cumulative, or a frame's difference).
 struct Activity {
     std::uint64_t queue_writes = 0;       // fragments entering the input queue
     std::uint64_t comparator_activations = 0;
@@ -59,7 +69,7 @@ struct Activity {
     std::uint64_t stack_pushes = 0, stack_matches = 0, id_compares = 0;
     std::uint64_t buffer_records = 0;
     std::uint64_t memory_bytes = 0;       // through b_transport (the unit's writes)
-    std::vector<std::uint64_t> bank_reads, bank_writes;   // totals only; empty per frame
+    std::vector<std::uint64_t> bank_reads, bank_writes;   // per bank; empty in a difference
     Activity operator-(const Activity& o) const;   // per-bank vectors dropped
 };
 
@@ -82,33 +92,14 @@ struct EnergyReport {
 // has per-bank counts, else one "zeb" block for all banks.
 EnergyReport energy_of(const EnergyCosts& k, const Activity& a, std::uint64_t cycles);
 
-// Snapshots the counters at frame boundaries, for per-frame energy.
-class FrameEnergyProbe {
-public:
-    explicit FrameEnergyProbe(const rbcd_system& sys);
-    // From the feed's on_frame hook: frame `n` begins, so the feed is done with n-1.
-    void on_feed_frame(std::uint64_t n);
-    // The unit starts frame n: everything of n-1 is in memory and read back.
-    // Add unit_frames() to the system's collision sink (a TeeSink) to have it called.
-    void on_unit_frame(std::uint64_t n);
-    CollisionSink& unit_frames() { return sink_; }
-
-    // After the run: activity of each feed frame (sums to the totals).
-    std::vector<Activity> frames() const;
-    bool unit_boundaries_seen() const { return unit_seen_; }
-
-private:
-    struct Sink final : CollisionSink {
-        FrameEnergyProbe* probe = nullptr;
-        void frame(std::uint64_t n) override { probe->on_unit_frame(n); }
-        void hit(const HitRecord&) override {}
-        void overflow(const OverflowRecord&) override {}
-    };
-    const rbcd_system& sys_;
-    Sink sink_;
-    std::vector<Activity> feed_snaps_, unit_snaps_;   // cumulative at the end of frame i
-    std::uint64_t feed_calls_ = 0, unit_calls_ = 0;
-    bool unit_seen_ = false;
+// What the GPU did in a frame, in one of its two versions.
+struct GpuWork {
+    std::uint64_t shaded = 0;       // fragments through the fragment processors
+    std::uint64_t rasterized = 0;   // fragments the rasterizer produced
+    std::uint64_t primitives = 0;   // primitives set up
+    std::uint64_t tiles = 0;        // tiles rendered (colour buffer flushed)
 };
+// The GPU's own energy (pJ) for that work over `cycles` of frame time.
+double gpu_energy_pj(const EnergyCosts& k, const GpuWork& w, std::uint64_t cycles);
 
 } // namespace rbcd

@@ -1,0 +1,246 @@
+// The GPU's fragment side behind the rasterizer (paper, Figure 3 and Table 2):
+// a fragment queue of Q = gpu.fragment_queue_depth entries in front of early-Z,
+// and P = gpu.fragment_processors processors that take C =
+// gpu.cycles_per_fragment cycles a fragment.
+//
+// Fragments are dispatched in order to the earliest-free processor; with equal
+// service times that is round-robin, so fragment k, entering the queue at e_k,
+// starts at
+//     s_k = max(e_k + early_z, s_{k-P} + C)
+// and frees its queue slot then: fragment k may enter only once s_{k-Q} has
+// passed (a pop and a push in the same cycle are allowed). The processors idle
+// only when the queue runs dry.
+//
+// FragmentPipe is that recurrence, in plain C++: the with-unit timeline and the
+// baseline timelines of the rasterizer (docs/gpu-model.md) each own one.
+//
+//   FragmentPipe p(cfg.gpu);
+//   std::uint64_t e = p.room(raster_cycle);   // earliest cycle the queue takes one
+//   p.push(e);                                 // ... and it enters then
+//   p.done();                                  // every fragment so far finished
+#pragma once
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+#include <systemc>
+#include <vector>
+
+#include "common/config.h"
+#include "common/vcd_writer.h"
+#include "hw/clocking.h"
+
+namespace rbcd {
+
+class FragmentPipe {
+public:
+    explicit FragmentPipe(const GpuConfig& g)
+        : q_(g.fragment_queue_depth),
+          p_(g.fragment_processors),
+          c_(g.cycles_per_fragment),
+          ez_(g.early_z_cycles),
+          slot_free_(g.fragment_queue_depth, 0),
+          proc_free_(g.fragment_processors, 0) {}
+
+    // Frame barrier: an empty queue and idle processors from cycle t on.
+    // (Slots and processors free "at 0" constrain nothing: every cycle is >= 0.)
+    void restart(std::uint64_t t) {
+        std::fill(slot_free_.begin(), slot_free_.end(), 0);
+        std::fill(proc_free_.begin(), proc_free_.end(), 0);
+        n_ = 0;
+        qi_ = pi_ = 0;
+        done_ = t;
+    }
+    // Earliest cycle >= t at which the queue has a free slot for the next fragment.
+    std::uint64_t room(std::uint64_t t) const { return std::max(t, slot_free_[qi_]); }
+    // The next fragment enters at e (>= room(e)); returns its dispatch cycle.
+    std::uint64_t push(std::uint64_t e) {
+        const std::uint64_t s = std::max(e + ez_, proc_free_[pi_]);
+        proc_free_[pi_] = s + c_;
+        slot_free_[qi_] = s;
+        if (++pi_ == p_) pi_ = 0;
+        if (++qi_ == q_) qi_ = 0;
+        ++n_;
+        done_ = std::max(done_, s + c_);
+        return s;
+    }
+    // m fragments from a rasterizer emitting `rate` a cycle, whose clock is
+    // (t, used): each leaves at the rasterizer's next slot or when the queue
+    // has room. Returns the cycles the rasterizer waited. The same as m times
+    // room() and push(), with the state in registers.
+    std::uint64_t shade(std::uint64_t& t_io, unsigned& used_io, unsigned rate, std::uint64_t m) {
+        std::uint64_t t = t_io, done = done_, wait = 0;
+        unsigned used = used_io, qi = qi_, pi = pi_;
+        std::uint64_t* const slot_free = slot_free_.data();
+        std::uint64_t* const proc_free = proc_free_.data();
+        for (std::uint64_t k = 0; k < m; ++k) {
+            if (used == rate) {
+                ++t;
+                used = 0;
+            }
+            const std::uint64_t room = slot_free[qi];
+            if (room > t) {
+                wait += room - t;
+                t = room;
+                used = 0;
+            }
+            ++used;
+            const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
+            proc_free[pi] = s + c_;
+            slot_free[qi] = s;
+            if (++pi == p_) pi = 0;
+            if (++qi == q_) qi = 0;
+            done = std::max(done, s + c_);
+        }
+        t_io = t;
+        used_io = used;
+        done_ = done;
+        qi_ = qi;
+        pi_ = pi;
+        n_ += m;
+        return wait;
+    }
+
+    // The same as shade(), for any m: a run of identical fragments is a
+    // max-plus system with constant input; once it is in its periodic regime
+    // a block of fragments shifts the whole state (rings and rasterizer
+    // clock) by the same number of cycles, and every later block does the
+    // same (the recurrences are shift-invariant). Long runs jump over those
+    // blocks, so their cost does not grow with their length.
+    std::uint64_t shade_run(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
+        if (m <= kLongRun) return shade(t, used, rate, m);
+        return shade_long(t, used, rate, m);
+    }
+    static constexpr std::uint64_t kLongRun = 256;
+
+    // The cycle every fragment pushed since restart() has finished.
+    std::uint64_t done() const { return done_; }
+    unsigned processors() const { return p_; }
+    unsigned cycles_per_fragment() const { return c_; }
+
+    // Long runs (rasterizer.cpp, shade_run): a run of identical fragments is
+    // eventually periodic, its state shifting by a fixed number of cycles
+    // every `period_hint` fragments.
+    std::uint64_t period_hint(unsigned rate) const {
+        std::uint64_t b = std::lcm<std::uint64_t>(p_, rate);
+        while (b < 16) b *= 2;
+        return b;
+    }
+    // Fragments after which both rings hold only this run's entries.
+    std::uint64_t saturation() const { return std::max(q_, p_); }
+    // The state in age order (oldest first): queue slots, then processors.
+    void state(std::vector<std::uint64_t>& out) const {
+        out.clear();
+        for (unsigned a = 0; a < q_; ++a) out.push_back(slot_free_[(qi_ + a) % q_]);
+        for (unsigned a = 0; a < p_; ++a) out.push_back(proc_free_[(pi_ + a) % p_]);
+    }
+    // As if `count` more fragments continued a periodic run that shifts the
+    // state by `delta` cycles per `count` fragments.
+    void advance(std::uint64_t count, std::uint64_t delta) {
+        if (!count) return;
+        for (auto& v : slot_free_) v += delta;
+        for (auto& v : proc_free_) v += delta;
+        // The same state in age order, later by delta: the ring positions may stay.
+        n_ += count;
+        done_ += delta;
+    }
+
+private:
+    std::uint64_t shade_long(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
+        std::uint64_t wait = 0;
+        const std::uint64_t block = period_hint(rate);
+        const std::uint64_t warm = saturation() + 2 * block;
+        if (m < warm + 4 * block) return shade(t, used, rate, m);
+        wait += shade(t, used, rate, warm);
+        m -= warm;
+        std::vector<std::uint64_t> ref, cur;
+        state(ref);
+        std::uint64_t ref_t = t;
+        unsigned ref_used = used;
+        while (m >= block) {
+            const std::uint64_t block_wait = shade(t, used, rate, block);
+            m -= block;
+            wait += block_wait;
+            state(cur);
+            const std::uint64_t delta = t - ref_t;
+            bool periodic = used == ref_used && delta > 0;
+            for (std::size_t i = 0; periodic && i < cur.size(); ++i) periodic = cur[i] == ref[i] + delta;
+            if (periodic) {
+                const std::uint64_t jumps = m / block;
+                advance(jumps * block, jumps * delta);
+                t += jumps * delta;
+                wait += jumps * block_wait;
+                m -= jumps * block;
+                break;
+            }
+            ref.swap(cur);
+            ref_t = t;
+            ref_used = used;
+        }
+        return wait + shade(t, used, rate, m);
+    }
+
+    unsigned q_, p_, c_, ez_;
+    std::vector<std::uint64_t> slot_free_;   // s_k of the last Q fragments (ring)
+    std::vector<std::uint64_t> proc_free_;   // s_k + C of the last P fragments (ring)
+    std::uint64_t n_ = 0;
+    unsigned qi_ = 0, pi_ = 0;
+    std::uint64_t done_ = 0;
+};
+
+// The block: the with-unit timeline's fragment queue and processors, with
+// their counters and waveforms. The rasterizer drives it.
+class fragment_processors : public sc_core::sc_module {
+public:
+    struct stats_t {
+        std::uint64_t fragments = 0;            // fragments shaded
+        std::uint64_t busy_cycles = 0;          // processor-cycles shading (fragments x C)
+        std::uint64_t idle_cycles = 0;          // processor-cycles idle inside frames
+        template <class F> void for_each(F f) const {
+            RBCD_STAT(f, *this, fragments, "fragments shaded");
+            RBCD_STAT(f, *this, busy_cycles, "processor-cycles shading (fragments x cycles_per_fragment)");
+            RBCD_STAT(f, *this, idle_cycles, "processor-cycles idle between a frame's start and end");
+        }
+    };
+
+    fragment_processors(sc_core::sc_module_name name, const GpuConfig& g) : sc_module(name), pipe_(g) {}
+
+    std::uint64_t room(std::uint64_t t) const { return pipe_.room(t); }
+    std::uint64_t push(std::uint64_t e) {
+        const std::uint64_t s = pipe_.push(e);
+        ++stats_.fragments;
+        if (vcd_) {
+            vcd_->add_delta(vcd_queue_, e, +1);
+            vcd_->add_delta(vcd_queue_, s, -1);
+            vcd_->add_delta(vcd_busy_, s, +1);
+            vcd_->add_delta(vcd_busy_, s + pipe_.cycles_per_fragment(), -1);
+        }
+        return s;
+    }
+    std::uint64_t done() const { return pipe_.done(); }
+    void restart(std::uint64_t t) { pipe_.restart(t); }
+    // For runs computed on the pipe directly (no waveforms): count them.
+    FragmentPipe& pipe() { return pipe_; }
+    void count(std::uint64_t fragments) { stats_.fragments += fragments; }
+    // Frame accounting: a frame of `cycles` in which `fragments` were shaded.
+    void close_frame(std::uint64_t cycles, std::uint64_t fragments) {
+        const std::uint64_t busy = fragments * pipe_.cycles_per_fragment();
+        const std::uint64_t all = cycles * pipe_.processors();
+        stats_.busy_cycles += busy;
+        stats_.idle_cycles += all > busy ? all - busy : 0;
+    }
+
+    const stats_t& stats() const { return stats_; }
+    void attach_vcd(VcdWriter& vcd, const std::string& scope) {
+        vcd_ = &vcd;
+        vcd_queue_ = vcd.add(scope, "queue_occupancy", 17);
+        vcd_busy_ = vcd.add(scope, "processors_busy", 9);
+    }
+
+private:
+    FragmentPipe pipe_;
+    stats_t stats_;
+    VcdWriter* vcd_ = nullptr;
+    VcdWriter::Sig vcd_queue_ = 0, vcd_busy_ = 0;
+};
+
+} // namespace rbcd

@@ -1,0 +1,27 @@
+// The --stats JSON document and the end-of-run summary on stdout, from the
+// system's counters and the run's per-frame reduction (report/run_report.h):
+//
+//   rbcd_system sys("rbcd", cfg, src, sink);
+//   RunReport report(sys);                       // per-frame figures, streamed
+//   sys.run();
+//   nlohmann::json j = make_stats(sys, info, report);
+//   std::string text = make_summary(j, report);
+#pragma once
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "hw/rbcd_system.h"
+#include "report/energy_model.h"
+#include "report/run_report.h"
+
+namespace rbcd {
+
+struct RunInfo {
+    std::string input;        // trace path or scene name
+    double wall_seconds = 0;
+};
+
+nlohmann::json make_stats(const rbcd_system& sys, const RunInfo& info, const RunReport& report);
+std::string make_summary(const nlohmann::json& stats, const RunReport& report);
+
+} // namespace rbcd
