@@ -282,6 +282,7 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
+    app.footer("Formats and options: docs/formats.md; configuration keys: docs/config.md; statistics: docs/stats.md.");
     app.set_version_flag("--version", rbcd::version_text(), "print the version, git revision, SystemC, compiler and build type");
     app.add_flag("--config-reference", opt.config_reference, "print the table of configuration keys (docs/config.md)");
     try {

@@ -86,3 +86,21 @@ TEST_CASE("cli: --dump-config prints the shortest decimals that read back the sa
     CHECK_THAT(r.out, Contains("\ncomparator_pj_per_bit = 0.1   #"));
     CHECK(r.out.find("0000000") == std::string::npos);
 }
+
+TEST_CASE("cli: --help sends the reader to the repository's own docs only") {
+    TempDir td;
+    const Result r = run_sim(td, {"--help"});
+    CHECK(r.status == 0);
+    CHECK_THAT(r.out, Contains("--version"));
+    CHECK_THAT(r.out, Contains("docs/formats.md"));
+    CHECK_THAT(r.out, !Contains("../"));
+    CHECK_THAT(r.out, !Contains("shared/"));
+    // Every docs/ file named exists in the source tree.
+    for (std::size_t p = r.out.find("docs/"); p != std::string::npos; p = r.out.find("docs/", p + 1)) {
+        const std::size_t e = r.out.find(".md", p);
+        REQUIRE(e != std::string::npos);
+        const std::string doc = r.out.substr(p, e + 3 - p);
+        INFO(doc);
+        CHECK(fs::exists(std::string(RBCD_SOURCE_DIR) + "/" + doc));
+    }
+}
