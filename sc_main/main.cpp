@@ -97,7 +97,8 @@ int run(const Options& opt) {
         src = std::move(s);
     }
     const std::string input_name = src->name();
-    // Inputs are hashed now, as they were read (docs/provenance.md).
+    // Inputs are hashed now, as they were read, and only for a stats file
+    // (docs/provenance.md).
     std::vector<ProvenanceInput> prov_inputs;
     const std::string default_scene = scene::default_scene_text();
     if (!opt.config_file.empty()) prov_inputs.push_back({"config", opt.config_file});
@@ -106,7 +107,7 @@ int run(const Options& opt) {
     else prov_inputs.push_back({"scene", opt.scene});
     if (scene_src)
         for (const auto& m : scene_src->mesh_files()) prov_inputs.push_back({"mesh", m});
-    const nlohmann::json provenance = make_provenance(opt.argv, cfg, prov_inputs);
+    const nlohmann::json provenance = stats_out.active() ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
 
     std::unique_ptr<CollisionFileSink> file_sink;
     TeeSink tee;
@@ -183,7 +184,7 @@ int run(const Options& opt) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, &probe);
-    stats["provenance"] = provenance;
+    if (stats_out.active()) stats["provenance"] = provenance;
     if (file_sink) {
         file_sink->finish();
         collisions_out.commit();
