@@ -1,5 +1,6 @@
 #include "common/config.h"
 
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -83,10 +84,11 @@ ConfigKey real_key(std::string name, std::string block, std::string unit, std::s
         get(c) = v;
     };
     k.to_toml = [get](const SimConfig& c) {
-        std::ostringstream os;
-        os.precision(17);
-        os << get(const_cast<SimConfig&>(c));
-        std::string s = os.str();
+        // The shortest decimal that reads back as the same double (0.025, not
+        // 0.025000000000000001).
+        char buf[32];
+        const auto r = std::to_chars(buf, buf + sizeof buf, get(const_cast<SimConfig&>(c)));
+        std::string s(buf, r.ptr);
         if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
         return s;
     };

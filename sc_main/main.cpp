@@ -2,6 +2,7 @@
 // (formats.md, "Command line"). Exit 0 done, 2 bad input/config/command line,
 // 1 anything else; on a non-zero exit no output file is left behind.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "sc_main/progress.h"
 #include "report/run_report.h"
 #include "report/stats_report.h"
+#include "sc_main/provenance.h"
 #include "hw/rbcd_system.h"
 
 namespace {
@@ -38,6 +40,7 @@ struct Options {
     bool dump_config = false;
     bool config_reference = false;
     bool quiet = false;
+    std::vector<std::string> argv;   // for the stats' provenance
 };
 
 void make_directory(const std::string& dir) {
@@ -99,6 +102,17 @@ int run(const Options& opt) {
         src = std::move(s);
     }
     const std::string input_name = src->name();
+    // Inputs are hashed now, as they were read, and only for a stats file
+    // (docs/provenance.md).
+    std::vector<ProvenanceInput> prov_inputs;
+    const std::string default_scene = scene::default_scene_text();
+    if (!opt.config_file.empty()) prov_inputs.push_back({"config", opt.config_file});
+    if (!opt.trace.empty()) prov_inputs.push_back({"trace", opt.trace});
+    else if (opt.scene.empty()) prov_inputs.push_back({"scene", input_name, &default_scene});
+    else prov_inputs.push_back({"scene", opt.scene});
+    if (scene_src)
+        for (const auto& m : scene_src->mesh_files()) prov_inputs.push_back({"mesh", m});
+    const nlohmann::json provenance = stats_out.active() ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
 
     std::unique_ptr<CollisionFileSink> file_sink;
     TeeSink tee;
@@ -183,7 +197,8 @@ int run(const Options& opt) {
     image_guard.keep = true;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-    const nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
+    nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
+    if (stats_out.active()) stats["provenance"] = provenance;
     if (file_sink) {
         file_sink->finish();
         collisions_out.commit();
@@ -226,10 +241,50 @@ int fail(int status, const std::string& msg, int argc, char* argv[]) {
     return status;
 }
 
+// Levenshtein distance, for suggesting the option a mistyped argument meant.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diag = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+            diag = up;
+        }
+    }
+    return row[b.size()];
+}
+
+// "unknown argument '--tracee' (did you mean --trace?)": CLI11 lists the
+// arguments it did not expect; the first is named with the nearest option.
+std::string unknown_argument_message(const CLI::App& app, const std::vector<std::string>& extras) {
+    const std::string arg = extras.empty() ? std::string() : extras.front();
+    std::string msg = "unknown argument '" + arg + "'";
+    const std::size_t b = arg.find_first_not_of('-');
+    if (b > 0 && b != std::string::npos) {
+        // Against the long names, dashes aside: "-trace" and "--tracee" both mean --trace.
+        const std::string name = arg.substr(b, arg.find('=') - b);
+        std::string best;
+        std::size_t best_d = std::string::npos;
+        for (const CLI::Option* o : app.get_options())
+            for (const auto& l : o->get_lnames())
+                if (const std::size_t d = edit_distance(name, l); d < best_d) best_d = d, best = l;
+        // Close enough to be a typo: at most a third of the name wrong.
+        if (!best.empty() && name.size() >= 3 && best_d <= std::max<std::size_t>(1, best.size() / 3))
+            msg += " (did you mean --" + best + "?)";
+    } else if (b == 0) {
+        msg += " (inputs are given as --trace FILE or --scene FILE)";
+    }
+    return msg;
+}
+
 } // namespace
 
 int sc_main(int argc, char* argv[]) {
     Options opt;
+    opt.argv.assign(argv, argv + argc);
     CLI::App app{"rbcd-sim: SystemC/TLM-2.0 model of the RBCD collision-detection unit"};
     app.add_option("--config", opt.config_file, "TOML configuration file");
     app.add_option("--set", opt.sets, "KEY=VALUE, applied after --config in order (repeatable)")->take_all();
@@ -245,6 +300,8 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
+    app.footer("Formats and options: docs/formats.md; configuration keys: docs/config.md; statistics: docs/stats.md.");
+    app.set_version_flag("--version", rbcd::version_text(), "print the version, git revision, SystemC, compiler and build type");
     app.add_flag("--config-reference", opt.config_reference, "print the table of configuration keys (docs/config.md)");
     try {
         app.parse(argc, argv);
@@ -252,6 +309,10 @@ int sc_main(int argc, char* argv[]) {
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {
         return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ExtrasError&) {
+        return fail(2, unknown_argument_message(app, app.remaining()) + " (see --help)", argc, argv);
     } catch (const CLI::ParseError& e) {
         return fail(2, std::string(e.what()) + " (see --help)", argc, argv);
     }

@@ -1,6 +1,11 @@
 #include "scene/mesh.h"
 
+#include <cctype>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -87,9 +92,12 @@ Mesh make_torus(unsigned major_seg) {
     }
     auto at = [&](unsigned i, unsigned j) { return (i % major_seg) * minor_seg + (j % minor_seg); };
     for (unsigned i = 0; i < major_seg; ++i) {
-        // The tube's axis at this quad: "inside" for winding purposes.
+        // The tube's axis at this quad: "inside" for winding purposes. The
+        // chord's midpoint, not the circle's: with few segments the circle
+        // lies outside the inner faces (3 or 4 segments wound them inward).
         const double th = 2.0 * kPi * (i + 0.5) / major_seg;
-        const Eigen::Vector3d axis(R * std::cos(th), 0.0, R * std::sin(th));
+        const double rc = R * std::cos(kPi / major_seg);
+        const Eigen::Vector3d axis(rc * std::cos(th), 0.0, rc * std::sin(th));
         for (unsigned j = 0; j < minor_seg; ++j) add_quad(m, at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1), axis);
     }
     return m;
@@ -139,6 +147,38 @@ void append_node(const aiScene* s, const aiNode* node, const aiMatrix4x4& parent
     for (unsigned ci = 0; ci < node->mNumChildren; ++ci) append_node(s, node->mChildren[ci], xf, out);
 }
 
+// Some assimp messages mislead: a .gltf whose .bin is missing reports "No
+// suitable reader found", an empty ASCII STL "Mesh with invalid primitive type".
+// Says what is wrong instead; other messages pass unchanged.
+std::string explain_import_error(const std::string& path, const std::string& err) {
+    namespace fs = std::filesystem;
+    std::string ext = fs::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const bool no_reader = err.find("No suitable reader") != std::string::npos;
+    if (ext == ".gltf") {
+        // The buffers and images a glTF file names by relative URI.
+        std::ifstream in(path, std::ios::binary);
+        std::ostringstream text;
+        text << in.rdbuf();
+        static const std::regex uri(R"re("uri"\s*:\s*"([^"]*)")re");
+        const std::string s = text.str();
+        for (std::sregex_iterator it(s.begin(), s.end(), uri), end; it != end; ++it) {
+            const std::string u = (*it)[1].str();
+            if (u.rfind("data:", 0) == 0) continue;
+            std::error_code ec;
+            if (!fs::exists(fs::path(path).parent_path() / u, ec))
+                return "the file '" + u + "' it refers to is missing (looked for beside it)";
+        }
+        if (no_reader) return "assimp cannot read it as glTF (\"" + err + "\")";
+    }
+    if (no_reader) return "assimp has no reader for this file format (\"" + err + "\")";
+    if (err.find("invalid primitive type") != std::string::npos || err.find("There are no facets") != std::string::npos ||
+        err.find("OBJ-file is too small") != std::string::npos)
+        return "it holds no triangles";
+    if (err == "File is empty") return "the file is empty";
+    return err;
+}
+
 } // namespace
 
 Mesh builtin_mesh(const std::string& shape, unsigned segments) {
@@ -155,6 +195,7 @@ bool load_mesh_file(const std::string& path, Mesh& out, std::string& error) {
     if (!s || !s->mRootNode || (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
         error = imp.GetErrorString();
         if (error.empty()) error = "assimp could not import it";
+        error = explain_import_error(path, error);
         return false;
     }
     out = Mesh{};

@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include <Eigen/Geometry>
 
 #include "common/errors.h"
+#include "scene/mesh_check.h"
 
 namespace rbcd::scene {
 namespace {
@@ -75,6 +77,7 @@ SceneRenderer::SceneRenderer(SceneDesc desc, const SceneLimits& limits)
 
     std::map<std::string, std::shared_ptr<const Mesh>> files;
     std::map<std::pair<std::string, unsigned>, std::shared_ptr<const Mesh>> shapes;
+    std::set<std::string> warned;
     for (const ObjectDesc& od : desc_.objects) {
         Object o;
         if (od.builtin) {
@@ -94,6 +97,8 @@ SceneRenderer::SceneRenderer(SceneDesc desc, const SceneLimits& limits)
             }
             o.mesh = m;
         }
+        // docs/scene.md "Mesh checks": one warning per file, unless silenced.
+        if (!od.builtin && od.check_mesh && warned.insert(od.mesh).second) warn_mesh_problems(desc_.display_name, od, *o.mesh);
         o.collisionable = od.id.has_value();
         o.id = od.id.value_or(0);
         o.cull = od.cull;

@@ -151,7 +151,7 @@ ObjectDesc read_object(const Reader& rd, const toml::table& t, std::size_t index
     if (auto n = t.get("name")) o.name = rd.string(*n, object_path(index, "") + ".name");
     o.key_path = object_path(index, o.name);
     const std::string& p = o.key_path;
-    rd.only_keys(t, p, {"name", "id", "mesh", "segments", "cull", "position", "rotation", "scale", "key"});
+    rd.only_keys(t, p, {"name", "id", "mesh", "segments", "cull", "check_mesh", "position", "rotation", "scale", "key"});
 
     if (auto n = t.get("id")) {
         const std::int64_t max_id = (std::int64_t{1} << limits.id_bits) - 1;
@@ -191,6 +191,12 @@ ObjectDesc read_object(const Reader& rd, const toml::table& t, std::size_t index
         else if (c == "front") o.cull = Cull::Front;
         else if (c == "none") o.cull = Cull::None;
         else rd.fail(*n, p + ".cull: '" + c + "' is not one of back, front, none");
+    }
+
+    if (auto n = t.get("check_mesh")) {
+        auto b = n->as_boolean();
+        if (!b) rd.fail(*n, p + ".check_mesh: expected a boolean, got " + Reader::type_name(*n));
+        o.check_mesh = b->get();
     }
 
     Keyframe k0;

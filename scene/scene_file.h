@@ -37,6 +37,7 @@ struct ObjectDesc {
     unsigned long mesh_line = 0;
     unsigned segments = 32;
     Cull cull = Cull::Back;
+    bool check_mesh = true;         // warn about an open, inside-out or self-intersecting mesh file
     std::vector<Keyframe> keys;     // keys[0] is frame 0; frames strictly increasing
 };
 

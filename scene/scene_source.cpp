@@ -1,5 +1,6 @@
 #include "scene/scene_source.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -50,6 +51,13 @@ const StreamHeader& SceneSource::header() const { return header_; }
 std::string SceneSource::name() const { return name_; }
 std::uint64_t SceneSource::frame_count() const { return r_->desc().frames; }
 const std::vector<SceneSource::ObjectInfo>& SceneSource::objects() const { return r_->objects(); }
+
+std::vector<std::string> SceneSource::mesh_files() const {
+    std::vector<std::string> files;
+    for (const ObjectDesc& o : r_->desc().objects)
+        if (!o.builtin && std::find(files.begin(), files.end(), o.mesh) == files.end()) files.push_back(o.mesh);
+    return files;
+}
 
 void SceneSource::enable_images(bool on) { images_ = on; }
 

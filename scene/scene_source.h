@@ -1,4 +1,4 @@
-// The scene front end: reads a scene (docs: /work/shared/spec/scene-format.md)
+// The scene front end: reads a scene (docs/scene.md, docs/formats.md)
 // and renders it frame by frame through a tile-based rasterizer into the
 // Frame/Tile stream the unit consumes, exactly what a trace file would carry.
 #pragma once
@@ -56,6 +56,9 @@ public:
         std::size_t triangles = 0;     // of the tessellated / loaded mesh
     };
     const std::vector<ObjectInfo>& objects() const;
+    // The mesh files the scene loads, each once, in the order objects name them
+    // (for provenance: their sizes and hashes go into stats.json).
+    std::vector<std::string> mesh_files() const;
 
     // ---- Pictures (--images) ----
     static constexpr std::uint32_t kNoDepth = 0xFFFFFFFFu;

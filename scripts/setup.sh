@@ -1,16 +1,37 @@
 #!/usr/bin/env bash
-# Installs the Debian bookworm packages the build needs, only those missing.
+# Installs the Debian bookworm packages the build needs, only those missing:
+# as root directly, otherwise through sudo. When neither works it lists the
+# missing packages and the command an administrator should run, and exits 1.
 set -euo pipefail
 pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
       nlohmann-json3-dev libcli11-dev zlib1g-dev libeigen3-dev libassimp-dev libpng-dev)
+
+# Exit 1 with the list of what is missing and how to install it.
+cannot_install() {
+  printf 'setup: %s\n' "$1" >&2
+  printf 'setup: missing Debian packages: %s\n' "${missing[*]}" >&2
+  printf 'setup: install them as root, then run this script again:\n' >&2
+  printf '    apt-get install --no-install-recommends %s\n' "${missing[*]}" >&2
+  exit 1
+}
+
+if ! command -v dpkg-query >/dev/null 2>&1; then
+  missing=("${pkgs[@]}")
+  cannot_install "dpkg-query not found: this script expects Debian bookworm"
+fi
 missing=()
 for p in "${pkgs[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
+  [ "$status" = "install ok installed" ] || missing+=("$p")
 done
-if ((${#missing[@]})); then
-  echo "setup: installing ${missing[*]}" >&2
-  sudo_cmd=""
-  [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
-  $sudo_cmd apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
+((${#missing[@]})) || exit 0
+
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null 2>&1 || cannot_install "not root and no sudo: cannot install packages"
+  sudo_cmd=(sudo)
 fi
+echo "setup: installing ${missing[*]}" >&2
+"${sudo_cmd[@]}" apt-get update -qq || cannot_install "apt-get update failed"
+"${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" ||
+  cannot_install "apt-get install failed"

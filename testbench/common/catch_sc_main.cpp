@@ -1,7 +1,15 @@
 // libsystemc.so defines main() and calls sc_main(): Catch runs from there.
 #define CATCH_CONFIG_RUNNER
 #include <catch2/catch.hpp>
+#include <cstdlib>
 #include <systemc>
+
+namespace {
+// The kernel prints its banner before sc_main runs, once per test process:
+// dozens of copies in a ctest log and in catch_discover_tests at build time.
+// Static initialisation of the program comes first (as in rbcd-sim).
+const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0) == 0; }();
+} // namespace
 
 int sc_main(int argc, char* argv[]) {
     return Catch::Session().run(argc, argv);

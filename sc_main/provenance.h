@@ -1,0 +1,40 @@
+// Where a result came from (docs/provenance.md): the build (--version), and for
+// stats.json the command line, the effective configuration's hash and every
+// input file's size and hash, so that a results table can be traced back.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/config.h"
+
+namespace rbcd {
+
+// {"program", "version", "git", "systemc", "compiler", "build_type", "sanitize"};
+// "git" is null when the build did not come from a git checkout.
+nlohmann::json build_info();
+// The text `rbcd-sim --version` prints: one "key: value" line per field.
+std::string version_text();
+
+// A word as a POSIX shell reads it back: unchanged when it holds only safe
+// characters, otherwise in single quotes.
+std::string shell_quote(const std::string& word);
+
+// An input as it was read: role ("trace", "scene", "mesh", "config"), path and,
+// for a file, its size in bytes and SHA-256. `text` set: an embedded input
+// (the default scene) hashed from memory.
+struct ProvenanceInput {
+    std::string role, path;
+    const std::string* text = nullptr;
+};
+nlohmann::json input_info(const ProvenanceInput& in);
+
+// The "provenance" object of stats.json: {"build": build_info(), "command_line",
+// "argv", "working_directory", "config_sha256" (of dump_config_toml(cfg)),
+// "inputs": [input_info...]}.
+nlohmann::json make_provenance(const std::vector<std::string>& argv, const SimConfig& cfg,
+                               const std::vector<ProvenanceInput>& inputs);
+
+} // namespace rbcd

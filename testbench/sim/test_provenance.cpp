@@ -1,0 +1,80 @@
+// Provenance (docs/provenance.md): SHA-256 against the FIPS 180-4 / NIST
+// example vectors, shell quoting, input sizes and hashes, and the hash of the
+// effective configuration.
+#include <catch2/catch.hpp>
+
+#include "testbench/common/temp_dir.h"
+
+#include <string>
+
+#include "common/config.h"
+#include "common/sha256.h"
+#include "sc_main/provenance.h"
+
+using namespace rbcd;
+using Catch::Matchers::Contains;
+
+TEST_CASE("sha256: NIST example vectors") {
+    CHECK(sha256_hex("") == "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+    CHECK(sha256_hex("abc") == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+    CHECK(sha256_hex("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq") ==
+          "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+    CHECK(sha256_hex("abcdefghbcdefghicdefghijdefghijkefghijklfghijklmghijklmnhijklmnoijklmnopjklmnopqklmnopqrlmnopqrsmnopqrstnopqrstu") ==
+          "cf5b16a778af8380036ce59e7b0492370b249b11e8f07a51afac45037afee9d1");
+    CHECK(sha256_hex(std::string(1000000, 'a')) == "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+}
+
+TEST_CASE("sha256: any split of the input into updates gives the same digest") {
+    std::string msg;
+    for (int i = 0; i < 300; ++i) msg += char('a' + i % 26);
+    const std::string whole = sha256_hex(msg);
+    // Lengths around the block (64) and padding (56) boundaries.
+    for (std::size_t len : {0u, 1u, 55u, 56u, 57u, 63u, 64u, 65u, 119u, 120u, 128u, 300u}) {
+        const std::string part = msg.substr(0, len);
+        for (std::size_t step : {1u, 3u, 63u, 64u, 100u}) {
+            INFO("length " << len << " step " << step);
+            Sha256 h;
+            for (std::size_t at = 0; at < part.size(); at += step) h.update(part.data() + at, std::min(step, part.size() - at));
+            CHECK(h.hex_digest() == sha256_hex(part));
+        }
+    }
+    CHECK(whole.size() == 64);
+}
+
+TEST_CASE("provenance: shell quoting reads back as the same words") {
+    CHECK(shell_quote("build/bin/rbcd-sim") == "build/bin/rbcd-sim");
+    CHECK(shell_quote("--set=zeb.tie=arrival") == "--set=zeb.tie=arrival");
+    CHECK(shell_quote("") == "''");
+    CHECK(shell_quote("a b") == "'a b'");
+    CHECK(shell_quote("it's") == "'it'\\''s'");
+    CHECK(shell_quote("$HOME") == "'$HOME'");
+    CHECK(shell_quote("x;rm") == "'x;rm'");
+}
+
+TEST_CASE("provenance: inputs carry path, size and SHA-256, the configuration its hash") {
+    test::TempDir td;
+    const std::string trace = td.write("t.rbt", "rbcd-trace 1\n");
+    const std::string embedded = "format = 1\n";
+    SimConfig cfg;
+    const auto p = make_provenance({"rbcd-sim", "--trace", trace, "--set", "a b"}, cfg,
+                                   {{"trace", trace}, {"scene", "<embedded>", &embedded}, {"mesh", td.path("gone.obj")}});
+    CHECK(p["command_line"] == "rbcd-sim --trace " + trace + " --set 'a b'");
+    CHECK(p["argv"].size() == 5);
+    CHECK(p["config_sha256"] == sha256_hex(dump_config_toml(cfg)));
+    CHECK(p["build"]["program"] == "rbcd-sim");
+    CHECK(p["build"]["systemc"].get<std::string>().rfind("2.3", 0) == 0);
+    for (const char* k : {"version", "compiler", "build_type"}) CHECK_FALSE(p["build"][k].get<std::string>().empty());
+    REQUIRE(p["inputs"].size() == 3);
+    CHECK(p["inputs"][0]["role"] == "trace");
+    CHECK(p["inputs"][0]["path"] == trace);
+    CHECK(p["inputs"][0]["size"] == 13);
+    CHECK(p["inputs"][0]["sha256"] == sha256_hex("rbcd-trace 1\n"));
+    CHECK(p["inputs"][1]["size"] == embedded.size());
+    CHECK(p["inputs"][1]["sha256"] == sha256_hex(embedded));
+    CHECK(p["inputs"][2]["sha256"].is_null());
+    CHECK_THAT(p["inputs"][2]["note"].get<std::string>(), Contains("cannot read"));
+
+    SimConfig other;
+    apply_config_set(other, "zeb.list_length=4");
+    CHECK(make_provenance({}, other, {})["config_sha256"] != p["config_sha256"]);
+}
