@@ -39,8 +39,8 @@ def run(cmd, **kw):
 
 
 class Case:
-    def __init__(self, sim, tmp):
-        self.sim, self.tmp = sim, tmp
+    def __init__(self, sim, checker, tmp):
+        self.sim, self.checker, self.tmp = sim, checker, tmp
 
     def sweep_file(self, name, text):
         p = os.path.join(self.tmp, name)
@@ -48,9 +48,11 @@ class Case:
             f.write(text)
         return p
 
-    def sweep(self, *args):
+    def sweep(self, *args, checker=None):
+        """checker: rbcd-config-check's path, or "none" (one rbcd-sim --dump-config a point)."""
+        env = dict(os.environ, RBCD_CONFIG_CHECK=checker or self.checker)
         return run(["/usr/bin/python3", SWEEP] + [a for a in args] + ["--rbcd-sim", self.sim]
-                   if args[0] in ("run", "list", "slurm") else ["/usr/bin/python3", SWEEP] + list(args))
+                   if args[0] in ("run", "list", "slurm") else ["/usr/bin/python3", SWEEP] + list(args), env=env)
 
     def rows(self, out):
         with open(os.path.join(out, "results.csv"), newline="") as f:
@@ -81,6 +83,8 @@ first_seed = 7
 """)
     r = c.sweep("list", s)
     check(r.returncode == 0, f"list failed: {r.stderr}")
+    r2 = c.sweep("list", s, checker="none")
+    check(r2.stdout == r.stdout, "rbcd-config-check and rbcd-sim --dump-config plan different runs")
     lines = [l.split("\t") for l in r.stdout.splitlines()]
     check(len(lines) == 2 * 3 * 2 * 2 * 2, f"expected 48 runs, got {len(lines)}")
     pts = []
@@ -117,6 +121,9 @@ def case_validate(c):
         s = c.sweep_file("s.toml", text)
         r = c.sweep("run", s, "-o", out, "-q")
         msg = r.stderr.strip()
+        r2 = c.sweep("run", s, "-o", out, "-q", checker="none")
+        check((r2.returncode, r2.stderr.strip()) == (r.returncode, msg),
+              f"{text!r}: rbcd-sim --dump-config says {r2.stderr.strip()!r}, rbcd-config-check {msg!r}")
         check(r.returncode == 2, f"{text!r}: exit {r.returncode}, expected 2 ({msg})")
         check(len(msg.splitlines()) == 1 and msg.startswith("rbcd-sweep: "), f"{text!r}: not one line: {msg!r}")
         check(key in msg, f"{text!r}: message does not name {key}: {msg}")
@@ -308,10 +315,11 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("case", choices=sorted(CASES))
     ap.add_argument("--sim", required=True)
+    ap.add_argument("--checker", default="", help="rbcd-config-check (default: beside --sim)")
     a = ap.parse_args()
     tmp = tempfile.mkdtemp(prefix=f"rbcd_sweep_{a.case}.")
     try:
-        CASES[a.case](Case(os.path.abspath(a.sim), tmp))
+        CASES[a.case](Case(os.path.abspath(a.sim), os.path.abspath(a.checker) if a.checker else "", tmp))
     except Fail as e:
         print(f"FAILED: {e}")
         return 1
