@@ -18,6 +18,10 @@ for tool in munged slurmctld slurmd sbatch squeue sinfo; do
   fi
 done
 PATH="$PATH:/usr/sbin"
+if [ "$(id -u)" -ne 0 ]; then
+  echo "SKIPPED: the local SLURM cluster runs as root (slurmd launches the jobs); CI runs as root"
+  exit 77
+fi
 
 tmp=$(mktemp -d /tmp/rbcd_slurm.XXXXXX)
 chmod 700 "$tmp"

@@ -100,6 +100,8 @@ first_seed = 7
     check([p[1:] for p in uniq][:4] == [("1", "4", "4"), ("1", "4", "8"), ("1", "6", "4"), ("1", "6", "8")],
           f"grid order (first axis slowest, zip last): {uniq[:4]}")
     check(uniq[6][1] == "2", "banks=2 from point 6")
+    r = c.sweep("list", os.path.join(ROOT, "docs", "sweep-example.toml"))
+    check(r.returncode == 0 and len(r.stdout.splitlines()) == 24, f"docs/sweep-example.toml: {r.stderr}")
 
 
 def case_validate(c):
