@@ -119,13 +119,14 @@ def case_validate(c):
         ("[inputs]\ntraces = [\"nope.rbt\"]\n", "nope.rbt"),
         ("[axes]\nzeb.banks = [1, 2\n", "s.toml"),
     ]
-    for text, key in bad:
+    for n, (text, key) in enumerate(bad):
         s = c.sweep_file("s.toml", text)
         r = c.sweep("run", s, "-o", out, "-q")
         msg = r.stderr.strip()
-        r2 = c.sweep("run", s, "-o", out, "-q", checker="none")
-        check((r2.returncode, r2.stderr.strip()) == (r.returncode, msg),
-              f"{text!r}: rbcd-sim --dump-config says {r2.stderr.strip()!r}, rbcd-config-check {msg!r}")
+        if n < 4:   # the configuration errors: rbcd-sim itself says the same
+            r2 = c.sweep("run", s, "-o", out, "-q", checker="none")
+            check((r2.returncode, r2.stderr.strip()) == (r.returncode, msg),
+                  f"{text!r}: rbcd-sim --dump-config says {r2.stderr.strip()!r}, rbcd-config-check {msg!r}")
         check(r.returncode == 2, f"{text!r}: exit {r.returncode}, expected 2 ({msg})")
         check(len(msg.splitlines()) == 1 and msg.startswith("rbcd-sweep: "), f"{text!r}: not one line: {msg!r}")
         check(key in msg, f"{text!r}: message does not name {key}: {msg}")
@@ -288,14 +289,14 @@ def case_frames(c):
 [inputs]
 traces = ["{trace}"]
 [split]
-frames_per_run = 7
+frames_per_run = 25
 [results]
 fields = ["totals.frames", "totals.hits", "totals.cycles"]
 """)
     out = os.path.join(c.tmp, "out")
     r = c.sweep("list", s)
-    check(r.returncode == 0 and len(r.stdout.splitlines()) == 9, f"60 frames in 9 ranges of 7: {r.stdout}")
-    check(r.stdout.splitlines()[-1].split("\t")[3] == "56:59", "last range 56:59")
+    check(r.returncode == 0 and [l.split("\t")[3] for l in r.stdout.splitlines()] == ["0:24", "25:49", "50:59"],
+          f"60 frames in ranges of 25: {r.stdout}")
     r = c.sweep("run", s, "-o", out, "-q")
     rows = c.rows(out)
     check(len(rows) == 1 and rows[0]["status"] == "0", f"one merged row: {rows} {r.stderr}")
