@@ -127,6 +127,8 @@ ls "$tmp"/out-slurm/slurm/logs/merge-*.out >/dev/null || { echo "FAILED: the mer
 cmp "$tmp/out-local/results.csv" "$tmp/out-slurm/results.csv" \
   || { echo "FAILED: the SLURM table differs from the local one"; diff "$tmp/out-local/results.csv" "$tmp/out-slurm/results.csv"; exit 1; }
 [ "$(wc -l < "$tmp/out-slurm/results.csv")" -eq 17 ] || { echo "FAILED: expected 16 rows"; exit 1; }
+status=$("${sweep_cmd[@]}" status "$tmp/out-slurm")
+[[ "$status" == *"16/16 runs done, 0 failed; slurm: no jobs queued" ]] || { echo "FAILED: status says: $status"; exit 1; }
 
 # Resume: a resubmission finds every run complete and only merges.
 rm "$tmp/out-slurm/results.csv"

@@ -282,8 +282,10 @@ def case_frames(c):
     check(r.returncode == 0, f"--frames: {r.stderr}")
     body = whole.split("frame 10\n", 1)[1].split("frame 20\n", 1)[0]
     check(c.read(part) == "rbcd-collisions 1\nframe 10\n" + body, "--frames 10:19 differs from the whole run's frames")
-    r = run([c.sim, "-q", "--trace", trace, "--frames", "9:3"])
-    check(r.returncode == 2 and "--frames" in r.stderr, f"a bad range is exit 2 naming --frames: {r.stderr}")
+    for bad in ("9:3", "x", "1:2:3"):
+        r = run([c.sim, "-q", "--trace", trace, "--frames", bad, "--collisions", part])
+        check(r.returncode == 2 and r.stderr.startswith("rbcd-sim: --frames: ") and not os.path.exists(part),
+              f"--frames {bad}: exit 2 naming --frames, no output left: {r.stderr}")
 
     s = c.sweep_file("s.toml", f"""
 [inputs]
