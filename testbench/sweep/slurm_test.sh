@@ -136,4 +136,27 @@ rm "$tmp/out-slurm/results.csv"
   || { cat "$tmp/resume.log"; echo "FAILED: the resubmission"; exit 1; }
 grep -q "0 to run in 0 array tasks" "$tmp/resume.log" || { cat "$tmp/resume.log"; echo "FAILED: resume reran runs"; exit 1; }
 cmp "$tmp/out-local/results.csv" "$tmp/out-slurm/results.csv" || { echo "FAILED: resumed table differs"; exit 1; }
-echo "passed: SLURM table equals the local one (16 runs, 6 array tasks, merge job), resume merges only"
+# One input split in frame ranges across array tasks, merged by the merge job.
+cat > "$tmp/split.toml" <<EOF
+[axes]
+zeb.banks = [1, 2]
+[inputs]
+suites = ["suite"]
+[split]
+frames_per_run = 1
+[results]
+fields = ["totals.frames", "totals.hits", "totals.overflows"]
+[slurm]
+runs_per_task = 4
+EOF
+"${sweep_cmd[@]}" run "$tmp/split.toml" -o "$tmp/split-local" -q --rbcd-sim "$sim"
+"${sweep_cmd[@]}" slurm "$tmp/split.toml" -o "$tmp/split-slurm" --wait --poll 0.5 -q --rbcd-sim "$sim" 2> "$tmp/split.log" \
+  || { cat "$tmp/split.log"; echo "FAILED: the split SLURM sweep"; exit 1; }
+grep -q "12 runs, 12 to run in 3 array tasks" "$tmp/split.log" || { cat "$tmp/split.log"; echo "FAILED: expected 3 tasks"; exit 1; }
+cmp "$tmp/split-local/results.csv" "$tmp/split-slurm/results.csv" || { echo "FAILED: split tables differ"; exit 1; }
+for run in $(awk -F, 'NR > 1 { print $NF }' "$tmp/split-local/results.csv"); do
+  cmp "$tmp/split-local/runs/$run/collisions.txt" "$tmp/split-slurm/runs/$run/collisions.txt" \
+    || { echo "FAILED: merged collisions of $run differ"; exit 1; }
+done
+echo "passed: SLURM table equals the local one (16 runs, 6 array tasks, merge job), resume merges only;"
+echo "        frame ranges in array tasks merge into the local runner's table and collision files"
