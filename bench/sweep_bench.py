@@ -69,6 +69,9 @@ def main():
             print(f"        runner overhead while running: {ov_run:.1f}% "
                   f"(workers x run phase vs sum of run wall); with validation: "
                   f"{((t['total_s'] * j) - t['sum_run_wall_s']) / t['sum_run_wall_s'] * 100:.1f}%")
+        for j, t in res.items():
+            print(f"  -j{j}: CPU time: runner {t['runner_cpu_s']:.2f} s, rbcd-sim processes {t['children_cpu_s']:.2f} s "
+                  f"({t['runner_cpu_s'] / t['children_cpu_s'] * 100:.1f}% of theirs)")
         print(f"  speed-up 2 workers vs 1: {one['total_s'] / two['total_s']:.2f}x total, "
               f"{one['run_s'] / two['run_s']:.2f}x run phase")
         same = open(os.path.join(tmp, "out1", "results.csv"), "rb").read() == \
