@@ -100,6 +100,17 @@ first_seed = 7
     check([p[1:] for p in uniq][:4] == [("1", "4", "4"), ("1", "4", "8"), ("1", "6", "4"), ("1", "6", "8")],
           f"grid order (first axis slowest, zip last): {uniq[:4]}")
     check(uniq[6][1] == "2", "banks=2 from point 6")
+    # A workload suite: the folder's scenes and traces, by name; other files ignored.
+    suite = os.path.join(c.tmp, "suite")
+    os.mkdir(suite)
+    for name in ("b.rbt", "a.toml", "notes.txt"):
+        shutil.copy(os.path.join(VEC, "default.rbt") if name.endswith((".rbt", ".txt")) else
+                    os.path.join(ROOT, "scene", "default_scene.toml"), os.path.join(suite, name))
+    s = c.sweep_file("suite.toml", '[inputs]\nsuites = ["suite"]\ndefault = true\n')
+    r = c.sweep("list", s)
+    got = [(l.split("\t")[1], l.split("\t")[4].split()[-2:]) for l in r.stdout.splitlines()]
+    check(got == [("default", []), ("suite/a.toml", ["--scene", f"{suite}/a.toml"]),
+                  ("suite/b.rbt", ["--trace", f"{suite}/b.rbt"])], f"suite inputs: {got} {r.stderr}")
     r = c.sweep("list", os.path.join(ROOT, "docs", "sweep-example.toml"))
     check(r.returncode == 0 and len(r.stdout.splitlines()) == 24, f"docs/sweep-example.toml: {r.stderr}")
 
