@@ -16,6 +16,7 @@
 #include "common/config.h"
 #include "common/errors.h"
 #include "io/prefetch_source.h"
+#include "io/frame_range_source.h"
 #include "io/trace_reader.h"
 #include "io/trace_writer.h"
 #include "sc_main/collision_file.h"
@@ -37,6 +38,7 @@ struct Options {
     std::string config_file;
     std::vector<std::string> sets;
     std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd;
+    std::string frames;   // --frames A:B
     bool dump_config = false;
     bool config_reference = false;
     bool quiet = false;
@@ -100,6 +102,11 @@ int run(const Options& opt) {
                      : std::make_unique<scene::SceneSource>(opt.scene, scene_limits);
         scene_src = s.get();
         src = std::move(s);
+    }
+    if (!opt.frames.empty()) {
+        // A trace's frames count from 0: a range written out would not read back.
+        if (!opt.write_trace.empty()) throw InputError("--frames: cannot be combined with --write-trace");
+        src = std::make_unique<FrameRangeSource>(std::move(src), parse_frame_range(opt.frames));
     }
     const std::string input_name = src->name();
     // Inputs are hashed now, as they were read, and only for a stats file
@@ -291,6 +298,7 @@ int sc_main(int argc, char* argv[]) {
     auto* trace_opt = app.add_option("--trace", opt.trace, "fragment trace (.rbt, plain or gzip)");
     app.add_option("--scene", opt.scene, "3D scene (TOML) rendered by the tile-based rasterizer feed")
         ->excludes(trace_opt);
+    app.add_option("--frames", opt.frames, "A:B: run only frames A..B of the input (their numbers kept; docs/sweeps.md)");
     app.add_option("--write-trace", opt.write_trace, "also save the fragment stream the unit saw as a .rbt trace");
     app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");
     app.add_option("--collisions", opt.collisions, "write the collision records here");

@@ -5,6 +5,16 @@
 set -euo pipefail
 pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
       nlohmann-json3-dev libcli11-dev zlib1g-dev libeigen3-dev libassimp-dev libpng-dev)
+# Optional, only when asked for (their tests are skipped with a message without them):
+#   --slurm  slurm-wlm and munge, for the SLURM sweep backend's test (docs/sweeps.md)
+#   --plots  python3-matplotlib for scripts/rbcd-plot (gnuplot-nox also does)
+for opt in "$@"; do
+  case "$opt" in
+    --slurm) pkgs+=(slurm-wlm munge) ;;
+    --plots) pkgs+=(python3-matplotlib) ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots)" >&2; exit 2 ;;
+  esac
+done
 
 # Exit 1 with the list of what is missing and how to install it.
 cannot_install() {

@@ -4,7 +4,8 @@
 #   scripts/test.sh --sanitize      AddressSanitizer + UBSan build in build-asan/
 set -euo pipefail
 cd "$(dirname "$0")/.."
-./scripts/setup.sh
+# The whole suite: also the optional packages whose tests are otherwise skipped.
+./scripts/setup.sh --slurm --plots
 dir=build
 args=(-DCMAKE_BUILD_TYPE=Release)
 if [ "${1:-}" = "--sanitize" ]; then

@@ -1,0 +1,349 @@
+#!/usr/bin/python3
+"""CLI tests of scripts/rbcd-sweep and scripts/rbcd-plot (docs/sweeps.md).
+
+    test_sweep.py CASE --sim build/bin/rbcd-sim
+
+One CTest entry per case; exit 0 pass, 1 fail, 77 skipped (with the reason).
+"""
+import argparse
+import csv
+import io
+import json
+import os
+import shlex
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SWEEP = os.path.join(ROOT, "scripts", "rbcd-sweep")
+PLOT = os.path.join(ROOT, "scripts", "rbcd-plot")
+VEC = os.path.join(ROOT, "vectors")
+SKIP = 77
+
+
+class Fail(Exception):
+    pass
+
+
+def check(cond, what):
+    if not cond:
+        raise Fail(what)
+
+
+def run(cmd, **kw):
+    return subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
+
+
+class Case:
+    def __init__(self, sim, checker, tmp):
+        self.sim, self.checker, self.tmp = sim, checker, tmp
+
+    def sweep_file(self, name, text):
+        p = os.path.join(self.tmp, name)
+        with open(p, "w") as f:
+            f.write(text)
+        return p
+
+    def sweep(self, *args, checker=None):
+        """checker: rbcd-config-check's path, or "none" (one rbcd-sim --dump-config a point)."""
+        env = dict(os.environ, RBCD_CONFIG_CHECK=checker or self.checker)
+        return run(["/usr/bin/python3", SWEEP] + [a for a in args] + ["--rbcd-sim", self.sim]
+                   if args[0] in ("run", "list", "slurm") else ["/usr/bin/python3", SWEEP] + list(args), env=env)
+
+    def rows(self, out):
+        with open(os.path.join(out, "results.csv"), newline="") as f:
+            return list(csv.DictReader(f))
+
+    def read(self, p, mode="r"):
+        with open(p, mode) as f:
+            return f.read()
+
+
+TRACES = f'traces = ["{VEC}/default.rbt", "{VEC}/multi-frame-mixed.rbt"]'
+
+
+def case_expand(c):
+    """Grid x zip x inputs x repeats, first axis slowest; zipped keys move together."""
+    s = c.sweep_file("s.toml", f"""
+[axes]
+zeb.banks = [1, 2]
+"zeb.list_length" = [4, 6, 8]
+[[zip]]
+tester.stack_depth = [4, 8]
+tester.output = ["raw", "tile"]
+[inputs]
+{TRACES}
+[repeats]
+count = 2
+first_seed = 7
+""")
+    r = c.sweep("list", s)
+    check(r.returncode == 0, f"list failed: {r.stderr}")
+    r2 = c.sweep("list", s, checker="none")
+    check(r2.stdout == r.stdout, "rbcd-config-check and rbcd-sim --dump-config plan different runs")
+    lines = [l.split("\t") for l in r.stdout.splitlines()]
+    check(len(lines) == 2 * 3 * 2 * 2 * 2, f"expected 48 runs, got {len(lines)}")
+    pts = []
+    for point, label, rep, frames, args in lines:
+        sets = dict(a.split("=", 1) for a in shlex.split(args) if "=" in a and not a.startswith("--"))
+        check(frames == "-", "no frame ranges without [split]")
+        check(sets["memory.seed"] == str(7 + int(rep)), f"repeat {rep} has seed {sets['memory.seed']}")
+        pair = (sets["tester.stack_depth"], sets["tester.output"])
+        check(pair in (("4", '"raw"'), ("8", '"tile"')), f"zip keys did not move together: {pair}")
+        pts.append((int(point), sets["zeb.banks"], sets["zeb.list_length"], pair[0]))
+    uniq = sorted(set(pts))
+    check([p[0] for p in uniq] == list(range(12)), "points numbered 0..11")
+    check([p[1:] for p in uniq][:4] == [("1", "4", "4"), ("1", "4", "8"), ("1", "6", "4"), ("1", "6", "8")],
+          f"grid order (first axis slowest, zip last): {uniq[:4]}")
+    check(uniq[6][1] == "2", "banks=2 from point 6")
+    # A workload suite: the folder's scenes and traces, by name; other files ignored.
+    suite = os.path.join(c.tmp, "suite")
+    os.mkdir(suite)
+    for name in ("b.rbt", "a.toml", "notes.txt"):
+        shutil.copy(os.path.join(VEC, "default.rbt") if name.endswith((".rbt", ".txt")) else
+                    os.path.join(ROOT, "scene", "default_scene.toml"), os.path.join(suite, name))
+    s = c.sweep_file("suite.toml", '[inputs]\nsuites = ["suite"]\ndefault = true\n')
+    r = c.sweep("list", s)
+    got = [(l.split("\t")[1], l.split("\t")[4].split()[-2:]) for l in r.stdout.splitlines()]
+    check(got == [("default", []), ("suite/a.toml", ["--scene", f"{suite}/a.toml"]),
+                  ("suite/b.rbt", ["--trace", f"{suite}/b.rbt"])], f"suite inputs: {got} {r.stderr}")
+    r = c.sweep("list", os.path.join(ROOT, "docs", "sweep-example.toml"))
+    check(r.returncode == 0 and len(r.stdout.splitlines()) == 24, f"docs/sweep-example.toml: {r.stderr}")
+
+
+def case_validate(c):
+    """Bad keys and values are rejected before anything runs, naming the key, exit 2, nothing written."""
+    out = os.path.join(c.tmp, "out")
+    bad = [
+        ("[axes]\nzeb.banks = [1, 99]\n", "zeb.banks"),
+        ("[axes]\nzeb.bnaks = [1, 2]\n", "zeb.bnaks"),
+        ("[base]\nset = { \"tester.output\" = \"everything\" }\n", "tester.output"),
+        ("[axes]\nmemory.latency_min = [50, 500]\n", "memory.latency_min"),
+        ("[axes]\nzeb.banks = [1, 2]\n[[zip]]\nzeb.banks = [3]\n", "zeb.banks"),
+        ("[axes]\nzeb.banks = []\n", "zeb.banks"),
+        ("[axis]\nzeb.banks = [1]\n", "axis"),
+        ("[results]\nfield = [\"totals.hits\"]\n", "results.field"),
+        ("[inputs]\ntraces = [\"nope.rbt\"]\n", "nope.rbt"),
+        ("[axes]\nzeb.banks = [1, 2\n", "s.toml"),
+    ]
+    for n, (text, key) in enumerate(bad):
+        s = c.sweep_file("s.toml", text)
+        r = c.sweep("run", s, "-o", out, "-q")
+        msg = r.stderr.strip()
+        if n < 4:   # the configuration errors: rbcd-sim itself says the same
+            r2 = c.sweep("run", s, "-o", out, "-q", checker="none")
+            check((r2.returncode, r2.stderr.strip()) == (r.returncode, msg),
+                  f"{text!r}: rbcd-sim --dump-config says {r2.stderr.strip()!r}, rbcd-config-check {msg!r}")
+        check(r.returncode == 2, f"{text!r}: exit {r.returncode}, expected 2 ({msg})")
+        check(len(msg.splitlines()) == 1 and msg.startswith("rbcd-sweep: "), f"{text!r}: not one line: {msg!r}")
+        check(key in msg, f"{text!r}: message does not name {key}: {msg}")
+        check(not os.path.exists(out), f"{text!r}: output directory created")
+
+
+def case_workers(c):
+    """The same sweep gives byte-identical results.csv with 1 and 2 workers; wall times in wall.csv."""
+    s = c.sweep_file("s.toml", f"""
+[axes]
+zeb.banks = [1, 2]
+"zeb.list_length" = [2, 8]
+[inputs]
+{TRACES}
+[repeats]
+count = 2
+""")
+    outs = []
+    for j in ("1", "2"):
+        out = os.path.join(c.tmp, f"out{j}")
+        r = c.sweep("run", s, "-o", out, "-j", j, "-q")
+        check(r.returncode == 0, f"-j{j}: {r.stderr}")
+        outs.append(out)
+    a, b = (c.read(os.path.join(o, "results.csv"), "rb") for o in outs)
+    check(a == b, "results.csv differs between 1 and 2 workers")
+    rows = c.rows(outs[0])
+    check(len(rows) == 16 and all(r["status"] == "0" for r in rows), "16 successful rows")
+    check(rows[0]["memory.seed"] == "1" and rows[1]["memory.seed"] == "2", "seed column")
+    for r in rows:
+        st = json.load(open(os.path.join(outs[0], "runs", r["run"], "stats.json")))
+        check(str(st["totals"]["hits"]) == r["totals.hits"], "row matches its stats JSON")
+    walls = list(csv.DictReader(open(os.path.join(outs[0], "wall.csv"))))
+    check(sorted(w["run"] for w in walls) == sorted(r["run"] for r in rows), "wall.csv has every run")
+    check(all(float(w["wall_s"]) > 0 for w in walls), "wall times recorded")
+
+
+def case_failing(c):
+    """A run that fails is recorded with its status and error; the others run; exit 1."""
+    s = c.sweep_file("s.toml", f"""
+[axes]
+tile.width = [16, 8]
+zeb.banks = [1, 2]
+[inputs]
+traces = ["{VEC}/default.rbt"]
+""")
+    out = os.path.join(c.tmp, "out")
+    r = c.sweep("run", s, "-o", out, "-q")
+    check(r.returncode == 1, f"exit {r.returncode}, expected 1")
+    rows = c.rows(out)
+    check(len(rows) == 4, "every point has its row")
+    for row in rows:
+        if row["tile.width"] == "16":
+            check(row["status"] == "0" and row["error"] == "" and row["totals.hits"] != "", f"ok row: {row}")
+        else:
+            check(row["status"] == "2" and "tile" in row["error"] and row["totals.hits"] == "", f"failed row: {row}")
+    # A rerun retries the failed runs only.
+    r = c.sweep("run", s, "-o", out)
+    check("2 already complete, 2 to run" in r.stderr, f"rerun retries the failed: {r.stderr}")
+
+
+def case_resume(c):
+    """A sweep killed mid-way keeps its finished runs; the rerun runs only the rest and gives
+    the table an uninterrupted sweep gives."""
+    s = c.sweep_file("s.toml", """
+[axes]
+zeb.list_length = [2, 4, 8]
+zeb.banks = [1, 2]
+[results]
+fields = ["totals.hits", "totals.overflows", "totals.cycles", "gpu.overhead_pct"]
+""")   # the default scene: about 0.4 s a run
+    out = os.path.join(c.tmp, "killed")
+    runs = os.path.join(out, "runs")
+    p = subprocess.Popen(["/usr/bin/python3", SWEEP, "run", s, "-o", out, "-j", "1", "-q", "--rbcd-sim", c.sim],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    done = []
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and p.poll() is None:
+        done = [d for d in (os.listdir(runs) if os.path.isdir(runs) else [])
+                if os.path.exists(os.path.join(runs, d, "result.json"))]
+        if len(done) >= 2:
+            break
+        time.sleep(0.02)
+    check(p.poll() is None, "the sweep ended before it could be killed")
+    p.send_signal(signal.SIGTERM)
+    err = p.communicate()[1]
+    check(p.returncode != 0, "a killed sweep does not exit 0")
+    check(not os.path.exists(os.path.join(out, "results.csv")), "no table from a killed sweep")
+    done = sorted(d for d in os.listdir(runs) if os.path.exists(os.path.join(runs, d, "result.json")))
+    check(2 <= len(done) < 6, f"{len(done)} runs finished before the kill")
+    stamps = {d: os.stat(os.path.join(runs, d, "result.json")).st_mtime_ns for d in done}
+    for d in done:
+        check(json.load(open(os.path.join(runs, d, "result.json")))["status"] == 0, "a finished run is complete")
+    r = c.sweep("run", s, "-o", out, "-j", "2")
+    check(r.returncode == 0, f"resume failed: {r.stderr}")
+    check(f"{len(done)} already complete, {6 - len(done)} to run" in r.stderr, f"resume skips finished: {r.stderr}")
+    for d, t in stamps.items():
+        check(os.stat(os.path.join(runs, d, "result.json")).st_mtime_ns == t, "a finished run was rerun")
+    ref = os.path.join(c.tmp, "whole")
+    r = c.sweep("run", s, "-o", ref, "-j", "2", "-q")
+    check(r.returncode == 0, f"reference sweep failed: {r.stderr}")
+    check(c.read(os.path.join(out, "results.csv"), "rb") == c.read(os.path.join(ref, "results.csv"), "rb"),
+          "resumed table differs from the uninterrupted one")
+
+
+def case_plot(c):
+    """rbcd-plot writes a PNG with matplotlib and with gnuplot; bad columns exit 2."""
+    table = os.path.join(c.tmp, "results.csv")
+    with open(table, "w") as f:
+        f.write("point,input,repeat,zeb.banks,zeb.list_length,totals.overflows,gpu.overhead_pct,status,error,run\n")
+        i = 0
+        for inp in ("a.rbt", "b.rbt"):
+            for banks in (1, 2, 4):
+                for m in (4, 8):
+                    f.write(f"{i},{inp},0,{banks},{m},{10 * banks // m},{3.5 / banks + m / 10},0,,r{i}\n")
+                    i += 1
+        f.write(f"{i},a.rbt,0,8,8,,,2,bad input,r{i}\n")
+    backends = ["matplotlib", "gnuplot"]
+    if run(["/usr/bin/python3", "-c", "import matplotlib"]).returncode != 0:
+        print("note: python3-matplotlib missing, only gnuplot tried")
+        backends.remove("matplotlib")
+    if not shutil.which("gnuplot"):
+        print("note: gnuplot missing, only matplotlib tried")
+        backends.remove("gnuplot")
+    if not backends:
+        print("SKIPPED: neither python3-matplotlib nor gnuplot is installed")
+        sys.exit(SKIP)
+    for b in backends:
+        png = os.path.join(c.tmp, f"{b}.png")
+        r = run(["/usr/bin/python3", PLOT, table, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "--lines", "input",
+                 "-o", png, "--backend", b])
+        check(r.returncode == 0, f"{b}: {r.stderr}")
+        check("averaging over zeb.list_length" in r.stderr, f"{b}: names the averaged axis: {r.stderr}")
+        data = c.read(png, "rb")
+        check(data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 1000, f"{b}: not a PNG")
+        check(not [f for f in os.listdir(c.tmp) if ".tmp." in f], f"{b}: temporary left behind")
+    r = run(["/usr/bin/python3", PLOT, table, "--y", "totals.nope", "--x", "zeb.banks", "-o",
+             os.path.join(c.tmp, "x.png")])
+    check(r.returncode == 2 and "totals.nope" in r.stderr and not os.path.exists(os.path.join(c.tmp, "x.png")),
+          f"a missing column is an error naming it: {r.stderr}")
+
+
+def case_frames(c):
+    """A long input split in frame ranges (rbcd-sim --frames, [split] in the sweep) merges into the
+    collisions file of one whole run; the totals except cycles add up to the whole run's."""
+    trace = os.path.join(c.tmp, "default.rbt")
+    whole_c, whole_s = os.path.join(c.tmp, "whole.txt"), os.path.join(c.tmp, "whole.json")
+    r = run([c.sim, "-q", "--write-trace", trace, "--collisions", whole_c, "--stats", whole_s])
+    check(r.returncode == 0, f"default scene: {r.stderr}")
+    whole = c.read(whole_c)
+    # rbcd-sim alone: frames 10..19 are exactly the whole run's lines of those frames.
+    part = os.path.join(c.tmp, "part.txt")
+    r = run([c.sim, "-q", "--trace", trace, "--frames", "10:19", "--collisions", part])
+    check(r.returncode == 0, f"--frames: {r.stderr}")
+    body = whole.split("frame 10\n", 1)[1].split("frame 20\n", 1)[0]
+    check(c.read(part) == "rbcd-collisions 1\nframe 10\n" + body, "--frames 10:19 differs from the whole run's frames")
+    for bad in ("9:3", "x", "1:2:3"):
+        r = run([c.sim, "-q", "--trace", trace, "--frames", bad, "--collisions", part])
+        check(r.returncode == 2 and r.stderr.startswith("rbcd-sim: --frames: ") and not os.path.exists(part),
+              f"--frames {bad}: exit 2 naming --frames, no output left: {r.stderr}")
+
+    s = c.sweep_file("s.toml", f"""
+[inputs]
+traces = ["{trace}"]
+[split]
+frames_per_run = 25
+[results]
+fields = ["totals.frames", "totals.hits", "totals.cycles"]
+""")
+    out = os.path.join(c.tmp, "out")
+    r = c.sweep("list", s)
+    check(r.returncode == 0 and [l.split("\t")[3] for l in r.stdout.splitlines()] == ["0:24", "25:49", "50:59"],
+          f"60 frames in ranges of 25: {r.stdout}")
+    r = c.sweep("run", s, "-o", out, "-q")
+    rows = c.rows(out)
+    check(len(rows) == 1 and rows[0]["status"] == "0", f"one merged row: {rows} {r.stderr}")
+    merged = os.path.join(out, "runs", rows[0]["run"])
+    check(c.read(os.path.join(merged, "collisions.txt")) == whole, "merged collisions differ from the whole run's")
+    mt = json.load(open(os.path.join(merged, "stats.json")))["totals"]
+    wt = json.load(open(whole_s))["totals"]
+    for k, v in wt.items():
+        if k != "cycles":
+            check(mt[k] == v, f"totals.{k}: merged {mt[k]}, whole {v}")
+    print(f"note: totals.cycles merged {mt['cycles']}, whole {wt['cycles']} "
+          "(equal once every frame starts on a drained unit)")
+
+
+CASES = {n[5:]: f for n, f in globals().items() if n.startswith("case_")}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("case", choices=sorted(CASES))
+    ap.add_argument("--sim", required=True)
+    ap.add_argument("--checker", default="", help="rbcd-config-check (default: beside --sim)")
+    a = ap.parse_args()
+    tmp = tempfile.mkdtemp(prefix=f"rbcd_sweep_{a.case}.")
+    try:
+        CASES[a.case](Case(os.path.abspath(a.sim), os.path.abspath(a.checker) if a.checker else "", tmp))
+    except Fail as e:
+        print(f"FAILED: {e}")
+        return 1
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print("passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
