@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
 # Installs the Debian bookworm packages the build needs, only those missing.
+# libbullet-dev and libfcl-dev (rbcd-cpucd), assimp-testmodels (meshes of
+# workloads/) and python3-matplotlib (scripts/reproduce.sh plots) serve the
+# evaluation; the build works without them.
 set -euo pipefail
 pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
-      nlohmann-json3-dev libcli11-dev zlib1g-dev libeigen3-dev libassimp-dev libpng-dev)
+      nlohmann-json3-dev libcli11-dev zlib1g-dev libeigen3-dev libassimp-dev libpng-dev
+      libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
