@@ -210,10 +210,19 @@ std::string geometry_file_text(const CdInput& in) {
 }
 
 bool is_closed(const PartMesh& m) {
+    // Mesh files repeat a vertex where its normal or texture coordinate
+    // changes: weld by position first, so that seams do not count as borders.
+    std::map<std::array<double, 3>, std::uint32_t> weld;
+    std::vector<std::uint32_t> id(m.verts.size());
+    for (std::size_t i = 0; i < m.verts.size(); ++i)
+        id[i] = weld.emplace(std::array<double, 3>{m.verts[i].x(), m.verts[i].y(), m.verts[i].z()},
+                             std::uint32_t(weld.size()))
+                    .first->second;
     std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
     for (const auto& t : m.tris)
         for (int e = 0; e < 3; ++e) {
-            std::uint32_t a = t[e], b = t[(e + 1) % 3];
+            std::uint32_t a = id[t[e]], b = id[t[(e + 1) % 3]];
+            if (a == b) continue;   // degenerate triangle edge
             if (a > b) std::swap(a, b);
             ++edges[{a, b}];
         }

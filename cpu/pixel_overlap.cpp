@@ -14,7 +14,8 @@ struct Interval {
 
 } // namespace
 
-void pixel_overlap_tile(const std::vector<Fragment>& frags, std::uint32_t tolerance, FramePixels& out) {
+void pixel_overlap_tile(const std::vector<Fragment>& frags, std::uint32_t tolerance, FramePixels& out,
+                        DepthHistogram* depth) {
     std::vector<std::uint32_t> idx(frags.size());
     std::iota(idx.begin(), idx.end(), 0u);
     std::sort(idx.begin(), idx.end(), [&](std::uint32_t i, std::uint32_t j) {
@@ -36,6 +37,10 @@ void pixel_overlap_tile(const std::vector<Fragment>& frags, std::uint32_t tolera
         std::size_t e = s;
         const Fragment& f0 = frags[idx[s]];
         while (e < idx.size() && frags[idx[e]].x == f0.x && frags[idx[e]].y == f0.y) ++e;
+        if (depth) {
+            depth->resize(kDepthBins, 0);
+            ++(*depth)[std::min(e - s, kDepthBins - 1)];
+        }
         iv.clear();
         open.clear();
         for (std::size_t k = s; k < e; ++k) {
@@ -69,14 +74,14 @@ void pixel_overlap_tile(const std::vector<Fragment>& frags, std::uint32_t tolera
     }
 }
 
-std::vector<FramePixels> pixel_overlap(FragmentSource& src, std::uint32_t tolerance) {
+std::vector<FramePixels> pixel_overlap(FragmentSource& src, std::uint32_t tolerance, DepthHistogram* depth) {
     std::vector<FramePixels> frames;
     Tile t;
     for (;;) {
         const auto ev = src.next(t);
         if (ev == FragmentSource::Event::End) break;
         if (ev == FragmentSource::Event::Frame) frames.emplace_back();
-        else if (!frames.empty()) pixel_overlap_tile(t.frags, tolerance, frames.back());
+        else if (!frames.empty()) pixel_overlap_tile(t.frags, tolerance, frames.back(), depth);
     }
     return frames;
 }

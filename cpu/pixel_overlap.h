@@ -19,13 +19,18 @@ struct PixelCounts {
 };
 using PairKey = std::pair<std::uint32_t, std::uint32_t>;   // (smaller id, larger id)
 using FramePixels = std::map<PairKey, PixelCounts>;
+// Depth complexity: pixels by the number of collisionable fragments on them
+// (index n, n >= 1; the last bin counts kDepthBins - 1 and more).
+constexpr std::size_t kDepthBins = 65;
+using DepthHistogram = std::vector<std::uint64_t>;
 
 // One tile's fragments (any order): adds to `out`. An object's intervals along a
 // pixel's ray run from a front face to the back face that closes it (nested
 // fronts of the same object merge); front before back at equal depth.
-void pixel_overlap_tile(const std::vector<Fragment>& frags, std::uint32_t tolerance, FramePixels& out);
+void pixel_overlap_tile(const std::vector<Fragment>& frags, std::uint32_t tolerance, FramePixels& out,
+                        DepthHistogram* depth = nullptr);
 
 // The whole stream, one map per frame.
-std::vector<FramePixels> pixel_overlap(FragmentSource& src, std::uint32_t tolerance);
+std::vector<FramePixels> pixel_overlap(FragmentSource& src, std::uint32_t tolerance, DepthHistogram* depth = nullptr);
 
 } // namespace rbcd::cpucd

@@ -18,7 +18,7 @@
 namespace {
 
 struct Options {
-    std::string scene, geometry, trace, pairs, frames, write_geometry;
+    std::string scene, geometry, trace, pairs, frames, write_geometry, depth_hist;
     unsigned repeat = 5;
     bool pixels = false;
     unsigned tolerance = 1;
@@ -78,7 +78,8 @@ int run(const Options& opt) {
         throw InputError("command line: --pixels with --geometry needs --trace FILE (the frames' fragments)");
     if (opt.repeat < 1) throw InputError("command line: --repeat must be at least 1");
 
-    Output pairs_out(opt.pairs), frames_out(opt.frames), geo_out(opt.write_geometry);
+    if (!opt.depth_hist.empty() && !opt.pixels) throw InputError("command line: --depth-histogram needs --pixels");
+    Output pairs_out(opt.pairs), frames_out(opt.frames), geo_out(opt.write_geometry), hist_out(opt.depth_hist);
     const CdInput in = opt.scene.empty() ? load_geometry_file(opt.geometry) : load_scene_input(opt.scene);
 
     std::vector<FramePixels> px;
@@ -87,7 +88,11 @@ int run(const Options& opt) {
         if (!opt.scene.empty()) src = std::make_unique<scene::SceneSource>(opt.scene, scene::SceneLimits{16, 16, 16});
         else src = std::make_unique<TraceReader>(opt.trace, TraceLimits{16, 16, 16});
         // Tiles of any size work: intervals are per pixel. The trace's own tile size is accepted.
-        px = pixel_overlap(*src, opt.tolerance);
+        DepthHistogram hist(kDepthBins, 0);
+        px = pixel_overlap(*src, opt.tolerance, &hist);
+        hist_out.write("fragments_per_pixel,pixels\n");
+        for (std::size_t n = 1; n < hist.size(); ++n)
+            if (hist[n]) hist_out.write(std::to_string(n) + (n + 1 == kDepthBins ? "+" : "") + "," + std::to_string(hist[n]) + "\n");
         if (px.size() != in.frames())
             throw InputError((opt.trace.empty() ? opt.scene : opt.trace) + ": " + std::to_string(px.size()) +
                              " frames of fragments for " + std::to_string(in.frames()) + " frames of geometry");
@@ -137,6 +142,7 @@ int run(const Options& opt) {
     pairs_out.commit();
     frames_out.commit();
     geo_out.commit();
+    hist_out.commit();
     if (!opt.quiet) {
         const double nf = double(in.frames());
         std::printf("rbcd-cpucd: %s\n  frames %llu  parts %zu (%zu closed meshes)\n", in.name.c_str(),
@@ -162,6 +168,7 @@ int main(int argc, char* argv[]) {
     app.add_option("--write-geometry", opt.write_geometry, "also write the input as a geometry file");
     app.add_option("--repeat", opt.repeat, "timed repeats per frame (median reported), default 5");
     app.add_flag("--pixels", opt.pixels, "also count, per pair, pixels where the depth intervals overlap / nearly overlap");
+    app.add_option("--depth-histogram", opt.depth_hist, "with --pixels: CSV of pixels by fragments on them (all frames)");
     app.add_option("--depth-tolerance", opt.tolerance, "depth units for --pixels' near overlaps, default 1");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
     try {
