@@ -68,6 +68,12 @@ class Scene:
         return "\n".join(out) + "\n"
 
 
+def backdrop(s, z, width=60, height=30, y=8):
+    """A sky wall behind everything: a game draws its background too, which is
+    the GPU work the unit's cost is measured against (docs/workloads.md)."""
+    s.add("sky", "box", (0, y, z), scale=(width, height, 0.5), collide=False)
+
+
 def moving(pos, vel, frames=LAST):
     """Keys moving linearly by vel per frame until the last frame."""
     return [(frames, tuple(p + v * frames for p, v in zip(pos, vel)), None, None)]
@@ -79,6 +85,7 @@ Barriers on the runner's lane hit it unless it jumps; coins pass through its
 body (contact, then containment, then contact); an arch (torus) passes around
 it without touching (a concave near-miss); side barriers never touch it.""",
               eye=(0, 2.4, 6.5), target=(0, 0.6, -12), fov=50, near=0.5, far=80)
+    backdrop(s, -75)
     s.add("track", "box", (0, -0.1, -30), scale=(3.2, 0.1, 40), collide=False)
     for side in (-1, 1):
         s.add(f"wall_{side}", "box", (side * 3.4, 1.0, -30), scale=(0.2, 1.2, 40), collide=False)
@@ -127,6 +134,7 @@ def snowboard():
 slope of trees (trunk and crown, one object each), rocks, Wusons and thin
 flags (thinner than a pixel far away) coming up the slope to it.""",
               eye=(0, 4.0, 7.5), target=(0, 0.0, -14), fov=55, near=0.5, far=90)
+    backdrop(s, -85, width=80, height=40)
     s.add("slope", "box", (0, -0.15, -35), scale=(14, 0.1, 45), collide=False)
     rng = random.Random(2)
     speed = 1.0
@@ -164,6 +172,7 @@ cylinders, ducks, teapots) drifting through each other in front of the
 flying character; ids above 127 need zeb.id_bits = 8.""",
               eye=(0, 0, 9), target=(0, 0, -10), fov=55, near=0.5, far=60)
     rng = random.Random(3)
+    backdrop(s, -45, width=60, height=40, y=0)
     s.add("sky_floor", "box", (0, -7, -12), scale=(25, 0.2, 25), collide=False)
     s.add("jack", DUCK, (0, -1.0, 2.0), rot=(0, 90, 0), scale=(1.0, 1.0, 1.0),
           keys=[(20, (1.0, -0.3, 1.0), (0, 100, 10), None), (40, (-1.0, -1.4, 1.5), (0, 80, -10), None),
@@ -192,6 +201,7 @@ ducks) that close in and fall back; a thrown shield (a flat cylinder)
 bounces between them; an energy orb is absorbed into the hero's body
 (containment) and leaves; a ring the hero steps through never touches it.""",
               eye=(0, 3.2, 6.0), target=(0, 0.5, -1.5), fov=55, near=0.5, far=40)
+    backdrop(s, -12, width=30, height=20)
     s.add("arena", "box", (0, -0.1, -2), scale=(8, 0.1, 8), collide=False)
     for k in range(5):
         a = math.pi + math.pi * k / 4      # behind the fight only: none between camera and hero
@@ -236,6 +246,9 @@ near-misses); the smallest and the off-centre ones clip it. Drones (boxes)
 fly across and hit rings.""",
               eye=(0, 0.6, 6.0), target=(0, 0.2, -20), fov=50, near=0.5, far=90)
     rng = random.Random(5)
+    # The tunnel's wall, seen from inside (its back faces): what the GPU draws around the rings.
+    s.add("tunnel_wall", "cylinder", (0, 0.2, -30), rot=(90, 0, 0), scale=(5.0, 40, 5.0), collide=False,
+          segments=32, cull="front")
     s.add("flyer", DUCK, (0, -0.7, 0), rot=(0, 90, 0), scale=(0.8, 0.8, 0.8),
           keys=[(15, (0.3, -0.5, 0), (0, 90, 15), None), (35, (-0.3, -0.9, 0), (0, 90, -15), None),
                 (LAST, (0, -0.7, 0), (0, 90, 0), None)])
