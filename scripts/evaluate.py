@@ -95,6 +95,15 @@ def fmt(v, nd=2):
     return f"{v:.{nd}f}"
 
 
+def sig(v, digits=3):
+    """A ratio to `digits` significant digits (0.42, 3.1, 250)."""
+    if v is None:
+        return "n/a"
+    if math.isinf(v):
+        return "inf"
+    return f"{v:.{digits}g}" if v < 10 ** digits else f"{v:.0f}"
+
+
 def md_table(header, rows):
     out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
@@ -316,7 +325,7 @@ def target_fig8(out, scenes):
                 er = e_cpu / e_gpu if e_gpu > 0 else math.inf
                 ratios[(kind, banks)].append((sp, er))
                 rows.append([s, kind, banks, f"{t_host[kind] * 1e3:.3f}", f"{t_cpu * 1e3:.3f}", f"{t_gpu * 1e3:.4f}",
-                             fmt(sp, 1), f"{e_cpu * 1e3:.4f}", f"{e_gpu * 1e3:.5f}", fmt(er, 1)])
+                             sig(sp), f"{e_cpu * 1e3:.4f}", f"{e_gpu * 1e3:.5f}", sig(er)])
     header = ["scene", "cpu version", "ZEBs", "host CPU ms", "paper CPU ms (scaled)", "extra GPU ms",
               "speed-up", "CPU mJ (model)", "extra GPU mJ", "energy reduction"]
     write_csv(os.path.join(out, "fig8.csv"), header, rows)
@@ -328,8 +337,8 @@ def target_fig8(out, scenes):
     for (kind, banks), paper in PAPER["fig8"].items():
         sp = gmean([r[0] for r in ratios[(kind, banks)]])
         er = gmean([r[1] for r in ratios[(kind, banks)]])
-        summary.append([{"broad": "(a) broad phase", "gjk": "(b) broad + GJK"}[kind], banks, fmt(sp, 0), paper[0],
-                        fmt(er, 0), paper[1]])
+        summary.append([{"broad": "(a) broad phase", "gjk": "(b) broad + GJK"}[kind], banks, sig(sp), paper[0],
+                        sig(er), paper[1]])
     sh = ["CPU version", "ZEBs", "speed-up (geo. mean)", "paper speed-up", "energy reduction (geo. mean)",
           "paper energy reduction"]
     write_csv(os.path.join(out, "fig8_summary.csv"), sh, summary)
