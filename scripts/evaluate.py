@@ -459,8 +459,9 @@ def target_accuracy(out, scenes):
     fig, ax = plt.subplots(figsize=(7, 3.2))
     allrows = [r for r in rows if r[0] == "all"]
     x = range(len(allrows))
-    ax.bar([i - 0.2 for i in x], [float(r[6]) for r in allrows], 0.4, label="precision")
-    ax.bar([i + 0.2 for i in x], [float(r[7]) for r in allrows], 0.4, label="recall")
+    ax.bar([i - 0.27 for i in x], [float(r[6]) for r in allrows], 0.27, label="precision")
+    ax.bar(list(x), [float(r[7]) for r in allrows], 0.27, label="recall")
+    ax.bar([i + 0.27 for i in x], [float(r[8]) for r in allrows], 0.27, label="recall, on-screen contacts")
     ax.set_xticks(list(x), [r[1].replace(" (", "\n(").replace("RBCD ", "RBCD\n") for r in allrows], fontsize=7)
     ax.set_ylim(0, 105)
     ax.set_ylabel("% (all scenes)")
