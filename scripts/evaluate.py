@@ -233,12 +233,19 @@ def target_table3(out, scenes):
 
 
 # ---------------------------------------------------------------- fig9
-def gpu_energy_overhead(st):
-    """energy.gpu.overhead_pct when the build models the GPU's energy, else None."""
-    g = st.get("energy", {}).get("gpu")
-    if isinstance(g, dict) and "overhead_pct" in g:
-        return float(g["overhead_pct"])
+def energy_gpu(st, key):
+    """energy.gpu.KEY (nested object or dotted key) when the build models the GPU's energy, else None."""
+    e = st.get("energy", {})
+    g = e.get("gpu")
+    if isinstance(g, dict) and key in g:
+        return float(g[key])
+    if "gpu." + key in e:
+        return float(e["gpu." + key])
     return None
+
+
+def gpu_energy_overhead(st):
+    return energy_gpu(st, "overhead_pct")
 
 
 def target_fig9(out, scenes):
@@ -312,9 +319,9 @@ def target_fig8(out, scenes):
             mhz = st["config"]["clock"]["mhz"]
             g = st["gpu"]
             t_gpu = (g["cycles_with_unit"] - g["baseline_cycles"]) / (mhz * 1e6)
-            eg = st["energy"].get("gpu")
-            if isinstance(eg, dict) and "with_unit_pj" in eg and "baseline_pj" in eg:
-                e_gpu = (eg["with_unit_pj"] - eg["baseline_pj"]) * 1e-12
+            with_pj, base_pj = energy_gpu(st, "with_unit_pj"), energy_gpu(st, "baseline_pj")
+            if with_pj is not None and base_pj is not None:
+                e_gpu = (with_pj - base_pj) * 1e-12
             else:
                 e_gpu = st["energy"]["total_pj"] * 1e-12
                 fallback = True

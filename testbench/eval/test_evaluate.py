@@ -82,5 +82,10 @@ with tempfile.TemporaryDirectory() as out:
     check(kinds[("RBCD M=8 T=8", "3")] == "list_overflow" and kinds[("RBCD M=8 T=8", "7")] == "sub_pixel",
           "misses listed with their pair")
 
+# ---- GPU energy keys: nested (energy.gpu.KEY) or dotted, absent -> None (fallback).
+check(evaluate.energy_gpu({"energy": {"gpu": {"baseline_pj": 5.0}}}, "baseline_pj") == 5.0, "nested energy.gpu key")
+check(evaluate.energy_gpu({"energy": {"gpu.overhead_pct": 3.5}}, "overhead_pct") == 3.5, "dotted energy key")
+check(evaluate.energy_gpu({"energy": {"total_pj": 1.0}}, "with_unit_pj") is None, "absent: fallback")
+
 print("test_evaluate:", "FAILED" if failures else "ok", f"({len(failures)} failures)")
 sys.exit(1 if failures else 0)
