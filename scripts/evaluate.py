@@ -95,6 +95,12 @@ def fmt(v, nd=2):
     return f"{v:.{nd}f}"
 
 
+def share(part, whole):
+    """A percentage for a histogram cell: 2 decimals, or '<0.01%' for a nonzero sliver."""
+    p = pct(part, whole)
+    return "<0.01%" if 0 < p < 0.005 else f"{p:.2f}%"
+
+
 def sig(v, digits=3):
     """A ratio to `digits` significant digits (0.42, 3.1, 250)."""
     if v is None:
@@ -184,7 +190,7 @@ def target_workloads(out, scenes):
         for s in scenes:
             hist = read_csv(run(out, s, "depth_hist.csv"))
             px = sum(int(h["pixels"]) for h in hist)
-            cells = ", ".join(f"{h['fragments_per_pixel']}: {pct(int(h['pixels']), px):.2f}%" for h in hist)
+            cells = ", ".join(f"{h['fragments_per_pixel']}: {share(int(h['pixels']), px)}" for h in hist)
             f.write(f"- {s}: {cells}\n")
 
 
