@@ -207,6 +207,7 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats) {
         PairResult& p = pairs[{a, b}];
         p.a = a;
         p.b = b;
+        p.open = p.open || !s.ps[i].closed || !s.ps[j].closed;
         return p;
     };
 

@@ -27,6 +27,7 @@ struct PairResult {
     bool contained = false;   // (c) by containment only
     bool on_screen = false;   // some contact point (or, contained, a vertex of the inner mesh) lies in the view volume
     unsigned contacts = 0;    // FCL contact points found (capped)
+    bool open = false;        // a part of a or b is not a closed mesh (RBCD assumes closed surfaces)
 };
 
 struct FrameTimes {

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <set>
 #include <unistd.h>
 
 #include "common/errors.h"
@@ -100,10 +101,15 @@ int run(const Options& opt) {
     if (geo_out.active()) geo_out.write(geometry_file_text(in));
 
     std::size_t closed = 0;
-    for (const auto& p : in.parts) closed += is_closed(*p.mesh);
+    std::set<std::uint32_t> open_ids;   // objects with a part that is not a closed mesh
+    for (const auto& p : in.parts) {
+        const bool c = is_closed(*p.mesh);
+        closed += c;
+        if (!c) open_ids.insert(p.id);
+    }
 
     CpuDetector det(in);
-    pairs_out.write("frame,id_a,id_b,aabb,gjk,exact,contained,on_screen,contacts,px_overlap,px_near\n");
+    pairs_out.write("frame,id_a,id_b,aabb,gjk,exact,contained,on_screen,contacts,px_overlap,px_near,open\n");
     frames_out.write("frame,parts,aabb_pairs,gjk_pairs,exact_pairs,broad_us,gjk_us,exact_us,gjk_no_result\n");
     double sum_broad = 0, sum_gjk = 0, sum_exact = 0;
     std::uint64_t n_aabb = 0, n_gjk = 0, n_exact = 0;
@@ -126,7 +132,8 @@ int run(const Options& opt) {
                             std::to_string(p.aabb) + "," + std::to_string(p.gjk) + "," + std::to_string(p.exact) + "," +
                             std::to_string(p.contained) + "," + std::to_string(p.on_screen) + "," +
                             std::to_string(p.contacts) + "," + std::to_string(c.overlap) + "," +
-                            std::to_string(c.near) + "\n");
+                            std::to_string(c.near) + "," + std::to_string(open_ids.count(p.a) || open_ids.count(p.b)) +
+                            "\n");
         }
         frames_out.write(std::to_string(f) + "," + std::to_string(in.parts.size()) + "," + std::to_string(na) + "," +
                          std::to_string(ng) + "," + std::to_string(ne) + "," + fmt("%.3f", r.t.broad_us) + "," +

@@ -33,7 +33,8 @@ PAPER = {
     "fig8": {("broad", 1): (250, 273), ("broad", 2): (600, 448), ("gjk", 1): (1400, 1750), ("gjk", 2): (3400, 2875)},
 }
 
-MISS_CLASSES = ["list_overflow", "stack_overflow", "off_screen", "depth_quantization", "sub_pixel", "unexplained"]
+MISS_CLASSES = ["list_overflow", "stack_overflow", "off_screen", "depth_quantization", "open_surface", "sub_pixel",
+                "unexplained"]
 
 
 class InputMissing(Exception):
@@ -385,7 +386,7 @@ def target_fig8(out, scenes):
 # ---------------------------------------------------------------- accuracy
 def classify_miss(gt, m64, m64t64):
     """Why RBCD missed a true contact (docs/accuracy.md). gt: the rbcd-cpucd
-    pair row (on_screen, px_overlap, px_near); m64 / m64t64: whether the pair
+    pair row (on_screen, px_overlap, px_near, open); m64 / m64t64: whether the pair
     is found in that frame with M = 64 (T as configured) / with M = T = 64."""
     if m64:
         return "list_overflow"
@@ -397,6 +398,8 @@ def classify_miss(gt, m64, m64t64):
         return "unexplained"
     if int(gt.get("px_near", 0)) > 0:
         return "depth_quantization"
+    if gt.get("open", "0") == "1":
+        return "open_surface"
     return "sub_pixel"
 
 

@@ -118,6 +118,13 @@ TEST_CASE("parts sharing an id are one object", "[cpucd]") {
     CHECK(d.run_frame(0, 1).pairs.empty());
 }
 
+TEST_CASE("a pair with an open mesh is flagged open", "[cpucd]") {
+    auto open = std::make_shared<PartMesh>(*shape("box"));
+    open->tris.pop_back();
+    CHECK(only_pair(two(open, place({-0.5, 0, 0}), shape("sphere"), place({0.5, 0, 0}))).open);
+    CHECK_FALSE(only_pair(two(shape("box"), place({-0.5, 0, 0}), shape("sphere"), place({0.5, 0, 0}))).open);
+}
+
 TEST_CASE("point in mesh by ray parity", "[cpucd]") {
     const auto box = shape("box");
     CHECK(point_in_mesh(*box, {0.1, 0.2, 0.3}));
