@@ -30,6 +30,9 @@ public:
     const std::vector<SceneSource::ObjectInfo>& objects() const { return info_; }
     unsigned tiles_x() const { return tiles_x_; }
     unsigned tiles_y() const { return tiles_y_; }
+    // Read by SceneGeometry (scene/scene_geometry.h): the same meshes and camera.
+    const Mesh& mesh(std::size_t object) const { return *objects_[object].mesh; }
+    const Eigen::Matrix4d& view_projection() const { return view_proj_; }
 
     // Geometry and binning of frame `f`; resets the tile cursor.
     void begin_frame(std::uint64_t f);

@@ -8,11 +8,14 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 # Optional, only when asked for (their tests are skipped with a message without them):
 #   --slurm  slurm-wlm and munge, for the SLURM sweep backend's test (docs/sweeps.md)
 #   --plots  python3-matplotlib for scripts/rbcd-plot (gnuplot-nox also does)
+#   --eval   libbullet-dev and libfcl-dev (rbcd-cpucd), assimp-testmodels (the meshes
+#            of workloads/) and python3-matplotlib, for scripts/reproduce.sh
 for opt in "$@"; do
   case "$opt" in
     --slurm) pkgs+=(slurm-wlm munge) ;;
     --plots) pkgs+=(python3-matplotlib) ;;
-    *) echo "setup: unknown option $opt (known: --slurm --plots)" >&2; exit 2 ;;
+    --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib) ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots --eval)" >&2; exit 2 ;;
   esac
 done
 

@@ -1,0 +1,234 @@
+#include "cpu/cd_input.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <Eigen/LU>
+
+#include "common/errors.h"
+#include "scene/scene_geometry.h"
+
+namespace rbcd::cpucd {
+
+CdInput load_scene_input(const std::string& scene_path) {
+    // The CPU side never runs the unit: any id up to the contract's 16 bits is accepted.
+    const scene::SceneLimits limits{16, 16, 16};
+    scene::SceneGeometry g(scene_path, limits);
+    CdInput in;
+    in.name = scene_path;
+    in.width = g.width();
+    in.height = g.height();
+    in.has_view = true;
+    in.view_proj = g.view_projection();
+    std::map<const scene::Mesh*, std::shared_ptr<const PartMesh>> shared;
+    for (const auto& p : g.parts()) {
+        auto& m = shared[p.mesh];
+        if (!m) {
+            auto pm = std::make_shared<PartMesh>();
+            pm->verts = p.mesh->verts;
+            pm->tris = p.mesh->tris;
+            m = std::move(pm);
+        }
+        in.parts.push_back(Part{p.id, p.name, m});
+    }
+    in.model.resize(g.frame_count());
+    for (std::uint64_t f = 0; f < g.frame_count(); ++f) {
+        in.model[f].reserve(in.parts.size());
+        for (std::size_t i = 0; i < in.parts.size(); ++i) in.model[f].push_back(g.model_matrix(i, f));
+    }
+    return in;
+}
+
+namespace {
+
+struct LineReader {
+    std::string file;
+    std::ifstream in;
+    unsigned long line = 0;
+    std::vector<std::string> tok;
+
+    [[noreturn]] void fail(const std::string& what) const { throw input_error_at(file, line, what); }
+
+    // Next non-blank, non-comment line split into fields; false at the end.
+    bool next() {
+        std::string s;
+        while (std::getline(in, s)) {
+            ++line;
+            if (auto h = s.find('#'); h != std::string::npos) s.resize(h);
+            std::istringstream is(s);
+            tok.clear();
+            for (std::string t; is >> t;) tok.push_back(t);
+            if (!tok.empty()) return true;
+        }
+        return false;
+    }
+    void expect_fields(std::size_t n, const char* what) const {
+        if (tok.size() != n) fail(std::string(what) + ": expected " + std::to_string(n - 1) + " fields, got " +
+                                  std::to_string(tok.size() - 1));
+    }
+    double number(std::size_t i) const {
+        const std::string& s = tok.at(i);
+        char* end = nullptr;
+        const double v = std::strtod(s.c_str(), &end);
+        if (end == s.c_str() || *end != '\0' || !std::isfinite(v)) fail("'" + s + "' is not a finite number");
+        return v;
+    }
+    std::uint64_t count(std::size_t i, std::uint64_t max) const {
+        const std::string& s = tok.at(i);
+        if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 12)
+            fail("'" + s + "' is not an unsigned integer");
+        const std::uint64_t v = std::stoull(s);
+        if (v > max) fail(s + " is out of range 0.." + std::to_string(max));
+        return v;
+    }
+};
+
+} // namespace
+
+CdInput load_geometry_file(const std::string& path) {
+    LineReader r;
+    r.file = path;
+    r.in.open(path, std::ios::binary);
+    if (!r.in) throw InputError(path + ": cannot open geometry file");
+    CdInput g;
+    g.name = path;
+    if (!r.next() || r.tok.size() != 2 || r.tok[0] != "rbcd-geometry" || r.tok[1] != "1")
+        r.fail("expected the magic line 'rbcd-geometry 1'");
+    constexpr std::uint64_t kMaxCount = 100000000;
+    bool in_frames = false, screen_seen = false;
+    std::vector<bool> seen;   // parts given a matrix in the current frame
+    auto close_frame = [&] {
+        if (!in_frames) return;
+        for (std::size_t i = 0; i < seen.size(); ++i)
+            if (!seen[i]) r.fail("frame " + std::to_string(g.model.size() - 1) + " gives no matrix for part " + std::to_string(i));
+    };
+    while (r.next()) {
+        const std::string& k = r.tok[0];
+        if (k == "screen") {
+            if (in_frames || screen_seen) r.fail("screen: must come once, before the first part");
+            r.expect_fields(3, "screen");
+            g.width = unsigned(r.count(1, 8192));
+            g.height = unsigned(r.count(2, 8192));
+            if (!g.width || !g.height) r.fail("screen: width and height must be at least 1");
+            screen_seen = true;
+        } else if (k == "view") {
+            if (in_frames || g.has_view) r.fail("view: must come once, before the first frame");
+            r.expect_fields(17, "view");
+            for (int i = 0; i < 16; ++i) g.view_proj(i / 4, i % 4) = r.number(1 + std::size_t(i));
+            g.has_view = true;
+        } else if (k == "part") {
+            if (in_frames) r.fail("part: parts come before the first frame");
+            if (r.tok.size() != 4 && r.tok.size() != 5) r.fail("part: expected ID NV NT [NAME]");
+            Part p;
+            p.id = std::uint32_t(r.count(1, 0xFFFFFFFFull));
+            const std::uint64_t nv = r.count(2, kMaxCount), nt = r.count(3, kMaxCount);
+            if (nv < 3 || nt < 1) r.fail("part: needs at least 3 vertices and 1 triangle");
+            if (r.tok.size() == 5) p.name = r.tok[4];
+            auto m = std::make_shared<PartMesh>();
+            for (std::uint64_t i = 0; i < nv; ++i) {
+                if (!r.next() || r.tok[0] != "v") r.fail("expected vertex " + std::to_string(i) + " ('v X Y Z')");
+                r.expect_fields(4, "v");
+                m->verts.emplace_back(r.number(1), r.number(2), r.number(3));
+            }
+            for (std::uint64_t i = 0; i < nt; ++i) {
+                if (!r.next() || r.tok[0] != "t") r.fail("expected triangle " + std::to_string(i) + " ('t A B C')");
+                r.expect_fields(4, "t");
+                m->tris.push_back({std::uint32_t(r.count(1, nv - 1)), std::uint32_t(r.count(2, nv - 1)),
+                                   std::uint32_t(r.count(3, nv - 1))});
+            }
+            p.mesh = std::move(m);
+            g.parts.push_back(std::move(p));
+        } else if (k == "frame") {
+            r.expect_fields(2, "frame");
+            if (g.parts.empty()) r.fail("frame: no part before the first frame");
+            if (r.count(1, kMaxCount) != g.model.size())
+                r.fail("frame: expected frame " + std::to_string(g.model.size()) + " (frames count up from 0)");
+            close_frame();
+            in_frames = true;
+            g.model.emplace_back(g.parts.size(), Eigen::Matrix4d::Identity());
+            seen.assign(g.parts.size(), false);
+        } else if (k == "m") {
+            if (!in_frames) r.fail("m: before the first frame");
+            r.expect_fields(14, "m");
+            const std::size_t pi = std::size_t(r.count(1, g.parts.size() - 1));
+            if (seen[pi]) r.fail("m: part " + std::to_string(pi) + " given twice in this frame");
+            seen[pi] = true;
+            Eigen::Matrix4d& mm = g.model.back()[pi];
+            for (int i = 0; i < 12; ++i) mm(i / 4, i % 4) = r.number(2 + std::size_t(i));
+            if (std::abs(mm.block<3, 3>(0, 0).determinant()) < 1e-18) r.fail("m: the matrix is singular");
+        } else {
+            r.fail("unknown record '" + k + "' (known: screen, view, part, v, t, frame, m)");
+        }
+    }
+    if (r.in.bad()) throw InputError(path + ": read error");
+    close_frame();
+    if (g.model.empty()) throw InputError(path + ": no frame");
+    if (g.has_view && !screen_seen) throw InputError(path + ": 'view' needs a 'screen' record");
+    return g;
+}
+
+std::string geometry_file_text(const CdInput& in) {
+    std::string s = "rbcd-geometry 1\n";
+    char buf[64];
+    auto num = [&](double v) {
+        std::snprintf(buf, sizeof buf, " %.17g", v);
+        s += buf;
+    };
+    if (in.has_view) {
+        s += "screen " + std::to_string(in.width) + " " + std::to_string(in.height) + "\nview";
+        for (int i = 0; i < 16; ++i) num(in.view_proj(i / 4, i % 4));
+        s += "\n";
+    }
+    for (const auto& p : in.parts) {
+        s += "part " + std::to_string(p.id) + " " + std::to_string(p.mesh->verts.size()) + " " +
+             std::to_string(p.mesh->tris.size());
+        std::string name = p.name;
+        for (char& c : name)
+            if (c == ' ' || c == '\t' || c == '#') c = '_';
+        if (!name.empty()) s += " " + name;
+        s += "\n";
+        for (const auto& v : p.mesh->verts) {
+            s += "v";
+            num(v.x()), num(v.y()), num(v.z());
+            s += "\n";
+        }
+        for (const auto& t : p.mesh->tris)
+            s += "t " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
+    }
+    for (std::size_t f = 0; f < in.model.size(); ++f) {
+        s += "frame " + std::to_string(f) + "\n";
+        for (std::size_t i = 0; i < in.parts.size(); ++i) {
+            s += "m " + std::to_string(i);
+            for (int k = 0; k < 12; ++k) num(in.model[f][i](k / 4, k % 4));
+            s += "\n";
+        }
+    }
+    return s;
+}
+
+bool is_closed(const PartMesh& m) {
+    // Mesh files repeat a vertex where its normal or texture coordinate
+    // changes: weld by position first, so that seams do not count as borders.
+    std::map<std::array<double, 3>, std::uint32_t> weld;
+    std::vector<std::uint32_t> id(m.verts.size());
+    for (std::size_t i = 0; i < m.verts.size(); ++i)
+        id[i] = weld.emplace(std::array<double, 3>{m.verts[i].x(), m.verts[i].y(), m.verts[i].z()},
+                             std::uint32_t(weld.size()))
+                    .first->second;
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+    for (const auto& t : m.tris)
+        for (int e = 0; e < 3; ++e) {
+            std::uint32_t a = id[t[e]], b = id[t[(e + 1) % 3]];
+            if (a == b) continue;   // degenerate triangle edge
+            if (a > b) std::swap(a, b);
+            ++edges[{a, b}];
+        }
+    for (const auto& [e, n] : edges)
+        if (n != 2) return false;
+    return !edges.empty();
+}
+
+} // namespace rbcd::cpucd

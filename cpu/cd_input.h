@@ -1,0 +1,50 @@
+// What rbcd-cpucd detects collisions on: the collisionable objects' meshes in
+// object space and, per frame, each one's model matrix (world = M * object), so
+// the world-space meshes of every frame; plus the camera, for the accuracy
+// analysis (where a contact lies on screen). Read from a scene (the same
+// geometry the rasterizer draws) or from a geometry file (docs/cpucd.md), the
+// input for traces whose geometry is given separately.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace rbcd::cpucd {
+
+struct PartMesh {
+    std::vector<Eigen::Vector3d> verts;
+    std::vector<std::array<std::uint32_t, 3>> tris;
+};
+
+// One rigid part; parts sharing an id are one object (pairs inside it are not collisions).
+struct Part {
+    std::uint32_t id = 0;
+    std::string name;
+    std::shared_ptr<const PartMesh> mesh;
+};
+
+struct CdInput {
+    std::string name;
+    unsigned width = 0, height = 0;   // screen; 0 when the input gives no camera
+    bool has_view = false;
+    Eigen::Matrix4d view_proj = Eigen::Matrix4d::Identity();   // OpenGL clip space
+    std::vector<Part> parts;
+    std::vector<std::vector<Eigen::Matrix4d>> model;          // [frame][part]
+    std::uint64_t frames() const { return model.size(); }
+};
+
+// Both throw InputError naming file:line (or the key) on bad input.
+CdInput load_scene_input(const std::string& scene_path);
+CdInput load_geometry_file(const std::string& path);
+// The text of a geometry file holding `in` (load_geometry_file reads it back exactly).
+std::string geometry_file_text(const CdInput& in);
+
+// Whether every edge of the mesh is shared by exactly two triangles (closed,
+// so point-in-mesh by ray parity is meaningful).
+bool is_closed(const PartMesh& m);
+
+} // namespace rbcd::cpucd

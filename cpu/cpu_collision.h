@@ -1,0 +1,66 @@
+// The CPU collision detection the paper compares RBCD with (docs/cpucd.md):
+//   (a) broad phase: Bullet's btDbvtBroadphase over the parts' AABBs, margins
+//       zeroed, its pairs filtered by exact AABB overlap;
+//   (b) (a) plus a GJK narrow phase (btGjkPairDetector) on the parts' convex
+//       hulls (btConvexHullShape);
+//   (c) ground truth: FCL mesh-mesh collision (BVHModel<OBBRSS>), plus a
+//       containment test (a vertex of either mesh inside the other, by ray
+//       parity), since FCL reports only intersecting surfaces.
+// (a) and (b) are timed per frame; building hulls and BVHs is loading, untimed.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "cpu/cd_input.h"
+
+namespace rbcd::cpucd {
+
+// One pair of objects (ids, a < b) that some method reports or the ground truth holds.
+struct PairResult {
+    std::uint32_t a = 0, b = 0;
+    bool aabb = false;        // (a)
+    bool gjk = false;         // (b): hulls intersect (or GJK gave no answer: counted, conservative)
+    bool exact = false;       // (c): surfaces intersect or one contains the other
+    bool contained = false;   // (c) by containment only
+    bool on_screen = false;   // some contact point (or, contained, a vertex of the inner mesh) lies in the view volume
+    unsigned contacts = 0;    // FCL contact points found (capped)
+    bool open = false;        // a part of a or b is not a closed mesh (RBCD assumes closed surfaces)
+};
+
+struct FrameTimes {
+    double broad_us = 0;   // (a): median over repeats
+    double gjk_us = 0;     // (b) = (a) + narrow phase: median over repeats
+    double exact_us = 0;   // (c), once, for information
+    unsigned gjk_no_result = 0;
+};
+
+struct FrameResult {
+    std::uint64_t frame = 0;
+    std::vector<PairResult> pairs;   // sorted by (a, b)
+    FrameTimes t;
+};
+
+class CpuDetector {
+public:
+    explicit CpuDetector(const CdInput& in);
+    ~CpuDetector();
+    CpuDetector(const CpuDetector&) = delete;
+    CpuDetector& operator=(const CpuDetector&) = delete;
+
+    // repeats >= 1 timed runs of (a) and (b), each from the state of frame f-1.
+    FrameResult run_frame(std::uint64_t f, unsigned repeats);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// Point inside a closed mesh (object space) by the parity of a ray's crossings.
+bool point_in_mesh(const PartMesh& m, const Eigen::Vector3d& p);
+// Inside OpenGL's clip volume after view_proj.
+bool in_view(const Eigen::Matrix4d& view_proj, const Eigen::Vector3d& p);
+
+} // namespace rbcd::cpucd

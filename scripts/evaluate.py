@@ -1,0 +1,546 @@
+#!/usr/bin/python3
+"""The evaluation's arithmetic (docs/results.md, docs/accuracy.md): reads the
+runs scripts/reproduce.sh made under OUT/runs/ and writes each figure's CSV,
+PNG and Markdown table into OUT.
+
+    scripts/evaluate.py --out DIR TARGET...     TARGET: workloads table3 fig9 fig8 accuracy
+    scripts/evaluate.py --splice OUT DOC        copy OUT's tables into DOC between its markers
+
+Every input it needs is named in the target's function; a missing one is an
+error naming the file (exit 2).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import re
+import sys
+
+# ---- The CPU model of Figure 8 (docs/results.md, "CPU energy model").
+# The paper's CPU (Table 2): 2 cores at 1.5 GHz, 32 nm, 1 V. Collision
+# detection runs on one core; the time measured here is scaled by the clock
+# ratio (same cycle count per detection: stated, not measured) and multiplied
+# by the power of one active core plus the idle one's leakage.
+PAPER_CPU_GHZ = 1.5
+CPU_ACTIVE_CORE_W = 0.8
+CPU_IDLE_CORE_W = 0.1
+
+PAPER = {
+    "table3": {4: 3.68, 8: 0.08, 16: 0.0},
+    "fig9_time": {1: 5.4, 2: 3.0},
+    "fig9_energy": {1: 5.1, 2: 3.5},
+    "fig8": {("broad", 1): (250, 273), ("broad", 2): (600, 448), ("gjk", 1): (1400, 1750), ("gjk", 2): (3400, 2875)},
+}
+
+MISS_CLASSES = ["list_overflow", "stack_overflow", "off_screen", "depth_quantization", "open_surface", "sub_pixel",
+                "unexplained"]
+
+
+class InputMissing(Exception):
+    pass
+
+
+def need(path):
+    if not os.path.exists(path):
+        raise InputMissing(f"{path}: missing (run scripts/reproduce.sh for this target)")
+    return path
+
+
+def load_json(path):
+    with open(need(path)) as f:
+        return json.load(f)
+
+
+def read_collisions(path):
+    """frame -> set of (a, b); frame -> lists overflowed; total lists overflowed."""
+    pairs, lists = {}, {}
+    frame = None
+    with open(need(path)) as f:
+        for line in f:
+            t = line.split()
+            if not t:
+                continue
+            if t[0] == "frame":
+                frame = int(t[1])
+                pairs[frame] = set()
+                lists[frame] = 0
+            elif t[0] == "hit":
+                pairs[frame].add((int(t[3]), int(t[4])))
+            elif t[0] == "overflow":
+                lists[frame] += int(t[3])
+    return pairs, lists
+
+
+def read_csv(path):
+    with open(need(path)) as f:
+        return list(csv.DictReader(f))
+
+
+def write_csv(path, header, rows):
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        w.writerows(rows)
+
+
+def pct(a, b):
+    return 100.0 * a / b if b else 0.0
+
+
+def fmt(v, nd=2):
+    if v is None:
+        return "n/a"
+    if isinstance(v, float) and math.isinf(v):
+        return "inf"
+    return f"{v:.{nd}f}"
+
+
+def share(part, whole):
+    """A percentage for a histogram cell: 2 decimals, or '<0.01%' for a nonzero sliver."""
+    p = pct(part, whole)
+    return "<0.01%" if 0 < p < 0.005 else f"{p:.2f}%"
+
+
+def sig(v, digits=3):
+    """A ratio to `digits` significant digits (0.42, 3.1, 250)."""
+    if v is None:
+        return "n/a"
+    if math.isinf(v):
+        return "inf"
+    return f"{v:.{digits}g}" if v < 10 ** digits else f"{v:.0f}"
+
+
+def md_table(header, rows):
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(out) + "\n"
+
+
+def plot():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+SCENE_PATHS = {}
+
+
+def scenes_of(out):
+    """OUT/runs/scenes.txt: one "NAME PATH" a line, as reproduce.sh ran them."""
+    with open(need(os.path.join(out, "runs", "scenes.txt"))) as f:
+        for line in f:
+            if line.strip():
+                name, path = line.split(None, 1)
+                SCENE_PATHS[name] = path.strip()
+    return list(SCENE_PATHS)
+
+
+def scene_objects(name):
+    """(collisionable ids, scenery objects) of a scene file."""
+    import tomllib
+    with open(need(SCENE_PATHS[name]), "rb") as f:
+        sc = tomllib.load(f)
+    objs = sc.get("object", [])
+    return len({o["id"] for o in objs if "id" in o}), sum(1 for o in objs if "id" not in o)
+
+
+def run(out, scene, name):
+    return os.path.join(out, "runs", scene, name)
+
+
+# ---------------------------------------------------------------- workloads
+def target_workloads(out, scenes):
+    rows, md_rows = [], []
+    plt = plot()
+    fig, axes = plt.subplots(1, len(scenes), figsize=(3.2 * len(scenes), 2.6), squeeze=False)
+    for k, s in enumerate(scenes):
+        st = load_json(run(out, s, "m8.json"))
+        frames = st["totals"]["frames"]
+        feed = st["blocks"]["rasterizer"]
+        pairs = read_csv(run(out, s, "cpucd_pairs.csv"))
+        n_coll, n_scenery = scene_objects(s)
+        hist = read_csv(run(out, s, "depth_hist.csv"))
+        px = sum(int(h["pixels"]) for h in hist)
+        mean = sum(int(h["fragments_per_pixel"].rstrip("+")) * int(h["pixels"]) for h in hist) / px if px else 0
+        p4 = pct(sum(int(h["pixels"]) for h in hist if int(h["fragments_per_pixel"].rstrip("+")) > 4), px)
+        p8 = pct(sum(int(h["pixels"]) for h in hist if int(h["fragments_per_pixel"].rstrip("+")) > 8), px)
+        mx = max(int(h["fragments_per_pixel"].rstrip("+")) for h in hist) if hist else 0
+        exact = sum(1 for r in pairs if r["exact"] == "1")
+        rows.append([s, n_coll, n_scenery, frames, feed["fragments"] // frames,
+                     feed["other_fragments"] // frames, fmt(pct(feed["culled_fragments"], feed["fragments"]), 1),
+                     fmt(mean, 2), mx, fmt(p4, 2), fmt(p8, 2), exact])
+        ax = axes[0][k]
+        xs = [int(h["fragments_per_pixel"].rstrip("+")) for h in hist]
+        ax.bar(xs, [int(h["pixels"]) / px * 100 for h in hist], color="#4477aa")
+        ax.set_yscale("log")
+        ax.set_title(s, fontsize=9)
+        ax.set_xlabel("fragments on a pixel", fontsize=8)
+        if k == 0:
+            ax.set_ylabel("% of covered pixels", fontsize=8)
+        ax.tick_params(labelsize=7)
+    header = ["scene", "collisionable objects", "scenery objects", "frames", "fragments/frame", "other fragments/frame",
+              "culled (c) %", "mean fragments/pixel", "max", "pixels > 4 %", "pixels > 8 %", "contact pair-frames"]
+    write_csv(os.path.join(out, "workloads.csv"), header, rows)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "workloads.png"), dpi=80)
+    with open(os.path.join(out, "workloads.md"), "w") as f:
+        f.write(md_table(header, rows))
+        f.write("\nDepth complexity (fragments of collisionable objects per covered pixel, all frames):\n\n")
+        for s in scenes:
+            hist = read_csv(run(out, s, "depth_hist.csv"))
+            px = sum(int(h["pixels"]) for h in hist)
+            cells = ", ".join(f"{h['fragments_per_pixel']}: {share(int(h['pixels']), px)}" for h in hist)
+            f.write(f"- {s}: {cells}\n")
+
+
+# ---------------------------------------------------------------- table3
+def target_table3(out, scenes):
+    rows = []
+    tot = {m: [0, 0, 0, 0] for m in (4, 8, 16)}
+    for s in scenes:
+        row = [s]
+        for m in (4, 8, 16):
+            st = load_json(run(out, s, f"m{m}.json"))
+            _, lists = read_collisions(run(out, s, f"m{m}.col"))
+            frags, drop = st["totals"]["fragments"], st["totals"]["overflows"]
+            nl, lo = st["blocks"]["zoverlap_tester"]["lists"], sum(lists.values())
+            t = tot[m]
+            t[0] += frags
+            t[1] += drop
+            t[2] += nl
+            t[3] += lo
+            row += [fmt(pct(drop, frags), 3), fmt(pct(lo, nl), 3)]
+        rows.append(row)
+    rows.append(["all (pooled)"] + sum(([fmt(pct(tot[m][1], tot[m][0]), 3), fmt(pct(tot[m][3], tot[m][2]), 3)]
+                                        for m in (4, 8, 16)), []))
+    means = []
+    for i in range(6):
+        means.append(fmt(sum(float(r[1 + i]) for r in rows[:-1]) / len(scenes), 3))
+    rows.append(["mean of scenes"] + means)
+    rows.append(["paper (Table 3)"] + sum(([f"{PAPER['table3'][m]}", "-"] for m in (4, 8, 16)), []))
+    header = ["scene", "M=4 fragments dropped %", "M=4 lists overflowed %", "M=8 fragments dropped %",
+              "M=8 lists overflowed %", "M=16 fragments dropped %", "M=16 lists overflowed %"]
+    write_csv(os.path.join(out, "table3.csv"), header, rows)
+    with open(os.path.join(out, "table3.md"), "w") as f:
+        f.write(md_table(header, rows))
+    plt = plot()
+    fig, ax = plt.subplots(figsize=(7, 3))
+    w = 0.8 / (len(scenes) + 1)
+    for k, r in enumerate(rows[:len(scenes)] + [rows[len(scenes) + 1]]):
+        ax.bar([i + k * w for i in range(3)], [float(r[1]), float(r[3]), float(r[5])], w, label=r[0])
+    ax.scatter([i + w * len(scenes) / 2 for i in range(3)], [PAPER["table3"][m] for m in (4, 8, 16)], marker="*",
+               color="k", zorder=3, label="paper")
+    ax.set_xticks([i + w * len(scenes) / 2 for i in range(3)], ["M = 4", "M = 8", "M = 16"])
+    ax.set_ylabel("fragments dropped %")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "table3.png"), dpi=80)
+
+
+# ---------------------------------------------------------------- fig9
+def energy_gpu(st, key):
+    """energy.gpu.KEY (nested object or dotted key) when the build models the GPU's energy, else None."""
+    e = st.get("energy", {})
+    g = e.get("gpu")
+    if isinstance(g, dict) and key in g:
+        return float(g[key])
+    if "gpu." + key in e:
+        return float(e["gpu." + key])
+    return None
+
+
+def gpu_energy_overhead(st):
+    return energy_gpu(st, "overhead_pct")
+
+
+def target_fig9(out, scenes):
+    rows = []
+    agg = {1: [0, 0], 2: [0, 0]}
+    energy_model = True
+    for s in scenes:
+        row = [s]
+        for banks, name in ((1, "m8_b1.json"), (2, "m8.json")):
+            st = load_json(run(out, s, name))
+            g = st["gpu"]
+            agg[banks][0] += g["baseline_cycles"]
+            agg[banks][1] += g["cycles_with_unit"]
+            e = gpu_energy_overhead(st)
+            energy_model &= e is not None
+            row += [fmt(g["overhead_pct"], 2), fmt(e, 2),
+                    fmt(st["energy"]["total_nj"] / max(1, st["totals"]["frames"]), 1)]
+        rows.append(row)
+    pooled = ["all (pooled)"]
+    for banks in (1, 2):
+        pooled += [fmt(pct(agg[banks][1] - agg[banks][0], agg[banks][0]), 2), "", ""]
+    rows.append(pooled)
+    rows.append(["paper (Fig. 9)", PAPER["fig9_time"][1], PAPER["fig9_energy"][1], "-", PAPER["fig9_time"][2],
+                 PAPER["fig9_energy"][2], "-"])
+    header = ["scene", "1 ZEB: GPU time overhead %", "1 ZEB: GPU energy overhead %", "1 ZEB: unit nJ/frame",
+              "2 ZEBs: GPU time overhead %", "2 ZEBs: GPU energy overhead %", "2 ZEBs: unit nJ/frame"]
+    write_csv(os.path.join(out, "fig9.csv"), header, rows)
+    with open(os.path.join(out, "fig9.md"), "w") as f:
+        f.write(md_table(header, rows))
+        if not energy_model:
+            f.write("\nGPU energy overhead: n/a in this build (stats.json has no energy.gpu.overhead_pct); "
+                    "the unit's own energy per frame is given instead.\n")
+    plt = plot()
+    fig, ax = plt.subplots(figsize=(7, 3))
+    x = list(range(len(scenes) + 1))
+    ax.bar([i - 0.2 for i in x], [float(r[1]) for r in rows[:-2]] + [float(rows[-2][1])], 0.4, label="1 ZEB")
+    ax.bar([i + 0.2 for i in x], [float(r[4]) for r in rows[:-2]] + [float(rows[-2][4])], 0.4, label="2 ZEBs")
+    ax.axhline(PAPER["fig9_time"][1], color="C0", ls="--", lw=1, label="paper, 1 ZEB")
+    ax.axhline(PAPER["fig9_time"][2], color="C1", ls="--", lw=1, label="paper, 2 ZEBs")
+    ax.set_xticks(x, scenes + ["pooled"], fontsize=8)
+    ax.set_ylabel("GPU time overhead %")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "fig9.png"), dpi=80)
+
+
+# ---------------------------------------------------------------- fig8
+def host_ghz():
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("cpu MHz"):
+                    return float(line.split(":")[1]) / 1000.0
+    except OSError:
+        pass
+    return None
+
+
+def target_fig8(out, scenes):
+    ghz = host_ghz() or PAPER_CPU_GHZ
+    scale = ghz / PAPER_CPU_GHZ
+    power = CPU_ACTIVE_CORE_W + CPU_IDLE_CORE_W
+    rows, ratios = [], {k: [] for k in PAPER["fig8"]}
+    fallback = False
+    for s in scenes:
+        fr = read_csv(run(out, s, "cpucd_frames.csv"))
+        t_host = {"broad": sum(float(r["broad_us"]) for r in fr) * 1e-6,
+                  "gjk": sum(float(r["gjk_us"]) for r in fr) * 1e-6}
+        for banks, name in ((1, "m8_b1.json"), (2, "m8.json")):
+            st = load_json(run(out, s, name))
+            mhz = st["config"]["clock"]["mhz"]
+            g = st["gpu"]
+            t_gpu = (g["cycles_with_unit"] - g["baseline_cycles"]) / (mhz * 1e6)
+            with_pj, base_pj = energy_gpu(st, "with_unit_pj"), energy_gpu(st, "baseline_pj")
+            if with_pj is not None and base_pj is not None:
+                e_gpu = (with_pj - base_pj) * 1e-12
+            else:
+                e_gpu = st["energy"]["total_pj"] * 1e-12
+                fallback = True
+            for kind in ("broad", "gjk"):
+                t_cpu = t_host[kind] * scale
+                e_cpu = t_cpu * power
+                sp = t_cpu / t_gpu if t_gpu > 0 else math.inf
+                er = e_cpu / e_gpu if e_gpu > 0 else math.inf
+                ratios[(kind, banks)].append((sp, er))
+                rows.append([s, kind, banks, f"{t_host[kind] * 1e3:.3f}", f"{t_cpu * 1e3:.3f}", f"{t_gpu * 1e3:.4f}",
+                             sig(sp), f"{e_cpu * 1e3:.4f}", f"{e_gpu * 1e3:.5f}", sig(er)])
+    header = ["scene", "cpu version", "ZEBs", "host CPU ms", "paper CPU ms (scaled)", "extra GPU ms",
+              "speed-up", "CPU mJ (model)", "extra GPU mJ", "energy reduction"]
+    write_csv(os.path.join(out, "fig8.csv"), header, rows)
+
+    def gmean(v):
+        v = [x for x in v if x > 0 and not math.isinf(x)]
+        return math.exp(sum(math.log(x) for x in v) / len(v)) if v else math.inf
+    summary = []
+    for (kind, banks), paper in PAPER["fig8"].items():
+        sp = gmean([r[0] for r in ratios[(kind, banks)]])
+        er = gmean([r[1] for r in ratios[(kind, banks)]])
+        summary.append([{"broad": "(a) broad phase", "gjk": "(b) broad + GJK"}[kind], banks, sig(sp), paper[0],
+                        sig(er), paper[1]])
+    sh = ["CPU version", "ZEBs", "speed-up (geo. mean)", "paper speed-up", "energy reduction (geo. mean)",
+          "paper energy reduction"]
+    write_csv(os.path.join(out, "fig8_summary.csv"), sh, summary)
+    with open(os.path.join(out, "fig8.md"), "w") as f:
+        f.write(md_table(sh, summary))
+        f.write(f"\nHost: {ghz:.2f} GHz; CPU times scaled by {scale:.2f} to the paper's 1.5 GHz CPU; "
+                f"CPU power {power:.2f} W (one active core {CPU_ACTIVE_CORE_W} W + one idle {CPU_IDLE_CORE_W} W).\n")
+        if fallback:
+            f.write("GPU energy: this build has no energy.gpu.with_unit_pj / baseline_pj; the unit's own energy "
+                    "(energy.total_pj) stands for the extra GPU energy, so the energy ratios are upper bounds.\n")
+        f.write("\nPer scene:\n\n" + md_table(header, rows))
+    plt = plot()
+    fig, axes = plt.subplots(1, 2, figsize=(8, 3))
+    for ax, idx, title in ((axes[0], 0, "speed-up"), (axes[1], 1, "energy reduction")):
+        labels, vals, pap = [], [], []
+        for (kind, banks), paper in PAPER["fig8"].items():
+            labels.append(f"{kind}\n{banks} ZEB")
+            vals.append(gmean([r[idx] for r in ratios[(kind, banks)]]))
+            pap.append(paper[idx])
+        x = range(len(labels))
+        ax.bar([i - 0.2 for i in x], [v if not math.isinf(v) else 0 for v in vals], 0.4, label="this model")
+        ax.bar([i + 0.2 for i in x], pap, 0.4, label="paper")
+        ax.set_yscale("log")
+        ax.set_xticks(list(x), labels, fontsize=7)
+        ax.set_title(title, fontsize=9)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "fig8.png"), dpi=80)
+
+
+# ---------------------------------------------------------------- accuracy
+def classify_miss(gt, m64, m64t64):
+    """Why RBCD missed a true contact (docs/accuracy.md). gt: the rbcd-cpucd
+    pair row (on_screen, px_overlap, px_near, open); m64 / m64t64: whether the pair
+    is found in that frame with M = 64 (T as configured) / with M = T = 64."""
+    if m64:
+        return "list_overflow"
+    if m64t64:
+        return "stack_overflow"
+    if gt.get("on_screen", "0") != "1":
+        return "off_screen"
+    if int(gt.get("px_overlap", 0)) > 0:
+        return "unexplained"
+    if int(gt.get("px_near", 0)) > 0:
+        return "depth_quantization"
+    if gt.get("open", "0") == "1":
+        return "open_surface"
+    return "sub_pixel"
+
+
+# RBCD configurations of the accuracy table: name -> (run, run with M = 64, run with M = T = 64)
+ACC_CONFIGS = [("M=4 T=8", "m4", "m64", "m64t64"), ("M=8 T=8", "m8", "m64", "m64t64"),
+               ("M=16 T=8", "m16", "m64", "m64t64"), ("M=8 T=2", "m8t2", "m64t2", "m64t64")]
+
+
+def prf(tp, fp, fn):
+    p = 100.0 * tp / (tp + fp) if tp + fp else 100.0
+    r = 100.0 * tp / (tp + fn) if tp + fn else 100.0
+    return p, r
+
+
+def target_accuracy(out, scenes):
+    rows, miss_rows, fp_rows = [], [], []
+    totals = {}
+    for s in scenes:
+        gt_rows = read_csv(run(out, s, "cpucd_pairs.csv"))
+        gt = {(int(r["frame"]), int(r["id_a"]), int(r["id_b"])): r for r in gt_rows}
+        truth = {k for k, r in gt.items() if r["exact"] == "1"}
+        methods = {"AABB (a)": {k for k, r in gt.items() if r["aabb"] == "1"},
+                   "GJK on hulls (b)": {k for k, r in gt.items() if r["gjk"] == "1"}}
+        cf = {}
+        for label, name, n64, n6464 in ACC_CONFIGS:
+            for n in (name, n64, n6464):
+                if n not in cf:
+                    p, _ = read_collisions(run(out, s, n + ".col"))
+                    cf[n] = {(f, a, b) for f, ps in p.items() for a, b in ps}
+            methods["RBCD " + label] = cf[name]
+        for mname, found in methods.items():
+            tp, fp, fn = len(found & truth), len(found - truth), len(truth - found)
+            classes = dict.fromkeys(MISS_CLASSES, 0)
+            if mname.startswith("RBCD"):
+                cfgs = {("RBCD " + c[0]): c for c in ACC_CONFIGS}
+                _, _, n64, n6464 = cfgs[mname]
+                for k in sorted(truth - found):
+                    c = classify_miss(gt[k], k in cf[n64], k in cf[n6464])
+                    classes[c] += 1
+                    miss_rows.append([s, mname, *k, c])
+                for k in sorted(found - truth):
+                    r = gt.get(k, {})
+                    fp_rows.append([s, mname, *k, r.get("aabb", "0"), r.get("gjk", "0"), r.get("px_overlap", "0")])
+            p, r = prf(tp, fp, fn)
+            _, rv = prf(tp, 0, fn - classes["off_screen"])
+            rows.append([s, mname, len(truth), tp, fp, fn, fmt(p, 2), fmt(r, 2), fmt(rv, 2)] +
+                        ([classes[c] for c in MISS_CLASSES] if mname.startswith("RBCD") else [""] * len(MISS_CLASSES)))
+            t = totals.setdefault(mname, [0, 0, 0, 0, dict.fromkeys(MISS_CLASSES, 0)])
+            t[0] += len(truth)
+            t[1] += tp
+            t[2] += fp
+            t[3] += fn
+            for c in MISS_CLASSES:
+                t[4][c] += classes[c]
+    for mname, t in totals.items():
+        p, r = prf(t[1], t[2], t[3])
+        _, rv = prf(t[1], 0, t[3] - t[4]["off_screen"])
+        rows.append(["all", mname, t[0], t[1], t[2], t[3], fmt(p, 2), fmt(r, 2), fmt(rv, 2)] +
+                    ([t[4][c] for c in MISS_CLASSES] if mname.startswith("RBCD") else [""] * len(MISS_CLASSES)))
+    header = ["scene", "method", "true pair-frames", "TP", "FP", "FN", "precision %", "recall %",
+              "recall of on-screen contacts %"] + \
+             ["miss: " + c.replace("_", " ") for c in MISS_CLASSES]
+    write_csv(os.path.join(out, "accuracy.csv"), header, rows)
+    write_csv(os.path.join(out, "accuracy_misses.csv"), ["scene", "method", "frame", "id_a", "id_b", "class"], miss_rows)
+    write_csv(os.path.join(out, "accuracy_false_positives.csv"),
+              ["scene", "method", "frame", "id_a", "id_b", "aabb", "gjk", "px_overlap"], fp_rows)
+    with open(os.path.join(out, "accuracy.md"), "w") as f:
+        f.write("Overall (pair-frames of all scenes):\n\n")
+        f.write(md_table(header[1:], [r[1:] for r in rows if r[0] == "all"]))
+        f.write("\nPer scene:\n\n")
+        f.write(md_table(header, [r for r in rows if r[0] != "all"]))
+    plt = plot()
+    fig, ax = plt.subplots(figsize=(7, 3.2))
+    allrows = [r for r in rows if r[0] == "all"]
+    x = range(len(allrows))
+    ax.bar([i - 0.27 for i in x], [float(r[6]) for r in allrows], 0.27, label="precision")
+    ax.bar(list(x), [float(r[7]) for r in allrows], 0.27, label="recall")
+    ax.bar([i + 0.27 for i in x], [float(r[8]) for r in allrows], 0.27, label="recall, on-screen contacts")
+    ax.set_xticks(list(x), [r[1].replace(" (", "\n(").replace("RBCD ", "RBCD\n") for r in allrows], fontsize=7)
+    ax.set_ylim(0, 105)
+    ax.set_ylabel("% (all scenes)")
+    ax.legend(fontsize=7, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "accuracy.png"), dpi=80)
+
+
+# ---------------------------------------------------------------- splice
+def splice(out, doc):
+    """Replaces every <!-- NAME:begin --> ... <!-- NAME:end --> block of doc by OUT/NAME.md."""
+    with open(doc) as f:
+        text = f.read()
+
+    def repl(m):
+        name = m.group(1)
+        path = os.path.join(out, name + ".md")
+        if not os.path.exists(path):
+            return m.group(0)   # a target not run this time keeps its last table
+        with open(path) as g:
+            body = g.read()
+        return f"<!-- {name}:begin -->\n{body}<!-- {name}:end -->"
+    text = re.sub(r"<!-- (\w+):begin -->.*?<!-- \1:end -->", repl, text, flags=re.S)
+    with open(doc, "w") as f:
+        f.write(text)
+
+
+def thumbnail(src, dst):
+    """Half-size copy of a picture: small enough to commit."""
+    import matplotlib.image as mpimg
+    img = mpimg.imread(need(src))
+    mpimg.imsave(dst, img[::2, ::2])
+
+
+TARGETS = {"workloads": target_workloads, "table3": target_table3, "fig9": target_fig9, "fig8": target_fig8,
+           "accuracy": target_accuracy}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", default="results")
+    ap.add_argument("--splice", nargs=2, metavar=("OUT", "DOC"))
+    ap.add_argument("--thumbnail", nargs=2, metavar=("SRC", "DST"))
+    ap.add_argument("targets", nargs="*")
+    a = ap.parse_args()
+    try:
+        if a.splice:
+            splice(*a.splice)
+            return 0
+        if a.thumbnail:
+            thumbnail(*a.thumbnail)
+            return 0
+        scenes = scenes_of(a.out)
+        for t in a.targets:
+            if t not in TARGETS:
+                print(f"evaluate.py: unknown target '{t}' (known: {', '.join(TARGETS)})", file=sys.stderr)
+                return 2
+            TARGETS[t](a.out, scenes)
+    except InputMissing as e:
+        print(f"evaluate.py: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,180 @@
+#!/usr/bin/env bash
+# One command per figure of the paper's evaluation (docs/results.md):
+#
+#   scripts/reproduce.sh [options] TARGET...
+#     TARGET: workloads | table3 | fig8 | fig9 | accuracy | all
+#   --out DIR          results directory (default results/, gitignored)
+#   --workloads DIR    scenes to run (default workloads/; every *.toml in it)
+#   --build DIR        build directory (default build/); built first unless --no-build
+#   --no-build         use the binaries as they are
+#   --repeat N         rbcd-cpucd's timed repeats per frame (default 5)
+#   --jobs N           rbcd-sim runs at once (default: number of cores)
+#   --update-docs      copy the tables into docs/results.md and docs/workloads.md
+#                      and the scene pictures into docs/img/workloads/
+#
+# Every run starts from scratch: OUT/runs/ is emptied first, then each target
+# runs what it needs (rbcd-sim over the scenes with the configurations it
+# needs, rbcd-cpucd once per scene, timed alone) and scripts/evaluate.py writes
+# OUT/TARGET.csv, .png and .md. Targets needing rbcd-cpucd are skipped with a
+# message when it was not built (Bullet or FCL missing).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+out=results workloads=$root/workloads build=$root/build repeat=5 jobs=$(nproc) do_build=1 update_docs=0
+targets=()
+usage() { sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'; }
+while (($#)); do
+  case $1 in
+    --out) out=$2; shift 2 ;;
+    --workloads) workloads=$2; shift 2 ;;
+    --build) build=$2; shift 2 ;;
+    --no-build) do_build=0; shift ;;
+    --repeat) repeat=$2; shift 2 ;;
+    --jobs) jobs=$2; shift 2 ;;
+    --update-docs) update_docs=1; shift ;;
+    -h|--help) usage; exit 0 ;;
+    workloads|table3|fig8|fig9|accuracy) targets+=("$1"); shift ;;
+    all) targets+=(workloads table3 fig9 fig8 accuracy); shift ;;
+    *) echo "reproduce.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+done
+((${#targets[@]})) || { usage >&2; exit 2; }
+[[ $repeat =~ ^[1-9][0-9]*$ ]] || { echo "reproduce.sh: --repeat: '$repeat' is not a positive integer" >&2; exit 2; }
+[[ $jobs =~ ^[1-9][0-9]*$ ]] || { echo "reproduce.sh: --jobs: '$jobs' is not a positive integer" >&2; exit 2; }
+shopt -s nullglob
+scenes=("$workloads"/*.toml)
+((${#scenes[@]})) || { echo "reproduce.sh: $workloads: no scene (*.toml)" >&2; exit 2; }
+
+if ((do_build)); then
+  if [ ! -f "$build/CMakeCache.txt" ]; then
+    cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+  fi
+  cmake --build "$build" --target rbcd-sim >/dev/null
+  cmake --build "$build" --target rbcd-cpucd >/dev/null 2>&1 || true   # absent without Bullet/FCL
+fi
+sim=$build/bin/rbcd-sim cpucd=$build/bin/rbcd-cpucd
+[ -x "$sim" ] || { echo "reproduce.sh: $sim not built" >&2; exit 2; }
+have_cpucd=0
+[ -x "$cpucd" ] && have_cpucd=1
+
+mkdir -p "$out"
+rm -rf "$out/runs"
+mkdir -p "$out/runs"
+: > "$out/runs/scenes.txt"
+for s in "${scenes[@]}"; do echo "$(basename "$s" .toml) $s" >> "$out/runs/scenes.txt"; done
+
+# Object ids above 127 need more than the default 7 id bits (docs/workloads.md).
+id_bits() {
+  local max
+  max=$(sed -n 's/^[[:space:]]*id[[:space:]]*=[[:space:]]*\([0-9]*\).*/\1/p' "$1" | sort -n | tail -1)
+  local b=7
+  while ((${max:-0} >= (1 << b))); do b=$((b + 1)); done
+  echo "$b"
+}
+
+# Configurations, on top of sc_main/configs/paper.toml (the paper's Table 1).
+declare -A cfg=(
+  [m4]="zeb.list_length=4" [m8]="" [m16]="zeb.list_length=16" [m8_b1]="zeb.banks=1"
+  [m8t2]="tester.stack_depth=2 tester.output=tile"
+  [m64]="zeb.list_length=64 tester.output=tile" [m64t2]="zeb.list_length=64 tester.stack_depth=2 tester.output=tile"
+  [m64t64]="zeb.list_length=64 tester.stack_depth=64 tester.output=tile")
+needed_cfgs=() need_cpucd=0 need_images=0
+for t in "${targets[@]}"; do
+  case $t in
+    workloads) needed_cfgs+=(m8); need_cpucd=1; need_images=1 ;;
+    table3) needed_cfgs+=(m4 m8 m16) ;;
+    fig9) needed_cfgs+=(m8 m8_b1) ;;
+    fig8) needed_cfgs+=(m8 m8_b1); need_cpucd=1 ;;
+    accuracy) needed_cfgs+=(m4 m8 m16 m8t2 m64 m64t2 m64t64); need_cpucd=1 ;;
+  esac
+done
+if ((need_cpucd && !have_cpucd)); then
+  echo "reproduce.sh: rbcd-cpucd not built (needs libbullet-dev and libfcl-dev: scripts/setup.sh --eval): skipping workloads, fig8, accuracy" >&2
+  kept=()
+  for t in "${targets[@]}"; do [[ $t == workloads || $t == fig8 || $t == accuracy ]] || kept+=("$t"); done
+  targets=("${kept[@]}")
+  need_cpucd=0 need_images=0
+fi
+mapfile -t needed_cfgs < <(printf '%s\n' "${needed_cfgs[@]}" | sort -u)
+
+# ---- rbcd-sim runs, $jobs at a time, with a progress line.
+jobs_list=()
+for s in "${scenes[@]}"; do
+  for c in "${needed_cfgs[@]}"; do jobs_list+=("$s|$c"); done
+done
+n=${#jobs_list[@]} k=0 failed=0
+progress() { printf '\rreproduce.sh: %s %d/%d %-40s' "$1" "$2" "$3" "$4" >&2; }
+run_sim() {
+  local s=${1%%|*} c=${1##*|} name d sets=()
+  name=$(basename "$s" .toml)
+  d=$out/runs/$name
+  mkdir -p "$d"
+  for kv in ${cfg[$c]}; do sets+=(--set "$kv"); done
+  "$sim" --config "$root/sc_main/configs/paper.toml" --set "zeb.id_bits=$(id_bits "$s")" "${sets[@]}" \
+    --scene "$s" --stats "$d/$c.json" --collisions "$d/$c.col" -q 2> "$d/$c.err" ||
+    { echo; echo "reproduce.sh: rbcd-sim failed on $name ($c):" >&2; cat "$d/$c.err" >&2; return 1; }
+}
+for j in "${jobs_list[@]}"; do
+  while (($(jobs -rp | wc -l) >= jobs)); do wait -n || failed=1; done
+  k=$((k + 1))
+  progress "rbcd-sim" "$k" "$n" "$(basename "${j%%|*}" .toml) ${j##*|}"
+  run_sim "$j" &
+done
+while (($(jobs -rp | wc -l))); do wait -n || failed=1; done
+((n)) && echo >&2
+((failed)) && exit 1
+
+# ---- Pictures: one frame of each scene (the middle one).
+if ((need_images)); then
+  k=0
+  for s in "${scenes[@]}"; do
+    name=$(basename "$s" .toml) k=$((k + 1))
+    progress "images" "$k" "${#scenes[@]}" "$name"
+    rm -rf "$out/runs/$name/images"
+    "$sim" --config "$root/sc_main/configs/paper.toml" --set "zeb.id_bits=$(id_bits "$s")" --scene "$s" \
+      --images "$out/runs/$name/images" -q
+    frames=$(ls "$out/runs/$name/images" | wc -l)
+    cp "$out/runs/$name/images/$(printf 'frame_%05d.png' $((frames / 2)))" "$out/$name.png"
+    rm -rf "$out/runs/$name/images"
+  done
+  echo >&2
+fi
+
+# ---- rbcd-cpucd, one scene at a time and nothing else running: it is timed.
+if ((need_cpucd)); then
+  k=0
+  for s in "${scenes[@]}"; do
+    name=$(basename "$s" .toml) k=$((k + 1))
+    progress "rbcd-cpucd" "$k" "${#scenes[@]}" "$name"
+    "$cpucd" --scene "$s" --pixels --repeat "$repeat" -q --pairs "$out/runs/$name/cpucd_pairs.csv" \
+      --frames "$out/runs/$name/cpucd_frames.csv" --depth-histogram "$out/runs/$name/depth_hist.csv"
+  done
+  echo >&2
+fi
+
+/usr/bin/python3 "$root/scripts/evaluate.py" --out "$out" "${targets[@]}"
+{
+  echo "Generated by \`scripts/reproduce.sh ${targets[*]}\` on $(date -u +%Y-%m-%d) at commit" \
+       "$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$root" diff --quiet HEAD 2>/dev/null || echo ' (with local changes)');" \
+       "host: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores."
+} > "$out/provenance.md"
+for t in "${targets[@]}"; do
+  for f in "$out/$t.csv" "$out/$t.png"; do [ -f "$f" ] && echo "reproduce.sh: wrote $f"; done
+done
+
+if ((update_docs)); then
+  /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/results.md"
+  mkdir -p "$root/docs/img/results"
+  for t in table3 fig9 fig8 accuracy; do
+    [[ " ${targets[*]} " == *" $t "* ]] && cp "$out/$t.png" "$root/docs/img/results/$t.png"
+  done
+  if [[ " ${targets[*]} " == *" workloads "* ]]; then
+    /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/workloads.md"
+    mkdir -p "$root/docs/img/workloads"
+    cp "$out/workloads.png" "$root/docs/img/workloads/depth.png"
+    for s in "${scenes[@]}"; do
+      name=$(basename "$s" .toml)
+      /usr/bin/python3 "$root/scripts/evaluate.py" --thumbnail "$out/$name.png" "$root/docs/img/workloads/$name.png"
+    done
+  fi
+  echo "reproduce.sh: updated docs/results.md (and docs/workloads.md with the workloads target)"
+fi

@@ -1,0 +1,196 @@
+// rbcd-cpucd's three detectors on analytic cases, the geometry file, and the
+// per-pixel interval check the accuracy analysis relies on (docs/cpucd.md).
+#include <catch2/catch.hpp>
+
+#include <Eigen/Geometry>
+#include <cstdio>
+#include <fstream>
+
+#include "common/errors.h"
+#include "cpu/cd_input.h"
+#include "cpu/cpu_collision.h"
+#include "cpu/pixel_overlap.h"
+#include "scene/mesh.h"
+
+using namespace rbcd;
+using namespace rbcd::cpucd;
+
+namespace {
+
+std::shared_ptr<const PartMesh> shape(const char* name, unsigned segments = 32) {
+    const scene::Mesh m = scene::builtin_mesh(name, segments);
+    auto p = std::make_shared<PartMesh>();
+    p->verts = m.verts;
+    p->tris = m.tris;
+    return p;
+}
+
+Eigen::Matrix4d place(Eigen::Vector3d pos, Eigen::Vector3d scale = {1, 1, 1}) {
+    Eigen::Affine3d a = Eigen::Affine3d::Identity();
+    a.translate(pos);
+    a.scale(scale);
+    return a.matrix();
+}
+
+// A camera at z = 10 looking down -z at the origin (as the scene front end builds it).
+Eigen::Matrix4d camera_towards_origin() {
+    const double n = 0.5, f = 50, fy = 1.0 / std::tan(30.0 * 3.14159265358979 / 180.0), aspect = 800.0 / 480.0;
+    Eigen::Matrix4d p = Eigen::Matrix4d::Zero();
+    p(0, 0) = fy / aspect;
+    p(1, 1) = fy;
+    p(2, 2) = (f + n) / (n - f);
+    p(2, 3) = 2 * f * n / (n - f);
+    p(3, 2) = -1;
+    Eigen::Matrix4d v = Eigen::Matrix4d::Identity();
+    v(2, 3) = -10;
+    return p * v;
+}
+
+CdInput two(std::shared_ptr<const PartMesh> a, const Eigen::Matrix4d& ma, std::shared_ptr<const PartMesh> b,
+            const Eigen::Matrix4d& mb) {
+    CdInput in;
+    in.name = "test";
+    in.width = 800;
+    in.height = 480;
+    in.has_view = true;
+    in.view_proj = camera_towards_origin();
+    in.parts = {Part{1, "a", a}, Part{2, "b", b}};
+    in.model = {{ma, mb}};
+    return in;
+}
+
+PairResult only_pair(const CdInput& in) {
+    CpuDetector d(in);
+    FrameResult r = d.run_frame(0, 1);
+    if (r.pairs.empty()) return PairResult{1, 2};
+    REQUIRE(r.pairs.size() == 1);
+    return r.pairs[0];
+}
+
+} // namespace
+
+TEST_CASE("two spheres apart: no method reports them", "[cpucd]") {
+    const PairResult p = only_pair(two(shape("sphere"), place({-1.5, 0, 0}), shape("sphere"), place({1.5, 0, 0})));
+    CHECK_FALSE(p.aabb);
+    CHECK_FALSE(p.gjk);
+    CHECK_FALSE(p.exact);
+}
+
+TEST_CASE("two spheres touching: every method reports them", "[cpucd]") {
+    // Centres 1.98 apart: the tessellated surfaces overlap by a sliver.
+    const PairResult p = only_pair(two(shape("sphere"), place({-0.99, 0, 0}), shape("sphere"), place({0.99, 0, 0})));
+    CHECK(p.aabb);
+    CHECK(p.gjk);
+    CHECK(p.exact);
+    CHECK_FALSE(p.contained);
+    CHECK(p.on_screen);
+    CHECK(p.contacts > 0);
+}
+
+TEST_CASE("a sphere inside another: ground truth by containment", "[cpucd]") {
+    const PairResult p =
+        only_pair(two(shape("sphere"), place({0, 0, 0}, {2, 2, 2}), shape("sphere"), place({0.3, 0.2, 0}, {0.4, 0.4, 0.4})));
+    CHECK(p.aabb);
+    CHECK(p.gjk);
+    CHECK(p.exact);
+    CHECK(p.contained);
+    CHECK(p.on_screen);
+}
+
+TEST_CASE("a rod through a ring: AABB and hull report contact, ground truth does not", "[cpucd]") {
+    // Torus: major radius 1, tube 0.25 (hole radius 0.75) around Y; the rod has radius 0.2.
+    const PairResult p = only_pair(two(shape("torus"), place({0, 0, 0}), shape("cylinder", 16), place({0, 0, 0}, {0.2, 1.5, 0.2})));
+    CHECK(p.aabb);
+    CHECK(p.gjk);
+    CHECK_FALSE(p.exact);
+}
+
+TEST_CASE("a contact behind the camera is not on screen", "[cpucd]") {
+    const PairResult p = only_pair(two(shape("sphere"), place({-0.99, 0, 20}), shape("sphere"), place({0.99, 0, 20})));
+    CHECK(p.exact);
+    CHECK_FALSE(p.on_screen);
+}
+
+TEST_CASE("parts sharing an id are one object", "[cpucd]") {
+    CdInput in = two(shape("sphere"), place({-0.5, 0, 0}), shape("sphere"), place({0.5, 0, 0}));
+    in.parts[1].id = 1;
+    CpuDetector d(in);
+    CHECK(d.run_frame(0, 1).pairs.empty());
+}
+
+TEST_CASE("a pair with an open mesh is flagged open", "[cpucd]") {
+    auto open = std::make_shared<PartMesh>(*shape("box"));
+    open->tris.pop_back();
+    CHECK(only_pair(two(open, place({-0.5, 0, 0}), shape("sphere"), place({0.5, 0, 0}))).open);
+    CHECK_FALSE(only_pair(two(shape("box"), place({-0.5, 0, 0}), shape("sphere"), place({0.5, 0, 0}))).open);
+}
+
+TEST_CASE("point in mesh by ray parity", "[cpucd]") {
+    const auto box = shape("box");
+    CHECK(point_in_mesh(*box, {0.1, 0.2, 0.3}));
+    CHECK_FALSE(point_in_mesh(*box, {1.5, 0, 0}));
+    CHECK(is_closed(*box));
+    PartMesh open = *box;
+    open.tris.pop_back();
+    CHECK_FALSE(is_closed(open));
+}
+
+TEST_CASE("geometry file: written and read back the same, bad input names the line", "[cpucd]") {
+    CdInput in = two(shape("sphere", 8), place({-1, 0, 0}), shape("box"), place({1, 0.5, 0}, {1, 2, 1}));
+    const std::string path = "test_cpucd_geometry.txt";
+    {
+        std::ofstream f(path);
+        f << geometry_file_text(in);
+    }
+    const CdInput back = load_geometry_file(path);
+    REQUIRE(back.parts.size() == 2);
+    CHECK(back.parts[1].mesh->tris == in.parts[1].mesh->tris);
+    CHECK(back.parts[0].mesh->verts == in.parts[0].mesh->verts);
+    CHECK(back.model[0][1] == in.model[0][1]);
+    CHECK(back.view_proj == in.view_proj);
+    CHECK(back.width == 800);
+    {
+        std::ofstream f(path);
+        f << "rbcd-geometry 1\npart 1 3 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\nt 0 1 7\n";
+    }
+    try {
+        load_geometry_file(path);
+        FAIL("no error");
+    } catch (const InputError& e) {
+        CHECK(std::string(e.what()).find(path + ":6:") == 0);
+    }
+    std::remove(path.c_str());
+}
+
+TEST_CASE("pixel intervals: overlap, near within the tolerance, apart", "[cpucd]") {
+    auto frag = [](std::uint32_t x, std::uint32_t depth, std::uint32_t id, Facing f) {
+        Fragment r;
+        r.x = x;
+        r.y = 0;
+        r.depth = depth;
+        r.id = id;
+        r.facing = f;
+        return r;
+    };
+    const std::vector<Fragment> frags = {
+        // pixel 0: 1 = [10, 20], 2 = [15, 30]: overlap
+        frag(0, 10, 1, Facing::Front), frag(0, 20, 1, Facing::Back), frag(0, 15, 2, Facing::Front), frag(0, 30, 2, Facing::Back),
+        // pixel 1: 1 = [10, 20], 2 = [21, 30]: one unit apart
+        frag(1, 10, 1, Facing::Front), frag(1, 20, 1, Facing::Back), frag(1, 21, 2, Facing::Front), frag(1, 30, 2, Facing::Back),
+        // pixel 2: 1 = [10, 20], 2 = [25, 30]: apart; 3 = [12, 14] inside 1 (containment)
+        frag(2, 10, 1, Facing::Front), frag(2, 20, 1, Facing::Back), frag(2, 25, 2, Facing::Front), frag(2, 30, 2, Facing::Back),
+        frag(2, 12, 3, Facing::Front), frag(2, 14, 3, Facing::Back),
+        // pixel 3: touching at equal depth counts as overlap (front before back)
+        frag(3, 10, 1, Facing::Front), frag(3, 20, 1, Facing::Back), frag(3, 20, 2, Facing::Front), frag(3, 30, 2, Facing::Back),
+    };
+    FramePixels px;
+    DepthHistogram h;
+    pixel_overlap_tile(frags, 1, px, &h);
+    CHECK(px[{1, 2}].overlap == 2);
+    CHECK(px[{1, 2}].near == 1);
+    CHECK(px[{1, 3}].overlap == 1);
+    CHECK(px.count({2, 3}) == 0);
+    REQUIRE(h.size() == kDepthBins);
+    CHECK(h[4] == 3);
+    CHECK(h[6] == 1);
+}

@@ -1,0 +1,94 @@
+#!/usr/bin/python3
+"""scripts/evaluate.py's accuracy arithmetic on constructed runs: one RBCD miss
+of each kind (docs/accuracy.md), precision and recall counted by hand."""
+import csv
+import os
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+import evaluate  # noqa: E402
+
+failures = []
+
+
+def check(cond, what):
+    if not cond:
+        failures.append(what)
+        print("FAILED:", what)
+
+
+# ---- classify_miss: each rule of the cascade, on its own input.
+on = {"on_screen": "1", "px_overlap": "0", "px_near": "0"}
+check(evaluate.classify_miss(on, True, True) == "list_overflow", "found with M = 64: list overflow")
+check(evaluate.classify_miss(on, False, True) == "stack_overflow", "found only with M = T = 64: stack overflow")
+check(evaluate.classify_miss({**on, "on_screen": "0"}, False, False) == "off_screen", "no contact point in view: off-screen")
+check(evaluate.classify_miss({**on, "px_near": "3"}, False, False) == "depth_quantization",
+      "intervals within one depth unit at some pixel: depth quantization")
+check(evaluate.classify_miss(on, False, False) == "sub_pixel", "on screen, no pixel sees the overlap: sub-pixel")
+check(evaluate.classify_miss({**on, "open": "1"}, False, False) == "open_surface",
+      "no pixel sees the overlap, an object is not closed: open surface")
+check(evaluate.classify_miss({**on, "px_overlap": "5"}, False, False) == "unexplained",
+      "pixels overlap yet unlimited lists miss it: unexplained")
+# List overflow wins over off-screen: being found with longer lists proves it visible.
+check(evaluate.classify_miss({**on, "on_screen": "0"}, True, True) == "list_overflow", "cascade order")
+
+# ---- target_accuracy end to end on constructed run files.
+with tempfile.TemporaryDirectory() as out:
+    runs = os.path.join(out, "runs", "s")
+    os.makedirs(runs)
+    with open(os.path.join(out, "runs", "scenes.txt"), "w") as f:
+        f.write("s /nonexistent.toml\n")
+    # Ground truth, frame 0: six true pairs, one per miss kind, plus (1,2) found by
+    # everyone; (8,9) a concave near-miss: AABB and GJK positive, not true.
+    gt = [
+        # frame, a, b, aabb, gjk, exact, contained, on_screen, contacts, px_overlap, px_near, open
+        (0, 1, 2, 1, 1, 1, 0, 1, 4, 30, 0, 0),
+        (0, 1, 3, 1, 1, 1, 0, 1, 4, 10, 0, 0),    # list overflow
+        (0, 1, 4, 1, 1, 1, 0, 1, 4, 10, 0, 0),    # stack overflow
+        (0, 1, 5, 1, 1, 1, 0, 0, 4, 0, 0, 0),     # off-screen
+        (0, 1, 6, 1, 1, 1, 0, 1, 1, 0, 2, 0),     # depth quantization
+        (0, 1, 7, 1, 1, 1, 0, 1, 1, 0, 0, 0),     # sub-pixel
+        (0, 1, 10, 1, 1, 1, 0, 1, 1, 0, 0, 1),    # open surface
+        (0, 8, 9, 1, 1, 0, 0, 0, 0, 0, 0, 0),     # near-miss
+    ]
+    with open(os.path.join(runs, "cpucd_pairs.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["frame", "id_a", "id_b", "aabb", "gjk", "exact", "contained", "on_screen", "contacts",
+                    "px_overlap", "px_near", "open"])
+        w.writerows(gt)
+
+    def col(name, pairs):
+        with open(os.path.join(runs, name + ".col"), "w") as f:
+            f.write("rbcd-collisions 1\nframe 0\n")
+            for a, b in pairs:
+                f.write(f"hit 3 4 {a} {b} 100\n")
+            f.write("overflow 0 0 1 1\n")
+    for name in ("m4", "m8", "m16", "m8t2"):
+        col(name, [(1, 2)])
+    col("m64", [(1, 2), (1, 3)])
+    col("m64t2", [(1, 2), (1, 3)])
+    col("m64t64", [(1, 2), (1, 3), (1, 4)])
+    evaluate.target_accuracy(out, evaluate.scenes_of(out))
+    rows = {(r["scene"], r["method"]): r for r in csv.DictReader(open(os.path.join(out, "accuracy.csv")))}
+    r = rows[("s", "RBCD M=8 T=8")]
+    check((r["TP"], r["FP"], r["FN"]) == ("1", "0", "6"), f"RBCD counts {r['TP']} {r['FP']} {r['FN']}")
+    for c in evaluate.MISS_CLASSES:
+        want = "0" if c == "unexplained" else "1"
+        check(r["miss: " + c.replace("_", " ")] == want, f"one miss of kind {c}, got {r['miss: ' + c.replace('_', ' ')]}")
+    check(r["precision %"] == "100.00" and r["recall %"] == "14.29", "RBCD precision / recall")
+    check(r["recall of on-screen contacts %"] == "16.67", "recall of on-screen contacts")
+    a = rows[("s", "AABB (a)")]
+    check((a["TP"], a["FP"], a["FN"], a["precision %"]) == ("7", "1", "0", "87.50"), "AABB counts")
+    misses = list(csv.DictReader(open(os.path.join(out, "accuracy_misses.csv"))))
+    kinds = {(m["method"], m["id_b"]): m["class"] for m in misses}
+    check(kinds[("RBCD M=8 T=8", "3")] == "list_overflow" and kinds[("RBCD M=8 T=8", "7")] == "sub_pixel",
+          "misses listed with their pair")
+
+# ---- GPU energy keys: nested (energy.gpu.KEY) or dotted, absent -> None (fallback).
+check(evaluate.energy_gpu({"energy": {"gpu": {"baseline_pj": 5.0}}}, "baseline_pj") == 5.0, "nested energy.gpu key")
+check(evaluate.energy_gpu({"energy": {"gpu.overhead_pct": 3.5}}, "overhead_pct") == 3.5, "dotted energy key")
+check(evaluate.energy_gpu({"energy": {"total_pj": 1.0}}, "with_unit_pj") is None, "absent: fallback")
+
+print("test_evaluate:", "FAILED" if failures else "ok", f"({len(failures)} failures)")
+sys.exit(1 if failures else 0)
