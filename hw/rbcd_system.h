@@ -1,6 +1,7 @@
-// The modelled system: the RBCD unit's blocks (rasterizer feed, ZEB banks,
+// The modelled system: the RBCD unit (rbcd_unit: rasterizer feed, ZEB banks,
 // insertion sorter, z-overlap tester, output buffer) and, over TLM-2.0, the
-// memory controller and the host CPU that reads the collision records back.
+// memory controller and the host CPU that reads the collision records back,
+// bound the way any other platform binds the unit (docs/embedding.md).
 //
 //   feed --fill_tile--> sorter --rows--> zeb_bank[i] <--rows-- tester --records--> output_buffer
 //                                                                                     | b_transport
@@ -19,6 +20,7 @@
 #include "hw/insertion_sorter.h"
 #include "hw/output_buffer.h"
 #include "hw/rasterizer_feed.h"
+#include "hw/rbcd_unit.h"
 #include "hw/zeb_bank.h"
 #include "common/vcd_writer.h"
 #include "hw/zoverlap_tester.h"
@@ -36,20 +38,20 @@ public:
     // Before run(): the blocks that cfg.trace enables record into `vcd`.
     void attach_vcd(VcdWriter& vcd);
 
-    const SimConfig cfg;
-    Clocking clk;
-    std::vector<std::unique_ptr<zeb_bank>> banks;
+    rbcd_unit unit;
     memory_controller memory;
     host_reader host;
-    output_buffer outbuf;
-    insertion_sorter sorter;
-    zoverlap_tester tester;
-    rasterizer_feed feed;
+    // The unit's parts, by their old names.
+    const SimConfig& cfg;
+    Clocking& clk;
+    std::vector<std::unique_ptr<zeb_bank>>& banks;
+    output_buffer& outbuf;
+    insertion_sorter& sorter;
+    zoverlap_tester& tester;
+    rasterizer_feed& feed;
 
 private:
-    static std::vector<std::unique_ptr<zeb_bank>> make_banks(const SimConfig& cfg);
     VcdWriter* vcd_ = nullptr;
-    std::vector<zeb_bank*> bank_ptrs() const;
 };
 
 } // namespace rbcd
