@@ -31,8 +31,8 @@
 //
 // Usage:
 //   rbcd::memory_controller mem("mem", cfg.memory, sc_time(2500, SC_PS));
-//   unit.out_socket.bind(mem.unit_port);
-//   host.socket.bind(mem.host_port);
+//   unit.mem.bind(mem.unit_port);          // rbcd_unit, see hw/rbcd_unit.h
+//   host.mem.bind(mem.host_port);          // host_reader
 //   ... sc_start(); mem.stats().for_each([](auto name, auto v, auto help) {...});
 #pragma once
 #include <cstdint>
