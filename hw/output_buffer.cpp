@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
+
+#include "common/errors.h"
 
 namespace rbcd {
 
 output_buffer::output_buffer(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk,
-                             host_reader& host)
+                             unit_host_if& host)
     : sc_module(name),
       mem("mem"),
       clk_(clk),
@@ -69,9 +72,11 @@ std::uint64_t output_buffer::issue(std::uint64_t cycle, unsigned n) {
     // Loosely timed: the annotated delay carries the local offset from sc_time_stamp().
     sc_core::sc_time delay = clk_.time(t - clk_.now());
     mem->b_transport(gp_, delay);
-    if (gp_.is_response_error())
-        throw std::runtime_error("output_buffer: memory write at 0x" + std::to_string(gp_.get_address()) +
-                                 " failed: " + gp_.get_response_string());
+    // Any status but OK is the run's failure (TLM_INCOMPLETE_RESPONSE too: the
+    // target did not answer); docs/embedding.md.
+    if (!gp_.is_response_ok())
+        throw RunError(std::string(name()) + ": memory write of " + std::to_string(bytes) + " bytes at " +
+                       hex_address(gp_.get_address()) + " failed: " + gp_.get_response_string());
     const std::uint64_t done = clk_.now() + clk_.cycles(delay);
 
     if (vcd_) {
@@ -125,7 +130,7 @@ std::uint64_t output_buffer::flush(std::uint64_t cycle) {
 }
 
 std::uint64_t output_buffer::switch_region(std::uint64_t all_done, bool because_full) {
-    region_free_[region_] = host_.read_back(region_addr_ + region_ * region_bytes_, write_offset_, all_done, because_full);
+    region_free_[region_] = host_.records_ready(region_addr_ + region_ * region_bytes_, write_offset_, all_done, because_full);
     region_ = (region_ + 1) % static_cast<unsigned>(region_free_.size());
     write_offset_ = 0;
     const std::uint64_t ready = std::max(all_done, region_free_[region_]);

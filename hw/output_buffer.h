@@ -20,14 +20,15 @@
 #include "common/config.h"
 #include "common/records.h"
 #include "hw/clocking.h"
-#include "hw/host_reader.h"
+#include "hw/unit_host_if.h"
+#include "tlm/bus.h"
 #include "common/vcd_writer.h"
 
 namespace rbcd {
 
 class output_buffer : public sc_core::sc_module {
 public:
-    tlm_utils::simple_initiator_socket<output_buffer> mem;
+    tlm_utils::simple_initiator_socket<output_buffer, kBusWidth> mem;
 
     struct stats_t {
         std::uint64_t records = 0;            // records accepted from the tester
@@ -52,7 +53,7 @@ public:
         }
     };
 
-    output_buffer(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk, host_reader& host);
+    output_buffer(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk, unit_host_if& host);
 
     // Offers a record at cycle `cycle`; returns the cycle it was accepted (later when full).
     std::uint64_t push(const MemRecord& r, std::uint64_t cycle);
@@ -81,7 +82,7 @@ private:
     std::uint64_t occupancy() const { return pending_.size() + inflight_records_; }
 
     const Clocking& clk_;
-    host_reader& host_;
+    unit_host_if& host_;
     unsigned capacity_, burst_, max_outstanding_;
     std::uint64_t region_addr_, region_bytes_;
     std::vector<std::uint64_t> region_free_;   // per region: the host is done reading it back

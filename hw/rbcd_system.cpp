@@ -1,39 +1,29 @@
 #include "hw/rbcd_system.h"
 
 #include <algorithm>
-#include <stdexcept>
 #include <string>
+
+#include "common/errors.h"
 
 namespace rbcd {
 
-std::vector<std::unique_ptr<zeb_bank>> rbcd_system::make_banks(const SimConfig& cfg) {
-    std::vector<std::unique_ptr<zeb_bank>> v;
-    for (unsigned i = 0; i < cfg.zeb.banks; ++i)
-        v.push_back(std::make_unique<zeb_bank>(("zeb_bank" + std::to_string(i)).c_str(), cfg.zeb, cfg.tile, i));
-    return v;
-}
-
-std::vector<zeb_bank*> rbcd_system::bank_ptrs() const {
-    std::vector<zeb_bank*> v;
-    for (const auto& b : banks) v.push_back(b.get());
-    return v;
-}
-
 rbcd_system::rbcd_system(sc_core::sc_module_name name, const SimConfig& c, FragmentSource& src, CollisionSink& sink)
     : sc_module(name),
-      cfg(c),
-      clk(c.clock.period_ps()),
-      banks(make_banks(c)),
-      memory("memory_controller", c.memory, clk.period()),
+      unit("unit", c, src),
+      memory("memory_controller", c.memory, unit.clk.period()),
       host("host", c, sink),
-      outbuf("output_buffer", c, clk, host),
-      queue("input_queue", c.feed),
-      sorter("insertion_sorter", c),
-      tester("zoverlap_tester", c, clk, outbuf, host),
-      fragments("fragment_processors", c.gpu),
-      raster("rasterizer", cfg, clk, src, bank_ptrs(), fragments, queue, sorter, tester),
+      cfg(unit.cfg),
+      clk(unit.clk),
+      banks(unit.banks),
+      outbuf(unit.outbuf),
+      queue(unit.queue),
+      sorter(unit.sorter),
+      tester(unit.tester),
+      fragments(unit.fragments),
+      raster(unit.raster),
       reseed_(memory) {
-    outbuf.mem.bind(memory.unit_port);
+    unit.mem.bind(memory.unit_port);
+    unit.host.bind(host);
     host.mem.bind(memory.host_port);
     raster.add_observer(&reseed_);
 }
@@ -58,11 +48,15 @@ void rbcd_system::attach_vcd(VcdWriter& vcd) {
 }
 
 void rbcd_system::run() {
-    sc_core::sc_start();
+    try {
+        sc_core::sc_start();
+    } catch (const sc_core::sc_report& r) {
+        // An exception out of a process (e.g. a memory error response) reaches
+        // sc_start as a report whose message is the exception's.
+        throw RunError(r.get_msg());
+    }
     if (vcd_ && !raster.error()) vcd_->finish(std::max(tester.finish_cycle(), raster.end_cycle()));
-    if (raster.error()) std::rethrow_exception(raster.error());
-    if (!tester.finished())
-        throw std::runtime_error("simulation ended before the z-overlap tester finished (internal error)");
+    unit.check_finished();
 }
 
 } // namespace rbcd

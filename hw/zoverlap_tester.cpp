@@ -5,7 +5,7 @@
 namespace rbcd {
 
 zoverlap_tester::zoverlap_tester(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk,
-                                 output_buffer& out, host_reader& host)
+                                 output_buffer& out, unit_host_if& host)
     : sc_module(name),
       clk_(clk),
       out_(out),

@@ -72,7 +72,7 @@ public:
     };
 
     zoverlap_tester(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk, output_buffer& out,
-                    host_reader& host);
+                    unit_host_if& host);
 
     void post(const Job& j) {
         jobs_.push_back(j);
@@ -99,7 +99,7 @@ private:
 
     const Clocking& clk_;
     output_buffer& out_;
-    host_reader& host_;
+    unit_host_if& host_;
     unsigned t_depth_, tile_w_, tile_h_, id_shift_;
     std::uint32_t id_mask_;
     OutputMode mode_;

@@ -328,6 +328,8 @@ int sc_main(int argc, char* argv[]) {
         return run(opt);
     } catch (const rbcd::InputError& e) {
         return fail(2, e.what(), argc, argv);
+    } catch (const rbcd::RunError& e) {
+        return fail(1, e.what(), argc, argv);
     } catch (const std::exception& e) {
         return fail(1, std::string("internal error: ") + e.what(), argc, argv);
     }

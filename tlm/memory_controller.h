@@ -31,8 +31,8 @@
 //
 // Usage:
 //   rbcd::memory_controller mem("mem", cfg.memory, sc_time(2500, SC_PS));
-//   unit.out_socket.bind(mem.unit_port);
-//   host.socket.bind(mem.host_port);
+//   unit.mem.bind(mem.unit_port);          // rbcd_unit, see hw/rbcd_unit.h
+//   host.mem.bind(mem.host_port);          // host_reader
 //   ... sc_start(); mem.stats().for_each([](auto name, auto v, auto help) {...});
 #pragma once
 #include <cstdint>
@@ -44,6 +44,7 @@
 
 #include "common/config.h"
 #include "common/vcd_writer.h"
+#include "tlm/bus.h"
 
 namespace rbcd {
 
@@ -89,8 +90,8 @@ struct memory_stats {
 
 class memory_controller : public sc_core::sc_module {
 public:
-    tlm_utils::simple_target_socket<memory_controller> unit_port;   // unit's output bursts
-    tlm_utils::simple_target_socket<memory_controller> host_port;   // CPU reading records back
+    tlm_utils::simple_target_socket<memory_controller, kBusWidth> unit_port;   // unit's output bursts
+    tlm_utils::simple_target_socket<memory_controller, kBusWidth> host_port;   // CPU reading records back
 
     // Throws InputError if the configuration cannot describe a memory (zero
     // size, zero bandwidth, latency_min > latency_max, mapping past 2^64) or

@@ -57,8 +57,8 @@ struct outcome {
 // The initiator: runs a test-supplied script in an SC_THREAD so that
 // sc_time_stamp() and wait() behave as they do for the real unit and host.
 struct driver : sc_module {
-    tlm_utils::simple_initiator_socket<driver> unit;
-    tlm_utils::simple_initiator_socket<driver> host;
+    tlm_utils::simple_initiator_socket<driver, rbcd::kBusWidth> unit;
+    tlm_utils::simple_initiator_socket<driver, rbcd::kBusWidth> host;
     std::function<void(driver&)> script;
 
     SC_HAS_PROCESS(driver);
@@ -82,12 +82,12 @@ struct driver : sc_module {
         gp.set_dmi_allowed(false);
         gp.set_response_status(tlm::TLM_INCOMPLETE_RESPONSE);
     }
-    static outcome send(tlm_utils::simple_initiator_socket<driver>& s,
+    static outcome send(tlm_utils::simple_initiator_socket<driver, rbcd::kBusWidth>& s,
                         tlm::tlm_generic_payload& gp, sc_time delay) {
         s->b_transport(gp, delay);
         return {gp.get_response_status(), delay, gp.is_dmi_allowed(), sc_time_stamp()};
     }
-    static outcome access(tlm_utils::simple_initiator_socket<driver>& s, tlm::tlm_command cmd,
+    static outcome access(tlm_utils::simple_initiator_socket<driver, rbcd::kBusWidth>& s, tlm::tlm_command cmd,
                           std::uint64_t addr, unsigned char* data, unsigned len, sc_time delay) {
         tlm::tlm_generic_payload gp;
         prepare(gp, cmd, addr, data, len);
