@@ -47,15 +47,22 @@ std::size_t count(const std::string& s, const std::string& what) {
 
 } // namespace
 
-TEST_CASE("cli scene: --write-trace replayed with --trace gives the same collisions and stats totals") {
+TEST_CASE("cli scene: --write-trace replayed with --trace gives the same collisions stats and GPU figures") {
     TempDir td;
     const std::string scene = td.write("s.toml", kTwoSpheres);
     const std::string trace = td.path("s.rbt");
     const std::string c1 = td.path("c1.txt"), c2 = td.path("c2.txt"), s1 = td.path("s1.json"), s2 = td.path("s2.json");
-    const Result a = run_sim(td, {"--scene", scene, "--write-trace", trace, "--collisions", c1, "--stats", s1, "-q"});
+    const std::string f1 = td.path("f1.jsonl"), f2 = td.path("f2.jsonl");
+    const Result a = run_sim(td, {"--scene", scene, "--write-trace", trace, "--collisions", c1, "--stats", s1,
+                                  "--frame-stats", f1, "-q"});
     INFO(a.err);
     REQUIRE(a.status == 0);
-    const Result b = run_sim(td, {"--trace", trace, "--collisions", c2, "--stats", s2, "-q"});
+    // The scene's primitive counts and rasterization order travel in the trace.
+    const std::string written = slurp(trace);
+    CHECK_THAT(written, Contains(" prims="));
+    CHECK_THAT(written, Contains(" cprims="));
+    CHECK_THAT(written, Contains("\no "));
+    const Result b = run_sim(td, {"--trace", trace, "--collisions", c2, "--stats", s2, "--frame-stats", f2, "-q"});
     INFO(b.err);
     REQUIRE(b.status == 0);
     const std::string out = slurp(c1);
@@ -65,6 +72,12 @@ TEST_CASE("cli scene: --write-trace replayed with --trace gives the same collisi
     const auto j1 = nlohmann::json::parse(slurp(s1)), j2 = nlohmann::json::parse(slurp(s2));
     CHECK(j1["totals"] == j2["totals"]);
     CHECK(j1["totals"]["cycles"].get<std::uint64_t>() > 0);
+    // The paced pipeline sees the same primitives and order: the same GPU time and energy.
+    CHECK(j1["gpu"] == j2["gpu"]);
+    CHECK(j1["energy"] == j2["energy"]);
+    CHECK(j1["blocks"] == j2["blocks"]);
+    CHECK(j1["gpu"]["culled_primitives"].get<std::uint64_t>() > 0);
+    CHECK(slurp(f1) == slurp(f2));
 }
 
 TEST_CASE("cli scene: the embedded default scene runs with no arguments and matches its written trace") {
