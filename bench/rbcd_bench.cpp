@@ -111,5 +111,31 @@ int sc_main(int argc, char* argv[]) {
                 (unsigned long long)sys.tester.stats().hits, (unsigned long long)sys.sorter.stats().overflows);
     std::remove(t1.c_str());
     std::remove(t2.c_str());
+
+    // Long runs: peak memory must not grow with the number of frames (per-frame
+    // figures stream to --frame-stats). Frames of one small tile each.
+    std::printf("\n%-34s %12s %10s %12s\n", "long run, frames of one tile", "frames", "seconds", "peak MiB");
+    for (const std::uint64_t frames : {std::uint64_t(1000), std::uint64_t(100000), std::uint64_t(1000000)}) {
+        const std::string t = dir + "/rbcd-bench-frames.rbt", fs = dir + "/rbcd-bench-frames.jsonl",
+                          st = dir + "/rbcd-bench-frames.json";
+        std::FILE* f = std::fopen(t.c_str(), "w");
+        if (!f) return 1;
+        std::fputs("rbcd-trace 1\n", f);
+        for (std::uint64_t i = 0; i < frames; ++i)
+            std::fprintf(f, "frame %llu\ntile %llu 0 other=20\nf %llu 1 100 1 F\nf %llu 1 200 1 B\n",
+                         (unsigned long long)i, (unsigned long long)(i % 50), (unsigned long long)(i % 50 * 16),
+                         (unsigned long long)(i % 50 * 16));
+        std::fclose(f);
+        const ChildRun r = run_child({sim, "--trace", t, "-q", "--stats", st, "--frame-stats", fs});
+        if (r.status != 0) {
+            std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on the %llu-frame trace\n", (unsigned long long)frames);
+            return 1;
+        }
+        std::printf("%-34s %12llu %10.3f %12.1f\n", "rbcd-sim with --stats --frame-stats", (unsigned long long)frames,
+                    r.seconds, r.max_rss_kb / 1024.0);
+        std::remove(t.c_str());
+        std::remove(fs.c_str());
+        std::remove(st.c_str());
+    }
     return 0;
 }
