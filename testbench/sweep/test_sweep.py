@@ -281,7 +281,7 @@ def case_plot(c):
 
 def case_frames(c):
     """A long input split in frame ranges (rbcd-sim --frames, [split] in the sweep) merges into the
-    collisions file of one whole run; the totals except cycles add up to the whole run's."""
+    collisions file of one whole run; the totals and GPU cycles add up to the whole run's."""
     trace = os.path.join(c.tmp, "default.rbt")
     whole_c, whole_s = os.path.join(c.tmp, "whole.txt"), os.path.join(c.tmp, "whole.json")
     r = run([c.sim, "-q", "--write-trace", trace, "--collisions", whole_c, "--stats", whole_s])
@@ -315,13 +315,16 @@ fields = ["totals.frames", "totals.hits", "totals.cycles"]
     check(len(rows) == 1 and rows[0]["status"] == "0", f"one merged row: {rows} {r.stderr}")
     merged = os.path.join(out, "runs", rows[0]["run"])
     check(c.read(os.path.join(merged, "collisions.txt")) == whole, "merged collisions differ from the whole run's")
-    mt = json.load(open(os.path.join(merged, "stats.json")))["totals"]
-    wt = json.load(open(whole_s))["totals"]
-    for k, v in wt.items():
-        if k != "cycles":
-            check(mt[k] == v, f"totals.{k}: merged {mt[k]}, whole {v}")
-    print(f"note: totals.cycles merged {mt['cycles']}, whole {wt['cycles']} "
-          "(equal once every frame starts on a drained unit)")
+    ms = json.load(open(os.path.join(merged, "stats.json")))
+    ws = json.load(open(whole_s))
+    # Every frame starts on a drained unit: each frame's cycles are its own.
+    for k, v in ws["totals"].items():
+        check(ms["totals"][k] == v, f"totals.{k}: merged {ms['totals'][k]}, whole {v}")
+    for k in ("baseline_cycles", "cycles_with_unit", "overhead_cycles"):
+        check(ms["gpu"][k] == ws["gpu"][k], f"gpu.{k}: merged {ms['gpu'][k]}, whole {ws['gpu'][k]}")
+    check(abs(ms["gpu"]["overhead_pct"] - ws["gpu"]["overhead_pct"]) < 1e-9, "gpu.overhead_pct")
+    check(abs(ms["energy"]["total_pj"] - ws["energy"]["total_pj"]) <= 1e-9 * ws["energy"]["total_pj"],
+          "energy.total_pj")
 
 
 CASES = {n[5:]: f for n, f in globals().items() if n.startswith("case_")}
