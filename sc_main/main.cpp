@@ -85,7 +85,7 @@ int run(const Options& opt) {
     scene::SceneSource* scene_src = nullptr;
     const scene::SceneLimits scene_limits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits};
     if (!opt.trace.empty()) {
-        src = std::make_unique<TraceReader>(opt.trace, TraceLimits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits});
+        src = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
     } else {
         auto s = opt.scene.empty()
                      ? scene::SceneSource::from_text(scene::default_scene_text(), "", "<default scene>", scene_limits)

@@ -43,7 +43,10 @@ struct Reader {
     // Every key of `t` must be one of `allowed`: a misspelt key would otherwise
     // silently fall back to a default.
     void only_keys(const toml::table& t, const std::string& path, std::initializer_list<const char*> allowed) const {
-        for (auto&& [k, v] : t) {
+        for (auto&& kv : t) {
+            // Named, not a structured binding: clang 14 cannot capture those in a lambda.
+            const toml::key& k = kv.first;
+            const toml::node& v = kv.second;
             bool ok = std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return k.str() == a; });
             if (!ok) {
                 std::string list;
