@@ -14,6 +14,7 @@
 
 #include "common/config.h"
 #include "common/errors.h"
+#include "common/input_file.h"
 #include "io/trace_reader.h"
 #include "io/trace_writer.h"
 #include "sc_main/collision_file.h"
@@ -83,7 +84,9 @@ int run(const Options& opt) {
 
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
-    const scene::SceneLimits scene_limits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits};
+    const scene::SceneLimits scene_limits{cfg.tile.width,           cfg.tile.height,
+                                          cfg.zeb.id_bits,          cfg.input.max_scene_bytes,
+                                          cfg.input.max_scene_triangles, cfg.input.max_tile_fragments};
     if (!opt.trace.empty()) {
         src = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
     } else {
@@ -199,7 +202,9 @@ std::vector<std::string> option_values(int argc, char* argv[], std::initializer_
 }
 
 int fail(int status, const std::string& msg, int argc, char* argv[]) {
-    std::fprintf(stderr, "rbcd-sim: %s\n", msg.c_str());
+    // One line whatever the input held: control bytes from files, --set values
+    // or library messages (toml++) are escaped here, in one place.
+    std::fprintf(stderr, "rbcd-sim: %s\n", rbcd::escape_for_message(msg).c_str());
     // formats.md: on a non-zero exit nothing stands at an output path, not even an
     // older file; but an output path that names one of the inputs is the input.
     const auto inputs = option_values(argc, argv, {"--trace", "--scene", "--config"});

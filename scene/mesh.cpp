@@ -149,6 +149,15 @@ Mesh builtin_mesh(const std::string& shape, unsigned segments) {
     throw std::logic_error("builtin_mesh: unknown shape " + shape);
 }
 
+std::uint64_t builtin_triangles(const std::string& shape, unsigned segments) {
+    const std::uint64_t s = segments;
+    if (shape == "sphere") return 2 * s * (std::max<std::uint64_t>(2, s / 2) - 1);
+    if (shape == "box") return 12;
+    if (shape == "torus") return 2 * s * std::max<std::uint64_t>(3, s / 2);
+    if (shape == "cylinder") return 4 * s;
+    throw std::logic_error("builtin_triangles: unknown shape " + shape);
+}
+
 bool load_mesh_file(const std::string& path, Mesh& out, std::string& error) {
     Assimp::Importer imp;
     const aiScene* s = imp.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);

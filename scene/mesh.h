@@ -24,6 +24,8 @@ struct Mesh {
 // one (sphere stacks, torus tube) gets half as many (at least 2, resp. 3).
 // The box ignores it. An unknown name is a logic error (the parser checked it).
 Mesh builtin_mesh(const std::string& shape, unsigned segments);
+// The number of triangles builtin_mesh(shape, segments) has, without building it.
+std::uint64_t builtin_triangles(const std::string& shape, unsigned segments);
 
 // Every mesh of the file with its node transforms applied, as one mesh.
 // Returns false and sets `error` when assimp cannot read it or it holds no triangle.
