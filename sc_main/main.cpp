@@ -23,6 +23,7 @@
 #include "sc_main/progress.h"
 #include "sc_main/stats_report.h"
 #include "hw/rbcd_system.h"
+#include "hw/self_check.h"
 
 namespace {
 
@@ -116,23 +117,11 @@ int run(const Options& opt) {
 
     // --write-trace: the stream the unit saw, replayable with --trace.
     std::unique_ptr<TraceWriter> trace_out;
-    std::string trace_tmp;
+    OutputFile trace_file;   // the temporary beside the path, or the path itself when not a regular file
     if (!opt.write_trace.empty()) {
-        if (std::filesystem::is_directory(opt.write_trace))
-            throw InputError(opt.write_trace + ": cannot create: is a directory");
-        trace_tmp = opt.write_trace + ".tmp." + std::to_string(::getpid());
-        trace_out = std::make_unique<TraceWriter>(trace_tmp, src->header());
+        trace_file = OutputFile(opt.write_trace);
+        trace_out = std::make_unique<TraceWriter>(trace_file.open_file_path(), src->header());
     }
-    if (!trace_tmp.empty()) remove_on_interrupt(trace_tmp);
-    struct TraceTmpGuard {
-        std::string tmp, path;
-        bool keep = false;
-        ~TraceTmpGuard() {
-            if (keep || tmp.empty()) return;
-            ::unlink(tmp.c_str());
-            ::unlink(path.c_str());
-        }
-    } trace_guard{trace_tmp, opt.write_trace};
     struct ImageGuard {
         ImageSink* sink;
         bool keep = false;
@@ -161,13 +150,12 @@ int run(const Options& opt) {
     probe.attach();                      // runs before the hooks above
     tee.add(&probe.unit_frames());       // the unit's frame boundaries reach the probe through the sink
     sys.run();
+    if (const std::string bad = self_check(self_check_counters(sys)); !bad.empty()) throw std::runtime_error(bad);
     progress.finish();
     if (images) images->finish();
     if (trace_out) {
         trace_out->close();
-        if (std::rename(trace_tmp.c_str(), opt.write_trace.c_str()) != 0)
-            throw InputError(opt.write_trace + ": cannot create: " + std::strerror(errno));
-        trace_guard.keep = true;
+        trace_file.commit();
     }
     image_guard.keep = true;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
