@@ -205,12 +205,23 @@ bool TraceReader::Impl::fill() {
         cur = buf.data();
         data_end = cur + rem;
         lines_end = cur;
-        const std::size_t room = std::min(buf.size() - 1 - rem, lim.read_chunk);
+        // Reads of at most max_line_bytes + 1 bytes: a line inside one read is
+        // within the limit; one that spans reads is measured below.
+        const std::size_t room = std::min({buf.size() - 1 - rem, lim.read_chunk,
+                                           static_cast<std::size_t>(std::min<std::uint64_t>(lim.max_line_bytes + 1, SIZE_MAX))});
         const long n = in->read(data_end, room);
         if (n < 0) fail(in->error());
         if (n == 0) {
             eof = true;
             continue;
+        }
+        if (rem) {
+            const void* nl = std::memchr(data_end, '\n', static_cast<std::size_t>(n));
+            const std::size_t len = rem + (nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - data_end)
+                                              : static_cast<std::size_t>(n));
+            if (len > lim.max_line_bytes)
+                fail("line longer than " + num_str(lim.max_line_bytes) +
+                     " bytes (the limit input.max_line_bytes; docs/limits.md)");
         }
         char* fresh = data_end;
         data_end += n;

@@ -6,6 +6,8 @@
 #include <initializer_list>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <Eigen/Geometry>
 #include <toml++/toml.h>
 
@@ -191,10 +193,15 @@ ObjectDesc read_object(const Reader& rd, const toml::table& t, std::size_t index
         if (mp.is_relative() && !base_dir.empty()) mp = fs::path(base_dir) / mp;
         std::error_code ec;
         if (!fs::is_regular_file(mp, ec)) {
-            if (!mp.has_extension())
+            if (!mp.has_extension() && !fs::exists(mp, ec))
                 rd.fail(*mesh, p + ".mesh: unknown shape '" + o.mesh +
                                    "' (built-in shapes: sphere, box, torus, cylinder; otherwise a mesh file path)");
-            rd.fail(*mesh, p + ".mesh: mesh file '" + mp.string() + "' not found");
+        }
+        // The same wording as every other input that cannot be read.
+        try {
+            ::close(open_input(mp.string(), "mesh file"));
+        } catch (const InputError& e) {
+            rd.fail(*mesh, p + ".mesh: " + e.what());
         }
         o.mesh = mp.string();
     }

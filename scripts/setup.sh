@@ -2,7 +2,8 @@
 # Installs the Debian bookworm packages the build needs, only those missing.
 set -euo pipefail
 pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
-      nlohmann-json3-dev libcli11-dev zlib1g-dev libeigen3-dev libassimp-dev libpng-dev)
+      nlohmann-json3-dev libcli11-dev zlib1g-dev libeigen3-dev libassimp-dev libpng-dev
+      clang-14 libclang-rt-14-dev assimp-testmodels)   # the last three: scripts/fuzz.sh (libFuzzer, mesh seeds)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,7 +1,6 @@
 // Hostile scenes (issue 12): each case used to crash, hang, allocate without
 // bound or give a silent wrong answer; now each is refused naming the key and
 // the limit, or runs in bounded memory and time.
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -38,18 +37,18 @@ std::string obj(const std::string& body) { return "[[object]]\nid = 1\nmesh = \"
 } // namespace
 
 TEST_CASE("hostile scene: the singular-scale check is linear in keys, not frames", "[scene][hostile]") {
-    // Singular only near frame 10^8 - 1: the old check evaluated every frame.
+    // 800 objects animated over 10^8 frames, the last singular near the end.
+    // The old check evaluated every frame of every object (about 0.5 s each):
+    // this case then outlives CTest's 300 s timeout; now it is immediate.
     std::string t = "format = \"rbcd-scene 1\"\nframes = 100000000\n[camera]\neye = [0, 0, 0]\ntarget = [0, 0, -1]\n"
                     "fov_y = 60\nnear = 0.1\nfar = 100\n";
-    for (int i = 0; i < 50; ++i) t += obj("[[object.key]]\nframe = 100000000\nscale = [1.0, 1.0, -1.0e-8]\n");
-    const auto t0 = std::chrono::steady_clock::now();
+    for (int i = 0; i < 799; ++i) t += obj("[[object.key]]\nframe = 100000000\nscale = [2.0, 2.0, 2.0]\n");
+    t += obj("[[object.key]]\nframe = 100000000\nscale = [1.0, 1.0, -1.0e-8]\n");
     const std::string msg = error_of(t);
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     INFO(msg);
-    CHECK(msg.find("object[0].scale: the transform is singular") != std::string::npos);
+    CHECK(msg.find("object[799].scale: the transform is singular") != std::string::npos);
     // Zero at f = 1e8 / (1 + 1e-8), just below 99999999.01.
     CHECK(msg.find("at frame 99999999 ") != std::string::npos);
-    CHECK(s < 5.0);   // not a timing test: the old code took about a minute here
 
     // A zero crossing between integer frames is not singular at any rendered frame.
     std::string ok = kHdr + obj("[[object.key]]\nframe = 3\nscale = [1.0, 1.0, -2.0]\n");   // zero at frame 1
