@@ -133,6 +133,9 @@ void check_toml_text(std::string_view s, const std::string& name) {
     enum class St { Normal, Comment, Basic, Literal, MlBasic, MlLiteral } st = St::Normal;
     unsigned long long line = 1;
     const auto at = [&](std::size_t i, char c) { return i < s.size() && s[i] == c; };
+    const auto ascii_after = [&](std::size_t i) {
+        return i + 1 < s.size() && s[i + 1] != '\n' && static_cast<unsigned char>(s[i + 1]) < 0x80;
+    };
     for (std::size_t i = 0; i < s.size();) {
         const char c = s[i];
         const unsigned char u = static_cast<unsigned char>(c);
@@ -161,7 +164,9 @@ void check_toml_text(std::string_view s, const std::string& name) {
             if (c == '\n') st = St::Normal;
             break;
         case St::Basic:
-            if (c == '\\' && i + 1 < s.size() && s[i + 1] != '\n') { i += 2; continue; }
+            // An escaped ASCII character is skipped (it may be a quote); a
+            // non-ASCII one is looked at like any other (toml++ tests it too).
+            if (c == '\\' && ascii_after(i)) { i += 2; continue; }
             if (c == '"' || c == '\n') st = St::Normal;
             break;
         case St::Literal:
@@ -170,7 +175,7 @@ void check_toml_text(std::string_view s, const std::string& name) {
         case St::MlBasic:
         case St::MlLiteral: {
             const char q = st == St::MlBasic ? '"' : '\'';
-            if (st == St::MlBasic && c == '\\' && i + 1 < s.size() && s[i + 1] != '\n') { i += 2; continue; }
+            if (st == St::MlBasic && c == '\\' && ascii_after(i)) { i += 2; continue; }
             if (c == q && at(i + 1, q) && at(i + 2, q)) {
                 i += 3;
                 // Up to two more quotes belong to the string ("""a"""" is a").

@@ -39,7 +39,7 @@ add() { # add MODE_BYTE_OCTAL|"" FILE...
 case "$target" in
   trace) add 007 vectors/*.rbt; add 207 vectors/*.rbt; add 000 vectors/*.rbt ;;
   config) add 000 sc_main/configs/*.toml vectors/*.toml ;;
-  scene) add "" scene/default_scene.toml scene/examples/*.toml ;;
+  scene) add "" scene/default_scene.toml testbench/golden/determinism/scene.toml ;;
   mesh) add 000 /usr/share/assimp/models/OBJ/box.obj; add 001 /usr/share/assimp/models/PLY/cube.ply
         add 002 /usr/share/assimp/models/STL/triangle.stl /usr/share/assimp/models/STL/Spider_ascii.stl ;;
 esac

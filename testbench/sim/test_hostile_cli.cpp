@@ -77,6 +77,10 @@ TEST_CASE("cli hostile: control bytes from the input are escaped: messages stay 
     r = run_with_outputs(td, {"--trace", td.write("in.rbt", kTrace), "--set", "zeb.tie=a\x1b[2Jb\rc"});
     expect_input_error(td, r, {"--set zeb.tie", "a\\x1b[2Jb\\x0dc"});
     CHECK(r.err.find('\x1b') == std::string::npos);
+    // toml++'s own message echoes the raw byte it saw.
+    r = run_with_outputs(td, {"--trace", td.write("in.rbt", kTrace), "--config", td.write("c.toml", "a = tru\x01e\n")});
+    expect_input_error(td, r, {"c.toml:1:", "saw 'tru\\x01'"});
+    CHECK(r.err.find('\x01') == std::string::npos);
 }
 
 TEST_CASE("cli hostile: limits are raised by the keys their messages name") {
