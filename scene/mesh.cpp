@@ -1,6 +1,8 @@
 #include "scene/mesh.h"
 
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -131,6 +133,12 @@ void append_node(const aiScene* s, const aiNode* node, const aiMatrix4x4& parent
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const aiFace& face = mesh->mFaces[f];
             if (face.mNumIndices != 3) continue;   // points and lines cover nothing
+            // assimp passes through indices a file gets wrong (found by fuzzing).
+            if (face.mIndices[0] >= mesh->mNumVertices || face.mIndices[1] >= mesh->mNumVertices ||
+                face.mIndices[2] >= mesh->mNumVertices) {
+                out.bad_index = true;
+                continue;
+            }
             std::uint32_t a = base + face.mIndices[0], b = base + face.mIndices[1], c = base + face.mIndices[2];
             if (mirror) std::swap(b, c);
             out.tris.push_back({a, b, c});
@@ -158,7 +166,33 @@ std::uint64_t builtin_triangles(const std::string& shape, unsigned segments) {
     throw std::logic_error("builtin_triangles: unknown shape " + shape);
 }
 
+namespace {
+// assimp 5.2 (Debian) never returns from a PLY file whose header lacks its
+// end_header line (found by fuzzing): such a file is refused before assimp
+// sees it. The header is text at the start of the file, in any PLY variant.
+bool ply_header_ok(const std::string& path, std::string& error) {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) return true;   // assimp reports it
+    std::string head(65536, '\0');
+    head.resize(std::fread(head.data(), 1, head.size(), f));
+    std::fclose(f);
+    // assimp takes a file for PLY by its extension or by "ply" at the start.
+    std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (head.compare(0, 3, "ply") != 0 && ext != ".ply") return true;
+    for (std::size_t at = head.find("end_header"); at != std::string::npos; at = head.find("end_header", at + 1)) {
+        const bool line_start = at > 0 && (head[at - 1] == '\n' || head[at - 1] == '\r');
+        const std::size_t e = at + 10;
+        const bool line_end = e < head.size() && (head[e] == '\n' || head[e] == '\r' || head[e] == ' ');
+        if (line_start && line_end) return true;
+    }
+    error = "PLY header without an end_header line in its first 64 KiB";
+    return false;
+}
+} // namespace
+
 bool load_mesh_file(const std::string& path, Mesh& out, std::string& error) {
+    if (!ply_header_ok(path, error)) return false;
     Assimp::Importer imp;
     const aiScene* s = imp.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
     if (!s || !s->mRootNode || (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
@@ -168,6 +202,11 @@ bool load_mesh_file(const std::string& path, Mesh& out, std::string& error) {
     }
     out = Mesh{};
     append_node(s, s->mRootNode, aiMatrix4x4(), out);
+    if (out.bad_index) {
+        out = Mesh{};
+        error = "a face refers to a vertex the mesh does not have";
+        return false;
+    }
     if (out.tris.empty()) {
         error = "it holds no triangles";
         return false;

@@ -16,6 +16,7 @@ namespace rbcd::scene {
 struct Mesh {
     std::vector<Eigen::Vector3d> verts;
     std::vector<std::array<std::uint32_t, 3>> tris;
+    bool bad_index = false;   // load_mesh_file only: a face index past its mesh's vertices
 };
 
 // sphere (radius 1), box (edge 2), torus (major radius 1, minor 0.25, around Y),

@@ -47,6 +47,7 @@ cp testbench/fuzz/"$target"/* "$seeds"/ 2>/dev/null || true
 
 export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+export LSAN_OPTIONS="suppressions=$(realpath fuzz/lsan-suppressions.txt)"
 # Mesh paths in scenes resolve from the working directory: an empty one.
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
