@@ -211,12 +211,12 @@ int sc_main(int argc, char* argv[]) {
     CLI::App app{"rbcd-sim: SystemC/TLM-2.0 model of the RBCD collision-detection unit"};
     app.add_option("--config", opt.config_file, "TOML configuration file");
     app.add_option("--set", opt.sets, "KEY=VALUE, applied after --config in order (repeatable)")->take_all();
-    auto* trace_opt = app.add_option("--trace", opt.trace, "fragment trace (.rbt, plain or gzip)");
+    auto* trace_opt = app.add_option("--trace", opt.trace, "fragment trace (.rbt, plain or gzip; - reads standard input)");
     app.add_option("--scene", opt.scene, "3D scene (TOML) rendered by the tile-based rasterizer feed")
         ->excludes(trace_opt);
     app.add_option("--write-trace", opt.write_trace, "also save the fragment stream the unit saw as a .rbt trace");
     app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");
-    app.add_option("--collisions", opt.collisions, "write the collision records here");
+    app.add_option("--collisions", opt.collisions, "write the collision records here (- for standard output)");
     app.add_option("--stats", opt.stats, "write statistics JSON here");
     app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");

@@ -78,7 +78,7 @@ TEST_CASE("cli hostile: control bytes from the input are escaped: messages stay 
     expect_input_error(td, r, {"--set zeb.tie", "a\\x1b[2Jb\\x0dc"});
     CHECK(r.err.find('\x1b') == std::string::npos);
     // toml++'s own message echoes the raw byte it saw.
-    r = run_with_outputs(td, {"--trace", td.write("in.rbt", kTrace), "--config", td.write("c.toml", "a = tru\x01e\n")});
+    r = run_with_outputs(td, {"--trace", td.write("in.rbt", kTrace), "--config", td.write("c.toml", "a = tru\x01" "e\n")});
     expect_input_error(td, r, {"c.toml:1:", "saw 'tru\\x01'"});
     CHECK(r.err.find('\x01') == std::string::npos);
 }
