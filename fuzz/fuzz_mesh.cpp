@@ -1,4 +1,5 @@
-// The mesh loader (assimp through load_mesh_file). The first byte picks the
+// The mesh loader (assimp through load_mesh_file_in_process; rbcd-sim runs
+// the same in a child process, which contains what assimp itself does wrong). The first byte picks the
 // file extension assimp sees; the rest is the file.
 #include <unistd.h>
 
@@ -20,7 +21,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     rbcd::scene::Mesh m;
     std::string err;
-    if (rbcd::scene::load_mesh_file(path, m, err)) {
+    if (rbcd::scene::load_mesh_file_in_process(path, m, err)) {
         for (const auto& t : m.tris)
             for (auto i : t)
                 if (i >= m.verts.size()) rbcd::fuzz::finding("triangle index out of range");

@@ -30,6 +30,10 @@ std::uint64_t builtin_triangles(const std::string& shape, unsigned segments);
 
 // Every mesh of the file with its node transforms applied, as one mesh.
 // Returns false and sets `error` when assimp cannot read it or it holds no triangle.
-bool load_mesh_file(const std::string& path, Mesh& out, std::string& error);
+// assimp runs in a child process: a crash or a run longer than timeout_s is
+// an error too, never the end of the caller (docs/limits.md).
+bool load_mesh_file(const std::string& path, Mesh& out, std::string& error, unsigned timeout_s = 60);
+// The same in this process (what the fuzz target drives, for coverage).
+bool load_mesh_file_in_process(const std::string& path, Mesh& out, std::string& error);
 
 } // namespace rbcd::scene

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -152,5 +153,27 @@ TEST_CASE("hostile scene: a scene file above input.max_scene_bytes is refused", 
         CHECK(std::string(e.what()).find("larger than 1000 bytes") != std::string::npos);
         CHECK(std::string(e.what()).find("input.max_scene_bytes") != std::string::npos);
     }
+    std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("hostile scene: assimp crashing on a mesh file is an error, not the end of the program", "[scene][hostile][mesh]") {
+    // libassimp 5.2 calls abort() on this PLY (fuzzing finding, testbench/fuzz-open/).
+    const std::string in = std::string(RBCD_SOURCE_DIR) + "/testbench/fuzz-open/mesh/ply-assimp-abort";
+    std::ifstream f(in, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    REQUIRE(bytes.size() > 1);
+    auto dir = std::filesystem::temp_directory_path() / ("rbcd_hostile_mesh_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const std::string p = (dir / "bad.ply").string();
+    std::ofstream(p, std::ios::binary) << bytes.substr(1);   // the first byte is the fuzz target's mode
+    rbcd::scene::Mesh m;
+    std::string err;
+    CHECK_FALSE(rbcd::scene::load_mesh_file(p, m, err));
+    CHECK(err == "the mesh reader (assimp) crashed (signal 6)");
+    // A good file still loads through the child process.
+    std::ofstream(dir / "t.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    CHECK(rbcd::scene::load_mesh_file((dir / "t.obj").string(), m, err));
+    CHECK(m.tris.size() == 1);
+    CHECK(m.verts.size() == 3);
     std::filesystem::remove_all(dir);
 }
