@@ -7,6 +7,7 @@
 #include <toml++/toml.h>
 
 #include "common/errors.h"
+#include "common/input_file.h"
 
 namespace rbcd {
 
@@ -278,6 +279,18 @@ std::vector<ConfigKey> make_keys() {
     k.push_back(int_key<std::uint64_t>("trace.end", "vcd", "cycles", "last cycle dumped to --vcd", 0,
                                        std::uint64_t(1) << 62,
                                        [](SimConfig& c) -> std::uint64_t& { return c.trace.end; }));
+
+    k.push_back(int_key<std::uint64_t>("input.max_line_bytes", "readers", "bytes",
+                                       "longest line of a trace (after gzip inflation)", 64, big,
+                                       [](SimConfig& c) -> std::uint64_t& { return c.input.max_line_bytes; }));
+    k.push_back(int_key<std::uint64_t>("input.max_tile_fragments", "readers", "fragments",
+                                       "most collisionable fragments in one tile of a trace or scene", 1, big,
+                                       [](SimConfig& c) -> std::uint64_t& { return c.input.max_tile_fragments; }));
+    k.push_back(int_key<std::uint64_t>("input.max_scene_bytes", "readers", "bytes", "largest scene file", 64, big,
+                                       [](SimConfig& c) -> std::uint64_t& { return c.input.max_scene_bytes; }));
+    k.push_back(int_key<std::uint64_t>("input.max_scene_triangles", "readers", "triangles",
+                                       "most triangles over all objects of a scene (memory per frame grows with them)",
+                                       1, big, [](SimConfig& c) -> std::uint64_t& { return c.input.max_scene_triangles; }));
     return k;
 }
 
@@ -307,6 +320,11 @@ const std::vector<ConfigKey>& config_keys() {
     return keys;
 }
 
+std::uint64_t SimConfig::max_run_cycles() const {
+    const std::uint64_t p = clock.period_ps();
+    return p ? (std::uint64_t(1) << 62) / p : 0;
+}
+
 void SimConfig::validate() const {
     auto bad = [](const std::string& key, const std::string& what) { throw InputError("config: " + key + ": " + what); };
     if (zeb.z_bits + zeb.id_bits + 1 > 49) bad("zeb.z_bits", "element wider than 49 bits");
@@ -329,13 +347,18 @@ void apply_config_table(SimConfig& cfg, const toml::table& tbl, const std::strin
     apply_table(cfg, tbl, "", file);
 }
 
+// A configuration is a page of keys; this keeps a hostile one from filling memory.
+constexpr std::uint64_t kMaxConfigBytes = std::uint64_t(1) << 20;
+
 void apply_config_file(SimConfig& cfg, const std::string& path) {
+    const std::string text = read_input_text(path, "configuration file", kMaxConfigBytes, "");
+    check_toml_text(text, path);
     toml::table tbl;
     try {
-        tbl = toml::parse_file(path);
+        tbl = toml::parse(text, path);
     } catch (const toml::parse_error& e) {
         const auto& src = e.source();
-        std::string msg(e.description());
+        const std::string msg = escape_for_message(e.description());
         if (src.begin.line == 0) throw InputError(path + ": " + msg);
         throw InputError(path + ":" + std::to_string(src.begin.line) + ": " + msg);
     }
@@ -351,6 +374,7 @@ void apply_config_set(SimConfig& cfg, const std::string& assignment) {
     const ConfigKey* k = find_key(key);
     if (!k) throw InputError("--set " + key + ": unknown configuration key");
     const std::string where = "--set " + key;
+    check_toml_text(value, where);
     toml::table tbl;
     try {
         tbl = toml::parse("v = " + value);

@@ -113,6 +113,16 @@ struct EnergyConfig {
     double gpu_static_mw = 60.0;               // GPU leakage over the frame's time
 };
 
+// Bounds on what the readers accept, so that a small hostile input cannot make
+// the program allocate without limit (docs/limits.md). Defaults lie far above
+// anything a real GPU trace or scene needs.
+struct InputConfig {
+    std::uint64_t max_line_bytes = std::uint64_t(1) << 20;           // trace line, after gzip inflation
+    std::uint64_t max_tile_fragments = std::uint64_t(1) << 24;       // collisionable fragments of one tile
+    std::uint64_t max_scene_bytes = std::uint64_t(64) << 20;         // scene file size
+    std::uint64_t max_scene_triangles = std::uint64_t(1) << 22;      // triangles of all objects of a scene
+};
+
 // --vcd: which blocks are traced and the window, in cycles.
 struct TraceConfig {
     bool feed = true, zeb = true, sorter = true, tester = true, output = true, memory = true;
@@ -133,6 +143,13 @@ struct SimConfig {
     GpuConfig gpu;
     EnergyConfig energy;
     TraceConfig trace;
+    InputConfig input;
+
+    // The longest run, in cycles, whose simulated time (cycles x clock period in
+    // ps) stays below 2^62 ps: a quarter of sc_time's 64-bit range, so that
+    // timing arithmetic inside a run cannot overflow. Readers refuse input whose
+    // work bound exceeds it (docs/limits.md).
+    std::uint64_t max_run_cycles() const;
 
     // Cross-key checks (ranges are checked as keys are set). Throws InputError.
     void validate() const;

@@ -17,9 +17,13 @@
 #include <stdexcept>
 #include <string_view>
 #include <unordered_set>
+#include <sstream>
 #include <vector>
 
+#include "common/config.h"
 #include "common/errors.h"
+#include "common/input_file.h"
+#include "io/gzip_stream.h"
 
 namespace rbcd {
 
@@ -29,9 +33,6 @@ constexpr std::uint64_t kTileWorkLimit = std::uint64_t(1) << 40;
 
 namespace {
 
-// Big reads keep syscall and zlib call overhead per fragment negligible.
-constexpr std::size_t kChunk = std::size_t(1) << 20;
-constexpr unsigned kGzInputBuffer = 256u << 10;
 // Above this many tiles in the screen grid a bitmap per frame would be too big
 // (1x1-pixel tiles on a 65535x65535 screen): fall back to a hash set.
 constexpr std::uint64_t kMaxBitmapTiles = std::uint64_t(1) << 27;
@@ -106,7 +107,8 @@ struct TraceReader::Impl {
     std::string path;
     TraceLimits lim;
     StreamHeader hdr;
-    gzFile gz = nullptr;
+    std::unique_ptr<GzipStream> in;
+    std::uint64_t work = 0;   // declared work so far, cycles (see TraceLimits)
 
     // Buffer invariants: [cur, data_end) is unread data; [cur, lines_end) holds
     // only whole lines, lines_end being just past a '\n'. One byte is kept spare
@@ -135,11 +137,6 @@ struct TraceReader::Impl {
     std::vector<std::uint64_t> tiles_in_frame;
     std::unordered_set<std::uint64_t> tile_set;
 
-    // Here, not in ~TraceReader: a constructor that throws must close too.
-    ~Impl() {
-        if (gz) gzclose(gz);
-    }
-
     [[noreturn]] void fail(const std::string& what) const { throw input_error_at(path, line, what); }
 
     void open();
@@ -156,25 +153,38 @@ struct TraceReader::Impl {
     bool other_given = false;   // the current tile has other=
     std::uint64_t start_frame(const Fields& fl);
     bool mark_tile(std::uint64_t idx);
+    Event end_tile(const Tile& t);
 };
 
+// The declared work of the tile just read joins the run's; refused past the
+// bound, before the simulation could reach a time 64-bit picoseconds cannot hold.
+FragmentSource::Event TraceReader::Impl::end_tile(const Tile& t) {
+    if (lim.max_work_cycles == 0) return Event::Tile;
+    std::uint64_t w = 0, setup = 0;
+    const bool over = __builtin_mul_overflow(std::uint64_t(t.frags.size()) + t.other, lim.cycles_per_fragment, &w) ||
+                      __builtin_mul_overflow(t.prims + t.cprims, lim.cycles_per_primitive, &setup) ||
+                      __builtin_add_overflow(w, setup, &w) || __builtin_add_overflow(w, lim.tile_overhead, &w) ||
+                      __builtin_add_overflow(w, t.base, &w) || __builtin_add_overflow(work, w, &work) ||
+                      work > lim.max_work_cycles;
+    if (over) {
+        std::ostringstream mhz;
+        mhz << lim.clock_mhz;
+        // The tile's last line is the one before cur.
+        throw input_error_at(path, line > 1 ? line - 1 : line,
+                             "the run is too long to simulate: the work declared up to tile " + num_str(tcol) + " " +
+                                 num_str(trow) + " of frame " + num_str(frame) +
+                                 " ((fragments + other=) x gpu.cycles_per_fragment + (prims= + cprims=) x gpu.setup_cycles_per_primitive + base=) exceeds " +
+                                 num_str(lim.max_work_cycles) + " cycles, the limit for clock.mhz = " + mhz.str() +
+                                 " (2^60 ps of simulated time; docs/limits.md)");
+    }
+    return Event::Tile;
+}
+
 void TraceReader::Impl::open() {
-    int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
-    struct stat st;
-    if (::fstat(fd, &st) == 0 && S_ISDIR(st.st_mode)) {
-        ::close(fd);
-        throw InputError(path + ": cannot open: " + std::strerror(EISDIR));
-    }
-    // gzdopen looks at the first two bytes (1f 8b) and reads anything else as
-    // plain text, so the file name plays no part.
-    gz = gzdopen(fd, "rb");
-    if (!gz) {
-        ::close(fd);
-        throw InputError(path + ": cannot open: out of memory");
-    }
-    gzbuffer(gz, kGzInputBuffer);
-    buf.resize(kChunk);
+    // The stream looks at the first two bytes (1f 8b) and reads anything else
+    // as plain text, so the file name plays no part.
+    in = std::make_unique<GzipStream>(open_input(path, "trace", true), lim.read_chunk);
+    buf.resize(std::max<std::size_t>(lim.read_chunk, 16) + 1);
     cur = lines_end = data_end = buf.data();
 }
 
@@ -188,6 +198,10 @@ bool TraceReader::Impl::fill() {
             return true;
         }
         std::size_t rem = static_cast<std::size_t>(data_end - cur);
+        // [cur, data_end) holds no newline: it is the start of one line.
+        if (rem > lim.max_line_bytes)
+            fail("line longer than " + num_str(lim.max_line_bytes) +
+                 " bytes (the limit input.max_line_bytes; docs/limits.md)");
         if (rem && cur != buf.data()) std::memmove(buf.data(), cur, rem);
         // A line longer than half the buffer: grow, so memory follows the
         // longest line, never the trace length.
@@ -195,22 +209,23 @@ bool TraceReader::Impl::fill() {
         cur = buf.data();
         data_end = cur + rem;
         lines_end = cur;
-        std::size_t room = buf.size() - 1 - rem;
-        if (room > INT_MAX) room = INT_MAX;
-        int n = gzread(gz, data_end, static_cast<unsigned>(room));
-        if (n <= 0) {
-            int err = Z_OK;
-            const char* msg = gzerror(gz, &err);
-            if (n < 0 || err != Z_OK) {
-                if (err == Z_ERRNO) fail(std::string("read error: ") + std::strerror(errno));
-                std::string why = msg ? msg : "unknown zlib error";
-                // zlib prefixes the name it was opened under, "<fd:N>" here.
-                if (why.compare(0, 4, "<fd:") == 0 && why.find(": ") != std::string::npos)
-                    why.erase(0, why.find(": ") + 2);
-                fail("corrupt or truncated gzip stream: " + why);
-            }
+        // Reads of at most max_line_bytes + 1 bytes: a line inside one read is
+        // within the limit; one that spans reads is measured below.
+        const std::size_t room = std::min({buf.size() - 1 - rem, lim.read_chunk,
+                                           static_cast<std::size_t>(std::min<std::uint64_t>(lim.max_line_bytes + 1, SIZE_MAX))});
+        const long n = in->read(data_end, room);
+        if (n < 0) fail(in->error());
+        if (n == 0) {
             eof = true;
             continue;
+        }
+        if (rem) {
+            const void* nl = std::memchr(data_end, '\n', static_cast<std::size_t>(n));
+            const std::size_t len = rem + (nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - data_end)
+                                              : static_cast<std::size_t>(n));
+            if (len > lim.max_line_bytes)
+                fail("line longer than " + num_str(lim.max_line_bytes) +
+                     " bytes (the limit input.max_line_bytes; docs/limits.md)");
         }
         char* fresh = data_end;
         data_end += n;
@@ -528,8 +543,25 @@ std::uint64_t TraceReader::Impl::start_frame(const Fields& fl) {
     return n;
 }
 
+TraceLimits trace_limits(const SimConfig& cfg) {
+    TraceLimits l;
+    l.tile_w = cfg.tile.width;
+    l.tile_h = cfg.tile.height;
+    l.id_bits = cfg.zeb.id_bits;
+    l.max_line_bytes = cfg.input.max_line_bytes;
+    l.max_tile_fragments = cfg.input.max_tile_fragments;
+    // A quarter of the run's cycle budget: the rest covers what the trace does
+    // not declare (sorting, testing, memory, per-tile and per-frame costs).
+    l.max_work_cycles = cfg.max_run_cycles() / 4;
+    l.cycles_per_fragment = std::max<std::uint64_t>(cfg.gpu.cycles_per_fragment, 1);
+    l.cycles_per_primitive = cfg.gpu.setup_cycles_per_primitive;
+    l.tile_overhead = cfg.gpu.tile_overhead_cycles;
+    l.clock_mhz = cfg.clock.mhz;
+    return l;
+}
+
 TraceReader::TraceReader(const std::string& path, const TraceLimits& limits) : impl_(std::make_unique<Impl>()) {
-    if (limits.tile_w < 1 || limits.tile_h < 1 || limits.id_bits < 1)
+    if (limits.tile_w < 1 || limits.tile_h < 1 || limits.id_bits < 1 || limits.read_chunk < 1)
         throw std::invalid_argument("TraceReader: tile size and id_bits must be at least 1");
     impl_->path = path;
     impl_->lim = limits;
@@ -550,10 +582,14 @@ FragmentSource::Event TraceReader::next(Tile& t) {
     Fields fl;
     for (;;) {
         if (m.cur == m.lines_end && !m.fill()) {
-            if (in_tile) return Event::Tile;
+            if (in_tile) return m.end_tile(t);
             m.ended = true;
             return Event::End;
         }
+        if (in_tile && t.frags.size() >= m.lim.max_tile_fragments && m.cur[0] == 'f')
+            m.fail("tile " + num_str(m.tcol) + " " + num_str(m.trow) + " has more than " +
+                   num_str(m.lim.max_tile_fragments) +
+                   " fragments (the limit input.max_tile_fragments; docs/limits.md)");
         if (in_tile && m.cur[0] == 'f' && (m.cur[1] == ' ' || m.cur[1] == '\t') && m.fast_fragment(t.frags)) continue;
 
         m.tokenize(m.cur, fl);
@@ -574,14 +610,14 @@ FragmentSource::Event TraceReader::next(Tile& t) {
         }
         // The record that ends a tile stays unread until the next call.
         if (key == "tile") {
-            if (in_tile) return Event::Tile;
+            if (in_tile) return m.end_tile(t);
             m.start_tile(fl, t);
             m.advance(fl.next);
             in_tile = true;
             continue;
         }
         if (key == "frame") {
-            if (in_tile) return Event::Tile;
+            if (in_tile) return m.end_tile(t);
             t.frame = m.start_frame(fl);
             m.advance(fl.next);
             return Event::Frame;

@@ -6,18 +6,38 @@
 
 #include "common/fragment.h"
 
+namespace rbcd { struct SimConfig; }
+
 namespace rbcd {
 
 // What the unit accepts; the trace is checked against it while it is read.
 struct TraceLimits {
     unsigned tile_w = 16, tile_h = 16;   // must equal the trace's tile_size
     unsigned id_bits = 7;                // object ids must fit
+    // Resource bounds (docs/limits.md); the messages name the key that raises them.
+    std::uint64_t max_line_bytes = std::uint64_t(1) << 20;        // input.max_line_bytes
+    std::uint64_t max_tile_fragments = std::uint64_t(1) << 24;    // input.max_tile_fragments
+    // The run's declared work, sum over tiles of (fragments + other) x
+    // cycles_per_fragment + (prims + cprims) x cycles_per_primitive +
+    // tile_overhead + base, may not exceed max_work_cycles (0: unchecked),
+    // so that simulated time stays far inside 64-bit picoseconds.
+    std::uint64_t max_work_cycles = 0;
+    std::uint64_t cycles_per_fragment = 1;
+    std::uint64_t cycles_per_primitive = 0;   // prims= and cprims= setups
+    std::uint64_t tile_overhead = 0;          // per tile record
+    double clock_mhz = 0;                // for the message only
+    // Bytes per read(2) of the file; small values exercise buffer refills (tests, fuzzing).
+    std::size_t read_chunk = std::size_t(1) << 20;
 };
+
+// The limits rbcd-sim applies for a configuration.
+TraceLimits trace_limits(const SimConfig& cfg);
 
 class TraceReader final : public FragmentSource {
 public:
     // Reads the magic and header records. Throws InputError ("file:line: ...")
-    // on malformed input or when the file cannot be opened ("file: cannot open: ...").
+    // on malformed input, or cannot_read_message() when the file cannot be
+    // opened or is not a regular file. "-" reads standard input.
     TraceReader(const std::string& path, const TraceLimits& limits);
     ~TraceReader() override;
     const StreamHeader& header() const override;

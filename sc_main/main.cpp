@@ -17,6 +17,7 @@
 #include "common/errors.h"
 #include "io/prefetch_source.h"
 #include "io/frame_range_source.h"
+#include "common/input_file.h"
 #include "io/trace_reader.h"
 #include "io/trace_writer.h"
 #include "sc_main/collision_file.h"
@@ -27,6 +28,7 @@
 #include "report/stats_report.h"
 #include "sc_main/provenance.h"
 #include "hw/rbcd_system.h"
+#include "hw/self_check.h"
 
 namespace {
 
@@ -91,11 +93,12 @@ int run(const Options& opt) {
 
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
-    const scene::SceneLimits scene_limits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits};
+    const scene::SceneLimits scene_limits{cfg.tile.width,           cfg.tile.height,
+                                          cfg.zeb.id_bits,          cfg.input.max_scene_bytes,
+                                          cfg.input.max_scene_triangles, cfg.input.max_tile_fragments};
     if (!opt.trace.empty()) {
         // Parsed a few tiles ahead on another core (io/prefetch_source.h).
-        src = std::make_unique<PrefetchSource>(
-            std::make_unique<TraceReader>(opt.trace, TraceLimits{cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits}));
+        src = std::make_unique<PrefetchSource>(std::make_unique<TraceReader>(opt.trace, trace_limits(cfg)));
     } else {
         auto s = opt.scene.empty()
                      ? scene::SceneSource::from_text(scene::default_scene_text(), "", "<default scene>", scene_limits)
@@ -139,23 +142,11 @@ int run(const Options& opt) {
 
     // --write-trace: the stream the unit saw, replayable with --trace.
     std::unique_ptr<TraceWriter> trace_out;
-    std::string trace_tmp;
+    OutputFile trace_file;   // the temporary beside the path, or the path itself when not a regular file
     if (!opt.write_trace.empty()) {
-        if (std::filesystem::is_directory(opt.write_trace))
-            throw InputError(opt.write_trace + ": cannot create: is a directory");
-        trace_tmp = opt.write_trace + ".tmp." + std::to_string(::getpid());
-        trace_out = std::make_unique<TraceWriter>(trace_tmp, src->header());
+        trace_file = OutputFile(opt.write_trace);
+        trace_out = std::make_unique<TraceWriter>(trace_file.open_file_path(), src->header());
     }
-    if (!trace_tmp.empty()) remove_on_interrupt(trace_tmp);
-    struct TraceTmpGuard {
-        std::string tmp, path;
-        bool keep = false;
-        ~TraceTmpGuard() {
-            if (keep || tmp.empty()) return;
-            ::unlink(tmp.c_str());
-            ::unlink(path.c_str());
-        }
-    } trace_guard{trace_tmp, opt.write_trace};
     struct ImageGuard {
         ImageSink* sink;
         bool keep = false;
@@ -192,14 +183,13 @@ int run(const Options& opt) {
     } watch(sys, trace_out.get());
     sys.raster.add_observer(&watch);
     sys.run();
+    if (const std::string bad = self_check(self_check_counters(sys)); !bad.empty()) throw std::runtime_error(bad);
     Progress& progress = watch.progress;
     progress.finish();
     if (images) images->finish();
     if (trace_out) {
         trace_out->close();
-        if (std::rename(trace_tmp.c_str(), opt.write_trace.c_str()) != 0)
-            throw InputError(opt.write_trace + ": cannot create: " + std::strerror(errno));
-        trace_guard.keep = true;
+        trace_file.commit();
     }
     image_guard.keep = true;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -236,7 +226,9 @@ std::vector<std::string> option_values(int argc, char* argv[], std::initializer_
 }
 
 int fail(int status, const std::string& msg, int argc, char* argv[]) {
-    std::fprintf(stderr, "rbcd-sim: %s\n", msg.c_str());
+    // One line whatever the input held: control bytes from files, --set values
+    // or library messages (toml++) are escaped here, in one place.
+    std::fprintf(stderr, "rbcd-sim: %s\n", rbcd::escape_for_message(msg).c_str());
     // formats.md: on a non-zero exit nothing stands at an output path, not even an
     // older file; but an output path that names one of the inputs is the input.
     const auto inputs = option_values(argc, argv, {"--trace", "--scene", "--config"});
@@ -295,13 +287,13 @@ int sc_main(int argc, char* argv[]) {
     CLI::App app{"rbcd-sim: SystemC/TLM-2.0 model of the RBCD collision-detection unit"};
     app.add_option("--config", opt.config_file, "TOML configuration file");
     app.add_option("--set", opt.sets, "KEY=VALUE, applied after --config in order (repeatable)")->take_all();
-    auto* trace_opt = app.add_option("--trace", opt.trace, "fragment trace (.rbt, plain or gzip)");
+    auto* trace_opt = app.add_option("--trace", opt.trace, "fragment trace (.rbt, plain or gzip; - reads standard input)");
     app.add_option("--scene", opt.scene, "3D scene (TOML) rendered by the tile-based rasterizer feed")
         ->excludes(trace_opt);
     app.add_option("--frames", opt.frames, "A:B: run only frames A..B of the input (their numbers kept; docs/sweeps.md)");
     app.add_option("--write-trace", opt.write_trace, "also save the fragment stream the unit saw as a .rbt trace");
     app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");
-    app.add_option("--collisions", opt.collisions, "write the collision records here");
+    app.add_option("--collisions", opt.collisions, "write the collision records here (- for standard output)");
     app.add_option("--stats", opt.stats, "write statistics JSON here");
     app.add_option("--frame-stats", opt.frame_stats,
                    "write per-frame figures here, one JSON object a line, as frames end (docs/stats.md)");

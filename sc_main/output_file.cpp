@@ -1,22 +1,21 @@
 #include "sc_main/output_file.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <stdexcept>
-#include <csignal>
-#include <sys/stat.h>
-#include <vector>
-#include <unistd.h>
 #include <utility>
+#include <vector>
 
 #include "common/errors.h"
 
 namespace rbcd {
 
 namespace {
-// unlink, not remove: a path that names a directory is never deleted.
-void unlink_file(const std::string& p) { ::unlink(p.c_str()); }
-
 // Paths to remove if the run is interrupted: filled before the simulation
 // starts and read-only afterwards, so the signal handler may walk it.
 std::vector<std::string>& cleanup_paths() {
@@ -27,6 +26,34 @@ std::vector<std::string>& cleanup_paths() {
 extern "C" void on_fatal_signal(int sig) {
     for (const auto& p : cleanup_paths()) ::unlink(p.c_str());
     ::_exit(128 + sig);
+}
+
+void forget_on_interrupt(const std::string& path) {
+    // Only before the simulation runs (see cleanup_paths), or after it.
+    auto& v = cleanup_paths();
+    for (auto& p : v)
+        if (p == path) p.clear();
+}
+
+// What lstat says stands at the path: written in place unless it is a regular
+// file or nothing.
+bool needs_in_place(const std::string& path) {
+    if (path == "-") return true;
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) != 0) return false;
+    return !S_ISREG(st.st_mode);
+}
+
+std::string dir_of(const std::string& path) {
+    const auto slash = path.rfind('/');
+    if (slash == std::string::npos) return ".";
+    if (slash == 0) return "/";
+    return path.substr(0, slash);
+}
+
+std::string base_of(const std::string& path) {
+    const auto slash = path.rfind('/');
+    return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 } // namespace
 
@@ -49,20 +76,45 @@ bool same_file(const std::string& a, const std::string& b) {
 }
 
 void discard_output(const std::string& path) {
-    if (!path.empty()) unlink_file(path);
+    if (path.empty() || needs_in_place(path)) return;
+    ::unlink(path.c_str());   // unlink, not remove: never a directory
 }
 
 OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
     struct stat st {};
     if (::stat(path_.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
         throw InputError(path_ + ": cannot create: is a directory");
-    tmp_ = path_ + ".tmp." + std::to_string(::getpid());
-    // An older result must not outlive this run, even one killed before it
-    // could clean up: it goes now, and the temporary on an interrupt.
-    unlink_file(path_);
-    remove_on_interrupt(tmp_);
-    f_ = std::fopen(tmp_.c_str(), "wb");
-    if (!f_) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
+    int fd = -1;
+    if (needs_in_place(path_)) {
+        in_place_ = true;
+        fd = path_ == "-" ? ::fcntl(1, F_DUPFD_CLOEXEC, 3)
+                          : ::open(path_.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+        if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
+        // A symlink to a regular file is written through, from the start.
+        if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && path_ != "-") (void)::ftruncate(fd, 0);
+    } else {
+        // An older result must not outlive this run, even one killed before it
+        // could clean up: it goes now (formats.md).
+        ::unlink(path_.c_str());
+        std::string tmpl = dir_of(path_) + "/." + base_of(path_) + ".XXXXXX";
+        // mkostemp: O_CREAT|O_EXCL with a random name, so nothing planted at a
+        // predictable name (a symlink) can redirect the output.
+        fd = ::mkostemp(tmpl.data(), O_CLOEXEC);
+        if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
+        tmp_ = tmpl;
+        remove_on_interrupt(tmp_);
+        // mkstemp creates 0600; the result gets what fopen would give it.
+        const mode_t mask = ::umask(0);
+        ::umask(mask);
+        (void)::fchmod(fd, 0666 & ~mask);
+    }
+    f_ = ::fdopen(fd, "wb");
+    if (!f_) {
+        const std::string why = std::strerror(errno);
+        ::close(fd);
+        abandon();
+        throw InputError(path_ + ": cannot create: " + why);
+    }
     std::setvbuf(f_, nullptr, _IOFBF, 1 << 20);
 }
 
@@ -74,11 +126,16 @@ OutputFile& OutputFile::operator=(OutputFile&& o) noexcept {
     if (this != &o) {
         abandon();
         path_ = std::move(o.path_);
-        tmp_ = std::move(o.tmp_);
+        tmp_ = std::exchange(o.tmp_, std::string());
         f_ = std::exchange(o.f_, nullptr);
+        in_place_ = o.in_place_;
         failed_ = o.failed_;
     }
     return *this;
+}
+
+std::string OutputFile::open_file_path() const {
+    return f_ ? "/proc/self/fd/" + std::to_string(::fileno(f_)) : std::string();
 }
 
 void OutputFile::write(const char* p, std::size_t n) {
@@ -88,20 +145,21 @@ void OutputFile::write(const char* p, std::size_t n) {
 void OutputFile::commit() {
     if (!f_) return;
     const bool flushed = std::fflush(f_) == 0 && !std::ferror(f_);
+    const int flush_errno = errno;
     const bool closed = std::fclose(f_) == 0;
     f_ = nullptr;
     if (failed_ || !flushed || !closed) {
-        const std::string why = std::strerror(errno);
-        unlink_file(tmp_);
-        unlink_file(path_);
+        const std::string why = std::strerror(flushed ? errno : flush_errno);
+        abandon();
         throw std::runtime_error(path_ + ": write failed: " + why);
     }
+    if (in_place_) return;
     if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
         const std::string why = std::strerror(errno);
-        unlink_file(tmp_);
-        unlink_file(path_);
+        abandon();
         throw std::runtime_error(path_ + ": cannot rename into place: " + why);
     }
+    forget_on_interrupt(tmp_);
     tmp_.clear();
 }
 
@@ -111,8 +169,8 @@ void OutputFile::abandon() {
         f_ = nullptr;
     }
     if (!tmp_.empty()) {
-        unlink_file(tmp_);
-        unlink_file(path_);
+        ::unlink(tmp_.c_str());   // ours; whatever stands at path_ is not
+        forget_on_interrupt(tmp_);
         tmp_.clear();
     }
 }

@@ -1,13 +1,20 @@
-// An output that appears at its path only when the run succeeds: written to a
-// temporary beside it, renamed on commit. formats.md: on any non-zero exit no
-// file is left at an output path, not even an older one.
+// An output that appears at its path only when the run succeeds (formats.md: on
+// any non-zero exit no file is left at an output path, not even an older one).
+//
+// A path that is a regular file or does not exist yet is written through a
+// temporary beside it: created by mkstemp (unpredictable name, O_EXCL, so a
+// planted symlink is never followed), renamed over the path on commit, removed
+// on failure. Anything else at the path (a device, a FIFO, a socket, a symlink,
+// /dev/stdout, or "-" for standard output) is written in place: opened as it
+// is, never unlinked, never replaced by a regular file. docs/limits.md.
 #pragma once
 #include <cstdio>
 #include <string>
 
 namespace rbcd {
 
-// Removes a file left at an output path by an earlier run (never a directory).
+// Removes a regular file left at an output path by an earlier run; anything
+// else there (directory, device, FIFO, symlink) is left alone.
 void discard_output(const std::string& path);
 // On SIGINT, SIGTERM or SIGHUP the path is unlinked before the process exits.
 // Call before the simulation starts.
@@ -18,7 +25,8 @@ bool same_file(const std::string& a, const std::string& b);
 class OutputFile {
 public:
     OutputFile() = default;
-    // Creates the temporary; throws InputError naming the path when it cannot.
+    // Opens the temporary (or the path in place); throws InputError naming the
+    // path when it cannot.
     explicit OutputFile(std::string path);
     ~OutputFile();
     OutputFile(const OutputFile&) = delete;
@@ -27,17 +35,23 @@ public:
     OutputFile& operator=(OutputFile&& o) noexcept;
 
     bool active() const { return f_ != nullptr; }
+    bool in_place() const { return in_place_; }
     const std::string& path() const { return path_; }
+    // A path naming the open file itself (/proc/self/fd/N), for writers that
+    // open their own stream by name; what they write is committed with this.
+    std::string open_file_path() const;
     void write(const std::string& s) { write(s.data(), s.size()); }
     void write(const char* p, std::size_t n);
-    // Flush, close, rename over the path. Throws std::runtime_error on I/O errors.
+    // Flush, close, rename over the path (in place: flush and close). Throws
+    // std::runtime_error on I/O errors.
     void commit();
-    // Removes the temporary and whatever stands at the path.
+    // Removes the temporary this run created; nothing else.
     void abandon();
 
 private:
     std::string path_, tmp_;
     std::FILE* f_ = nullptr;
+    bool in_place_ = false;
     bool failed_ = false;
 };
 

@@ -6,6 +6,13 @@
 #include <fstream>
 #include <regex>
 #include <sstream>
+#include <cerrno>
+#include <cstring>
+#include <csignal>
+#include <unistd.h>
+#include <sys/wait.h>
+#include <fcntl.h>
+#include <cstdio>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -139,6 +146,12 @@ void append_node(const aiScene* s, const aiNode* node, const aiMatrix4x4& parent
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const aiFace& face = mesh->mFaces[f];
             if (face.mNumIndices != 3) continue;   // points and lines cover nothing
+            // assimp passes through indices a file gets wrong (found by fuzzing).
+            if (face.mIndices[0] >= mesh->mNumVertices || face.mIndices[1] >= mesh->mNumVertices ||
+                face.mIndices[2] >= mesh->mNumVertices) {
+                out.bad_index = true;
+                continue;
+            }
             std::uint32_t a = base + face.mIndices[0], b = base + face.mIndices[1], c = base + face.mIndices[2];
             if (mirror) std::swap(b, c);
             out.tris.push_back({a, b, c});
@@ -189,7 +202,42 @@ Mesh builtin_mesh(const std::string& shape, unsigned segments) {
     throw std::logic_error("builtin_mesh: unknown shape " + shape);
 }
 
-bool load_mesh_file(const std::string& path, Mesh& out, std::string& error) {
+std::uint64_t builtin_triangles(const std::string& shape, unsigned segments) {
+    const std::uint64_t s = segments;
+    if (shape == "sphere") return 2 * s * (std::max<std::uint64_t>(2, s / 2) - 1);
+    if (shape == "box") return 12;
+    if (shape == "torus") return 2 * s * std::max<std::uint64_t>(3, s / 2);
+    if (shape == "cylinder") return 4 * s;
+    throw std::logic_error("builtin_triangles: unknown shape " + shape);
+}
+
+namespace {
+// assimp 5.2 (Debian) never returns from a PLY file whose header lacks its
+// end_header line (found by fuzzing): such a file is refused before assimp
+// sees it. The header is text at the start of the file, in any PLY variant.
+bool ply_header_ok(const std::string& path, std::string& error) {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) return true;   // assimp reports it
+    std::string head(65536, '\0');
+    head.resize(std::fread(head.data(), 1, head.size(), f));
+    std::fclose(f);
+    // assimp takes a file for PLY by its extension or by "ply" at the start.
+    std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (head.compare(0, 3, "ply") != 0 && ext != ".ply") return true;
+    for (std::size_t at = head.find("end_header"); at != std::string::npos; at = head.find("end_header", at + 1)) {
+        const bool line_start = at > 0 && (head[at - 1] == '\n' || head[at - 1] == '\r');
+        const std::size_t e = at + 10;
+        const bool line_end = e < head.size() && (head[e] == '\n' || head[e] == '\r' || head[e] == ' ');
+        if (line_start && line_end) return true;
+    }
+    error = "PLY header without an end_header line in its first 64 KiB";
+    return false;
+}
+} // namespace
+
+bool load_mesh_file_in_process(const std::string& path, Mesh& out, std::string& error) {
+    if (!ply_header_ok(path, error)) return false;
     Assimp::Importer imp;
     const aiScene* s = imp.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
     if (!s || !s->mRootNode || (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
@@ -200,6 +248,11 @@ bool load_mesh_file(const std::string& path, Mesh& out, std::string& error) {
     }
     out = Mesh{};
     append_node(s, s->mRootNode, aiMatrix4x4(), out);
+    if (out.bad_index) {
+        out = Mesh{};
+        error = "a face refers to a vertex the mesh does not have";
+        return false;
+    }
     if (out.tris.empty()) {
         error = "it holds no triangles";
         return false;
@@ -210,6 +263,96 @@ bool load_mesh_file(const std::string& path, Mesh& out, std::string& error) {
             return false;
         }
     }
+    return true;
+}
+
+} // namespace rbcd::scene
+
+namespace rbcd::scene {
+namespace {
+bool write_all(int fd, const void* p, std::size_t n) {
+    const char* c = static_cast<const char*>(p);
+    while (n) {
+        const ssize_t k = ::write(fd, c, n);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) return false;
+        c += k;
+        n -= static_cast<std::size_t>(k);
+    }
+    return true;
+}
+} // namespace
+
+// assimp is a large parser of hostile files that can abort or loop (fuzzing
+// found both, docs/limits.md): it runs in a child process with a time limit,
+// and the mesh comes back through a pipe. A crash or a timeout is an error
+// naming the file, never the end of rbcd-sim.
+bool load_mesh_file(const std::string& path, Mesh& out, std::string& error, unsigned timeout_s) {
+    int p[2];
+    if (::pipe2(p, O_CLOEXEC) != 0) return load_mesh_file_in_process(path, out, error);
+    std::fflush(nullptr);
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+        ::close(p[0]);
+        ::close(p[1]);
+        return load_mesh_file_in_process(path, out, error);
+    }
+    if (pid == 0) {
+        ::close(p[0]);
+        ::alarm(timeout_s);
+        Mesh m;
+        std::string err;
+        const std::uint8_t ok = load_mesh_file_in_process(path, m, err) ? 1 : 0;
+        const std::uint64_t nv = m.verts.size(), nt = m.tris.size(), ne = err.size();
+        bool w = write_all(p[1], &ok, 1) && write_all(p[1], &nv, 8) && write_all(p[1], &nt, 8) &&
+                 write_all(p[1], &ne, 8) && write_all(p[1], err.data(), err.size());
+        for (const auto& v : m.verts) w = w && write_all(p[1], v.data(), 3 * sizeof(double));
+        if (nt) w = w && write_all(p[1], m.tris.data(), nt * sizeof(m.tris[0]));
+        ::_exit(w ? 0 : 1);
+    }
+    ::close(p[1]);
+    std::string data;
+    char buf[65536];
+    for (;;) {
+        const ssize_t k = ::read(p[0], buf, sizeof buf);
+        if (k < 0 && errno == EINTR) continue;
+        if (k <= 0) break;
+        data.append(buf, static_cast<std::size_t>(k));
+    }
+    ::close(p[0]);
+    int st = 0;
+    while (::waitpid(pid, &st, 0) < 0 && errno == EINTR) {}
+    if (WIFSIGNALED(st)) {
+        error = WTERMSIG(st) == SIGALRM ? "the mesh reader (assimp) did not finish within " + std::to_string(timeout_s) + " s"
+                                        : "the mesh reader (assimp) crashed (signal " + std::to_string(WTERMSIG(st)) + ")";
+        return false;
+    }
+    std::size_t at = 0;
+    auto take = [&](void* dst, std::size_t n) {
+        if (data.size() - at < n) return false;
+        std::memcpy(dst, data.data() + at, n);
+        at += n;
+        return true;
+    };
+    std::uint8_t ok = 0;
+    std::uint64_t nv = 0, nt = 0, ne = 0;
+    if (!WIFEXITED(st) || WEXITSTATUS(st) != 0 || !take(&ok, 1) || !take(&nv, 8) || !take(&nt, 8) || !take(&ne, 8) ||
+        data.size() - at < ne) {
+        error = "the mesh reader (assimp) failed";
+        return false;
+    }
+    error.assign(data, at, ne);
+    at += ne;
+    if (!ok) return false;
+    if ((data.size() - at) != nv * 3 * sizeof(double) + nt * sizeof(out.tris[0])) {
+        error = "the mesh reader (assimp) failed";
+        return false;
+    }
+    out = Mesh{};
+    out.verts.resize(nv);
+    for (auto& v : out.verts) take(v.data(), 3 * sizeof(double));
+    out.tris.resize(nt);
+    if (nt) take(out.tris.data(), nt * sizeof(out.tris[0]));
     return true;
 }
 

@@ -124,6 +124,12 @@ void SceneRenderer::project(const Eigen::Vector4d& clip, ScreenVert& out) const 
     const double sx = (clip.x() * iw * 0.5 + 0.5) * double(desc_.width);
     const double sy = (0.5 - clip.y() * iw * 0.5) * double(desc_.height);   // screen y grows downwards
     const double z = (clip.z() * iw * 0.5 + 0.5) * double(kDepthMax);
+    // Refused by begin_frame: converting NaN or inf to an integer is undefined.
+    if (!(std::isfinite(sx) && std::isfinite(sy) && std::isfinite(z) && std::abs(sx) < 1e9 && std::abs(sy) < 1e9)) {
+        nonfinite_ = true;
+        out = ScreenVert{0, 0, 0.0};
+        return;
+    }
     out.x = static_cast<std::int32_t>(std::llround(sx * double(kSub)));
     out.y = static_cast<std::int32_t>(std::llround(sy * double(kSub)));
     out.z = std::clamp(z, 0.0, double(kDepthMax));
@@ -162,7 +168,19 @@ void SceneRenderer::begin_frame(std::uint64_t f) {
                 clip_and_setup(c, obj_index, obj, mirrored);
             }
         }
+        if (nonfinite_ || !mvp.allFinite()) throw_nonfinite(oi, f);
     }
+}
+
+void SceneRenderer::throw_nonfinite(std::size_t oi, std::uint64_t f) const {
+    const ObjectDesc& od = desc_.objects[oi];
+    std::size_t k = 0;   // the key in force at frame f
+    while (k + 1 < od.keys.size() && od.keys[k + 1].frame <= f) ++k;
+    const std::string key = k == 0 ? od.key_path : od.key_path + ".key[" + std::to_string(k - 1) + "]";
+    throw input_error_at(desc_.display_name, od.keys[k].line,
+                         key + ": at frame " + std::to_string(f) +
+                             " the transform (position, rotation, scale) with the camera makes a projected "
+                             "coordinate or depth non-finite or out of range");
 }
 
 void SceneRenderer::clip_and_setup(const Eigen::Vector4d* c[3], std::uint16_t obj_index, const Object& obj, bool mirrored) {

@@ -75,6 +75,7 @@ private:
                const Object& obj, bool mirrored);
     void clip_and_setup(const Eigen::Vector4d* c[3], std::uint16_t obj_index, const Object& obj, bool mirrored);
     void bin(std::uint32_t tri_index);
+    [[noreturn]] void throw_nonfinite(std::size_t object, std::uint64_t frame) const;
     void raster_tile(unsigned col, unsigned row, Tile& tile, SceneSource::FrameImage* image);
 
     SceneDesc desc_;
@@ -91,6 +92,7 @@ private:
     std::vector<Eigen::Vector4d> clip_;
     std::vector<std::uint8_t> outcode_;
     std::vector<ScreenVert> screen_;
+    mutable bool nonfinite_ = false;   // set by project(): a coordinate NaN, inf or far out of range
 };
 
 } // namespace rbcd::scene

@@ -6,15 +6,22 @@
 #include <initializer_list>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <Eigen/Geometry>
 #include <toml++/toml.h>
 
 #include "common/errors.h"
+#include "common/input_file.h"
+#include "scene/mesh.h"
 
 namespace rbcd::scene {
 namespace {
 
 constexpr const char* kFormat = "rbcd-scene 1";
+constexpr double kMaxCoordinate = 1e9;
+// A scale component this close to zero makes the transform singular.
+constexpr double kSingular = 1e-9;
 const char* const kBuiltins[] = {"sphere", "box", "torus", "cylinder"};
 
 struct Reader {
@@ -43,7 +50,10 @@ struct Reader {
     // Every key of `t` must be one of `allowed`: a misspelt key would otherwise
     // silently fall back to a default.
     void only_keys(const toml::table& t, const std::string& path, std::initializer_list<const char*> allowed) const {
-        for (auto&& [k, v] : t) {
+        for (auto&& kv : t) {
+            // Named, not a structured binding: clang 14 cannot capture those in a lambda.
+            const toml::key& k = kv.first;
+            const toml::node& v = kv.second;
             bool ok = std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return k.str() == a; });
             if (!ok) {
                 std::string list;
@@ -90,7 +100,15 @@ struct Reader {
         auto a = n.as_array();
         if (!a || a->size() != 3) fail(n, key + ": expected an array of 3 numbers");
         Eigen::Vector3d v;
-        for (int i = 0; i < 3; ++i) v[i] = number(*a->get(static_cast<std::size_t>(i)), key);
+        for (int i = 0; i < 3; ++i) {
+            const toml::node& e = *a->get(static_cast<std::size_t>(i));
+            v[i] = number(e, key);
+            // Far beyond any scene, and small enough that products of
+            // transforms and the projection stay finite and precise.
+            if (std::abs(v[i]) > kMaxCoordinate)
+                fail(e, key + ": component " + std::to_string(i) + " beyond +-1e9 (the documented limit of " +
+                            "positions, angles and scales; docs/limits.md)");
+        }
         return v;
     }
 
@@ -119,7 +137,9 @@ void read_camera(const Reader& rd, const toml::table& t, unsigned long line, Cam
     if (auto n = t.get("up")) cam.up = rd.vec3(*n, "camera.up");
     const toml::node& fov = need("fov_y");
     cam.fov_y = rd.number(fov, "camera.fov_y");
-    if (!(cam.fov_y > 0.0 && cam.fov_y < 180.0)) rd.fail(fov, "camera.fov_y: must lie strictly between 0 and 180 degrees");
+    if (!(cam.fov_y >= kMinFovY && cam.fov_y < 180.0))
+        rd.fail(fov, "camera.fov_y: must lie between 0.01 (the documented minimum: narrower views lose fragments "
+                     "to rounding) and 180 degrees (180 excluded)");
     const toml::node& nn = need("near");
     cam.near = rd.number(nn, "camera.near");
     if (!(cam.near > 0.0)) rd.fail(nn, "camera.near: must be > 0");
@@ -173,10 +193,15 @@ ObjectDesc read_object(const Reader& rd, const toml::table& t, std::size_t index
         if (mp.is_relative() && !base_dir.empty()) mp = fs::path(base_dir) / mp;
         std::error_code ec;
         if (!fs::is_regular_file(mp, ec)) {
-            if (!mp.has_extension())
+            if (!mp.has_extension() && !fs::exists(mp, ec))
                 rd.fail(*mesh, p + ".mesh: unknown shape '" + o.mesh +
                                    "' (built-in shapes: sphere, box, torus, cylinder; otherwise a mesh file path)");
-            rd.fail(*mesh, p + ".mesh: mesh file '" + mp.string() + "' not found");
+        }
+        // The same wording as every other input that cannot be read.
+        try {
+            ::close(open_input(mp.string(), "mesh file"));
+        } catch (const InputError& e) {
+            rd.fail(*mesh, p + ".mesh: " + e.what());
         }
         o.mesh = mp.string();
     }
@@ -264,6 +289,7 @@ SceneDesc parse_scene(const std::string& toml_text, const std::string& display_n
     if (limits.id_bits < 1 || limits.id_bits > 31) throw InputError(display_name + ": id_bits must be 1..31");
     if (limits.tile_w < 1 || limits.tile_h < 1) throw InputError(display_name + ": the tile size must be at least 1x1");
 
+    check_toml_text(toml_text, display_name);
     toml::table root;
     try {
         root = toml::parse(toml_text, display_name);
@@ -308,23 +334,66 @@ SceneDesc parse_scene(const std::string& toml_text, const std::string& display_n
     }
 
     // Scale components interpolate linearly, so a sign change between keys
-    // passes through zero; only whole frames are rendered, hence checked.
+    // passes through zero; only whole frames are rendered, hence checked. Each
+    // segment between two keys is solved for where a component comes within
+    // kSingular of zero, and only the frames around there are evaluated (with
+    // transform_at itself): linear in the number of keys, not of frames.
     for (const ObjectDesc& o : sc.objects) {
-        for (std::uint64_t f = 0; f < sc.frames; ++f) {
-            Transform t = transform_at(o, f);
-            if (std::abs(t.scale.x()) < 1e-9 || std::abs(t.scale.y()) < 1e-9 || std::abs(t.scale.z()) < 1e-9) {
-                // The key at f, or the one the interpolation heads for.
-                auto it = std::lower_bound(o.keys.begin(), o.keys.end(), f,
-                                           [](const Keyframe& k, std::uint64_t fr) { return k.frame < fr; });
-                const Keyframe& k = (it == o.keys.end()) ? o.keys.back() : *it;
-                std::ostringstream s;
-                s << o.key_path << ".scale: the transform is singular (determinant 0) at frame " << f << " (scale ["
-                  << t.scale.x() << ", " << t.scale.y() << ", " << t.scale.z() << "])";
-                rd.fail(k.scale_line ? k.scale_line : k.line, s.str());
+        std::uint64_t first = UINT64_MAX;
+        for (std::size_t ki = 0; ki < o.keys.size() && first == UINT64_MAX; ++ki) {
+            const Keyframe& a = o.keys[ki];
+            if (a.frame >= sc.frames) break;
+            const bool last = ki + 1 == o.keys.size();
+            const std::uint64_t end = last ? a.frame : std::min(o.keys[ki + 1].frame, sc.frames - 1);
+            std::vector<std::uint64_t> cand{a.frame, end};
+            if (!last) {
+                const Keyframe& b = o.keys[ki + 1];
+                const double span = double(b.frame - a.frame);
+                for (int c = 0; c < 3; ++c) {
+                    const double sa = a.t.scale[c], sb = b.t.scale[c];
+                    if (sa == sb) continue;
+                    for (double target : {-kSingular, 0.0, kSingular}) {
+                        const double f = double(a.frame) + (target - sa) / (sb - sa) * span;
+                        if (!(f >= double(a.frame) - 2.0 && f <= double(end) + 2.0)) continue;
+                        const auto base = static_cast<std::int64_t>(std::floor(f));
+                        for (std::int64_t d = -2; d <= 2; ++d) {
+                            const std::int64_t g = base + d;
+                            if (g >= std::int64_t(a.frame) && std::uint64_t(g) <= end) cand.push_back(std::uint64_t(g));
+                        }
+                    }
+                }
             }
-            // Past the last key nothing changes.
-            if (f >= o.keys.back().frame) break;
+            for (std::uint64_t f : cand) {
+                const Transform t = transform_at(o, f);
+                if (std::abs(t.scale.x()) < kSingular || std::abs(t.scale.y()) < kSingular ||
+                    std::abs(t.scale.z()) < kSingular)
+                    first = std::min(first, f);
+            }
         }
+        if (first != UINT64_MAX) {
+            const std::uint64_t f = first;
+            const Transform t = transform_at(o, f);
+            // The key at f, or the one the interpolation heads for.
+            auto it = std::lower_bound(o.keys.begin(), o.keys.end(), f,
+                                       [](const Keyframe& k, std::uint64_t fr) { return k.frame < fr; });
+            const Keyframe& k = (it == o.keys.end()) ? o.keys.back() : *it;
+            std::ostringstream s;
+            s << o.key_path << ".scale: the transform is singular (determinant 0) at frame " << f << " (scale ["
+              << t.scale.x() << ", " << t.scale.y() << ", " << t.scale.z() << "])";
+            rd.fail(k.scale_line ? k.scale_line : k.line, s.str());
+        }
+    }
+
+    // Meshes are built once per shape and tessellation, but every object's
+    // triangles are set up each frame: their sum bounds the memory per frame.
+    std::uint64_t triangles = 0;
+    for (const ObjectDesc& o : sc.objects) {
+        if (!o.builtin) continue;
+        triangles += builtin_triangles(o.mesh, o.segments);
+        if (triangles > limits.max_scene_triangles)
+            rd.fail(o.mesh_line, o.key_path + ".mesh: the scene's objects add up to more than " +
+                                     std::to_string(limits.max_scene_triangles) +
+                                     " triangles (the limit input.max_scene_triangles; docs/limits.md)");
     }
     return sc;
 }

@@ -58,6 +58,9 @@ struct SceneDesc {
 // 32 bits and edge functions in 64 bits (see renderer.cpp).
 constexpr unsigned kMaxScreenSide = 8192;
 constexpr std::uint64_t kMaxFrames = 100000000;
+// Narrowest camera.fov_y, degrees: below it projected coordinates lose the
+// precision the rasterizer needs (docs/limits.md).
+constexpr double kMinFovY = 0.01;
 
 // Throws InputError naming display_name:line and the key on any violation.
 SceneDesc parse_scene(const std::string& toml_text, const std::string& display_name,

@@ -2,41 +2,43 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "common/errors.h"
+#include "common/input_file.h"
 #include "scene/renderer.h"
 
 namespace rbcd::scene {
 
 namespace {
 
-std::string read_text_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path + ": cannot open scene file");
-    std::ostringstream s;
-    s << in.rdbuf();
-    if (in.bad()) throw InputError(path + ": cannot read scene file");
-    return s.str();
+// A regular file of bounded size: the whole text is parsed at once.
+std::string read_text_file(const std::string& path, const SceneLimits& limits) {
+    return read_input_text(path, "scene file", limits.max_scene_bytes, "input.max_scene_bytes");
 }
 
 } // namespace
 
 SceneSource::SceneSource(const std::string& path, const SceneLimits& limits)
     : SceneSource(std::make_unique<SceneRenderer>(
-                      parse_scene(read_text_file(path), path, std::filesystem::path(path).parent_path().string(), limits),
+                      parse_scene(read_text_file(path, limits), path, std::filesystem::path(path).parent_path().string(), limits),
                       limits),
                   path, limits) {}
 
 SceneSource::SceneSource(std::unique_ptr<SceneRenderer> r, std::string name, const SceneLimits& limits)
-    : r_(std::move(r)), name_(std::move(name)) {
+    : r_(std::move(r)), name_(std::move(name)), max_tile_fragments_(limits.max_tile_fragments) {
     const SceneDesc& d = r_->desc();
     header_.screen_w = d.width;
     header_.screen_h = d.height;
     header_.tile_w = limits.tile_w;
     header_.tile_h = limits.tile_h;
     header_.depth_bits = kDepthBits;
+    // Mesh files are counted once loaded (built-in shapes were counted when parsed).
+    std::uint64_t triangles = 0;
+    for (const auto& o : r_->objects()) triangles += o.triangles;
+    if (triangles > limits.max_scene_triangles)
+        throw InputError(name_ + ": the scene's objects add up to " + std::to_string(triangles) + " triangles, more than " +
+                         std::to_string(limits.max_scene_triangles) +
+                         " (the limit input.max_scene_triangles; docs/limits.md)");
 }
 
 std::unique_ptr<SceneSource> SceneSource::from_text(const std::string& toml_text, const std::string& base_dir,
@@ -107,6 +109,11 @@ FragmentSource::Event SceneSource::next(Tile& tile) {
             return Event::Frame;
         case State::InFrame:
             if (r_->next_tile(tile, current_image_ ? &*current_image_ : nullptr)) {
+                if (tile.frags.size() > max_tile_fragments_)
+                    throw InputError(name_ + ": frame " + std::to_string(frame_) + ", tile " + std::to_string(tile.col) +
+                                     " " + std::to_string(tile.row) + ": more than " +
+                                     std::to_string(max_tile_fragments_) +
+                                     " fragments (the limit input.max_tile_fragments; docs/limits.md)");
                 total_fragments_ += tile.frags.size() + tile.other;
                 return Event::Tile;
             }

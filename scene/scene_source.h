@@ -18,6 +18,10 @@ namespace rbcd::scene {
 struct SceneLimits {
     unsigned tile_w = 16, tile_h = 16;
     unsigned id_bits = 7;   // object ids must fit: an error naming the key otherwise
+    // Resource bounds (docs/limits.md); the messages name the key that raises them.
+    std::uint64_t max_scene_bytes = std::uint64_t(64) << 20;        // input.max_scene_bytes
+    std::uint64_t max_scene_triangles = std::uint64_t(1) << 22;     // input.max_scene_triangles
+    std::uint64_t max_tile_fragments = std::uint64_t(1) << 24;      // input.max_tile_fragments
 };
 
 class SceneRenderer;   // scene/renderer.h; internal
@@ -96,6 +100,7 @@ private:
     enum class State { BeforeFrame, InFrame, Done } state_ = State::BeforeFrame;
     std::uint64_t frame_ = 0;             // the frame being produced (InFrame) or the next one
     std::uint64_t total_fragments_ = 0;   // collisionable and other, over all frames so far
+    std::uint64_t max_tile_fragments_;
     bool images_ = false;
     std::optional<FrameImage> current_image_;
     std::map<std::uint64_t, FrameImage> ready_images_;

@@ -10,12 +10,15 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #   --plots  python3-matplotlib for scripts/rbcd-plot (gnuplot-nox also does)
 #   --eval   libbullet-dev and libfcl-dev (rbcd-cpucd), assimp-testmodels (the meshes
 #            of workloads/) and python3-matplotlib, for scripts/reproduce.sh
+#   --fuzz   clang-14, libclang-rt-14-dev (libFuzzer) and assimp-testmodels (mesh
+#            seeds), for scripts/fuzz.sh
 for opt in "$@"; do
   case "$opt" in
     --slurm) pkgs+=(slurm-wlm munge) ;;
     --plots) pkgs+=(python3-matplotlib) ;;
     --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib) ;;
-    *) echo "setup: unknown option $opt (known: --slurm --plots --eval)" >&2; exit 2 ;;
+    --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz)" >&2; exit 2 ;;
   esac
 done
 

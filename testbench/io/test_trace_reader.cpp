@@ -5,6 +5,7 @@
 #include "testbench/common/temp_dir.h"
 
 #include <stdlib.h>
+#include <sys/stat.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -15,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/config.h"
 #include "common/errors.h"
 #include "common/fragment.h"
 #include "io/memory_source.h"
@@ -358,14 +360,16 @@ TEST_CASE("io: traces bigger than the read buffer parse and count lines across c
 TEST_CASE("io: a line longer than the read buffer is handled", "[io][reader]") {
     TempDir d;
     std::string text = M + "# " + std::string(3u << 20, 'z') + "\nframe 0\ntile 0 0\nf 1 1 1 1 F\n";
-    auto items = read_path(d.write("t.rbt", text));
+    TraceLimits big;
+    big.max_line_bytes = 4u << 20;
+    auto items = read_path(d.write("t.rbt", text), big);
     REQUIRE(items.size() == 2);
     CHECK(items[1].tile.frags.at(0).x == 1);
-    CHECK_THAT(error_of(text + "f 99 0 0 1 F\n"), Equals("t.rbt:6: fragment x=99 outside tile 0 0 (x 0..15)"));
+    CHECK_THAT(error_of(text + "f 99 0 0 1 F\n", big), Equals("t.rbt:6: fragment x=99 outside tile 0 0 (x 0..15)"));
     // A fragment line padded past the buffer with leading zeros and blanks.
     std::string padded = M + "frame 0\ntile 0 0\nf " + std::string(2u << 20, '0') + "7" + std::string(1u << 20, ' ') +
                          "3 0 1 F\n";
-    auto p = read_path(d.write("p.rbt", padded));
+    auto p = read_path(d.write("p.rbt", padded), big);
     CHECK(p.at(1).tile.frags.at(0).x == 7);
     CHECK(p.at(1).tile.frags.at(0).y == 3);
 }
@@ -584,8 +588,97 @@ TEST_CASE("io: writer errors name the file", "[io][writer]") {
 TEST_CASE("io: error: file cannot be opened", "[io][reader][error]") {
     TempDir d;
     const std::string p = d.path("missing.rbt");
-    CHECK_THROWS_WITH(TraceReader(p, {}), Equals(p + ": cannot open: No such file or directory"));
-    CHECK_THROWS_WITH(TraceReader(d.dir, {}), Equals(d.dir + ": cannot open: Is a directory"));
+    CHECK_THROWS_WITH(TraceReader(p, {}), Equals(p + ": cannot read trace: No such file or directory"));
+    CHECK_THROWS_WITH(TraceReader(d.dir, {}),
+                      Equals(d.dir + ": cannot read trace: is a directory, not a regular file (use - for standard input)"));
+}
+
+// ---------------------------------------------------------------- hostile input (issue 12)
+
+TEST_CASE("io: hostile: devices and FIFOs are refused, not read", "[io][reader][error][hostile]") {
+    // /dev/zero used to grow the line buffer until std::bad_alloc.
+    CHECK_THROWS_WITH(TraceReader("/dev/zero", {}), Equals("/dev/zero: cannot read trace: is a character device, not "
+                                                          "a regular file (use - for standard input)"));
+    TempDir d;
+    const std::string fifo = d.path("f");
+    REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+    CHECK_THROWS_WITH(TraceReader(fifo, {}), Contains("cannot read trace: is a FIFO, not a regular file"));
+}
+
+TEST_CASE("io: hostile: a line longer than input.max_line_bytes is refused naming the key", "[io][reader][error][hostile]") {
+    TraceLimits lim;
+    lim.max_line_bytes = 1000;
+    lim.read_chunk = 64;
+    const std::string ok = M + "# " + std::string(990, 'z') + "\nframe 0\n";
+    CHECK(error_of(ok, lim) == "<no error>");
+    const std::string msg = error_of(M + "frame 0\n# " + std::string(5000, 'z') + "\n", lim);
+    CHECK_THAT(msg, StartsWith("t.rbt:3: line longer than 1000 bytes") && Contains("input.max_line_bytes"));
+}
+
+TEST_CASE("io: hostile: a gzip bomb of zeros ends at the line limit in bounded memory", "[io][reader][error][hostile]") {
+    // 64 MiB of NUL bytes inflate from a few tens of KiB: one endless line.
+    TempDir d;
+    const std::string p = d.write_gz("bomb.rbt", M + std::string(64u << 20, '\0'));
+    CHECK(fs::file_size(p) < (1u << 20));
+    CHECK_THAT(error_in_path(p, "bomb.rbt"), StartsWith("bomb.rbt:2: line longer than 1048576 bytes") &&
+                                                 Contains("input.max_line_bytes"));
+}
+
+TEST_CASE("io: hostile: a tile with more than input.max_tile_fragments fragments is refused", "[io][reader][error][hostile]") {
+    TraceLimits lim;
+    lim.max_tile_fragments = 3;
+    std::string t = M + "frame 0\ntile 0 0\nf 0 0 1 1 F\nf 0 0 2 1 F\nf 0 0 3 1 F\n";
+    CHECK(error_of(t, lim) == "<no error>");
+    CHECK_THAT(error_of(t + "f 0 0 4 1 F\n", lim),
+               Equals("t.rbt:7: tile 0 0 has more than 3 fragments (the limit input.max_tile_fragments; docs/limits.md)"));
+    // The slow path (a comment on the line) is bounded too.
+    CHECK_THAT(error_of(t + "f 0 0 4 1 F # x\n", lim), StartsWith("t.rbt:7: tile 0 0 has more than 3 fragments"));
+}
+
+TEST_CASE("io: hostile: declared work that would overflow simulated time is refused naming clock.mhz",
+          "[io][reader][error][hostile]") {
+    // other=2^40 on enough tiles used to wrap totals.cycles around 2^64 ps.
+    SimConfig cfg;
+    const TraceLimits lim = trace_limits(cfg);
+    REQUIRE(lim.max_work_cycles == (std::uint64_t(1) << 62) / 2500 / 4);
+    std::string t = M + "screen 2048 2048\nframe 0\n";
+    for (int i = 0; i < 200; ++i) t += "tile " + std::to_string(i % 128) + " " + std::to_string(i / 128) + " other=1099511627776\n";
+    const std::string msg = error_of(t, lim);
+    CHECK_THAT(msg, Contains("the run is too long to simulate") && Contains("clock.mhz = 400") &&
+                        Contains("docs/limits.md"));
+    // The same trace at a few tiles is fine.
+    CHECK(error_of(M + "frame 0\ntile 0 0 other=1099511627776 base=1099511627776\n", lim) == "<no error>");
+}
+
+TEST_CASE("io: hostile: bytes after the last gzip member are an error", "[io][reader][error][hostile][gzip]") {
+    TempDir d;
+    const std::string text = M + "frame 0\ntile 0 0\nf 0 0 1 1 F\n";
+    const std::string gz = slurp(d.write_gz("a.gz", text));
+    // Two members are one stream.
+    auto two = read_path(d.write("two.rbt", gz + slurp(d.write_gz("b.gz", "frame 1\n"))));
+    CHECK(two.size() == 3);
+    for (const std::string tail : {std::string("x"), std::string("\n"), std::string(100, '\0'), std::string("\x1f")}) {
+        const std::string p = d.write("tail.rbt", gz + tail);
+        CHECK_THAT(error_in_path(p, "tail.rbt"), Contains("bytes after the last gzip member"));
+    }
+}
+
+TEST_CASE("io: hostile: every read chunk size gives the same stream (refill boundaries)", "[io][reader][hostile]") {
+    TempDir d;
+    std::string text = M + "screen 64 64\n# comment\r\nframe 0\ntile 1 1 other=3\nf 16 17 100 9 F\nf 16 17 200 9 B c\n"
+                           "tile 0 0\nf 0 0 5 1 F # tail\nframe 1\ntile 2 2\nf 33 34 7 2 B";
+    const auto want = read_path(d.write("ref.rbt", text));
+    const std::string plain = d.write("p.rbt", text), gz = d.write_gz("g.rbt", text);
+    for (std::size_t chunk : {1u, 2u, 3u, 7u, 64u}) {
+        INFO("chunk " << chunk);
+        TraceLimits lim;
+        lim.read_chunk = chunk;
+        for (const auto& p : {plain, gz}) {
+            const auto got = read_path(p, lim);
+            REQUIRE(got.size() == want.size());
+            for (std::size_t i = 0; i < got.size(); ++i) CHECK(got[i].tile.frags.size() == want[i].tile.frags.size());
+        }
+    }
 }
 
 TEST_CASE("io: error: magic record", "[io][reader][error]") {

@@ -180,7 +180,7 @@ TEST_CASE("bad scenes give one-line input errors naming the file, line and key",
     SECTION("missing mesh file") {
         Obj b = o;
         b.mesh = "no/such/mesh.obj";
-        check(error_of(kHdr + object_text(b)), {"bad.toml:", ".mesh", "not found", "no/such/mesh.obj"});
+        check(error_of(kHdr + object_text(b)), {"bad.toml:", ".mesh", "no/such/mesh.obj: cannot read mesh file: No such file or directory"});
     }
     SECTION("unreadable mesh file") {
         auto dir = temp_dir("garbage");

@@ -59,20 +59,24 @@ TEST_CASE("cli outputs: a bad trace with --write-trace leaves no trace file and 
 TEST_CASE("cli outputs: a run killed by SIGTERM leaves neither the older outputs nor temporaries") {
     TempDir td;
     td.plant_old_outputs();
-    const std::string fifo = td.path("in.fifo");
-    REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
-    std::vector<std::string> args{RBCD_SIM, "--trace", fifo, "--collisions", td.collisions(), "--stats", td.stats()};
+    // Standard input is a pipe nobody writes to: rbcd-sim blocks reading it.
+    int pfd[2];
+    REQUIRE(::pipe(pfd) == 0);
+    std::vector<std::string> args{RBCD_SIM, "--trace", "-", "--collisions", td.collisions(), "--stats", td.stats()};
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
     posix_spawn_file_actions_t fa;
     posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_adddup2(&fa, pfd[0], 0);
+    posix_spawn_file_actions_addclose(&fa, pfd[1]);
     posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
     posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
     pid_t pid = 0;
     REQUIRE(posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) == 0);
     posix_spawn_file_actions_destroy(&fa);
-    // rbcd-sim creates its outputs, then blocks opening the FIFO: wait for the
+    ::close(pfd[0]);
+    // rbcd-sim creates its outputs, then blocks reading the pipe: wait for the
     // temporaries to appear, then stop it as a user would.
     bool created = false;
     for (int i = 0; i < 500 && !created; ++i) {
@@ -83,10 +87,115 @@ TEST_CASE("cli outputs: a run killed by SIGTERM leaves neither the older outputs
     REQUIRE(kill(pid, SIGTERM) == 0);
     int st = 0;
     REQUIRE(waitpid(pid, &st, 0) == pid);
+    ::close(pfd[1]);
     CHECK(WIFEXITED(st));
     CHECK(WEXITSTATUS(st) == 128 + SIGTERM);
     std::string names;
     for (const auto& e : td.out_entries()) names += e + " ";
     INFO("left behind: " << names);
     CHECK(td.out_entries().empty());
+}
+
+// ---------------------------------------------------------------- safe output files (issue 12)
+
+namespace {
+const std::string kGoodTrace = "rbcd-trace 1\nframe 0\ntile 0 0\nf 0 0 100 1 F\nf 0 0 300 1 B\nf 0 0 200 2 F\n";
+
+// The pid the next process will most likely get, and a span after it.
+long next_pid_guess() {
+    std::ifstream in("/proc/sys/kernel/ns_last_pid");
+    long p = 0;
+    in >> p;
+    return p + 1;
+}
+} // namespace
+
+TEST_CASE("cli outputs: a symlink planted at the old predictable temporary name is not followed") {
+    TempDir td;
+    const std::string victim = td.write("victim.txt", "precious\n");
+    const std::string out = td.collisions();
+    // The old code wrote to <out>.tmp.<pid> with fopen: plant links for the pids
+    // the child is likely to get.
+    const long p0 = next_pid_guess();
+    for (long p = p0; p < p0 + 400; ++p) REQUIRE(::symlink(victim.c_str(), (out + ".tmp." + std::to_string(p)).c_str()) == 0);
+    const Result r = run_sim(td, {"--trace", td.write("in.rbt", kGoodTrace), "--collisions", out, "-q"});
+    INFO(r.err);
+    CHECK(r.status == 0);
+    CHECK(slurp(victim) == "precious\n");
+    CHECK_THAT(slurp(out), StartsWith("rbcd-collisions 1\nframe 0\nhit 0 0 1 2"));
+    // Only the links and the output: no temporary left.
+    std::size_t others = 0;
+    for (const auto& e : td.out_entries()) others += e.find(".tmp.") == std::string::npos && e != "collisions.txt";
+    CHECK(others == 0);
+}
+
+TEST_CASE("cli outputs: a symlink at an output path is written through and never replaced or removed") {
+    TempDir td;
+    const std::string target = td.write("target.txt", "old\n");
+    const std::string link = td.out_dir() + "/link.txt";
+    REQUIRE(::symlink(target.c_str(), link.c_str()) == 0);
+    Result r = run_sim(td, {"--trace", td.write("in.rbt", kGoodTrace), "--collisions", link, "-q"});
+    CHECK(r.status == 0);
+    CHECK(fs::is_symlink(link));
+    CHECK_THAT(slurp(target), StartsWith("rbcd-collisions 1\n"));
+    // A failed run (bad --set) leaves the link and its target's file in place.
+    r = run_sim(td, {"--trace", td.write("in.rbt", kGoodTrace), "--collisions", link, "--set", "zeb.banks=99"});
+    CHECK(r.status == 2);
+    CHECK(fs::is_symlink(link));
+    CHECK(fs::exists(target));
+}
+
+TEST_CASE("cli outputs: a FIFO at an output path is written in place and survives a failed run") {
+    TempDir td;
+    const std::string fifo = td.out_dir() + "/c.fifo";
+    REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+    std::string got;
+    std::thread reader([&] { got = slurp(fifo); });
+    Result r = run_sim(td, {"--trace", td.write("in.rbt", kGoodTrace), "--collisions", fifo, "-q"});
+    reader.join();
+    CHECK(r.status == 0);
+    CHECK_THAT(got, StartsWith("rbcd-collisions 1\nframe 0\nhit 0 0 1 2"));
+    struct stat st {};
+    REQUIRE(::lstat(fifo.c_str(), &st) == 0);
+    CHECK(S_ISFIFO(st.st_mode));
+    // The old code unlinked whatever stood at an output path on failure
+    // (--collisions /dev/stdout with a bad --set deleted /dev/stdout as root).
+    r = run_sim(td, {"--collisions", fifo, "--set", "zeb.banks=99"});
+    CHECK(r.status == 2);
+    REQUIRE(::lstat(fifo.c_str(), &st) == 0);
+    CHECK(S_ISFIFO(st.st_mode));
+}
+
+TEST_CASE("cli outputs: - writes an output to standard output") {
+    TempDir td;
+    const Result r = run_sim(td, {"--trace", td.write("in.rbt", kGoodTrace), "--collisions", "-", "-q"});
+    CHECK(r.status == 0);
+    CHECK_THAT(r.out, StartsWith("rbcd-collisions 1\nframe 0\nhit 0 0 1 2"));
+    CHECK_FALSE(fs::exists(td.path("-")));
+    CHECK_FALSE(fs::exists("-"));
+}
+
+TEST_CASE("cli outputs: --write-trace goes through an unpredictable temporary, never a planted symlink") {
+    TempDir td;
+    const std::string victim = td.write("victim.txt", "precious\n");
+    const std::string out = td.out_dir() + "/w.rbt";
+    const long p0 = next_pid_guess();
+    for (long p = p0; p < p0 + 400; ++p) REQUIRE(::symlink(victim.c_str(), (out + ".tmp." + std::to_string(p)).c_str()) == 0);
+    const Result r = run_sim(td, {"--trace", td.write("in.rbt", kGoodTrace), "--write-trace", out, "-q"});
+    CHECK(r.status == 0);
+    CHECK(slurp(victim) == "precious\n");
+    CHECK_THAT(slurp(out), StartsWith("rbcd-trace 1\n"));
+    // and in place to standard output
+    const Result s = run_sim(td, {"--trace", td.write("in.rbt", kGoodTrace), "--write-trace", "-", "-q"});
+    CHECK(s.status == 0);
+    CHECK_THAT(s.out, StartsWith("rbcd-trace 1\n"));
+}
+
+TEST_CASE("cli outputs: a failed run removes only the temporaries it created") {
+    TempDir td;
+    const std::string mine = td.write("out/unrelated.txt", "keep\n");
+    const Result r = run_with_outputs(td, {"--trace", td.write("bad.rbt", kGoodTrace + "bogus\n")});
+    CHECK(r.status == 2);
+    CHECK(slurp(mine) == "keep\n");
+    CHECK(td.out_entries() == std::vector<std::string>{"unrelated.txt"});
 }

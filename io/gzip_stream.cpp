@@ -1,0 +1,99 @@
+#include "io/gzip_stream.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <cstring>
+
+namespace rbcd {
+
+GzipStream::GzipStream(int fd, std::size_t chunk_bytes) : fd_(fd), in_(std::max<std::size_t>(chunk_bytes, 2)) {}
+
+GzipStream::~GzipStream() {
+    if (z_init_) inflateEnd(&zs_);
+    if (fd_ > 0) ::close(fd_);
+}
+
+long GzipStream::fail(const std::string& what) {
+    error_ = what;
+    return -1;
+}
+
+bool GzipStream::refill() {
+    if (raw_eof_) return false;
+    if (in_pos_ < in_end_ && in_pos_ > 0) {
+        std::memmove(in_.data(), in_.data() + in_pos_, in_end_ - in_pos_);
+        in_end_ -= in_pos_;
+        in_pos_ = 0;
+    } else if (in_pos_ == in_end_) {
+        in_pos_ = in_end_ = 0;
+    }
+    if (in_end_ == in_.size()) return true;
+    for (;;) {
+        const ssize_t n = ::read(fd_, in_.data() + in_end_, in_.size() - in_end_);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) {
+            error_ = std::string("read error: ") + std::strerror(errno);
+            return false;
+        }
+        if (n == 0) raw_eof_ = true;
+        in_end_ += static_cast<std::size_t>(n);
+        return n > 0;
+    }
+}
+
+long GzipStream::read(char* dst, std::size_t n) {
+    if (!error_.empty()) return -1;
+    if (n > INT_MAX) n = INT_MAX;
+    if (!started_) {
+        // The magic needs two bytes; a chunk of one byte reads twice.
+        while (in_end_ - in_pos_ < 2 && refill()) {}
+        if (!error_.empty()) return -1;
+        started_ = true;
+        gz_ = in_end_ - in_pos_ >= 2 && in_[in_pos_] == 0x1f && in_[in_pos_ + 1] == 0x8b;
+        if (gz_) {
+            if (inflateInit2(&zs_, 15 + 16) != Z_OK) return fail("cannot start zlib: out of memory");
+            z_init_ = true;
+        }
+    }
+    if (!gz_) {
+        if (in_pos_ == in_end_ && !refill()) return error_.empty() ? 0 : -1;
+        const std::size_t k = std::min(n, in_end_ - in_pos_);
+        std::memcpy(dst, in_.data() + in_pos_, k);
+        in_pos_ += k;
+        return static_cast<long>(k);
+    }
+    for (;;) {
+        if (member_done_) {
+            // Another member, or the end of the file; anything else is an error.
+            while (in_end_ - in_pos_ < 2 && refill()) {}
+            if (!error_.empty()) return -1;
+            if (in_pos_ == in_end_) return 0;
+            if (in_end_ - in_pos_ < 2 || in_[in_pos_] != 0x1f || in_[in_pos_ + 1] != 0x8b)
+                return fail("corrupt gzip file: bytes after the last gzip member that are not another member");
+            if (inflateReset(&zs_) != Z_OK) return fail("corrupt or truncated gzip stream: inflateReset failed");
+            member_done_ = false;
+        }
+        if (in_pos_ == in_end_ && !refill()) {
+            if (!error_.empty()) return -1;
+            return fail("corrupt or truncated gzip stream: unexpected end of file");
+        }
+        zs_.next_in = in_.data() + in_pos_;
+        zs_.avail_in = static_cast<uInt>(std::min<std::size_t>(in_end_ - in_pos_, UINT_MAX));
+        zs_.next_out = reinterpret_cast<Bytef*>(dst);
+        zs_.avail_out = static_cast<uInt>(n);
+        const int rc = inflate(&zs_, Z_NO_FLUSH);
+        in_pos_ = static_cast<std::size_t>(zs_.next_in - in_.data());
+        const std::size_t produced = n - zs_.avail_out;
+        if (rc == Z_STREAM_END) member_done_ = true;
+        else if (rc == Z_BUF_ERROR && produced == 0 && in_pos_ < in_end_)
+            return fail("corrupt or truncated gzip stream: no progress");
+        else if (rc != Z_OK && rc != Z_BUF_ERROR)
+            return fail(std::string("corrupt or truncated gzip stream: ") + (zs_.msg ? zs_.msg : "inflate error"));
+        if (produced) return static_cast<long>(produced);
+    }
+}
+
+} // namespace rbcd

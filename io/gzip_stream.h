@@ -1,0 +1,46 @@
+// The bytes of a trace: a file descriptor read as it is, or inflated when it
+// starts with the gzip magic (1f 8b), whatever the file's name. Unlike zlib's
+// gzread, it reads every gzip member of a multi-member file and calls anything
+// after the last member that is not another member an error, instead of
+// silently ignoring it (formats.md: the file is gzip or it is text).
+#pragma once
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <zlib.h>
+
+namespace rbcd {
+
+class GzipStream {
+public:
+    // Takes ownership of fd (closed by the destructor unless it is 0).
+    // chunk_bytes: size of each read(2) of the raw file.
+    GzipStream(int fd, std::size_t chunk_bytes);
+    ~GzipStream();
+    GzipStream(const GzipStream&) = delete;
+    GzipStream& operator=(const GzipStream&) = delete;
+
+    // Up to n bytes into dst; 0 at the end of the data; -1 on an error, which
+    // error() then describes ("corrupt or truncated gzip stream: ...", "read
+    // error: ...").
+    long read(char* dst, std::size_t n);
+    const std::string& error() const { return error_; }
+    bool compressed() const { return gz_; }
+
+private:
+    bool refill();   // more raw input; false at end of file or on error
+    long fail(const std::string& what);
+
+    int fd_;
+    std::vector<unsigned char> in_;
+    std::size_t in_pos_ = 0, in_end_ = 0;
+    bool raw_eof_ = false;
+    bool started_ = false, gz_ = false;
+    bool member_done_ = false;    // between members: the next bytes must start another or end the file
+    bool z_init_ = false;
+    z_stream zs_{};
+    std::string error_;
+};
+
+} // namespace rbcd
