@@ -14,6 +14,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "common/errors.h"
+
 #include "common/fragment.h"
 #include "scene/scene_source.h"
 
@@ -206,6 +208,18 @@ inline std::size_t shared_pixels(const PixelFrags& px, std::uint32_t a, std::uin
 
 inline std::size_t shared_pixels(const Frame& f, const StreamHeader& h, std::uint32_t a, std::uint32_t b) {
     return shared_pixels(per_pixel(f, h), a, b);
+}
+
+// The one-line message a bad scene text gives ("" if it is accepted); drain:
+// render every frame too (errors found while rendering).
+inline std::string error_of(const std::string& text, const rbcd::scene::SceneLimits& lim = {}, bool drain = false) {
+    try {
+        auto s = rbcd::scene::SceneSource::from_text(text, "", "bad.toml", lim);
+        if (drain) capture(*s);
+    } catch (const rbcd::InputError& e) {
+        return e.what();
+    }
+    return "";
 }
 
 } // namespace scene_test

@@ -21,16 +21,6 @@ using rbcd::scene::SceneSource;
 
 namespace {
 
-std::string error_of(const std::string& text, const SceneLimits& lim = {}, bool drain = false) {
-    try {
-        auto s = SceneSource::from_text(text, "", "bad.toml", lim);
-        if (drain) capture(*s);
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "";
-}
-
 const std::string kHdr = scene_header(64, 48, 4);
 
 std::string obj(const std::string& body) { return "[[object]]\nid = 1\nmesh = \"sphere\"\nposition = [0, 0, -5]\n" + body; }

@@ -16,16 +16,6 @@ using rbcd::scene::SceneSource;
 
 namespace {
 
-std::string error_of(const std::string& text, const SceneLimits& lim = {}, bool drain = false) {
-    try {
-        auto s = SceneSource::from_text(text, "", "bad.toml", lim);
-        if (drain) capture(*s);
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "";
-}
-
 std::filesystem::path temp_dir(const std::string& name) {
     auto d = std::filesystem::temp_directory_path() / ("rbcd_scene_test_" + name + "_" + std::to_string(::getpid()));
     std::filesystem::remove_all(d);
