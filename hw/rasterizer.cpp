@@ -384,7 +384,9 @@ void rasterizer::feed_tile(const Tile& tile) {
 }
 
 void rasterizer::run() {
-    Tile tile;
+    // The tile is a member, not a local: a thread stopped by an error elsewhere
+    // is never unwound, and its stack's objects would never be destroyed.
+    Tile& tile = tile_;
     depth_bits_ = src_.header().depth_bits;
     try {
         for (;;) {

@@ -187,6 +187,7 @@ private:
     std::vector<FragmentPipe> pure_fp_;    // baseline, prims, work
     std::vector<Cursor> pure_r_;
     bool pure_live_[3] = {true, false, false};
+    Tile tile_;                            // the tile being rasterized
     FrameTimes cur_;
     bool in_frame_ = false;
     std::uint64_t last_end_ = 0;

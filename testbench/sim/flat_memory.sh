@@ -7,6 +7,11 @@
 set -euo pipefail
 sim=$1 dir=$2 sanitized=$3
 mkdir -p "$dir"
+if [ "$sanitized" != 0 ]; then
+  # ASan keeps freed memory in quarantine (256 MB by default) and so grows with
+  # any allocation churn: with a small quarantine the peak shows the program's own.
+  export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}quarantine_size_mb=1:thread_local_quarantine_size_kb=64"
+fi
 gen() {   # frames file
   awk -v n="$1" 'BEGIN { print "rbcd-trace 1";
     for (i = 0; i < n; i++) { c = i % 50; printf "frame %d\ntile %d 0 other=20\nf %d 1 100 1 F\nf %d 1 200 1 B\n", i, c, c * 16, c * 16 } }' > "$2"

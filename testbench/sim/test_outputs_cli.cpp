@@ -78,12 +78,16 @@ TEST_CASE("cli outputs: a run killed by SIGTERM leaves neither the older outputs
     ::close(pfd[0]);
     // rbcd-sim creates its outputs, then blocks reading the pipe: wait for the
     // temporaries to appear, then stop it as a user would.
+    // Both older outputs gone and two temporaries there: both outputs are open.
+    // A little more time lets the last one's clean-up registration follow its
+    // creation (slow sanitizer builds); rbcd-sim then blocks on the pipe.
     bool created = false;
     for (int i = 0; i < 500 && !created; ++i) {
-        created = td.out_entries().size() >= 2 && !fs::exists(td.collisions());
+        created = td.out_entries().size() == 2 && !fs::exists(td.collisions()) && !fs::exists(td.stats());
         if (!created) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     CHECK(created);
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
     REQUIRE(kill(pid, SIGTERM) == 0);
     int st = 0;
     REQUIRE(waitpid(pid, &st, 0) == pid);

@@ -324,7 +324,11 @@ struct rogue_bench : sc_core::sc_module {
         };
         auto none = [](tlm::tlm_generic_payload&) {};
         seen.push_back("ok " + bt(none));
+#ifndef RBCD_UB_SANITIZED
+        // An invalid command is an out-of-range enum: loading it is itself undefined
+        // behaviour, which UBSan (rightly) stops at; checked in ordinary builds only.
         seen.push_back("B3 " + bt([](auto& g) { g.set_command(tlm::tlm_command(7)); }));
+#endif
         seen.push_back("B4 " + bt([](auto& g) { g.set_data_ptr(nullptr); }));
         seen.push_back("B5 " + bt([](auto& g) { g.set_streaming_width(4); }));
         static unsigned char be[4] = {0xff, 0xff, 0xff, 0xff};
@@ -349,7 +353,9 @@ struct rogue_bench : sc_core::sc_module {
             edit(gp);
             return rules_of([&] { socket->transport_dbg(gp); });
         };
+#ifndef RBCD_UB_SANITIZED
         seen.push_back("D1 " + dbg([](auto& g) { g.set_command(tlm::tlm_command(7)); }, Fault::None));
+#endif
         seen.push_back("D2 " + dbg([](auto& g) { g.set_data_ptr(nullptr); }, Fault::None));
         seen.push_back("D3 " + dbg(none, Fault::DebugOverrun));
         seen.push_back("D4 " + dbg(none, Fault::DebugChangeLength));
@@ -411,7 +417,11 @@ TEST_CASE("protocol checker: each rule, broken once, is reported", "[protocol][c
     // Each call broke only the rule it meant to (T2's address change shows as T2 alone).
     for (const auto& s : b.seen)
         if (s.substr(0, 2) != "ok" && s.substr(0, 2) != "B2") CHECK(s.substr(3) == s.substr(0, 2) + " ");
+#ifdef RBCD_UB_SANITIZED
+    CHECK(b.seen.size() == 21);   // without B3 and D1 (see above)
+#else
     CHECK(b.seen.size() == 23);
+#endif
 }
 
 TEST_CASE("protocol checker: b_transport from a method process is reported (B1)", "[protocol][checker]") {
