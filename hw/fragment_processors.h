@@ -46,7 +46,6 @@ public:
     void restart(std::uint64_t t) {
         std::fill(slot_free_.begin(), slot_free_.end(), 0);
         std::fill(proc_free_.begin(), proc_free_.end(), 0);
-        n_ = 0;
         qi_ = pi_ = 0;
         done_ = t;
     }
@@ -59,7 +58,6 @@ public:
         slot_free_[qi_] = s;
         if (++pi_ == p_) pi_ = 0;
         if (++qi_ == q_) qi_ = 0;
-        ++n_;
         done_ = std::max(done_, s + c_);
         return s;
     }
@@ -96,7 +94,6 @@ public:
         done_ = done;
         qi_ = qi;
         pi_ = pi;
-        n_ += m;
         return wait;
     }
 
@@ -140,7 +137,6 @@ public:
         for (auto& v : slot_free_) v += delta;
         for (auto& v : proc_free_) v += delta;
         // The same state in age order, later by delta: the ring positions may stay.
-        n_ += count;
         done_ += delta;
     }
 
@@ -182,7 +178,6 @@ private:
     unsigned q_, p_, c_, ez_;
     std::vector<std::uint64_t> slot_free_;   // s_k of the last Q fragments (ring)
     std::vector<std::uint64_t> proc_free_;   // s_k + C of the last P fragments (ring)
-    std::uint64_t n_ = 0;
     unsigned qi_ = 0, pi_ = 0;
     std::uint64_t done_ = 0;
 };

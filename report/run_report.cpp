@@ -98,7 +98,6 @@ nlohmann::json frame_json(const FrameFigures& f) {
 }
 
 RunReport::RunReport(rbcd_system& sys) : sys_(sys), k_(energy_costs(sys.cfg)) {
-    prev_.bank_reads.clear();
     sys.raster.add_observer(this);
 }
 

@@ -3,7 +3,8 @@
 // the run has taken longer than a few seconds (short runs print nothing).
 //
 //   Progress progress;                               // decides from isatty(stderr)
-//   sys.feed.on_frame = [&](std::uint64_t n) { progress.on_frame(n, sys.feed.stats().fragments); };
+//   // from a RasterObserver's frame_begin(n):
+//   progress.on_frame(n, sys.raster.stats().fragments);
 //   sys.run();
 //   progress.finish();                               // clears the line
 #pragma once
