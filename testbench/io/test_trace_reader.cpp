@@ -293,6 +293,48 @@ TEST_CASE("io: tile fields other= and base=, and the tile is fully overwritten",
     CHECK(r.next(t) == Event::End);
 }
 
+TEST_CASE("io: tile keys prims= and cprims= and o records give the rasterization order", "[io][reader]") {
+    TempDir d;
+    auto p = d.write("t.rbt", M + "frame 0\ntile 0 0 prims=7 cprims=3\no 4\nf 1 1 10 1 F\no 2\no 1\n"
+                                  "f 2 1 10 1 B c\no 5\ntile 1 0 other=9\nf 17 1 10 1 F\n");
+    TraceReader r(p, {});
+    Tile t;
+    REQUIRE(r.next(t) == Event::Frame);
+    REQUIRE(r.next(t) == Event::Tile);
+    CHECK(t.has_prims);
+    CHECK(t.has_cprims);
+    CHECK(t.prims == 7);
+    CHECK(t.cprims == 3);
+    CHECK(t.ordered_other);
+    CHECK(t.other == 4 + 2 + 1 + 5);
+    REQUIRE(t.other_runs.size() == 4);
+    CHECK(t.other_runs[0].before == 0);   // before the first fragment
+    CHECK(t.other_runs[0].count == 4);
+    CHECK(t.other_runs[1].before == 1);
+    CHECK(t.other_runs[2].before == 1);
+    CHECK(t.other_runs[3].before == 2);   // after the last
+    CHECK(t.other_runs[3].count == 5);
+    // The next tile starts afresh: no keys, no order.
+    REQUIRE(r.next(t) == Event::Tile);
+    CHECK_FALSE(t.has_prims);
+    CHECK_FALSE(t.has_cprims);
+    CHECK(t.prims == 0);
+    CHECK_FALSE(t.ordered_other);
+    CHECK(t.other_runs.empty());
+    CHECK(t.other == 9);
+    CHECK(r.next(t) == Event::End);
+}
+
+TEST_CASE("io: error: o records and the GPU tile keys", "[io][reader][error]") {
+    CHECK_ERR(M + "frame 0\ntile 0 0 other=3\no 2\n", 4, "tile has both other= and 'o' records");
+    CHECK_ERR(M + "frame 0\no 2\n", 3, "'o' record outside a tile");
+    CHECK_ERR(M + "frame 0\ntile 0 0\no\n", 4, "o has too few fields");
+    CHECK_ERR(M + "frame 0\ntile 0 0\no 1 2\n", 4, "o has an extra field");
+    CHECK_ERR(M + "frame 0\ntile 0 0\no -1\n", 4, "o count");
+    CHECK_ERR(M + "frame 0\ntile 0 0 prims=1 prims=2\n", 3, "tile key 'prims' given twice");
+    CHECK_ERR(M + "frame 0\ntile 0 0 cprims=x\n", 3, "tile cprims=");
+}
+
 TEST_CASE("io: the fragment vector is reused across tiles", "[io][reader]") {
     TempDir d;
     std::string text = M + "frame 0\ntile 0 0\n";
