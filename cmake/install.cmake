@@ -2,7 +2,7 @@
 #   P/lib/librbcd.a                      the model (rbcd::rbcd)
 #   P/include/rbcd/{common,hw,io,scene,tlm}/*.h
 #   P/lib/cmake/rbcd/                    find_package(rbcd CONFIG)
-#   P/bin/rbcd-sim
+#   P/bin/rbcd-sim, P/bin/rbcd-merge
 #   P/share/rbcd/configs/*.toml, P/share/doc/rbcd/ (README, docs)
 include(CMakePackageConfigHelpers)
 
@@ -14,9 +14,11 @@ foreach(area common hw io scene tlm)
     FILES_MATCHING PATTERN "*.h")
 endforeach()
 
-if(TARGET rbcd-sim)
-  install(TARGETS rbcd-sim RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-endif()
+foreach(program rbcd-sim rbcd-merge)
+  if(TARGET ${program})
+    install(TARGETS ${program} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  endif()
+endforeach()
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/sc_main/configs/ DESTINATION ${CMAKE_INSTALL_DATADIR}/rbcd/configs
   FILES_MATCHING PATTERN "*.toml")
 install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rbcd)

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <systemc>
 
+#include "common/stat_counters.h"
+
 namespace rbcd {
 
 class Clocking {
@@ -26,8 +28,5 @@ private:
     sc_core::sc_time period_;
     std::uint64_t ticks_;   // period in kernel time resolution units
 };
-
-// Named counter enumeration shared by every block's stats struct: f(name, value, description).
-#define RBCD_STAT(f, s, name, desc) f(#name, (s).name, desc)
 
 } // namespace rbcd

@@ -190,10 +190,10 @@ public:
         std::uint64_t fragments = 0;            // fragments shaded
         std::uint64_t busy_cycles = 0;          // processor-cycles shading (fragments x C)
         std::uint64_t idle_cycles = 0;          // processor-cycles idle inside frames
-        template <class F> void for_each(F f) const {
-            RBCD_STAT(f, *this, fragments, "fragments shaded");
-            RBCD_STAT(f, *this, busy_cycles, "processor-cycles shading (fragments x cycles_per_fragment)");
-            RBCD_STAT(f, *this, idle_cycles, "processor-cycles idle between a frame's start and end");
+        RBCD_STATS_VISITOR {
+            RBCD_STAT(f, s, fragments, "fragments shaded");
+            RBCD_STAT(f, s, busy_cycles, "processor-cycles shading (fragments x cycles_per_fragment)");
+            RBCD_STAT(f, s, idle_cycles, "processor-cycles idle between a frame's start and end");
         }
     };
 

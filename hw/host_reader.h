@@ -37,15 +37,15 @@ public:
         std::uint64_t bytes = 0;
         std::uint64_t dmi_reads = 0;        // readbacks served by the DMI pointer
         std::uint64_t wait_cycles = 0;      // cycles a readback waited for the previous one
-        template <class F> void for_each(F f) const {
-            RBCD_STAT(f, *this, readbacks, "readbacks of the output region");
-            RBCD_STAT(f, *this, full_readbacks, "readbacks forced by a full region");
-            RBCD_STAT(f, *this, records, "records read back");
-            RBCD_STAT(f, *this, hit_records, "hit records read back");
-            RBCD_STAT(f, *this, overflow_records, "overflow records read back");
-            RBCD_STAT(f, *this, bytes, "bytes read back");
-            RBCD_STAT(f, *this, dmi_reads, "readbacks through the DMI pointer");
-            RBCD_STAT(f, *this, wait_cycles, "cycles readbacks waited for the host to finish the previous one");
+        RBCD_STATS_VISITOR {
+            RBCD_STAT(f, s, readbacks, "readbacks of the output region");
+            RBCD_STAT(f, s, full_readbacks, "readbacks forced by a full region");
+            RBCD_STAT(f, s, records, "records read back");
+            RBCD_STAT(f, s, hit_records, "hit records read back");
+            RBCD_STAT(f, s, overflow_records, "overflow records read back");
+            RBCD_STAT(f, s, bytes, "bytes read back");
+            RBCD_STAT(f, s, dmi_reads, "readbacks through the DMI pointer");
+            RBCD_STAT(f, s, wait_cycles, "cycles readbacks waited for the host to finish the previous one");
         }
     };
 

@@ -27,9 +27,9 @@ public:
     struct stats_t {
         std::uint64_t writes = 0;            // fragments entered
         std::uint64_t max_occupancy = 0;     // deepest occupancy seen
-        template <class F> void for_each(F f) const {
-            RBCD_STAT(f, *this, writes, "fragments entered");
-            RBCD_STAT(f, *this, max_occupancy, "deepest occupancy seen");
+        RBCD_STATS_VISITOR {
+            RBCD_STAT(f, s, writes, "fragments entered");
+            RBCD_STAT(f, s, max_occupancy, "deepest occupancy seen");
         }
     };
 

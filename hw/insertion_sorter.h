@@ -44,17 +44,17 @@ public:
         std::uint64_t hazard_stall_cycles = 0;   // cycles lost to same-pixel hazards (stall policy)
         std::uint64_t bank_wait_cycles = 0;      // issue cycles lost waiting for the tile's bank
         std::uint64_t busy_cycles = 0;           // cycles with an insertion issued
-        template <class F> void for_each(F f) const {
-            RBCD_STAT(f, *this, insertions, "fragments inserted (one per issue cycle)");
-            RBCD_STAT(f, *this, comparator_activations, "key comparators fired (M per insertion)");
-            RBCD_STAT(f, *this, mux_shifts, "elements shifted down one slot by the muxes");
-            RBCD_STAT(f, *this, overflows, "fragments dropped by full lists");
-            RBCD_STAT(f, *this, dropped_new, "overflows where the new element sorted last and was dropped");
-            RBCD_STAT(f, *this, dropped_last, "overflows where the last element was shifted out");
-            RBCD_STAT(f, *this, hazard_forwards, "same-pixel hazards bypassed by forwarding");
-            RBCD_STAT(f, *this, hazard_stall_cycles, "issue cycles lost to same-pixel hazards");
-            RBCD_STAT(f, *this, bank_wait_cycles, "issue cycles lost waiting for the tile's ZEB bank (gpu.bank_wait = unit)");
-            RBCD_STAT(f, *this, busy_cycles, "cycles with an insertion issued");
+        RBCD_STATS_VISITOR {
+            RBCD_STAT(f, s, insertions, "fragments inserted (one per issue cycle)");
+            RBCD_STAT(f, s, comparator_activations, "key comparators fired (M per insertion)");
+            RBCD_STAT(f, s, mux_shifts, "elements shifted down one slot by the muxes");
+            RBCD_STAT(f, s, overflows, "fragments dropped by full lists");
+            RBCD_STAT(f, s, dropped_new, "overflows where the new element sorted last and was dropped");
+            RBCD_STAT(f, s, dropped_last, "overflows where the last element was shifted out");
+            RBCD_STAT(f, s, hazard_forwards, "same-pixel hazards bypassed by forwarding");
+            RBCD_STAT(f, s, hazard_stall_cycles, "issue cycles lost to same-pixel hazards");
+            RBCD_STAT(f, s, bank_wait_cycles, "issue cycles lost waiting for the tile's ZEB bank (gpu.bank_wait = unit)");
+            RBCD_STAT(f, s, busy_cycles, "cycles with an insertion issued");
         }
     };
 

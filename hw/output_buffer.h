@@ -40,16 +40,16 @@ public:
         std::uint64_t region_wait_cycles = 0;  // cycles waiting for the host to read a region back
         std::uint64_t max_occupancy = 0;
         std::uint64_t write_latency_cycles = 0;  // sum over bursts of issue-to-completion cycles
-        template <class F> void for_each(F f) const {
-            RBCD_STAT(f, *this, records, "records accepted from the tester");
-            RBCD_STAT(f, *this, bursts, "burst writes issued to memory");
-            RBCD_STAT(f, *this, bytes, "bytes written to memory");
-            RBCD_STAT(f, *this, full_stall_cycles, "cycles the tester waited on a full buffer");
-            RBCD_STAT(f, *this, outstanding_stall_cycles, "cycles bursts waited for a free write slot");
-            RBCD_STAT(f, *this, region_full_events, "times the output region filled up");
-            RBCD_STAT(f, *this, region_wait_cycles, "cycles waiting for the host to read the next region back");
-            RBCD_STAT(f, *this, max_occupancy, "most records held at once");
-            RBCD_STAT(f, *this, write_latency_cycles, "sum of burst issue-to-completion cycles");
+        RBCD_STATS_VISITOR {
+            RBCD_STAT(f, s, records, "records accepted from the tester");
+            RBCD_STAT(f, s, bursts, "burst writes issued to memory");
+            RBCD_STAT(f, s, bytes, "bytes written to memory");
+            RBCD_STAT(f, s, full_stall_cycles, "cycles the tester waited on a full buffer");
+            RBCD_STAT(f, s, outstanding_stall_cycles, "cycles bursts waited for a free write slot");
+            RBCD_STAT(f, s, region_full_events, "times the output region filled up");
+            RBCD_STAT(f, s, region_wait_cycles, "cycles waiting for the host to read the next region back");
+            RBCD_STAT(f, s, max_occupancy, "most records held at once");
+            RBCD_STAT(f, s, write_latency_cycles, "sum of burst issue-to-completion cycles");
         }
     };
 

@@ -102,19 +102,19 @@ public:
         std::uint64_t stall_no_bank_cycles = 0;  // cycles waiting for a free ZEB bank
         std::uint64_t stall_queue_full_cycles = 0;     // ... for room in the unit's input queue
         std::uint64_t stall_fragment_queue_cycles = 0; // ... for room in the fragment queue
-        template <class F> void for_each(F f) const {
-            RBCD_STAT(f, *this, frames, "frames replayed");
-            RBCD_STAT(f, *this, tiles, "tile records of the input");
-            RBCD_STAT(f, *this, tiles_with_fragments, "tiles with collisionable fragments (took a bank)");
-            RBCD_STAT(f, *this, fragments, "collisionable fragments sent to the unit");
-            RBCD_STAT(f, *this, culled_fragments, "fragments tagged c (deferred face culling)");
-            RBCD_STAT(f, *this, other_fragments, "non-collisionable fragments rasterized");
-            RBCD_STAT(f, *this, primitives, "primitives set up (prims=)");
-            RBCD_STAT(f, *this, culled_primitives, "primitives set up only for deferred culling (cprims=)");
-            RBCD_STAT(f, *this, busy_cycles, "cycles emitting fragments or setting up primitives");
-            RBCD_STAT(f, *this, stall_no_bank_cycles, "cycles stalled: no free ZEB bank");
-            RBCD_STAT(f, *this, stall_queue_full_cycles, "cycles stalled: the unit's input queue full");
-            RBCD_STAT(f, *this, stall_fragment_queue_cycles, "cycles stalled: the fragment queue full");
+        RBCD_STATS_VISITOR {
+            RBCD_STAT(f, s, frames, "frames replayed");
+            RBCD_STAT(f, s, tiles, "tile records of the input");
+            RBCD_STAT(f, s, tiles_with_fragments, "tiles with collisionable fragments (took a bank)");
+            RBCD_STAT(f, s, fragments, "collisionable fragments sent to the unit");
+            RBCD_STAT(f, s, culled_fragments, "fragments tagged c (deferred face culling)");
+            RBCD_STAT(f, s, other_fragments, "non-collisionable fragments rasterized");
+            RBCD_STAT(f, s, primitives, "primitives set up (prims=)");
+            RBCD_STAT(f, s, culled_primitives, "primitives set up only for deferred culling (cprims=)");
+            RBCD_STAT(f, s, busy_cycles, "cycles emitting fragments or setting up primitives");
+            RBCD_STAT(f, s, stall_no_bank_cycles, "cycles stalled: no free ZEB bank");
+            RBCD_STAT(f, s, stall_queue_full_cycles, "cycles stalled: the unit's input queue full");
+            RBCD_STAT(f, s, stall_fragment_queue_cycles, "cycles stalled: the fragment queue full");
         }
     };
 

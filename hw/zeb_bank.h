@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/config.h"
+#include "common/stat_counters.h"
 #include "common/vcd_writer.h"
 
 namespace rbcd {
@@ -27,13 +28,13 @@ public:
         std::uint64_t flash_clears = 0;     // occupancy resets between tiles
         std::uint64_t filling_cycles = 0;   // cycles in state Filling
         std::uint64_t testing_cycles = 0;   // cycles in state Testing
-        template <class F> void for_each(F f) const {
-            RBCD_STAT(f, *this, row_reads, "list rows read (sorter and tester ports)");
-            RBCD_STAT(f, *this, row_writes, "list rows written by the sorter");
-            RBCD_STAT(f, *this, tiles, "tiles held");
-            RBCD_STAT(f, *this, flash_clears, "occupancy flash clears (one per tile taken)");
-            RBCD_STAT(f, *this, filling_cycles, "cycles filling");
-            RBCD_STAT(f, *this, testing_cycles, "cycles being tested");
+        RBCD_STATS_VISITOR {
+            RBCD_STAT(f, s, row_reads, "list rows read (sorter and tester ports)");
+            RBCD_STAT(f, s, row_writes, "list rows written by the sorter");
+            RBCD_STAT(f, s, tiles, "tiles held");
+            RBCD_STAT(f, s, flash_clears, "occupancy flash clears (one per tile taken)");
+            RBCD_STAT(f, s, filling_cycles, "cycles filling");
+            RBCD_STAT(f, s, testing_cycles, "cycles being tested");
         }
     };
 

@@ -51,23 +51,23 @@ public:
         std::uint64_t output_stall_cycles = 0;  // cycles held by a full output buffer
         std::uint64_t readback_cycles = 0;      // cycles waiting for the host at frame ends
         std::uint64_t idle_cycles = 0;          // cycles with no filled bank to test
-        template <class F> void for_each(F f) const {
-            RBCD_STAT(f, *this, tiles, "tiles tested");
-            RBCD_STAT(f, *this, lists, "non-empty lists walked");
-            RBCD_STAT(f, *this, elements, "list elements walked");
-            RBCD_STAT(f, *this, pushes, "front faces pushed onto the FF-stack");
-            RBCD_STAT(f, *this, stack_overflows, "pushes dropped by a full FF-stack");
-            RBCD_STAT(f, *this, id_compares, "id equality comparators fired (T per back face)");
-            RBCD_STAT(f, *this, orphan_back_faces, "back faces with no unmatched entry of their id");
-            RBCD_STAT(f, *this, matches, "back faces that matched an entry");
-            RBCD_STAT(f, *this, raw_hits, "hits found before output filtering");
-            RBCD_STAT(f, *this, hits, "hit records written");
-            RBCD_STAT(f, *this, filtered_hits, "hits dropped by the pixel/tile output filter");
-            RBCD_STAT(f, *this, overflow_records, "overflow records written");
-            RBCD_STAT(f, *this, busy_cycles, "cycles walking lists");
-            RBCD_STAT(f, *this, output_stall_cycles, "cycles held by a full output buffer");
-            RBCD_STAT(f, *this, readback_cycles, "cycles waiting at frame ends for the host to free the next output region");
-            RBCD_STAT(f, *this, idle_cycles, "cycles with no filled bank to test");
+        RBCD_STATS_VISITOR {
+            RBCD_STAT(f, s, tiles, "tiles tested");
+            RBCD_STAT(f, s, lists, "non-empty lists walked");
+            RBCD_STAT(f, s, elements, "list elements walked");
+            RBCD_STAT(f, s, pushes, "front faces pushed onto the FF-stack");
+            RBCD_STAT(f, s, stack_overflows, "pushes dropped by a full FF-stack");
+            RBCD_STAT(f, s, id_compares, "id equality comparators fired (T per back face)");
+            RBCD_STAT(f, s, orphan_back_faces, "back faces with no unmatched entry of their id");
+            RBCD_STAT(f, s, matches, "back faces that matched an entry");
+            RBCD_STAT(f, s, raw_hits, "hits found before output filtering");
+            RBCD_STAT(f, s, hits, "hit records written");
+            RBCD_STAT(f, s, filtered_hits, "hits dropped by the pixel/tile output filter");
+            RBCD_STAT(f, s, overflow_records, "overflow records written");
+            RBCD_STAT(f, s, busy_cycles, "cycles walking lists");
+            RBCD_STAT(f, s, output_stall_cycles, "cycles held by a full output buffer");
+            RBCD_STAT(f, s, readback_cycles, "cycles waiting at frame ends for the host to free the next output region");
+            RBCD_STAT(f, s, idle_cycles, "cycles with no filled bank to test");
         }
     };
 

@@ -89,27 +89,29 @@ Activity Activity::operator-(const Activity& o) const {
     return d;
 }
 
-Activity activity_of(const rbcd_system& sys) {
+Activity activity_of(const UnitCounters& c) {
     Activity a;
-    const auto& so = sys.sorter.stats();
-    const auto& te = sys.tester.stats();
-    a.queue_writes = sys.queue.stats().writes;
+    const auto& so = c.sorter;
+    const auto& te = c.tester;
+    a.queue_writes = c.queue.writes;
     a.comparator_activations = so.comparator_activations;
     a.mux_moves = so.mux_shifts + (so.insertions - so.dropped_new);
     a.sorter_row_reads = so.insertions;   // the READ stage fires once per insertion
-    for (const auto& b : sys.banks) {
-        a.row_writes += b->stats().row_writes;
-        a.bank_reads.push_back(b->stats().row_reads);
-        a.bank_writes.push_back(b->stats().row_writes);
+    for (const auto& [name, b] : c.banks) {
+        a.row_writes += b.row_writes;
+        a.bank_reads.push_back(b.row_reads);
+        a.bank_writes.push_back(b.row_writes);
     }
     a.tester_row_reads = te.lists;
     a.stack_pushes = te.pushes;
     a.stack_matches = te.matches;
     a.id_compares = te.id_compares;
-    a.buffer_records = sys.outbuf.stats().records;
-    a.memory_bytes = sys.memory.stats().bytes_written + sys.memory.stats().bytes_read;
+    a.buffer_records = c.outbuf.records;
+    a.memory_bytes = c.memory.bytes_written + c.memory.bytes_read;
     return a;
 }
+
+Activity activity_of(const rbcd_system& sys) { return activity_of(UnitCounters::of(sys)); }
 
 const BlockEnergy* EnergyReport::find(const std::string& name) const {
     for (const auto& b : blocks)

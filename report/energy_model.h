@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "common/config.h"
+#include "report/unit_counters.h"
 
 namespace rbcd {
 
@@ -73,6 +74,7 @@ struct Activity {
     Activity operator-(const Activity& o) const;   // per-bank vectors dropped
 };
 
+Activity activity_of(const UnitCounters& c);
 Activity activity_of(const rbcd_system& sys);
 
 struct BlockEnergy {

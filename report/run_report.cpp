@@ -54,10 +54,72 @@ void FrameFigures::add(const FrameFigures& f) {
     tail += f.tail;
     hits += f.hits;
     overflows += f.overflows;
-    unit_dynamic_pj += f.unit_dynamic_pj;
-    unit_leakage_pj += f.unit_leakage_pj;
-    gpu_baseline_pj += f.gpu_baseline_pj;
-    gpu_with_unit_pj += f.gpu_with_unit_pj;
+}
+
+void fill_energies(FrameFigures& f, const EnergyCosts& k, const Activity& unit) {
+    const FrameTimes& t = f.t;
+    Activity a = unit;
+    a.bank_reads.clear();
+    a.bank_writes.clear();
+    const EnergyReport e = energy_of(k, a, t.with_unit);
+    f.unit_dynamic_pj = e.dynamic_pj;
+    f.unit_leakage_pj = e.leakage_pj;
+    f.gpu_baseline_pj = gpu_energy_pj(k, GpuWork{t.shaded, t.shaded, t.prims, t.tiles}, t.baseline);
+    f.gpu_with_unit_pj =
+        gpu_energy_pj(k, GpuWork{t.shaded, t.shaded + t.culled, t.prims + t.cprims, t.tiles}, t.with_unit);
+}
+
+void FrameReduction::add_frame(const FrameFigures& f) {
+    if (frames == 0) first_frame = f.t.frame;
+    last_frame = f.t.frame;
+    ++frames;
+    if (f.has_baseline()) {
+        ++frames_with_baseline;
+        const double pct = f.overhead_pct();
+        const double q = std::nearbyint(pct * 1e6);
+        if (!(std::fabs(q) < 9e18) || __builtin_add_overflow(overhead_sum_e6, std::int64_t(q), &overhead_sum_e6))
+            overhead_sum_overflow = true;
+        if (!has_worst || pct > worst_pct) {
+            has_worst = true;
+            worst_frame = f.t.frame;
+            worst_pct = pct;
+        }
+    }
+    // Compared in nJ, as reported, so that a merge of reports picks the same frame.
+    const double nj = f.unit_pj() * 1e-3;
+    if (!has_max_energy || nj > max_energy_nj) {
+        has_max_energy = true;
+        max_energy_frame = f.t.frame;
+        max_energy_nj = nj;
+    }
+}
+
+bool FrameReduction::merge(const FrameReduction& b) {
+    if (b.frames == 0) return true;
+    if (frames > 0 && b.first_frame != last_frame + 1) return false;
+    if (frames == 0) first_frame = b.first_frame;
+    last_frame = b.last_frame;
+    frames += b.frames;
+    frames_with_baseline += b.frames_with_baseline;
+    if (b.overhead_sum_overflow ||
+        __builtin_add_overflow(overhead_sum_e6, b.overhead_sum_e6, &overhead_sum_e6))
+        overhead_sum_overflow = true;
+    if (b.has_worst && (!has_worst || b.worst_pct > worst_pct)) {
+        has_worst = true;
+        worst_frame = b.worst_frame;
+        worst_pct = b.worst_pct;
+    }
+    if (b.has_max_energy && (!has_max_energy || b.max_energy_nj > max_energy_nj)) {
+        has_max_energy = true;
+        max_energy_frame = b.max_energy_frame;
+        max_energy_nj = b.max_energy_nj;
+    }
+    return true;
+}
+
+double FrameReduction::mean_overhead_pct() const {
+    if (!frames_with_baseline || overhead_sum_overflow) return kNaN;
+    return double(overhead_sum_e6) * 1e-6 / double(frames_with_baseline);
 }
 
 nlohmann::json frame_json(const FrameFigures& f) {
@@ -117,43 +179,28 @@ void RunReport::frame_end(const FrameTimes& t) {
     Activity now = activity_of(sys_);
     now.bank_reads.clear();
     now.bank_writes.clear();
-    const EnergyReport e = energy_of(k_, now - prev_, t.with_unit);
+    fill_energies(f, k_, now - prev_);
     prev_ = now;
-    f.unit_dynamic_pj = e.dynamic_pj;
-    f.unit_leakage_pj = e.leakage_pj;
-    f.gpu_baseline_pj = gpu_energy_pj(k_, GpuWork{t.shaded, t.shaded, t.prims, t.tiles}, t.baseline);
-    f.gpu_with_unit_pj =
-        gpu_energy_pj(k_, GpuWork{t.shaded, t.shaded + t.culled, t.prims + t.cprims, t.tiles}, t.with_unit);
     const std::uint64_t hits = sys_.tester.stats().hits, overflows = sys_.sorter.stats().overflows;
     f.hits = hits - prev_hits_;
     f.overflows = overflows - prev_overflows_;
     prev_hits_ = hits;
     prev_overflows_ = overflows;
 
-    ++frames_;
     totals_.add(f);
-    if (f.has_baseline()) {
-        ++frames_with_baseline_;
-        pct_sum_ += f.overhead_pct();
-        if (!has_worst_ || f.overhead_pct() > worst_.overhead_pct()) {
-            worst_ = f;
-            has_worst_ = true;
-        }
-    }
-    if (!has_max_energy_ || f.unit_pj() > max_energy_.unit_pj()) {
-        max_energy_ = f;
-        has_max_energy_ = true;
-    }
+    const bool worst = f.has_baseline() && (!red_.has_worst || f.overhead_pct() > red_.worst_pct);
+    const bool max_energy = !red_.has_max_energy || f.unit_pj() * 1e-3 > red_.max_energy_nj;
+    red_.add_frame(f);
+    if (worst) worst_ = f;
+    if (max_energy) max_energy_ = f;
     if (first_.size() < kFirstFrames) first_.push_back(f);
     if (out_) out_(frame_json(f).dump() + "\n");
 }
 
-double RunReport::mean_frame_overhead_pct() const {
-    return frames_with_baseline_ ? pct_sum_ / double(frames_with_baseline_) : kNaN;
-}
-
-double RunReport::mean_frame_nj() const {
-    return frames_ ? totals_.unit_pj() * 1e-3 / double(frames_) : 0.0;
+FrameFigures RunReport::totals() const {
+    FrameFigures f = totals_;
+    fill_energies(f, k_, prev_);
+    return f;
 }
 
 } // namespace rbcd

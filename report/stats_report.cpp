@@ -49,15 +49,25 @@ nlohmann::json energy_blocks_json(const EnergyReport& r) {
 } // namespace
 
 nlohmann::json make_stats(const rbcd_system& sys, const RunInfo& info, const RunReport& report) {
+    return make_stats(snapshot_of(sys, report, info.input), info.wall_seconds);
+}
+
+nlohmann::json make_stats(const RunSnapshot& s, double wall_seconds) {
     nlohmann::json j;
-    const auto& raster = sys.raster.stats();
-    const auto& sorter = sys.sorter.stats();
-    const auto& tester = sys.tester.stats();
-    const std::uint64_t cycles = sys.total_cycles();
-    const double simulated_ns = double(cycles) * double(sys.clk.period_ps()) * 1e-3;
+    const UnitCounters& c = s.counters;
+    const auto& raster = c.raster;
+    const auto& sorter = c.sorter;
+    const auto& tester = c.tester;
+    const std::uint64_t cycles = s.cycles;
+    const std::uint64_t period_ps = s.cfg.clock.period_ps();
+    const double simulated_ns = double(cycles) * double(period_ps) * 1e-3;
+    const EnergyCosts k = energy_costs(s.cfg);
+    FrameFigures t = s.gpu;
+    fill_energies(t, k, activity_of(c));
+    const FrameReduction& r = s.frames;
 
     j["format"] = "rbcd-stats 2";
-    j["input"] = info.input;
+    j["input"] = s.input;
     j["totals"] = {
         {"frames", raster.frames},
         {"tiles", raster.tiles},
@@ -68,28 +78,21 @@ nlohmann::json make_stats(const rbcd_system& sys, const RunInfo& info, const Run
         {"hits", tester.hits},
         {"cycles", cycles},
     };
+    j["frame_range"] = r.frames ? nlohmann::json{{"first", r.first_frame}, {"last", r.last_frame}} : nlohmann::json(nullptr);
     j["time"] = {
-        {"clock_mhz", sys.cfg.clock.mhz},
-        {"period_ps", sys.clk.period_ps()},
+        {"clock_mhz", s.cfg.clock.mhz},
+        {"period_ps", period_ps},
         {"simulated_us", simulated_ns * 1e-3},
-        {"wall_seconds", info.wall_seconds},
-        {"fragments_per_second", info.wall_seconds > 0 ? double(raster.fragments) / info.wall_seconds : 0.0},
+        {"wall_seconds", wall_seconds},
+        {"fragments_per_second", wall_seconds > 0 ? double(raster.fragments) / wall_seconds : 0.0},
     };
 
     nlohmann::json blocks;
-    blocks["rasterizer"] = block_json(raster);
-    blocks["fragment_processors"] = block_json(sys.fragments.stats());
-    blocks["input_queue"] = block_json(sys.queue.stats());
-    for (const auto& b : sys.banks) blocks[b->basename()] = block_json(b->stats());
-    blocks["insertion_sorter"] = block_json(sorter);
-    blocks["zoverlap_tester"] = block_json(tester);
-    blocks["output_buffer"] = block_json(sys.outbuf.stats());
-    blocks["memory_controller"] = block_json(sys.memory.stats());
-    blocks["host"] = block_json(sys.host.stats());
+    c.for_each_block([&](const std::string& name, const auto& stats) { blocks[name] = block_json(stats); });
     j["blocks"] = blocks;
 
     // Derived figures, each a formula over the counters above.
-    const auto& fp = sys.fragments.stats();
+    const auto& fp = c.fragments;
     j["derived"] = {
         {"sorter_utilization_pct", pct(sorter.busy_cycles, cycles)},
         {"tester_utilization_pct", pct(tester.busy_cycles, cycles)},
@@ -98,15 +101,13 @@ nlohmann::json make_stats(const rbcd_system& sys, const RunInfo& info, const Run
          pct(raster.stall_no_bank_cycles + raster.stall_queue_full_cycles + raster.stall_fragment_queue_cycles, cycles)},
         {"overflow_pct_of_fragments", pct(sorter.overflows, raster.fragments)},
         {"fragments_per_cycle", cycles ? double(raster.fragments) / double(cycles) : 0.0},
-        {"zeb_bank_bits", sys.banks.empty() ? 0 : sys.banks[0]->bits()},
+        {"zeb_bank_bits", k.bank_bits},
     };
 
     // ---- GPU time (docs/gpu-model.md)
-    const FrameFigures& t = report.totals();
-    const FrameFigures* worst = report.worst_frame();
     j["gpu"] = {
         {"model", "paced raster pipeline, docs/gpu-model.md"},
-        {"bank_wait", to_string(sys.cfg.gpu.bank_wait)},
+        {"bank_wait", to_string(s.cfg.gpu.bank_wait)},
         {"baseline_cycles", t.t.baseline},
         {"cycles_with_unit", t.t.with_unit},
         {"overhead_pct", num_or_null(t.overhead_pct())},
@@ -122,21 +123,23 @@ nlohmann::json make_stats(const rbcd_system& sys, const RunInfo& info, const Run
           {"fragment_queue_cycles", t.t.stall_fragment_queue}}},
         {"primitives", t.t.prims},
         {"culled_primitives", t.t.cprims},
+        {"tiles", t.t.tiles},
         {"tiles_with_base", t.t.tiles_with_base},
+        {"shaded_fragments", t.t.shaded},
+        {"culled_fragments", t.t.culled},
         {"per_frame_overhead_pct",
-         {{"mean", num_or_null(report.mean_frame_overhead_pct())},
-          {"max", worst ? num_or_null(worst->overhead_pct()) : nlohmann::json(nullptr)},
-          {"max_frame", worst ? nlohmann::json(worst->t.frame) : nlohmann::json(nullptr)},
-          {"frames_without_baseline", report.frames() - report.frames_with_baseline()}}},
+         {{"mean", num_or_null(r.mean_overhead_pct())},
+          {"max", r.has_worst ? num_or_null(r.worst_pct) : nlohmann::json(nullptr)},
+          {"max_frame", r.has_worst ? nlohmann::json(r.worst_frame) : nlohmann::json(nullptr)},
+          {"frames_without_baseline", r.frames - r.frames_with_baseline},
+          {"sum_e6", r.overhead_sum_overflow ? nlohmann::json(nullptr) : nlohmann::json(r.overhead_sum_e6)}}},
     };
 
     // ---- Energy (docs/energy.md)
-    const EnergyCosts& k = report.costs();
-    const EnergyReport et = energy_of(k, activity_of(sys), cycles);
-    const FrameFigures* emax = report.max_energy_frame();
+    const EnergyReport et = energy_of(k, activity_of(c), cycles);
     j["energy"] = {
         {"model", "docs/energy.md"},
-        {"zeb_device", to_string(sys.cfg.energy.zeb_device)},
+        {"zeb_device", to_string(s.cfg.energy.zeb_device)},
         {"bank_bits", k.bank_bits},
         {"row_bits", k.row_bits},
         {"sram_scale", k.sram_scale},
@@ -171,11 +174,11 @@ nlohmann::json make_stats(const rbcd_system& sys, const RunInfo& info, const Run
           {"overhead_pct", num_or_null(t.energy_overhead_pct())}}},
         {"per_frame",
          {{"basis", "the unit's counters at each frame barrier; leakage over the frame's time with the unit"},
-          {"mean_nj", report.mean_frame_nj()},
-          {"max_nj", emax ? emax->unit_pj() * 1e-3 : 0.0},
-          {"max_frame", emax ? nlohmann::json(emax->t.frame) : nlohmann::json(nullptr)}}},
+          {"mean_nj", r.mean_frame_nj(t.unit_pj())},
+          {"max_nj", r.has_max_energy ? r.max_energy_nj : 0.0},
+          {"max_frame", r.has_max_energy ? nlohmann::json(r.max_energy_frame) : nlohmann::json(nullptr)}}},
     };
-    j["config"] = config_json(sys.cfg);
+    j["config"] = config_json(s.cfg);
     return j;
 }
 
@@ -273,7 +276,7 @@ std::string make_summary(const nlohmann::json& s, const RunReport& report) {
     // ---- GPU time and energy
     const auto& g = s["gpu"];
     const auto& oc = g["overhead_cycles"];
-    const FrameFigures& tot = report.totals();
+    const FrameFigures tot = report.totals();
     const auto pct_text = [](double v) { return std::isnan(v) ? std::string("n/a") : fmt("%+.2f%%", v); };
     out += fmt("\n  GPU time (docs/gpu-model.md, bank wait: %s): baseline %llu cycles, with the unit %llu: %s\n",
                g["bank_wait"].get<std::string>().c_str(), ull(u(g, "baseline_cycles")), ull(u(g, "cycles_with_unit")),

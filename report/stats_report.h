@@ -13,6 +13,7 @@
 #include "hw/rbcd_system.h"
 #include "report/energy_model.h"
 #include "report/run_report.h"
+#include "report/run_snapshot.h"
 
 namespace rbcd {
 
@@ -22,6 +23,8 @@ struct RunInfo {
 };
 
 nlohmann::json make_stats(const rbcd_system& sys, const RunInfo& info, const RunReport& report);
+// The same document from a snapshot (a run's, or merged runs').
+nlohmann::json make_stats(const RunSnapshot& s, double wall_seconds);
 std::string make_summary(const nlohmann::json& stats, const RunReport& report);
 
 } // namespace rbcd

@@ -43,6 +43,7 @@
 #include <tlm_utils/simple_target_socket.h>
 
 #include "common/config.h"
+#include "common/stat_counters.h"
 #include "common/vcd_writer.h"
 #include "tlm/bus.h"
 
@@ -73,18 +74,18 @@ struct memory_stats {
 
     // f(const char* name, std::uint64_t value, const char* description) for
     // every counter, in declaration order, so that reports need no field list.
-    template <class F> void for_each(F f) const {
-        f("reads", reads, "read transactions completed");
-        f("writes", writes, "write transactions completed");
-        f("bytes_read", bytes_read, "bytes read by completed transactions");
-        f("bytes_written", bytes_written, "bytes written by completed transactions");
-        f("errors", errors, "transactions answered with an error response");
-        f("busy_cycles", busy_cycles, "cycles the data channel transferred data");
-        f("queue_cycles", queue_cycles, "cycles requests waited for the data channel");
-        f("latency_cycles", latency_cycles, "access latency cycles, summed over transactions");
-        f("max_completion_cycle", max_completion_cycle, "latest response completion, cycles");
-        f("debug_accesses", debug_accesses, "debug transport accesses (no time, no channel)");
-        f("dmi_grants", dmi_grants, "direct memory pointers granted");
+    RBCD_STATS_VISITOR {
+        f("reads", s.reads, "read transactions completed");
+        f("writes", s.writes, "write transactions completed");
+        f("bytes_read", s.bytes_read, "bytes read by completed transactions");
+        f("bytes_written", s.bytes_written, "bytes written by completed transactions");
+        f("errors", s.errors, "transactions answered with an error response");
+        f("busy_cycles", s.busy_cycles, "cycles the data channel transferred data");
+        f("queue_cycles", s.queue_cycles, "cycles requests waited for the data channel");
+        f("latency_cycles", s.latency_cycles, "access latency cycles, summed over transactions");
+        f("max_completion_cycle", s.max_completion_cycle, "latest response completion, cycles");
+        f("debug_accesses", s.debug_accesses, "debug transport accesses (no time, no channel)");
+        f("dmi_grants", s.dmi_grants, "direct memory pointers granted");
     }
 };
 

@@ -32,7 +32,7 @@ struct ReportedRun {
     }
     nlohmann::json stats() const { return make_stats(*sys, RunInfo{"test", 0.0}, *report); }
     std::string summary() const { return make_summary(stats(), *report); }
-    const FrameFigures& totals() const { return report->totals(); }
+    FrameFigures totals() const { return report->totals(); }
 };
 
 // Memory latency fixed at 50 cycles, as docs/timing.md's worked example.

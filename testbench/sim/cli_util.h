@@ -91,10 +91,10 @@ inline void strip_asan_stack_switch_notice(std::string& err) {
     err.erase(begin, end - begin);
 }
 
-inline Result run_sim(const TempDir& td, const std::vector<std::string>& args) {
+inline Result run_program(const TempDir& td, const std::string& program, const std::vector<std::string>& args) {
     Result r;
     const std::string out_path = td.path("stdout.txt"), err_path = td.path("stderr.txt");
-    std::vector<std::string> argv_s{RBCD_SIM};
+    std::vector<std::string> argv_s{program};
     argv_s.insert(argv_s.end(), args.begin(), args.end());
     std::vector<char*> argv;
     for (auto& a : argv_s) {
@@ -130,6 +130,8 @@ inline Result run_sim(const TempDir& td, const std::vector<std::string>& args) {
     strip_asan_stack_switch_notice(r.err);
     return r;
 }
+
+inline Result run_sim(const TempDir& td, const std::vector<std::string>& args) { return run_program(td, RBCD_SIM, args); }
 
 // Runs with --collisions and --stats into td's out directory, over older files.
 inline Result run_with_outputs(const TempDir& td, std::vector<std::string> args, bool plant_old = true) {
