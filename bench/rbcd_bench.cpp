@@ -9,6 +9,8 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <spawn.h>
 #include <string>
 #include <sys/resource.h>
@@ -24,6 +26,9 @@
 extern char** environ;
 
 namespace {
+
+// The kernel prints its banner before sc_main runs, unless told not to.
+const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0) == 0; }();
 
 struct ChildRun {
     int status = -1;
@@ -66,6 +71,12 @@ int sc_main(int argc, char* argv[]) {
     sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
 
     const std::string gen = sibling(argv[0], "gen_busy_trace"), sim = sibling(argv[0], "rbcd-sim");
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) {
+        std::fprintf(stderr, "rbcd-bench: %s: cannot create: %s\n", dir.c_str(), ec.message().c_str());
+        return 2;
+    }
     const std::string t1 = dir + "/rbcd-bench-1x.rbt", t2 = dir + "/rbcd-bench-2x.rbt";
     std::printf("generating %llu and %llu fragment traces in %s ...\n", (unsigned long long)fragments,
                 (unsigned long long)(2 * fragments), dir.c_str());
