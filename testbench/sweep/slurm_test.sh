@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs a 3-axis sweep over a two-trace workload suite through a real SLURM
+# Runs a 3-axis sweep over the workload suite (workloads/) through a real SLURM
 # (Debian's slurm-wlm 22.05 + munge) started here on localhost, and checks that
 # the merged table equals the local runner's, byte for byte; then resubmits
 # (resume: nothing left to run, the table again). Everything it starts runs in
@@ -101,16 +101,21 @@ for _ in $(seq 200); do
 done
 [ "$state" = "idle" ] || { echo "FAILED: the SLURM node did not come up (state: '${state:-none}')"; exit 1; }
 
-# The sweep: 3 axes over a suite of two traces, 16 runs in array tasks of 3.
-mkdir "$tmp/suite"
-cp "$root/vectors/default.rbt" "$root/vectors/multi-frame-mixed.rbt" "$tmp/suite/"
+# The sweep: 3 axes over the workload suite (workloads/: 5 scenes with
+# third-party meshes, their first 3 frames), 40 runs in array tasks of 3.
 cat > "$tmp/sweep.toml" <<EOF
+[base]
+config = "$root/sc_main/configs/paper.toml"
+set = { "zeb.id_bits" = 8 }
 [axes]
 zeb.banks = [1, 2]
 zeb.list_length = [4, 8]
 tester.stack_depth = [4, 8]
 [inputs]
-suites = ["suite"]
+suites = ["$root/workloads"]
+frames = "0:2"
+[results]
+fields = ["totals.frames", "totals.hits", "totals.overflows", "gpu.overhead_pct", "energy.total_nj"]
 [slurm]
 partition = "rbcd"
 time = "00:05:00"
@@ -122,13 +127,16 @@ EOF
 "${sweep_cmd[@]}" run "$tmp/sweep.toml" -o "$tmp/out-local" -q --rbcd-sim "$sim"
 "${sweep_cmd[@]}" slurm "$tmp/sweep.toml" -o "$tmp/out-slurm" --wait --poll 0.5 --rbcd-sim "$sim" 2> "$tmp/submit.log" \
   || { cat "$tmp/submit.log"; echo "FAILED: the SLURM sweep"; exit 1; }
-grep -q "in 6 array tasks" "$tmp/submit.log" || { echo "FAILED: expected 16 runs in 6 array tasks"; exit 1; }
+grep -q "in 14 array tasks" "$tmp/submit.log" || { cat "$tmp/submit.log"; echo "FAILED: expected 40 runs in 14 array tasks"; exit 1; }
 ls "$tmp"/out-slurm/slurm/logs/merge-*.out >/dev/null || { echo "FAILED: the merge job did not run"; exit 1; }
 cmp "$tmp/out-local/results.csv" "$tmp/out-slurm/results.csv" \
   || { echo "FAILED: the SLURM table differs from the local one"; diff "$tmp/out-local/results.csv" "$tmp/out-slurm/results.csv"; exit 1; }
-[ "$(wc -l < "$tmp/out-slurm/results.csv")" -eq 17 ] || { echo "FAILED: expected 16 rows"; exit 1; }
+[ "$(wc -l < "$tmp/out-slurm/results.csv")" -eq 41 ] || { echo "FAILED: expected 40 rows"; exit 1; }
+# Every row ran (status 0) and read 3 frames.
+awk -F, 'NR > 1 && ($2 !~ /workloads\// || $0 !~ /,0,,/) { bad = 1 } END { exit bad }' "$tmp/out-slurm/results.csv" \
+  || { echo "FAILED: a row did not run its workload"; cat "$tmp/out-slurm/results.csv"; exit 1; }
 status=$("${sweep_cmd[@]}" status "$tmp/out-slurm")
-[[ "$status" == *"16/16 runs done, 0 failed; slurm: no jobs queued" ]] || { echo "FAILED: status says: $status"; exit 1; }
+[[ "$status" == *"40/40 runs done, 0 failed; slurm: no jobs queued" ]] || { echo "FAILED: status says: $status"; exit 1; }
 
 # Resume: a resubmission finds every run complete and only merges.
 rm "$tmp/out-slurm/results.csv"
@@ -137,6 +145,8 @@ rm "$tmp/out-slurm/results.csv"
 grep -q "0 to run in 0 array tasks" "$tmp/resume.log" || { cat "$tmp/resume.log"; echo "FAILED: resume reran runs"; exit 1; }
 cmp "$tmp/out-local/results.csv" "$tmp/out-slurm/results.csv" || { echo "FAILED: resumed table differs"; exit 1; }
 # One input split in frame ranges across array tasks, merged by the merge job.
+mkdir "$tmp/suite"
+cp "$root/vectors/default.rbt" "$root/vectors/multi-frame-mixed.rbt" "$tmp/suite/"
 cat > "$tmp/split.toml" <<EOF
 [axes]
 zeb.banks = [1, 2]
@@ -158,5 +168,5 @@ for run in $(awk -F, 'NR > 1 { print $NF }' "$tmp/split-local/results.csv"); do
   cmp "$tmp/split-local/runs/$run/collisions.txt" "$tmp/split-slurm/runs/$run/collisions.txt" \
     || { echo "FAILED: merged collisions of $run differ"; exit 1; }
 done
-echo "passed: SLURM table equals the local one (16 runs, 6 array tasks, merge job), resume merges only;"
+echo "passed: SLURM table equals the local one (40 runs over workloads/, 14 array tasks, merge job), resume merges only;"
 echo "        frame ranges in array tasks merge into the local runner's table and collision files"

@@ -300,6 +300,28 @@ def case_frames(c):
         check(r.returncode == 2 and r.stderr.startswith("rbcd-sim: --frames: ") and not os.path.exists(part),
               f"--frames {bad}: exit 2 naming --frames, no output left: {r.stderr}")
 
+    # inputs.frames: a window of every input, run as rbcd-sim --frames.
+    s = c.sweep_file("w.toml", f"""
+[axes]
+zeb.banks = [1, 2]
+[inputs]
+traces = ["{trace}"]
+frames = "10:19"
+[results]
+fields = ["totals.frames", "totals.hits"]
+""")
+    r = c.sweep("run", s, "-o", os.path.join(c.tmp, "window"), "-q")
+    rows = c.rows(os.path.join(c.tmp, "window"))
+    check(r.returncode == 0 and len(rows) == 2 and all(x["totals.frames"] == "10" for x in rows),
+          f"inputs.frames = 10:19: two rows of 10 frames: {rows} {r.stderr}")
+    check(rows[1]["totals.hits"] == str(body.count("hit ")), "the window's hits are the whole run's of those frames")
+    for bad, needle in (('frames = "9:3"', "inputs.frames"), ('frames = 3', "inputs.frames"),
+                        ('frames = "0:9"\n[split]\nframes_per_run = 5', "cannot be combined with inputs.frames")):
+        s = c.sweep_file("bad.toml", f'[inputs]\ntraces = ["{trace}"]\n{bad}\n')
+        r = c.sweep("list", s)
+        check(r.returncode == 2 and needle in r.stderr and len(r.stderr.splitlines()) == 1,
+              f"{bad!r}: exit 2 naming {needle}: {r.returncode} {r.stderr}")
+
     s = c.sweep_file("s.toml", f"""
 [inputs]
 traces = ["{trace}"]
