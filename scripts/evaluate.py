@@ -258,7 +258,7 @@ def toml_text(doc):
 def sweep_file(template, suite, dest):
     """TEMPLATE (a sweep of workloads/sweeps/) with its inputs replaced by SUITE's scenes, each
     with the id bits it needs, and its paths made absolute: what reproduce.sh --workloads runs."""
-    with open(need(template), "rb") as f:
+    with open(template, "rb") as f:
         doc = tomllib.load(f)
     base = doc.setdefault("base", {})
     if "config" in base:
@@ -668,6 +668,9 @@ def main():
         return 2
     except tomllib.TOMLDecodeError as e:
         print(f"evaluate.py: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"evaluate.py: {e.filename}: {e.strerror}", file=sys.stderr)
         return 2
     return 0
 
