@@ -1,10 +1,14 @@
 #!/usr/bin/python3
 """The evaluation's arithmetic (docs/results.md, docs/accuracy.md): reads the
-runs scripts/reproduce.sh made under OUT/runs/ and writes each figure's CSV,
-PNG and Markdown table into OUT.
+runs scripts/reproduce.sh made (the sweeps' tables OUT/sweep/NAME.csv and the
+other runs under OUT/runs/) and writes each figure's CSV, PNG and Markdown
+table into OUT.
 
     scripts/evaluate.py --out DIR TARGET...     TARGET: workloads table3 fig9 fig8 accuracy
     scripts/evaluate.py --splice OUT DOC        copy OUT's tables into DOC between its markers
+    scripts/evaluate.py --sweep-file SWEEP SUITE DEST
+                                                SWEEP (workloads/sweeps/) over another suite
+    scripts/evaluate.py --id-bits SCENE         the zeb.id_bits a scene's ids need
 
 Every input it needs is named in the target's function; a missing one is an
 error naming the file (exit 2).
@@ -15,7 +19,9 @@ import json
 import math
 import os
 import re
+import subprocess
 import sys
+import tomllib
 
 # ---- The CPU model of Figure 8 (docs/results.md, "CPU energy model").
 # The paper's CPU (Table 2): 2 cores at 1.5 GHz, 32 nm, 1 V. Collision
@@ -45,11 +51,6 @@ def need(path):
     if not os.path.exists(path):
         raise InputMissing(f"{path}: missing (run scripts/reproduce.sh for this target)")
     return path
-
-
-def load_json(path):
-    with open(need(path)) as f:
-        return json.load(f)
 
 
 def read_collisions(path):
@@ -139,7 +140,6 @@ def scenes_of(out):
 
 def scene_objects(name):
     """(collisionable ids, scenery objects) of a scene file."""
-    import tomllib
     with open(need(SCENE_PATHS[name]), "rb") as f:
         sc = tomllib.load(f)
     objs = sc.get("object", [])
@@ -150,15 +150,146 @@ def run(out, scene, name):
     return os.path.join(out, "runs", scene, name)
 
 
+# ---------------------------------------------------------------- sweeps
+# Table 3 and Figure 9 are sweeps (workloads/sweeps/NAME.toml) run by
+# scripts/rbcd-sweep, one after the other, into one output directory OUT/sweep/
+# (so the run they share, M = 8 with two ZEBs, runs once); each one's
+# results.csv is kept as OUT/sweep/NAME.csv: a row per point and scene, with
+# the stats fields the sweep file lists.
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def sweep_dir(out):
+    return os.path.join(out, "sweep")
+
+
+def value(row, field):
+    """A results.csv cell as the stats JSON held it: int, float, or None (empty)."""
+    if field not in row:
+        raise InputMissing(f"results.csv: no column {field} (add it to the sweep's results.fields)")
+    v = row[field]
+    if v == "":
+        return None
+    try:
+        return int(v)
+    except ValueError:
+        return float(v)
+
+
+def sweep_rows(out, name, axis, scenes):
+    """({(scene, axis value): row}, the axis values in table order) of OUT/sweep/NAME.csv;
+    every scene must have a successful row at every value."""
+    path = os.path.join(sweep_dir(out), name + ".csv")
+    rows = read_csv(path)
+    if rows and axis not in rows[0]:
+        raise InputMissing(f"{path}: no column {axis} (the sweep must sweep {axis})")
+    table, values = {}, []
+    for r in rows:
+        scene = os.path.basename(r["input"]).removesuffix(".toml")
+        v = value(r, axis)
+        if v not in values:
+            values.append(v)
+        if r["status"] != "0":
+            raise InputMissing(f"{path}: {scene} at {axis} = {v}: run failed: {r['error']}")
+        table[(scene, v)] = r
+    for s in scenes:
+        for v in values:
+            if (s, v) not in table:
+                raise InputMissing(f"{path}: no row for {s} at {axis} = {v}")
+    return table, values
+
+
+def sweep_run_file(out, name, row, file):
+    """A file of the row's run: OUT/sweep/runs/ID/FILE."""
+    return os.path.join(sweep_dir(out), "runs", row["run"], file)
+
+
+def rbcd_plot(table, png, y, x, lines, title, logx=False):
+    """The figure's PNG by scripts/rbcd-plot, from a table in results.csv form."""
+    cmd = ["/usr/bin/python3", os.path.join(HERE, "rbcd-plot"), table, "--y", y, "--x", x, "--lines", lines,
+           "--title", title, "-o", png] + (["--logx"] if logx else [])
+    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    if r.returncode != 0:
+        raise InputMissing(f"rbcd-plot failed on {table}: {r.stderr.strip()}")
+
+
+def id_bits(scene_path):
+    """The smallest zeb.id_bits (at least the paper's 7) holding a scene's object ids."""
+    with open(need(scene_path), "rb") as f:
+        objs = tomllib.load(f).get("object", [])
+    top = max([o["id"] for o in objs if isinstance(o.get("id"), int)] or [0])
+    b = 7
+    while top >= 1 << b:
+        b += 1
+    return b
+
+
+def toml_text(doc):
+    """A sweep file's tables as TOML (the subset sweep files use)."""
+    def val(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, (int, float)):
+            return repr(v)
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        raise ValueError(f"cannot write {v!r} as TOML")
+
+    def table(name, t, lines):
+        lines.append(f"[{name}]")
+        lines += [f"{json.dumps(k)} = {val(v)}" for k, v in t.items() if not isinstance(v, dict)]
+        for k, v in t.items():
+            if isinstance(v, dict):
+                table(f"{name}.{json.dumps(k)}", v, lines)
+
+    lines = []
+    for name, t in doc.items():
+        for sub in (t if isinstance(t, list) else [t]):
+            if isinstance(t, list):
+                lines.append(f"[[{name}]]")
+                lines += [f"{json.dumps(k)} = {val(v)}" for k, v in sub.items()]
+            else:
+                table(name, sub, lines)
+    return "\n".join(lines) + "\n"
+
+
+def sweep_file(template, suite, dest):
+    """TEMPLATE (a sweep of workloads/sweeps/) with its inputs replaced by SUITE's scenes, each
+    with the id bits it needs, and its paths made absolute: what reproduce.sh --workloads runs."""
+    with open(template, "rb") as f:
+        doc = tomllib.load(f)
+    base = doc.setdefault("base", {})
+    if "config" in base:
+        base["config"] = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(template)), base["config"]))
+    suite = os.path.abspath(suite)
+    inputs = {"suites": [suite]}
+    sets = {}
+    for name in sorted(os.listdir(suite)):
+        if name.endswith(".toml"):
+            b = id_bits(os.path.join(suite, name))
+            if b != 7:
+                sets[os.path.join(suite, name)] = {"zeb.id_bits": b}
+    if sets:
+        inputs["set"] = sets
+    doc["inputs"] = inputs
+    with open(dest, "w") as f:
+        f.write(f"# {template} over {suite} (scripts/evaluate.py --sweep-file)\n")
+        f.write(toml_text(doc))
+
+
 # ---------------------------------------------------------------- workloads
 def target_workloads(out, scenes):
     rows, md_rows = [], []
     plt = plot()
     fig, axes = plt.subplots(1, len(scenes), figsize=(3.2 * len(scenes), 2.6), squeeze=False)
+    # The rasterizer's counts do not depend on the unit: the paper configuration's runs of Figure 9.
+    sw, _ = sweep_rows(out, "fig9", "zeb.banks", scenes)
     for k, s in enumerate(scenes):
-        st = load_json(run(out, s, "m8.json"))
-        frames = st["totals"]["frames"]
-        feed = st["blocks"]["rasterizer"]
+        r = sw[(s, 2)]
+        frames = value(r, "totals.frames")
+        feed = {f: value(r, "blocks.rasterizer." + f) for f in ("fragments", "other_fragments", "culled_fragments")}
         pairs = read_csv(run(out, s, "cpucd_pairs.csv"))
         n_coll, n_scenery = scene_objects(s)
         hist = read_csv(run(out, s, "depth_hist.csv"))
@@ -197,15 +328,17 @@ def target_workloads(out, scenes):
 
 # ---------------------------------------------------------------- table3
 def target_table3(out, scenes):
+    """From the sweep workloads/sweeps/table3.toml (zeb.list_length x scene)."""
+    sw, ms = sweep_rows(out, "table3", "zeb.list_length", scenes)
     rows = []
-    tot = {m: [0, 0, 0, 0] for m in (4, 8, 16)}
+    tot = {m: [0, 0, 0, 0] for m in ms}
     for s in scenes:
         row = [s]
-        for m in (4, 8, 16):
-            st = load_json(run(out, s, f"m{m}.json"))
-            _, lists = read_collisions(run(out, s, f"m{m}.col"))
-            frags, drop = st["totals"]["fragments"], st["totals"]["overflows"]
-            nl, lo = st["blocks"]["zoverlap_tester"]["lists"], sum(lists.values())
+        for m in ms:
+            r = sw[(s, m)]
+            _, lists = read_collisions(sweep_run_file(out, "table3", r, "collisions.txt"))
+            frags, drop = value(r, "totals.fragments"), value(r, "totals.overflows")
+            nl, lo = value(r, "blocks.zoverlap_tester.lists"), sum(lists.values())
             t = tot[m]
             t[0] += frags
             t[1] += drop
@@ -214,89 +347,70 @@ def target_table3(out, scenes):
             row += [fmt(pct(drop, frags), 3), fmt(pct(lo, nl), 3)]
         rows.append(row)
     rows.append(["all (pooled)"] + sum(([fmt(pct(tot[m][1], tot[m][0]), 3), fmt(pct(tot[m][3], tot[m][2]), 3)]
-                                        for m in (4, 8, 16)), []))
+                                        for m in ms), []))
     means = []
-    for i in range(6):
+    for i in range(2 * len(ms)):
         means.append(fmt(sum(float(r[1 + i]) for r in rows[:-1]) / len(scenes), 3))
     rows.append(["mean of scenes"] + means)
-    rows.append(["paper (Table 3)"] + sum(([f"{PAPER['table3'][m]}", "-"] for m in (4, 8, 16)), []))
-    header = ["scene", "M=4 fragments dropped %", "M=4 lists overflowed %", "M=8 fragments dropped %",
-              "M=8 lists overflowed %", "M=16 fragments dropped %", "M=16 lists overflowed %"]
+    rows.append(["paper (Table 3)"] + sum(([f"{PAPER['table3'][m]}" if m in PAPER["table3"] else "-", "-"]
+                                           for m in ms), []))
+    header = ["scene"] + sum(([f"M={m} fragments dropped %", f"M={m} lists overflowed %"] for m in ms), [])
     write_csv(os.path.join(out, "table3.csv"), header, rows)
     with open(os.path.join(out, "table3.md"), "w") as f:
         f.write(md_table(header, rows))
-    plt = plot()
-    fig, ax = plt.subplots(figsize=(7, 3))
-    w = 0.8 / (len(scenes) + 1)
-    for k, r in enumerate(rows[:len(scenes)] + [rows[len(scenes) + 1]]):
-        ax.bar([i + k * w for i in range(3)], [float(r[1]), float(r[3]), float(r[5])], w, label=r[0])
-    ax.scatter([i + w * len(scenes) / 2 for i in range(3)], [PAPER["table3"][m] for m in (4, 8, 16)], marker="*",
-               color="k", zorder=3, label="paper")
-    ax.set_xticks([i + w * len(scenes) / 2 for i in range(3)], ["M = 4", "M = 8", "M = 16"])
-    ax.set_ylabel("fragments dropped %")
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "table3.png"), dpi=80)
+    # The plot: fragments dropped against M, a line per scene, their mean and the paper's.
+    y = "fragments dropped %"
+    plot_rows = [[r[0], m, r[1 + 2 * k]] for r in rows[:len(scenes)] + [rows[len(scenes) + 1]]
+                 for k, m in enumerate(ms)]
+    plot_rows += [["paper", m, PAPER["table3"][m]] for m in ms if m in PAPER["table3"]]
+    write_csv(os.path.join(out, "table3_plot.csv"), ["scene", "zeb.list_length", y], plot_rows)
+    rbcd_plot(os.path.join(out, "table3_plot.csv"), os.path.join(out, "table3.png"), y, "zeb.list_length", "scene",
+              "Table 3: fragments dropped by list overflow against M", logx=True)
 
 
 # ---------------------------------------------------------------- fig9
-def energy_gpu(st, key):
-    """energy.gpu.KEY (nested object or dotted key) when the build models the GPU's energy, else None."""
-    e = st.get("energy", {})
-    g = e.get("gpu")
-    if isinstance(g, dict) and key in g:
-        return float(g[key])
-    if "gpu." + key in e:
-        return float(e["gpu." + key])
-    return None
-
-
-def gpu_energy_overhead(st):
-    return energy_gpu(st, "overhead_pct")
+def zebs(banks):
+    return f"{banks} ZEB" + ("" if banks == 1 else "s")
 
 
 def target_fig9(out, scenes):
+    """From the sweep workloads/sweeps/fig9.toml (zeb.banks x scene)."""
+    sw, banks_list = sweep_rows(out, "fig9", "zeb.banks", scenes)
     rows = []
-    agg = {1: [0, 0], 2: [0, 0]}
+    agg = {b: [0, 0] for b in banks_list}
     energy_model = True
     for s in scenes:
         row = [s]
-        for banks, name in ((1, "m8_b1.json"), (2, "m8.json")):
-            st = load_json(run(out, s, name))
-            g = st["gpu"]
-            agg[banks][0] += g["baseline_cycles"]
-            agg[banks][1] += g["cycles_with_unit"]
-            e = gpu_energy_overhead(st)
+        for banks in banks_list:
+            r = sw[(s, banks)]
+            agg[banks][0] += value(r, "gpu.baseline_cycles")
+            agg[banks][1] += value(r, "gpu.cycles_with_unit")
+            e = value(r, "energy.gpu.overhead_pct")
             energy_model &= e is not None
-            row += [fmt(g["overhead_pct"], 2), fmt(e, 2),
-                    fmt(st["energy"]["total_nj"] / max(1, st["totals"]["frames"]), 1)]
+            row += [fmt(value(r, "gpu.overhead_pct"), 2), fmt(e, 2),
+                    fmt(value(r, "energy.total_nj") / max(1, value(r, "totals.frames")), 1)]
         rows.append(row)
     pooled = ["all (pooled)"]
-    for banks in (1, 2):
+    for banks in banks_list:
         pooled += [fmt(pct(agg[banks][1] - agg[banks][0], agg[banks][0]), 2), "", ""]
     rows.append(pooled)
-    rows.append(["paper (Fig. 9)", PAPER["fig9_time"][1], PAPER["fig9_energy"][1], "-", PAPER["fig9_time"][2],
-                 PAPER["fig9_energy"][2], "-"])
-    header = ["scene", "1 ZEB: GPU time overhead %", "1 ZEB: GPU energy overhead %", "1 ZEB: unit nJ/frame",
-              "2 ZEBs: GPU time overhead %", "2 ZEBs: GPU energy overhead %", "2 ZEBs: unit nJ/frame"]
+    rows.append(["paper (Fig. 9)"] + sum(([PAPER["fig9_time"].get(b, "-"), PAPER["fig9_energy"].get(b, "-"), "-"]
+                                          for b in banks_list), []))
+    header = ["scene"] + sum(([f"{zebs(b)}: GPU time overhead %", f"{zebs(b)}: GPU energy overhead %",
+                               f"{zebs(b)}: unit nJ/frame"] for b in banks_list), [])
     write_csv(os.path.join(out, "fig9.csv"), header, rows)
     with open(os.path.join(out, "fig9.md"), "w") as f:
         f.write(md_table(header, rows))
         if not energy_model:
             f.write("\nGPU energy overhead: n/a in this build (stats.json has no energy.gpu.overhead_pct); "
                     "the unit's own energy per frame is given instead.\n")
-    plt = plot()
-    fig, ax = plt.subplots(figsize=(7, 3))
-    x = list(range(len(scenes) + 1))
-    ax.bar([i - 0.2 for i in x], [float(r[1]) for r in rows[:-2]] + [float(rows[-2][1])], 0.4, label="1 ZEB")
-    ax.bar([i + 0.2 for i in x], [float(r[4]) for r in rows[:-2]] + [float(rows[-2][4])], 0.4, label="2 ZEBs")
-    ax.axhline(PAPER["fig9_time"][1], color="C0", ls="--", lw=1, label="paper, 1 ZEB")
-    ax.axhline(PAPER["fig9_time"][2], color="C1", ls="--", lw=1, label="paper, 2 ZEBs")
-    ax.set_xticks(x, scenes + ["pooled"], fontsize=8)
-    ax.set_ylabel("GPU time overhead %")
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "fig9.png"), dpi=80)
+    # The plot: GPU time overhead against the ZEB count, a line per scene, pooled and the paper's.
+    y = "GPU time overhead %"
+    plot_rows = [[r[0], b, r[1 + 3 * k]] for r in rows[:-1] for k, b in enumerate(banks_list)]
+    plot_rows += [["paper", b, PAPER["fig9_time"][b]] for b in banks_list if b in PAPER["fig9_time"]]
+    write_csv(os.path.join(out, "fig9_plot.csv"), ["scene", "zeb.banks", y], plot_rows)
+    rbcd_plot(os.path.join(out, "fig9_plot.csv"), os.path.join(out, "fig9.png"), y, "zeb.banks", "scene",
+              "Figure 9: GPU time overhead against the ZEB count")
 
 
 # ---------------------------------------------------------------- fig8
@@ -317,20 +431,21 @@ def target_fig8(out, scenes):
     power = CPU_ACTIVE_CORE_W + CPU_IDLE_CORE_W
     rows, ratios = [], {k: [] for k in PAPER["fig8"]}
     fallback = False
+    # The GPU side: Figure 9's runs (one ZEB and two, M = 8).
+    sw, _ = sweep_rows(out, "fig9", "zeb.banks", scenes)
     for s in scenes:
         fr = read_csv(run(out, s, "cpucd_frames.csv"))
         t_host = {"broad": sum(float(r["broad_us"]) for r in fr) * 1e-6,
                   "gjk": sum(float(r["gjk_us"]) for r in fr) * 1e-6}
-        for banks, name in ((1, "m8_b1.json"), (2, "m8.json")):
-            st = load_json(run(out, s, name))
-            mhz = st["config"]["clock"]["mhz"]
-            g = st["gpu"]
-            t_gpu = (g["cycles_with_unit"] - g["baseline_cycles"]) / (mhz * 1e6)
-            with_pj, base_pj = energy_gpu(st, "with_unit_pj"), energy_gpu(st, "baseline_pj")
+        for banks in (1, 2):
+            r = sw[(s, banks)]
+            t_gpu = (value(r, "gpu.cycles_with_unit") - value(r, "gpu.baseline_cycles")) / \
+                (value(r, "config.clock.mhz") * 1e6)
+            with_pj, base_pj = value(r, "energy.gpu.with_unit_pj"), value(r, "energy.gpu.baseline_pj")
             if with_pj is not None and base_pj is not None:
-                e_gpu = (with_pj - base_pj) * 1e-12
+                e_gpu = (float(with_pj) - float(base_pj)) * 1e-12
             else:
-                e_gpu = st["energy"]["total_pj"] * 1e-12
+                e_gpu = value(r, "energy.total_pj") * 1e-12
                 fallback = True
             for kind in ("broad", "gjk"):
                 t_cpu = t_host[kind] * scale
@@ -406,6 +521,8 @@ def classify_miss(gt, m64, m64t64):
 # RBCD configurations of the accuracy table: name -> (run, run with M = 64, run with M = T = 64)
 ACC_CONFIGS = [("M=4 T=8", "m4", "m64", "m64t64"), ("M=8 T=8", "m8", "m64", "m64t64"),
                ("M=16 T=8", "m16", "m64", "m64t64"), ("M=8 T=2", "m8t2", "m64t2", "m64t64")]
+# The runs that are Table 3's sweep (zeb.list_length = M); the others are OUT/runs/SCENE/NAME.col.
+ACC_FROM_TABLE3 = {"m4": 4, "m8": 8, "m16": 16}
 
 
 def prf(tp, fp, fn):
@@ -417,6 +534,7 @@ def prf(tp, fp, fn):
 def target_accuracy(out, scenes):
     rows, miss_rows, fp_rows = [], [], []
     totals = {}
+    sw, _ = sweep_rows(out, "table3", "zeb.list_length", scenes)
     for s in scenes:
         gt_rows = read_csv(run(out, s, "cpucd_pairs.csv"))
         gt = {(int(r["frame"]), int(r["id_a"]), int(r["id_b"])): r for r in gt_rows}
@@ -427,7 +545,8 @@ def target_accuracy(out, scenes):
         for label, name, n64, n6464 in ACC_CONFIGS:
             for n in (name, n64, n6464):
                 if n not in cf:
-                    p, _ = read_collisions(run(out, s, n + ".col"))
+                    p, _ = read_collisions(sweep_run_file(out, "table3", sw[(s, ACC_FROM_TABLE3[n])], "collisions.txt")
+                                           if n in ACC_FROM_TABLE3 else run(out, s, n + ".col"))
                     cf[n] = {(f, a, b) for f, ps in p.items() for a, b in ps}
             methods["RBCD " + label] = cf[name]
         for mname, found in methods.items():
@@ -521,6 +640,8 @@ def main():
     ap.add_argument("--out", default="results")
     ap.add_argument("--splice", nargs=2, metavar=("OUT", "DOC"))
     ap.add_argument("--thumbnail", nargs=2, metavar=("SRC", "DST"))
+    ap.add_argument("--sweep-file", nargs=3, metavar=("SWEEP", "SUITE", "DEST"))
+    ap.add_argument("--id-bits", metavar="SCENE")
     ap.add_argument("targets", nargs="*")
     a = ap.parse_args()
     try:
@@ -530,6 +651,12 @@ def main():
         if a.thumbnail:
             thumbnail(*a.thumbnail)
             return 0
+        if a.sweep_file:
+            sweep_file(*a.sweep_file)
+            return 0
+        if a.id_bits:
+            print(id_bits(a.id_bits))
+            return 0
         scenes = scenes_of(a.out)
         for t in a.targets:
             if t not in TARGETS:
@@ -538,6 +665,12 @@ def main():
             TARGETS[t](a.out, scenes)
     except InputMissing as e:
         print(f"evaluate.py: {e}", file=sys.stderr)
+        return 2
+    except tomllib.TOMLDecodeError as e:
+        print(f"evaluate.py: {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"evaluate.py: {e.filename}: {e.strerror}", file=sys.stderr)
         return 2
     return 0
 

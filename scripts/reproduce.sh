@@ -12,16 +12,18 @@
 #   --update-docs      copy the tables into docs/results.md and docs/workloads.md
 #                      and the scene pictures into docs/img/workloads/
 #
-# Every run starts from scratch: OUT/runs/ is emptied first, then each target
-# runs what it needs (rbcd-sim over the scenes with the configurations it
-# needs, rbcd-cpucd once per scene, timed alone) and scripts/evaluate.py writes
-# OUT/TARGET.csv, .png and .md. Targets needing rbcd-cpucd are skipped with a
-# message when it was not built (Bullet or FCL missing).
+# Every run starts from scratch: OUT/runs/ and OUT/sweep/ are emptied first,
+# then each target runs what it needs: the sweeps workloads/sweeps/table3.toml
+# (table3, accuracy) and fig9.toml (fig9, fig8, workloads) by scripts/rbcd-sweep
+# into OUT/sweep/, the accuracy's other rbcd-sim runs, rbcd-cpucd once per
+# scene, timed alone; then scripts/evaluate.py writes OUT/TARGET.csv, .png and
+# .md. Targets needing rbcd-cpucd are skipped with a message when it was not
+# built (Bullet or FCL missing).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=results workloads=$root/workloads build=$root/build repeat=5 jobs=$(nproc) do_build=1 update_docs=0
 targets=()
-usage() { sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,21p' "$0" | sed 's/^# \{0,1\}//'; }
 while (($#)); do
   case $1 in
     --out) out=$2; shift 2 ;;
@@ -48,7 +50,7 @@ if ((do_build)); then
   if [ ! -f "$build/CMakeCache.txt" ]; then
     cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
   fi
-  cmake --build "$build" --target rbcd-sim >/dev/null
+  cmake --build "$build" --target rbcd-sim rbcd-config-check >/dev/null
   cmake --build "$build" --target rbcd-cpucd >/dev/null 2>&1 || true   # absent without Bullet/FCL
 fi
 sim=$build/bin/rbcd-sim cpucd=$build/bin/rbcd-cpucd
@@ -57,34 +59,32 @@ have_cpucd=0
 [ -x "$cpucd" ] && have_cpucd=1
 
 mkdir -p "$out"
-rm -rf "$out/runs"
+rm -rf "$out/runs" "$out/sweep"
 mkdir -p "$out/runs"
 : > "$out/runs/scenes.txt"
-for s in "${scenes[@]}"; do echo "$(basename "$s" .toml) $s" >> "$out/runs/scenes.txt"; done
+for s in "${scenes[@]}"; do
+  echo "$(basename "$s" .toml) $s" >> "$out/runs/scenes.txt"
+  mkdir -p "$out/runs/$(basename "$s" .toml)"
+done
 
 # Object ids above 127 need more than the default 7 id bits (docs/workloads.md).
-id_bits() {
-  local max
-  max=$(sed -n 's/^[[:space:]]*id[[:space:]]*=[[:space:]]*\([0-9]*\).*/\1/p' "$1" | sort -n | tail -1)
-  local b=7
-  while ((${max:-0} >= (1 << b))); do b=$((b + 1)); done
-  echo "$b"
-}
+declare -A idb
+for s in "${scenes[@]}"; do idb[$s]=$(/usr/bin/python3 "$root/scripts/evaluate.py" --id-bits "$s"); done
 
-# Configurations, on top of sc_main/configs/paper.toml (the paper's Table 1).
+# The accuracy's runs that are no figure's sweep, on top of sc_main/configs/paper.toml
+# (the paper's Table 1); its M = 4, 8, 16 runs are Table 3's sweep.
 declare -A cfg=(
-  [m4]="zeb.list_length=4" [m8]="" [m16]="zeb.list_length=16" [m8_b1]="zeb.banks=1"
   [m8t2]="tester.stack_depth=2 tester.output=tile"
   [m64]="zeb.list_length=64 tester.output=tile" [m64t2]="zeb.list_length=64 tester.stack_depth=2 tester.output=tile"
   [m64t64]="zeb.list_length=64 tester.stack_depth=64 tester.output=tile")
-needed_cfgs=() need_cpucd=0 need_images=0
+needed_cfgs=() needed_sweeps=() need_cpucd=0 need_images=0
 for t in "${targets[@]}"; do
   case $t in
-    workloads) needed_cfgs+=(m8); need_cpucd=1; need_images=1 ;;
-    table3) needed_cfgs+=(m4 m8 m16) ;;
-    fig9) needed_cfgs+=(m8 m8_b1) ;;
-    fig8) needed_cfgs+=(m8 m8_b1); need_cpucd=1 ;;
-    accuracy) needed_cfgs+=(m4 m8 m16 m8t2 m64 m64t2 m64t64); need_cpucd=1 ;;
+    workloads) needed_sweeps+=(fig9); need_cpucd=1; need_images=1 ;;
+    table3) needed_sweeps+=(table3) ;;
+    fig9) needed_sweeps+=(fig9) ;;
+    fig8) needed_sweeps+=(fig9); need_cpucd=1 ;;
+    accuracy) needed_sweeps+=(table3); needed_cfgs+=(m8t2 m64 m64t2 m64t64); need_cpucd=1 ;;
   esac
 done
 if ((need_cpucd && !have_cpucd)); then
@@ -92,9 +92,32 @@ if ((need_cpucd && !have_cpucd)); then
   kept=()
   for t in "${targets[@]}"; do [[ $t == workloads || $t == fig8 || $t == accuracy ]] || kept+=("$t"); done
   targets=("${kept[@]}")
-  need_cpucd=0 need_images=0
+  need_cpucd=0 need_images=0 needed_cfgs=() needed_sweeps=()
+  for t in "${targets[@]}"; do needed_sweeps+=("$t"); done   # what is left: table3, fig9
 fi
-mapfile -t needed_cfgs < <(printf '%s\n' "${needed_cfgs[@]}" | sort -u)
+mapfile -t needed_cfgs < <(printf '%s\n' "${needed_cfgs[@]}" | sed '/^$/d' | sort -u)
+# table3 first: fig9 then finds its M = 8 runs done (with the collisions files table3 keeps).
+mapfile -t needed_sweeps < <(printf '%s\n' "${needed_sweeps[@]}" | sed '/^$/d' | sort -ru)
+
+# ---- The figures that are sweeps: workloads/sweeps/NAME.toml by scripts/rbcd-sweep's local
+# runner ($jobs workers), all into OUT/sweep/ so that a run two sweeps share (a run's id is
+# its configuration and input) runs once; each sweep's results.csv is kept as OUT/sweep/NAME.csv.
+# Over another --workloads folder, the same sweep with that folder's scenes (and the id bits
+# they need): OUT/NAME.sweep.toml.
+same_dir() { [ "$(cd "$1" && pwd -P)" = "$(cd "$2" && pwd -P)" ]; }
+for sw in "${needed_sweeps[@]}"; do
+  file=$root/workloads/sweeps/$sw.toml
+  if ! same_dir "$workloads" "$root/workloads"; then
+    /usr/bin/python3 "$root/scripts/evaluate.py" --sweep-file "$file" "$workloads" "$out/$sw.sweep.toml"
+    file=$out/$sw.sweep.toml
+  fi
+  echo "reproduce.sh: sweep $sw: scripts/rbcd-sweep run $file -o $out/sweep" >&2
+  /usr/bin/python3 "$root/scripts/rbcd-sweep" run "$file" -o "$out/sweep" -j "$jobs" --rbcd-sim "$sim" || {
+    echo "reproduce.sh: sweep $sw failed (its failed runs: $out/sweep/results.csv)" >&2
+    exit 1
+  }
+  cp "$out/sweep/results.csv" "$out/sweep/$sw.csv"
+done
 
 # ---- rbcd-sim runs, $jobs at a time, with a progress line.
 jobs_list=()
@@ -109,7 +132,7 @@ run_sim() {
   d=$out/runs/$name
   mkdir -p "$d"
   for kv in ${cfg[$c]}; do sets+=(--set "$kv"); done
-  "$sim" --config "$root/sc_main/configs/paper.toml" --set "zeb.id_bits=$(id_bits "$s")" "${sets[@]}" \
+  "$sim" --config "$root/sc_main/configs/paper.toml" --set "zeb.id_bits=${idb[$s]}" "${sets[@]}" \
     --scene "$s" --stats "$d/$c.json" --collisions "$d/$c.col" -q 2> "$d/$c.err" ||
     { echo; echo "reproduce.sh: rbcd-sim failed on $name ($c):" >&2; cat "$d/$c.err" >&2; return 1; }
 }
@@ -130,7 +153,7 @@ if ((need_images)); then
     name=$(basename "$s" .toml) k=$((k + 1))
     progress "images" "$k" "${#scenes[@]}" "$name"
     rm -rf "$out/runs/$name/images"
-    "$sim" --config "$root/sc_main/configs/paper.toml" --set "zeb.id_bits=$(id_bits "$s")" --scene "$s" \
+    "$sim" --config "$root/sc_main/configs/paper.toml" --set "zeb.id_bits=${idb[$s]}" --scene "$s" \
       --images "$out/runs/$name/images" -q
     frames=$(ls "$out/runs/$name/images" | wc -l)
     cp "$out/runs/$name/images/$(printf 'frame_%05d.png' $((frames / 2)))" "$out/$name.png"

@@ -27,6 +27,15 @@ rows = list(csv.DictReader(open(f"{out}/{target}.csv")))
 def fail(msg):
     print(f"run_reproduce.sh {target}: {msg}", file=sys.stderr)
     sys.exit(1)
+if target in ("table3", "fig9"):
+    # Run as a sweep (workloads/sweeps/TARGET.toml over the mini suite) by rbcd-sweep; plotted by rbcd-plot.
+    axis, n = {"table3": ("zeb.list_length", 3), "fig9": ("zeb.banks", 2)}[target]
+    runs = list(csv.DictReader(open(f"{out}/sweep/{target}.csv")))
+    if len(runs) != n or any(r["status"] != "0" or not r["input"].endswith("/mini.toml") for r in runs):
+        fail(f"sweep/{target}.csv: {len(runs)} rows, expected {n} successful runs of mini.toml")
+    plot = list(csv.DictReader(open(f"{out}/{target}_plot.csv")))
+    if {r[axis] for r in plot} != {r[axis] for r in runs} or "paper" not in {r["scene"] for r in plot}:
+        fail(f"{target}_plot.csv: not the sweep's {axis} values with the paper's line")
 if target == "table3":
     mini = rows[0]
     # M = 4 overflows in the mini scene (balls in front of the box in front of the backdrop), M = 16 never.

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """scripts/evaluate.py's accuracy arithmetic on constructed runs: one RBCD miss
-of each kind (docs/accuracy.md), precision and recall counted by hand."""
+of each kind (docs/accuracy.md), precision and recall counted by hand; and its
+reading of a sweep's results.csv (scripts/rbcd-sweep)."""
 import csv
 import os
 import sys
@@ -58,17 +59,29 @@ with tempfile.TemporaryDirectory() as out:
                     "px_overlap", "px_near", "open"])
         w.writerows(gt)
 
-    def col(name, pairs):
-        with open(os.path.join(runs, name + ".col"), "w") as f:
+    def col(path, pairs):
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "w") as f:
             f.write("rbcd-collisions 1\nframe 0\n")
             for a, b in pairs:
                 f.write(f"hit 3 4 {a} {b} 100\n")
             f.write("overflow 0 0 1 1\n")
-    for name in ("m4", "m8", "m16", "m8t2"):
-        col(name, [(1, 2)])
-    col("m64", [(1, 2), (1, 3)])
-    col("m64t2", [(1, 2), (1, 3)])
-    col("m64t64", [(1, 2), (1, 3), (1, 4)])
+
+    def write_sweep(name, axis, table):
+        """OUT/sweep/NAME.csv, the sweep's results.csv: table = [(input, axis value, run id)]."""
+        os.makedirs(os.path.join(out, "sweep"), exist_ok=True)
+        with open(os.path.join(out, "sweep", name + ".csv"), "w", newline="") as f:
+            w = csv.writer(f, lineterminator="\n")
+            w.writerow(["point", "input", "repeat", axis, "status", "error", "run"])
+            w.writerows([i, inp, 0, v, 0, "", rid] for i, (inp, v, rid) in enumerate(table))
+    # M = 4, 8, 16 are Table 3's sweep; the rest are runs of their own.
+    write_sweep("table3", "zeb.list_length", [("../s.toml", m, f"r{m}") for m in (4, 8, 16)])
+    for m in (4, 8, 16):
+        col(os.path.join(out, "sweep", "runs", f"r{m}", "collisions.txt"), [(1, 2)])
+    col(os.path.join(runs, "m8t2.col"), [(1, 2)])
+    col(os.path.join(runs, "m64.col"), [(1, 2), (1, 3)])
+    col(os.path.join(runs, "m64t2.col"), [(1, 2), (1, 3)])
+    col(os.path.join(runs, "m64t64.col"), [(1, 2), (1, 3), (1, 4)])
     evaluate.target_accuracy(out, evaluate.scenes_of(out))
     rows = {(r["scene"], r["method"]): r for r in csv.DictReader(open(os.path.join(out, "accuracy.csv")))}
     r = rows[("s", "RBCD M=8 T=8")]
@@ -85,10 +98,32 @@ with tempfile.TemporaryDirectory() as out:
     check(kinds[("RBCD M=8 T=8", "3")] == "list_overflow" and kinds[("RBCD M=8 T=8", "7")] == "sub_pixel",
           "misses listed with their pair")
 
-# ---- GPU energy keys: nested (energy.gpu.KEY) or dotted, absent -> None (fallback).
-check(evaluate.energy_gpu({"energy": {"gpu": {"baseline_pj": 5.0}}}, "baseline_pj") == 5.0, "nested energy.gpu key")
-check(evaluate.energy_gpu({"energy": {"gpu.overhead_pct": 3.5}}, "overhead_pct") == 3.5, "dotted energy key")
-check(evaluate.energy_gpu({"energy": {"total_pj": 1.0}}, "with_unit_pj") is None, "absent: fallback")
+    # A failed or missing run of the sweep is an error naming the scene and the value.
+    write_sweep("table3", "zeb.list_length", [("../s.toml", 4, "r4"), ("../s.toml", 8, "r8")])
+    with open(os.path.join(out, "sweep", "table3.csv"), "a") as f:
+        f.write("2,../s.toml,0,16,2,bad scene,r16\n")
+    try:
+        evaluate.sweep_rows(out, "table3", "zeb.list_length", ["s"])
+        check(False, "a failed run of the sweep is an error")
+    except evaluate.InputMissing as e:
+        check("s at zeb.list_length = 16: run failed: bad scene" in str(e), f"failed run named: {e}")
+    write_sweep("table3", "zeb.list_length", [("../s.toml", 4, "r4"), ("../t.toml", 8, "r8")])
+    try:
+        evaluate.sweep_rows(out, "table3", "zeb.list_length", ["s", "t"])
+        check(False, "a missing row of the sweep is an error")
+    except evaluate.InputMissing as e:
+        check("no row for s at zeb.list_length = 8" in str(e), f"missing row named: {e}")
+
+# ---- results.csv cells back to the stats JSON's values: int, float (shortest round-trip), empty -> None.
+row = {"totals.hits": "81424880", "gpu.overhead_pct": "1.2394688208321585", "energy.gpu.overhead_pct": ""}
+check(evaluate.value(row, "totals.hits") == 81424880 and isinstance(evaluate.value(row, "totals.hits"), int), "int")
+check(evaluate.value(row, "gpu.overhead_pct") == 1.2394688208321585, "float, exactly")
+check(evaluate.value(row, "energy.gpu.overhead_pct") is None, "empty: not in this build's stats")
+try:
+    evaluate.value(row, "totals.cycles")
+    check(False, "a column the sweep does not collect is an error")
+except evaluate.InputMissing as e:
+    check("results.fields" in str(e), f"names results.fields: {e}")
 
 print("test_evaluate:", "FAILED" if failures else "ok", f"({len(failures)} failures)")
 sys.exit(1 if failures else 0)

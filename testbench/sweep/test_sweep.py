@@ -146,6 +146,68 @@ def case_validate(c):
         check(not os.path.exists(out), f"{text!r}: output directory created")
 
 
+def case_input_sets(c):
+    """[inputs.set]: keys one input alone runs with; the other inputs' runs (and their ids) are
+    unchanged; a bad set is rejected before anything runs, naming it."""
+    one, other = f"{VEC}/default.rbt", f"{VEC}/multi-frame-mixed.rbt"
+    body = f'[axes]\nzeb.banks = [1, 2]\n[inputs]\ntraces = ["{one}", "{other}"]\n'
+    plain = c.sweep_file("plain.toml", body)
+    s = c.sweep_file("s.toml", body + f'[inputs.set]\n"{other}" = {{ zeb.id_bits = 8 }}\n')
+    r = c.sweep("list", s)
+    check(r.returncode == 0, f"list failed: {r.stderr}")
+    for line in r.stdout.splitlines():
+        label, args = line.split("\t")[1], line.split("\t")[4]
+        check(("--set zeb.id_bits=8" in args) == (label == other), f"{label}: {args}")
+    outs = {}
+    for name, f in (("plain", plain), ("set", s)):
+        outs[name] = os.path.join(c.tmp, name)
+        r = c.sweep("run", f, "-o", outs[name], "-q")
+        check(r.returncode == 0, f"{name}: {r.stderr}")
+    a, b = c.rows(outs["plain"]), c.rows(outs["set"])
+    check(len(a) == len(b) == 4, "4 rows each")
+    for ra, rb in zip(a, b):
+        same = ra["input"] == one
+        check((ra["run"] == rb["run"]) == same, f"{ra['input']}: run ids {ra['run']} / {rb['run']}")
+        st = json.load(open(os.path.join(outs["set"], "runs", rb["run"], "stats.json")))
+        check(st["config"]["zeb"]["id_bits"] == (7 if same else 8), f"{rb['input']}: id_bits in its stats")
+    out = os.path.join(c.tmp, "out")
+    for text, key in ((f'"{VEC}/nope.rbt" = {{ zeb.id_bits = 8 }}', "nope.rbt"),
+                      (f'"{other}" = {{ zeb.banks = 4 }}', "zeb.banks"),
+                      (f'"{other}" = {{ zeb.id_bits = 99 }}', "zeb.id_bits"),
+                      (f'"{other}" = 8', other)):
+        f = c.sweep_file("bad.toml", body + "[inputs.set]\n" + text + "\n")
+        r = c.sweep("run", f, "-o", out, "-q")
+        msg = r.stderr.strip()
+        check(r.returncode == 2 and len(msg.splitlines()) == 1 and key in msg, f"{text}: exit {r.returncode}: {msg}")
+        check(not os.path.exists(out), f"{text}: output directory created")
+    f = c.sweep_file("bad.toml", body + f'[repeats]\ncount = 2\n[inputs.set]\n"{other}" = {{ memory.seed = 3 }}\n')
+    r = c.sweep("list", f)
+    check(r.returncode == 2 and "memory.seed" in r.stderr, f"memory.seed beside [repeats]: {r.stderr}")
+
+
+def case_shared_out(c):
+    """Two sweeps into one output directory run their common run once (scripts/reproduce.sh's
+    Table 3 and Figure 9); a run done without the collisions file the next sweep keeps is rerun."""
+    inp = f'[inputs]\ntraces = ["{VEC}/default.rbt"]\n'
+    a = c.sweep_file("a.toml", "[axes]\nzeb.banks = [1, 2]\n" + inp)
+    b = c.sweep_file("b.toml", "[axes]\nzeb.list_length = [4, 8]\n" + inp + "[results]\ncollisions = true\n")
+    out = os.path.join(c.tmp, "out")
+    r = c.sweep("run", a, "-o", out)
+    check(r.returncode == 0 and "2 runs, 0 already complete" in r.stderr, f"a: {r.stderr}")
+    table_a = c.read(os.path.join(out, "results.csv"), "rb")
+    shared = c.rows(out)[1]["run"]   # banks = 2: the defaults, as list_length = 8 is
+    check(not os.path.exists(os.path.join(out, "runs", shared, "collisions.txt")), "a keeps no collisions")
+    r = c.sweep("run", b, "-o", out)
+    check(r.returncode == 0 and "2 runs, 0 already complete, 2 to run" in r.stderr,
+          f"b reruns the common run for its collisions file: {r.stderr}")
+    rows = c.rows(out)
+    check(rows[1]["run"] == shared, "list_length = 8 and banks = 2 are one run (the defaults)")
+    check(os.path.isfile(os.path.join(out, "runs", shared, "collisions.txt")), "b's collisions file")
+    r = c.sweep("run", a, "-o", out)
+    check(r.returncode == 0 and "2 runs, 2 already complete" in r.stderr, f"a again runs nothing: {r.stderr}")
+    check(c.read(os.path.join(out, "results.csv"), "rb") == table_a, "a's table is the same again")
+
+
 def case_workers(c):
     """The same sweep gives byte-identical results.csv with 1 and 2 workers; wall times in wall.csv."""
     s = c.sweep_file("s.toml", f"""
