@@ -379,7 +379,7 @@ void rasterizer::feed_tile(const Tile& tile) {
     const std::uint64_t span = end - start;
     stats_.busy_cycles += span > stalls ? span - stalls : 0;
     if (vcd_) vcd_->set(vcd_emit_, end, 0);
-    if (bank) tester_.post({zoverlap_tester::Job::TileJob, tile.frame, bank, sorter_.end_tile()});
+    if (bank) tester_.post({zoverlap_tester::Job::TileJob, tile.frame, bank, sorter_.end_tile(), n});
     clk_.wait_until(end);
 }
 

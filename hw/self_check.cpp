@@ -79,4 +79,10 @@ std::string self_check(const SelfCheckCounters& c) {
     return "";
 }
 
+std::string tile_conservation_failure(std::uint64_t frame, std::uint32_t col, std::uint32_t row, std::uint64_t in,
+                                      std::uint64_t stored, std::uint64_t dropped) {
+    return failed("tile_conservation", "frame " + n(frame) + ", tile column " + n(col) + " row " + n(row) + ": in " +
+                                           n(in) + " != stored " + n(stored) + " + dropped " + n(dropped));
+}
+
 } // namespace rbcd

@@ -1,6 +1,11 @@
-// End-of-run self-checks: invariants that hold after every correct run, read
-// from the blocks' public statistics. A violation is a model bug, not bad
-// input: rbcd-sim exits 1 naming the check (docs/testing.md).
+// Self-checks: invariants that hold in every correct run. A violation is a
+// model bug, not bad input: rbcd-sim exits 1 naming the check (docs/testing.md).
+//
+// Per tile, the z-overlap tester checks fragment conservation as it finishes
+// each tile (tile_conservation): the fragments the rasterizer sent for the
+// tile = the elements the bank stored + those its full lists dropped. A
+// violation stops the run at that tile. The others are read at the end of the
+// run from the blocks' public statistics:
 //
 //   const SelfCheckCounters c = self_check_counters(sys);   // after sys.run()
 //   if (const std::string v = self_check(c); !v.empty()) fail(v);
@@ -46,5 +51,9 @@ SelfCheckCounters self_check_counters(const rbcd_system& sys);
 // banks_released, input_queue_empty, output_queue_empty, records_reported,
 // hits_filtered, cycles_consistent.
 std::string self_check(const SelfCheckCounters& c);
+
+// The message for a failed tile_conservation check, naming the tile.
+std::string tile_conservation_failure(std::uint64_t frame, std::uint32_t col, std::uint32_t row, std::uint64_t in,
+                                      std::uint64_t stored, std::uint64_t dropped);
 
 } // namespace rbcd

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 
+#include "common/errors.h"
+#include "hw/self_check.h"
+
 namespace rbcd {
 
 zoverlap_tester::zoverlap_tester(sc_core::sc_module_name name, const SimConfig& cfg, const Clocking& clk,
@@ -136,6 +139,15 @@ std::uint64_t zoverlap_tester::test_tile(zeb_bank& bank, std::uint64_t t) {
     return t;
 }
 
+void zoverlap_tester::lose_element(zeb_bank& bank) {
+    const auto& occ = bank.occupancy();
+    for (std::size_t wi = 0; wi < occ.size(); ++wi) {
+        if (!occ[wi]) continue;
+        --bank.count(static_cast<unsigned>(wi * 64 + __builtin_ctzll(occ[wi])));
+        return;
+    }
+}
+
 std::uint64_t zoverlap_tester::emit_overflow(const OverflowRecord& o, std::uint64_t t) {
     ++stats_.overflow_records;
     const std::uint64_t accepted = out_.push(MemRecord::overflow(o), t);
@@ -175,7 +187,15 @@ void zoverlap_tester::run() {
                 vcd_->set(vcd_bank_, t, job.bank->index());
                 vcd_->set(vcd_frame_, t, job.bank->frame());
             }
+            if (stats_.tiles == lose_tile_) lose_element(*job.bank);
+            const std::uint64_t walked_before = stats_.elements;
             t = test_tile(*job.bank, t);
+            // Fragment conservation per tile (hw/self_check.h): the elements
+            // walked are what the bank stored. Two adds and a compare a tile.
+            if (stats_.elements - walked_before + job.bank->fragments_dropped() != job.fragments)
+                throw RunError(tile_conservation_failure(job.bank->frame(), job.bank->tile_col(), job.bank->tile_row(),
+                                                         job.fragments, stats_.elements - walked_before,
+                                                         job.bank->fragments_dropped()));
             // The overflow notice is taken from the bank's flags before it is
             // released: the bank is reusable once its last list has been read,
             // whatever the output buffer makes the notice wait for.

@@ -32,6 +32,7 @@ public:
         std::uint64_t frame = 0;
         zeb_bank* bank = nullptr;
         std::uint64_t ready = 0;   // cycle the bank holds the whole tile
+        std::uint64_t fragments = 0;   // collisionable fragments the rasterizer sent for the tile
     };
 
     struct stats_t {
@@ -84,6 +85,11 @@ public:
     const stats_t& stats() const { return stats_; }
     void attach_vcd(VcdWriter& vcd, const std::string& scope);
 
+    // Test-only hook (testbench/hw/test_self_check.cpp): before testing the
+    // tile-th tile (from 0) the tester takes one element out of its bank, as a
+    // sorter that lost a fragment would, so that tile_conservation fires.
+    void lose_element_for_test(std::uint64_t tile) { lose_tile_ = tile; }
+
     // Frame ends: after each FrameEnd job, the cycle the frame's records were
     // all in memory, announced by frame_flushed (the rasterizer's frame barrier).
     std::uint64_t last_flushed() const { return last_flushed_; }
@@ -93,6 +99,7 @@ public:
 private:
     void run();
     std::uint64_t test_tile(zeb_bank& bank, std::uint64_t t);
+    void lose_element(zeb_bank& bank);
     std::uint64_t emit_overflow(const OverflowRecord& o, std::uint64_t t);
     std::uint64_t emit_hit(std::uint32_t x, std::uint32_t y, std::uint32_t id1, std::uint32_t id2,
                            std::uint32_t dq, std::uint64_t t);
@@ -115,6 +122,7 @@ private:
     std::uint64_t last_flushed_ = 0, frames_flushed_ = 0;
     std::uint64_t finish_cycle_ = 0;
     bool finished_ = false;
+    std::uint64_t lose_tile_ = ~std::uint64_t(0);
     stats_t stats_;
     VcdWriter* vcd_ = nullptr;
     VcdWriter::Sig vcd_busy_ = 0, vcd_bank_ = 0, vcd_list_ = 0, vcd_stack_ = 0, vcd_hit_ = 0, vcd_stall_ = 0,

@@ -56,5 +56,14 @@ bin=$(realpath "$dir/bin/fuzz_$target")
 corpus=$(realpath "$dir/corpus/$target")
 findings=$(realpath "$dir/findings/$target")
 seeds=$(realpath "$seeds")
+before=$(find "$findings" -type f | wc -l)
+status=0
 (cd "$work" && "$bin" -max_total_time="$seconds" -rss_limit_mb=2048 -timeout=10 -max_len=65536 \
-   -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "$seeds")
+   -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "$seeds") || status=$?
+# A child process (the mesh target's loader) can write a finding, e.g. on an
+# allocation above the limit, without stopping the fuzzer: it counts too.
+if [ "$status" -eq 0 ] && [ "$(find "$findings" -type f | wc -l)" -gt "$before" ]; then
+  echo "fuzz.sh: new finding in $findings/ (written by a child process)" >&2
+  status=1
+fi
+exit "$status"

@@ -103,7 +103,13 @@ struct TesterBench : sc_core::sc_module {
     // One frame of the given (bank, ready cycle) tile jobs, then run to the end.
     void run(std::vector<std::pair<zeb_bank*, std::uint64_t>> jobs) {
         tester.post({zoverlap_tester::Job::FrameStart, 0, nullptr, 0});
-        for (auto& j : jobs) tester.post({zoverlap_tester::Job::TileJob, 0, j.first, j.second});
+        for (auto& j : jobs) {
+            // The fragments a rasterizer would have sent for the tile: the
+            // elements put and the overflows noted (the per-tile self-check).
+            std::uint64_t in = j.first->fragments_dropped();
+            for (unsigned li = 0; li < j.first->lists(); ++li) in += j.first->count(li);
+            tester.post({zoverlap_tester::Job::TileJob, 0, j.first, j.second, in});
+        }
         tester.post({zoverlap_tester::Job::FrameEnd, 0, nullptr, 0});
         tester.post({zoverlap_tester::Job::Finish, 0, nullptr, 0});
         sc_core::sc_start();

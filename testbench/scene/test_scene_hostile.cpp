@@ -147,8 +147,8 @@ TEST_CASE("hostile scene: a scene file above input.max_scene_bytes is refused", 
 }
 
 TEST_CASE("hostile scene: assimp crashing on a mesh file is an error, not the end of the program", "[scene][hostile][mesh]") {
-    // libassimp 5.2 calls abort() on this PLY (fuzzing finding, testbench/fuzz-open/).
-    const std::string in = std::string(RBCD_SOURCE_DIR) + "/testbench/fuzz-open/mesh/ply-assimp-abort";
+    // libassimp 5.2 calls abort() on this PLY (a fuzzing finding, also replayed by fuzz-regressions-mesh).
+    const std::string in = std::string(RBCD_SOURCE_DIR) + "/testbench/fuzz/mesh/ply-assimp-abort";
     std::ifstream f(in, std::ios::binary);
     std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
     REQUIRE(bytes.size() > 1);
