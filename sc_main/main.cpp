@@ -41,6 +41,7 @@ struct Options {
     std::vector<std::string> sets;
     std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd;
     std::string frames;   // --frames A:B
+    unsigned threads = 2;  // 2: a trace is parsed on its own thread
     bool dump_config = false;
     bool config_reference = false;
     bool quiet = false;
@@ -97,8 +98,11 @@ int run(const Options& opt) {
                                           cfg.zeb.id_bits,          cfg.input.max_scene_bytes,
                                           cfg.input.max_scene_triangles, cfg.input.max_tile_fragments};
     if (!opt.trace.empty()) {
-        // Parsed a few tiles ahead on another core (io/prefetch_source.h).
-        src = std::make_unique<PrefetchSource>(std::make_unique<TraceReader>(opt.trace, trace_limits(cfg)));
+        // Parsed a few tiles ahead on another core (io/prefetch_source.h),
+        // unless the cores are the caller's to share (rbcd-sweep's workers).
+        auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
+        if (opt.threads > 1) src = std::make_unique<PrefetchSource>(std::move(reader));
+        else src = std::move(reader);
     } else {
         auto s = opt.scene.empty()
                      ? scene::SceneSource::from_text(scene::default_scene_text(), "", "<default scene>", scene_limits)
@@ -291,6 +295,9 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--scene", opt.scene, "3D scene (TOML) rendered by the tile-based rasterizer feed")
         ->excludes(trace_opt);
     app.add_option("--frames", opt.frames, "A:B: run only frames A..B of the input (their numbers kept; docs/sweeps.md)");
+    app.add_option("--threads", opt.threads,
+                   "2 (default): a trace is parsed on a second thread; 1: one thread (what rbcd-sweep runs)")
+        ->check(CLI::Range(1u, 2u));
     app.add_option("--write-trace", opt.write_trace, "also save the fragment stream the unit saw as a .rbt trace");
     app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");
     app.add_option("--collisions", opt.collisions, "write the collision records here (- for standard output)");

@@ -156,6 +156,24 @@ TEST_CASE("cli: gzip trace gives the same output as the plain one") {
     check_stats(td.stats(), Totals{1, 1, 14, 0, 2, 2, 3});
 }
 
+TEST_CASE("cli: --threads 1 parses in the simulation thread, with the same outputs") {
+    TempDir td;
+    const std::string trace = kVectors + "/multi-frame-mixed.rbt", cfg = kVectors + "/multi-frame-mixed.toml";
+    Result r = run_with_outputs(td, {"--trace", trace, "--config", cfg, "-q", "--threads", "1"});
+    expect_success(td, r);
+    const std::string one = slurp(td.collisions());
+    CHECK(one == slurp(kVectors + "/multi-frame-mixed.golden"));
+    const auto totals = nlohmann::json::parse(slurp(td.stats()))["totals"];
+    r = run_with_outputs(td, {"--trace", trace, "--config", cfg, "-q"});
+    expect_success(td, r);
+    CHECK(slurp(td.collisions()) == one);
+    CHECK(nlohmann::json::parse(slurp(td.stats()))["totals"] == totals);
+    for (const char* bad : {"0", "3", "x"}) {
+        r = run_with_outputs(td, {"--trace", trace, "-q", "--threads", bad});
+        expect_input_error(td, r, {"--threads"});
+    }
+}
+
 TEST_CASE("cli: trace of only the magic line gives zero frames") {
     TempDir td;
     const std::string p = td.write("empty.rbt", "rbcd-trace 1\n");
