@@ -1,6 +1,9 @@
 #include "scene/mesh.h"
 
+#include <atomic>
 #include <cctype>
+#include <cstdlib>
+#include <vector>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -212,32 +215,153 @@ std::uint64_t builtin_triangles(const std::string& shape, unsigned segments) {
 }
 
 namespace {
-// assimp 5.2 (Debian) never returns from a PLY file whose header lacks its
-// end_header line (found by fuzzing): such a file is refused before assimp
-// sees it. The header is text at the start of the file, in any PLY variant.
-bool ply_header_ok(const std::string& path, std::string& error) {
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (!f) return true;   // assimp reports it
-    std::string head(65536, '\0');
-    head.resize(std::fread(head.data(), 1, head.size(), f));
-    std::fclose(f);
-    // assimp takes a file for PLY by its extension or by "ply" at the start.
+std::vector<std::string> words_of(const std::string& line) {
+    std::vector<std::string> w;
+    std::size_t i = 0;
+    while (true) {
+        i = line.find_first_not_of(" \t\r", i);
+        if (i == std::string::npos) break;
+        const std::size_t e = line.find_first_of(" \t\r", i);
+        w.push_back(line.substr(i, e == std::string::npos ? std::string::npos : e - i));
+        if (e == std::string::npos) break;
+        i = e;
+    }
+    return w;
+}
+
+bool is_count(const std::string& w, std::uint64_t& v) {
+    if (w.empty() || w.size() > 18 || w.find_first_not_of("0123456789") != std::string::npos) return false;
+    v = std::stoull(w);
+    return true;
+}
+
+bool is_number(const std::string& w) {
+    char* end = nullptr;
+    std::strtod(w.c_str(), &end);
+    return !w.empty() && end == w.c_str() + w.size();
+}
+
+// assimp 5.2 (Debian) mishandles malformed PLY files, all found by fuzzing:
+// it never returns from a header without end_header, calls abort() on some
+// broken headers, and on a body that does not match its header reads freed
+// memory, so that the mesh it returns depends on the heap. A PLY file is
+// therefore checked before assimp sees it: its header line by line, and an
+// ASCII body entry by entry against the header (every entry one line, one
+// number per scalar property, a list's count then that many numbers, face
+// indices below the vertex count), as far as assimp's own reading allows
+// (free-text header lines; a list missing at the end of a line). Binary
+// bodies are left to assimp.
+bool ply_file_ok(const std::string& path, std::string& error) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return true;   // assimp reports it
+    std::string line;
     std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (head.compare(0, 3, "ply") != 0 && ext != ".ply") return true;
-    for (std::size_t at = head.find("end_header"); at != std::string::npos; at = head.find("end_header", at + 1)) {
-        const bool line_start = at > 0 && (head[at - 1] == '\n' || head[at - 1] == '\r');
-        const std::size_t e = at + 10;
-        const bool line_end = e < head.size() && (head[e] == '\n' || head[e] == '\r' || head[e] == ' ');
-        if (line_start && line_end) return true;
+    // assimp takes a file for PLY by its extension or by "ply" at the start.
+    const int first = in.peek();
+    if (ext != ".ply" && first != 'p') return true;
+    if (!std::getline(in, line)) return true;
+    if (words_of(line) != std::vector<std::string>{"ply"}) {
+        if (ext != ".ply") return true;   // not a PLY file: another reader's
+        error = "PLY line 1: not \"ply\"";
+        return false;
     }
-    error = "PLY header without an end_header line in its first 64 KiB";
-    return false;
+
+    struct Property {
+        bool list = false;
+        std::string name;
+    };
+    struct Element {
+        std::string name;
+        std::uint64_t count = 0;
+        std::vector<Property> props;
+    };
+    std::vector<Element> elements;
+    bool ascii = false, format = false, ended = false;
+    std::uint64_t n = 1, header_bytes = line.size() + 1;
+    const auto bad = [&](const std::string& what) {
+        error = "PLY line " + std::to_string(n) + ": " + what;
+        return false;
+    };
+    while (std::getline(in, line)) {
+        ++n;
+        header_bytes += line.size() + 1;
+        if (header_bytes > 65536) return bad("no end_header line in the first 64 KiB");
+        const auto w = words_of(line);
+        if (w.empty()) continue;
+        if (w[0] == "comment" || w[0] == "obj_info") continue;
+        if (w[0] == "end_header" && w.size() == 1) {
+            ended = true;
+            break;
+        }
+        if (w[0] == "format" && w.size() == 3 && !format) {
+            if (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian")
+                return bad("unknown format '" + w[1] + "'");
+            format = true;
+            ascii = w[1] == "ascii";
+            continue;
+        }
+        std::uint64_t count = 0;
+        if (w[0] == "element" && w.size() == 3 && is_count(w[2], count)) {
+            elements.push_back({w[1], count, {}});
+            continue;
+        }
+        if (w[0] == "property" && !elements.empty() && (w.size() == 3 || (w.size() == 5 && w[1] == "list"))) {
+            elements.back().props.push_back({w.size() == 5, w.back()});
+            continue;
+        }
+        // Other lines are free text, as assimp takes them (Blender writes
+        // comments without the keyword); a keyword line must be well formed.
+        if (w[0] == "format" || w[0] == "element" || w[0] == "property" || w[0] == "end_header")
+            return bad("malformed '" + w[0] + "' line");
+    }
+    if (!ended) return bad("no end_header line");
+    if (!format) return bad("no format line in the header");
+    if (!ascii) return true;
+
+    std::uint64_t vertices = 0;
+    for (const auto& e : elements)
+        if (e.name == "vertex") vertices = e.count;
+    for (const auto& e : elements) {
+        for (std::uint64_t k = 0; k < e.count; ++k) {
+            if (!std::getline(in, line)) {
+                ++n;
+                return bad("the file ends inside element '" + e.name + "' (" + std::to_string(k) + " of " +
+                           std::to_string(e.count) + " entries)");
+            }
+            ++n;
+            const auto w = words_of(line);
+            std::size_t at = 0;
+            for (const auto& p : e.props) {
+                // A list missing at the end of the line is an empty one, as
+                // assimp reads it (its own test model issue623.ply).
+                if (at >= w.size() && p.list) continue;
+                if (at >= w.size()) return bad("element '" + e.name + "': too few values for its properties");
+                if (!p.list) {
+                    if (!is_number(w[at++])) return bad("element '" + e.name + "': not a number: '" + w[at - 1] + "'");
+                    continue;
+                }
+                std::uint64_t len = 0;
+                if (!is_count(w[at++], len)) return bad("element '" + e.name + "': not a list length: '" + w[at - 1] + "'");
+                if (w.size() - at < len) return bad("element '" + e.name + "': a list of " + std::to_string(len) +
+                                                    " holds fewer values");
+                const bool indices = e.name == "face" && (p.name == "vertex_index" || p.name == "vertex_indices");
+                for (std::uint64_t i = 0; i < len; ++i, ++at) {
+                    std::uint64_t v = 0;
+                    if (indices ? !is_count(w[at], v) || v >= vertices : !is_number(w[at]))
+                        return bad(indices ? "a face refers to vertex '" + w[at] + "' of " + std::to_string(vertices)
+                                           : "element '" + e.name + "': not a number: '" + w[at] + "'");
+                }
+            }
+            if (at != w.size()) return bad("element '" + e.name + "': more values than its properties");
+        }
+    }
+    return true;
 }
 } // namespace
 
 bool load_mesh_file_in_process(const std::string& path, Mesh& out, std::string& error) {
-    if (!ply_header_ok(path, error)) return false;
+    if (!ply_file_ok(path, error)) return false;
     Assimp::Importer imp;
     const aiScene* s = imp.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
     if (!s || !s->mRootNode || (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
@@ -287,7 +411,14 @@ bool write_all(int fd, const void* p, std::size_t n) {
 // found both, docs/limits.md): it runs in a child process with a time limit,
 // and the mesh comes back through a pipe. A crash or a timeout is an error
 // naming the file, never the end of rbcd-sim.
+namespace {
+std::atomic<bool> abort_next_reader{false};
+} // namespace
+
+void abort_next_mesh_reader_for_test() { abort_next_reader = true; }
+
 bool load_mesh_file(const std::string& path, Mesh& out, std::string& error, unsigned timeout_s) {
+    const bool abort_reader = abort_next_reader.exchange(false);
     int p[2];
     if (::pipe2(p, O_CLOEXEC) != 0) return load_mesh_file_in_process(path, out, error);
     std::fflush(nullptr);
@@ -302,6 +433,7 @@ bool load_mesh_file(const std::string& path, Mesh& out, std::string& error, unsi
         // The parent's interrupt handlers remove its temporary outputs
         // (sc_main/output_file.h); a signal meant for the reader must only end it.
         for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::signal(sig, SIG_DFL);
+        if (abort_reader) ::abort();
         ::alarm(timeout_s);
         Mesh m;
         std::string err;

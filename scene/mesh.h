@@ -35,5 +35,9 @@ std::uint64_t builtin_triangles(const std::string& shape, unsigned segments);
 bool load_mesh_file(const std::string& path, Mesh& out, std::string& error, unsigned timeout_s = 60);
 // The same in this process (what the fuzz target drives, for coverage).
 bool load_mesh_file_in_process(const std::string& path, Mesh& out, std::string& error);
+// Tests only: the next load_mesh_file's child process aborts before reading,
+// as assimp does on some files, so that its containment stays tested whatever
+// inputs the PLY check refuses before assimp.
+void abort_next_mesh_reader_for_test();
 
 } // namespace rbcd::scene
