@@ -69,7 +69,8 @@ void fill_energies(FrameFigures& f, const EnergyCosts& k, const Activity& unit) 
         gpu_energy_pj(k, GpuWork{t.shaded, t.shaded + t.culled, t.prims + t.cprims, t.tiles}, t.with_unit);
 }
 
-void FrameReduction::add_frame(const FrameFigures& f) {
+FrameReduction::NewExtrema FrameReduction::add_frame(const FrameFigures& f) {
+    NewExtrema now;
     if (frames == 0) first_frame = f.t.frame;
     last_frame = f.t.frame;
     ++frames;
@@ -80,7 +81,7 @@ void FrameReduction::add_frame(const FrameFigures& f) {
         if (!(std::fabs(q) < 9e18) || __builtin_add_overflow(overhead_sum_e6, std::int64_t(q), &overhead_sum_e6))
             overhead_sum_overflow = true;
         if (!has_worst || pct > worst_pct) {
-            has_worst = true;
+            has_worst = now.worst = true;
             worst_frame = f.t.frame;
             worst_pct = pct;
         }
@@ -88,10 +89,11 @@ void FrameReduction::add_frame(const FrameFigures& f) {
     // Compared in nJ, as reported, so that a merge of reports picks the same frame.
     const double nj = f.unit_pj() * 1e-3;
     if (!has_max_energy || nj > max_energy_nj) {
-        has_max_energy = true;
+        has_max_energy = now.max_energy = true;
         max_energy_frame = f.t.frame;
         max_energy_nj = nj;
     }
+    return now;
 }
 
 bool FrameReduction::merge(const FrameReduction& b) {
@@ -188,11 +190,9 @@ void RunReport::frame_end(const FrameTimes& t) {
     prev_overflows_ = overflows;
 
     totals_.add(f);
-    const bool worst = f.has_baseline() && (!red_.has_worst || f.overhead_pct() > red_.worst_pct);
-    const bool max_energy = !red_.has_max_energy || f.unit_pj() * 1e-3 > red_.max_energy_nj;
-    red_.add_frame(f);
-    if (worst) worst_ = f;
-    if (max_energy) max_energy_ = f;
+    const FrameReduction::NewExtrema became = red_.add_frame(f);
+    if (became.worst) worst_ = f;
+    if (became.max_energy) max_energy_ = f;
     if (first_.size() < kFirstFrames) first_.push_back(f);
     if (out_) out_(frame_json(f).dump() + "\n");
 }

@@ -63,7 +63,11 @@ struct FrameReduction {
     std::uint64_t max_energy_frame = 0;
     double max_energy_nj = 0;            // the unit's largest per-frame energy
 
-    void add_frame(const FrameFigures& f);
+    // Which extrema the frame became.
+    struct NewExtrema {
+        bool worst = false, max_energy = false;
+    };
+    NewExtrema add_frame(const FrameFigures& f);
     // `later` holds the frames right after these; false if they are not consecutive.
     bool merge(const FrameReduction& later);
     double mean_overhead_pct() const;    // NaN without frames with a baseline (or on overflow)

@@ -214,33 +214,15 @@ int run(const Options& opt) {
     return 0;
 }
 
-// The values of the given options on the command line, found without CLI11 so
-// that they are known even when the command line itself is what failed.
-std::vector<std::string> option_values(int argc, char* argv[], std::initializer_list<const char*> flags) {
-    std::vector<std::string> values;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        for (const char* f : flags) {
-            const std::string flag = f;
-            if (a == flag && i + 1 < argc) values.push_back(argv[i + 1]);
-            else if (a.rfind(flag + "=", 0) == 0) values.push_back(a.substr(flag.size() + 1));
-        }
-    }
-    return values;
-}
-
 int fail(int status, const std::string& msg, int argc, char* argv[]) {
     // One line whatever the input held: control bytes from files, --set values
     // or library messages (toml++) are escaped here, in one place.
     std::fprintf(stderr, "rbcd-sim: %s\n", rbcd::escape_for_message(msg).c_str());
     // formats.md: on a non-zero exit nothing stands at an output path, not even an
     // older file; but an output path that names one of the inputs is the input.
-    const auto inputs = option_values(argc, argv, {"--trace", "--scene", "--config"});
-    for (const auto& p : option_values(argc, argv, {"--collisions", "--stats", "--frame-stats", "--vcd"})) {
-        bool is_input = false;
-        for (const auto& in : inputs) is_input = is_input || rbcd::same_file(p, in);
-        if (!is_input) rbcd::discard_output(p);
-    }
+    const std::vector<std::string> args(argv, argv + argc);
+    rbcd::discard_outputs(rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd"}),
+                          rbcd::option_values(args, {"--trace", "--scene", "--config"}));
     return status;
 }
 

@@ -60,15 +60,6 @@ const nlohmann::json& provenance_of(const Part& p) {
     return p.stats["provenance"];
 }
 
-// The value of OPTION on a recorded command line ("--x V" or "--x=V"), or "".
-std::string option_value(const std::vector<std::string>& argv, const std::string& option) {
-    for (std::size_t i = 1; i < argv.size(); ++i) {
-        if (argv[i] == option && i + 1 < argv.size()) return argv[i + 1];
-        if (argv[i].rfind(option + "=", 0) == 0) return argv[i].substr(option.size() + 1);
-    }
-    return "";
-}
-
 std::vector<std::string> argv_of(const Part& p) {
     const nlohmann::json& pv = provenance_of(p);
     if (!pv.contains("argv") || !pv["argv"].is_array()) throw InputError(p.path + ": stats: provenance.argv: missing");
@@ -82,7 +73,8 @@ std::vector<std::string> argv_of(const Part& p) {
 
 // Where a part wrote OPTION's file: its recorded path, from its working directory.
 std::string part_output(const Part& p, const std::string& option) {
-    const std::string v = option_value(argv_of(p), option);
+    const auto values = rbcd::option_values(argv_of(p), {option.c_str()});
+    const std::string v = values.empty() ? std::string() : values.front();
     if (v.empty() || v == "-") throw InputError(p.path + ": the run wrote no " + option + " file");
     const nlohmann::json& wd = provenance_of(p)["working_directory"];
     std::filesystem::path f(v);
@@ -213,10 +205,8 @@ int run(const Options& opt) {
     const std::vector<std::string> argv = whole_run_argv(
         argv_of(parts.front()),
         {{"--stats", opt.stats}, {"--collisions", opt.collisions}, {"--frame-stats", opt.frame_stats}});
-    std::string line;
-    for (const auto& a : argv) line += (line.empty() ? "" : " ") + rbcd::shell_quote(a);
     pv["argv"] = argv;
-    pv["command_line"] = line;
+    pv["command_line"] = rbcd::command_line(argv);
     stats["provenance"] = pv;
 
     rbcd::OutputFile stats_out(opt.stats), collisions_out, frames_out;
@@ -239,12 +229,7 @@ int run(const Options& opt) {
 // an older file, unless the path names one of the inputs.
 int fail(int status, const std::string& msg, const Options& opt) {
     std::fprintf(stderr, "rbcd-merge: %s\n", rbcd::escape_for_message(msg).c_str());
-    for (const auto* out : {&opt.stats, &opt.collisions, &opt.frame_stats}) {
-        if (out->empty()) continue;
-        bool is_input = false;
-        for (const auto& in : opt.parts) is_input = is_input || rbcd::same_file(*out, in);
-        if (!is_input) rbcd::discard_output(*out);
-    }
+    rbcd::discard_outputs({opt.stats, opt.collisions, opt.frame_stats}, opt.parts);
     return status;
 }
 

@@ -75,6 +75,15 @@ bool same_file(const std::string& a, const std::string& b) {
            sa.st_ino == sb.st_ino;
 }
 
+void discard_outputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs) {
+    for (const auto& out : outputs) {
+        if (out.empty()) continue;
+        bool is_input = false;
+        for (const auto& in : inputs) is_input = is_input || same_file(out, in);
+        if (!is_input) discard_output(out);
+    }
+}
+
 void discard_output(const std::string& path) {
     if (path.empty() || needs_in_place(path)) return;
     ::unlink(path.c_str());   // unlink, not remove: never a directory

@@ -10,6 +10,7 @@
 #pragma once
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace rbcd {
 
@@ -21,6 +22,9 @@ void discard_output(const std::string& path);
 void remove_on_interrupt(const std::string& path);
 // Both paths exist and name the same file.
 bool same_file(const std::string& a, const std::string& b);
+// After a failed run: discard_output() for every output path that is not one
+// of the inputs (an output named like an input is the input, left alone).
+void discard_outputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs);
 
 class OutputFile {
 public:

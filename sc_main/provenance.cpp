@@ -79,13 +79,30 @@ nlohmann::json input_info(const ProvenanceInput& in) {
     return j;
 }
 
+std::string command_line(const std::vector<std::string>& argv) {
+    std::string line;
+    for (const auto& a : argv) line += (line.empty() ? "" : " ") + shell_quote(a);
+    return line;
+}
+
+std::vector<std::string> option_values(const std::vector<std::string>& argv,
+                                       std::initializer_list<const char*> options) {
+    std::vector<std::string> values;
+    for (std::size_t i = 1; i < argv.size(); ++i) {
+        for (const char* o : options) {
+            const std::string opt = o;
+            if (argv[i] == opt && i + 1 < argv.size()) values.push_back(argv[i + 1]);
+            else if (argv[i].rfind(opt + "=", 0) == 0) values.push_back(argv[i].substr(opt.size() + 1));
+        }
+    }
+    return values;
+}
+
 nlohmann::json make_provenance(const std::vector<std::string>& argv, const SimConfig& cfg,
                                const std::vector<ProvenanceInput>& inputs) {
     nlohmann::json j;
     j["build"] = build_info();
-    std::string line;
-    for (const auto& a : argv) line += (line.empty() ? "" : " ") + shell_quote(a);
-    j["command_line"] = line;
+    j["command_line"] = command_line(argv);
     j["argv"] = argv;
     std::error_code ec;
     const auto cwd = std::filesystem::current_path(ec);

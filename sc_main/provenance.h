@@ -3,6 +3,7 @@
 // input file's size and hash, so that a results table can be traced back.
 #pragma once
 #include <cstdint>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,15 @@ std::string version_text();
 // A word as a POSIX shell reads it back: unchanged when it holds only safe
 // characters, otherwise in single quotes.
 std::string shell_quote(const std::string& word);
+
+// argv as one line a POSIX shell reads back: the words shell_quote()d, joined by spaces.
+std::string command_line(const std::vector<std::string>& argv);
+
+// The values OPTION takes on a command line ("--x V" or "--x=V"), for any of
+// `options`, in order; found without CLI11, so that they are known even when
+// the command line itself is what failed, or when it was only recorded.
+std::vector<std::string> option_values(const std::vector<std::string>& argv,
+                                       std::initializer_list<const char*> options);
 
 // An input as it was read: role ("trace", "scene", "mesh", "config"), path and,
 // for a file, its size in bytes and SHA-256. `text` set: an embedded input
