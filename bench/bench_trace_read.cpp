@@ -10,8 +10,8 @@
 #include <exception>
 #include <string>
 
-#include "common/errors.h"
-#include "io/trace_reader.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/io/trace_reader.h"
 
 int main(int argc, char** argv) {
     CLI::App app{"Measures TraceReader throughput"};

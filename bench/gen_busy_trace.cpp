@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "common/errors.h"
-#include "common/fragment.h"
-#include "io/trace_writer.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/io/trace_writer.h"
 
 namespace {
 

@@ -19,9 +19,9 @@
 #include <unistd.h>
 #include <vector>
 
-#include "hw/rbcd_system.h"
-#include "io/memory_source.h"
-#include "io/trace_reader.h"
+#include "rbcd/hw/rbcd_system.h"
+#include "rbcd/io/memory_source.h"
+#include "rbcd/io/trace_reader.h"
 
 extern char** environ;
 

@@ -8,7 +8,7 @@ include(CMakePackageConfigHelpers)
 
 install(TARGETS rbcd EXPORT rbcdTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
-# Same relative layout as the tree, so that "hw/zeb_bank.h" resolves in both.
+# Consumers add P/include and write "rbcd/hw/zeb_bank.h", as the tree does.
 foreach(area common hw io scene tlm)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${area}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/rbcd/${area}
     FILES_MATCHING PATTERN "*.h")

@@ -1,4 +1,4 @@
-#include "common/config.h"
+#include "rbcd/common/config.h"
 
 #include <charconv>
 #include <cmath>
@@ -6,8 +6,8 @@
 #include <sstream>
 #include <toml++/toml.h>
 
-#include "common/errors.h"
-#include "common/input_file.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/common/input_file.h"
 
 namespace rbcd {
 

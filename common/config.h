@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "common/element.h"
+#include "rbcd/common/element.h"
 
 namespace toml { inline namespace v3 { class table; class node; } }
 

@@ -4,7 +4,7 @@
 #pragma once
 #include <cstdint>
 
-#include "common/fragment.h"
+#include "rbcd/common/fragment.h"
 
 namespace rbcd {
 

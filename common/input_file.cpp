@@ -1,4 +1,4 @@
-#include "common/input_file.h"
+#include "rbcd/common/input_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -7,7 +7,7 @@
 #include <cerrno>
 #include <cstring>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
 namespace rbcd {
 

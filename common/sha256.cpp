@@ -1,4 +1,4 @@
-#include "common/sha256.h"
+#include "rbcd/common/sha256.h"
 
 #include <algorithm>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "common/vcd_writer.h"
+#include "rbcd/common/vcd_writer.h"
 
 #include <algorithm>
 #include <ctime>

@@ -1,4 +1,4 @@
-#include "cpu/cd_input.h"
+#include "rbcd/cpu/cd_input.h"
 
 #include <cmath>
 #include <cstdio>
@@ -8,8 +8,8 @@
 
 #include <Eigen/LU>
 
-#include "common/errors.h"
-#include "scene/scene_geometry.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/scene/scene_geometry.h"
 
 namespace rbcd::cpucd {
 

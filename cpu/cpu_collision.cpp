@@ -1,4 +1,4 @@
-#include "cpu/cpu_collision.h"
+#include "rbcd/cpu/cpu_collision.h"
 
 #include <algorithm>
 #include <chrono>

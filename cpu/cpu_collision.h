@@ -14,7 +14,7 @@
 
 #include <Eigen/Core>
 
-#include "cpu/cd_input.h"
+#include "rbcd/cpu/cd_input.h"
 
 namespace rbcd::cpucd {
 

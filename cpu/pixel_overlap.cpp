@@ -1,4 +1,4 @@
-#include "cpu/pixel_overlap.h"
+#include "rbcd/cpu/pixel_overlap.h"
 
 #include <algorithm>
 #include <numeric>

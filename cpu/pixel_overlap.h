@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "common/fragment.h"
+#include "rbcd/common/fragment.h"
 
 namespace rbcd::cpucd {
 

@@ -9,12 +9,12 @@
 #include <set>
 #include <unistd.h>
 
-#include "common/errors.h"
-#include "cpu/cd_input.h"
-#include "cpu/cpu_collision.h"
-#include "cpu/pixel_overlap.h"
-#include "io/trace_reader.h"
-#include "scene/scene_source.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/cpu/cd_input.h"
+#include "rbcd/cpu/cpu_collision.h"
+#include "rbcd/cpu/pixel_overlap.h"
+#include "rbcd/io/trace_reader.h"
+#include "rbcd/scene/scene_source.h"
 
 namespace {
 

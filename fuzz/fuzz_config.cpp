@@ -3,9 +3,9 @@
 // accepted is dumped, read back and dumped again: the two dumps must match.
 #include <string>
 
-#include "common/config.h"
-#include "common/errors.h"
-#include "fuzz/fuzz_util.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/fuzz/fuzz_util.h"
 
 namespace {
 void round_trip(const rbcd::SimConfig& cfg) {

@@ -27,9 +27,9 @@
 #include <cstdio>
 #include <string>
 
-#include "fuzz/fuzz_util.h"
-#include "scene/mesh.h"
-#include "scene/mesh_check.h"
+#include "rbcd/fuzz/fuzz_util.h"
+#include "rbcd/scene/mesh.h"
+#include "rbcd/scene/mesh_check.h"
 
 // Present only in sanitizer builds (the replay program may be built without).
 extern "C" __attribute__((weak)) void __sanitizer_set_death_callback(void (*)(void));

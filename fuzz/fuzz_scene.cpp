@@ -2,9 +2,9 @@
 // are rendered. Limits are small so that the fuzzer explores, not allocates.
 #include <string>
 
-#include "common/errors.h"
-#include "fuzz/fuzz_util.h"
-#include "scene/scene_source.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/fuzz/fuzz_util.h"
+#include "rbcd/scene/scene_source.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     const std::string text(reinterpret_cast<const char*>(data), size);

@@ -5,9 +5,9 @@
 
 #include <string>
 
-#include "common/errors.h"
-#include "fuzz/fuzz_util.h"
-#include "io/trace_reader.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/fuzz/fuzz_util.h"
+#include "rbcd/io/trace_reader.h"
 
 namespace {
 std::string gzip(const std::uint8_t* data, std::size_t size) {

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <systemc>
 
-#include "common/stat_counters.h"
+#include "rbcd/common/stat_counters.h"
 
 namespace rbcd {
 

@@ -5,7 +5,7 @@
 #include <variant>
 #include <vector>
 
-#include "common/records.h"
+#include "rbcd/common/records.h"
 
 namespace rbcd {
 

@@ -1,10 +1,10 @@
-#include "hw/host_reader.h"
+#include "rbcd/hw/host_reader.h"
 
 #include <algorithm>
 #include <cstring>
 #include <string>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
 namespace rbcd {
 

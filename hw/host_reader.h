@@ -16,11 +16,11 @@
 #include <tlm_utils/simple_initiator_socket.h>
 #include <vector>
 
-#include "common/config.h"
-#include "hw/clocking.h"
-#include "hw/collision_sink.h"
-#include "hw/unit_host_if.h"
-#include "tlm/bus.h"
+#include "rbcd/common/config.h"
+#include "rbcd/hw/clocking.h"
+#include "rbcd/hw/collision_sink.h"
+#include "rbcd/hw/unit_host_if.h"
+#include "rbcd/tlm/bus.h"
 
 namespace rbcd {
 

@@ -16,9 +16,9 @@
 #include <systemc>
 #include <vector>
 
-#include "common/config.h"
-#include "common/vcd_writer.h"
-#include "hw/clocking.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/vcd_writer.h"
+#include "rbcd/hw/clocking.h"
 
 namespace rbcd {
 

@@ -1,4 +1,4 @@
-#include "hw/insertion_sorter.h"
+#include "rbcd/hw/insertion_sorter.h"
 
 #include <algorithm>
 

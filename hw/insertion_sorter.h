@@ -21,11 +21,11 @@
 #include <systemc>
 #include <vector>
 
-#include "common/config.h"
-#include "common/fragment.h"
-#include "hw/clocking.h"
-#include "common/vcd_writer.h"
-#include "hw/zeb_bank.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/hw/clocking.h"
+#include "rbcd/common/vcd_writer.h"
+#include "rbcd/hw/zeb_bank.h"
 
 namespace rbcd {
 

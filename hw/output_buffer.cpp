@@ -1,10 +1,10 @@
-#include "hw/output_buffer.h"
+#include "rbcd/hw/output_buffer.h"
 
 #include <algorithm>
 #include <stdexcept>
 #include <string>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
 namespace rbcd {
 

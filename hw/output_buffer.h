@@ -17,12 +17,12 @@
 #include <tlm_utils/simple_initiator_socket.h>
 #include <vector>
 
-#include "common/config.h"
-#include "common/records.h"
-#include "hw/clocking.h"
-#include "hw/unit_host_if.h"
-#include "tlm/bus.h"
-#include "common/vcd_writer.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/records.h"
+#include "rbcd/hw/clocking.h"
+#include "rbcd/hw/unit_host_if.h"
+#include "rbcd/tlm/bus.h"
+#include "rbcd/common/vcd_writer.h"
 
 namespace rbcd {
 

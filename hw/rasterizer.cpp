@@ -1,4 +1,4 @@
-#include "hw/rasterizer.h"
+#include "rbcd/hw/rasterizer.h"
 
 #include <algorithm>
 #include <limits>

@@ -37,15 +37,15 @@
 #include <systemc>
 #include <vector>
 
-#include "common/config.h"
-#include "common/fragment.h"
-#include "common/vcd_writer.h"
-#include "hw/clocking.h"
-#include "hw/fragment_processors.h"
-#include "hw/input_queue.h"
-#include "hw/insertion_sorter.h"
-#include "hw/zeb_bank.h"
-#include "hw/zoverlap_tester.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/common/vcd_writer.h"
+#include "rbcd/hw/clocking.h"
+#include "rbcd/hw/fragment_processors.h"
+#include "rbcd/hw/input_queue.h"
+#include "rbcd/hw/insertion_sorter.h"
+#include "rbcd/hw/zeb_bank.h"
+#include "rbcd/hw/zoverlap_tester.h"
 
 namespace rbcd {
 

@@ -1,9 +1,9 @@
-#include "hw/rbcd_system.h"
+#include "rbcd/hw/rbcd_system.h"
 
 #include <algorithm>
 #include <string>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
 namespace rbcd {
 

@@ -15,13 +15,13 @@
 #include <systemc>
 #include <vector>
 
-#include "common/config.h"
-#include "common/fragment.h"
-#include "common/vcd_writer.h"
-#include "hw/collision_sink.h"
-#include "hw/host_reader.h"
-#include "hw/rbcd_unit.h"
-#include "tlm/memory_controller.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/common/vcd_writer.h"
+#include "rbcd/hw/collision_sink.h"
+#include "rbcd/hw/host_reader.h"
+#include "rbcd/hw/rbcd_unit.h"
+#include "rbcd/tlm/memory_controller.h"
 
 namespace rbcd {
 

@@ -1,4 +1,4 @@
-#include "hw/rbcd_unit.h"
+#include "rbcd/hw/rbcd_unit.h"
 
 #include <stdexcept>
 #include <string>

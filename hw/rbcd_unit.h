@@ -26,18 +26,18 @@
 #include <tlm>
 #include <vector>
 
-#include "common/config.h"
-#include "common/fragment.h"
-#include "hw/clocking.h"
-#include "hw/insertion_sorter.h"
-#include "hw/output_buffer.h"
-#include "hw/fragment_processors.h"
-#include "hw/input_queue.h"
-#include "hw/rasterizer.h"
-#include "hw/unit_host_if.h"
-#include "hw/zeb_bank.h"
-#include "hw/zoverlap_tester.h"
-#include "tlm/bus.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/hw/clocking.h"
+#include "rbcd/hw/insertion_sorter.h"
+#include "rbcd/hw/output_buffer.h"
+#include "rbcd/hw/fragment_processors.h"
+#include "rbcd/hw/input_queue.h"
+#include "rbcd/hw/rasterizer.h"
+#include "rbcd/hw/unit_host_if.h"
+#include "rbcd/hw/zeb_bank.h"
+#include "rbcd/hw/zoverlap_tester.h"
+#include "rbcd/tlm/bus.h"
 
 namespace rbcd {
 

@@ -1,6 +1,6 @@
-#include "hw/self_check.h"
+#include "rbcd/hw/self_check.h"
 
-#include "hw/rbcd_system.h"
+#include "rbcd/hw/rbcd_system.h"
 
 namespace rbcd {
 

@@ -1,4 +1,4 @@
-#include "hw/zeb_bank.h"
+#include "rbcd/hw/zeb_bank.h"
 
 #include <algorithm>
 

@@ -11,9 +11,9 @@
 #include <systemc>
 #include <vector>
 
-#include "common/config.h"
-#include "common/stat_counters.h"
-#include "common/vcd_writer.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/stat_counters.h"
+#include "rbcd/common/vcd_writer.h"
 
 namespace rbcd {
 

@@ -1,9 +1,9 @@
-#include "hw/zoverlap_tester.h"
+#include "rbcd/hw/zoverlap_tester.h"
 
 #include <algorithm>
 
-#include "common/errors.h"
-#include "hw/self_check.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/hw/self_check.h"
 
 namespace rbcd {
 

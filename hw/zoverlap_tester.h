@@ -15,11 +15,11 @@
 #include <unordered_set>
 #include <vector>
 
-#include "common/config.h"
-#include "hw/clocking.h"
-#include "hw/output_buffer.h"
-#include "common/vcd_writer.h"
-#include "hw/zeb_bank.h"
+#include "rbcd/common/config.h"
+#include "rbcd/hw/clocking.h"
+#include "rbcd/hw/output_buffer.h"
+#include "rbcd/common/vcd_writer.h"
+#include "rbcd/hw/zeb_bank.h"
 
 namespace rbcd {
 

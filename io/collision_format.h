@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-#include "common/records.h"
+#include "rbcd/common/records.h"
 
 namespace rbcd {
 

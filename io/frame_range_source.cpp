@@ -1,8 +1,8 @@
-#include "io/frame_range_source.h"
+#include "rbcd/io/frame_range_source.h"
 
 #include <charconv>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
 namespace rbcd {
 

@@ -13,7 +13,7 @@
 #include <memory>
 #include <string>
 
-#include "common/fragment.h"
+#include "rbcd/common/fragment.h"
 
 namespace rbcd {
 

@@ -1,4 +1,4 @@
-#include "io/gzip_stream.h"
+#include "rbcd/io/gzip_stream.h"
 
 #include <unistd.h>
 

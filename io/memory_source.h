@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "common/fragment.h"
+#include "rbcd/common/fragment.h"
 
 namespace rbcd {
 

@@ -1,4 +1,4 @@
-#include "io/prefetch_source.h"
+#include "rbcd/io/prefetch_source.h"
 
 #include <utility>
 

@@ -19,7 +19,7 @@
 #include <thread>
 #include <vector>
 
-#include "common/fragment.h"
+#include "rbcd/common/fragment.h"
 
 namespace rbcd {
 

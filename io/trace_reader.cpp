@@ -2,7 +2,7 @@
 // the chunk buffer (no per-line allocation, no iostreams, no per-line memchr);
 // anything unusual on a line falls back to a general tokenizer that either
 // accepts the line or says precisely what is wrong with it.
-#include "io/trace_reader.h"
+#include "rbcd/io/trace_reader.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -20,10 +20,10 @@
 #include <sstream>
 #include <vector>
 
-#include "common/config.h"
-#include "common/errors.h"
-#include "common/input_file.h"
-#include "io/gzip_stream.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/common/input_file.h"
+#include "rbcd/io/gzip_stream.h"
 
 namespace rbcd {
 

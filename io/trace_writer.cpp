@@ -1,4 +1,4 @@
-#include "io/trace_writer.h"
+#include "rbcd/io/trace_writer.h"
 
 #include <stdexcept>
 
@@ -7,7 +7,7 @@
 #include <charconv>
 #include <cstring>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
 namespace rbcd {
 namespace {

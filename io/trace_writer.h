@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <string>
 
-#include "common/fragment.h"
+#include "rbcd/common/fragment.h"
 
 namespace rbcd {
 

@@ -16,11 +16,11 @@
 #include <variant>
 #include <vector>
 
-#include "common/config.h"
-#include "common/errors.h"
-#include "io/collision_format.h"
-#include "io/trace_reader.h"
-#include "ref/reference_model.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/io/collision_format.h"
+#include "rbcd/io/trace_reader.h"
+#include "rbcd/ref/reference_model.h"
 
 namespace {
 

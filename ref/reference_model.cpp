@@ -3,14 +3,14 @@
 // ordinary containers, and deliberately not the way the hardware does it
 // (no comparator rows, no fixed-size arrays, no bit-packed words), so that a
 // shared misreading of the hardware structure cannot hide in both models.
-#include "ref/reference_model.h"
+#include "rbcd/ref/reference_model.h"
 
 #include <algorithm>
 #include <set>
 #include <string>
 #include <utility>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
 namespace rbcd::ref {
 

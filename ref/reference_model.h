@@ -7,10 +7,10 @@
 #include <variant>
 #include <vector>
 
-#include "common/config.h"
-#include "common/element.h"
-#include "common/fragment.h"
-#include "common/records.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/element.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/common/records.h"
 
 namespace rbcd::ref {
 

@@ -1,10 +1,10 @@
-#include "report/energy_model.h"
+#include "rbcd/report/energy_model.h"
 
 #include <cmath>
 
-#include "common/records.h"
-#include "hw/insertion_sorter.h"
-#include "hw/rbcd_system.h"
+#include "rbcd/common/records.h"
+#include "rbcd/hw/insertion_sorter.h"
+#include "rbcd/hw/rbcd_system.h"
 
 namespace rbcd {
 

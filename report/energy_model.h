@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include "common/config.h"
-#include "report/unit_counters.h"
+#include "rbcd/common/config.h"
+#include "rbcd/report/unit_counters.h"
 
 namespace rbcd {
 

@@ -1,9 +1,9 @@
-#include "report/run_report.h"
+#include "rbcd/report/run_report.h"
 
 #include <cmath>
 #include <limits>
 
-#include "hw/rbcd_system.h"
+#include "rbcd/hw/rbcd_system.h"
 
 namespace rbcd {
 

@@ -16,8 +16,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "hw/rasterizer.h"
-#include "report/energy_model.h"
+#include "rbcd/hw/rasterizer.h"
+#include "rbcd/report/energy_model.h"
 
 namespace rbcd {
 

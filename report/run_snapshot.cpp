@@ -1,12 +1,12 @@
-#include "report/run_snapshot.h"
+#include "rbcd/report/run_snapshot.h"
 
 #include <algorithm>
 #include <vector>
 
 #include <toml++/toml.h>
 
-#include "common/errors.h"
-#include "hw/rbcd_system.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/hw/rbcd_system.h"
 
 namespace rbcd {
 

@@ -16,9 +16,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/config.h"
-#include "report/run_report.h"
-#include "report/unit_counters.h"
+#include "rbcd/common/config.h"
+#include "rbcd/report/run_report.h"
+#include "rbcd/report/unit_counters.h"
 
 namespace rbcd {
 

@@ -1,4 +1,4 @@
-#include "report/stats_report.h"
+#include "rbcd/report/stats_report.h"
 
 #include <algorithm>
 #include <cmath>

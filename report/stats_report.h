@@ -10,10 +10,10 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "hw/rbcd_system.h"
-#include "report/energy_model.h"
-#include "report/run_report.h"
-#include "report/run_snapshot.h"
+#include "rbcd/hw/rbcd_system.h"
+#include "rbcd/report/energy_model.h"
+#include "rbcd/report/run_report.h"
+#include "rbcd/report/run_snapshot.h"
 
 namespace rbcd {
 

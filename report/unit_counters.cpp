@@ -1,6 +1,6 @@
-#include "report/unit_counters.h"
+#include "rbcd/report/unit_counters.h"
 
-#include "hw/rbcd_system.h"
+#include "rbcd/hw/rbcd_system.h"
 
 namespace rbcd {
 

@@ -6,15 +6,15 @@
 #include <utility>
 #include <vector>
 
-#include "hw/fragment_processors.h"
-#include "hw/host_reader.h"
-#include "hw/input_queue.h"
-#include "hw/insertion_sorter.h"
-#include "hw/output_buffer.h"
-#include "hw/rasterizer.h"
-#include "hw/zeb_bank.h"
-#include "hw/zoverlap_tester.h"
-#include "tlm/memory_controller.h"
+#include "rbcd/hw/fragment_processors.h"
+#include "rbcd/hw/host_reader.h"
+#include "rbcd/hw/input_queue.h"
+#include "rbcd/hw/insertion_sorter.h"
+#include "rbcd/hw/output_buffer.h"
+#include "rbcd/hw/rasterizer.h"
+#include "rbcd/hw/zeb_bank.h"
+#include "rbcd/hw/zoverlap_tester.h"
+#include "rbcd/tlm/memory_controller.h"
 
 namespace rbcd {
 

@@ -2,9 +2,9 @@
 #pragma once
 #include <string>
 
-#include "hw/collision_sink.h"
-#include "io/collision_format.h"
-#include "sc_main/output_file.h"
+#include "rbcd/hw/collision_sink.h"
+#include "rbcd/io/collision_format.h"
+#include "rbcd/sc_main/output_file.h"
 
 namespace rbcd {
 

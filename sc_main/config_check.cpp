@@ -13,8 +13,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "common/config.h"
-#include "common/errors.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/errors.h"
 
 namespace {
 

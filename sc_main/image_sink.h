@@ -5,8 +5,8 @@
 #include <utility>
 #include <vector>
 
-#include "hw/collision_sink.h"
-#include "scene/scene_source.h"
+#include "rbcd/hw/collision_sink.h"
+#include "rbcd/scene/scene_source.h"
 
 namespace rbcd {
 

@@ -13,22 +13,22 @@
 #include <systemc>
 #include <unistd.h>
 
-#include "common/config.h"
-#include "common/errors.h"
-#include "io/prefetch_source.h"
-#include "io/frame_range_source.h"
-#include "common/input_file.h"
-#include "io/trace_reader.h"
-#include "io/trace_writer.h"
-#include "sc_main/collision_file.h"
-#include "sc_main/image_sink.h"
-#include "sc_main/output_file.h"
-#include "sc_main/progress.h"
-#include "report/run_report.h"
-#include "report/stats_report.h"
-#include "sc_main/provenance.h"
-#include "hw/rbcd_system.h"
-#include "hw/self_check.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/io/prefetch_source.h"
+#include "rbcd/io/frame_range_source.h"
+#include "rbcd/common/input_file.h"
+#include "rbcd/io/trace_reader.h"
+#include "rbcd/io/trace_writer.h"
+#include "rbcd/sc_main/collision_file.h"
+#include "rbcd/sc_main/image_sink.h"
+#include "rbcd/sc_main/output_file.h"
+#include "rbcd/sc_main/progress.h"
+#include "rbcd/report/run_report.h"
+#include "rbcd/report/stats_report.h"
+#include "rbcd/sc_main/provenance.h"
+#include "rbcd/hw/rbcd_system.h"
+#include "rbcd/hw/self_check.h"
 
 namespace {
 

@@ -22,12 +22,12 @@
 #include <nlohmann/json.hpp>
 #include <systemc>
 
-#include "common/errors.h"
-#include "common/input_file.h"
-#include "report/run_snapshot.h"
-#include "report/stats_report.h"
-#include "sc_main/output_file.h"
-#include "sc_main/provenance.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/common/input_file.h"
+#include "rbcd/report/run_snapshot.h"
+#include "rbcd/report/stats_report.h"
+#include "rbcd/sc_main/output_file.h"
+#include "rbcd/sc_main/provenance.h"
 
 namespace {
 

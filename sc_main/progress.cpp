@@ -1,4 +1,4 @@
-#include "sc_main/progress.h"
+#include "rbcd/sc_main/progress.h"
 
 #include <chrono>
 #include <cstdio>

@@ -1,4 +1,4 @@
-#include "sc_main/provenance.h"
+#include "rbcd/sc_main/provenance.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <systemc>
 
-#include "common/sha256.h"
-#include "sc_main/build_info.h"    // generated at configure time (sc_main/CMakeLists.txt)
-#include "sc_main/git_describe.h"  // generated at build time
+#include "rbcd/common/sha256.h"
+#include "rbcd/sc_main/build_info.h"    // generated at configure time (sc_main/CMakeLists.txt)
+#include "rbcd/sc_main/git_describe.h"  // generated at build time
 
 namespace rbcd {
 

@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/config.h"
+#include "rbcd/common/config.h"
 
 namespace rbcd {
 

@@ -1,4 +1,4 @@
-#include "scene/mesh.h"
+#include "rbcd/scene/mesh.h"
 
 #include <atomic>
 #include <cctype>

@@ -1,4 +1,4 @@
-#include "scene/mesh_check.h"
+#include "rbcd/scene/mesh_check.h"
 
 #include <algorithm>
 #include <array>

@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <string>
 
-#include "scene/mesh.h"
-#include "scene/scene_file.h"
+#include "rbcd/scene/mesh.h"
+#include "rbcd/scene/scene_file.h"
 
 namespace rbcd::scene {
 

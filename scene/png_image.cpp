@@ -5,8 +5,8 @@
 
 #include <png.h>
 
-#include "common/errors.h"
-#include "scene/scene_source.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/scene/scene_source.h"
 
 namespace rbcd::scene {
 namespace {

@@ -1,4 +1,4 @@
-#include "scene/renderer.h"
+#include "rbcd/scene/renderer.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 
 #include <Eigen/Geometry>
 
-#include "common/errors.h"
-#include "scene/mesh_check.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/scene/mesh_check.h"
 
 namespace rbcd::scene {
 namespace {

@@ -9,10 +9,10 @@
 
 #include <Eigen/Core>
 
-#include "common/fragment.h"
-#include "scene/mesh.h"
-#include "scene/scene_file.h"
-#include "scene/scene_source.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/scene/mesh.h"
+#include "rbcd/scene/scene_file.h"
+#include "rbcd/scene/scene_source.h"
 
 namespace rbcd::scene {
 

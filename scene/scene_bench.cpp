@@ -10,8 +10,8 @@
 #include <memory>
 #include <string>
 
-#include "common/errors.h"
-#include "scene/scene_source.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/scene/scene_source.h"
 
 int main(int argc, char** argv) {
     using namespace rbcd;

@@ -1,4 +1,4 @@
-#include "scene/scene_file.h"
+#include "rbcd/scene/scene_file.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,9 +11,9 @@
 #include <Eigen/Geometry>
 #include <toml++/toml.h>
 
-#include "common/errors.h"
-#include "common/input_file.h"
-#include "scene/mesh.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/common/input_file.h"
+#include "rbcd/scene/mesh.h"
 
 namespace rbcd::scene {
 namespace {

@@ -8,7 +8,7 @@
 
 #include <Eigen/Core>
 
-#include "scene/scene_source.h"
+#include "rbcd/scene/scene_source.h"
 
 namespace rbcd::scene {
 

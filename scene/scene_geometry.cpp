@@ -1,12 +1,12 @@
-#include "scene/scene_geometry.h"
+#include "rbcd/scene/scene_geometry.h"
 
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
-#include "common/errors.h"
-#include "scene/renderer.h"
-#include "scene/scene_file.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/scene/renderer.h"
+#include "rbcd/scene/scene_file.h"
 
 namespace rbcd::scene {
 

@@ -15,8 +15,8 @@
 
 #include <Eigen/Core>
 
-#include "scene/mesh.h"
-#include "scene/scene_source.h"
+#include "rbcd/scene/mesh.h"
+#include "rbcd/scene/scene_source.h"
 
 namespace rbcd::scene {
 

@@ -1,11 +1,11 @@
-#include "scene/scene_source.h"
+#include "rbcd/scene/scene_source.h"
 
 #include <algorithm>
 #include <filesystem>
 
-#include "common/errors.h"
-#include "common/input_file.h"
-#include "scene/renderer.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/common/input_file.h"
+#include "rbcd/scene/renderer.h"
 
 namespace rbcd::scene {
 

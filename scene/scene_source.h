@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "common/fragment.h"
+#include "rbcd/common/fragment.h"
 
 namespace rbcd::scene {
 

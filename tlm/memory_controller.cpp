@@ -1,11 +1,11 @@
-#include "tlm/memory_controller.h"
+#include "rbcd/tlm/memory_controller.h"
 
 #include <algorithm>
 #include <cstring>
 #include <limits>
 #include <string>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
 namespace rbcd {
 

@@ -42,10 +42,10 @@
 #include <tlm>
 #include <tlm_utils/simple_target_socket.h>
 
-#include "common/config.h"
-#include "common/stat_counters.h"
-#include "common/vcd_writer.h"
-#include "tlm/bus.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/stat_counters.h"
+#include "rbcd/common/vcd_writer.h"
+#include "rbcd/tlm/bus.h"
 
 namespace rbcd {
 

@@ -1,6 +1,6 @@
-#include "tlm/protocol_checker.h"
+#include "rbcd/tlm/protocol_checker.h"
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
 namespace rbcd {
 

@@ -41,7 +41,7 @@
 #include <tlm_utils/simple_initiator_socket.h>
 #include <tlm_utils/simple_target_socket.h>
 
-#include "tlm/bus.h"
+#include "rbcd/tlm/bus.h"
 
 namespace rbcd {
 

@@ -20,18 +20,19 @@
 #include <tlm_utils/simple_initiator_socket.h>
 #include <tlm_utils/simple_target_socket.h>
 
-#include "common/config.h"
-#include "common/errors.h"
-#include "common/records.h"
-#include "hw/rbcd_unit.h"
-#include "io/collision_format.h"
-#include "io/trace_reader.h"
+#include "common/config.h"   // the platform's own, not rbcd's
+#include "rbcd/common/config.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/common/records.h"
+#include "rbcd/hw/rbcd_unit.h"
+#include "rbcd/io/collision_format.h"
+#include "rbcd/io/trace_reader.h"
 
 namespace {
 
 constexpr unsigned kBus = rbcd::kBusWidth;
-constexpr std::uint64_t kSramBase = 0x20000000;   // where the platform maps its memory
-constexpr std::uint64_t kSramSize = 1 << 20;
+using platform::kSramBase;
+using platform::kSramSize;
 
 // The platform's memory: local addresses from 0, answers at once (a fixed
 // 30 ns annotated latency), no DMI.

@@ -6,11 +6,11 @@
 #include <cstdio>
 #include <fstream>
 
-#include "common/errors.h"
-#include "cpu/cd_input.h"
-#include "cpu/cpu_collision.h"
-#include "cpu/pixel_overlap.h"
-#include "scene/mesh.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/cpu/cd_input.h"
+#include "rbcd/cpu/cpu_collision.h"
+#include "rbcd/cpu/pixel_overlap.h"
+#include "rbcd/scene/mesh.h"
 
 using namespace rbcd;
 using namespace rbcd::cpucd;

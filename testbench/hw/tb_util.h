@@ -4,11 +4,11 @@
 #include <string>
 #include <vector>
 
-#include "common/config.h"
-#include "hw/collision_sink.h"
-#include "hw/rbcd_system.h"
-#include "io/collision_format.h"
-#include "io/memory_source.h"
+#include "rbcd/common/config.h"
+#include "rbcd/hw/collision_sink.h"
+#include "rbcd/hw/rbcd_system.h"
+#include "rbcd/io/collision_format.h"
+#include "rbcd/io/memory_source.h"
 
 namespace rbcd::tb {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "testbench/hw/tb_util.h"
+#include "rbcd/testbench/hw/tb_util.h"
 
 using namespace rbcd;
 

@@ -4,8 +4,8 @@
 #include <catch2/catch.hpp>
 #include <random>
 
-#include "ref/reference_model.h"
-#include "testbench/hw/tb_util.h"
+#include "rbcd/ref/reference_model.h"
+#include "rbcd/testbench/hw/tb_util.h"
 
 using namespace rbcd;
 

@@ -6,9 +6,9 @@
 
 #include <functional>
 
-#include "common/errors.h"
-#include "hw/self_check.h"
-#include "testbench/hw/tb_util.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/hw/self_check.h"
+#include "rbcd/testbench/hw/tb_util.h"
 
 using namespace rbcd;
 using namespace rbcd::tb;

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "testbench/hw/tb_util.h"
+#include "rbcd/testbench/hw/tb_util.h"
 
 using namespace rbcd;
 using rbcd::tb::frag;

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "testbench/hw/tb_util.h"
-#include "tlm/memory_controller.h"
+#include "rbcd/testbench/hw/tb_util.h"
+#include "rbcd/tlm/memory_controller.h"
 
 using namespace rbcd;
 

@@ -4,7 +4,7 @@
 // processors at 8 cycles a fragment.
 #include <catch2/catch.hpp>
 
-#include "testbench/hw/tb_util.h"
+#include "rbcd/testbench/hw/tb_util.h"
 
 using namespace rbcd;
 using rbcd::tb::frag;

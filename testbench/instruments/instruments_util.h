@@ -4,12 +4,12 @@
 #include <string>
 #include <vector>
 
-#include "hw/rbcd_system.h"
-#include "io/memory_source.h"
-#include "io/trace_reader.h"
-#include "report/run_report.h"
-#include "report/stats_report.h"
-#include "testbench/hw/tb_util.h"
+#include "rbcd/hw/rbcd_system.h"
+#include "rbcd/io/memory_source.h"
+#include "rbcd/io/trace_reader.h"
+#include "rbcd/report/run_report.h"
+#include "rbcd/report/stats_report.h"
+#include "rbcd/testbench/hw/tb_util.h"
 
 namespace rbcd::tb {
 

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "testbench/instruments/instruments_util.h"
+#include "rbcd/testbench/instruments/instruments_util.h"
 
 using namespace rbcd;
 using rbcd::tb::frag;

@@ -1,8 +1,8 @@
 // The --stats document, the stdout summary and the progress line.
 #include <catch2/catch.hpp>
 
-#include "sc_main/progress.h"
-#include "testbench/instruments/instruments_util.h"
+#include "rbcd/sc_main/progress.h"
+#include "rbcd/testbench/instruments/instruments_util.h"
 
 using namespace rbcd;
 using rbcd::tb::frag;

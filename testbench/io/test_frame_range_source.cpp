@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "common/errors.h"
-#include "io/frame_range_source.h"
-#include "io/memory_source.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/io/frame_range_source.h"
+#include "rbcd/io/memory_source.h"
 
 using namespace rbcd;
 using Catch::Matchers::StartsWith;

@@ -2,7 +2,7 @@
 // rejected one with its exact line number, gzip input and a writer round trip.
 #include <catch2/catch.hpp>
 
-#include "testbench/common/temp_dir.h"
+#include "rbcd/testbench/common/temp_dir.h"
 
 #include <stdlib.h>
 #include <sys/stat.h>
@@ -16,12 +16,12 @@
 #include <string>
 #include <vector>
 
-#include "common/config.h"
-#include "common/errors.h"
-#include "common/fragment.h"
-#include "io/memory_source.h"
-#include "io/trace_reader.h"
-#include "io/trace_writer.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/io/memory_source.h"
+#include "rbcd/io/trace_reader.h"
+#include "rbcd/io/trace_writer.h"
 
 using namespace rbcd;
 using Catch::Matchers::Contains;

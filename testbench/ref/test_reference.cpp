@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "common/errors.h"
-#include "io/memory_source.h"
-#include "ref/reference_model.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/io/memory_source.h"
+#include "rbcd/ref/reference_model.h"
 
 using namespace rbcd;
 using namespace rbcd::ref;

@@ -14,10 +14,10 @@
 
 #include <catch2/catch.hpp>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 
-#include "common/fragment.h"
-#include "scene/scene_source.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/scene/scene_source.h"
 
 namespace scene_test {
 

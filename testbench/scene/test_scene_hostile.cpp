@@ -9,9 +9,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "common/errors.h"
-#include "scene/mesh.h"
-#include "scene/scene_file.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/scene/mesh.h"
+#include "rbcd/scene/scene_file.h"
 #include "scene_test_util.h"
 
 using namespace scene_test;

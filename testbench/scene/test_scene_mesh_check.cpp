@@ -12,11 +12,11 @@
 
 #include <Eigen/Geometry>
 
-#include "common/errors.h"
-#include "scene/mesh.h"
-#include "scene/mesh_check.h"
-#include "scene/scene_source.h"
-#include "testbench/common/temp_dir.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/scene/mesh.h"
+#include "rbcd/scene/mesh_check.h"
+#include "rbcd/scene/scene_source.h"
+#include "rbcd/testbench/common/temp_dir.h"
 
 using namespace rbcd::scene;
 using Catch::Matchers::Contains;

@@ -8,7 +8,7 @@
 #include <png.h>
 #include <unistd.h>
 
-#include "common/errors.h"
+#include "rbcd/common/errors.h"
 #include "scene_test_util.h"
 
 using namespace scene_test;

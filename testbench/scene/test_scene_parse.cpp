@@ -5,8 +5,8 @@
 
 #include <unistd.h>
 
-#include "common/errors.h"
-#include "scene/scene_file.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/scene/scene_file.h"
 #include "scene_test_util.h"
 
 using namespace scene_test;

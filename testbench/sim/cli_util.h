@@ -3,7 +3,7 @@
 #pragma once
 #include <catch2/catch.hpp>
 
-#include "testbench/common/temp_dir.h"
+#include "rbcd/testbench/common/temp_dir.h"
 
 #include <fcntl.h>
 #include <spawn.h>

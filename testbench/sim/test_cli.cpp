@@ -26,7 +26,7 @@
 #error "RBCD_SIM must name the rbcd-sim executable"
 #endif
 
-#include "testbench/sim/cli_util.h"
+#include "rbcd/testbench/sim/cli_util.h"
 
 using namespace rbcd::cli_test;
 

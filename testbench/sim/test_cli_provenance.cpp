@@ -1,12 +1,12 @@
 // rbcd-sim's --version, the stats' provenance block (docs/provenance.md) and
 // the first-hour rough edges of issue 13: an unknown argument named with the
 // option it most likely meant, --dump-config's shortest decimals.
-#include "testbench/sim/cli_util.h"
+#include "rbcd/testbench/sim/cli_util.h"
 
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "common/sha256.h"
+#include "rbcd/common/sha256.h"
 
 using namespace rbcd::cli_test;
 

@@ -5,7 +5,7 @@
 // and the --dump-config round trip.
 #include <catch2/catch.hpp>
 
-#include "testbench/common/temp_dir.h"
+#include "rbcd/testbench/common/temp_dir.h"
 
 #include <stdlib.h>
 
@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "common/config.h"
-#include "common/errors.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/errors.h"
 
 using namespace rbcd;
 using Catch::Matchers::Contains;

@@ -5,12 +5,12 @@
 //   - two ZEB banks never take longer than one;
 //   - the baseline never exceeds the time with the unit, in any frame;
 //   - without collisionable fragments the overhead is 0.
-#include "testbench/sim/cli_util.h"
+#include "rbcd/testbench/sim/cli_util.h"
 
 #include <nlohmann/json.hpp>
 
-#include "common/fragment.h"
-#include "io/trace_writer.h"
+#include "rbcd/common/fragment.h"
+#include "rbcd/io/trace_writer.h"
 
 using namespace rbcd::cli_test;
 

@@ -2,7 +2,7 @@
 // wrong answer, exit 1 after std::bad_alloc, hang, or print raw control bytes.
 // Now: exit 2, one line naming the limit and the key that raises it, nothing
 // left at the output paths.
-#include "testbench/sim/cli_util.h"
+#include "rbcd/testbench/sim/cli_util.h"
 
 using namespace rbcd::cli_test;
 

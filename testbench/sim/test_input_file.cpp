@@ -1,8 +1,8 @@
 // common/input_file: the escaping of messages and the toml++ guard, directly.
 #include <catch2/catch.hpp>
 
-#include "common/errors.h"
-#include "common/input_file.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/common/input_file.h"
 
 using rbcd::check_toml_text;
 using rbcd::escape_for_message;

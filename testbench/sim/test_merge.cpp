@@ -1,7 +1,7 @@
 // rbcd-merge (docs/sweeps.md): runs over consecutive frame ranges merged into
 // the outputs of one run over all their frames, byte for byte (wall time
 // aside), and refused when they cannot be one run.
-#include "testbench/sim/cli_util.h"
+#include "rbcd/testbench/sim/cli_util.h"
 
 #include <nlohmann/json.hpp>
 #include <regex>

@@ -1,6 +1,6 @@
 // What rbcd-sim leaves on disk when a run cannot complete: never an older
 // result, never a temporary, never the user's input or directories.
-#include "testbench/sim/cli_util.h"
+#include "rbcd/testbench/sim/cli_util.h"
 
 #include <csignal>
 #include <thread>

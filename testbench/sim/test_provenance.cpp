@@ -3,13 +3,13 @@
 // effective configuration.
 #include <catch2/catch.hpp>
 
-#include "testbench/common/temp_dir.h"
+#include "rbcd/testbench/common/temp_dir.h"
 
 #include <string>
 
-#include "common/config.h"
-#include "common/sha256.h"
-#include "sc_main/provenance.h"
+#include "rbcd/common/config.h"
+#include "rbcd/common/sha256.h"
+#include "rbcd/sc_main/provenance.h"
 
 using namespace rbcd;
 using Catch::Matchers::Contains;

@@ -1,6 +1,6 @@
 // rbcd-sim on 3D scenes, as a user runs it: --scene against --write-trace
 // replayed with --trace, images, waveforms, and bad scenes failing cleanly.
-#include "testbench/sim/cli_util.h"
+#include "rbcd/testbench/sim/cli_util.h"
 
 #include <nlohmann/json.hpp>
 

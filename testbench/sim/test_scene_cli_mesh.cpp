@@ -1,11 +1,11 @@
 // rbcd-sim with mesh files: the one-line warning for a defective mesh (and the
 // run goes on), check_mesh = false, the bundled default scene silent, and the
 // mesh files listed with their sizes and hashes in the stats' provenance.
-#include "testbench/sim/cli_util.h"
+#include "rbcd/testbench/sim/cli_util.h"
 
 #include <nlohmann/json.hpp>
 
-#include "common/sha256.h"
+#include "rbcd/common/sha256.h"
 
 using namespace rbcd::cli_test;
 

@@ -18,7 +18,7 @@
 #include <tlm>
 #include <tlm_utils/simple_target_socket.h>
 
-#include "tlm/bus.h"
+#include "rbcd/tlm/bus.h"
 
 namespace rbcd::tb {
 

@@ -21,8 +21,8 @@
 #include <tlm>
 #include <tlm_utils/simple_initiator_socket.h>
 
-#include "common/errors.h"
-#include "tlm/memory_controller.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/tlm/memory_controller.h"
 
 using namespace sc_core;
 using rbcd::memory_controller;

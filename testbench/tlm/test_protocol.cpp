@@ -15,11 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "common/errors.h"
-#include "hw/rbcd_unit.h"
-#include "testbench/hw/tb_util.h"
-#include "testbench/tlm/test_memory.h"
-#include "tlm/protocol_checker.h"
+#include "rbcd/common/errors.h"
+#include "rbcd/hw/rbcd_unit.h"
+#include "rbcd/testbench/hw/tb_util.h"
+#include "rbcd/testbench/tlm/test_memory.h"
+#include "rbcd/tlm/protocol_checker.h"
 
 using namespace rbcd;
 using tb::test_memory;
