@@ -14,7 +14,7 @@ foreach(area common hw io scene tlm)
     FILES_MATCHING PATTERN "*.h")
 endforeach()
 
-foreach(program rbcd-sim rbcd-merge)
+foreach(program rbcd-sim rbcd-merge rbcd-gl-raster)
   if(TARGET ${program})
     install(TARGETS ${program} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
   endif()

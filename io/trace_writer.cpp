@@ -7,6 +7,8 @@
 #include <charconv>
 #include <cstring>
 
+#include <zlib.h>
+
 #include "rbcd/common/errors.h"
 
 namespace rbcd {
@@ -23,21 +25,54 @@ inline char* put(char* p, const char* s) {
     return p;
 }
 
-void flush(std::FILE* f, std::string& buf, const std::string& path) {
-    if (std::fwrite(buf.data(), 1, buf.size(), f) != buf.size())
-        throw std::runtime_error(path + ": write error: " + std::strerror(errno));
-    buf.clear();
-}
-
 } // namespace
 
-TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header) : path_(path) {
+struct TraceWriter::Deflater {
+    z_stream z{};
+    std::string out = std::string(std::size_t(1) << 18, '\0');
+    ~Deflater() { deflateEnd(&z); }
+};
+
+TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header, bool gzip) : path_(path) {
+    if (gzip) {
+        z_ = std::make_unique<Deflater>();
+        // windowBits 15 + 16: a gzip wrapper rather than zlib's.
+        if (deflateInit2(&z_->z, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+            throw std::runtime_error(path + ": cannot start gzip compression");
+    }
     f_ = std::fopen(path.c_str(), "wb");
     if (!f_) throw InputError(path + ": cannot create: " + std::strerror(errno));
     buf_.reserve(kFlushAt + kMaxTileLine);
     buf_ += "rbcd-trace 1\nscreen " + std::to_string(header.screen_w) + " " + std::to_string(header.screen_h) +
             "\ntile_size " + std::to_string(header.tile_w) + " " + std::to_string(header.tile_h) + "\ndepth_bits " +
             std::to_string(header.depth_bits) + "\n";
+}
+
+// Writes n bytes, through the compressor when there is one; `finish` ends the
+// gzip member. Throws std::runtime_error on a write error.
+void TraceWriter::emit(const char* p, std::size_t n, bool finish) {
+    if (!z_) {
+        if (n && std::fwrite(p, 1, n, f_) != n) throw std::runtime_error(path_ + ": write error: " + std::strerror(errno));
+        return;
+    }
+    z_stream& z = z_->z;
+    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(p));
+    z.avail_in = static_cast<uInt>(n);
+    int rc;
+    do {
+        z.next_out = reinterpret_cast<Bytef*>(&z_->out[0]);
+        z.avail_out = static_cast<uInt>(z_->out.size());
+        rc = deflate(&z, finish ? Z_FINISH : Z_NO_FLUSH);
+        if (rc == Z_STREAM_ERROR) throw std::runtime_error(path_ + ": gzip compression failed");
+        const std::size_t have = z_->out.size() - z.avail_out;
+        if (have && std::fwrite(z_->out.data(), 1, have, f_) != have)
+            throw std::runtime_error(path_ + ": write error: " + std::strerror(errno));
+    } while (z.avail_out == 0 || (finish && rc != Z_STREAM_END));
+}
+
+void TraceWriter::flush() {
+    emit(buf_.data(), buf_.size(), false);
+    buf_.clear();
 }
 
 TraceWriter::~TraceWriter() {
@@ -97,7 +132,7 @@ void TraceWriter::tile(const Tile& t) {
         }
     };
     while (i < n) {
-        if (buf_.size() >= kFlushAt) flush(f_, buf_, path_);
+        if (buf_.size() >= kFlushAt) flush();
         // A slice ends at the next `o` run so runs land between the right fragments.
         std::size_t slice = std::min<std::size_t>(n - i, 4096);
         put_runs_before(i);
@@ -127,15 +162,21 @@ void TraceWriter::tile(const Tile& t) {
         buf_.resize(static_cast<std::size_t>(p - buf_.data()));
     }
     put_runs_before(n);
-    if (buf_.size() >= kFlushAt) flush(f_, buf_, path_);
+    if (buf_.size() >= kFlushAt) flush();
 }
 
 void TraceWriter::close() {
     if (!f_) return;
     std::FILE* f = f_;
+    bool ok = true;
+    int err = 0;
+    try {
+        emit(buf_.data(), buf_.size(), true);
+    } catch (const std::runtime_error&) {
+        ok = false;
+        err = errno;
+    }
     f_ = nullptr;
-    bool ok = buf_.empty() || std::fwrite(buf_.data(), 1, buf_.size(), f) == buf_.size();
-    int err = ok ? 0 : errno;
     buf_.clear();
     if (ok && std::fflush(f) != 0) { ok = false; err = errno; }
     if (std::fclose(f) != 0 && ok) { ok = false; err = errno; }

@@ -2,6 +2,7 @@
 // to the same stream (used by --write-trace and the benchmark generator).
 #pragma once
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include "rbcd/common/fragment.h"
@@ -10,8 +11,9 @@ namespace rbcd {
 
 class TraceWriter {
 public:
-    // Throws InputError if the file cannot be created.
-    TraceWriter(const std::string& path, const StreamHeader& header);
+    // Throws InputError if the file cannot be created. With `gzip` the file is
+    // one gzip member (TraceReader recognises it by its first two bytes).
+    TraceWriter(const std::string& path, const StreamHeader& header, bool gzip = false);
     ~TraceWriter();
     TraceWriter(const TraceWriter&) = delete;
     TraceWriter& operator=(const TraceWriter&) = delete;
@@ -21,9 +23,14 @@ public:
     void close();
 
 private:
+    struct Deflater;
+    void flush();
+    void emit(const char* p, std::size_t n, bool finish);
+
     std::string path_;
     std::FILE* f_ = nullptr;
     std::string buf_;
+    std::unique_ptr<Deflater> z_;   // set when compressing
 };
 
 } // namespace rbcd

@@ -1,0 +1,172 @@
+// rbcd-gl-raster: the rasterizing half of rbcd-gl2rbt (docs/gl-capture.md).
+// Reads a draw stream (gl/draw_stream.h) on standard input, rasterizes every
+// frame through the scene front end's tile rasterizer and writes the fragment
+// trace; optionally the depth buffer at each frame's snapshot point and one
+// JSON line of figures per frame. rbcd-gl2rbt runs it; it is not a user's
+// command, but it is held to the same rules: a malformed stream is one line
+// naming the call, exit 2, and no output left behind.
+//
+//   rbcd-gl-raster --trace OUT.rbt[.gz] [--depth-out PREFIX] [--summary FILE] [--name CAPTURE]
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <iostream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "rbcd/common/errors.h"
+#include "rbcd/gl/draw_stream.h"
+#include "rbcd/io/trace_writer.h"
+#include "rbcd/sc_main/output_file.h"
+#include "rbcd/scene/tile_rasterizer.h"
+
+namespace {
+
+struct Options {
+    std::string trace, depth_out, summary, name = "draw stream";
+};
+
+Options parse(int argc, char** argv) {
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        const auto value = [&]() -> std::string {
+            if (i + 1 >= argc) throw rbcd::InputError(a + ": needs a value");
+            return argv[++i];
+        };
+        if (a == "--trace") o.trace = value();
+        else if (a == "--depth-out") o.depth_out = value();
+        else if (a == "--summary") o.summary = value();
+        else if (a == "--name") o.name = value();
+        else throw rbcd::InputError("unknown option '" + a + "' (see gl/gl_raster_main.cpp)");
+    }
+    if (o.trace.empty()) throw rbcd::InputError("--trace is required");
+    return o;
+}
+
+bool ends_with(const std::string& s, const char* suffix) {
+    const std::size_t n = std::strlen(suffix);
+    return s.size() >= n && s.compare(s.size() - n, n, suffix) == 0;
+}
+
+// One frame's figures, for rbcd-gl2rbt's report.
+struct FrameFigures {
+    std::uint64_t tiles = 0, fragments = 0, culled = 0, other = 0, prims = 0, cprims = 0, draws = 0;
+    std::set<std::uint32_t> objects;
+};
+
+std::string json_line(std::uint64_t frame, std::uint64_t call, const FrameFigures& f) {
+    std::string s = "{\"frame\":" + std::to_string(frame) + ",\"end_call\":" + std::to_string(call) +
+                    ",\"draws\":" + std::to_string(f.draws) + ",\"tiles\":" + std::to_string(f.tiles) +
+                    ",\"fragments\":" + std::to_string(f.fragments) + ",\"culled\":" + std::to_string(f.culled) +
+                    ",\"other\":" + std::to_string(f.other) + ",\"prims\":" + std::to_string(f.prims) +
+                    ",\"cprims\":" + std::to_string(f.cprims) + ",\"objects\":[";
+    bool first = true;
+    for (auto id : f.objects) {
+        if (!first) s += ',';
+        s += std::to_string(id);
+        first = false;
+    }
+    return s + "]}\n";
+}
+
+int run(const Options& o) {
+    rbcd::gl::DrawStreamReader in(std::cin, o.name);
+    const auto& h = in.header();
+    rbcd::scene::TileRasterizer raster(h.width, h.height, h.tile_w, h.tile_h, h.depth_bits);
+    raster.keep_depth_buffer(!o.depth_out.empty());
+
+    // Every output is committed only at the end: a run that fails leaves none.
+    rbcd::OutputFile trace_file(o.trace);
+    rbcd::StreamHeader sh;
+    sh.screen_w = h.width;
+    sh.screen_h = h.height;
+    sh.tile_w = h.tile_w;
+    sh.tile_h = h.tile_h;
+    sh.depth_bits = h.depth_bits;
+    rbcd::TraceWriter trace(trace_file.open_file_path(), sh, ends_with(o.trace, ".gz"));
+    rbcd::OutputFile summary;
+    if (!o.summary.empty()) {
+        summary = rbcd::OutputFile(o.summary);
+    }
+    std::vector<rbcd::OutputFile> depth_files;
+
+    FrameFigures fig;
+    bool snapshot = false;
+    rbcd::Tile tile;
+    for (;;) {
+        const auto kind = in.next();
+        if (kind == rbcd::gl::DrawStreamReader::Kind::End) break;
+        switch (kind) {
+        case rbcd::gl::DrawStreamReader::Kind::FrameStart:
+            raster.begin_frame(in.frame());
+            fig = FrameFigures{};
+            snapshot = false;
+            break;
+        case rbcd::gl::DrawStreamReader::Kind::Draw: {
+            const auto& d = in.draw();
+            const auto draw = raster.add_draw(d.state);
+            ++fig.draws;
+            if (!raster.add_mesh(draw, d.clip.data(), d.clip.size(), d.tris.data(), d.tris.size()))
+                throw rbcd::InputError(o.name + ": call " + std::to_string(d.call) +
+                                       ": a vertex projects to a non-finite or out-of-range window coordinate");
+            break;
+        }
+        case rbcd::gl::DrawStreamReader::Kind::DepthClear:
+            raster.add_depth_clear(in.clear_value(), in.clear_rect());
+            break;
+        case rbcd::gl::DrawStreamReader::Kind::Snapshot:
+            raster.snapshot_depth_here();
+            snapshot = true;
+            break;
+        case rbcd::gl::DrawStreamReader::Kind::FrameEnd: {
+            trace.frame(in.frame());   // at the swap: a frame never swapped is not written
+            while (raster.next_tile(tile, nullptr)) {
+                trace.tile(tile);
+                ++fig.tiles;
+                fig.other += tile.other;
+                fig.prims += tile.prims;
+                fig.cprims += tile.cprims;
+                fig.fragments += tile.frags.size();
+                for (const auto& f : tile.frags) {
+                    fig.culled += f.culled;
+                    fig.objects.insert(f.id);
+                }
+            }
+            if (summary.active()) summary.write(json_line(in.frame(), in.call(), fig));
+            if (snapshot && !o.depth_out.empty()) {
+                // rbcd-depth 1 W H BITS, then W*H u32 little endian, rows from the top.
+                depth_files.emplace_back(o.depth_out + "." + std::to_string(in.frame()) + ".depth");
+                rbcd::OutputFile& df = depth_files.back();
+                df.write("rbcd-depth 1 " + std::to_string(h.width) + " " + std::to_string(h.height) + " " +
+                         std::to_string(h.depth_bits) + "\n");
+                const auto& buf = raster.depth_buffer();
+                df.write(reinterpret_cast<const char*>(buf.data()), buf.size() * sizeof buf[0]);
+            }
+            break;
+        }
+        default: break;
+        }
+    }
+    trace.close();
+    trace_file.commit();
+    if (summary.active()) summary.commit();
+    for (auto& df : depth_files) df.commit();
+    return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    std::ios::sync_with_stdio(false);
+    try {
+        return run(parse(argc, argv));
+    } catch (const rbcd::InputError& e) {
+        std::fprintf(stderr, "rbcd-gl-raster: %s\n", e.what());
+        return 2;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "rbcd-gl-raster: %s\n", e.what());
+        return 1;
+    }
+}
