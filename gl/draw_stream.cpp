@@ -121,6 +121,7 @@ void DrawStreamReader::read_draw() {
     s.depth_test = depth_test;
     s.depth_func = scene::DepthFunc(depth_func);
     s.depth_write = depth_write;
+    s.depth_from_unsnapped = true;   // as the GL implementation the captures are checked against
     const auto planes = get<std::uint8_t>();
     if (planes > scene::kMaxUserClipPlanes)
         fail("more than " + std::to_string(scene::kMaxUserClipPlanes) + " user clip planes");

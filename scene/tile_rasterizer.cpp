@@ -92,12 +92,14 @@ bool TileRasterizer::project(const DrawState& s, const Eigen::Vector4d& clip, Sc
     const double z = (s.depth_near + (s.depth_far - s.depth_near) * (clip.z() * iw * 0.5 + 0.5)) * depth_max_;
     // Converting NaN or inf to an integer is undefined: the caller refuses.
     if (!(std::isfinite(sx) && std::isfinite(sy) && std::isfinite(z) && std::abs(sx) < 1e9 && std::abs(sy) < 1e9)) {
-        out = ScreenVert{0, 0, 0.0};
+        out = ScreenVert{0, 0, 0.0, 0.0, 0.0};
         return false;
     }
     out.x = static_cast<std::int32_t>(std::llround(sx * double(kSub)));
     out.y = static_cast<std::int32_t>(std::llround(sy * double(kSub)));
     out.z = std::clamp(z, 0.0, depth_max_);
+    out.fx = sx;
+    out.fy = sy;
     return true;
 }
 
@@ -214,11 +216,23 @@ void TileRasterizer::setup(const ScreenVert& v0, const ScreenVert& v1in, const S
     t.px1 = std::int32_t(px1);
     t.py1 = std::int32_t(py1);
 
-    // Window depth is affine in screen space: a plane through the snapped corners.
+    // Window depth is affine in screen space: a plane through the snapped
+    // corners, or through the unsnapped ones when the draw asks.
     const double inv = 1.0 / double(kSub);
-    const double x0 = v[0]->x * inv, y0 = v[0]->y * inv;
-    const double x1 = v[1]->x * inv - x0, y1 = v[1]->y * inv - y0;
-    const double x2 = v[2]->x * inv - x0, y2 = v[2]->y * inv - y0;
+    double x0, y0, x1, y1, x2, y2;
+    const auto unsnapped_det = [&] {
+        return (v[1]->fx - v[0]->fx) * (v[2]->fy - v[0]->fy) - (v[2]->fx - v[0]->fx) * (v[1]->fy - v[0]->fy);
+    };
+    // A sliver with area once snapped may have none before: the snapped plane then.
+    if (s.depth_from_unsnapped && std::abs(unsnapped_det()) > 1e-6) {
+        x0 = v[0]->fx, y0 = v[0]->fy;
+        x1 = v[1]->fx - x0, y1 = v[1]->fy - y0;
+        x2 = v[2]->fx - x0, y2 = v[2]->fy - y0;
+    } else {
+        x0 = v[0]->x * inv, y0 = v[0]->y * inv;
+        x1 = v[1]->x * inv - x0, y1 = v[1]->y * inv - y0;
+        x2 = v[2]->x * inv - x0, y2 = v[2]->y * inv - y0;
+    }
     const double z1 = v[1]->z - v[0]->z, z2 = v[2]->z - v[0]->z;
     const double det = x1 * y2 - x2 * y1;
     t.zx = (z1 * y2 - z2 * y1) / det;

@@ -64,6 +64,10 @@ struct DrawState {
     bool depth_test = true;
     DepthFunc depth_func = DepthFunc::Less;
     bool depth_write = true;
+    // The depth plane through the vertices' window positions before
+    // sub-pixel snapping (as Mesa's llvmpipe interpolates), rather than
+    // through the snapped corners (the scene front end's rule).
+    bool depth_from_unsnapped = false;
 
     static DrawState full_screen(unsigned width, unsigned height);
 };
@@ -126,6 +130,7 @@ private:
     struct ScreenVert {
         std::int32_t x, y;   // fixed point, kSubBits
         double z;            // 0..depth_max
+        double fx, fy;       // before snapping, pixels
     };
 
     bool project(const DrawState& s, const Eigen::Vector4d& clip, ScreenVert& out) const;

@@ -204,9 +204,14 @@ int main(int argc, char** argv) {
     XSetWindowAttributes swa;
     memset(&swa, 0, sizeof swa);
     swa.colormap = XCreateColormap(dpy, RootWindow(dpy, vi->screen), vi->visual, AllocNone);
+    swa.event_mask = StructureNotifyMask;
     Window win = XCreateWindow(dpy, RootWindow(dpy, vi->screen), 0, 0, w, h, 0, vi->depth, InputOutput, vi->visual,
-                               CWColormap, &swa);
+                               CWColormap | CWEventMask, &swa);
     XMapWindow(dpy, win);
+    for (XEvent ev;;) {   /* render only once the window is on the screen, at its size */
+        XNextEvent(dpy, &ev);
+        if (ev.type == MapNotify) break;
+    }
     GLXContext ctx = glXCreateContext(dpy, vi, NULL, True);
     glXMakeCurrent(dpy, win, ctx);
     push_group = (PFNGLPUSHDEBUGGROUPPROC)glXGetProcAddress((const GLubyte*)"glPushDebugGroup");
