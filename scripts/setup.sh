@@ -12,13 +12,17 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #            of workloads/) and python3-matplotlib, for scripts/reproduce.sh
 #   --fuzz   clang-14, libclang-rt-14-dev (libFuzzer) and assimp-testmodels (mesh
 #            seeds), for scripts/fuzz.sh
+#   --gl     apitrace, Xvfb and Mesa (llvmpipe) to capture OpenGL programs, numpy for
+#            scripts/rbcd-gl2rbt, and the GL and X11 headers for the test program
+#            (docs/gl-capture.md)
 for opt in "$@"; do
   case "$opt" in
     --slurm) pkgs+=(slurm-wlm munge) ;;
     --plots) pkgs+=(python3-matplotlib) ;;
     --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib) ;;
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
-    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz)" >&2; exit 2 ;;
+    --gl) pkgs+=(apitrace xvfb xauth libgl1-mesa-dri libglx-mesa0 libgl-dev libx11-dev python3-numpy) ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl)" >&2; exit 2 ;;
   esac
 done
 

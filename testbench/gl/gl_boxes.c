@@ -4,7 +4,13 @@
  * converter must produce can be worked out by hand: docs/gl-capture.md gives
  * the expected fragments, `c` tags and pairs of each frame.
  *
- *   gl_boxes [WIDTH HEIGHT]        (default 128 96; the window is the screen)
+ *   gl_boxes [WIDTH HEIGHT [FAULT]]   (default 128 96; the window is the screen)
+ *
+ * FAULT adds one call in frame 1 that the converter must refuse, naming it:
+ * nan (a NaN matrix), index (an index past a buffer's vertices), ortho (an
+ * empty glOrtho volume), list (a display list), shader (a draw under a
+ * program), line (glPolygonMode GL_LINE), underflow (glPopMatrix on an
+ * empty stack).
  *
  * Collisionable objects are tagged as rbcd-gl2rbt reads them: a KHR_debug
  * group "rbcd-object" whose id is the object id, or an EXT_debug_marker group
@@ -29,6 +35,62 @@ static PFNGLGENBUFFERSPROC gen_buffers;
 static PFNGLBINDBUFFERPROC bind_buffer;
 static PFNGLBUFFERDATAPROC buffer_data;
 static PFNGLBUFFERSUBDATAPROC buffer_sub_data;
+
+static const char* fault = "";
+static PFNGLCREATESHADERPROC create_shader;
+static PFNGLSHADERSOURCEPROC shader_source;
+static PFNGLCOMPILESHADERPROC compile_shader;
+static PFNGLCREATEPROGRAMPROC create_program;
+static PFNGLATTACHSHADERPROC attach_shader;
+static PFNGLLINKPROGRAMPROC link_program;
+static PFNGLUSEPROGRAMPROC use_program;
+
+/* The one refusable call of frame 1 (see the header comment). */
+static void inject_fault(void) {
+    static const GLushort past[3] = {0, 1, 20};
+    if (!strcmp(fault, "nan")) {
+        const GLfloat m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, NAN, 0, 0, 0, 0, 1};
+        glLoadMatrixf(m);
+    } else if (!strcmp(fault, "index")) {
+        GLuint b[2];
+        const float v[8][3] = {{0}};
+        gen_buffers(2, b);
+        bind_buffer(GL_ARRAY_BUFFER, b[0]);
+        buffer_data(GL_ARRAY_BUFFER, sizeof v, v, GL_STATIC_DRAW);
+        bind_buffer(GL_ELEMENT_ARRAY_BUFFER, b[1]);
+        buffer_data(GL_ELEMENT_ARRAY_BUFFER, sizeof past, past, GL_STATIC_DRAW);
+        glEnableClientState(GL_VERTEX_ARRAY);
+        glVertexPointer(3, GL_FLOAT, 0, (const void*)0);
+        glDrawElements(GL_TRIANGLES, 3, GL_UNSIGNED_SHORT, (const void*)0);
+        glDisableClientState(GL_VERTEX_ARRAY);
+        bind_buffer(GL_ARRAY_BUFFER, 0);
+        bind_buffer(GL_ELEMENT_ARRAY_BUFFER, 0);
+    } else if (!strcmp(fault, "ortho")) {
+        glOrtho(0, 0, 0, 1, -1, 1);
+    } else if (!strcmp(fault, "list")) {
+        const GLuint l = glGenLists(1);
+        glNewList(l, GL_COMPILE);
+        glRectf(0, 0, 4, 4);
+        glEndList();
+        glCallList(l);
+    } else if (!strcmp(fault, "shader")) {
+        const char* src = "void main() { gl_Position = ftransform(); }";
+        const GLuint sh = create_shader(GL_VERTEX_SHADER), prog = create_program();
+        shader_source(sh, 1, &src, NULL);
+        compile_shader(sh);
+        attach_shader(prog, sh);
+        link_program(prog);
+        use_program(prog);
+        glRectf(0, 0, 4, 4);
+        use_program(0);
+    } else if (!strcmp(fault, "line")) {
+        glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    } else if (!strcmp(fault, "underflow")) {
+        glMatrixMode(GL_PROJECTION);
+        glPopMatrix();
+        glMatrixMode(GL_MODELVIEW);
+    }
+}
 
 static void begin_object(unsigned id) { push_group(GL_DEBUG_SOURCE_APPLICATION, id, -1, "rbcd-object"); }
 static void end_object(void) { pop_group(); }
@@ -158,6 +220,7 @@ static void frame_ortho(int w, int h, int frame) {
         push_marker(0, "rbcd-object 3"); box_immediate(60, 8, -20, 70, 18, -10); pop_marker();
         glDepthMask(GL_TRUE);
         glDepthFunc(GL_LESS);
+        inject_fault();
     }
     floor_quad(80, 40, 120, 80, -50);   /* 40 x 40 = 1600 fragments, not collisionable */
     overlay(w, h);
@@ -190,6 +253,7 @@ static void frame_perspective(int w, int h) {
 
 int main(int argc, char** argv) {
     const int w = argc > 2 ? atoi(argv[1]) : 128, h = argc > 2 ? atoi(argv[2]) : 96;
+    if (argc > 3) fault = argv[3];
     Display* dpy = XOpenDisplay(NULL);
     if (!dpy) {
         fprintf(stderr, "gl_boxes: cannot open display (run under Xvfb)\n");
@@ -222,6 +286,13 @@ int main(int argc, char** argv) {
     bind_buffer = (PFNGLBINDBUFFERPROC)glXGetProcAddress((const GLubyte*)"glBindBuffer");
     buffer_data = (PFNGLBUFFERDATAPROC)glXGetProcAddress((const GLubyte*)"glBufferData");
     buffer_sub_data = (PFNGLBUFFERSUBDATAPROC)glXGetProcAddress((const GLubyte*)"glBufferSubData");
+    create_shader = (PFNGLCREATESHADERPROC)glXGetProcAddress((const GLubyte*)"glCreateShader");
+    shader_source = (PFNGLSHADERSOURCEPROC)glXGetProcAddress((const GLubyte*)"glShaderSource");
+    compile_shader = (PFNGLCOMPILESHADERPROC)glXGetProcAddress((const GLubyte*)"glCompileShader");
+    create_program = (PFNGLCREATEPROGRAMPROC)glXGetProcAddress((const GLubyte*)"glCreateProgram");
+    attach_shader = (PFNGLATTACHSHADERPROC)glXGetProcAddress((const GLubyte*)"glAttachShader");
+    link_program = (PFNGLLINKPROGRAMPROC)glXGetProcAddress((const GLubyte*)"glLinkProgram");
+    use_program = (PFNGLUSEPROGRAMPROC)glXGetProcAddress((const GLubyte*)"glUseProgram");
     if (!push_group || !pop_group || !push_marker || !pop_marker || !gen_buffers) {
         fprintf(stderr, "gl_boxes: the GL lacks KHR_debug, EXT_debug_marker or buffer objects\n");
         return 1;
