@@ -7,7 +7,14 @@
 // naming the call, exit 2, and no output left behind.
 //
 //   rbcd-gl-raster --trace OUT.rbt[.gz] [--depth-out PREFIX] [--summary FILE] [--name CAPTURE]
+//                  [--ids-out FILE --ids-frame N]
+//
+// --ids-out: for frame N, the draw (its index in the frame) nearest the eye
+// at every pixel, displayed faces only ("rbcd-ids 1 W H", then W*H u16 little
+// endian, 0xFFFF none): rbcd-gl2rbt --list-draws --image labels draws with it.
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <iostream>
@@ -24,7 +31,8 @@
 namespace {
 
 struct Options {
-    std::string trace, depth_out, summary, name = "draw stream";
+    std::string trace, depth_out, summary, ids_out, name = "draw stream";
+    std::uint64_t ids_frame = 0;
 };
 
 Options parse(int argc, char** argv) {
@@ -39,6 +47,13 @@ Options parse(int argc, char** argv) {
         else if (a == "--depth-out") o.depth_out = value();
         else if (a == "--summary") o.summary = value();
         else if (a == "--name") o.name = value();
+        else if (a == "--ids-out") o.ids_out = value();
+        else if (a == "--ids-frame") {
+            const std::string v = value();
+            char* end = nullptr;
+            o.ids_frame = std::strtoull(v.c_str(), &end, 10);
+            if (v.empty() || *end || v[0] == '-') throw rbcd::InputError("--ids-frame: '" + v + "' is not a frame number");
+        }
         else throw rbcd::InputError("unknown option '" + a + "' (see gl/gl_raster_main.cpp)");
     }
     if (o.trace.empty()) throw rbcd::InputError("--trace is required");
@@ -91,6 +106,9 @@ int run(const Options& o) {
         summary = rbcd::OutputFile(o.summary);
     }
     std::vector<rbcd::OutputFile> depth_files;
+    rbcd::OutputFile ids;
+    rbcd::scene::SceneSource::FrameImage image;
+    std::uint32_t draws_in_frame = 0;
 
     FrameFigures fig;
     bool snapshot = false;
@@ -103,10 +121,14 @@ int run(const Options& o) {
             raster.begin_frame(in.frame());
             fig = FrameFigures{};
             snapshot = false;
+            draws_in_frame = 0;
             break;
         case rbcd::gl::DrawStreamReader::Kind::Draw: {
             const auto& d = in.draw();
-            const auto draw = raster.add_draw(d.state);
+            auto state = d.state;
+            // Labels for --ids-out: the draw's index in the frame (saturating).
+            state.object = static_cast<std::uint16_t>(std::min<std::uint32_t>(draws_in_frame++, 0xFFFEu));
+            const auto draw = raster.add_draw(std::move(state));
             ++fig.draws;
             if (!raster.add_mesh(draw, d.clip.data(), d.clip.size(), d.tris.data(), d.tris.size()))
                 throw rbcd::InputError(o.name + ": call " + std::to_string(d.call) +
@@ -122,7 +144,13 @@ int run(const Options& o) {
             break;
         case rbcd::gl::DrawStreamReader::Kind::FrameEnd: {
             trace.frame(in.frame());   // at the swap: a frame never swapped is not written
-            while (raster.next_tile(tile, nullptr)) {
+            const bool want_ids = !o.ids_out.empty() && in.frame() == o.ids_frame;
+            if (want_ids) {
+                image.width = h.width;
+                image.height = h.height;
+                image.pixels.assign(std::size_t(h.width) * h.height, rbcd::scene::SceneSource::ImagePixel{});
+            }
+            while (raster.next_tile(tile, want_ids ? &image : nullptr)) {
                 trace.tile(tile);
                 ++fig.tiles;
                 fig.other += tile.other;
@@ -135,6 +163,15 @@ int run(const Options& o) {
                 }
             }
             if (summary.active()) summary.write(json_line(in.frame(), in.call(), fig));
+            if (want_ids) {
+                ids = rbcd::OutputFile(o.ids_out);
+                ids.write("rbcd-ids 1 " + std::to_string(h.width) + " " + std::to_string(h.height) + "\n");
+                std::vector<std::uint16_t> row(h.width);
+                for (unsigned y = 0; y < h.height; ++y) {
+                    for (unsigned x = 0; x < h.width; ++x) row[x] = image.at(x, y).object;
+                    ids.write(reinterpret_cast<const char*>(row.data()), row.size() * sizeof row[0]);
+                }
+            }
             if (snapshot && !o.depth_out.empty()) {
                 // rbcd-depth 1 W H BITS, then W*H u32 little endian, rows from the top.
                 depth_files.emplace_back(o.depth_out + "." + std::to_string(in.frame()) + ".depth");
@@ -153,6 +190,9 @@ int run(const Options& o) {
     trace_file.commit();
     if (summary.active()) summary.commit();
     for (auto& df : depth_files) df.commit();
+    if (!o.ids_out.empty() && !ids.active())
+        throw rbcd::InputError("--ids-frame " + std::to_string(o.ids_frame) + ": the stream has no such frame");
+    if (ids.active()) ids.commit();
     return 0;
 }
 

@@ -10,9 +10,9 @@
 # testbench/fuzz/TARGET/ (the normal test suite replays that directory).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-target=${1:?usage: scripts/fuzz.sh trace|config|scene|mesh [SECONDS]}
+target=${1:?usage: scripts/fuzz.sh trace|config|scene|mesh|draw_stream [SECONDS]}
 seconds=${2:-60}
-case "$target" in trace|config|scene|mesh) ;; *) echo "fuzz.sh: unknown target '$target'" >&2; exit 2 ;; esac
+case "$target" in trace|config|scene|mesh|draw_stream) ;; *) echo "fuzz.sh: unknown target '$target'" >&2; exit 2 ;; esac
 ./scripts/setup.sh --fuzz
 command -v clang++-14 >/dev/null || { echo "fuzz.sh: clang++-14 is missing (scripts/setup.sh --fuzz installs it)" >&2; exit 2; }
 
