@@ -198,6 +198,46 @@ class Case:
             check(r.returncode == 2 and len(lines) == 1 and "call" in lines[0], f"{name}: {r.returncode} {lines}")
             check(not os.path.exists(out), f"{name}: an output was left")
 
+    def select(self):
+        """Selection rules for untagged draws: the floor of frame 0 (call
+        range, vertex count) becomes object 9; a bad rules file is one line
+        naming the key; --list-draws says what each draw became and why."""
+        cap = self.capture_path()
+        listing = self.gl2rbt(cap, "--list-draws", "0")
+        check(listing.returncode == 0, f"--list-draws failed: {listing.stderr}")
+        floor = [l for l in listing.stdout.splitlines() if "glDrawArrays" in l]
+        check(len(floor) == 1 and "untagged" in floor[0], f"the floor's listing: {floor}")
+        call = int(floor[0].split()[1])
+        rules = os.path.join(self.tmp, "rules.toml")
+        with open(rules, "w") as f:
+            f.write(f'[[exclude]]\nname = "2D"\nprojection = "perspective"\n\n'
+                    f'[[object]]\nname = "floor"\nid = 9\ncalls = [{call}, {call}]\nvertex_count = [4, 4]\n')
+        path, _ = self.convert("--select", rules, "--summary", os.path.join(self.tmp, "s.jsonl"))
+        with open(os.path.join(self.tmp, "s.jsonl")) as f:
+            s0 = json.loads(f.readline())
+        check(s0["objects"] == [1, 2, 3, 9] and s0["fragments"] == 1800 + 1600 and s0["other"] == 32,
+              f"the floor did not become object 9: {s0}")
+        frames, _ = read_trace(path)
+        check(frames[0][(100, 50)] == [(round(0.75 * DEPTH_MAX), 9, "F", False)],
+              f"the floor's fragment at (100, 50): {frames[0].get((100, 50))}")
+        listing = self.gl2rbt(cap, "--list-draws", "0", "--select", rules, "--image", os.path.join(self.tmp, "f0.png"))
+        floor = [l for l in listing.stdout.splitlines() if "glDrawArrays" in l]
+        check(floor and floor[0].split()[-2:] == ["9", "floor"], f"the listing does not say floor: {floor}")
+        with open(os.path.join(self.tmp, "f0.png"), "rb") as f:
+            check(f.read(8) == b"\x89PNG\r\n\x1a\n", "--image wrote no PNG")
+        for body, key in (('[[object]]\nid = 1\nvertex_count = [5, 2]\n', "vertex_count"),
+                          ('[[object]]\nid = 1\nbogus = 1\n', "bogus"),
+                          ('[[object]]\nname = "x"\n', "needs id"),
+                          ('[[object]\n', "rules.toml")):
+            with open(rules, "w") as f:
+                f.write(body)
+            out = os.path.join(self.tmp, "sel.rbt")
+            r = self.gl2rbt(cap, "-o", out, "--select", rules)
+            lines = r.stderr.strip().splitlines()
+            check(r.returncode == 2 and len(lines) == 1 and key in lines[0] and "rules.toml" in lines[0],
+                  f"rules {body!r}: {r.returncode} {lines}")
+            check(not os.path.exists(out), "an output was left after a bad rules file")
+
     def frames(self):
         whole, _ = self.convert()
         part, _ = self.convert("--frames", "1:2", out="part.rbt")
