@@ -2,7 +2,7 @@
 #   P/lib/librbcd.a                      the model (rbcd::rbcd)
 #   P/include/rbcd/{common,hw,io,scene,tlm}/*.h
 #   P/lib/cmake/rbcd/                    find_package(rbcd CONFIG)
-#   P/bin/rbcd-sim, P/bin/rbcd-merge
+#   P/bin/rbcd-sim, P/bin/rbcd-merge, P/bin/rbcd-gl2rbt and rbcd-gl-raster
 #   P/share/rbcd/configs/*.toml, P/share/doc/rbcd/ (README, docs)
 include(CMakePackageConfigHelpers)
 
@@ -19,6 +19,12 @@ foreach(program rbcd-sim rbcd-merge rbcd-gl-raster)
     install(TARGETS ${program} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
   endif()
 endforeach()
+# rbcd-gl2rbt finds rbcd-gl-raster beside itself (docs/gl-capture.md).
+if(TARGET rbcd-gl-raster)
+  install(PROGRAMS ${PROJECT_SOURCE_DIR}/scripts/rbcd-gl2rbt DESTINATION ${CMAKE_INSTALL_BINDIR})
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/workloads/games/ DESTINATION ${CMAKE_INSTALL_DATADIR}/rbcd/games
+    FILES_MATCHING PATTERN "*.toml")
+endif()
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/sc_main/configs/ DESTINATION ${CMAKE_INSTALL_DATADIR}/rbcd/configs
   FILES_MATCHING PATTERN "*.toml")
 install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rbcd)
