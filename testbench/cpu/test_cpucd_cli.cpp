@@ -155,3 +155,30 @@ TEST_CASE("rbcd-cpucd: messages are one line, escaped, long tokens cut", "[cpucd
     expect_refused(big, {"tok.geo:2: unknown record 'aaaa", "...' (4000 bytes)"});
     CHECK(big.err.size() < 300);
 }
+
+TEST_CASE("rbcd-cpucd: SIGTERM during a run leaves nothing at the output paths", "[cpucd_cli]") {
+    TempDir td;
+    // Many frames and repeats: the run is still going when the signal comes.
+    std::string s = "rbcd-geometry 1\n" + cube_part(1) + cube_part(2);
+    for (int f = 0; f < 2000; ++f) s += "frame " + std::to_string(f) + "\nm 0 " + kIdentity + "\nm 1 " + kIdentity + "\n";
+    const std::string geo = td.write("long.geo", s);
+    const std::string pairs = td.out_dir() + "/pairs.csv";
+    std::vector<std::string> args{RBCD_CPUCD, "-q", "--repeat", "1000", "--geometry", geo, "--pairs", pairs};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    REQUIRE(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) == 0);
+    // Until its temporary exists (the output is open), then stop it.
+    for (int i = 0; i < 200 && td.out_entries().empty(); ++i) ::usleep(20000);
+    REQUIRE_FALSE(td.out_entries().empty());
+    ::usleep(100000);
+    ::kill(pid, SIGTERM);
+    int st = 0;
+    REQUIRE(::waitpid(pid, &st, 0) == pid);
+    CHECK((WIFEXITED(st) && WEXITSTATUS(st) == 128 + SIGTERM));
+    std::string left;
+    for (const auto& e : td.out_entries()) left += e + " ";
+    INFO("left: " << left);
+    CHECK(td.out_entries().empty());
+}
