@@ -341,6 +341,27 @@ def case_plot(c):
              os.path.join(c.tmp, "x.png")])
     check(r.returncode == 2 and "totals.nope" in r.stderr and not os.path.exists(os.path.join(c.tmp, "x.png")),
           f"a missing column is an error naming it: {r.stderr}")
+    # Axis labels with units, legends without absolute paths (issue 19).
+    import importlib.machinery
+    import importlib.util
+    loader = importlib.machinery.SourceFileLoader("rbcd_plot", PLOT)
+    mod = importlib.util.module_from_spec(importlib.util.spec_from_loader("rbcd_plot", loader))
+    loader.exec_module(mod)
+    check(mod.label("gpu.overhead_pct") == "gpu.overhead_pct (%)" and mod.label("energy.total_nj") == "energy.total_nj (nJ)"
+          and mod.label("totals.hits") == "totals.hits (count)" and mod.label("clock.mhz") == "clock.mhz (MHz)",
+          "axis labels carry units")
+    check(mod.legend_names(["/w/suite/a.rbt", "/w/suite/b.rbt"]) == {"/w/suite/a.rbt": "a.rbt", "/w/suite/b.rbt": "b.rbt"}
+          and mod.legend_names(["/w/x/a.toml"]) == {"/w/x/a.toml": "a.toml"}
+          and mod.legend_names(["default", "b"]) == {"default": "default", "b": "b"},
+          "legends without the directories the inputs share")
+    # Hostile input (issue 22): a FIFO table is refused, -o naming the table is refused.
+    fifo = os.path.join(c.tmp, "t.fifo")
+    os.mkfifo(fifo)
+    r = run(["/usr/bin/python3", PLOT, fifo, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "-o", os.path.join(c.tmp, "f.png")])
+    check(r.returncode == 2 and "is a FIFO" in r.stderr and len(r.stderr.splitlines()) == 1, f"FIFO table: {r.stderr}")
+    before = c.read(table)
+    r = run(["/usr/bin/python3", PLOT, table, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "-o", table])
+    check(r.returncode == 2 and "is the input table" in r.stderr and c.read(table) == before, f"-o = table: {r.stderr}")
 
 
 def case_frames(c):
