@@ -291,6 +291,8 @@ fields = ["totals.hits", "totals.overflows", "totals.cycles", "gpu.overhead_pct"
     check(not os.path.exists(os.path.join(out, "results.csv")), "no table from a killed sweep")
     done = sorted(d for d in os.listdir(runs) if os.path.exists(os.path.join(runs, d, "result.json")))
     check(2 <= len(done) < 6, f"{len(done)} runs finished before the kill")
+    # The interrupted run's folder is gone: only finished runs stay (issue 19).
+    check(sorted(os.listdir(runs)) == done, f"partial run folders left: {sorted(set(os.listdir(runs)) - set(done))}")
     stamps = {d: os.stat(os.path.join(runs, d, "result.json")).st_mtime_ns for d in done}
     for d in done:
         check(json.load(open(os.path.join(runs, d, "result.json")))["status"] == 0, "a finished run is complete")
@@ -502,6 +504,10 @@ def case_hostile(c):
     with open(bad, "wb") as f:
         f.write(b"[axes]\nx = [\xff\xfe]\n")
     one_error_line(c.sweep("list", bad), "not UTF-8", "binary sweep file")
+    # list catches a typo in results.fields (a warning: exit 0).
+    r = c.sweep("list", c.sweep_file("typo.toml", '[results]\nfields = ["totls.hits", "totals.hits"]\n'))
+    check(r.returncode == 0 and "results.fields: totls.hits: not a key" in r.stderr
+          and "totals.hits:" not in r.stderr, f"typo in results.fields: {r.returncode} {r.stderr}")
 
 
 def case_parser_property(c):
@@ -556,6 +562,38 @@ def case_parser_property(c):
         check(len(sw.points()) * len(sw.inputs) * len(sw.seeds) == n, f"file {i}: points do not multiply out")
         statuses[0] += 1
     check(statuses[0] > 10 and statuses[2] > 10, f"both outcomes drawn: {statuses}")
+
+
+def case_warnings(c):
+    """rbcd-sim's warnings are kept per run (runs/ID/stderr.txt) and summarized
+    (OUT/warnings.txt, one line on stderr); wall.csv says which frames each run ran;
+    progress in a log comes at least every tenth of the runs (issue 19)."""
+    mesh = os.path.join(c.tmp, "open.obj")
+    with open(mesh, "w") as f:   # one triangle: an open mesh, which rbcd-sim warns about
+        f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    scene = os.path.join(c.tmp, "scene.toml")
+    with open(scene, "w") as f:
+        f.write('format = "rbcd-scene 1"\nframes = 2\n[screen]\nwidth = 64\nheight = 48\n'
+                '[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\nfov_y = 45.0\nnear = 0.5\nfar = 60.0\n'
+                '[[object]]\nid = 1\nmesh = "open.obj"\n')
+    s = c.sweep_file("s.toml", f'[axes]\nzeb.banks = [1, 2, 4, 8]\n[inputs]\nscenes = ["{scene}"]\n')
+    out = os.path.join(c.tmp, "out")
+    r = c.sweep("run", s, "-o", out, "-j", "2")
+    check(r.returncode == 0, f"sweep failed: {r.stderr}")
+    rows = c.rows(out)
+    for row in rows:
+        err = c.read(os.path.join(out, "runs", row["run"], "stderr.txt"))
+        check(": warning: " in err and "open" in err, f"run {row['run']}: stderr.txt lacks the warning: {err!r}")
+    summary = c.read(os.path.join(out, "warnings.txt"))
+    check(summary.startswith("4 runs (") and "open" in summary and len(summary.splitlines()) == 1,
+          f"warnings.txt: {summary!r}")
+    check("4 runs printed 1 distinct rbcd-sim warnings" in r.stderr, f"no summary on stderr: {r.stderr}")
+    with open(os.path.join(out, "wall.csv"), newline="") as f:
+        frames = [w["frames"] for w in csv.DictReader(f)]
+    check(frames == ["0:1"] * 4, f"wall.csv frames column: {frames}")
+    # Progress in a log (not a terminal): a line at every tenth of the runs at least.
+    progress = [l for l in r.stderr.splitlines() if " runs, " in l and " failed, " in l]
+    check(len(progress) >= 4, f"sparse progress: {progress}")
 
 
 CASES = {n[5:]: f for n, f in globals().items() if n.startswith("case_")}
