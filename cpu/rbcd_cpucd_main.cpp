@@ -155,7 +155,7 @@ int run(const Options& opt) {
 // created is left at an output path (the outputs' temporaries are removed by
 // their destructors, an older file was removed when the output was opened).
 int fail(int status, const std::string& msg, const Options& opt) {
-    std::fprintf(stderr, "rbcd-cpucd: %s\n", rbcd::escape_for_message(msg).c_str());
+    std::fprintf(stderr, "rbcd-cpucd: %s\n", rbcd::escape_for_message(rbcd::cut_long_tokens(msg)).c_str());
     rbcd::discard_outputs({opt.pairs, opt.frames, opt.write_geometry, opt.depth_hist},
                           {opt.scene, opt.geometry, opt.trace});
     return status;

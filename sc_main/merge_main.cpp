@@ -363,7 +363,7 @@ int run(const Options& opt) {
 // As rbcd-sim: on a non-zero exit nothing stands at an output path, not even
 // an older file, unless the path names one of the inputs.
 int fail(int status, const std::string& msg, const Options& opt) {
-    std::fprintf(stderr, "rbcd-merge: %s\n", rbcd::escape_for_message(msg).c_str());
+    std::fprintf(stderr, "rbcd-merge: %s\n", rbcd::escape_for_message(rbcd::cut_long_tokens(msg)).c_str());
     // A part's own collision or frame stats file is an input too (found through
     // its provenance, which may itself be what failed: then compared by name).
     std::vector<std::string> inputs = opt.parts;

@@ -4,7 +4,7 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
     from rbcd_cli import UsageError, read_input, write_output, main_wrapper
 
 - Messages are one line: bytes that are not printable are written as \\xNN (as
-  rbcd-sim's escape_for_message does) and a token longer than 200 characters
+  rbcd-sim's escape_for_message does) and a token longer than 1024 characters
   is cut. Errors are exit 2 (UsageError) or 1 (anything else, "internal
   error"), never a traceback.
 - Inputs are regular files, opened without waiting on a FIFO, read up to a
@@ -24,7 +24,7 @@ import stat
 import sys
 import tempfile
 
-MAX_TOKEN = 200
+MAX_TOKEN = 1024
 
 
 class UsageError(Exception):

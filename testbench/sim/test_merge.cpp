@@ -259,3 +259,13 @@ TEST_CASE("rbcd-sim --frames: an empty value or a range without frames is refuse
     expect_input_error(td, run_with_outputs(td, {"--frames", "60:70"}),
                        {"--frames: 60:70 selects no frame: the input has 60 frames (0..59)"});
 }
+
+TEST_CASE("rbcd-merge: messages are one line, escaped, long tokens cut", "[merge_hostile]") {
+    TempDir td;
+    // A 1 MB token the JSON parser quotes back, with an ESC in it.
+    const std::string bad = td.write("bad.json", "{\"format\": \"" + std::string(1 << 20, 'x') + "\x1b");
+    const Result r = run_program(td, RBCD_MERGE, {"--stats", td.stats(), bad});
+    expect_input_error(td, r, {"bad.json", "not JSON", "bytes)"});
+    CHECK(r.err.size() < 4096);
+    CHECK(r.err.find('\x1b') == std::string::npos);
+}
