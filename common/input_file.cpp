@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -102,6 +103,31 @@ std::string hex_cp(char32_t c) {
     return s;
 }
 } // namespace
+
+std::string cut_long_tokens(std::string_view s, std::size_t max) {
+    std::string out;
+    out.reserve(std::min(s.size(), std::size_t(4096)));
+    std::size_t i = 0;
+    while (i < s.size()) {
+        if (s[i] == ' ') {
+            out += ' ';
+            ++i;
+            continue;
+        }
+        const std::size_t e = std::min(s.find(' ', i), s.size());
+        if (e - i <= max) {
+            out.append(s.substr(i, e - i));
+        } else {
+            // Not inside a UTF-8 sequence: back up to a lead byte.
+            std::size_t cut = max;
+            while (cut > 0 && (static_cast<unsigned char>(s[i + cut]) & 0xc0) == 0x80) --cut;
+            out.append(s.substr(i, cut));
+            out += "...(" + std::to_string(e - i) + " bytes)";
+        }
+        i = e;
+    }
+    return out;
+}
 
 std::string escape_for_message(std::string_view s) {
     static const char* digits = "0123456789abcdef";

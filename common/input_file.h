@@ -32,6 +32,11 @@ std::string read_input_text(const std::string& path, const std::string& what, st
 // cannot drive a terminal, whatever produced them.
 std::string escape_for_message(std::string_view text);
 
+// The text with every run of more than `max` non-blank bytes cut to its first
+// `max` and "...(N bytes)": a 100 MB token from an input (or a library's
+// "last read" excerpt) is not printed whole. Apply before escape_for_message.
+std::string cut_long_tokens(std::string_view text, std::size_t max = 1024);
+
 // toml++ 3.3 reaches __builtin_unreachable (undefined behaviour) in
 // is_non_ascii_horizontal_whitespace() for some code points met outside a
 // comment (U+00A1..U+0499, U+2D6E..U+3167 but U+3000, U+FBA6..U+FEFE). Throws

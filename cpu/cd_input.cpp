@@ -2,13 +2,12 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <map>
-#include <sstream>
 
 #include <Eigen/LU>
 
 #include "rbcd/common/errors.h"
+#include "rbcd/common/input_file.h"
 #include "rbcd/scene/scene_geometry.h"
 
 namespace rbcd::cpucd {
@@ -44,9 +43,16 @@ CdInput load_scene_input(const std::string& scene_path) {
 
 namespace {
 
+// A token as messages show it: at most 40 bytes (a 100 MB token is not
+// printed whole); main() escapes what is not printable.
+std::string show(const std::string& t) {
+    return t.size() <= 40 ? "'" + t + "'" : "'" + t.substr(0, 40) + "...' (" + std::to_string(t.size()) + " bytes)";
+}
+
 struct LineReader {
     std::string file;
-    std::ifstream in;
+    std::string_view text;
+    std::size_t pos = 0;
     unsigned long line = 0;
     std::vector<std::string> tok;
 
@@ -54,13 +60,23 @@ struct LineReader {
 
     // Next non-blank, non-comment line split into fields; false at the end.
     bool next() {
-        std::string s;
-        while (std::getline(in, s)) {
+        while (pos < text.size()) {
+            const std::size_t nl = text.find('\n', pos);
+            const std::size_t end = nl == std::string_view::npos ? text.size() : nl;
             ++line;
-            if (auto h = s.find('#'); h != std::string::npos) s.resize(h);
-            std::istringstream is(s);
+            if (end - pos > kMaxGeometryLineBytes)
+                fail("line longer than " + std::to_string(kMaxGeometryLineBytes) + " bytes (the limit, fixed; docs/limits.md)");
+            std::string_view s = text.substr(pos, end - pos);
+            pos = nl == std::string_view::npos ? text.size() : nl + 1;
+            if (auto h = s.find('#'); h != std::string_view::npos) s = s.substr(0, h);
             tok.clear();
-            for (std::string t; is >> t;) tok.push_back(t);
+            std::size_t i = 0;
+            while (i < s.size()) {
+                while (i < s.size() && (s[i] == ' ' || s[i] == '\t' || s[i] == '\r' || s[i] == '\v' || s[i] == '\f')) ++i;
+                const std::size_t b = i;
+                while (i < s.size() && !(s[i] == ' ' || s[i] == '\t' || s[i] == '\r' || s[i] == '\v' || s[i] == '\f')) ++i;
+                if (i > b) tok.emplace_back(s.substr(b, i - b));
+            }
             if (!tok.empty()) return true;
         }
         return false;
@@ -69,30 +85,58 @@ struct LineReader {
         if (tok.size() != n) fail(std::string(what) + ": expected " + std::to_string(n - 1) + " fields, got " +
                                   std::to_string(tok.size() - 1));
     }
+    // A finite number within the scene reader's bound (docs/limits.md).
     double number(std::size_t i) const {
         const std::string& s = tok.at(i);
         char* end = nullptr;
         const double v = std::strtod(s.c_str(), &end);
-        if (end == s.c_str() || *end != '\0' || !std::isfinite(v)) fail("'" + s + "' is not a finite number");
+        if (end == s.c_str() || *end != '\0' || !std::isfinite(v)) fail(show(s) + " is not a finite number");
+        if (std::abs(v) > kMaxGeometryCoordinate)
+            fail(show(s) + " is beyond +-1e9 (the limit of coordinates and matrix entries, as in scenes; docs/limits.md)");
         return v;
     }
     std::uint64_t count(std::size_t i, std::uint64_t max) const {
         const std::string& s = tok.at(i);
         if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 12)
-            fail("'" + s + "' is not an unsigned integer");
+            fail(show(s) + " is not an unsigned integer");
         const std::uint64_t v = std::stoull(s);
         if (v > max) fail(s + " is out of range 0.." + std::to_string(max));
         return v;
     }
 };
 
+// Model matrices are a rotation (or mirror) times a positive scale per axis
+// plus a translation, as the scene writes them: Bullet and FCL take rigid
+// transforms with the scale applied to the mesh, so a shear would be dropped
+// silently and the ground truth be wrong. Columns must be orthogonal to
+// kRigidTolerance (|cos| of the angle between two) and of length at least
+// kMinGeometryScale.
+void check_rigid_plus_scale(const LineReader& r, const Eigen::Matrix4d& m) {
+    const Eigen::Matrix3d l = m.block<3, 3>(0, 0);
+    for (int k = 0; k < 3; ++k)
+        if (!(l.col(k).norm() >= kMinGeometryScale))
+            r.fail("m: column " + std::to_string(k) + " has length below 1e-9: the matrix is singular");
+    for (int a = 0; a < 3; ++a)
+        for (int b = a + 1; b < 3; ++b) {
+            const double c = std::abs(l.col(a).dot(l.col(b))) / (l.col(a).norm() * l.col(b).norm());
+            if (!(c <= kRigidTolerance))
+                r.fail("m: columns " + std::to_string(a) + " and " + std::to_string(b) +
+                       " are not orthogonal (|cos| " + std::to_string(c) +
+                       " > 1e-6): only rotation, per-axis scale and translation are allowed (no shear)");
+        }
+}
+
 } // namespace
 
-CdInput load_geometry_file(const std::string& path) {
+CdInput load_geometry_file(const std::string& path, const GeometryLimits& limits) {
+    const std::string text = read_input_text(path, "geometry file", limits.max_bytes, "--max-geometry-bytes");
+    return load_geometry_text(text, path);
+}
+
+CdInput load_geometry_text(std::string_view text, const std::string& path) {
     LineReader r;
     r.file = path;
-    r.in.open(path, std::ios::binary);
-    if (!r.in) throw InputError(path + ": cannot open geometry file");
+    r.text = text;
     CdInput g;
     g.name = path;
     if (!r.next() || r.tok.size() != 2 || r.tok[0] != "rbcd-geometry" || r.tok[1] != "1")
@@ -158,12 +202,11 @@ CdInput load_geometry_file(const std::string& path) {
             seen[pi] = true;
             Eigen::Matrix4d& mm = g.model.back()[pi];
             for (int i = 0; i < 12; ++i) mm(i / 4, i % 4) = r.number(2 + std::size_t(i));
-            if (std::abs(mm.block<3, 3>(0, 0).determinant()) < 1e-18) r.fail("m: the matrix is singular");
+            check_rigid_plus_scale(r, mm);
         } else {
-            r.fail("unknown record '" + k + "' (known: screen, view, part, v, t, frame, m)");
+            r.fail("unknown record " + show(k) + " (known: screen, view, part, v, t, frame, m)");
         }
     }
-    if (r.in.bad()) throw InputError(path + ": read error");
     close_frame();
     if (g.model.empty()) throw InputError(path + ": no frame");
     if (g.has_view && !screen_seen) throw InputError(path + ": 'view' needs a 'screen' record");

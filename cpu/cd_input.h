@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -37,9 +38,21 @@ struct CdInput {
     std::uint64_t frames() const { return model.size(); }
 };
 
+// What a geometry file may hold (docs/limits.md, "rbcd-cpucd").
+struct GeometryLimits {
+    std::uint64_t max_bytes = std::uint64_t(256) << 20;   // --max-geometry-bytes
+};
+// The bounds the scene reader puts on a scene, put on a geometry file too.
+inline constexpr double kMaxGeometryCoordinate = 1e9;   // |vertex|, |matrix entry|
+inline constexpr double kMinGeometryScale = 1e-9;       // a column's length (scale) at least
+inline constexpr double kRigidTolerance = 1e-6;         // |cos| between a matrix's columns at most
+inline constexpr std::size_t kMaxGeometryLineBytes = 4096;
+
 // Both throw InputError naming file:line (or the key) on bad input.
 CdInput load_scene_input(const std::string& scene_path);
-CdInput load_geometry_file(const std::string& path);
+CdInput load_geometry_file(const std::string& path, const GeometryLimits& limits = {});
+// The same from text in memory (`name` for messages), as the fuzz target reads it.
+CdInput load_geometry_text(std::string_view text, const std::string& name);
 // The text of a geometry file holding `in` (load_geometry_file reads it back exactly).
 std::string geometry_file_text(const CdInput& in);
 

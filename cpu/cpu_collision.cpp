@@ -241,19 +241,8 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats) {
     // ---- (c) exact, over the pairs whose exact (double) world AABBs overlap.
     const auto t0 = Clock::now();
     const std::size_t n = in.parts.size();
-    std::vector<Eigen::Vector3d> lo(n), hi(n);
     std::vector<Decomposed> dec(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const Eigen::Matrix4d& m = in.model[f][i];
-        dec[i] = decompose(m);
-        lo[i] = Eigen::Vector3d::Constant(HUGE_VAL);
-        hi[i] = Eigen::Vector3d::Constant(-HUGE_VAL);
-        for (const auto& v : in.parts[i].mesh->verts) {
-            const Eigen::Vector3d w = m.block<3, 3>(0, 0) * v + m.block<3, 1>(0, 3);
-            lo[i] = lo[i].cwiseMin(w);
-            hi[i] = hi[i].cwiseMax(w);
-        }
-    }
+    for (std::size_t i = 0; i < n; ++i) dec[i] = decompose(in.model[f][i]);
     auto world_vert = [&](std::size_t i, std::size_t k) {
         const Eigen::Matrix4d& m = in.model[f][i];
         return Eigen::Vector3d(m.block<3, 3>(0, 0) * in.parts[i].mesh->verts[k] + m.block<3, 1>(0, 3));
@@ -263,10 +252,8 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats) {
             if (in_view(in.view_proj, world_vert(i, k))) return true;
         return false;
     };
-    for (std::size_t i = 0; i < n; ++i) {
-        for (std::size_t j = i + 1; j < n; ++j) {
-            if (in.parts[i].id == in.parts[j].id) continue;
-            if ((lo[i].array() > hi[j].array()).any() || (lo[j].array() > hi[i].array()).any()) continue;
+    for (const auto& [i, j] : overlapping_aabb_pairs(in, f, UINT64_MAX).pairs) {
+        {
             const Bvh& bi = s.bvh(i, dec[i].scale);
             const Bvh& bj = s.bvh(j, dec[j].scale);
             fcl::Transform3d ti = fcl::Transform3d::Identity(), tj = fcl::Transform3d::Identity();
@@ -315,6 +302,48 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats) {
         fr.pairs.push_back(p);
     }
     return fr;
+}
+
+AabbPairs overlapping_aabb_pairs(const CdInput& in, std::uint64_t f, std::uint64_t limit) {
+    const std::size_t n = in.parts.size();
+    std::vector<Eigen::Vector3d> lo(n), hi(n);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero(), sum2 = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < n; ++i) {
+        const Eigen::Matrix4d& m = in.model[f][i];
+        lo[i] = Eigen::Vector3d::Constant(HUGE_VAL);
+        hi[i] = Eigen::Vector3d::Constant(-HUGE_VAL);
+        for (const auto& v : in.parts[i].mesh->verts) {
+            const Eigen::Vector3d w = m.block<3, 3>(0, 0) * v + m.block<3, 1>(0, 3);
+            lo[i] = lo[i].cwiseMin(w);
+            hi[i] = hi[i].cwiseMax(w);
+        }
+        const Eigen::Vector3d c = 0.5 * (lo[i] + hi[i]);
+        sum += c;
+        sum2 += c.cwiseProduct(c);
+    }
+    int axis = 0;
+    const Eigen::Vector3d spread = sum2 - sum.cwiseProduct(sum) / double(std::max<std::size_t>(n, 1));
+    spread.maxCoeff(&axis);
+    std::vector<std::size_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return lo[a][axis] < lo[b][axis]; });
+    AabbPairs out;
+    std::uint64_t candidates = 0;
+    for (std::size_t a = 0; a < n; ++a) {
+        const std::size_t i = order[a];
+        for (std::size_t b = a + 1; b < n && lo[order[b]][axis] <= hi[i][axis]; ++b) {
+            if (++candidates > limit) {
+                out.over_limit = true;
+                return out;
+            }
+            const std::size_t j = order[b];
+            if (in.parts[i].id == in.parts[j].id) continue;
+            if ((lo[i].array() > hi[j].array()).any() || (lo[j].array() > hi[i].array()).any()) continue;
+            out.pairs.emplace_back(std::min(i, j), std::max(i, j));
+        }
+    }
+    std::sort(out.pairs.begin(), out.pairs.end());
+    return out;
 }
 
 bool point_in_mesh(const PartMesh& m, const Eigen::Vector3d& p) {

@@ -10,6 +10,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -57,6 +58,19 @@ private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
+
+// The pairs (i < j) of parts of distinct objects whose world AABBs overlap
+// at frame f, by sort and sweep along the axis on which the boxes' centres
+// spread most: n log n plus the candidate pairs (boxes overlapping along that
+// axis). `over_limit` when there are more than `limit` candidates (the pairs
+// are then incomplete): rbcd-cpucd refuses such a frame (--max-pairs) before
+// Bullet or FCL sees it, since co-located parts make the pairs, and the work,
+// grow with the square of the parts whatever the broad phase.
+struct AabbPairs {
+    std::vector<std::pair<std::size_t, std::size_t>> pairs;   // sorted
+    bool over_limit = false;
+};
+AabbPairs overlapping_aabb_pairs(const CdInput& in, std::uint64_t f, std::uint64_t limit);
 
 // Point inside a closed mesh (object space) by the parity of a ray's crossings.
 bool point_in_mesh(const PartMesh& m, const Eigen::Vector3d& p);

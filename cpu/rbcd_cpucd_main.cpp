@@ -4,63 +4,33 @@
 // on a non-zero exit no file is left at an output path.
 #include <CLI/CLI.hpp>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <set>
 #include <unistd.h>
 
 #include "rbcd/common/errors.h"
+#include "rbcd/common/input_file.h"
 #include "rbcd/cpu/cd_input.h"
 #include "rbcd/cpu/cpu_collision.h"
 #include "rbcd/cpu/pixel_overlap.h"
 #include "rbcd/io/trace_reader.h"
+#include "rbcd/sc_main/output_file.h"
 #include "rbcd/scene/scene_source.h"
 
 namespace {
 
+// Timed repeats per frame: each runs the broad phase and GJK twice over every
+// part; more than this says nothing the median of fewer would not.
+constexpr unsigned kMaxRepeat = 1000;
+
 struct Options {
     std::string scene, geometry, trace, pairs, frames, write_geometry, depth_hist;
     unsigned repeat = 5;
+    std::uint64_t max_pairs = 100000;
+    std::uint64_t max_geometry_bytes = std::uint64_t(256) << 20;
     bool pixels = false;
     unsigned tolerance = 1;
     bool quiet = false;
-};
-
-// Written beside the path and renamed over it: complete or absent.
-class Output {
-public:
-    Output() = default;
-    explicit Output(std::string path) : path_(std::move(path)) {
-        if (path_.empty()) return;
-        if (std::filesystem::is_directory(path_)) throw rbcd::InputError(path_ + ": cannot create: is a directory");
-        std::remove(path_.c_str());   // no older result may pass for this run's
-        tmp_ = path_ + ".tmp." + std::to_string(::getpid());
-        f_ = std::fopen(tmp_.c_str(), "wb");
-        if (!f_) throw rbcd::InputError(path_ + ": cannot create");
-    }
-    ~Output() {
-        if (f_) {
-            std::fclose(f_);
-            std::remove(tmp_.c_str());
-        }
-    }
-    bool active() const { return f_ != nullptr; }
-    void write(const std::string& s) {
-        if (f_ && std::fwrite(s.data(), 1, s.size(), f_) != s.size()) throw std::runtime_error(path_ + ": write error");
-    }
-    void commit() {
-        if (!f_) return;
-        const bool ok = std::fclose(f_) == 0;
-        f_ = nullptr;
-        if (!ok || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-            std::remove(tmp_.c_str());
-            throw std::runtime_error(path_ + ": write error");
-        }
-    }
-
-private:
-    std::string path_, tmp_;
-    std::FILE* f_ = nullptr;
 };
 
 std::string fmt(const char* f, double v) {
@@ -77,11 +47,30 @@ int run(const Options& opt) {
         throw InputError("command line: --trace goes with --geometry (a scene is rasterized itself)");
     if (opt.pixels && opt.scene.empty() && opt.trace.empty())
         throw InputError("command line: --pixels with --geometry needs --trace FILE (the frames' fragments)");
-    if (opt.repeat < 1) throw InputError("command line: --repeat must be at least 1");
+    if (opt.repeat < 1 || opt.repeat > kMaxRepeat)
+        throw InputError("--repeat: " + std::to_string(opt.repeat) + " is out of range 1.." + std::to_string(kMaxRepeat));
+    if (opt.max_pairs < 1) throw InputError("--max-pairs: must be at least 1");
 
     if (!opt.depth_hist.empty() && !opt.pixels) throw InputError("command line: --depth-histogram needs --pixels");
-    Output pairs_out(opt.pairs), frames_out(opt.frames), geo_out(opt.write_geometry), hist_out(opt.depth_hist);
-    const CdInput in = opt.scene.empty() ? load_geometry_file(opt.geometry) : load_scene_input(opt.scene);
+    // Before any output is opened: opening one removes an older file there.
+    check_output_paths({{"--pairs", opt.pairs}, {"--frames", opt.frames}, {"--write-geometry", opt.write_geometry},
+                        {"--depth-histogram", opt.depth_hist}},
+                       {{"--scene", opt.scene}, {"--geometry", opt.geometry}, {"--trace", opt.trace}});
+    OutputFile pairs_out, frames_out, geo_out, hist_out;
+    if (!opt.pairs.empty()) pairs_out = OutputFile(opt.pairs);
+    if (!opt.frames.empty()) frames_out = OutputFile(opt.frames);
+    if (!opt.write_geometry.empty()) geo_out = OutputFile(opt.write_geometry);
+    if (!opt.depth_hist.empty()) hist_out = OutputFile(opt.depth_hist);
+    const CdInput in = opt.scene.empty() ? load_geometry_file(opt.geometry, GeometryLimits{opt.max_geometry_bytes})
+                                         : load_scene_input(opt.scene);
+    // Work bounded in the input: every frame's candidate pairs counted before
+    // Bullet or FCL sees any (docs/limits.md).
+    for (std::uint64_t f = 0; f < in.frames(); ++f)
+        if (overlapping_aabb_pairs(in, f, opt.max_pairs).over_limit)
+            throw InputError((opt.scene.empty() ? opt.geometry : opt.scene) + ": frame " + std::to_string(f) +
+                             ": more than " + std::to_string(opt.max_pairs) +
+                             " pairs of parts with overlapping bounding boxes (the limit, raised by --max-pairs; "
+                             "docs/limits.md)");
 
     std::vector<FramePixels> px;
     if (opt.pixels) {
@@ -152,7 +141,7 @@ int run(const Options& opt) {
     hist_out.commit();
     if (!opt.quiet) {
         const double nf = double(in.frames());
-        std::printf("rbcd-cpucd: %s\n  frames %llu  parts %zu (%zu closed meshes)\n", in.name.c_str(),
+        std::printf("rbcd-cpucd: %s\n  frames %llu  parts %zu (%zu closed meshes)\n", escape_for_message(in.name).c_str(),
                     (unsigned long long)in.frames(), in.parts.size(), closed);
         std::printf("  pair-frames: aabb %llu  gjk %llu  exact %llu\n", (unsigned long long)n_aabb,
                     (unsigned long long)n_gjk, (unsigned long long)n_exact);
@@ -160,6 +149,16 @@ int run(const Options& opt) {
                     sum_broad / nf, sum_gjk / nf, sum_exact / nf, opt.repeat);
     }
     return 0;
+}
+
+// One line whatever the input held; on a non-zero exit nothing this run
+// created is left at an output path (the outputs' temporaries are removed by
+// their destructors, an older file was removed when the output was opened).
+int fail(int status, const std::string& msg, const Options& opt) {
+    std::fprintf(stderr, "rbcd-cpucd: %s\n", rbcd::escape_for_message(rbcd::cut_long_tokens(msg)).c_str());
+    rbcd::discard_outputs({opt.pairs, opt.frames, opt.write_geometry, opt.depth_hist},
+                          {opt.scene, opt.geometry, opt.trace});
+    return status;
 }
 
 } // namespace
@@ -173,7 +172,10 @@ int main(int argc, char* argv[]) {
     app.add_option("--pairs", opt.pairs, "per frame and pair CSV");
     app.add_option("--frames", opt.frames, "per frame CSV: pair counts and times");
     app.add_option("--write-geometry", opt.write_geometry, "also write the input as a geometry file");
-    app.add_option("--repeat", opt.repeat, "timed repeats per frame (median reported), default 5");
+    app.add_option("--repeat", opt.repeat, "timed repeats per frame (median reported), 1..1000, default 5");
+    app.add_option("--max-pairs", opt.max_pairs,
+                   "refuse a frame with more candidate pairs of overlapping bounding boxes, default 100000");
+    app.add_option("--max-geometry-bytes", opt.max_geometry_bytes, "refuse a larger geometry file, default 256 MiB");
     app.add_flag("--pixels", opt.pixels, "also count, per pair, pixels where the depth intervals overlap / nearly overlap");
     app.add_option("--depth-histogram", opt.depth_hist, "with --pixels: CSV of pixels by fragments on them (all frames)");
     app.add_option("--depth-tolerance", opt.tolerance, "depth units for --pixels' near overlaps, default 1");
@@ -183,16 +185,13 @@ int main(int argc, char* argv[]) {
     } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        std::fprintf(stderr, "rbcd-cpucd: %s (see --help)\n", e.what());
-        return 2;
+        return fail(2, std::string(e.what()) + " (see --help)", opt);
     }
     try {
         return run(opt);
     } catch (const rbcd::InputError& e) {
-        std::fprintf(stderr, "rbcd-cpucd: %s\n", e.what());
-        return 2;
+        return fail(2, e.what(), opt);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "rbcd-cpucd: internal error: %s\n", e.what());
-        return 1;
+        return fail(1, std::string("internal error: ") + e.what(), opt);
     }
 }

@@ -23,6 +23,7 @@ FrameRange parse_frame_range(const std::string& text) {
         return InputError("--frames: " + why + ", got \"" + text + "\" (expected A:B, A: or A)");
     };
     FrameRange r;
+    if (text.empty()) throw bad("empty value");
     const auto colon = text.find(':');
     const std::string a = text.substr(0, colon);
     if (!parse_u64(a, r.first)) throw bad("first frame is not an unsigned integer");
@@ -45,15 +46,26 @@ FragmentSource::Event FrameRangeSource::next(Tile& tile) {
         const Event ev = inner_->next(tile);
         if (ev == Event::End) {
             done_ = true;
+            // A range past the input's end would give an empty run that looks
+            // like a result (no frame, exit 0): refused, as a bad --frames is.
+            if (!selected_) {
+                const std::string last = range_.last == UINT64_MAX ? "" : std::to_string(range_.last);
+                throw InputError("--frames: " + std::to_string(range_.first) + ":" + last +
+                                 " selects no frame: the input has " + std::to_string(input_frames_) + " frame" +
+                                 (input_frames_ == 1 ? "" : "s") +
+                                 (input_frames_ ? " (0.." + std::to_string(input_frames_ - 1) + ")" : std::string()));
+            }
             return ev;
         }
         if (ev == Event::Frame) {
+            input_frames_ = tile.frame + 1;
             if (tile.frame > range_.last) {
                 // Frames only count up: nothing after this one is wanted.
                 done_ = true;
                 return Event::End;
             }
             in_range_ = tile.frame >= range_.first;
+            selected_ = selected_ || in_range_;
             if (in_range_) return ev;
             continue;
         }

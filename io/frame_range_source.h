@@ -5,6 +5,8 @@
 //
 //     auto src = std::make_unique<FrameRangeSource>(std::move(inner), parse_frame_range("120:239"));
 //
+// A range that selects no frame of the input is an InputError at the input's
+// end, naming the input's frame count (an empty run would look like a result).
 // Frames before `first` are read and dropped (the inner source still checks
 // them, so a range run reports the same input errors a whole run would up to
 // `last`); reading stops after `last`, so what follows it is never parsed.
@@ -38,6 +40,8 @@ private:
     FrameRange range_;
     bool in_range_ = false;
     bool done_ = false;
+    bool selected_ = false;              // some frame was in the range
+    std::uint64_t input_frames_ = 0;     // frames of the input seen so far
 };
 
 } // namespace rbcd

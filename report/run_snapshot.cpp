@@ -150,21 +150,50 @@ void merge_snapshots(RunSnapshot& a, const RunSnapshot& b) {
         throw InputError("stats: frame_range: frame " + std::to_string(first) + " does not follow frame " +
                          std::to_string(a.frames.last_frame));
 
+    // Sums that wrap past 2^64 would give a wrong answer that looks right
+    // (tampered or hostile parts): refused naming the key.
+    const auto sum = [](std::uint64_t x, std::uint64_t y, const std::string& key) {
+        std::uint64_t r = 0;
+        if (__builtin_add_overflow(x, y, &r)) bad(key, "the parts' sum is beyond 2^64 - 1");
+        return r;
+    };
     std::vector<std::uint64_t> later;
     each_counter(b.counters, [&](const std::string&, const char*, std::uint64_t v) { later.push_back(v); });
     std::size_t i = 0;
     const std::uint64_t offset = a.cycles;
-    each_counter(a.counters, [&](const std::string&, const char* key, std::uint64_t& v) {
+    RunSnapshot merged = a;
+    each_counter(merged.counters, [&](const std::string& block, const char* key, std::uint64_t& v) {
         const std::uint64_t w = later.at(i++);
         const std::string k = key;
         const bool is_max = k.rfind("max_", 0) == 0;
         const bool is_time = k.size() > 6 && k.compare(k.size() - 6, 6, "_cycle") == 0;
-        if (is_max && is_time) v = w ? std::max(v, offset + w) : v;
+        if (is_max && is_time) v = w ? std::max(v, sum(offset, w, "blocks." + block + "." + k)) : v;
         else if (is_max) v = std::max(v, w);
-        else v += w;
+        else v = sum(v, w, "blocks." + block + "." + k);
     });
-    a.cycles += b.cycles;
-    a.gpu.add(b.gpu);
+    merged.cycles = sum(a.cycles, b.cycles, "totals.cycles");
+    // The GPU sums a stats document holds (snapshot_from_stats), checked
+    // before FrameFigures::add sums them.
+    const FrameTimes &ta = a.gpu.t, &tb = b.gpu.t;
+    sum(ta.baseline, tb.baseline, "gpu.baseline_cycles");
+    sum(ta.with_unit, tb.with_unit, "gpu.cycles_with_unit");
+    sum(ta.tiles, tb.tiles, "gpu.tiles");
+    sum(ta.shaded, tb.shaded, "gpu.shaded_fragments");
+    sum(ta.culled, tb.culled, "gpu.culled_fragments");
+    sum(ta.prims, tb.prims, "gpu.primitives");
+    sum(ta.cprims, tb.cprims, "gpu.culled_primitives");
+    sum(ta.tiles_with_base, tb.tiles_with_base, "gpu.tiles_with_base");
+    sum(a.gpu.extra_prims, b.gpu.extra_prims, "gpu.overhead_cycles.extra_primitives");
+    sum(a.gpu.extra_fragments, b.gpu.extra_fragments, "gpu.overhead_cycles.extra_fragments");
+    sum(a.gpu.unit_no_bank, b.gpu.unit_no_bank, "gpu.overhead_cycles.unit_no_bank");
+    sum(a.gpu.unit_queue, b.gpu.unit_queue, "gpu.overhead_cycles.unit_queue");
+    sum(a.gpu.tail, b.gpu.tail, "gpu.overhead_cycles.tail");
+    sum(ta.stall_no_bank, tb.stall_no_bank, "gpu.stalls.no_bank_cycles");
+    sum(ta.stall_queue_full, tb.stall_queue_full, "gpu.stalls.queue_full_cycles");
+    sum(ta.stall_fragment_queue, tb.stall_fragment_queue, "gpu.stalls.fragment_queue_cycles");
+    merged.gpu.add(b.gpu);
+    merged.frames = a.frames;
+    a = std::move(merged);
 }
 
 } // namespace rbcd

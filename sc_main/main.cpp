@@ -41,6 +41,7 @@ struct Options {
     std::vector<std::string> sets;
     std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd;
     std::string frames;   // --frames A:B
+    bool frames_given = false;   // --frames '' is an error, not "all frames"
     unsigned threads = 2;  // 2: a trace is parsed on its own thread
     bool dump_config = false;
     bool config_reference = false;
@@ -110,7 +111,7 @@ int run(const Options& opt) {
         scene_src = s.get();
         src = std::move(s);
     }
-    if (!opt.frames.empty()) {
+    if (opt.frames_given) {
         // A trace's frames count from 0: a range written out would not read back.
         if (!opt.write_trace.empty()) throw InputError("--frames: cannot be combined with --write-trace");
         src = std::make_unique<FrameRangeSource>(std::move(src), parse_frame_range(opt.frames));
@@ -276,7 +277,8 @@ int sc_main(int argc, char* argv[]) {
     auto* trace_opt = app.add_option("--trace", opt.trace, "fragment trace (.rbt, plain or gzip; - reads standard input)");
     app.add_option("--scene", opt.scene, "3D scene (TOML) rendered by the tile-based rasterizer feed")
         ->excludes(trace_opt);
-    app.add_option("--frames", opt.frames, "A:B: run only frames A..B of the input (their numbers kept; docs/sweeps.md)");
+    auto* frames_opt =
+        app.add_option("--frames", opt.frames, "A:B: run only frames A..B of the input (their numbers kept; docs/sweeps.md)");
     app.add_option("--threads", opt.threads,
                    "2 (default): a trace is parsed on a second thread; 1: one thread (what rbcd-sweep runs)")
         ->check(CLI::Range(1u, 2u));
@@ -305,6 +307,7 @@ int sc_main(int argc, char* argv[]) {
     } catch (const CLI::ParseError& e) {
         return fail(2, std::string(e.what()) + " (see --help)", argc, argv);
     }
+    opt.frames_given = frames_opt->count() > 0;
     try {
         return run(opt);
     } catch (const rbcd::InputError& e) {

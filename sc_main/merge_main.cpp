@@ -14,7 +14,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -24,6 +27,9 @@
 
 #include "rbcd/common/errors.h"
 #include "rbcd/common/input_file.h"
+#include "rbcd/io/collision_check.h"
+#include "rbcd/io/collision_format.h"
+#include "rbcd/io/frame_range_source.h"
 #include "rbcd/report/run_snapshot.h"
 #include "rbcd/report/stats_report.h"
 #include "rbcd/sc_main/output_file.h"
@@ -36,17 +42,22 @@ using rbcd::InputError;
 // The kernel prints its banner before sc_main runs, unless told not to.
 const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0) == 0; }();
 
-// A stats document is a page of JSON; this keeps a hostile one from filling memory.
-constexpr std::uint64_t kMaxStatsBytes = std::uint64_t(64) << 20;
+// A --frame-stats line is one frame's figures, well under a kilobyte.
+constexpr std::size_t kMaxFrameStatsLineBytes = 64 << 10;
 
+// What is kept of a part: its stats document is parsed, read and dropped, so
+// that memory holds one document at a time whatever the parts' number.
 struct Part {
     std::string path;
-    nlohmann::json stats;
+    nlohmann::json provenance;
+    double wall = 0;
     rbcd::RunSnapshot snapshot;
+    rbcd::FrameRange range;   // its --frames (the whole input without)
+    std::string collisions, frame_stats;   // where it wrote them, when merged
 };
 
-nlohmann::json read_json(const std::string& path) {
-    const std::string text = rbcd::read_input_text(path, "stats file", kMaxStatsBytes, "");
+nlohmann::json read_json(const std::string& path, std::uint64_t max_bytes) {
+    const std::string text = rbcd::read_input_text(path, "stats file", max_bytes, "--max-stats-bytes");
     try {
         return nlohmann::json::parse(text);
     } catch (const nlohmann::json::parse_error& e) {
@@ -54,11 +65,7 @@ nlohmann::json read_json(const std::string& path) {
     }
 }
 
-const nlohmann::json& provenance_of(const Part& p) {
-    if (!p.stats.contains("provenance") || !p.stats["provenance"].is_object())
-        throw InputError(p.path + ": stats: provenance: missing");
-    return p.stats["provenance"];
-}
+const nlohmann::json& provenance_of(const Part& p) { return p.provenance; }
 
 std::vector<std::string> argv_of(const Part& p) {
     const nlohmann::json& pv = provenance_of(p);
@@ -76,18 +83,20 @@ std::string part_output(const Part& p, const std::string& option) {
     const auto values = rbcd::option_values(argv_of(p), {option.c_str()});
     const std::string v = values.empty() ? std::string() : values.front();
     if (v.empty() || v == "-") throw InputError(p.path + ": the run wrote no " + option + " file");
-    const nlohmann::json& wd = provenance_of(p)["working_directory"];
+    const nlohmann::json& pv = provenance_of(p);
     std::filesystem::path f(v);
-    if (f.is_relative() && wd.is_string()) f = std::filesystem::path(wd.get<std::string>()) / f;
+    if (f.is_relative() && pv.contains("working_directory") && pv["working_directory"].is_string())
+        f = std::filesystem::path(pv["working_directory"].get<std::string>()) / f;
     return f.string();
 }
 
 // The command line one run over all the frames would have had: the first
-// part's, without --frames, its outputs the merged ones, and without the
-// outputs that are not merged (--vcd, --images, --write-trace).
+// part's, its --frames and outputs rewritten (an empty value drops the
+// option), and without the outputs that are not merged (--vcd, --images,
+// --write-trace).
 std::vector<std::string> whole_run_argv(const std::vector<std::string>& argv,
                                         const std::vector<std::pair<std::string, std::string>>& outputs) {
-    const std::vector<std::string> dropped = {"--frames", "--vcd", "--images", "--write-trace"};
+    const std::vector<std::string> dropped = {"--vcd", "--images", "--write-trace"};
     std::vector<std::string> out;
     if (!argv.empty()) out.push_back(argv[0]);
     for (std::size_t i = 1; i < argv.size(); ++i) {
@@ -116,46 +125,103 @@ std::vector<std::string> whole_run_argv(const std::vector<std::string>& argv,
     return out;
 }
 
-void copy_collisions(const std::vector<Part>& parts, rbcd::OutputFile& out) {
-    static const std::string magic = "rbcd-collisions 1";
-    bool first = true;
-    for (const auto& p : parts) {
-        const std::string path = part_output(p, "--collisions");
-        std::ifstream in(path, std::ios::binary);
-        if (!in) throw InputError(path + ": cannot read");
-        std::string head;
-        if (!std::getline(in, head) || head != magic) throw InputError(path + ":1: not a collisions file");
-        if (first) out.write(head + "\n");
-        first = false;
-        char buf[1 << 16];
-        while (in.read(buf, sizeof buf) || in.gcount() > 0) out.write(buf, std::size_t(in.gcount()));
-        if (in.bad()) throw InputError(path + ": read error");
+// Calls line(text) for every line of a regular file (text without its LF),
+// refusing a line longer than max_line before it is held. Returns whether the
+// file ended with LF (true for an empty file).
+template <class F>
+bool for_each_line(const std::string& path, const std::string& what, std::size_t max_line, F line) {
+    const int fd = rbcd::open_input(path, what);
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
+    std::string carry;
+    char buf[1 << 16];
+    std::uint64_t n = 0;
+    for (;;) {
+        const ssize_t got = ::read(fd, buf, sizeof buf);
+        if (got < 0) {
+            if (errno == EINTR) continue;
+            throw InputError(rbcd::cannot_read_message(path, what, std::strerror(errno)));
+        }
+        if (got == 0) break;
+        std::size_t b = 0;
+        for (std::size_t i = 0; i < std::size_t(got); ++i) {
+            if (buf[i] != '\n') continue;
+            carry.append(buf + b, i - b);
+            ++n;
+            if (carry.size() > max_line)
+                throw rbcd::input_error_at(path, n, "line longer than " + std::to_string(max_line) + " bytes");
+            line(std::string_view(carry));
+            carry.clear();
+            b = i + 1;
+        }
+        carry.append(buf + b, std::size_t(got) - b);
+        if (carry.size() > max_line)
+            throw rbcd::input_error_at(path, n + 1, "line longer than " + std::to_string(max_line) + " bytes");
     }
+    if (carry.empty()) return true;
+    line(std::string_view(carry));
+    return false;
 }
 
-// The parts' per-frame lines, their cycles counted from the whole run's start.
+// The parts' collision files, each read and checked against its part's
+// frames (io/collision_check.h) as it is copied.
+void copy_collisions(const std::vector<Part>& parts, rbcd::OutputFile& out) {
+    out.write(std::string(rbcd::kCollisionsMagic));
+    std::string buf;
+    for (const auto& p : parts) {
+        rbcd::CollisionFileCheck check(p.collisions, p.snapshot.frames.first_frame, p.snapshot.frames.frames);
+        bool first = true;
+        const bool lf = for_each_line(p.collisions, "collisions file", rbcd::CollisionFileCheck::kMaxLineBytes,
+                                      [&](std::string_view line) {
+                                          check.line(line);
+                                          if (first) {
+                                              first = false;   // the magic line, written once
+                                              return;
+                                          }
+                                          buf.append(line);
+                                          buf += '\n';
+                                          if (buf.size() >= (1u << 16)) {
+                                              out.write(buf);
+                                              buf.clear();
+                                          }
+                                      });
+        check.finish(lf);
+    }
+    out.write(buf);
+}
+
+// The parts' per-frame lines, their cycles counted from the whole run's start;
+// each part's lines must be its frames, in order.
 void copy_frame_stats(const std::vector<Part>& parts, rbcd::OutputFile& out) {
     std::uint64_t offset = 0;
     for (const auto& p : parts) {
-        const std::string path = part_output(p, "--frame-stats");
-        std::ifstream in(path, std::ios::binary);
-        if (!in) throw InputError(path + ": cannot read");
-        std::string line;
-        for (std::uint64_t n = 1; std::getline(in, line); ++n) {
-            nlohmann::json f;
-            try {
-                f = nlohmann::json::parse(line);
-            } catch (const nlohmann::json::parse_error&) {
-                throw InputError(path + ":" + std::to_string(n) + ": not a JSON object");
-            }
+        const std::string& path = p.frame_stats;
+        std::uint64_t n = 0;
+        const bool lf = for_each_line(path, "frame stats file", kMaxFrameStatsLineBytes, [&](std::string_view line) {
+            ++n;
+            nlohmann::json f = nlohmann::json::parse(line, nullptr, false);
+            if (!f.is_object()) throw rbcd::input_error_at(path, n, "not a JSON object");
+            const std::uint64_t expected = p.snapshot.frames.first_frame + n - 1;
+            if (n > p.snapshot.frames.frames || !f.contains("frame") || !f["frame"].is_number_unsigned() ||
+                f["frame"].get<std::uint64_t>() != expected)
+                throw rbcd::input_error_at(path, n, "frame: expected frame " + std::to_string(expected) +
+                                                        (n > p.snapshot.frames.frames ? " (beyond the part's frames)" : ""));
             for (const char* key : {"start_cycle", "end_cycle"}) {
-                if (!f.is_object() || !f.contains(key) || !f[key].is_number_unsigned())
-                    throw InputError(path + ":" + std::to_string(n) + ": " + key + ": missing");
-                f[key] = f[key].get<std::uint64_t>() + offset;
+                if (!f.contains(key) || !f[key].is_number_unsigned())
+                    throw rbcd::input_error_at(path, n, std::string(key) + ": missing");
+                std::uint64_t v = 0;
+                if (__builtin_add_overflow(f[key].get<std::uint64_t>(), offset, &v))
+                    throw rbcd::input_error_at(path, n, std::string(key) + ": beyond 2^64 - 1 once offset");
+                f[key] = v;
             }
             out.write(f.dump() + "\n");
-        }
-        if (in.bad()) throw InputError(path + ": read error");
+        });
+        if (!lf) throw rbcd::input_error_at(path, n, "the last line does not end with LF (the file is cut short)");
+        if (n != p.snapshot.frames.frames)
+            throw InputError(path + ": " + std::to_string(n) + " lines where the part has " +
+                             std::to_string(p.snapshot.frames.frames) + " frames");
         offset += p.snapshot.cycles;
     }
 }
@@ -163,19 +229,54 @@ void copy_frame_stats(const std::vector<Part>& parts, rbcd::OutputFile& out) {
 struct Options {
     std::string stats, collisions, frame_stats;
     std::vector<std::string> parts;
+    std::uint64_t max_stats_bytes = std::uint64_t(4) << 20;
 };
+
+std::string range_text(std::uint64_t first, std::uint64_t last) {
+    return std::to_string(first) + ":" + (last == UINT64_MAX ? std::string() : std::to_string(last));
+}
+
+// The frames a part says it ran (its --frames) against those its stats hold:
+// a part is its range's frames from the first, all of them unless the input
+// ended (then no part may follow).
+void check_part_frames(const Part& p) {
+    const rbcd::FrameReduction& r = p.snapshot.frames;
+    if (r.frames == 0) throw InputError(p.path + ": stats: totals.frames: 0 (a part without frames)");
+    if (r.last_frame < r.first_frame || r.last_frame - r.first_frame != r.frames - 1)
+        throw InputError(p.path + ": stats: totals.frames: " + std::to_string(r.frames) + " does not match frame_range " +
+                         std::to_string(r.first_frame) + ".." + std::to_string(r.last_frame));
+    if (r.first_frame != p.range.first || r.last_frame > p.range.last)
+        throw InputError(p.path + ": stats: frame_range: " + std::to_string(r.first_frame) + ".." +
+                         std::to_string(r.last_frame) + " is not what its --frames " +
+                         range_text(p.range.first, p.range.last) + " selects");
+}
 
 int run(const Options& opt) {
     std::vector<Part> parts;
     for (const auto& path : opt.parts) {
         Part p;
         p.path = path;
-        p.stats = read_json(path);
+        nlohmann::json stats = read_json(path, opt.max_stats_bytes);
         try {
-            p.snapshot = rbcd::snapshot_from_stats(p.stats);
+            p.snapshot = rbcd::snapshot_from_stats(stats);
         } catch (const InputError& e) {
             throw InputError(path + ": " + e.what());
         }
+        if (!stats.contains("provenance") || !stats["provenance"].is_object())
+            throw InputError(path + ": stats: provenance: missing");
+        p.provenance = std::move(stats["provenance"]);
+        const nlohmann::json& t = stats["time"];
+        if (t.is_object() && t.contains("wall_seconds") && t["wall_seconds"].is_number())
+            p.wall = t["wall_seconds"].get<double>();
+        const auto frames = rbcd::option_values(argv_of(p), {"--frames"});
+        if (!frames.empty()) {
+            try {
+                p.range = rbcd::parse_frame_range(frames.back());
+            } catch (const InputError& e) {
+                throw InputError(path + ": stats: provenance.argv: " + e.what());
+            }
+        }
+        check_part_frames(p);
         parts.push_back(std::move(p));
     }
 
@@ -183,15 +284,23 @@ int run(const Options& opt) {
     double wall = 0;
     for (std::size_t i = 0; i < parts.size(); ++i) {
         if (i > 0) {
+            // The ranges tile the frames: no gap, no overlap, and nothing
+            // after a part that reached the input's end.
+            const Part& prev = parts[i - 1];
+            if (prev.range.last == UINT64_MAX || prev.snapshot.frames.last_frame < prev.range.last)
+                throw InputError(parts[i].path + ": follows " + prev.path + ", which ran to the input's end");
+            if (parts[i].range.first != prev.range.last + 1)
+                throw InputError(parts[i].path + ": frame_range: frame " + std::to_string(parts[i].range.first) +
+                                 " does not follow frame " + std::to_string(prev.range.last) + " (its --frames " +
+                                 range_text(parts[i].range.first, parts[i].range.last) + " after " + prev.path + "'s " +
+                                 range_text(prev.range.first, prev.range.last) + ")");
             try {
                 rbcd::merge_snapshots(all, parts[i].snapshot);
             } catch (const InputError& e) {
                 throw InputError(parts[i].path + ": " + e.what());
             }
         }
-        const nlohmann::json& t = parts[i].stats["time"];
-        if (t.is_object() && t.contains("wall_seconds") && t["wall_seconds"].is_number())
-            wall += t["wall_seconds"].get<double>();
+        wall += parts[i].wall;
     }
     // One program, one configuration, the same inputs: else not one run.
     const nlohmann::json& pv0 = provenance_of(parts.front());
@@ -200,14 +309,40 @@ int run(const Options& opt) {
             if (provenance_of(p).value(key, nlohmann::json()) != pv0.value(key, nlohmann::json()))
                 throw InputError(p.path + ": stats: provenance." + key + ": differs from " + parts.front().path + "'s");
 
+    for (auto& p : parts) {
+        if (!opt.collisions.empty()) p.collisions = part_output(p, "--collisions");
+        if (!opt.frame_stats.empty()) p.frame_stats = part_output(p, "--frame-stats");
+    }
+
+    // The merged run's frames: the whole input when the first part starts at
+    // frame 0 and the last ran to the input's end, else the range it covers,
+    // kept in the recorded command line (docs/sweeps.md).
+    const Part& last = parts.back();
+    const bool to_end = last.range.last == UINT64_MAX || last.snapshot.frames.last_frame < last.range.last;
+    const std::string frames =
+        parts.front().range.first == 0 && to_end ? std::string() : range_text(parts.front().range.first, last.range.last);
+
     nlohmann::json stats = rbcd::make_stats(all, wall);
     nlohmann::json pv = pv0;
-    const std::vector<std::string> argv = whole_run_argv(
-        argv_of(parts.front()),
-        {{"--stats", opt.stats}, {"--collisions", opt.collisions}, {"--frame-stats", opt.frame_stats}});
+    const std::vector<std::string> argv =
+        whole_run_argv(argv_of(parts.front()), {{"--frames", frames},
+                                                {"--stats", opt.stats},
+                                                {"--collisions", opt.collisions},
+                                                {"--frame-stats", opt.frame_stats}});
     pv["argv"] = argv;
     pv["command_line"] = rbcd::command_line(argv);
     stats["provenance"] = pv;
+
+    // Nothing is opened (which removes an older file at an output path)
+    // before every output is known to be neither an input nor another output.
+    std::vector<rbcd::NamedPath> inputs;
+    for (const auto& p : parts) {
+        inputs.push_back({"", p.path});
+        inputs.push_back({"", p.collisions});
+        inputs.push_back({"", p.frame_stats});
+    }
+    rbcd::check_output_paths(
+        {{"--stats", opt.stats}, {"--collisions", opt.collisions}, {"--frame-stats", opt.frame_stats}}, inputs);
 
     rbcd::OutputFile stats_out(opt.stats), collisions_out, frames_out;
     if (!opt.collisions.empty()) {
@@ -228,8 +363,28 @@ int run(const Options& opt) {
 // As rbcd-sim: on a non-zero exit nothing stands at an output path, not even
 // an older file, unless the path names one of the inputs.
 int fail(int status, const std::string& msg, const Options& opt) {
-    std::fprintf(stderr, "rbcd-merge: %s\n", rbcd::escape_for_message(msg).c_str());
-    rbcd::discard_outputs({opt.stats, opt.collisions, opt.frame_stats}, opt.parts);
+    std::fprintf(stderr, "rbcd-merge: %s\n", rbcd::escape_for_message(rbcd::cut_long_tokens(msg)).c_str());
+    // A part's own collision or frame stats file is an input too (found through
+    // its provenance, which may itself be what failed: then compared by name).
+    std::vector<std::string> inputs = opt.parts;
+    for (const auto& path : opt.parts) {
+        try {
+            Part p;
+            p.path = path;
+            const nlohmann::json stats = nlohmann::json::parse(
+                rbcd::read_input_text(path, "stats file", opt.max_stats_bytes, ""), nullptr, false);
+            if (!stats.is_object() || !stats.contains("provenance") || !stats["provenance"].is_object()) continue;
+            p.provenance = stats["provenance"];
+            for (const char* o : {"--collisions", "--frame-stats"}) {
+                try {
+                    inputs.push_back(part_output(p, o));
+                } catch (const std::exception&) {
+                }
+            }
+        } catch (const std::exception&) {
+        }
+    }
+    rbcd::discard_outputs({opt.stats, opt.collisions, opt.frame_stats}, inputs);
     return status;
 }
 
@@ -245,6 +400,7 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--collisions", opt.collisions,
                    "also merge the parts' collision files (where their provenance says they are) into this one");
     app.add_option("--frame-stats", opt.frame_stats, "also merge the parts' --frame-stats files into this one");
+    app.add_option("--max-stats-bytes", opt.max_stats_bytes, "refuse a larger part stats file, default 4 MiB");
     app.add_option("parts", opt.parts, "the parts' stats JSON files, in frame order")->required();
     try {
         app.parse(argc, argv);

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -81,6 +82,39 @@ void discard_outputs(const std::vector<std::string>& outputs, const std::vector<
         bool is_input = false;
         for (const auto& in : inputs) is_input = is_input || same_file(out, in);
         if (!is_input) discard_output(out);
+    }
+}
+
+namespace {
+// A path as the file system would resolve it, for outputs that do not exist yet.
+std::string resolved(const std::string& path) {
+    std::error_code ec;
+    const auto p = std::filesystem::weakly_canonical(path, ec);
+    return ec ? path : p.string();
+}
+
+bool is_regular_or_absent(const std::string& path) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) return true;
+    return S_ISREG(st.st_mode);
+}
+} // namespace
+
+void check_output_paths(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs) {
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+        const NamedPath& o = outputs[i];
+        if (o.path.empty()) continue;
+        for (const NamedPath& in : inputs)
+            if (!in.path.empty() && o.path != "-" && same_file(o.path, in.path))
+                throw InputError(o.flag + ": " + o.path + " is the input file " + in.path +
+                                 (in.flag.empty() ? std::string() : " (" + in.flag + ")"));
+        if (o.path == "-" || !is_regular_or_absent(o.path)) continue;
+        for (std::size_t j = 0; j < i; ++j) {
+            const NamedPath& e = outputs[j];
+            if (e.path.empty() || e.path == "-") continue;
+            if (same_file(o.path, e.path) || resolved(o.path) == resolved(e.path))
+                throw InputError(o.flag + ": " + o.path + " is also " + e.flag + "'s output");
+        }
     }
 }
 

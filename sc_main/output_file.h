@@ -26,6 +26,17 @@ bool same_file(const std::string& a, const std::string& b);
 // of the inputs (an output named like an input is the input, left alone).
 void discard_outputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs);
 
+// Before any output is opened (opening removes an older regular file): throws
+// InputError "FLAG: PATH is the input file INPUT" when an output names one of
+// the inputs, and "FLAG: PATH is also FLAG2's output" when two outputs would
+// land in the same regular file (or the same new path). Outputs written in
+// place (a device, a FIFO, "-") may be shared. Entries with an empty path are
+// skipped.
+struct NamedPath {
+    std::string flag, path;
+};
+void check_output_paths(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs);
+
 class OutputFile {
 public:
     OutputFile() = default;

@@ -23,6 +23,9 @@ import subprocess
 import sys
 import tomllib
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from rbcd_cli import main_wrapper, say  # noqa: E402  (one-line messages, no tracebacks)
+
 # ---- The CPU model of Figure 8 (docs/results.md, "CPU energy model").
 # The paper's CPU (Table 2): 2 cores at 1.5 GHz, 32 nm, 1 V. Collision
 # detection runs on one core; the time measured here is scaled by the clock
@@ -660,20 +663,20 @@ def main():
         scenes = scenes_of(a.out)
         for t in a.targets:
             if t not in TARGETS:
-                print(f"evaluate.py: unknown target '{t}' (known: {', '.join(TARGETS)})", file=sys.stderr)
+                say("evaluate.py", f"unknown target '{t}' (known: {', '.join(TARGETS)})")
                 return 2
             TARGETS[t](a.out, scenes)
     except InputMissing as e:
-        print(f"evaluate.py: {e}", file=sys.stderr)
+        say("evaluate.py", str(e))
         return 2
     except tomllib.TOMLDecodeError as e:
-        print(f"evaluate.py: {e}", file=sys.stderr)
+        say("evaluate.py", str(e))
         return 2
     except OSError as e:
-        print(f"evaluate.py: {e.filename}: {e.strerror}", file=sys.stderr)
+        say("evaluate.py", f"{e.filename}: {e.strerror}")
         return 2
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main_wrapper("evaluate.py", lambda _argv: main(), sys.argv[1:]))

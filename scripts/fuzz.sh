@@ -1,19 +1,22 @@
 #!/usr/bin/env bash
 # Builds one libFuzzer target (clang++-14, ASan + UBSan, toml++ header-only)
 # and runs it for SECONDS (default 60).
-#   scripts/fuzz.sh trace|config|scene|mesh [SECONDS]
+#   scripts/fuzz.sh trace|config|scene|mesh|geometry|merge [SECONDS]
 # Seeds: vectors/ (trace), sc_main/configs/ (config), the scene examples
-# (scene), a few assimp test models (mesh), and every committed finding in
+# (scene), a few assimp test models (mesh), a geometry file (geometry:
+# rbcd-cpucd's reader), a stats document and a collisions file (merge:
+# rbcd-merge's inputs), and every committed finding in
 # testbench/fuzz/TARGET/. The growing corpus stays in build-fuzz/corpus/TARGET;
 # a crash is written to build-fuzz/findings/TARGET/ and the script exits 1.
 # Turn each finding into a regression: fix it, then copy the file into
 # testbench/fuzz/TARGET/ (the normal test suite replays that directory).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-target=${1:?usage: scripts/fuzz.sh trace|config|scene|mesh|draw_stream [SECONDS]}
+target=${1:?usage: scripts/fuzz.sh trace|config|scene|mesh|geometry|merge|draw_stream [SECONDS]}
 seconds=${2:-60}
-case "$target" in trace|config|scene|mesh|draw_stream) ;; *) echo "fuzz.sh: unknown target '$target'" >&2; exit 2 ;; esac
-./scripts/setup.sh --fuzz
+case "$target" in trace|config|scene|mesh|geometry|merge|draw_stream) ;; *) echo "fuzz.sh: unknown target '$target'" >&2; exit 2 ;; esac
+# The geometry target reads through rbcd-cpucd's library: Bullet and FCL (--eval).
+if [ "$target" = geometry ]; then ./scripts/setup.sh --fuzz --eval; else ./scripts/setup.sh --fuzz; fi
 command -v clang++-14 >/dev/null || { echo "fuzz.sh: clang++-14 is missing (scripts/setup.sh --fuzz installs it)" >&2; exit 2; }
 
 dir=build-fuzz
@@ -43,6 +46,7 @@ case "$target" in
   scene) add "" scene/default_scene.toml testbench/golden/determinism/scene.toml ;;
   mesh) add 000 /usr/share/assimp/models/OBJ/box.obj; add 001 /usr/share/assimp/models/PLY/cube.ply
         add 002 /usr/share/assimp/models/STL/triangle.stl /usr/share/assimp/models/STL/Spider_ascii.stl ;;
+  geometry|merge) ;;   # their seeds are testbench/fuzz/TARGET/ (below)
 esac
 cp testbench/fuzz/"$target"/* "$seeds"/ 2>/dev/null || true
 

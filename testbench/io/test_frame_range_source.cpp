@@ -59,8 +59,14 @@ TEST_CASE("frame range passes only its frames with their numbers", "[frames]") {
     CHECK(events(open) == V{"F4", "T4.0", "T4.1", "T4.2", "T4.3"});
     FrameRangeSource one(five_frames(), parse_frame_range("0"));
     CHECK(events(one) == V{"F0"});
+}
+
+TEST_CASE("a frame range that selects no frame is refused naming the input's frame count", "[frames]") {
     FrameRangeSource past(five_frames(), parse_frame_range("7:9"));
-    CHECK(events(past).empty());
+    CHECK_THROWS_WITH(events(past), "--frames: 7:9 selects no frame: the input has 5 frames (0..4)");
+    FrameRangeSource open(five_frames(), parse_frame_range("5:"));
+    CHECK_THROWS_WITH(events(open), "--frames: 5: selects no frame: the input has 5 frames (0..4)");
+    CHECK_THROWS_WITH(parse_frame_range(""), Catch::Matchers::Contains("--frames: empty value"));
 }
 
 TEST_CASE("frame range stops reading after its last frame", "[frames]") {

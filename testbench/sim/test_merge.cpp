@@ -4,6 +4,7 @@
 #include "rbcd/testbench/sim/cli_util.h"
 
 #include <nlohmann/json.hpp>
+#include <functional>
 #include <regex>
 
 #ifndef RBCD_MERGE
@@ -63,7 +64,7 @@ TEST_CASE("split runs merge into the whole run's stats, collisions and frame sta
     Split s(config);
     s.run_part(0, "0:6");
     s.run_part(1, "7:33");
-    s.run_part(2, "34:59");
+    s.run_part(2, "34:");   // to the input's end: the merged run is the whole input's
     Result m = s.merge({s.part(0, ".json"), s.part(1, ".json"), s.part(2, ".json")});
     INFO(m.err);
     REQUIRE(m.status == 0);
@@ -133,4 +134,138 @@ TEST_CASE("rbcd-merge refuses parts that are not one run", "[merge]") {
         expect_input_error(s.td, s.merge({s.part(0, ".json"), s.td.path("tampered.json")}),
                            {"blocks.insertion_sorter.overflows", "not an unsigned integer"});
     }
+}
+
+// ---- Hostile parts (issue 22): each case failed on the code before.
+namespace {
+
+// Parts 0:29 and 30:59 of the default scene, made once per process.
+const Split& halves() {
+    static Split split({});
+    static const bool made = [] {
+        split.run_part(0, "0:29");
+        split.run_part(1, "30:59");
+        return true;
+    }();
+    (void)made;
+    return split;
+}
+
+// A copy of a part's stats with `edit` applied, written beside it.
+std::string tampered(const Split& s, int i, const std::string& name, const std::function<void(nlohmann::json&)>& edit) {
+    auto j = nlohmann::json::parse(slurp(s.part(i, ".json")));
+    edit(j);
+    const std::string p = s.td.path(name);
+    std::ofstream(p) << j.dump(2);
+    return p;
+}
+
+// The value after OPTION in a part's recorded argv set to `value`.
+void set_arg(nlohmann::json& j, const std::string& option, const std::string& value) {
+    auto& argv = j["provenance"]["argv"];
+    for (std::size_t k = 0; k + 1 < argv.size(); ++k)
+        if (argv[k] == option) argv[k + 1] = value;
+}
+
+} // namespace
+
+TEST_CASE("rbcd-merge: an output naming a part's own file is refused and the file kept", "[merge_hostile]") {
+    const Split& s = halves();
+    const std::string own = slurp(s.part(0, ".txt"));
+    Result r = run_program(s.td, RBCD_MERGE,
+                           {"--stats", s.td.stats(), "--collisions", s.part(0, ".txt"), s.part(0, ".json"), s.part(1, ".json")});
+    expect_input_error(s.td, r, {"--collisions", "is the input file"});
+    CHECK(slurp(s.part(0, ".txt")) == own);
+    // Two outputs into one file: the old code exited 0 with one lost.
+    r = run_program(s.td, RBCD_MERGE,
+                    {"--stats", s.td.stats(), "--collisions", s.td.stats(), s.part(0, ".json"), s.part(1, ".json")});
+    expect_input_error(s.td, r, {"--collisions", "is also --stats's output"});
+}
+
+TEST_CASE("rbcd-merge: parts that leave out frames are merged as the range they cover", "[merge_hostile]") {
+    Split s({});
+    s.run_part(0, "10:29");
+    s.run_part(1, "30:49");
+    Result m = s.merge({s.part(0, ".json"), s.part(1, ".json")});
+    INFO(m.err);
+    REQUIRE(m.status == 0);
+    const auto stats = nlohmann::json::parse(slurp(s.td.stats()));
+    const auto argv = stats["provenance"]["argv"].get<std::vector<std::string>>();
+    const auto at = std::find(argv.begin(), argv.end(), "--frames");
+    REQUIRE(at != argv.end());
+    CHECK(*(at + 1) == "10:49");
+    CHECK(stats["totals"]["frames"] == 40);
+    // The recorded command line reproduces the merged stats.
+    const std::string merged = slurp(s.td.stats());
+    const Result w = run_sim(s.td, std::vector<std::string>(argv.begin() + 1, argv.end()));
+    REQUIRE(w.status == 0);
+    CHECK(mask_wall_time(merged) == mask_wall_time(slurp(s.td.stats())));
+}
+
+TEST_CASE("rbcd-merge: a part whose frames are not what its --frames selects is refused", "[merge_hostile]") {
+    const Split& s = halves();
+    // Claims 25:59 but holds 30..59: frames 25..29 would be missing.
+    const std::string claims = tampered(s, 1, "claims.json", [](nlohmann::json& j) { set_arg(j, "--frames", "25:59"); });
+    expect_input_error(s.td, s.merge({s.part(0, ".json"), claims}), {"claims.json", "frame_range: 30..59", "25:59"});
+    // totals.frames against its own frame_range.
+    const std::string short_count = tampered(s, 1, "count.json", [](nlohmann::json& j) { j["totals"]["frames"] = 5; });
+    expect_input_error(s.td, s.merge({s.part(0, ".json"), short_count}),
+                       {"count.json", "totals.frames: 5 does not match frame_range 30..59"});
+}
+
+TEST_CASE("rbcd-merge: sums past 2^64 are refused", "[merge_hostile]") {
+    const Split& s = halves();
+    const std::string huge = tampered(s, 1, "huge.json", [](nlohmann::json& j) {
+        j["totals"]["cycles"] = UINT64_MAX;
+        j["gpu"]["cycles_with_unit"] = UINT64_MAX;
+    });
+    expect_input_error(s.td, s.merge({s.part(0, ".json"), huge}), {"huge.json", "beyond 2^64 - 1"});
+    const std::string counter = tampered(s, 1, "counter.json", [](nlohmann::json& j) {
+        j["blocks"]["insertion_sorter"]["overflows"] = UINT64_MAX;
+    });
+    const std::string counter0 = tampered(s, 0, "counter0.json", [](nlohmann::json& j) {
+        j["blocks"]["insertion_sorter"]["overflows"] = 2;
+    });
+    expect_input_error(s.td, s.merge({counter0, counter}), {"blocks.insertion_sorter.overflows", "beyond 2^64 - 1"});
+}
+
+TEST_CASE("rbcd-merge: collision files are read and checked against their part's frames", "[merge_hostile]") {
+    const Split& s = halves();
+    // Another part's file.
+    const std::string other = tampered(s, 1, "other.json", [&](nlohmann::json& j) { set_arg(j, "--collisions", s.part(0, ".txt")); });
+    expect_input_error(s.td, s.merge({s.part(0, ".json"), other}), {s.part(0, ".txt") + ":2", "frame 0 where frame 30"});
+    // Binary garbage.
+    const std::string junk = s.td.write("junk.txt", std::string("\x00\x01\xff\x1b garbage\n", 13));
+    const std::string garbage = tampered(s, 1, "garbage.json", [&](nlohmann::json& j) { set_arg(j, "--collisions", junk); });
+    const Result g = s.merge({s.part(0, ".json"), garbage});
+    expect_input_error(s.td, g, {"junk.txt:1", "not a collisions file"});
+    CHECK(g.err.find('\x1b') == std::string::npos);
+    // Cut short: no final LF (the old code wrote "frame 29frame 30").
+    std::string text = slurp(s.part(0, ".txt"));
+    text.pop_back();
+    const std::string cut = s.td.write("cut.txt", text);
+    const std::string cut_json = tampered(s, 0, "cut.json", [&](nlohmann::json& j) { set_arg(j, "--collisions", cut); });
+    expect_input_error(s.td, s.merge({cut_json, s.part(1, ".json")}), {"cut.txt", "does not end with LF"});
+    // A FIFO named by the provenance: refused, not waited on.
+    const std::string fifo = s.td.path("fifo.txt");
+    REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+    const std::string fifo_json = tampered(s, 1, "fifo.json", [&](nlohmann::json& j) { set_arg(j, "--collisions", fifo); });
+    expect_input_error(s.td, s.merge({s.part(0, ".json"), fifo_json}), {"fifo.txt: cannot read collisions file: is a FIFO"});
+}
+
+TEST_CASE("rbcd-sim --frames: an empty value or a range without frames is refused", "[frames_cli]") {
+    TempDir td;
+    expect_input_error(td, run_with_outputs(td, {"--frames", ""}), {"--frames: empty value"});
+    expect_input_error(td, run_with_outputs(td, {"--frames", "60:70"}),
+                       {"--frames: 60:70 selects no frame: the input has 60 frames (0..59)"});
+}
+
+TEST_CASE("rbcd-merge: messages are one line, escaped, long tokens cut", "[merge_hostile]") {
+    TempDir td;
+    // A 1 MB token the JSON parser quotes back, with an ESC in it.
+    const std::string bad = td.write("bad.json", "{\"format\": \"" + std::string(1 << 20, 'x') + "\x1b");
+    const Result r = run_program(td, RBCD_MERGE, {"--stats", td.stats(), bad});
+    expect_input_error(td, r, {"bad.json", "not JSON", "bytes)"});
+    CHECK(r.err.size() < 4096);
+    CHECK(r.err.find('\x1b') == std::string::npos);
 }

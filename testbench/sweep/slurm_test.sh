@@ -144,6 +144,12 @@ rm "$tmp/out-slurm/results.csv"
   || { cat "$tmp/resume.log"; echo "FAILED: the resubmission"; exit 1; }
 grep -q "0 to run in 0 array tasks" "$tmp/resume.log" || { cat "$tmp/resume.log"; echo "FAILED: resume reran runs"; exit 1; }
 cmp "$tmp/out-local/results.csv" "$tmp/out-slurm/results.csv" || { echo "FAILED: resumed table differs"; exit 1; }
+# jobs.json keeps the first submission's ids beside the resubmission's; -q prints nothing.
+python3 -c 'import json, sys; j = json.load(open(sys.argv[1])); e = j["earlier"]; sys.exit(not (len(e) == 1 and e[0]["array"] and e[0]["merge"] and j["merge"]))' \
+  "$tmp/out-slurm/slurm/jobs.json" || { cat "$tmp/out-slurm/slurm/jobs.json"; echo "FAILED: jobs.json lost the earlier ids"; exit 1; }
+"${sweep_cmd[@]}" slurm "$tmp/sweep.toml" -o "$tmp/out-slurm" --wait --poll 0.5 -q --rbcd-sim "$sim" 2> "$tmp/quiet.log" \
+  || { cat "$tmp/quiet.log"; echo "FAILED: the quiet resubmission"; exit 1; }
+[ ! -s "$tmp/quiet.log" ] || { cat "$tmp/quiet.log"; echo "FAILED: slurm -q printed"; exit 1; }
 # One input split in frame ranges across array tasks, merged by the merge job.
 mkdir "$tmp/suite"
 cp "$root/vectors/default.rbt" "$root/vectors/multi-frame-mixed.rbt" "$tmp/suite/"
@@ -160,7 +166,7 @@ fields = ["totals.frames", "totals.hits", "totals.overflows"]
 runs_per_task = 4
 EOF
 "${sweep_cmd[@]}" run "$tmp/split.toml" -o "$tmp/split-local" -q --rbcd-sim "$sim"
-"${sweep_cmd[@]}" slurm "$tmp/split.toml" -o "$tmp/split-slurm" --wait --poll 0.5 -q --rbcd-sim "$sim" 2> "$tmp/split.log" \
+"${sweep_cmd[@]}" slurm "$tmp/split.toml" -o "$tmp/split-slurm" --wait --poll 0.5 --rbcd-sim "$sim" 2> "$tmp/split.log" \
   || { cat "$tmp/split.log"; echo "FAILED: the split SLURM sweep"; exit 1; }
 grep -q "12 runs, 12 to run in 3 array tasks" "$tmp/split.log" || { cat "$tmp/split.log"; echo "FAILED: expected 3 tasks"; exit 1; }
 cmp "$tmp/split-local/results.csv" "$tmp/split-slurm/results.csv" || { echo "FAILED: split tables differ"; exit 1; }

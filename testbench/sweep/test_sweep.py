@@ -291,6 +291,8 @@ fields = ["totals.hits", "totals.overflows", "totals.cycles", "gpu.overhead_pct"
     check(not os.path.exists(os.path.join(out, "results.csv")), "no table from a killed sweep")
     done = sorted(d for d in os.listdir(runs) if os.path.exists(os.path.join(runs, d, "result.json")))
     check(2 <= len(done) < 6, f"{len(done)} runs finished before the kill")
+    # The interrupted run's folder is gone: only finished runs stay (issue 19).
+    check(sorted(os.listdir(runs)) == done, f"partial run folders left: {sorted(set(os.listdir(runs)) - set(done))}")
     stamps = {d: os.stat(os.path.join(runs, d, "result.json")).st_mtime_ns for d in done}
     for d in done:
         check(json.load(open(os.path.join(runs, d, "result.json")))["status"] == 0, "a finished run is complete")
@@ -341,6 +343,27 @@ def case_plot(c):
              os.path.join(c.tmp, "x.png")])
     check(r.returncode == 2 and "totals.nope" in r.stderr and not os.path.exists(os.path.join(c.tmp, "x.png")),
           f"a missing column is an error naming it: {r.stderr}")
+    # Axis labels with units, legends without absolute paths (issue 19).
+    import importlib.machinery
+    import importlib.util
+    loader = importlib.machinery.SourceFileLoader("rbcd_plot", PLOT)
+    mod = importlib.util.module_from_spec(importlib.util.spec_from_loader("rbcd_plot", loader))
+    loader.exec_module(mod)
+    check(mod.label("gpu.overhead_pct") == "gpu.overhead_pct (%)" and mod.label("energy.total_nj") == "energy.total_nj (nJ)"
+          and mod.label("totals.hits") == "totals.hits (count)" and mod.label("clock.mhz") == "clock.mhz (MHz)",
+          "axis labels carry units")
+    check(mod.legend_names(["/w/suite/a.rbt", "/w/suite/b.rbt"]) == {"/w/suite/a.rbt": "a.rbt", "/w/suite/b.rbt": "b.rbt"}
+          and mod.legend_names(["/w/x/a.toml"]) == {"/w/x/a.toml": "a.toml"}
+          and mod.legend_names(["default", "b"]) == {"default": "default", "b": "b"},
+          "legends without the directories the inputs share")
+    # Hostile input (issue 22): a FIFO table is refused, -o naming the table is refused.
+    fifo = os.path.join(c.tmp, "t.fifo")
+    os.mkfifo(fifo)
+    r = run(["/usr/bin/python3", PLOT, fifo, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "-o", os.path.join(c.tmp, "f.png")])
+    check(r.returncode == 2 and "is a FIFO" in r.stderr and len(r.stderr.splitlines()) == 1, f"FIFO table: {r.stderr}")
+    before = c.read(table)
+    r = run(["/usr/bin/python3", PLOT, table, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "-o", table])
+    check(r.returncode == 2 and "is the input table" in r.stderr and c.read(table) == before, f"-o = table: {r.stderr}")
 
 
 def case_frames(c):
@@ -419,6 +442,158 @@ fields = ["totals.frames", "totals.hits", "totals.cycles"]
     check(mask(ms_text) == mask(whole_text), "merged stats JSON differs from the whole run's (wall time aside):\n" +
           "".join(difflib.unified_diff(mask(whole_text).splitlines(True), mask(ms_text).splitlines(True), "whole", "merged")))
     check(c.read(mc) == whole, "whole run by the merged provenance's command differs in collisions")
+
+
+def one_error_line(r, needle, what):
+    """Exit 2, one escaped line holding `needle`, no traceback."""
+    check(r.returncode == 2, f"{what}: exit {r.returncode}, expected 2: {r.stderr!r}")
+    check(len(r.stderr.splitlines()) == 1 and r.stderr.startswith("rbcd-sweep: "),
+          f"{what}: not one line: {r.stderr!r}")
+    check("Traceback" not in r.stderr and "\x1b" not in r.stderr, f"{what}: traceback or raw ESC: {r.stderr!r}")
+    check(needle in r.stderr, f"{what}: {needle!r} not in {r.stderr!r}")
+
+
+def case_hostile(c):
+    """Issue 22: hostile sweep files and output directories; each failed before."""
+    ok = c.sweep_file("ok.toml", "[axes]\nzeb.banks = [1, 2]\n[inputs]\ndefault = true\n")
+    # OUT/runs a file: refused before .lock or plan.json is written.
+    out = os.path.join(c.tmp, "o1")
+    os.makedirs(out)
+    with open(os.path.join(out, "plan.json"), "w") as f:
+        f.write("{}")
+    with open(os.path.join(out, "runs"), "w") as f:
+        f.write("")
+    r = c.sweep("run", ok, "-o", out, "-q")
+    one_error_line(r, "runs exists and is not a directory", "OUT/runs a file")
+    check(sorted(os.listdir(out)) == ["plan.json", "runs"] and c.read(os.path.join(out, "plan.json")) == "{}",
+          f"OUT touched: {os.listdir(out)}")
+    # -o a dangling symlink: one line, not [Errno 17].
+    dangling = os.path.join(c.tmp, "dangling")
+    os.symlink(os.path.join(c.tmp, "nowhere"), dangling)
+    one_error_line(c.sweep("run", ok, "-o", dangling, "-q"), "exists and is not a directory", "dangling -o")
+    # A FIFO as the sweep file: refused, not waited on.
+    fifo = os.path.join(c.tmp, "s.fifo")
+    os.mkfifo(fifo)
+    one_error_line(c.sweep("list", fifo), "cannot read sweep file: is a FIFO", "FIFO sweep file")
+    # Nested 5,000 deep: exit 2 naming the file, not "maximum recursion depth".
+    deep = c.sweep_file("deep.toml", "[axes]\nx = " + "[" * 5000 + "]" * 5000 + "\n")
+    one_error_line(c.sweep("list", deep), "deep.toml: nested too deep", "5000-deep arrays")
+    # Run counts capped before expansion (each took minutes or all memory).
+    for name, text, needle in (
+            ("count.toml", "[repeats]\ncount = 100000000\n", "repeats.count: 100000000"),
+            ("axes.toml", "[axes]\n" + "".join(f"k{i}.x = [{', '.join(map(str, range(1000)))}]\n" for i in range(3)),
+             "1000000000 runs"),
+            ("wide.toml", "[axes]\nk.x = [" + ", ".join(map(str, range(200000))) + "]\n", "200000 runs")):
+        t0 = time.monotonic()
+        one_error_line(c.sweep("list", c.sweep_file(name, text)), needle, name)
+        check(time.monotonic() - t0 < 30, f"{name}: took {time.monotonic() - t0:.0f} s")
+    r = c.sweep("list", c.sweep_file("count2.toml", "[repeats]\ncount = 3\n"), "--max-runs", "2")
+    one_error_line(r, "3 runs", "--max-runs")
+    # Values the checks let through before.
+    for text, needle in (('[inputs]\nframes = "0:18446744073709551616"\n', "beyond 2^64 - 1"),
+                         ("[slurm]\nmax_parallel = -1\n", "slurm.max_parallel: must be at least 1"),
+                         ('[axes]\n"zeb.banks" = [1, 2]\nzeb.banks = [1, 4]\n', "zeb.banks: given twice"),
+                         ('[base.set]\n"zeb.banks" = 1\nzeb.banks = 2\n', "zeb.banks: given twice"),
+                         ('[[zip]]\n"zeb.banks" = [1]\nzeb.banks = [2]\n', "zeb.banks: given twice")):
+        one_error_line(c.sweep("list", c.sweep_file("v.toml", text)), needle, text)
+    # Keys with ESC and LF are escaped in messages and in list's output.
+    r = c.sweep("list", c.sweep_file("esc.toml", '[axes]\n"a\\u001b[31m\\nb" = [1]\n'))
+    one_error_line(r, "a\\x1b[31m\\x0ab", "ESC in a key")
+    # A sweep file that is not UTF-8: one line, no traceback.
+    bad = os.path.join(c.tmp, "bin.toml")
+    with open(bad, "wb") as f:
+        f.write(b"[axes]\nx = [\xff\xfe]\n")
+    one_error_line(c.sweep("list", bad), "not UTF-8", "binary sweep file")
+    # list catches a typo in results.fields (a warning: exit 0).
+    r = c.sweep("list", c.sweep_file("typo.toml", '[results]\nfields = ["totls.hits", "totals.hits"]\n'))
+    check(r.returncode == 0 and "results.fields: totls.hits: not a key" in r.stderr
+          and "totals.hits:" not in r.stderr, f"typo in results.fields: {r.returncode} {r.stderr}")
+
+
+def case_parser_property(c):
+    """Property of the sweep file reader: whatever the file, `list` ends with exit 0 and
+    one line per run, or exit 2 and one escaped line; never a traceback or another
+    status. Files are drawn at random (fixed seed) from valid pieces, broken pieces and
+    random bytes; the reader is loaded once, in this process, to keep it fast."""
+    import importlib.machinery
+    import importlib.util
+    import random
+    loader = importlib.machinery.SourceFileLoader("rbcd_sweep", SWEEP)
+    mod = importlib.util.module_from_spec(importlib.util.spec_from_loader("rbcd_sweep", loader))
+    loader.exec_module(mod)
+    rnd = random.Random(22)
+    keys = ["zeb.banks", '"zeb.banks"', "zeb.list_length", "clock.mhz", "a.b", "x", '"\\u001b"', "memory.seed"]
+    values = ["1", "2", "4", '"s"', "1.5", "true", "-1", "1e400", "[]", "[1, [2]]", "{a = 1}", "99999999999999999999"]
+    tables = ["[axes]", "[base.set]", "[[zip]]", "[repeats]", "[inputs]", "[slurm]", "[results]", "[split]",
+              "[bogus]", "[axes.zeb]", "[inputs.set]"]
+    scalars = ["count", "first_seed", "seeds", "frames", "default", "max_parallel", "runs_per_task", "fields",
+               "frames_per_run", "collisions"]
+
+    def piece():
+        k = rnd.random()
+        if k < 0.3:
+            return rnd.choice(tables)
+        if k < 0.6:
+            vals = ", ".join(rnd.choice(values) for _ in range(rnd.randint(0, 4)))
+            return f"{rnd.choice(keys)} = [{vals}]"
+        if k < 0.85:
+            return rnd.choice(scalars) + " = " + rnd.choice(values + ["[1, 2, 3]", '"0:3"', '"3:1"'])
+        return "".join(chr(rnd.randint(0, 0x2fff)) for _ in range(rnd.randint(1, 12)))
+
+    path = os.path.join(c.tmp, "p.toml")
+    statuses = {0: 0, 2: 0}
+    for i in range(400):
+        text = "\n".join(piece() for _ in range(rnd.randint(0, 8))) + "\n"
+        with open(path, "w", encoding="utf-8", errors="surrogatepass") as f:
+            f.write(text)
+        try:
+            sw = mod.Sweep(path)
+        except mod.SweepError as e:
+            msg = mod.escape(str(e))
+            check("\n" not in msg and "\x1b" not in msg and msg.startswith(path), f"file {i}: message {msg!r}")
+            statuses[2] += 1
+            continue
+        except Exception as e:   # the property: nothing else escapes the reader
+            raise Fail(f"file {i}: {type(e).__name__}: {e}\n{text!r}")
+        n = len(sw.inputs) * len(sw.seeds)
+        for _, vals in sw.dims:
+            n *= len(vals)
+        check(n <= sw.max_runs, f"file {i}: {n} runs past the cap")
+        check(len(sw.points()) * len(sw.inputs) * len(sw.seeds) == n, f"file {i}: points do not multiply out")
+        statuses[0] += 1
+    check(statuses[0] > 10 and statuses[2] > 10, f"both outcomes drawn: {statuses}")
+
+
+def case_warnings(c):
+    """rbcd-sim's warnings are kept per run (runs/ID/stderr.txt) and summarized
+    (OUT/warnings.txt, one line on stderr); wall.csv says which frames each run ran;
+    progress in a log comes at least every tenth of the runs (issue 19)."""
+    mesh = os.path.join(c.tmp, "open.obj")
+    with open(mesh, "w") as f:   # one triangle: an open mesh, which rbcd-sim warns about
+        f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    scene = os.path.join(c.tmp, "scene.toml")
+    with open(scene, "w") as f:
+        f.write('format = "rbcd-scene 1"\nframes = 2\n[screen]\nwidth = 64\nheight = 48\n'
+                '[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\nfov_y = 45.0\nnear = 0.5\nfar = 60.0\n'
+                '[[object]]\nid = 1\nmesh = "open.obj"\n')
+    s = c.sweep_file("s.toml", f'[axes]\nzeb.banks = [1, 2, 4, 8]\n[inputs]\nscenes = ["{scene}"]\n')
+    out = os.path.join(c.tmp, "out")
+    r = c.sweep("run", s, "-o", out, "-j", "2")
+    check(r.returncode == 0, f"sweep failed: {r.stderr}")
+    rows = c.rows(out)
+    for row in rows:
+        err = c.read(os.path.join(out, "runs", row["run"], "stderr.txt"))
+        check(": warning: " in err and "open" in err, f"run {row['run']}: stderr.txt lacks the warning: {err!r}")
+    summary = c.read(os.path.join(out, "warnings.txt"))
+    check(summary.startswith("4 runs (") and "open" in summary and len(summary.splitlines()) == 1,
+          f"warnings.txt: {summary!r}")
+    check("4 runs printed 1 distinct rbcd-sim warnings" in r.stderr, f"no summary on stderr: {r.stderr}")
+    with open(os.path.join(out, "wall.csv"), newline="") as f:
+        frames = [w["frames"] for w in csv.DictReader(f)]
+    check(frames == ["0:1"] * 4, f"wall.csv frames column: {frames}")
+    # Progress in a log (not a terminal): a line at every tenth of the runs at least.
+    progress = [l for l in r.stderr.splitlines() if " runs, " in l and " failed, " in l]
+    check(len(progress) >= 4, f"sparse progress: {progress}")
 
 
 CASES = {n[5:]: f for n, f in globals().items() if n.startswith("case_")}

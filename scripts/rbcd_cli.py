@@ -1,0 +1,208 @@
+"""What the project's Python tools (rbcd-sweep, rbcd-plot) share with rbcd-sim's
+rules for inputs, outputs and messages (docs/limits.md), in one place:
+
+    from rbcd_cli import UsageError, read_input, write_output, main_wrapper
+
+- Messages are one line: bytes that are not printable are written as \\xNN (as
+  rbcd-sim's escape_for_message does) and a token longer than 1024 characters
+  is cut. Errors are exit 2 (UsageError) or 1 (anything else, "internal
+  error"), never a traceback.
+- Inputs are regular files, opened without waiting on a FIFO, read up to a
+  stated limit, with the same wording as rbcd-sim: "PATH: cannot read WHAT:
+  REASON".
+- Outputs are written as rbcd-sim writes them: a path that is absent or a
+  regular file through an unpredictable temporary beside it (mkstemp, never a
+  planted symlink followed), renamed over it when complete; anything else (a
+  device, a FIFO, a symlink) written in place and never unlinked. A temporary
+  is removed on failure and on SIGINT/SIGTERM/SIGHUP (main_wrapper turns them
+  into KeyboardInterrupt, so that cleanup code runs).
+"""
+import os
+import re
+import signal
+import stat
+import sys
+import tempfile
+
+MAX_TOKEN = 1024
+
+
+class UsageError(Exception):
+    """Bad input or command line: one line, exit 2."""
+
+
+def _escape_char(ch):
+    cp = ord(ch)
+    if 0x20 <= cp < 0x7f:
+        return ch
+    if cp >= 0xa0 and cp not in (0x2028, 0x2029) and not 0xd800 <= cp <= 0xdfff:
+        return ch
+    if 0xdc80 <= cp <= 0xdcff:   # a byte that was not UTF-8 (surrogateescape)
+        return f"\\x{cp - 0xdc00:02x}"
+    return "".join(f"\\x{b:02x}" for b in ch.encode("utf-8", "surrogatepass"))
+
+
+def escape(text):
+    """One printable line: control characters (LF, CR, ESC, ...), DEL, C1 controls and
+    invalid UTF-8 as \\xNN; tokens longer than MAX_TOKEN characters cut."""
+    if isinstance(text, bytes):
+        text = text.decode("utf-8", "surrogateescape")
+    out = "".join(_escape_char(c) for c in str(text))
+    return re.sub(r"\S{%d,}" % (MAX_TOKEN + 1),
+                  lambda m: m.group(0)[:MAX_TOKEN] + f"...({len(m.group(0))} characters)", out)
+
+
+def say(prog, text):
+    """One line on stderr, escaped."""
+    sys.stderr.write(f"{prog}: {escape(text)}\n")
+    sys.stderr.flush()
+
+
+def _kind(mode):
+    return ("a directory" if stat.S_ISDIR(mode) else "a character device" if stat.S_ISCHR(mode)
+            else "a block device" if stat.S_ISBLK(mode) else "a FIFO" if stat.S_ISFIFO(mode)
+            else "a socket" if stat.S_ISSOCK(mode) else "not a file")
+
+
+def cannot_read(path, what, reason):
+    return UsageError(f"{path}: cannot read {what}: {reason}")
+
+
+def read_input(path, what, max_bytes, limit_key=""):
+    """The bytes of a regular file of at most max_bytes; UsageError otherwise."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError as e:
+        raise cannot_read(path, what, e.strerror)
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise cannot_read(path, what, f"is {_kind(st.st_mode)}, not a regular file")
+        os.set_blocking(fd, True)
+        chunks, n = [], 0
+        while True:
+            b = os.read(fd, 1 << 16)
+            if not b:
+                break
+            n += len(b)
+            if n > max_bytes:
+                raise UsageError(f"{path}: {what} larger than {max_bytes} bytes (the limit"
+                                 + (f", raised by {limit_key}" if limit_key else ", fixed") + "; docs/limits.md)")
+            chunks.append(b)
+        return b"".join(chunks)
+    except OSError as e:
+        raise cannot_read(path, what, e.strerror)
+    finally:
+        os.close(fd)
+
+
+def read_input_text(path, what, max_bytes, limit_key=""):
+    data = read_input(path, what, max_bytes, limit_key)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise UsageError(f"{path}: {what}: not UTF-8 text (byte {e.start})")
+
+
+def _in_place(path):
+    try:
+        return not stat.S_ISREG(os.lstat(path).st_mode)
+    except FileNotFoundError:
+        return False
+
+
+_temporaries = set()
+
+
+def write_output(path, data, what="output"):
+    """Writes `data` (str or bytes) to `path` as rbcd-sim writes its outputs."""
+    if isinstance(data, str):
+        data = data.encode("utf-8")
+    if os.path.isdir(path):
+        raise UsageError(f"{path}: cannot create: is a directory")
+    if _in_place(path):
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_NOCTTY | os.O_CLOEXEC)
+        except OSError as e:
+            raise UsageError(f"{path}: cannot create: {e.strerror}")
+        try:
+            if stat.S_ISREG(os.fstat(fd).st_mode):
+                os.ftruncate(fd, 0)   # a symlink to a regular file: written through
+            _write_all(fd, data)
+        finally:
+            os.close(fd)
+        return
+    d, base = os.path.split(path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{base}.", dir=d or ".")
+    except OSError as e:
+        raise UsageError(f"{path}: cannot create: {e.strerror}")
+    _temporaries.add(tmp)
+    try:
+        mask = os.umask(0)
+        os.umask(mask)
+        os.fchmod(fd, 0o666 & ~mask)
+        _write_all(fd, data)
+        os.close(fd)
+        fd = -1
+        os.replace(tmp, path)
+    except BaseException:
+        if fd >= 0:
+            os.close(fd)
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    finally:
+        _temporaries.discard(tmp)
+
+
+def _write_all(fd, data):
+    view = memoryview(data)
+    while view:
+        n = os.write(fd, view)
+        view = view[n:]
+
+
+def same_file(a, b):
+    try:
+        sa, sb = os.stat(a), os.stat(b)
+    except OSError:
+        return False
+    return (sa.st_dev, sa.st_ino) == (sb.st_dev, sb.st_ino)
+
+
+def _interrupt(signum, _frame):
+    raise KeyboardInterrupt
+
+
+def main_wrapper(prog, fn, argv):
+    """fn(argv) with the project's exit statuses: its return value; 2 and one line for
+    UsageError (and a file nested too deep for the parser); 1 and one line for any
+    other error; 130 when interrupted. Never a traceback."""
+    for s in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(s, _interrupt)
+    try:
+        return fn(argv)
+    except UsageError as e:
+        say(prog, str(e))
+        return 2
+    except KeyboardInterrupt:
+        say(prog, "interrupted")
+        return 130
+    except RecursionError:
+        say(prog, "input nested too deep to read (internal error)")
+        return 1
+    except MemoryError:
+        say(prog, "out of memory (internal error)")
+        return 1
+    except Exception as e:   # noqa: BLE001: the promise is one line, whatever failed
+        say(prog, f"internal error: {type(e).__name__}: {e}")
+        return 1
+    finally:
+        for t in list(_temporaries):
+            try:
+                os.unlink(t)
+            except OSError:
+                pass
