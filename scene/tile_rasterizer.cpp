@@ -66,7 +66,9 @@ void TileRasterizer::begin_frame(std::uint64_t f) {
     for (auto& b : bins_) b.clear();
     cursor_ = 0;
     depth_limit_ = SIZE_MAX;
-    if (keep_depth_) depth_.assign(std::size_t(width_) * height_, static_cast<std::uint32_t>(depth_max_));
+    // As in GL, the depth buffer lasts from frame to frame until a clear; its
+    // first content (undefined in GL) is zero, as Mesa allocates it.
+    if (keep_depth_ && depth_.empty()) depth_.assign(std::size_t(width_) * height_, 0);
 }
 
 std::uint32_t TileRasterizer::add_draw(DrawState s) {

@@ -84,8 +84,8 @@ public:
     unsigned tiles_y() const { return tiles_y_; }
     double depth_max() const { return depth_max_; }
 
-    // Starts frame f: no draws, the tile cursor at the first tile, the depth
-    // buffer (when kept) cleared to depth_max.
+    // Starts frame f: no draws, the tile cursor at the first tile. The depth
+    // buffer (when kept) carries over from the frame before, as GL's does.
     void begin_frame(std::uint64_t f);
     std::uint32_t add_draw(DrawState s);
     // Clips, projects, culls and bins the triangles of `draw` (vertex indices
