@@ -139,8 +139,9 @@ CdInput load_geometry_text(std::string_view text, const std::string& path) {
     r.text = text;
     CdInput g;
     g.name = path;
-    if (!r.next() || r.tok.size() != 2 || r.tok[0] != "rbcd-geometry" || r.tok[1] != "1")
-        r.fail("expected the magic line 'rbcd-geometry 1'");
+    if (!r.next() || r.tok.size() != 2 || r.tok[0] != "rbcd-geometry" || (r.tok[1] != "1" && r.tok[1] != "2"))
+        r.fail("expected the magic line 'rbcd-geometry 1' or 'rbcd-geometry 2'");
+    const bool v2 = r.tok[1] == "2";
     constexpr std::uint64_t kMaxCount = 100000000;
     bool in_frames = false, screen_seen = false;
     std::vector<bool> seen;   // parts given a matrix in the current frame
@@ -158,18 +159,26 @@ CdInput load_geometry_text(std::string_view text, const std::string& path) {
             g.height = unsigned(r.count(2, 8192));
             if (!g.width || !g.height) r.fail("screen: width and height must be at least 1");
             screen_seen = true;
+        } else if (k == "view" && v2 && in_frames) {
+            FrameExtra& fx = g.extra.back();
+            if (fx.has_view) r.fail("view: given twice in this frame");
+            r.expect_fields(17, "view");
+            for (int i = 0; i < 16; ++i) fx.view_proj(i / 4, i % 4) = r.number(1 + std::size_t(i));
+            fx.has_view = true;
         } else if (k == "view") {
             if (in_frames || g.has_view) r.fail("view: must come once, before the first frame");
             r.expect_fields(17, "view");
             for (int i = 0; i < 16; ++i) g.view_proj(i / 4, i % 4) = r.number(1 + std::size_t(i));
             g.has_view = true;
-        } else if (k == "part") {
-            if (in_frames) r.fail("part: parts come before the first frame");
-            if (r.tok.size() != 4 && r.tok.size() != 5) r.fail("part: expected ID NV NT [NAME]");
+        } else if (k == "part" || (k == "mesh" && v2)) {
+            const bool mesh = k == "mesh";
+            if (!mesh && in_frames) r.fail("part: parts come before the first frame");
+            if (mesh && !in_frames) r.fail("mesh: meshes belong to a frame (parts come before the first)");
+            if (r.tok.size() != 4 && r.tok.size() != 5) r.fail(k + ": expected ID NV NT [NAME]");
             Part p;
             p.id = std::uint32_t(r.count(1, 0xFFFFFFFFull));
             const std::uint64_t nv = r.count(2, kMaxCount), nt = r.count(3, kMaxCount);
-            if (nv < 3 || nt < 1) r.fail("part: needs at least 3 vertices and 1 triangle");
+            if (nv < 3 || nt < 1) r.fail(k + ": needs at least 3 vertices and 1 triangle");
             if (r.tok.size() == 5) p.name = r.tok[4];
             auto m = std::make_shared<PartMesh>();
             for (std::uint64_t i = 0; i < nv; ++i) {
@@ -184,16 +193,17 @@ CdInput load_geometry_text(std::string_view text, const std::string& path) {
                                    std::uint32_t(r.count(3, nv - 1))});
             }
             p.mesh = std::move(m);
-            g.parts.push_back(std::move(p));
+            (mesh ? g.extra.back().meshes : g.parts).push_back(std::move(p));
         } else if (k == "frame") {
             r.expect_fields(2, "frame");
-            if (g.parts.empty()) r.fail("frame: no part before the first frame");
+            if (g.parts.empty() && !v2) r.fail("frame: no part before the first frame");
             if (r.count(1, kMaxCount) != g.model.size())
                 r.fail("frame: expected frame " + std::to_string(g.model.size()) + " (frames count up from 0)");
             close_frame();
             in_frames = true;
             g.model.emplace_back(g.parts.size(), Eigen::Matrix4d::Identity());
             seen.assign(g.parts.size(), false);
+            if (v2) g.extra.emplace_back();
         } else if (k == "m") {
             if (!in_frames) r.fail("m: before the first frame");
             r.expect_fields(14, "m");
@@ -204,29 +214,56 @@ CdInput load_geometry_text(std::string_view text, const std::string& path) {
             for (int i = 0; i < 12; ++i) mm(i / 4, i % 4) = r.number(2 + std::size_t(i));
             check_rigid_plus_scale(r, mm);
         } else {
-            r.fail("unknown record " + show(k) + " (known: screen, view, part, v, t, frame, m)");
+            r.fail("unknown record " + show(k) +
+                   (v2 ? " (known: screen, view, part, v, t, frame, m, mesh)" : " (known: screen, view, part, v, t, frame, m)"));
         }
     }
     close_frame();
     if (g.model.empty()) throw InputError(path + ": no frame");
-    if (g.has_view && !screen_seen) throw InputError(path + ": 'view' needs a 'screen' record");
+    bool any_view = g.has_view;
+    for (const FrameExtra& fx : g.extra) any_view = any_view || fx.has_view;
+    if (any_view && !screen_seen) throw InputError(path + ": 'view' needs a 'screen' record");
     return g;
 }
 
+CdInput CdInput::frame_input(std::uint64_t f) const {
+    CdInput one;
+    one.name = name;
+    one.width = width;
+    one.height = height;
+    one.has_view = has_view;
+    one.view_proj = view_proj;
+    one.parts = parts;
+    one.model.push_back(model.at(f));
+    if (per_frame()) {
+        const FrameExtra& fx = extra.at(f);
+        if (fx.has_view) {
+            one.has_view = true;
+            one.view_proj = fx.view_proj;
+        }
+        for (const Part& p : fx.meshes) {
+            one.parts.push_back(p);
+            one.model[0].push_back(Eigen::Matrix4d::Identity());
+        }
+    }
+    return one;
+}
+
 std::string geometry_file_text(const CdInput& in) {
-    std::string s = "rbcd-geometry 1\n";
+    std::string s = in.per_frame() ? "rbcd-geometry 2\n" : "rbcd-geometry 1\n";
     char buf[64];
     auto num = [&](double v) {
         std::snprintf(buf, sizeof buf, " %.17g", v);
         s += buf;
     };
+    if (in.width) s += "screen " + std::to_string(in.width) + " " + std::to_string(in.height) + "\n";
     if (in.has_view) {
-        s += "screen " + std::to_string(in.width) + " " + std::to_string(in.height) + "\nview";
+        s += "view";
         for (int i = 0; i < 16; ++i) num(in.view_proj(i / 4, i % 4));
         s += "\n";
     }
-    for (const auto& p : in.parts) {
-        s += "part " + std::to_string(p.id) + " " + std::to_string(p.mesh->verts.size()) + " " +
+    const auto put_part = [&](const char* record, const Part& p) {
+        s += std::string(record) + " " + std::to_string(p.id) + " " + std::to_string(p.mesh->verts.size()) + " " +
              std::to_string(p.mesh->tris.size());
         std::string name = p.name;
         for (char& c : name)
@@ -240,9 +277,19 @@ std::string geometry_file_text(const CdInput& in) {
         }
         for (const auto& t : p.mesh->tris)
             s += "t " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
-    }
+    };
+    for (const auto& p : in.parts) put_part("part", p);
     for (std::size_t f = 0; f < in.model.size(); ++f) {
         s += "frame " + std::to_string(f) + "\n";
+        if (in.per_frame()) {
+            const FrameExtra& fx = in.extra[f];
+            if (fx.has_view) {
+                s += "view";
+                for (int i = 0; i < 16; ++i) num(fx.view_proj(i / 4, i % 4));
+                s += "\n";
+            }
+            for (const auto& p : fx.meshes) put_part("mesh", p);
+        }
         for (std::size_t i = 0; i < in.parts.size(); ++i) {
             s += "m " + std::to_string(i);
             for (int k = 0; k < 12; ++k) num(in.model[f][i](k / 4, k % 4));

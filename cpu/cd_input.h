@@ -28,6 +28,15 @@ struct Part {
     std::shared_ptr<const PartMesh> mesh;
 };
 
+// What a frame of a format-2 geometry file adds to the parts of the whole run:
+// its own meshes (world coordinates, this frame only: game models change shape
+// every frame) and its own view.
+struct FrameExtra {
+    bool has_view = false;
+    Eigen::Matrix4d view_proj = Eigen::Matrix4d::Identity();
+    std::vector<Part> meshes;
+};
+
 struct CdInput {
     std::string name;
     unsigned width = 0, height = 0;   // screen; 0 when the input gives no camera
@@ -35,7 +44,12 @@ struct CdInput {
     Eigen::Matrix4d view_proj = Eigen::Matrix4d::Identity();   // OpenGL clip space
     std::vector<Part> parts;
     std::vector<std::vector<Eigen::Matrix4d>> model;          // [frame][part]
+    std::vector<FrameExtra> extra;   // [frame], format 2 only (empty: every frame is the parts alone)
     std::uint64_t frames() const { return model.size(); }
+    bool per_frame() const { return !extra.empty(); }
+    // Frame f alone, as an input of one frame: the parts at their frame-f
+    // matrices, and the frame's own meshes (identity matrices) and view.
+    CdInput frame_input(std::uint64_t f) const;
 };
 
 // What a geometry file may hold (docs/limits.md, "rbcd-cpucd").

@@ -65,8 +65,12 @@ int run(const Options& opt) {
                                          : load_scene_input(opt.scene);
     // Work bounded in the input: every frame's candidate pairs counted before
     // Bullet or FCL sees any (docs/limits.md).
+    // A format-2 file's frames each carry meshes of their own (game models
+    // change shape every frame): each frame is then its own input, and the
+    // broad phase starts afresh every frame (docs/cpucd.md).
     for (std::uint64_t f = 0; f < in.frames(); ++f)
-        if (overlapping_aabb_pairs(in, f, opt.max_pairs).over_limit)
+        if (in.per_frame() ? overlapping_aabb_pairs(in.frame_input(f), 0, opt.max_pairs).over_limit
+                           : overlapping_aabb_pairs(in, f, opt.max_pairs).over_limit)
             throw InputError((opt.scene.empty() ? opt.geometry : opt.scene) + ": frame " + std::to_string(f) +
                              ": more than " + std::to_string(opt.max_pairs) +
                              " pairs of parts with overlapping bounding boxes (the limit, raised by --max-pairs; "
@@ -91,19 +95,35 @@ int run(const Options& opt) {
 
     std::size_t closed = 0;
     std::set<std::uint32_t> open_ids;   // objects with a part that is not a closed mesh
-    for (const auto& p : in.parts) {
+    std::size_t parts = in.parts.size();
+    const auto note_closed = [&](const Part& p) {
         const bool c = is_closed(*p.mesh);
         closed += c;
         if (!c) open_ids.insert(p.id);
+    };
+    for (const auto& p : in.parts) note_closed(p);
+    for (const auto& fx : in.extra) {
+        parts += fx.meshes.size();
+        for (const auto& p : fx.meshes) note_closed(p);
     }
 
-    CpuDetector det(in);
+    std::unique_ptr<CpuDetector> whole;   // the parts of the whole run; per-frame inputs get their own
+    if (!in.per_frame()) whole = std::make_unique<CpuDetector>(in);
     pairs_out.write("frame,id_a,id_b,aabb,gjk,exact,contained,on_screen,contacts,px_overlap,px_near,open\n");
     frames_out.write("frame,parts,aabb_pairs,gjk_pairs,exact_pairs,broad_us,gjk_us,exact_us,gjk_no_result\n");
     double sum_broad = 0, sum_gjk = 0, sum_exact = 0;
     std::uint64_t n_aabb = 0, n_gjk = 0, n_exact = 0;
     for (std::uint64_t f = 0; f < in.frames(); ++f) {
-        FrameResult r = det.run_frame(f, opt.repeat);
+        std::size_t frame_parts = in.parts.size();
+        FrameResult r;
+        if (whole) {
+            r = whole->run_frame(f, opt.repeat);
+        } else {
+            const CdInput one = in.frame_input(f);
+            frame_parts = one.parts.size();
+            CpuDetector det(one);
+            r = det.run_frame(0, opt.repeat);
+        }
         std::map<PairKey, PairResult> all;
         for (const auto& p : r.pairs) all[{p.a, p.b}] = p;
         if (opt.pixels)
@@ -124,7 +144,7 @@ int run(const Options& opt) {
                             std::to_string(c.near) + "," + std::to_string(open_ids.count(p.a) || open_ids.count(p.b)) +
                             "\n");
         }
-        frames_out.write(std::to_string(f) + "," + std::to_string(in.parts.size()) + "," + std::to_string(na) + "," +
+        frames_out.write(std::to_string(f) + "," + std::to_string(frame_parts) + "," + std::to_string(na) + "," +
                          std::to_string(ng) + "," + std::to_string(ne) + "," + fmt("%.3f", r.t.broad_us) + "," +
                          fmt("%.3f", r.t.gjk_us) + "," + fmt("%.3f", r.t.exact_us) + "," +
                          std::to_string(r.t.gjk_no_result) + "\n");
@@ -142,7 +162,7 @@ int run(const Options& opt) {
     if (!opt.quiet) {
         const double nf = double(in.frames());
         std::printf("rbcd-cpucd: %s\n  frames %llu  parts %zu (%zu closed meshes)\n", escape_for_message(in.name).c_str(),
-                    (unsigned long long)in.frames(), in.parts.size(), closed);
+                    (unsigned long long)in.frames(), parts, closed);
         std::printf("  pair-frames: aabb %llu  gjk %llu  exact %llu\n", (unsigned long long)n_aabb,
                     (unsigned long long)n_gjk, (unsigned long long)n_exact);
         std::printf("  mean time per frame: broad phase %.1f us, broad + GJK %.1f us, exact %.1f us (median of %u repeats)\n",

@@ -162,6 +162,51 @@ TEST_CASE("geometry file: written and read back the same, bad input names the li
     std::remove(path.c_str());
 }
 
+TEST_CASE("geometry file format 2: each frame's own meshes and view, written and read back; misplaced records refused",
+          "[cpucd]") {
+    // Two unit boxes as frame 0's meshes, overlapping; frame 1 moves the second apart and has no view.
+    const auto box_at = [](const std::string& rec, double x) {
+        std::string s = rec + " 8 12\n";
+        for (int i = 0; i < 8; ++i)
+            s += "v " + std::to_string(x + (i & 1)) + " " + std::to_string(i >> 1 & 1) + " " + std::to_string(i >> 2 & 1) + "\n";
+        for (const char* t : {"0 2 1", "1 2 3", "4 5 6", "5 7 6", "0 1 4", "1 5 4", "2 6 3", "3 6 7", "0 4 2", "2 4 6", "1 3 5", "3 7 5"})
+            s += std::string("t ") + t + "\n";
+        return s;
+    };
+    const std::string view = "view 1 0 0 0 0 1 0 0 0 0 -1 -2 0 0 -1 0\n";
+    const std::string text = "rbcd-geometry 2\nscreen 64 48\nframe 0\n" + view + box_at("mesh 1", 0) +
+                             box_at("mesh 2", 0.5) + "frame 1\n" + box_at("mesh 1", 0) + box_at("mesh 2", 3);
+    const CdInput in = load_geometry_text(text, "g2");
+    REQUIRE(in.frames() == 2);
+    REQUIRE(in.per_frame());
+    CHECK(in.parts.empty());
+    CHECK(in.extra[0].meshes.size() == 2);
+    CHECK(in.extra[0].has_view);
+    CHECK_FALSE(in.extra[1].has_view);
+    const CdInput f0 = in.frame_input(0), f1 = in.frame_input(1);
+    CHECK(f0.parts.size() == 2);
+    CHECK(f0.has_view);
+    CHECK(f0.view_proj(2, 3) == -2.0);
+    CHECK(only_pair(f0).exact);
+    CHECK(overlapping_aabb_pairs(f1, 0, 100).pairs.empty());
+    // Written back: format 2 again, and read back to the same text.
+    const std::string once = geometry_file_text(in);
+    CHECK(once.rfind("rbcd-geometry 2\n", 0) == 0);
+    CHECK(geometry_file_text(load_geometry_text(once, "again")) == once);
+    const auto refused = [](const std::string& t, const std::string& where) {
+        try {
+            load_geometry_text(t, "bad");
+            FAIL("accepted: " << t);
+        } catch (const InputError& e) {
+            CHECK(std::string(e.what()).find(where) == 0);
+        }
+    };
+    refused("rbcd-geometry 2\n" + box_at("mesh 1", 0), "bad:2: mesh: meshes belong to a frame");
+    refused("rbcd-geometry 1\nframe 0\n" + box_at("mesh 1", 0), "bad:2: frame: no part");
+    refused("rbcd-geometry 2\nscreen 8 8\nframe 0\n" + view + view, "bad:5: view: given twice");
+    refused("rbcd-geometry 2\nframe 0\n" + view, "bad: 'view' needs a 'screen' record");
+}
+
 TEST_CASE("pixel intervals: overlap, near within the tolerance, apart", "[cpucd]") {
     auto frag = [](std::uint32_t x, std::uint32_t depth, std::uint32_t id, Facing f) {
         Fragment r;

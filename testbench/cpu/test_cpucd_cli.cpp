@@ -149,7 +149,7 @@ TEST_CASE("rbcd-cpucd: messages are one line, escaped, long tokens cut", "[cpucd
     const Result esc = cpucd(td, {"--geometry", td.write("esc.geo", "rbcd-geometry 1\n\x1b[31mred\xff\n")});
     expect_refused(esc, {"esc.geo:2: unknown record", "\\x1b[31mred\\xff"});
     CHECK(esc.err.find('\x1b') == std::string::npos);
-    const Result nl = cpucd(td, {"--geometry", td.write("new\nline.geo", "rbcd-geometry 2\n")});
+    const Result nl = cpucd(td, {"--geometry", td.write("new\nline.geo", "rbcd-geometry 3\n")});
     expect_refused(nl, {"new\\x0aline.geo:1"});
     const Result big = cpucd(td, {"--geometry", td.write("tok.geo", "rbcd-geometry 1\n" + std::string(4000, 'a') + "\n")});
     expect_refused(big, {"tok.geo:2: unknown record 'aaaa", "...' (4000 bytes)"});

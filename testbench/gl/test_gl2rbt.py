@@ -238,6 +238,23 @@ class Case:
                   f"rules {body!r}: {r.returncode} {lines}")
             check(not os.path.exists(out), "an output was left after a bad rules file")
 
+    def geometry(self):
+        """--geometry through rbcd-cpucd: the ground truth has each frame's
+        pairs (overlap, one inside another, sphere and box), on screen."""
+        if not self.a.cpucd:
+            print("skipped: rbcd-cpucd is not built (Bullet and FCL: scripts/setup.sh --eval)")
+            raise SystemExit(SKIP)
+        geo = os.path.join(self.tmp, "boxes.geo")
+        self.convert("--geometry", geo)
+        csv_path = os.path.join(self.tmp, "pairs.csv")
+        r = run([self.a.cpucd, "--geometry", geo, "--pairs", csv_path, "-q"])
+        check(r.returncode == 0, f"rbcd-cpucd failed: {r.stderr.strip()}")
+        with open(csv_path) as f:
+            rows = [l.strip().split(",") for l in f][1:]
+        exact = {(int(r[0]), int(r[1]), int(r[2])): (r[5], r[6], r[7]) for r in rows if r[5] == "1"}
+        check(exact == {(0, 1, 2): ("1", "0", "1"), (1, 1, 2): ("1", "1", "1"), (2, 1, 4): ("1", "0", "1")},
+              f"ground truth pairs (frame, a, b): (exact, contained, on_screen) = {exact}")
+
     def frames(self):
         whole, _ = self.convert()
         part, _ = self.convert("--frames", "1:2", out="part.rbt")
@@ -281,6 +298,7 @@ def main():
     ap.add_argument("--program", required=True)
     ap.add_argument("--raster", required=True)
     ap.add_argument("--sim", required=True)
+    ap.add_argument("--cpucd", default="")
     a = ap.parse_args()
     tmp = tempfile.mkdtemp(prefix="test_gl2rbt.")
     try:
