@@ -22,6 +22,7 @@ endforeach()
 # rbcd-gl2rbt finds rbcd-gl-raster beside itself (docs/gl-capture.md).
 if(TARGET rbcd-gl-raster)
   install(PROGRAMS ${PROJECT_SOURCE_DIR}/scripts/rbcd-gl2rbt DESTINATION ${CMAKE_INSTALL_BINDIR})
+  install(FILES ${PROJECT_SOURCE_DIR}/scripts/rbcd_cli.py DESTINATION ${CMAKE_INSTALL_BINDIR})
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/workloads/games/ DESTINATION ${CMAKE_INSTALL_DATADIR}/rbcd/games
     FILES_MATCHING PATTERN "*.toml")
 endif()
