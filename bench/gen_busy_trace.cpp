@@ -3,7 +3,13 @@
 // objects a tile, each covering ~70% of the tile with one or two depth
 // intervals. Streams tile by tile, so the trace can be far bigger than memory.
 //
-//   gen_busy_trace OUT [FRAGMENTS=5000000] [FRAMES=8] [SEED=1] [--tiles 400]
+//   gen_busy_trace OUT [FRAGMENTS=5000000] [FRAMES=8] [SEED=1] [--tiles 400] [--interleaved]
+//
+// By default each object's fragments come in bursts (its front faces, then its
+// back faces). --interleaved emits the same fragments as a rasterizer working
+// on many small primitives does: each object's fragments cut into runs of 2 to
+// 8 (one small triangle's worth), and the tile's runs taken from its objects
+// in random order, so objects, faces and pixels of the tile mix.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -48,12 +54,14 @@ int main(int argc, char** argv) {
     std::string out;
     std::uint64_t target = 5000000, frames = 8, seed = 1;
     unsigned tiles_per_frame = 400;
+    bool interleaved = false;
     app.add_option("out", out, "output trace path")->required();
     app.add_option("fragments", target, "target number of fragments (about)")->check(CLI::Range(1ull, 1ull << 40));
     app.add_option("frames", frames, "frames")->check(CLI::Range(1ull, 1ull << 20));
     app.add_option("seed", seed, "random seed");
     app.add_option("--tiles", tiles_per_frame, "occupied tiles per frame (at least; raised when the target needs it)")
         ->check(CLI::Range(1u, 1500u));
+    app.add_flag("--interleaved", interleaved, "objects' fragments mixed in small runs, not per-object bursts");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -69,6 +77,8 @@ int main(int argc, char** argv) {
     tiles_per_frame = static_cast<unsigned>(std::min<double>(grid, std::max<double>(tiles_per_frame, need_tiles)));
 
     Rng rng{seed};
+    // The interleaving draws from a stream of its own: both orders hold the same fragments.
+    Rng mix{seed ^ 0x5bd1e9955bd1e995ull};
     rbcd::StreamHeader h;
     h.screen_w = kScreenW;
     h.screen_h = kScreenH;
@@ -154,6 +164,21 @@ int main(int argc, char** argv) {
                         }
                         near += thick + static_cast<std::int64_t>(rng.range(1u << 12, 1u << 18));
                     }
+                }
+                if (interleaved) {
+                    // Runs of 2..8 fragments, in a random order of the tile's
+                    // runs; a run keeps its fragments' order.
+                    std::vector<std::pair<std::size_t, std::size_t>> runs;   // [begin, end)
+                    for (std::size_t b = 0; b < t.frags.size();) {
+                        const std::size_t e = std::min(t.frags.size(), b + static_cast<std::size_t>(mix.range(2, 8)));
+                        runs.emplace_back(b, e);
+                        b = e;
+                    }
+                    for (std::size_t i = runs.size(); i > 1; --i) std::swap(runs[i - 1], runs[mix.range(0, i - 1)]);
+                    std::vector<rbcd::Fragment> mixed;
+                    mixed.reserve(t.frags.size());
+                    for (const auto& [b, e] : runs) mixed.insert(mixed.end(), t.frags.begin() + b, t.frags.begin() + e);
+                    t.frags.swap(mixed);
                 }
                 w.tile(t);
                 written += t.frags.size();

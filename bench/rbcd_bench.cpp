@@ -1,9 +1,10 @@
 // The speed and memory benchmark (never a timed test: CI machines are noisy).
 //   rbcd-bench [--dir DIR] [--fragments N]
-// 1. generates the busy-frame trace (gen_busy_trace) of N fragments and one of 2N;
-// 2. runs rbcd-sim end to end on each as a child process: wall time and peak
-//    memory (ru_maxrss of the child), so the two show whether memory grows
-//    with the trace's length;
+// 1. generates the busy-frame trace (gen_busy_trace) of N fragments and one of
+//    2N, each with per-object bursts and interleaved (--interleaved);
+// 2. runs rbcd-sim end to end on each as a child process, writing collisions
+//    and stats as a user would: wall time and peak memory (ru_maxrss of the
+//    child), so the two sizes show whether memory grows with the trace;
 // 3. loads the N-fragment trace into memory and runs the model alone in this
 //    process: the model's own fragments/s, parsing excluded.
 #include <CLI/CLI.hpp>
@@ -14,6 +15,7 @@
 #include <spawn.h>
 #include <string>
 #include <sys/resource.h>
+#include <tuple>
 #include <sys/wait.h>
 #include <systemc>
 #include <unistd.h>
@@ -78,20 +80,28 @@ int sc_main(int argc, char* argv[]) {
         return 2;
     }
     const std::string t1 = dir + "/rbcd-bench-1x.rbt", t2 = dir + "/rbcd-bench-2x.rbt";
-    std::printf("generating %llu and %llu fragment traces in %s ...\n", (unsigned long long)fragments,
-                (unsigned long long)(2 * fragments), dir.c_str());
+    const std::string i1 = dir + "/rbcd-bench-1x-interleaved.rbt", i2 = dir + "/rbcd-bench-2x-interleaved.rbt";
+    std::printf("generating %llu and %llu fragment traces in %s, bursty and interleaved ...\n",
+                (unsigned long long)fragments, (unsigned long long)(2 * fragments), dir.c_str());
     if (run_child({gen, t1, std::to_string(fragments), "8"}).status != 0 ||
-        run_child({gen, t2, std::to_string(2 * fragments), "16"}).status != 0) {
+        run_child({gen, t2, std::to_string(2 * fragments), "16"}).status != 0 ||
+        run_child({gen, i1, std::to_string(fragments), "8", "--interleaved"}).status != 0 ||
+        run_child({gen, i2, std::to_string(2 * fragments), "16", "--interleaved"}).status != 0) {
         std::fprintf(stderr, "rbcd-bench: trace generation failed\n");
         return 1;
     }
 
-    std::printf("\n%-34s %12s %10s %14s %12s\n", "run", "fragments", "seconds", "fragments/s", "peak MiB");
-    for (const auto& [trace, n] : {std::pair{t1, fragments}, std::pair{t2, 2 * fragments}}) {
+    // End to end as a user runs it: the collisions and the stats written.
+    const std::string col = dir + "/rbcd-bench.collisions", st = dir + "/rbcd-bench.json";
+    std::printf("\n%-34s %12s %10s %14s %12s\n", "run (collisions, stats written)", "fragments", "seconds",
+                "fragments/s", "peak MiB");
+    for (const auto& [trace, n, kind] : {std::tuple{t1, fragments, ""}, std::tuple{t2, 2 * fragments, ""},
+                                         std::tuple{i1, fragments, " interleaved"},
+                                         std::tuple{i2, 2 * fragments, " interleaved"}}) {
         const ChildRun best = [&] {
             ChildRun b;
             for (int rep = 0; rep < 3; ++rep) {
-                ChildRun r = run_child({sim, "--trace", trace, "-q"});
+                ChildRun r = run_child({sim, "--trace", trace, "-q", "--collisions", col, "--stats", st});
                 if (r.status != 0) return r;
                 if (b.status != 0 || r.seconds < b.seconds) b = r;
             }
@@ -101,9 +111,12 @@ int sc_main(int argc, char* argv[]) {
             std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on %s\n", trace.c_str());
             return 1;
         }
-        std::printf("%-34s %12llu %10.3f %14.0f %12.1f\n", ("rbcd-sim end to end, " + std::to_string(n / 1000000) + "M").c_str(),
-                    (unsigned long long)n, best.seconds, double(n) / best.seconds, best.max_rss_kb / 1024.0);
+        std::printf("%-34s %12llu %10.3f %14.0f %12.1f\n",
+                    ("rbcd-sim end to end, " + std::to_string(n / 1000000) + "M" + kind).c_str(), (unsigned long long)n,
+                    best.seconds, double(n) / best.seconds, best.max_rss_kb / 1024.0);
     }
+    std::remove(col.c_str());
+    std::remove(st.c_str());
 
     // Long runs: peak memory must not grow with the number of frames (per-frame
     // figures stream to --frame-stats). Frames of one small tile each. Before the
@@ -147,8 +160,6 @@ int sc_main(int argc, char* argv[]) {
                 double(n) / secs, "-");
     std::printf("\nsimulated: %llu cycles, %llu hits, %llu overflows\n", (unsigned long long)sys.total_cycles(),
                 (unsigned long long)sys.tester.stats().hits, (unsigned long long)sys.sorter.stats().overflows);
-    std::remove(t1.c_str());
-    std::remove(t2.c_str());
-
+    for (const auto& t : {t1, t2, i1, i2}) std::remove(t.c_str());
     return 0;
 }
