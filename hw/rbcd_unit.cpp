@@ -3,6 +3,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "rbcd/common/errors.h"
+
 namespace rbcd {
 
 std::vector<std::unique_ptr<zeb_bank>> rbcd_unit::make_banks(const SimConfig& cfg) {
@@ -46,6 +48,8 @@ std::uint64_t rbcd_unit::host_relay::records_ready(std::uint64_t address, std::u
 
 void rbcd_unit::check_finished() const {
     if (raster.error()) std::rethrow_exception(raster.error());
+    // The run stopped on a memory error response: name it, not a lost tester.
+    if (!outbuf.failure().empty()) throw RunError(outbuf.failure());
     if (!tester.finished())
         throw std::runtime_error("simulation ended before the z-overlap tester finished (internal error)");
 }

@@ -58,8 +58,10 @@ public:
     const sc_core::sc_event& records_ready_event() const { return records_ready_event_; }
     std::uint64_t records_ready_count() const { return records_ready_count_; }
 
-    // After sc_start() returned: rethrows the input's error (InputError) or
-    // throws if the stream did not run to its end.
+    // After sc_start() returned (or threw): rethrows the input's error
+    // (InputError), throws the memory error that stopped the run (RunError,
+    // the message sc_start's report carried), or throws if the stream did not
+    // run to its end.
     void check_finished() const;
     bool finished() const { return tester.finished(); }
     std::exception_ptr error() const { return raster.error(); }
