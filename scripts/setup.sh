@@ -12,15 +12,25 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #            of workloads/) and python3-matplotlib, for scripts/reproduce.sh
 #   --fuzz   clang-14, libclang-rt-14-dev (libFuzzer) and assimp-testmodels (mesh
 #            seeds), for scripts/fuzz.sh
+#   --list   print the packages (with the options given) one a line, install nothing
+# Besides the build: what the test suite runs that a minimal Debian lacks
+# (testbench/scripts/check_test_programs.sh checks the list against the suite).
+pkgs+=(time python3)
+list=no
 for opt in "$@"; do
   case "$opt" in
+    --list) list=yes ;;
     --slurm) pkgs+=(slurm-wlm munge) ;;
     --plots) pkgs+=(python3-matplotlib) ;;
     --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib) ;;
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
-    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz)" >&2; exit 2 ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --list)" >&2; exit 2 ;;
   esac
 done
+if [ "$list" = yes ]; then
+  printf '%s\n' "${pkgs[@]}"
+  exit 0
+fi
 
 # Exit 1 with the list of what is missing and how to install it.
 cannot_install() {
