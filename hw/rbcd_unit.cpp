@@ -20,11 +20,20 @@ std::vector<zeb_bank*> rbcd_unit::bank_ptrs() const {
     return v;
 }
 
+namespace {
+// Before any block is built from it: a platform that skipped validate() gets
+// its InputError here, not a block built from a zero.
+const SimConfig& validated(const SimConfig& c) {
+    c.validate();
+    return c;
+}
+} // namespace
+
 rbcd_unit::rbcd_unit(sc_core::sc_module_name name, const SimConfig& c, FragmentSource& src)
     : sc_module(name),
       mem("mem"),
       host("host"),
-      cfg(c),
+      cfg(validated(c)),
       clk(c.clock.period_ps()),
       banks(make_banks(c)),
       relay_(*this),

@@ -48,7 +48,7 @@ public:
     // To the host: begin_frame, then records_ready whenever records wait in memory.
     sc_core::sc_port<unit_host_if> host;
 
-    // cfg must have passed SimConfig::validate(). The unit reads clock, tile,
+    // Throws InputError if cfg does not pass SimConfig::validate(). The unit reads clock, tile,
     // zeb, feed, gpu, sorter, tester, output and memory.base (the region's address);
     // src is read from the unit's own thread until it reports the end.
     rbcd_unit(sc_core::sc_module_name name, const SimConfig& cfg, FragmentSource& src);

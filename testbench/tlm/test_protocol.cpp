@@ -197,6 +197,20 @@ TEST_CASE("protocol: a latency that is not whole cycles: records ready only once
     CHECK(p->unit.outbuf.stats().write_latency_cycles == 17 * p->unit.outbuf.stats().bursts);
 }
 
+TEST_CASE("protocol: the unit refuses a configuration that does not pass validate()", "[protocol]") {
+    sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
+    SimConfig cfg = small_region_config();
+    cfg.output.max_outstanding = 0;   // crashed in output_buffer::issue()
+    MemorySource src = busy_input(cfg, 1, 1);
+    std::string message;
+    try {
+        rbcd_unit unit("unit", cfg, src);
+    } catch (const InputError& e) {
+        message = e.what();
+    }
+    CHECK(message == "config: output.max_outstanding: out of range 1..256, got 0");
+}
+
 TEST_CASE("protocol: partial DMI windows and short debug reads give the same records", "[protocol]") {
     SimConfig cfg = small_region_config();
     test_memory::options mo;
