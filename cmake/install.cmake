@@ -9,7 +9,7 @@
 include(CMakePackageConfigHelpers)
 
 # Two export sets, so that a platform that links only the unit needs only
-# SystemC (and zlib) found, never Eigen, assimp or libpng.
+# SystemC (and zlib's library) found, never Eigen, assimp or libpng.
 install(TARGETS rbcd_common rbcd_io rbcd_tlm rbcd_hw rbcd_unit EXPORT rbcdUnitTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(TARGETS rbcd_scene rbcd EXPORT rbcdSceneTargets

@@ -1,7 +1,7 @@
 # cmake -DBUILD_DIR= -DSRC_DIR= -DSTAGE= -DEXAMPLE_SRC= -DEXAMPLE_BUILD= -DGENERATOR= -DCXX= [-DLAUNCHER=] [-DFLAGS=]
 #       -DSIM= -DPKG_CONFIG= -DCASES=trace|config;... -P run_embed.cmake
 # The example links rbcd::unit only: it is configured with assimp, libpng,
-# toml++ and Eigen made unfindable, its link line must name none of them, and
+# toml++, Eigen and zlib's CMake module made unfindable, its link line must name none of them, and
 # it is linked a second time from the pkg-config file alone.
 cmake_minimum_required(VERSION 3.18)
 
@@ -49,9 +49,10 @@ endif()
 if(FLAGS)
   list(APPEND config_args "-DCMAKE_CXX_FLAGS=${FLAGS}" "-DCMAKE_EXE_LINKER_FLAGS=${FLAGS}")
 endif()
-# rbcd::unit needs SystemC (and zlib) only: with the scene front end's
-# dependencies unfindable, the package still configures.
-foreach(pkg assimp PNG tomlplusplus Eigen3)
+# rbcd::unit needs SystemC's development package only: with the scene front
+# end's dependencies and zlib's CMake module unfindable (zlib's runtime
+# library does), the package still configures.
+foreach(pkg assimp PNG tomlplusplus Eigen3 ZLIB)
   list(APPEND config_args -DCMAKE_DISABLE_FIND_PACKAGE_${pkg}=ON)
 endforeach()
 file(REMOVE_RECURSE ${EXAMPLE_BUILD})
