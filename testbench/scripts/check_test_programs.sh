@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Every program outside the project that the test suite runs comes from a
-# package scripts/setup.sh installs (for scripts/test.sh: with all its options)
+# package scripts/setup.sh installs (with the options scripts/test.sh gives it)
 # or from one every Debian system has (Priority: required, as a debootstrap
 # minbase holds). A fresh machine then runs the whole suite after set-up.
 #
@@ -15,7 +15,10 @@ setup=$src/scripts/setup.sh
 fails=0
 fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
 
-mapfile -t listed < <(bash "$setup" --list --slurm --plots --eval --fuzz)
+# With the options scripts/test.sh gives it (the whole suite).
+options=$(grep -oE '^[^#]*scripts/setup\.sh( +--[a-z]+)*' "$src/scripts/test.sh" | head -n1 | grep -oE -- '--[a-z]+' | tr '\n' ' ')
+[ -n "$options" ] || { echo "FAIL: scripts/test.sh does not run scripts/setup.sh with its options"; exit 1; }
+mapfile -t listed < <(bash "$setup" --list $options)
 ((${#listed[@]} > 5)) || { echo "FAIL: setup.sh --list printed no package list"; exit 1; }
 # What installing them brings: the listed packages and, recursively, what they
 # depend on (as installed here; slurm-wlm brings slurmd, python3 its interpreter).
