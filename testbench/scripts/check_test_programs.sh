@@ -104,11 +104,16 @@ while IFS=: read -r f w; do
   add "$w" "${f#$src/}"
 done < <(grep -roE 'COMMAND +[A-Za-z][A-Za-z0-9_.+-]*( |$)' --include=CMakeLists.txt --include='*.cmake' \
            "$src/testbench" "$src/vectors" "$src/fuzz" | sed -E 's/COMMAND +//; s/ $//')
-# Programs named first in a Python subprocess call.
+# Programs named first in a Python subprocess call (in *.py and in the
+# scripts/ programs written in Python: rbcd-sweep, rbcd-plot, ...).
+python_files=()
+while IFS= read -r f; do
+  case "$f" in *.py) python_files+=("$f") ;; *) head -n1 "$f" | grep -q python && python_files+=("$f") ;; esac
+done < <(find "$src/testbench" "$src/scripts" -type f)
 while IFS=: read -r f w; do
   add "$w" "${f#$src/}"
-done < <(grep -roE '(run|Popen|check_output|check_call|call)\(\[ *"[a-z][a-z0-9_.+-]*"' --include='*.py' \
-           "$src/testbench" "$src/scripts" | sed -E 's/:.*"([^"]*)"$/:\1/')
+done < <(grep -oE '(run|Popen|check_output|check_call|call)\(\[ *"[a-z][a-z0-9_.+-]*"' "${python_files[@]}" |
+         sed -E 's/:.*"([^"]*)"$/:\1/')
 # std::system() runs /bin/sh.
 grep -rqE 'std::system\(' "$src/testbench" && add /bin/sh "std::system() in testbench/"
 
@@ -118,7 +123,8 @@ declare -A path_of
 queries=()
 for prog in "${!found[@]}"; do
   path=$prog
-  [[ $prog == /* ]] || path=$(PATH="$PATH:/usr/sbin:/sbin" command -v "$prog" 2>/dev/null || true)
+  # Where a Debian system has it, not where this shell's PATH (pyenv, /usr/local) finds it.
+  [[ $prog == /* ]] || path=$(PATH=/usr/sbin:/usr/bin:/sbin:/bin command -v "$prog" 2>/dev/null || true)
   if [ -z "$path" ] || [ ! -e "$path" ]; then
     fail "${found[$prog]} runs $prog, which is not installed here: add its package to scripts/setup.sh"
     continue
