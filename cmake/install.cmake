@@ -1,12 +1,18 @@
 # `cmake --install build --prefix P` (docs/embedding.md):
-#   P/lib/librbcd.a                      the model (rbcd::rbcd)
+#   P/lib/librbcd_{common,io,tlm,hw}.a  the unit, TLM and trace input (rbcd::unit)
+#   P/lib/librbcd_scene.a               the scene front end (rbcd::scene, COMPONENTS scene)
 #   P/include/rbcd/{common,hw,io,scene,tlm}/*.h
-#   P/lib/cmake/rbcd/                    find_package(rbcd CONFIG)
+#   P/lib/cmake/rbcd/                   find_package(rbcd CONFIG [COMPONENTS scene])
+#   P/lib/pkgconfig/rbcd.pc             the unit for pkg-config builds
 #   P/bin/rbcd-sim, P/bin/rbcd-merge, P/bin/rbcd-gl2rbt and rbcd-gl-raster
 #   P/share/rbcd/configs/*.toml, P/share/doc/rbcd/ (README, docs)
 include(CMakePackageConfigHelpers)
 
-install(TARGETS rbcd EXPORT rbcdTargets
+# Two export sets, so that a platform that links only the unit needs only
+# SystemC (and zlib's library) found, never Eigen, assimp or libpng.
+install(TARGETS rbcd_common rbcd_io rbcd_tlm rbcd_hw rbcd_unit EXPORT rbcdUnitTargets
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
+install(TARGETS rbcd_scene rbcd EXPORT rbcdSceneTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
 # Consumers add P/include and write "rbcd/hw/zeb_bank.h", as the tree does.
 foreach(area common hw io scene tlm)
@@ -32,7 +38,8 @@ install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/LICENSE DEST
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rbcd)
 
 set(RBCD_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/rbcd)
-install(EXPORT rbcdTargets NAMESPACE rbcd:: DESTINATION ${RBCD_CMAKE_DIR})
+install(EXPORT rbcdUnitTargets NAMESPACE rbcd:: DESTINATION ${RBCD_CMAKE_DIR})
+install(EXPORT rbcdSceneTargets NAMESPACE rbcd:: DESTINATION ${RBCD_CMAKE_DIR})
 # How the package finds SystemC is decided here, the way this build found it.
 if(RBCD_SYSTEMC_TARGET STREQUAL "PkgConfig::SYSTEMC")
   set(RBCD_FIND_SYSTEMC [=[find_dependency(PkgConfig)
@@ -52,3 +59,14 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/rbcdConfigVersion.cmake
   VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/rbcdConfig.cmake ${PROJECT_BINARY_DIR}/rbcdConfigVersion.cmake
   DESTINATION ${RBCD_CMAKE_DIR})
+
+# pkg-config: the unit (rbcd::unit's archives), relocatable (paths from the .pc's own place).
+file(RELATIVE_PATH RBCD_PC_PREFIX /p/${CMAKE_INSTALL_LIBDIR}/pkgconfig /p)
+string(REGEX REPLACE "/$" "" RBCD_PC_PREFIX "${RBCD_PC_PREFIX}")
+if(RBCD_SYSTEMC_TARGET STREQUAL "PkgConfig::SYSTEMC")
+  set(RBCD_PC_REQUIRES "systemc zlib")
+else()
+  set(RBCD_PC_REQUIRES "zlib")   # SystemC from its CMake package: give its flags yourself
+endif()
+configure_file(${PROJECT_SOURCE_DIR}/cmake/rbcd.pc.in ${PROJECT_BINARY_DIR}/rbcd.pc @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/rbcd.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

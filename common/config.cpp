@@ -8,6 +8,7 @@
 
 #include "rbcd/common/errors.h"
 #include "rbcd/common/input_file.h"
+#include "rbcd/common/records.h"
 
 namespace rbcd {
 
@@ -50,6 +51,16 @@ std::string where_of(const std::string& where, const toml::node& n) {
     throw InputError(where_of(where, n) + ": " + key + ": " + what);
 }
 
+std::string out_of_range(std::uint64_t lo, std::uint64_t hi, const std::string& got) {
+    return "out of range " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " + got;
+}
+
+std::string out_of_range(double lo, double hi, double got) {
+    std::ostringstream os;
+    os << "out of range " << lo << ".." << hi << ", got " << got;
+    return os.str();
+}
+
 template <class T, class Get>
 ConfigKey int_key(std::string name, std::string block, std::string unit, std::string help,
                   std::uint64_t lo, std::uint64_t hi, Get get) {
@@ -60,11 +71,14 @@ ConfigKey int_key(std::string name, std::string block, std::string unit, std::st
         auto v = n.value_exact<std::int64_t>();
         if (!n.is_integer() || !v) fail(where, n, name, "expected an integer");
         if (*v < 0 || static_cast<std::uint64_t>(*v) < lo || static_cast<std::uint64_t>(*v) > hi)
-            fail(where, n, name, "out of range " + std::to_string(lo) + ".." + std::to_string(hi) +
-                                      ", got " + std::to_string(*v));
+            fail(where, n, name, out_of_range(lo, hi, std::to_string(*v)));
         get(c) = static_cast<T>(*v);
     };
     k.to_toml = [get](const SimConfig& c) { return std::to_string(get(const_cast<SimConfig&>(c))); };
+    k.check = [lo, hi, get](const SimConfig& c) {
+        const std::uint64_t v = get(const_cast<SimConfig&>(c));
+        return v < lo || v > hi ? out_of_range(lo, hi, std::to_string(v)) : std::string();
+    };
     return k;
 }
 
@@ -77,12 +91,12 @@ ConfigKey real_key(std::string name, std::string block, std::string unit, std::s
     k.set = [name, lo, hi, get](SimConfig& c, const toml::node& n, const std::string& where) {
         if (!n.is_number()) fail(where, n, name, "expected a number");
         double v = n.is_integer() ? static_cast<double>(*n.value<std::int64_t>()) : *n.value<double>();
-        if (!(v >= lo && v <= hi)) {
-            std::ostringstream os;
-            os << "out of range " << lo << ".." << hi << ", got " << v;
-            fail(where, n, name, os.str());
-        }
+        if (!(v >= lo && v <= hi)) fail(where, n, name, out_of_range(lo, hi, v));
         get(c) = v;
+    };
+    k.check = [lo, hi, get](const SimConfig& c) {
+        const double v = get(const_cast<SimConfig&>(c));
+        return v >= lo && v <= hi ? std::string() : out_of_range(lo, hi, v);   // NaN too
     };
     k.to_toml = [get](const SimConfig& c) {
         // The shortest decimal that reads back as the same double (0.025, not
@@ -116,6 +130,12 @@ ConfigKey enum_key(std::string name, std::string block, std::string help,
             if (ch.second == get(const_cast<SimConfig&>(c))) return "\"" + ch.first + "\"";
         return std::string("\"?\"");
     };
+    k.check = [choices, list, get](const SimConfig& c) {
+        const E v = get(const_cast<SimConfig&>(c));
+        for (auto& ch : choices)
+            if (ch.second == v) return std::string();
+        return "unknown value " + std::to_string(static_cast<long long>(v)) + ", expected " + list;
+    };
     return k;
 }
 
@@ -129,6 +149,7 @@ ConfigKey bool_key(std::string name, std::string block, std::string help, std::f
         get(c) = *v;
     };
     k.to_toml = [get](const SimConfig& c) { return std::string(get(const_cast<SimConfig&>(c)) ? "true" : "false"); };
+    k.check = [](const SimConfig&) { return std::string(); };
     return k;
 }
 
@@ -327,16 +348,29 @@ std::uint64_t SimConfig::max_run_cycles() const {
 
 void SimConfig::validate() const {
     auto bad = [](const std::string& key, const std::string& what) { throw InputError("config: " + key + ": " + what); };
+    for (const auto& k : config_keys()) {
+        const std::string why = k.check(*this);
+        if (!why.empty()) bad(k.name, why);
+    }
     if (zeb.z_bits + zeb.id_bits + 1 > 49) bad("zeb.z_bits", "element wider than 49 bits");
     if (memory.latency_min > memory.latency_max)
         bad("memory.latency_min", "greater than memory.latency_max (" + std::to_string(memory.latency_max) + ")");
     if (output.burst_records > output.buffer_records)
         bad("output.burst_records", "greater than output.buffer_records (" + std::to_string(output.buffer_records) + ")");
-    if (output.region_bytes % 16u != 0)
+    // Records land at 16-byte aligned addresses (docs/memory-layout.md), so every
+    // burst starts on a 64-bit bus word and a record is naturally aligned, as a
+    // host reading it with 128-bit loads expects.
+    if (memory.base % kRecordBytes != 0) bad("memory.base", "not a multiple of the 16-byte record");
+    if (output.region_offset % kRecordBytes != 0) bad("output.region_offset", "not a multiple of the 16-byte record");
+    if (output.region_bytes % kRecordBytes != 0)
         bad("output.region_bytes", "not a multiple of the 16-byte record");
-    if (output.region_bytes < std::uint64_t(output.burst_records) * 16u)
+    if (output.region_bytes < std::uint64_t(output.burst_records) * kRecordBytes)
         bad("output.region_bytes", "smaller than one burst (output.burst_records x 16 bytes)");
-    if (output.region_offset + output.region_bytes * output.regions() > memory.size_bytes)
+    // Written so that no sum can wrap, whatever the ranges above allow.
+    if (memory.size_bytes - 1 > ~std::uint64_t(0) - memory.base)
+        bad("memory.base", "the memory [base, base + size_bytes) wraps past the end of the 64-bit address space");
+    if (output.region_bytes > memory.size_bytes / output.regions() ||
+        output.region_offset > memory.size_bytes - output.region_bytes * output.regions())
         bad("output.region_bytes", std::string(output.double_buffer ? "regions (offset + 2 x size)" : "region (offset + size)") +
                                        " do not fit in memory.size_bytes (" + std::to_string(memory.size_bytes) + ")");
     if (clock.period_ps() == 0) bad("clock.mhz", "period rounds to 0 ps");

@@ -151,7 +151,10 @@ struct SimConfig {
     // work bound exceeds it (docs/limits.md).
     std::uint64_t max_run_cycles() const;
 
-    // Cross-key checks (ranges are checked as keys are set). Throws InputError.
+    // Every key's range (the registry's, as when the key is read from TOML or
+    // --set, so fields set in C++ meet the same rules and messages), then the
+    // cross-key checks: alignment, the memory map within 64 bits, the output
+    // regions inside the memory. Throws InputError "config: KEY: what".
     void validate() const;
 };
 
@@ -163,6 +166,9 @@ struct ConfigKey {
     std::string type;      // "integer", "float", "string", "boolean"
     std::function<void(SimConfig&, const toml::node&, const std::string& where)> set;
     std::function<std::string(const SimConfig&)> to_toml;   // value as TOML text
+    // Why the value `cfg` holds is refused ("out of range 1..16, got 0"), or ""
+    // when it is accepted: the same rule and text as `set` applies to TOML.
+    std::function<std::string(const SimConfig&)> check;
 };
 
 const std::vector<ConfigKey>& config_keys();

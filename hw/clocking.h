@@ -16,6 +16,10 @@ public:
     const sc_core::sc_time& period() const { return period_; }
     sc_core::sc_time time(std::uint64_t cycles) const { return sc_core::sc_time::from_value(cycles * ticks_); }
     std::uint64_t cycles(const sc_core::sc_time& t) const { return t.value() / ticks_; }
+    // The first cycle boundary at or after t: when something that ends at t
+    // (a target's annotated completion, not always a whole number of periods)
+    // is over.
+    std::uint64_t cycles_up(const sc_core::sc_time& t) const { return (t.value() + ticks_ - 1) / ticks_; }
     std::uint64_t now() const { return cycles(sc_core::sc_time_stamp()); }
     // Suspends the calling thread until cycle `c` (no-op if already there).
     void wait_until(std::uint64_t c) const {

@@ -74,10 +74,14 @@ std::uint64_t output_buffer::issue(std::uint64_t cycle, unsigned n) {
     mem->b_transport(gp_, delay);
     // Any status but OK is the run's failure (TLM_INCOMPLETE_RESPONSE too: the
     // target did not answer); docs/embedding.md.
-    if (!gp_.is_response_ok())
-        throw RunError(std::string(name()) + ": memory write of " + std::to_string(bytes) + " bytes at " +
-                       hex_address(gp_.get_address()) + " failed: " + gp_.get_response_string());
-    const std::uint64_t done = clk_.now() + clk_.cycles(delay);
+    if (!gp_.is_response_ok()) {
+        failure_ = std::string(name()) + ": memory write of " + std::to_string(bytes) + " bytes at " +
+                   hex_address(gp_.get_address()) + " failed: " + gp_.get_response_string();
+        throw RunError(failure_);
+    }
+    // Rounded up: a target's latency need not be whole cycles (41 ns at 400 MHz),
+    // and records_ready promises the write is complete by its cycle.
+    const std::uint64_t done = clk_.cycles_up(sc_core::sc_time_stamp() + delay);
 
     if (vcd_) {
         vcd_->add_delta(vcd_in_flight_, t, +1);

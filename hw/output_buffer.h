@@ -12,6 +12,7 @@
 // readback it just started.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <systemc>
 #include <tlm>
 #include <tlm_utils/simple_initiator_socket.h>
@@ -63,6 +64,9 @@ public:
     std::uint64_t end_frame(std::uint64_t cycle);
 
     const stats_t& stats() const { return stats_; }
+    // The memory error that stopped the run ("" if none): kept, because the
+    // exception leaves through sc_start and the platform may ask afterwards.
+    const std::string& failure() const { return failure_; }
     void attach_vcd(VcdWriter& vcd, const std::string& scope) {
         vcd_ = &vcd;
         vcd_occupancy_ = vcd.add(scope, "occupancy", 17);
@@ -96,6 +100,7 @@ private:
     std::vector<unsigned char> data_;
     tlm::tlm_generic_payload gp_;
     stats_t stats_;
+    std::string failure_;
     VcdWriter* vcd_ = nullptr;
     VcdWriter::Sig vcd_occupancy_ = 0, vcd_in_flight_ = 0, vcd_offset_ = 0, vcd_region_ = 0;
 };

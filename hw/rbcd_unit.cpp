@@ -3,6 +3,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "rbcd/common/errors.h"
+
 namespace rbcd {
 
 std::vector<std::unique_ptr<zeb_bank>> rbcd_unit::make_banks(const SimConfig& cfg) {
@@ -18,11 +20,20 @@ std::vector<zeb_bank*> rbcd_unit::bank_ptrs() const {
     return v;
 }
 
+namespace {
+// Before any block is built from it: a platform that skipped validate() gets
+// its InputError here, not a block built from a zero.
+const SimConfig& validated(const SimConfig& c) {
+    c.validate();
+    return c;
+}
+} // namespace
+
 rbcd_unit::rbcd_unit(sc_core::sc_module_name name, const SimConfig& c, FragmentSource& src)
     : sc_module(name),
       mem("mem"),
       host("host"),
-      cfg(c),
+      cfg(validated(c)),
       clk(c.clock.period_ps()),
       banks(make_banks(c)),
       relay_(*this),
@@ -46,6 +57,8 @@ std::uint64_t rbcd_unit::host_relay::records_ready(std::uint64_t address, std::u
 
 void rbcd_unit::check_finished() const {
     if (raster.error()) std::rethrow_exception(raster.error());
+    // The run stopped on a memory error response: name it, not a lost tester.
+    if (!outbuf.failure().empty()) throw RunError(outbuf.failure());
     if (!tester.finished())
         throw std::runtime_error("simulation ended before the z-overlap tester finished (internal error)");
 }

@@ -48,7 +48,7 @@ public:
     // To the host: begin_frame, then records_ready whenever records wait in memory.
     sc_core::sc_port<unit_host_if> host;
 
-    // cfg must have passed SimConfig::validate(). The unit reads clock, tile,
+    // Throws InputError if cfg does not pass SimConfig::validate(). The unit reads clock, tile,
     // zeb, feed, gpu, sorter, tester, output and memory.base (the region's address);
     // src is read from the unit's own thread until it reports the end.
     rbcd_unit(sc_core::sc_module_name name, const SimConfig& cfg, FragmentSource& src);
@@ -58,8 +58,10 @@ public:
     const sc_core::sc_event& records_ready_event() const { return records_ready_event_; }
     std::uint64_t records_ready_count() const { return records_ready_count_; }
 
-    // After sc_start() returned: rethrows the input's error (InputError) or
-    // throws if the stream did not run to its end.
+    // After sc_start() returned (or threw): rethrows the input's error
+    // (InputError), throws the memory error that stopped the run (RunError,
+    // the message sc_start's report carried), or throws if the stream did not
+    // run to its end.
     void check_finished() const;
     bool finished() const { return tester.finished(); }
     std::exception_ptr error() const { return raster.error(); }

@@ -15,16 +15,26 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #   --gl     apitrace, Xvfb and Mesa (llvmpipe) to capture OpenGL programs, numpy for
 #            scripts/rbcd-gl2rbt, and the GL and X11 headers for the test program
 #            (docs/gl-capture.md)
+#   --list   print the packages (with the options given) one a line, install nothing
+# Besides the build: what the test suite runs that a minimal Debian lacks
+# (testbench/scripts/check_test_programs.sh checks the list against the suite).
+pkgs+=(time python3)
+list=no
 for opt in "$@"; do
   case "$opt" in
+    --list) list=yes ;;
     --slurm) pkgs+=(slurm-wlm munge) ;;
     --plots) pkgs+=(python3-matplotlib) ;;
     --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib) ;;
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
     --gl) pkgs+=(apitrace xvfb xauth libgl1-mesa-dri libglx-mesa0 libgl-dev libx11-dev python3-numpy) ;;
-    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl)" >&2; exit 2 ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl --list)" >&2; exit 2 ;;
   esac
 done
+if [ "$list" = yes ]; then
+  printf '%s\n' "${pkgs[@]}"
+  exit 0
+fi
 
 # Exit 1 with the list of what is missing and how to install it.
 cannot_install() {

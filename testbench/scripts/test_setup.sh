@@ -89,5 +89,13 @@ run_setup
 grep -q "dpkg-query not found" <<<"$err" || fail "no dpkg-query: reason not given in: $err"
 grep -q "missing Debian packages: g++ cmake .* libpng-dev" <<<"$err" || fail "no dpkg-query: list not complete: $err"
 
+# 7. --list: the packages one a line, nothing run, even with every package missing.
+make_shims "$work/bin" 1000 "time libsystemc-dev" no yes
+PATH="$work/bin" /bin/bash "$setup" --list --slurm >"$work/out" 2>"$work/err"
+rc=$?
+[ "$rc" = 0 ] || fail "--list: exit status $rc: $(<"$work/err")"
+for p in libsystemc-dev time slurm-wlm; do grep -qx "$p" "$work/out" || fail "--list: $p not listed"; done
+[ ! -s "$work/calls" ] || fail "--list: ran: $(<"$work/calls")"
+
 if [ "$fails" -ne 0 ]; then echo "$fails check(s) failed"; exit 1; fi
-echo "setup.sh: 6 scenarios passed"
+echo "setup.sh: 7 scenarios passed"

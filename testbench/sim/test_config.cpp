@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <fstream>
 #include <map>
 #include <string>
@@ -528,6 +529,120 @@ TEST_CASE("config: validate rejects a region outside the memory") {
     msg = input_error([&] { c.validate(); });
     check_one_line(msg);
     CHECK_THAT(msg, Contains("output.region"));
+}
+
+// What validate() says of a configuration whose fields were set in C++.
+template <class Mutate>
+std::string cpp_error(Mutate&& mutate) {
+    SimConfig c;
+    mutate(c);
+    std::string msg = input_error([&] { c.validate(); });
+    check_one_line(msg);
+    return msg;
+}
+
+// The reason in the error the --set path gives ("--set KEY: KEY: REASON").
+std::string set_reason(const std::string& key, const std::string& value) {
+    const std::string msg = set_error(key + "=" + value);
+    const std::string prefix = "--set " + key + ": " + key + ": ";
+    REQUIRE_THAT(msg, StartsWith(prefix));
+    return msg.substr(prefix.size());
+}
+
+TEST_CASE("config: fields set in C++ are range-checked by validate with the --set message") {
+    // Each of these hung, crashed or ran wrong when set in code and passed to
+    // validate() (issue 19): the same rule as TOML, the same words.
+    struct Case {
+        const char* key;
+        const char* toml;
+        std::function<void(SimConfig&)> set;
+    };
+    const Case cases[] = {
+        {"output.burst_records", "0", [](SimConfig& c) { c.output.burst_records = 0; }},
+        {"output.max_outstanding", "0", [](SimConfig& c) { c.output.max_outstanding = 0; }},
+        {"zeb.banks", "0", [](SimConfig& c) { c.zeb.banks = 0; }},
+        {"gpu.fragment_processors", "0", [](SimConfig& c) { c.gpu.fragment_processors = 0; }},
+        {"zeb.list_length", "0", [](SimConfig& c) { c.zeb.list_length = 0; }},
+        {"clock.mhz", "0", [](SimConfig& c) { c.clock.mhz = 0; }},
+        {"tile.width", "0", [](SimConfig& c) { c.tile.width = 0; }},
+        {"memory.base", "2199023255552", [](SimConfig& c) { c.memory.base = std::uint64_t(1) << 41; }},
+        {"memory.size_bytes", "1099511627776", [](SimConfig& c) { c.memory.size_bytes = std::uint64_t(1) << 40; }},
+        {"feed.queue_depth", "0", [](SimConfig& c) { c.feed.queue_depth = 0; }},
+        {"tester.stack_depth", "65", [](SimConfig& c) { c.tester.stack_depth = 65; }},
+        {"gpu.cycles_per_fragment", "0", [](SimConfig& c) { c.gpu.cycles_per_fragment = 0; }},
+        {"energy.memory_pj_per_byte", "-1.0", [](SimConfig& c) { c.energy.memory_pj_per_byte = -1.0; }},
+    };
+    for (const auto& cs : cases) {
+        INFO(cs.key << " = " << cs.toml);
+        const std::string reason = set_reason(cs.key, cs.toml);
+        CHECK_THAT(reason, StartsWith("out of range"));
+        CHECK(cpp_error(cs.set) == "config: " + std::string(cs.key) + ": " + reason);
+    }
+    // A value the parser could not have produced: an enum outside its choices.
+    CHECK_THAT(cpp_error([](SimConfig& c) { c.zeb.tie = static_cast<TiePolicy>(7); }),
+               StartsWith("config: zeb.tie: unknown value 7, expected front_first | arrival"));
+    CHECK_THAT(cpp_error([](SimConfig& c) { c.clock.mhz = std::numeric_limits<double>::quiet_NaN(); }),
+               StartsWith("config: clock.mhz: out of range"));
+}
+
+TEST_CASE("config: every key's check accepts what its setter accepts") {
+    const SimConfig def;
+    for (const auto& k : config_keys()) {
+        INFO(k.name);
+        REQUIRE(k.check);
+        CHECK(k.check(def).empty());
+    }
+    // The setter's bounds are the check's: lowest and highest through --set, then validate().
+    for (const auto& k : config_keys()) {
+        if (k.type != "integer") continue;
+        INFO(k.name);
+        const std::string reason = set_reason(k.name, "-1");
+        // "out of range LO..HI, got -1"
+        const auto dots = reason.find("..");
+        const auto comma = reason.find(',');
+        REQUIRE(dots != std::string::npos);
+        REQUIRE(comma != std::string::npos);
+        const std::string lo = reason.substr(std::string("out of range ").size(), dots - 13);
+        const std::string hi = reason.substr(dots + 2, comma - dots - 2);
+        for (const auto& v : {lo, hi}) {
+            SimConfig c;
+            REQUIRE_NOTHROW(apply_config_set(c, k.name + "=" + v));
+            CHECK(k.check(c).empty());
+        }
+    }
+}
+
+TEST_CASE("config: a memory map that wraps past 2^64 is refused") {
+    CHECK_THAT(cpp_error([](SimConfig& c) { c.memory.base = 0xFFFFFFFFFFFF0000ull; }),
+               StartsWith("config: memory.base: out of range"));
+    CHECK_THAT(cpp_error([](SimConfig& c) { c.output.region_offset = ~std::uint64_t(0) - 15; }),
+               StartsWith("config: output.region_offset: out of range"));
+    CHECK_THAT(cpp_error([](SimConfig& c) { c.output.region_bytes = ~std::uint64_t(0) - 15; }),
+               StartsWith("config: output.region_bytes: out of range"));
+    // The highest memory the ranges allow ends well inside 64 bits and is accepted.
+    SimConfig c;
+    c.memory.base = std::uint64_t(1) << 40;
+    c.memory.size_bytes = std::uint64_t(1) << 32;
+    c.output.region_offset = c.memory.size_bytes - 2 * c.output.region_bytes;
+    CHECK_NOTHROW(c.validate());
+}
+
+TEST_CASE("config: records are 16-byte aligned: memory.base and output.region_offset") {
+    CHECK(cpp_error([](SimConfig& c) { c.output.region_offset = 3; }) ==
+          "config: output.region_offset: not a multiple of the 16-byte record");
+    CHECK(cpp_error([](SimConfig& c) { c.memory.base = 0x40000008; }) ==
+          "config: memory.base: not a multiple of the 16-byte record");
+    // Through --set as well: the value is in range, validate() refuses it.
+    SimConfig c;
+    apply_config_set(c, "output.region_offset=8");
+    CHECK(input_error([&] { c.validate(); }) == "config: output.region_offset: not a multiple of the 16-byte record");
+    c = SimConfig{};
+    apply_config_set(c, "memory.base=0x40000008");
+    CHECK(input_error([&] { c.validate(); }) == "config: memory.base: not a multiple of the 16-byte record");
+    c = SimConfig{};
+    c.memory.base = 0x40000010;
+    c.output.region_offset = 0x30;
+    CHECK_NOTHROW(c.validate());
 }
 
 TEST_CASE("config: validate errors reached through --set") {

@@ -29,6 +29,7 @@ struct test_memory : sc_core::sc_module {
     struct options {
         std::uint64_t base = 0, size = 1 << 20;
         std::uint64_t latency_cycles = 20;   // annotated per b_transport
+        std::uint64_t latency_extra_ps = 0;  // added to it: a latency that is not whole cycles
         std::uint64_t error_on_write = 0;    // 1-based write answered with error_status; 0 never
         tlm::tlm_response_status error_status = tlm::TLM_ADDRESS_ERROR_RESPONSE;
         bool dmi = true;
@@ -47,6 +48,7 @@ struct test_memory : sc_core::sc_module {
     std::vector<std::unique_ptr<std::vector<unsigned char>>> dropped;   // poisoned, kept allocated
     std::uint64_t writes = 0, errors = 0, grants = 0, refusals = 0, invalidations = 0, debug_reads = 0;
     std::uint64_t error_address = 0;
+    sc_core::sc_time last_write_done = sc_core::SC_ZERO_TIME;   // latest completion of a write so far
 
     test_memory(sc_core::sc_module_name n, const options& o, sc_core::sc_time clock_period)
         : sc_module(n), unit_port("unit_port"), host_port("host_port"), opt(o), period(clock_period),
@@ -81,7 +83,8 @@ struct test_memory : sc_core::sc_module {
             std::memcpy(&store[off], t.get_data_ptr(), n);
             write_through(off, n);
         }
-        delay += period * double(opt.latency_cycles);
+        delay += period * double(opt.latency_cycles) + sc_core::sc_time(double(opt.latency_extra_ps), sc_core::SC_PS);
+        if (t.is_write()) last_write_done = std::max(last_write_done, sc_core::sc_time_stamp() + delay);
         t.set_response_status(tlm::TLM_OK_RESPONSE);
         if (t.is_write() && opt.invalidate_every && writes % opt.invalidate_every == 0) invalidate_all();
     }

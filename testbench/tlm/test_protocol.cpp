@@ -11,6 +11,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -58,6 +59,26 @@ SimConfig small_region_config() {
     return cfg;
 }
 
+// Between the unit and its host: holds the unit to unit_host_if's promise that
+// every write of a batch has completed by the batch's cycle.
+struct completion_check final : unit_host_if {
+    unit_host_if* next = nullptr;
+    const test_memory* memory = nullptr;
+    sc_core::sc_time period;
+    std::vector<std::string> early;   // batches announced before their last write completed
+    std::map<std::uint64_t, sc_core::sc_time> due;   // cycle -> completion of its batch's writes
+    void begin_frame(std::uint64_t n) override { next->begin_frame(n); }
+    std::uint64_t records_ready(std::uint64_t address, std::uint64_t bytes, std::uint64_t cycle,
+                                bool because_full) override {
+        if (period * double(cycle) < memory->last_write_done)
+            early.push_back("records_ready at cycle " + std::to_string(cycle) + " (" +
+                            (period * double(cycle)).to_string() + "), last write completes at " +
+                            memory->last_write_done.to_string());
+        due[cycle] = std::max(due[cycle], memory->last_write_done);
+        return next->records_ready(address, bytes, cycle, because_full);
+    }
+};
+
 // The unit in a platform of the test's own, beside the bundled system.
 struct Platform : sc_core::sc_module {
     MemorySource src, ref_src;
@@ -67,7 +88,9 @@ struct Platform : sc_core::sc_module {
     protocol_checker unit_check, host_check;
     test_memory memory;
     rbcd_system ref;
+    completion_check completion;
     std::uint64_t ready_events = 0;
+    std::vector<std::string> early_events;   // records_ready_event before the batch's writes completed
 
     SC_HAS_PROCESS(Platform);
     Platform(sc_core::sc_module_name n, const SimConfig& cfg, MemorySource input, test_memory::options mo)
@@ -82,7 +105,10 @@ struct Platform : sc_core::sc_module {
           ref("ref", cfg, ref_src, ref_sink) {
         unit.mem.bind(unit_check.target);
         unit_check.initiator.bind(memory.unit_port);
-        unit.host.bind(host);
+        completion.next = &host;
+        completion.memory = &memory;
+        completion.period = unit.clk.period();
+        unit.host.bind(completion);
         host.mem.bind(host_check.target);
         host_check.initiator.bind(memory.host_port);
         SC_THREAD(count_ready);
@@ -96,6 +122,9 @@ struct Platform : sc_core::sc_module {
         for (;;) {
             wait(unit.records_ready_event());
             ++ready_events;
+            const auto it = completion.due.find(unit.clk.now());
+            if (it == completion.due.end() || sc_core::sc_time_stamp() < it->second)
+                early_events.push_back("records_ready_event at " + sc_core::sc_time_stamp().to_string());
         }
     }
     // sc_start, turning a process's exception back into its message.
@@ -109,8 +138,12 @@ struct Platform : sc_core::sc_module {
     void check_clean() const {
         for (const auto& v : unit_check.violations()) UNSCOPED_INFO("unit path: " << v);
         for (const auto& v : host_check.violations()) UNSCOPED_INFO("host path: " << v);
+        for (const auto& v : completion.early) UNSCOPED_INFO(v);
+        for (const auto& v : early_events) UNSCOPED_INFO(v);
         CHECK(unit_check.violations().empty());
         CHECK(host_check.violations().empty());
+        CHECK(completion.early.empty());
+        CHECK(early_events.empty());
     }
 };
 
@@ -144,6 +177,38 @@ TEST_CASE("protocol: the unit and host obey the base protocol against a plain me
     CHECK(p->unit.records_ready_count() == p->ref.host.stats().readbacks);
     CHECK(p->ready_events > 0);
     CHECK(p->ready_events <= p->unit.records_ready_count());
+}
+
+TEST_CASE("protocol: a latency that is not whole cycles: records ready only once every write completed", "[protocol]") {
+    // 41 ns at 400 MHz is 16.4 cycles: a completion rounded down to cycle 16
+    // announced the records 1 ns before the last write completed.
+    SimConfig cfg = small_region_config();
+    test_memory::options mo;
+    mo.latency_cycles = 16;
+    mo.latency_extra_ps = 1000;
+    auto p = platform(cfg, mo);
+    p->run();
+    p->unit.check_finished();
+    same_records(*p);
+    p->check_clean();
+    CHECK(p->unit.records_ready_count() > 5);
+    CHECK(p->ready_events > 0);
+    // Every write takes 17 cycles as the unit counts them, never 16.
+    CHECK(p->unit.outbuf.stats().write_latency_cycles == 17 * p->unit.outbuf.stats().bursts);
+}
+
+TEST_CASE("protocol: the unit refuses a configuration that does not pass validate()", "[protocol]") {
+    sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
+    SimConfig cfg = small_region_config();
+    cfg.output.max_outstanding = 0;   // crashed in output_buffer::issue()
+    MemorySource src = busy_input(cfg, 1, 1);
+    std::string message;
+    try {
+        rbcd_unit unit("unit", cfg, src);
+    } catch (const InputError& e) {
+        message = e.what();
+    }
+    CHECK(message == "config: output.max_outstanding: out of range 1..256, got 0");
 }
 
 TEST_CASE("protocol: partial DMI windows and short debug reads give the same records", "[protocol]") {
@@ -218,6 +283,14 @@ TEST_CASE("protocol: a write answered with an error stops the run naming the add
     CHECK(message.find(hex_address(expect)) != std::string::npos);
     CHECK(message.find("TLM_GENERIC_ERROR_RESPONSE") != std::string::npos);
     CHECK_FALSE(p->unit.finished());
+    // Asked afterwards, the unit names the same memory error, not an internal one.
+    std::string after;
+    try {
+        p->unit.check_finished();
+    } catch (const RunError& e) {
+        after = e.what();
+    }
+    CHECK(after == message);
     CHECK(p->unit_check.counts().error_responses == 1);
     p->check_clean();
 }
