@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include <chrono>
+#include <regex>
 
 using namespace rbcd::cli_test;
 
@@ -80,7 +81,7 @@ TEST_CASE("rbcd-cpucd: a failed run leaves a FIFO at an output path in place", "
     CHECK(S_ISFIFO(st.st_mode));
 }
 
-TEST_CASE("rbcd-cpucd: outputs go through unpredictable temporaries; nothing left on failure", "[cpucd_cli]") {
+TEST_CASE("rbcd-cpucd: outputs go through unpredictable temporaries", "[cpucd_cli]") {
     TempDir td;
     const std::string geo = td.write("in.geo", two_cubes(kIdentity));
     // A symlink planted where the old code put its temporary (PATH.tmp.PID
@@ -94,6 +95,30 @@ TEST_CASE("rbcd-cpucd: outputs go through unpredictable temporaries; nothing lef
     CHECK(slurp(target) == "not to be overwritten\n");
     CHECK_THAT(slurp(out), StartsWith("frame,id_a,id_b"));
     for (const auto& e : td.out_entries()) CHECK((e == "pairs.csv" || e.rfind("pairs.csv.tmp.", 0) == 0));
+
+    // While a run writes, its temporary is mkstemp's hidden .pairs.csv.XXXXXX,
+    // not the old PATH.tmp.PID anyone could plant a symlink at.
+    std::string s2 = "rbcd-geometry 1\n" + cube_part(1) + cube_part(2);
+    for (int f = 0; f < 2000; ++f) s2 += "frame " + std::to_string(f) + "\nm 0 " + kIdentity + "\nm 1 " + kIdentity + "\n";
+    const std::string long_geo = td.write("long.geo", s2);
+    const std::string out2 = td.out_dir() + "/second.csv";
+    std::vector<std::string> args{RBCD_CPUCD, "-q", "--repeat", "1000", "--geometry", long_geo, "--pairs", out2};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    pid_t pid = 0;
+    REQUIRE(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) == 0);
+    std::string temp;
+    for (int i = 0; i < 200 && temp.empty(); ++i) {
+        for (const auto& e : td.out_entries())
+            if (e != "pairs.csv" && e.rfind("pairs.csv.tmp.", 0) != 0) temp = e;
+        if (temp.empty()) ::usleep(20000);
+    }
+    ::kill(pid, SIGTERM);
+    int st = 0;
+    REQUIRE(::waitpid(pid, &st, 0) == pid);
+    INFO("temporary: " << temp);
+    CHECK(std::regex_match(temp, std::regex(R"(\.second\.csv\.[A-Za-z0-9]{6})")));
 }
 
 TEST_CASE("rbcd-cpucd: a sheared or out-of-range model matrix is refused", "[cpucd_cli]") {
