@@ -28,10 +28,25 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         rbcd::fuzz::finding(std::string("written text does not read back: ") + e.what());
     }
     constexpr std::uint64_t kPairs = 64;
-    bool small = in.parts.size() <= 8;
+    const auto small_input = [](const rbcd::cpucd::CdInput& c) {
+        bool small = c.parts.size() <= 8;
+        for (const auto& p : c.parts) small = small && p.mesh->tris.size() <= 64;
+        return small;
+    };
+    if (in.per_frame()) {
+        // As rbcd-cpucd runs a format-2 file: frame by frame, each its own input.
+        for (std::uint64_t f = 0; f < in.frames() && f < 4; ++f) {
+            const rbcd::cpucd::CdInput one = in.frame_input(f);
+            if (small_input(one) && !rbcd::cpucd::overlapping_aabb_pairs(one, 0, kPairs).over_limit) {
+                rbcd::cpucd::CpuDetector det(one);
+                det.run_frame(0, 1);
+            }
+        }
+        return 0;
+    }
+    bool small = small_input(in);
     for (std::uint64_t f = 0; f < in.frames() && f < 16; ++f)
         if (rbcd::cpucd::overlapping_aabb_pairs(in, f, kPairs).over_limit) small = false;
-    for (const auto& p : in.parts) small = small && p.mesh->tris.size() <= 64;
     if (small && in.frames() <= 16) {
         rbcd::cpucd::CpuDetector det(in);
         det.run_frame(0, 1);
