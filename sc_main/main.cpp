@@ -12,6 +12,7 @@
 #include <memory>
 #include <systemc>
 #include <unistd.h>
+#include <utility>
 
 #include "rbcd/common/config.h"
 #include "rbcd/common/errors.h"
@@ -21,6 +22,7 @@
 #include "rbcd/io/trace_reader.h"
 #include "rbcd/io/trace_writer.h"
 #include "rbcd/sc_main/collision_file.h"
+#include "rbcd/sc_main/fst_writer.h"
 #include "rbcd/sc_main/image_sink.h"
 #include "rbcd/sc_main/output_file.h"
 #include "rbcd/sc_main/progress.h"
@@ -39,7 +41,7 @@ const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE"
 struct Options {
     std::string config_file;
     std::vector<std::string> sets;
-    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd;
+    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd, fst;
     std::string frames;   // --frames A:B
     unsigned threads = 2;  // 2: a trace is parsed on its own thread
     bool dump_config = false;
@@ -60,8 +62,22 @@ void quiet_kernel() {
     sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
 }
 
-int run(const Options& opt) {
+bool ends_with(const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+int run(Options opt) {
     using namespace rbcd;
+    // --vcd run.fst: the format follows the file's extension.
+    if (ends_with(opt.vcd, ".fst")) {
+        if (!opt.fst.empty()) throw InputError("--vcd: " + opt.vcd + " is an FST file and --fst is given too");
+        opt.fst = std::exchange(opt.vcd, std::string());
+    }
+    if (!opt.fst.empty() && !opt.vcd.empty())
+        throw InputError("--fst: cannot be combined with --vcd (one waveform a run)");
+    if (!opt.fst.empty() && !fst_supported())
+        throw InputError("--fst: this rbcd-sim was built without FST support (install Debian's verilator package: "
+                         "scripts/setup.sh --waves, then rebuild)");
     SimConfig cfg;
     if (!opt.config_file.empty()) apply_config_file(cfg, opt.config_file);
     for (const auto& s : opt.sets) apply_config_set(cfg, s);
@@ -79,18 +95,23 @@ int run(const Options& opt) {
     // An output over an input would destroy it before it is read.
     const std::pair<const char*, const std::string*> outs[] = {
         {"--collisions", &opt.collisions}, {"--stats", &opt.stats}, {"--frame-stats", &opt.frame_stats},
-        {"--vcd", &opt.vcd}, {"--write-trace", &opt.write_trace}};
+        {"--vcd", &opt.vcd}, {"--fst", &opt.fst}, {"--write-trace", &opt.write_trace}};
     for (const std::string* in : {&opt.trace, &opt.scene, &opt.config_file})
         for (const auto& [flag, path] : outs)
             if (!in->empty() && !path->empty() && same_file(*path, *in))
                 throw InputError(std::string(flag) + ": " + *path + " is the input file " + *in);
 
     // Outputs are created before the run so an uncreatable path fails fast.
-    OutputFile collisions_out, stats_out, frame_stats_out, vcd_out;
+    OutputFile collisions_out, stats_out, frame_stats_out, vcd_out, fst_out;
     if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions);
     if (!opt.stats.empty()) stats_out = OutputFile(opt.stats);
     if (!opt.frame_stats.empty()) frame_stats_out = OutputFile(opt.frame_stats);
     if (!opt.vcd.empty()) vcd_out = OutputFile(opt.vcd);
+    std::unique_ptr<FstWriter> fst;
+    if (!opt.fst.empty()) {
+        fst_out = OutputFile(opt.fst, OutputFile::ByName{});
+        fst = std::make_unique<FstWriter>(fst_out.library_path(), opt.fst);
+    }
 
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
@@ -168,6 +189,9 @@ int run(const Options& opt) {
         vcd = std::make_unique<VcdWriter>([&](const std::string& s) { vcd_out.write(s); }, sys.clk.period_ps(),
                                           cfg.trace.start, cfg.trace.end);
         sys.attach_vcd(*vcd);
+    } else if (fst) {
+        vcd = std::make_unique<VcdWriter>(*fst, sys.clk.period_ps(), cfg.trace.start, cfg.trace.end);
+        sys.attach_vcd(*vcd);
     }
     RunReport report(sys);               // GPU time and energy per frame, reduced as frames end
     if (frame_stats_out.active()) report.stream_to([&](const std::string& line) { frame_stats_out.write(line); });
@@ -205,6 +229,10 @@ int run(const Options& opt) {
         collisions_out.commit();
     }
     if (vcd_out.active()) vcd_out.commit();
+    if (fst) {
+        fst->close();
+        fst_out.commit();
+    }
     if (frame_stats_out.active()) frame_stats_out.commit();
     if (stats_out.active()) {
         stats_out.write(stats.dump(2) + "\n");
@@ -221,7 +249,7 @@ int fail(int status, const std::string& msg, int argc, char* argv[]) {
     // formats.md: on a non-zero exit nothing stands at an output path, not even an
     // older file; but an output path that names one of the inputs is the input.
     const std::vector<std::string> args(argv, argv + argc);
-    rbcd::discard_outputs(rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd"}),
+    rbcd::discard_outputs(rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd", "--fst"}),
                           rbcd::option_values(args, {"--trace", "--scene", "--config"}));
     return status;
 }
@@ -286,7 +314,9 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--stats", opt.stats, "write statistics JSON here");
     app.add_option("--frame-stats", opt.frame_stats,
                    "write per-frame figures here, one JSON object a line, as frames end (docs/stats.md)");
-    app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window)");
+    app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window; "
+                                     "a .fst name writes FST)");
+    app.add_option("--fst", opt.fst, "write the waveforms as FST here (as --vcd; docs/waveforms.md)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
     app.footer("Formats and options: docs/formats.md; configuration keys: docs/config.md; statistics: docs/stats.md.");

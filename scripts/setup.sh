@@ -12,13 +12,17 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #            of workloads/) and python3-matplotlib, for scripts/reproduce.sh
 #   --fuzz   clang-14, libclang-rt-14-dev (libFuzzer) and assimp-testmodels (mesh
 #            seeds), for scripts/fuzz.sh
+#   --waves  verilator (its copy of GTKWave's fstapi sources: rbcd-sim --fst),
+#            gtkwave (fst2vcd for the FST test; the viewer) and libsqlite3-dev
+#            (rbcd-sim --db), docs/waveforms.md and docs/tile-database.md
 for opt in "$@"; do
   case "$opt" in
     --slurm) pkgs+=(slurm-wlm munge) ;;
     --plots) pkgs+=(python3-matplotlib) ;;
     --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib) ;;
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
-    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz)" >&2; exit 2 ;;
+    --waves) pkgs+=(verilator gtkwave libsqlite3-dev) ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --waves)" >&2; exit 2 ;;
   esac
 done
 
