@@ -74,7 +74,10 @@ void FstWriter::upscope() { fstWriterSetUpscope(ctx_); }
 
 void FstWriter::var(unsigned sig, const std::string& name, unsigned width) {
     if (handles_.size() <= sig) handles_.resize(sig + 1, 0);
-    handles_[sig] = fstWriterCreateVar(ctx_, FST_VT_VCD_WIRE, FST_VD_IMPLICIT, width, name.c_str(), 0);
+    // A vector's range goes in its name, as in the VCD's $var: viewers show
+    // and save files name it "state[1:0]" in either format.
+    const std::string full = width > 1 ? name + " [" + std::to_string(width - 1) + ":0]" : name;
+    handles_[sig] = fstWriterCreateVar(ctx_, FST_VT_VCD_WIRE, FST_VD_IMPLICIT, width, full.c_str(), 0);
 }
 
 void FstWriter::time(std::uint64_t ps) { fstWriterEmitTimeChange(ctx_, ps); }

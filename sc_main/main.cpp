@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <memory>
 #include <systemc>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <utility>
 
@@ -23,6 +24,7 @@
 #include "rbcd/io/trace_writer.h"
 #include "rbcd/sc_main/collision_file.h"
 #include "rbcd/sc_main/fst_writer.h"
+#include "rbcd/sc_main/gtkwave_layout.h"
 #include "rbcd/sc_main/image_sink.h"
 #include "rbcd/sc_main/output_file.h"
 #include "rbcd/sc_main/progress.h"
@@ -41,7 +43,7 @@ const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE"
 struct Options {
     std::string config_file;
     std::vector<std::string> sets;
-    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd, fst;
+    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd, fst, gtkw;
     std::string frames;   // --frames A:B
     unsigned threads = 2;  // 2: a trace is parsed on its own thread
     bool dump_config = false;
@@ -66,6 +68,23 @@ bool ends_with(const std::string& s, const std::string& tail) {
     return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
+// The GTKWave save file: --gtkw, else beside a waveform written through a
+// temporary (run.fst -> run.gtkw); its state filter beside it. Empty: none.
+std::pair<std::string, std::string> layout_paths(const std::string& gtkw, const std::string& wave) {
+    std::string path = gtkw;
+    if (path.empty() && !wave.empty() && wave != "-") {
+        struct stat st {};
+        const bool regular_or_new = ::lstat(wave.c_str(), &st) != 0 || S_ISREG(st.st_mode);
+        if (regular_or_new) {
+            const std::size_t dot = wave.rfind('.'), slash = wave.rfind('/');
+            const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+            path = (has_ext ? wave.substr(0, dot) : wave) + ".gtkw";
+        }
+    }
+    if (path.empty()) return {};
+    return {path, rbcd::GtkwaveLayout::filter_path_for(path)};
+}
+
 int run(Options opt) {
     using namespace rbcd;
     // --vcd run.fst: the format follows the file's extension.
@@ -78,6 +97,9 @@ int run(Options opt) {
     if (!opt.fst.empty() && !fst_supported())
         throw InputError("--fst: this rbcd-sim was built without FST support (install Debian's verilator package: "
                          "scripts/setup.sh --waves, then rebuild)");
+    if (!opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
+        throw InputError("--gtkw: needs a waveform (--vcd or --fst)");
+    const auto [gtkw_path, filter_path] = layout_paths(opt.gtkw, opt.fst.empty() ? opt.vcd : opt.fst);
     SimConfig cfg;
     if (!opt.config_file.empty()) apply_config_file(cfg, opt.config_file);
     for (const auto& s : opt.sets) apply_config_set(cfg, s);
@@ -95,7 +117,8 @@ int run(Options opt) {
     // An output over an input would destroy it before it is read.
     const std::pair<const char*, const std::string*> outs[] = {
         {"--collisions", &opt.collisions}, {"--stats", &opt.stats}, {"--frame-stats", &opt.frame_stats},
-        {"--vcd", &opt.vcd}, {"--fst", &opt.fst}, {"--write-trace", &opt.write_trace}};
+        {"--vcd", &opt.vcd}, {"--fst", &opt.fst}, {"--gtkw", &gtkw_path}, {"--gtkw", &filter_path},
+        {"--write-trace", &opt.write_trace}};
     for (const std::string* in : {&opt.trace, &opt.scene, &opt.config_file})
         for (const auto& [flag, path] : outs)
             if (!in->empty() && !path->empty() && same_file(*path, *in))
@@ -111,6 +134,11 @@ int run(Options opt) {
     if (!opt.fst.empty()) {
         fst_out = OutputFile(opt.fst, OutputFile::ByName{});
         fst = std::make_unique<FstWriter>(fst_out.library_path(), opt.fst);
+    }
+    OutputFile gtkw_out, filter_out;
+    if (!gtkw_path.empty()) {
+        gtkw_out = OutputFile(gtkw_path);
+        filter_out = OutputFile(filter_path);
     }
 
     std::unique_ptr<FragmentSource> src;
@@ -193,22 +221,26 @@ int run(Options opt) {
         vcd = std::make_unique<VcdWriter>(*fst, sys.clk.period_ps(), cfg.trace.start, cfg.trace.end);
         sys.attach_vcd(*vcd);
     }
+    std::unique_ptr<GtkwaveLayout> layout;
+    if (vcd && gtkw_out.active()) layout = std::make_unique<GtkwaveLayout>(*vcd, sys.clk.period_ps(), cfg.trace.start, cfg.trace.end);
     RunReport report(sys);               // GPU time and energy per frame, reduced as frames end
     if (frame_stats_out.active()) report.stream_to([&](const std::string& line) { frame_stats_out.write(line); });
     // Progress on stderr (only on a terminal, only after a few seconds) and --write-trace.
     struct Watch final : RasterObserver {
         rbcd_system& sys;
         TraceWriter* trace;
+        GtkwaveLayout* layout;
         Progress progress;
-        Watch(rbcd_system& s, TraceWriter* t) : sys(s), trace(t) {}
+        Watch(rbcd_system& s, TraceWriter* t, GtkwaveLayout* l) : sys(s), trace(t), layout(l) {}
         void frame_begin(std::uint64_t n) override {
             progress.on_frame(n, sys.raster.stats().fragments);
             if (trace) trace->frame(n);
+            if (layout) layout->frame_start(n, sys.clk.now());
         }
         void tile(const Tile& t) override {
             if (trace) trace->tile(t);
         }
-    } watch(sys, trace_out.get());
+    } watch(sys, trace_out.get(), layout.get());
     sys.raster.add_observer(&watch);
     sys.run();
     if (const std::string bad = self_check(self_check_counters(sys)); !bad.empty()) throw std::runtime_error(bad);
@@ -233,6 +265,16 @@ int run(Options opt) {
         fst->close();
         fst_out.commit();
     }
+    if (layout) {
+        const std::string wave = opt.fst.empty() ? opt.vcd : opt.fst;
+        std::error_code ec;
+        const std::string dump = wave == "-" ? wave : std::filesystem::absolute(wave, ec).string();
+        const std::string filter = std::filesystem::absolute(filter_path, ec).string();
+        gtkw_out.write(layout->save_file(dump, filter));
+        filter_out.write(GtkwaveLayout::state_filter());
+        filter_out.commit();
+        gtkw_out.commit();
+    }
     if (frame_stats_out.active()) frame_stats_out.commit();
     if (stats_out.active()) {
         stats_out.write(stats.dump(2) + "\n");
@@ -249,8 +291,14 @@ int fail(int status, const std::string& msg, int argc, char* argv[]) {
     // formats.md: on a non-zero exit nothing stands at an output path, not even an
     // older file; but an output path that names one of the inputs is the input.
     const std::vector<std::string> args(argv, argv + argc);
-    rbcd::discard_outputs(rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd", "--fst"}),
-                          rbcd::option_values(args, {"--trace", "--scene", "--config"}));
+    auto outputs = rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd", "--fst", "--gtkw"});
+    const auto gtkw = rbcd::option_values(args, {"--gtkw"});
+    for (const auto& wave : rbcd::option_values(args, {"--vcd", "--fst"})) {
+        const auto [g, f] = layout_paths(gtkw.empty() ? std::string() : gtkw.back(), wave);
+        outputs.push_back(g);
+        outputs.push_back(f);
+    }
+    rbcd::discard_outputs(outputs, rbcd::option_values(args, {"--trace", "--scene", "--config"}));
     return status;
 }
 
@@ -317,6 +365,8 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window; "
                                      "a .fst name writes FST)");
     app.add_option("--fst", opt.fst, "write the waveforms as FST here (as --vcd; docs/waveforms.md)");
+    app.add_option("--gtkw", opt.gtkw, "write the GTKWave save file for the waveform here (default: beside it, "
+                                       "NAME.gtkw, with NAME.states.txt)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
     app.footer("Formats and options: docs/formats.md; configuration keys: docs/config.md; statistics: docs/stats.md.");

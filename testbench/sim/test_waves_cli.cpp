@@ -167,3 +167,58 @@ TEST_CASE("waves: a full disk while writing the FST is one line and no file") {
                                                  "--fst", fst});
     expect_error(td, r, 1, {"w.fst", "write failed"});
 }
+
+TEST_CASE("waves: the GTKWave save file lists the run's signals by block in pipeline order") {
+    TempDir td;
+    const std::string vcd = td.out_dir() + "/run.vcd";
+    const Result r = run_sim(td, {"--trace", kVectors + "/multi-frame-mixed.rbt", "--config",
+                                  kVectors + "/multi-frame-mixed.toml", "--set", "zeb.banks=3", "--set",
+                                  "trace.memory=false", "--vcd", vcd, "-q"});
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    // Beside the waveform by default.
+    const std::string gtkw = slurp(td.out_dir() + "/run.gtkw");
+    CHECK(slurp(td.out_dir() + "/run.states.txt") == "0 free\n1 filling\n2 testing\n");
+    CHECK_THAT(gtkw, Contains("[dumpfile] \"" + fs::absolute(vcd).string() + "\""));
+    const Waves w = parse_vcd(slurp(vcd));
+    // Every signal of the dump once, each named as GTKWave names it; groups open and close.
+    std::vector<std::string> listed, groups;
+    std::istringstream in(gtkw);
+    std::string line, open_group;
+    for (std::string prev; std::getline(in, line); prev = line) {
+        if (line.rfind("rbcd.", 0) == 0) {
+            listed.push_back(line);
+            // Bank states are shown by name; counts in decimal, bits as bits.
+            if (line.find(".state[") != std::string::npos) CHECK_THAT(prev, StartsWith("^"));
+        } else if (line[0] == '-' && open_group.empty()) {
+            open_group = line.substr(1);
+            groups.push_back(open_group);
+        } else if (line[0] == '-') {
+            CHECK(line.substr(1) == open_group);
+            open_group.clear();
+        }
+    }
+    CHECK(open_group.empty());
+    std::vector<std::string> expected;
+    for (const auto& [path, width] : w.vars) expected.push_back(width > 1 ? path + "[" + std::to_string(width - 1) + ":0]" : path);
+    std::vector<std::string> sorted = listed;
+    std::sort(sorted.begin(), sorted.end());
+    CHECK(sorted == expected);
+    const std::vector<std::string> order{"rasterizer", "fragment_processors", "input_queue", "insertion_sorter",
+                                         "zeb_bank0",  "zeb_bank1",           "zeb_bank2",   "zoverlap_tester",
+                                         "output_buffer"};
+    CHECK(groups == order);
+    // A named marker per frame start (the vector has frames 0..2).
+    CHECK_THAT(gtkw, Contains("[markername] Aframe 0\n") && Contains("[markername] Cframe 2\n"));
+    CHECK_THAT(gtkw, !Contains("[markername] D"));
+}
+
+TEST_CASE("waves: --gtkw without a waveform, or to a bad path, is one line and no file") {
+    TempDir td;
+    expect_input_error(td, run_with_outputs(td, {"--trace", kVectors + "/rule-fig5-case2.rbt", "--gtkw",
+                                                 td.out_dir() + "/x.gtkw"}),
+                       {"--gtkw", "waveform"});
+    expect_input_error(td, run_with_outputs(td, {"--trace", kVectors + "/rule-fig5-case2.rbt", "--vcd",
+                                                 td.out_dir() + "/w.vcd", "--gtkw", td.path("no/such/x.gtkw")}),
+                       {"no/such/x.gtkw", "cannot create"});
+}
