@@ -26,6 +26,18 @@
 
 namespace rbcd {
 
+// A burst of records the buffer wrote to memory, for a WriteObserver.
+struct RecordWrite {
+    std::uint64_t address = 0, bytes = 0, records = 0;
+    std::uint64_t issue = 0, done = 0;   // cycles: sent, completed by the memory
+};
+
+class WriteObserver {
+public:
+    virtual ~WriteObserver() = default;
+    virtual void records_written(const RecordWrite&) = 0;
+};
+
 class output_buffer : public sc_core::sc_module {
 public:
     tlm_utils::simple_initiator_socket<output_buffer, kBusWidth> mem;
@@ -63,6 +75,8 @@ public:
     std::uint64_t end_frame(std::uint64_t cycle);
 
     const stats_t& stats() const { return stats_; }
+    // Told each burst as it is written; none: nothing is gathered.
+    void set_write_observer(WriteObserver* o) { observer_ = o; }
     void attach_vcd(VcdWriter& vcd, const std::string& scope) {
         vcd_ = &vcd;
         vcd_occupancy_ = vcd.add(scope, "occupancy", 17);
@@ -96,6 +110,7 @@ private:
     std::vector<unsigned char> data_;
     tlm::tlm_generic_payload gp_;
     stats_t stats_;
+    WriteObserver* observer_ = nullptr;
     VcdWriter* vcd_ = nullptr;
     VcdWriter::Sig vcd_occupancy_ = 0, vcd_in_flight_ = 0, vcd_offset_ = 0, vcd_region_ = 0;
 };

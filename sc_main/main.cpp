@@ -25,6 +25,7 @@
 #include "rbcd/sc_main/collision_file.h"
 #include "rbcd/sc_main/fst_writer.h"
 #include "rbcd/sc_main/gtkwave_layout.h"
+#include "rbcd/sc_main/tile_database.h"
 #include "rbcd/sc_main/image_sink.h"
 #include "rbcd/sc_main/output_file.h"
 #include "rbcd/sc_main/progress.h"
@@ -43,7 +44,7 @@ const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE"
 struct Options {
     std::string config_file;
     std::vector<std::string> sets;
-    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd, fst, gtkw;
+    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd, fst, gtkw, db;
     std::string frames;   // --frames A:B
     unsigned threads = 2;  // 2: a trace is parsed on its own thread
     bool dump_config = false;
@@ -97,6 +98,9 @@ int run(Options opt) {
     if (!opt.fst.empty() && !fst_supported())
         throw InputError("--fst: this rbcd-sim was built without FST support (install Debian's verilator package: "
                          "scripts/setup.sh --waves, then rebuild)");
+    if (!opt.db.empty() && !sqlite_supported())
+        throw InputError("--db: this rbcd-sim was built without SQLite (install Debian's libsqlite3-dev: "
+                         "scripts/setup.sh --waves, then rebuild)");
     if (!opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
         throw InputError("--gtkw: needs a waveform (--vcd or --fst)");
     const auto [gtkw_path, filter_path] = layout_paths(opt.gtkw, opt.fst.empty() ? opt.vcd : opt.fst);
@@ -118,7 +122,7 @@ int run(Options opt) {
     const std::pair<const char*, const std::string*> outs[] = {
         {"--collisions", &opt.collisions}, {"--stats", &opt.stats}, {"--frame-stats", &opt.frame_stats},
         {"--vcd", &opt.vcd}, {"--fst", &opt.fst}, {"--gtkw", &gtkw_path}, {"--gtkw", &filter_path},
-        {"--write-trace", &opt.write_trace}};
+        {"--db", &opt.db}, {"--write-trace", &opt.write_trace}};
     for (const std::string* in : {&opt.trace, &opt.scene, &opt.config_file})
         for (const auto& [flag, path] : outs)
             if (!in->empty() && !path->empty() && same_file(*path, *in))
@@ -134,6 +138,12 @@ int run(Options opt) {
     if (!opt.fst.empty()) {
         fst_out = OutputFile(opt.fst, OutputFile::ByName{});
         fst = std::make_unique<FstWriter>(fst_out.library_path(), opt.fst);
+    }
+    OutputFile db_out;
+    std::unique_ptr<TileDatabase> db;
+    if (!opt.db.empty()) {
+        db_out = OutputFile(opt.db, OutputFile::ByName{});
+        db = std::make_unique<TileDatabase>(db_out.library_path(), opt.db, cfg.tile.width, cfg.tile.height);
     }
     OutputFile gtkw_out, filter_out;
     if (!gtkw_path.empty()) {
@@ -175,7 +185,17 @@ int run(Options opt) {
     else prov_inputs.push_back({"scene", opt.scene});
     if (scene_src)
         for (const auto& m : scene_src->mesh_files()) prov_inputs.push_back({"mesh", m});
-    const nlohmann::json provenance = stats_out.active() ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
+    const nlohmann::json provenance =
+        stats_out.active() || db ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
+    if (db) {
+        db->run_fact("input", input_name);
+        db->run_fact("config", dump_config_toml(cfg));
+        db->run_fact("provenance", provenance.dump(2));
+        db->run_fact("tile_width", std::to_string(cfg.tile.width));
+        db->run_fact("tile_height", std::to_string(cfg.tile.height));
+        db->run_fact("screen_width", std::to_string(src->header().screen_w));
+        db->run_fact("screen_height", std::to_string(src->header().screen_h));
+    }
 
     std::unique_ptr<CollisionFileSink> file_sink;
     TeeSink tee;
@@ -242,6 +262,7 @@ int run(Options opt) {
         }
     } watch(sys, trace_out.get(), layout.get());
     sys.raster.add_observer(&watch);
+    if (db) db->attach(sys);
     sys.run();
     if (const std::string bad = self_check(self_check_counters(sys)); !bad.empty()) throw std::runtime_error(bad);
     Progress& progress = watch.progress;
@@ -264,6 +285,12 @@ int run(Options opt) {
     if (fst) {
         fst->close();
         fst_out.commit();
+    }
+    if (db) {
+        db->run_fact("cycles", std::to_string(sys.total_cycles()));
+        db->run_fact("wall_seconds", std::to_string(wall));
+        db->finish();
+        db_out.commit();
     }
     if (layout) {
         const std::string wave = opt.fst.empty() ? opt.vcd : opt.fst;
@@ -291,7 +318,7 @@ int fail(int status, const std::string& msg, int argc, char* argv[]) {
     // formats.md: on a non-zero exit nothing stands at an output path, not even an
     // older file; but an output path that names one of the inputs is the input.
     const std::vector<std::string> args(argv, argv + argc);
-    auto outputs = rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd", "--fst", "--gtkw"});
+    auto outputs = rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd", "--fst", "--gtkw", "--db"});
     const auto gtkw = rbcd::option_values(args, {"--gtkw"});
     for (const auto& wave : rbcd::option_values(args, {"--vcd", "--fst"})) {
         const auto [g, f] = layout_paths(gtkw.empty() ? std::string() : gtkw.back(), wave);
@@ -367,6 +394,7 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--fst", opt.fst, "write the waveforms as FST here (as --vcd; docs/waveforms.md)");
     app.add_option("--gtkw", opt.gtkw, "write the GTKWave save file for the waveform here (default: beside it, "
                                        "NAME.gtkw, with NAME.states.txt)");
+    app.add_option("--db", opt.db, "write the per-tile SQLite database here (docs/tile-database.md)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
     app.footer("Formats and options: docs/formats.md; configuration keys: docs/config.md; statistics: docs/stats.md.");
