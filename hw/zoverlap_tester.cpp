@@ -211,7 +211,8 @@ void zoverlap_tester::run() {
                 vcd_->set(vcd_bank_, t, job.bank->index());
                 vcd_->set(vcd_frame_, t, job.bank->frame());
             }
-            const stats_t before = observer_ ? stats_ : stats_t{};
+            const bool observed = !observers_.empty();
+            const stats_t before = observed ? stats_ : stats_t{};
             if (stats_.tiles == lose_tile_) lose_element(*job.bank);
             const std::uint64_t walked_before = stats_.elements;
             t = test_tile(*job.bank, t);
@@ -229,15 +230,15 @@ void zoverlap_tester::run() {
                                    job.bank->fragments_dropped()};
             clk_.wait_until(t);
             TestedTile seen;
-            if (observer_) seen = tested_tile(*job.bank, start, t, before);
+            if (observed) seen = tested_tile(*job.bank, start, t, before);
             job.bank->release(t);
             if (overflowed) t = emit_overflow(o, t);
             if (vcd_) vcd_->set(vcd_busy_, t, 0);
             stats_.busy_cycles += t - start;
-            if (observer_) {
+            if (observed) {
                 seen.done = t;
                 seen.output_stall = stats_.output_stall_cycles - before.output_stall_cycles;
-                observer_->tile_tested(seen);
+                for (auto* o : observers_) o->tile_tested(seen);
             }
             break;
         }

@@ -104,7 +104,7 @@ public:
     const stats_t& stats() const { return stats_; }
     void attach_vcd(VcdWriter& vcd, const std::string& scope);
     // Told each tile's figures as its test ends; none: nothing is gathered.
-    void set_test_observer(TestObserver* o) { observer_ = o; }
+    void add_test_observer(TestObserver* o) { observers_.push_back(o); }
 
     // Test-only hook (testbench/hw/test_self_check.cpp): before testing the
     // tile-th tile (from 0) the tester takes one element out of its bank, as a
@@ -146,7 +146,7 @@ private:
     bool finished_ = false;
     std::uint64_t lose_tile_ = ~std::uint64_t(0);
     stats_t stats_;
-    TestObserver* observer_ = nullptr;
+    std::vector<TestObserver*> observers_;
     VcdWriter* vcd_ = nullptr;
     VcdWriter::Sig vcd_busy_ = 0, vcd_bank_ = 0, vcd_list_ = 0, vcd_stack_ = 0, vcd_hit_ = 0, vcd_stall_ = 0,
                    vcd_readback_ = 0, vcd_frame_ = 0;

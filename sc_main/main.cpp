@@ -25,6 +25,7 @@
 #include "rbcd/sc_main/collision_file.h"
 #include "rbcd/sc_main/fst_writer.h"
 #include "rbcd/sc_main/gtkwave_layout.h"
+#include "rbcd/sc_main/heat_maps.h"
 #include "rbcd/sc_main/tile_database.h"
 #include "rbcd/sc_main/image_sink.h"
 #include "rbcd/sc_main/output_file.h"
@@ -44,7 +45,7 @@ const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE"
 struct Options {
     std::string config_file;
     std::vector<std::string> sets;
-    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd, fst, gtkw, db;
+    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd, fst, gtkw, db, heat_maps;
     std::string frames;   // --frames A:B
     unsigned threads = 2;  // 2: a trace is parsed on its own thread
     bool dump_config = false;
@@ -212,6 +213,15 @@ int run(Options opt) {
         tee.add(images.get());
     }
     CollisionSink* sink = &tee;
+    // Heat maps: summed over the run into --heat-maps DIR; with --images, also
+    // per frame, beside the frame images (and the run's there too).
+    std::unique_ptr<HeatMaps> heat;
+    if (!opt.heat_maps.empty() || !opt.images.empty()) {
+        const std::string dir = opt.heat_maps.empty() ? opt.images : opt.heat_maps;
+        make_directory(dir);
+        heat = std::make_unique<HeatMaps>(dir, !opt.images.empty(), src->header().screen_w, src->header().screen_h,
+                                          cfg.tile.width, cfg.tile.height);
+    }
 
     // --write-trace: the stream the unit saw, replayable with --trace.
     std::unique_ptr<TraceWriter> trace_out;
@@ -263,16 +273,19 @@ int run(Options opt) {
     } watch(sys, trace_out.get(), layout.get());
     sys.raster.add_observer(&watch);
     if (db) db->attach(sys);
+    if (heat) heat->attach(sys);
     sys.run();
     if (const std::string bad = self_check(self_check_counters(sys)); !bad.empty()) throw std::runtime_error(bad);
     Progress& progress = watch.progress;
     progress.finish();
     if (images) images->finish();
+    if (heat) heat->finish();
     if (trace_out) {
         trace_out->close();
         trace_file.commit();
     }
     image_guard.keep = true;
+    if (heat) heat->keep();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
@@ -394,6 +407,9 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--fst", opt.fst, "write the waveforms as FST here (as --vcd; docs/waveforms.md)");
     app.add_option("--gtkw", opt.gtkw, "write the GTKWave save file for the waveform here (default: beside it, "
                                        "NAME.gtkw, with NAME.states.txt)");
+    app.add_option("--heat-maps", opt.heat_maps,
+                   "write per-tile heat maps summed over the run into this directory (with --images: also per "
+                   "frame; docs/tile-database.md)");
     app.add_option("--db", opt.db, "write the per-tile SQLite database here (docs/tile-database.md)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");

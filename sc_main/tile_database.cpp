@@ -93,7 +93,7 @@ void TileDatabase::step(sqlite3_stmt* st) {
 
 void TileDatabase::attach(rbcd_system& sys) {
     sys.raster.add_tile_observer(this);
-    sys.tester.set_test_observer(this);
+    sys.tester.add_test_observer(this);
     sys.outbuf.set_write_observer(this);
 }
 

@@ -125,3 +125,79 @@ TEST_CASE("tile db: bad paths are one line and no file") {
                        {"no/such/x.sqlite", "cannot create"});
     expect_input_error(td, run_with_outputs(td, {"--trace", rbt, "--db", td.out_dir()}), {"is a directory"});
 }
+
+#ifdef RBCD_TEST_HAVE_SQLITE
+namespace {
+
+// The values a heat map carries (its "rbcd-heat-map" tEXt chunk): NaN where
+// no tile was.
+std::vector<std::vector<double>> heat_map_values(const std::string& png) {
+    std::size_t at = 8;
+    while (at + 12 <= png.size()) {
+        std::uint32_t len = 0;
+        for (int i = 0; i < 4; ++i) len = len << 8 | static_cast<unsigned char>(png[at + i]);
+        const std::string type = png.substr(at + 4, 4);
+        const std::string data = png.substr(at + 8, len);
+        if (type == "tEXt" && data.rfind(std::string("rbcd-heat-map") + '\0', 0) == 0) {
+            std::istringstream in(data.substr(14));
+            unsigned cols = 0, rows = 0;
+            in >> cols >> rows;
+            std::vector<std::vector<double>> v(rows, std::vector<double>(cols));
+            for (auto& row : v)
+                for (double& x : row) {
+                    std::string tok;
+                    in >> tok;
+                    x = tok == "-" ? NAN : std::stod(tok);
+                }
+            return v;
+        }
+        at += 12 + len;
+    }
+    FAIL("no rbcd-heat-map chunk");
+    return {};
+}
+
+} // namespace
+
+TEST_CASE("tile db: heat maps hold the database's per-tile sums") {
+    TempDir td;
+    const std::string db_path = td.out_dir() + "/run.sqlite", maps = td.path("maps");
+    const Result r = run_sim(td, {"--trace", kVectors + "/multi-frame-mixed.rbt", "--config",
+                                  kVectors + "/multi-frame-mixed.toml", "--db", db_path, "--heat-maps", maps, "-q"});
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    const Db db(db_path);
+    const std::int64_t frames = db.value("SELECT count(*) FROM frames");
+    const std::int64_t pixels = db.value("SELECT (SELECT value FROM run WHERE key='tile_width') * "
+                                         "(SELECT value FROM run WHERE key='tile_height')");
+    const std::pair<const char*, const char*> metrics[] = {
+        {"stall", "stall_no_bank + stall_queue_full + stall_fragment_queue + stall_output"},
+        {"overflow", "fragments_dropped"},
+        {"depth", "fragments"},
+        {"hits", "hits"}};
+    bool any_nonzero = false;
+    for (const auto& [name, expr] : metrics) {
+        INFO(name);
+        const std::string png = slurp(maps + "/run_" + name + ".png");
+        REQUIRE(png.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0);
+        const auto v = heat_map_values(png);
+        REQUIRE(!v.empty());
+        std::size_t cells = 0;
+        for (std::size_t row = 0; row < v.size(); ++row)
+            for (std::size_t col = 0; col < v[row].size(); ++col) {
+                const std::string where = " FROM tiles WHERE col = " + std::to_string(col) + " AND row = " + std::to_string(row);
+                const bool present = db.value("SELECT count(*)" + where) > 0;
+                INFO("tile " << col << "," << row);
+                CHECK(present == !std::isnan(v[row][col]));
+                if (!present) continue;
+                ++cells;
+                double expected = static_cast<double>(db.value("SELECT total(" + std::string(expr) + ")" + where));
+                if (std::string(name) == "depth") expected /= double(pixels * frames);
+                CHECK(v[row][col] == Approx(expected));
+                any_nonzero = any_nonzero || expected > 0;
+            }
+        CHECK(cells == static_cast<std::size_t>(db.value("SELECT count(*) FROM (SELECT DISTINCT col, row FROM tiles)")));
+    }
+    CHECK(any_nonzero);
+}
+#endif
