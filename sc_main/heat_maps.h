@@ -2,7 +2,7 @@
 // cycles (the rasterizer's three causes and the tester's output stalls),
 // overflows (fragments dropped by full lists), collisionable depth complexity
 // (collisionable fragments per pixel of the tile) and hits. Summed over the
-// run (--heat-maps DIR, or --images DIR), and per frame with --images.
+// run (--heat-maps DIR), and also per frame when --images is given.
 //
 // Each PNG has a colour scale with its legend and title, and carries its
 // values in a tEXt chunk ("rbcd-heat-map": the grid, row by row), so that

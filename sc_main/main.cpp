@@ -213,14 +213,13 @@ int run(Options opt) {
         tee.add(images.get());
     }
     CollisionSink* sink = &tee;
-    // Heat maps: summed over the run into --heat-maps DIR; with --images, also
-    // per frame, beside the frame images (and the run's there too).
+    // Heat maps into --heat-maps DIR: summed over the run; with --images, also
+    // each frame's (the images directory keeps one PNG a frame: scripts count them).
     std::unique_ptr<HeatMaps> heat;
-    if (!opt.heat_maps.empty() || !opt.images.empty()) {
-        const std::string dir = opt.heat_maps.empty() ? opt.images : opt.heat_maps;
-        make_directory(dir);
-        heat = std::make_unique<HeatMaps>(dir, !opt.images.empty(), src->header().screen_w, src->header().screen_h,
-                                          cfg.tile.width, cfg.tile.height);
+    if (!opt.heat_maps.empty()) {
+        make_directory(opt.heat_maps);
+        heat = std::make_unique<HeatMaps>(opt.heat_maps, !opt.images.empty(), src->header().screen_w,
+                                          src->header().screen_h, cfg.tile.width, cfg.tile.height);
     }
 
     // --write-trace: the stream the unit saw, replayable with --trace.
@@ -408,8 +407,8 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--gtkw", opt.gtkw, "write the GTKWave save file for the waveform here (default: beside it, "
                                        "NAME.gtkw, with NAME.states.txt)");
     app.add_option("--heat-maps", opt.heat_maps,
-                   "write per-tile heat maps summed over the run into this directory (with --images: also per "
-                   "frame; docs/tile-database.md)");
+                   "write per-tile heat maps summed over the run into this directory (with --images: also each "
+                   "frame's; docs/tile-database.md)");
     app.add_option("--db", opt.db, "write the per-tile SQLite database here (docs/tile-database.md)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
