@@ -201,3 +201,38 @@ TEST_CASE("tile db: heat maps hold the database's per-tile sums") {
     CHECK(any_nonzero);
 }
 #endif
+
+#ifdef RBCD_TEST_HAVE_SQLITE
+TEST_CASE("tile db: with --images, each frame's heat maps hold that frame's sums") {
+    TempDir td;
+    const std::string db_path = td.out_dir() + "/run.sqlite", maps = td.path("maps"), images = td.path("png");
+    const Result r = run_sim(td, {"--frames", "3:4", "--images", images, "--db", db_path, "--heat-maps", maps, "-q"});
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    const Db db(db_path);
+    // The images directory keeps one PNG a frame.
+    std::size_t pngs = 0;
+    for (const auto& e : fs::directory_iterator(images)) pngs += e.path().extension() == ".png";
+    CHECK(pngs == 2);
+    for (int frame : {3, 4}) {
+        char name[64];
+        std::snprintf(name, sizeof name, "/frame_%05d_hits.png", frame);
+        const auto v = heat_map_values(slurp(maps + name));
+        REQUIRE(!v.empty());
+        double sum = 0;
+        for (const auto& row : v)
+            for (double x : row) sum += std::isnan(x) ? 0 : x;
+        CHECK(sum == Approx(static_cast<double>(
+                         db.value("SELECT total(hits) FROM tiles WHERE frame = " + std::to_string(frame)))));
+        std::snprintf(name, sizeof name, "/frame_%05d_stall.png", frame);
+        const auto s = heat_map_values(slurp(maps + name));
+        double stall = 0;
+        for (const auto& row : s)
+            for (double x : row) stall += std::isnan(x) ? 0 : x;
+        CHECK(stall == Approx(static_cast<double>(db.value(
+                           "SELECT total(stall_no_bank + stall_queue_full + stall_fragment_queue + stall_output) "
+                           "FROM tiles WHERE frame = " + std::to_string(frame)))));
+        CHECK(stall > 0);
+    }
+}
+#endif
