@@ -1,17 +1,19 @@
 #include "rbcd/sc_main/heat_maps.h"
 
+#include <fcntl.h>
 #include <png.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 
 #include "rbcd/common/errors.h"
 #include "rbcd/hw/rbcd_system.h"
-#include "rbcd/sc_main/output_file.h"
 
 namespace rbcd {
 
@@ -99,6 +101,38 @@ std::string with_text(const std::string& png, const std::string& key, const std:
         crc32(0, reinterpret_cast<const Bytef*>(body.data()), static_cast<uInt>(body.size())));
     for (int i = 3; i >= 0; --i) chunk += static_cast<char>(crc >> (8 * i) & 0xff);
     return png.substr(0, 33) + chunk + png.substr(33);
+}
+
+// A map appears whole or not at all: written to an unpredictable temporary
+// beside it (mkostemp) and renamed. Not an OutputFile: maps are written while
+// the simulation runs, when OutputFile's interrupt list must not grow (its
+// signal handler walks it); a kill mid-write can leave a hidden .NAME.XXXXXX,
+// as docs/limits.md says of SIGKILL.
+void write_whole(const std::string& path, const std::string& bytes) {
+    const std::size_t slash = path.rfind('/');
+    std::string tmp = (slash == std::string::npos ? std::string(".") : path.substr(0, slash)) + "/." +
+                      (slash == std::string::npos ? path : path.substr(slash + 1)) + ".XXXXXX";
+    const int fd = ::mkostemp(tmp.data(), O_CLOEXEC);
+    if (fd < 0) throw RunError(path + ": cannot create: " + std::strerror(errno));
+    std::size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n <= 0) {
+            const std::string why = std::strerror(n < 0 ? errno : ENOSPC);
+            ::close(fd);
+            ::unlink(tmp.c_str());
+            throw RunError(path + ": write failed: " + why);
+        }
+        done += static_cast<std::size_t>(n);
+    }
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    (void)::fchmod(fd, 0666 & ~mask);
+    if (::close(fd) != 0 || ::rename(tmp.c_str(), path.c_str()) != 0) {
+        const std::string why = std::strerror(errno);
+        ::unlink(tmp.c_str());
+        throw RunError(path + ": write failed: " + why);
+    }
 }
 
 } // namespace
@@ -231,9 +265,7 @@ void HeatMaps::write(const Grid& g, const std::string& name, const std::string& 
         if (m == Depth)
             for (double& x : v) x = std::isnan(x) ? x : x / depth_scale;
         const std::string path = dir_ + "/" + name + "_" + file_name(Metric(m)) + ".png";
-        OutputFile out(path);
-        out.write(render(v, cols_, rows_, Metric(m), title));
-        out.commit();
+        write_whole(path, render(v, cols_, rows_, Metric(m), title));
         written_.push_back(path);
     }
 }

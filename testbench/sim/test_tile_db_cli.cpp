@@ -236,3 +236,15 @@ TEST_CASE("tile db: with --images, each frame's heat maps hold that frame's sums
     }
 }
 #endif
+
+TEST_CASE("heat maps: a full disk or a file for the directory is one line and no map") {
+    TempDir td;
+    // Each map is a few KiB; a limit of 1 KiB fails the first.
+    const std::string cmd = "ulimit -f 2; trap '' XFSZ; exec \"$0\" \"$@\"";
+    const Result r = run_program(td, "/bin/sh", {"-c", cmd, RBCD_SIM, "--trace", kVectors + "/default.rbt", "-q",
+                                                 "--heat-maps", td.out_dir()});
+    expect_error(td, r, 1, {"run_", ".png", "write failed"});
+    const std::string file = td.write("not-a-dir", "x");
+    expect_input_error(td, run_with_outputs(td, {"--trace", kVectors + "/default.rbt", "--heat-maps", file}),
+                       {"not-a-dir", "cannot create directory"});
+}
