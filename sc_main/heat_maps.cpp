@@ -108,12 +108,13 @@ std::string with_text(const std::string& png, const std::string& key, const std:
 // the simulation runs, when OutputFile's interrupt list must not grow (its
 // signal handler walks it); a kill mid-write can leave a hidden .NAME.XXXXXX,
 // as docs/limits.md says of SIGKILL.
-void write_whole(const std::string& path, const std::string& bytes) {
+// Empty when written, else the one-line reason.
+std::string write_whole(const std::string& path, const std::string& bytes) {
     const std::size_t slash = path.rfind('/');
     std::string tmp = (slash == std::string::npos ? std::string(".") : path.substr(0, slash)) + "/." +
                       (slash == std::string::npos ? path : path.substr(slash + 1)) + ".XXXXXX";
     const int fd = ::mkostemp(tmp.data(), O_CLOEXEC);
-    if (fd < 0) throw RunError(path + ": cannot create: " + std::strerror(errno));
+    if (fd < 0) return path + ": cannot create: " + std::strerror(errno);
     std::size_t done = 0;
     while (done < bytes.size()) {
         const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
@@ -121,7 +122,7 @@ void write_whole(const std::string& path, const std::string& bytes) {
             const std::string why = std::strerror(n < 0 ? errno : ENOSPC);
             ::close(fd);
             ::unlink(tmp.c_str());
-            throw RunError(path + ": write failed: " + why);
+            return path + ": write failed: " + why;
         }
         done += static_cast<std::size_t>(n);
     }
@@ -131,8 +132,9 @@ void write_whole(const std::string& path, const std::string& bytes) {
     if (::close(fd) != 0 || ::rename(tmp.c_str(), path.c_str()) != 0) {
         const std::string why = std::strerror(errno);
         ::unlink(tmp.c_str());
-        throw RunError(path + ": write failed: " + why);
+        return path + ": write failed: " + why;
     }
+    return {};
 }
 
 } // namespace
@@ -264,9 +266,10 @@ void HeatMaps::write(const Grid& g, const std::string& name, const std::string& 
         std::vector<double> v = g.v[m];
         if (m == Depth)
             for (double& x : v) x = std::isnan(x) ? x : x / depth_scale;
+        if (!error_.empty()) return;
         const std::string path = dir_ + "/" + name + "_" + file_name(Metric(m)) + ".png";
-        write_whole(path, render(v, cols_, rows_, Metric(m), title));
-        written_.push_back(path);
+        error_ = write_whole(path, render(v, cols_, rows_, Metric(m), title));
+        if (error_.empty()) written_.push_back(path);
     }
 }
 

@@ -29,8 +29,11 @@ public:
     HeatMaps(std::string dir, bool per_frame, unsigned screen_w, unsigned screen_h, unsigned tile_w, unsigned tile_h);
     ~HeatMaps() override;   // removes every map written unless keep()
     void attach(rbcd_system& sys);
-    // After the run: the run's maps. InputError naming a file it cannot write.
+    // After the run: the run's maps.
     void finish();
+    // The first map that could not be written, in one line; empty: none.
+    // (Reported, not thrown: maps are written from the simulation's processes.)
+    const std::string& error() const { return error_; }
     void keep() { keep_ = true; }
     const std::vector<std::string>& written() const { return written_; }
 
@@ -56,6 +59,7 @@ private:
     std::uint64_t frames_ = 0;
     std::vector<std::string> written_;
     bool keep_ = false;
+    std::string error_;
 };
 
 } // namespace rbcd

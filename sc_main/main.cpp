@@ -278,7 +278,10 @@ int run(Options opt) {
     Progress& progress = watch.progress;
     progress.finish();
     if (images) images->finish();
-    if (heat) heat->finish();
+    if (heat) {
+        heat->finish();
+        if (!heat->error().empty()) throw RunError(heat->error());
+    }
     if (trace_out) {
         trace_out->close();
         trace_file.commit();
