@@ -24,6 +24,10 @@ VcdWriter::VcdWriter(Output out, std::uint64_t period_ps, std::uint64_t start_cy
                      std::string version)
     : out_(std::move(out)), period_ps_(period_ps), start_(start_cycle), end_(end_cycle), version_(std::move(version)) {}
 
+VcdWriter::VcdWriter(WaveEncoder& enc, std::uint64_t period_ps, std::uint64_t start_cycle, std::uint64_t end_cycle,
+                     std::string version)
+    : enc_(&enc), period_ps_(period_ps), start_(start_cycle), end_(end_cycle), version_(std::move(version)) {}
+
 VcdWriter::Sig VcdWriter::add(const std::string& scope, const std::string& name, unsigned width,
                               std::uint64_t initial) {
     const Sig id = static_cast<Sig>(sigs_.size());
@@ -37,6 +41,7 @@ void VcdWriter::header() {
     char date[64];
     const std::time_t now = std::time(nullptr);
     std::strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S", std::gmtime(&now));
+    if (enc_) enc_->begin(date, version_, period_ps_);
     h += "$date\n  " + std::string(date) + "\n$end\n";
     h += "$version\n  " + version_ + "\n$end\n";
     h += "$comment\n  one cycle = " + std::to_string(period_ps_) + " ps\n$end\n";
@@ -56,31 +61,42 @@ void VcdWriter::header() {
         while (common < open.size() && common < parts.size() && open[common] == parts[common]) ++common;
         while (open.size() > common) {
             h += "$upscope $end\n";
+            if (enc_) enc_->upscope();
             open.pop_back();
         }
         for (std::size_t i = common; i < parts.size(); ++i) {
             h += "$scope module " + parts[i] + " $end\n";
+            if (enc_) enc_->scope(parts[i]);
             open.push_back(parts[i]);
         }
-        for (Sig id : ids)
+        for (Sig id : ids) {
+            if (enc_) enc_->var(id, sigs_[id].name, sigs_[id].width);
             h += "$var wire " + std::to_string(sigs_[id].width) + " " + sigs_[id].code + " " + sigs_[id].name +
                  (sigs_[id].width > 1 ? " [" + std::to_string(sigs_[id].width - 1) + ":0]" : "") + " $end\n";
+        }
     }
     while (!open.empty()) {
         h += "$upscope $end\n";
+        if (enc_) enc_->upscope();
         open.pop_back();
     }
     h += "$enddefinitions $end\n";
-    out_(h);
+    if (enc_) enc_->end_definitions();
+    else out_(h);
 }
 
 void VcdWriter::stamp(std::uint64_t cycle) {
-    buf_ += "#" + std::to_string(cycle * period_ps_) + "\n";
+    if (enc_) enc_->time(cycle * period_ps_);
+    else buf_ += "#" + std::to_string(cycle * period_ps_) + "\n";
     last_stamp_ = cycle;
     stamped_any_ = true;
 }
 
 void VcdWriter::write_value(const Signal& s) {
+    if (enc_) {
+        enc_->value(static_cast<Sig>(&s - sigs_.data()), s.width, s.value);
+        return;
+    }
     if (s.width == 1) {
         buf_ += (s.value & 1) ? '1' : '0';
     } else {
@@ -97,12 +113,14 @@ void VcdWriter::write_value(const Signal& s) {
 void VcdWriter::open_window(std::uint64_t cycle) {
     window_open_ = true;
     stamp(cycle);
-    buf_ += "$dumpvars\n";
+    if (enc_) enc_->dumpvars(true);
+    else buf_ += "$dumpvars\n";
     for (auto& s : sigs_) {
         write_value(s);
         s.written = s.value;
     }
-    buf_ += "$end\n";
+    if (enc_) enc_->dumpvars(false);
+    else buf_ += "$end\n";
 }
 
 void VcdWriter::emit(std::uint64_t cycle) {
@@ -127,7 +145,7 @@ void VcdWriter::emit(std::uint64_t cycle) {
         s.written = s.value;
     }
     touched_.clear();
-    if (buf_.size() > (1u << 16)) {
+    if (!enc_ && buf_.size() > (1u << 16)) {
         out_(buf_);
         buf_.clear();
     }
@@ -163,7 +181,8 @@ void VcdWriter::finish(std::uint64_t end_cycle) {
     // A closing time stamp so viewers show the last interval.
     const std::uint64_t last = std::min(end_cycle, end_);
     if (last >= start_ && (!stamped_any_ || last > last_stamp_)) stamp(last);
-    out_(buf_);
+    if (enc_) enc_->finish();
+    else out_(buf_);
     buf_.clear();
 }
 

@@ -89,6 +89,7 @@ std::uint64_t output_buffer::issue(std::uint64_t cycle, unsigned n) {
         vcd_->add_delta(vcd_occupancy_, done, -static_cast<std::int64_t>(n));
         vcd_->set(vcd_offset_, t, write_offset_ + bytes);
     }
+    if (observer_) observer_->records_written({gp_.get_address(), bytes, n, t, done});
     inflight_.push_back({done, n});
     inflight_records_ += n;
     pending_.erase(pending_.begin(), pending_.begin() + n);

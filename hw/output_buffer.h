@@ -27,6 +27,18 @@
 
 namespace rbcd {
 
+// A burst of records the buffer wrote to memory, for a WriteObserver.
+struct RecordWrite {
+    std::uint64_t address = 0, bytes = 0, records = 0;
+    std::uint64_t issue = 0, done = 0;   // cycles: sent, completed by the memory
+};
+
+class WriteObserver {
+public:
+    virtual ~WriteObserver() = default;
+    virtual void records_written(const RecordWrite&) = 0;
+};
+
 class output_buffer : public sc_core::sc_module {
 public:
     tlm_utils::simple_initiator_socket<output_buffer, kBusWidth> mem;
@@ -67,6 +79,8 @@ public:
     // The memory error that stopped the run ("" if none): kept, because the
     // exception leaves through sc_start and the platform may ask afterwards.
     const std::string& failure() const { return failure_; }
+    // Told each burst as it is written; none: nothing is gathered.
+    void set_write_observer(WriteObserver* o) { observer_ = o; }
     void attach_vcd(VcdWriter& vcd, const std::string& scope) {
         vcd_ = &vcd;
         vcd_occupancy_ = vcd.add(scope, "occupancy", 17);
@@ -101,6 +115,7 @@ private:
     tlm::tlm_generic_payload gp_;
     stats_t stats_;
     std::string failure_;
+    WriteObserver* observer_ = nullptr;
     VcdWriter* vcd_ = nullptr;
     VcdWriter::Sig vcd_occupancy_ = 0, vcd_in_flight_ = 0, vcd_offset_ = 0, vcd_region_ = 0;
 };

@@ -345,6 +345,9 @@ void rasterizer::feed_tile(const Tile& tile) {
         vcd_->set(vcd_col_, t0, tile.col);
         vcd_->set(vcd_row_, t0, tile.row);
     }
+    // Per-tile stall figures for tile observers.
+    const std::uint64_t no_bank_before = cur_.stall_no_bank, queue_full_before = cur_.stall_queue_full,
+                        fragment_queue_before = cur_.stall_fragment_queue;
     std::uint64_t start = t0, bank_ready = t0;
     const bool bank_wait_unit = cfg_.gpu.bank_wait == BankWait::Unit;
     zeb_bank* bank = nullptr;
@@ -379,7 +382,30 @@ void rasterizer::feed_tile(const Tile& tile) {
     const std::uint64_t span = end - start;
     stats_.busy_cycles += span > stalls ? span - stalls : 0;
     if (vcd_) vcd_->set(vcd_emit_, end, 0);
-    if (bank) tester_.post({zoverlap_tester::Job::TileJob, tile.frame, bank, sorter_.end_tile(), n});
+    const std::uint64_t filled = bank ? sorter_.end_tile() : end;
+    if (!tile_observers_.empty()) {
+        TileTimes tt;
+        tt.seq = stats_.tiles - 1;
+        tt.frame = tile.frame;
+        tt.col = tile.col;
+        tt.row = tile.row;
+        tt.bank = bank ? static_cast<int>(bank->index()) : -1;
+        tt.fragments = n;
+        tt.culled = culled;
+        tt.other = tile.other;
+        tt.prims = tile.prims;
+        tt.cprims = tile.cprims;
+        tt.arrive = t0;
+        tt.start = start;
+        tt.end = end;
+        tt.fill_start = bank ? bank_ready : end;
+        tt.fill_end = filled;
+        tt.stall_no_bank = cur_.stall_no_bank - no_bank_before;
+        tt.stall_queue_full = cur_.stall_queue_full - queue_full_before;
+        tt.stall_fragment_queue = cur_.stall_fragment_queue - fragment_queue_before;
+        for (auto* o : tile_observers_) o->tile_fed(tt);
+    }
+    if (bank) tester_.post({zoverlap_tester::Job::TileJob, tile.frame, bank, filled, n});
     clk_.wait_until(end);
 }
 

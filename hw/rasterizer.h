@@ -74,6 +74,20 @@ struct FrameTimes {
     std::uint64_t cost_tail() const { return with_unit - gpu_done; }
 };
 
+// One tile as the rasterizer fed it, with the unit (absolute cycles).
+struct TileTimes {
+    std::uint64_t seq = 0;              // the tile's place in the run, from 0
+    std::uint64_t frame = 0;
+    std::uint32_t col = 0, row = 0;
+    int bank = -1;                      // the ZEB bank it took; -1: no collisionable fragment
+    std::uint64_t fragments = 0, culled = 0, other = 0, prims = 0, cprims = 0;
+    std::uint64_t arrive = 0;           // the rasterizer free for it
+    std::uint64_t start = 0, end = 0;   // rasterizing (after a wait for its bank)
+    std::uint64_t fill_start = 0;       // its bank free to fill
+    std::uint64_t fill_end = 0;         // the bank holds the whole tile
+    std::uint64_t stall_no_bank = 0, stall_queue_full = 0, stall_fragment_queue = 0;
+};
+
 // Observers of the stream and its frames (trace writer, images, stats, progress).
 class RasterObserver {
 public:
@@ -81,6 +95,8 @@ public:
     virtual void frame_begin(std::uint64_t /*frame*/) {}
     // Before the tile is rasterized.
     virtual void tile(const Tile&) {}
+    // After it, for observers added with add_tile_observer (the tile database).
+    virtual void tile_fed(const TileTimes&) {}
     // At the frame's barrier: every block is done with the frame.
     virtual void frame_end(const FrameTimes&) {}
 };
@@ -128,6 +144,11 @@ public:
     // The end of the last frame (0 before any): the run's length in cycles.
     std::uint64_t end_cycle() const { return last_end_; }
     void add_observer(RasterObserver* o) { observers_.push_back(o); }
+    // Also told tile_fed(); without any, no tile's times are gathered.
+    void add_tile_observer(RasterObserver* o) {
+        observers_.push_back(o);
+        tile_observers_.push_back(o);
+    }
 
     // Waveforms; the rasterizer also retires the writer's settled events at each tile.
     void attach_vcd(VcdWriter& vcd, const std::string& scope);
@@ -194,6 +215,7 @@ private:
     std::exception_ptr error_;
     stats_t stats_;
     std::vector<RasterObserver*> observers_;
+    std::vector<RasterObserver*> tile_observers_;
     VcdWriter* vcd_ = nullptr;
     VcdWriter* vcd_flush_ = nullptr;
     VcdWriter::Sig vcd_frame_ = 0, vcd_col_ = 0, vcd_row_ = 0, vcd_emit_ = 0, vcd_no_bank_ = 0, vcd_queue_full_ = 0;

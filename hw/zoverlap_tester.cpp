@@ -139,6 +139,30 @@ std::uint64_t zoverlap_tester::test_tile(zeb_bank& bank, std::uint64_t t) {
     return t;
 }
 
+TestedTile zoverlap_tester::tested_tile(zeb_bank& bank, std::uint64_t start, std::uint64_t end,
+                                        const stats_t& before) const {
+    TestedTile s;
+    s.frame = bank.frame();
+    s.col = bank.tile_col();
+    s.row = bank.tile_row();
+    s.bank = bank.index();
+    s.start = start;
+    s.end = end;
+    s.lists = stats_.lists - before.lists;
+    s.elements = stats_.elements - before.elements;
+    const auto& occ = bank.occupancy();
+    for (std::size_t wi = 0; wi < occ.size(); ++wi)
+        for (std::uint64_t bits = occ[wi]; bits; bits &= bits - 1)
+            s.max_list = std::max<std::uint64_t>(s.max_list, bank.count(static_cast<unsigned>(wi * 64 + __builtin_ctzll(bits))));
+    s.hits = stats_.hits - before.hits;
+    s.filtered_hits = stats_.filtered_hits - before.filtered_hits;
+    s.stack_overflows = stats_.stack_overflows - before.stack_overflows;
+    s.orphan_back_faces = stats_.orphan_back_faces - before.orphan_back_faces;
+    s.lists_overflowed = bank.lists_overflowed();
+    s.fragments_dropped = bank.fragments_dropped();
+    return s;
+}
+
 void zoverlap_tester::lose_element(zeb_bank& bank) {
     const auto& occ = bank.occupancy();
     for (std::size_t wi = 0; wi < occ.size(); ++wi) {
@@ -187,6 +211,8 @@ void zoverlap_tester::run() {
                 vcd_->set(vcd_bank_, t, job.bank->index());
                 vcd_->set(vcd_frame_, t, job.bank->frame());
             }
+            const bool observed = !observers_.empty();
+            const stats_t before = observed ? stats_ : stats_t{};
             if (stats_.tiles == lose_tile_) lose_element(*job.bank);
             const std::uint64_t walked_before = stats_.elements;
             t = test_tile(*job.bank, t);
@@ -203,10 +229,17 @@ void zoverlap_tester::run() {
             const OverflowRecord o{job.bank->tile_col(), job.bank->tile_row(), job.bank->lists_overflowed(),
                                    job.bank->fragments_dropped()};
             clk_.wait_until(t);
+            TestedTile seen;
+            if (observed) seen = tested_tile(*job.bank, start, t, before);
             job.bank->release(t);
             if (overflowed) t = emit_overflow(o, t);
             if (vcd_) vcd_->set(vcd_busy_, t, 0);
             stats_.busy_cycles += t - start;
+            if (observed) {
+                seen.done = t;
+                seen.output_stall = stats_.output_stall_cycles - before.output_stall_cycles;
+                for (auto* o : observers_) o->tile_tested(seen);
+            }
             break;
         }
         case Job::FrameEnd: {

@@ -23,6 +23,25 @@
 
 namespace rbcd {
 
+// One tile as the tester saw it (absolute cycles), for a TestObserver.
+struct TestedTile {
+    std::uint64_t frame = 0;
+    std::uint32_t col = 0, row = 0;
+    unsigned bank = 0;
+    std::uint64_t start = 0, end = 0;          // walking its lists; end: bank released
+    std::uint64_t done = 0;                    // ... and its overflow record accepted
+    std::uint64_t lists = 0, elements = 0, max_list = 0;
+    std::uint64_t hits = 0, filtered_hits = 0, stack_overflows = 0, orphan_back_faces = 0;
+    std::uint64_t output_stall = 0;            // cycles held by a full output buffer
+    std::uint64_t lists_overflowed = 0, fragments_dropped = 0;
+};
+
+class TestObserver {
+public:
+    virtual ~TestObserver() = default;
+    virtual void tile_tested(const TestedTile&) = 0;
+};
+
 class zoverlap_tester : public sc_core::sc_module {
 public:
     SC_HAS_PROCESS(zoverlap_tester);
@@ -84,6 +103,8 @@ public:
     bool finished() const { return finished_; }
     const stats_t& stats() const { return stats_; }
     void attach_vcd(VcdWriter& vcd, const std::string& scope);
+    // Told each tile's figures as its test ends; none: nothing is gathered.
+    void add_test_observer(TestObserver* o) { observers_.push_back(o); }
 
     // Test-only hook (testbench/hw/test_self_check.cpp): before testing the
     // tile-th tile (from 0) the tester takes one element out of its bank, as a
@@ -100,6 +121,7 @@ private:
     void run();
     std::uint64_t test_tile(zeb_bank& bank, std::uint64_t t);
     void lose_element(zeb_bank& bank);
+    TestedTile tested_tile(zeb_bank& bank, std::uint64_t start, std::uint64_t end, const stats_t& before) const;
     std::uint64_t emit_overflow(const OverflowRecord& o, std::uint64_t t);
     std::uint64_t emit_hit(std::uint32_t x, std::uint32_t y, std::uint32_t id1, std::uint32_t id2,
                            std::uint32_t dq, std::uint64_t t);
@@ -124,6 +146,7 @@ private:
     bool finished_ = false;
     std::uint64_t lose_tile_ = ~std::uint64_t(0);
     stats_t stats_;
+    std::vector<TestObserver*> observers_;
     VcdWriter* vcd_ = nullptr;
     VcdWriter::Sig vcd_busy_ = 0, vcd_bank_ = 0, vcd_list_ = 0, vcd_stack_ = 0, vcd_hit_ = 0, vcd_stall_ = 0,
                    vcd_readback_ = 0, vcd_frame_ = 0;

@@ -11,7 +11,9 @@
 #include <filesystem>
 #include <memory>
 #include <systemc>
+#include <sys/stat.h>
 #include <unistd.h>
+#include <utility>
 
 #include "rbcd/common/config.h"
 #include "rbcd/common/errors.h"
@@ -21,6 +23,10 @@
 #include "rbcd/io/trace_reader.h"
 #include "rbcd/io/trace_writer.h"
 #include "rbcd/sc_main/collision_file.h"
+#include "rbcd/sc_main/fst_writer.h"
+#include "rbcd/sc_main/gtkwave_layout.h"
+#include "rbcd/sc_main/heat_maps.h"
+#include "rbcd/sc_main/tile_database.h"
 #include "rbcd/sc_main/image_sink.h"
 #include "rbcd/sc_main/output_file.h"
 #include "rbcd/sc_main/progress.h"
@@ -39,7 +45,7 @@ const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE"
 struct Options {
     std::string config_file;
     std::vector<std::string> sets;
-    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd;
+    std::string trace, scene, collisions, stats, frame_stats, write_trace, images, vcd, fst, gtkw, db, heat_maps;
     std::string frames;   // --frames A:B
     bool frames_given = false;   // --frames '' is an error, not "all frames"
     unsigned threads = 2;  // 2: a trace is parsed on its own thread
@@ -61,8 +67,45 @@ void quiet_kernel() {
     sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
 }
 
-int run(const Options& opt) {
+bool ends_with(const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+// The GTKWave save file: --gtkw, else beside a waveform written through a
+// temporary (run.fst -> run.gtkw); its state filter beside it. Empty: none.
+std::pair<std::string, std::string> layout_paths(const std::string& gtkw, const std::string& wave) {
+    std::string path = gtkw;
+    if (path.empty() && !wave.empty() && wave != "-") {
+        struct stat st {};
+        const bool regular_or_new = ::lstat(wave.c_str(), &st) != 0 || S_ISREG(st.st_mode);
+        if (regular_or_new) {
+            const std::size_t dot = wave.rfind('.'), slash = wave.rfind('/');
+            const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+            path = (has_ext ? wave.substr(0, dot) : wave) + ".gtkw";
+        }
+    }
+    if (path.empty()) return {};
+    return {path, rbcd::GtkwaveLayout::filter_path_for(path)};
+}
+
+int run(Options opt) {
     using namespace rbcd;
+    // --vcd run.fst: the format follows the file's extension.
+    if (ends_with(opt.vcd, ".fst")) {
+        if (!opt.fst.empty()) throw InputError("--vcd: " + opt.vcd + " is an FST file and --fst is given too");
+        opt.fst = std::exchange(opt.vcd, std::string());
+    }
+    if (!opt.fst.empty() && !opt.vcd.empty())
+        throw InputError("--fst: cannot be combined with --vcd (one waveform a run)");
+    if (!opt.fst.empty() && !fst_supported())
+        throw InputError("--fst: this rbcd-sim was built without FST support (install Debian's verilator package: "
+                         "scripts/setup.sh --waves, then rebuild)");
+    if (!opt.db.empty() && !sqlite_supported())
+        throw InputError("--db: this rbcd-sim was built without SQLite (install Debian's libsqlite3-dev: "
+                         "scripts/setup.sh --waves, then rebuild)");
+    if (!opt.gtkw.empty() && opt.vcd.empty() && opt.fst.empty())
+        throw InputError("--gtkw: needs a waveform (--vcd or --fst)");
+    const auto [gtkw_path, filter_path] = layout_paths(opt.gtkw, opt.fst.empty() ? opt.vcd : opt.fst);
     SimConfig cfg;
     if (!opt.config_file.empty()) apply_config_file(cfg, opt.config_file);
     for (const auto& s : opt.sets) apply_config_set(cfg, s);
@@ -80,18 +123,35 @@ int run(const Options& opt) {
     // An output over an input would destroy it before it is read.
     const std::pair<const char*, const std::string*> outs[] = {
         {"--collisions", &opt.collisions}, {"--stats", &opt.stats}, {"--frame-stats", &opt.frame_stats},
-        {"--vcd", &opt.vcd}, {"--write-trace", &opt.write_trace}};
+        {"--vcd", &opt.vcd}, {"--fst", &opt.fst}, {"--gtkw", &gtkw_path}, {"--gtkw", &filter_path},
+        {"--db", &opt.db}, {"--write-trace", &opt.write_trace}};
     for (const std::string* in : {&opt.trace, &opt.scene, &opt.config_file})
         for (const auto& [flag, path] : outs)
             if (!in->empty() && !path->empty() && same_file(*path, *in))
                 throw InputError(std::string(flag) + ": " + *path + " is the input file " + *in);
 
     // Outputs are created before the run so an uncreatable path fails fast.
-    OutputFile collisions_out, stats_out, frame_stats_out, vcd_out;
+    OutputFile collisions_out, stats_out, frame_stats_out, vcd_out, fst_out;
     if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions);
     if (!opt.stats.empty()) stats_out = OutputFile(opt.stats);
     if (!opt.frame_stats.empty()) frame_stats_out = OutputFile(opt.frame_stats);
     if (!opt.vcd.empty()) vcd_out = OutputFile(opt.vcd);
+    std::unique_ptr<FstWriter> fst;
+    if (!opt.fst.empty()) {
+        fst_out = OutputFile(opt.fst, OutputFile::ByName{});
+        fst = std::make_unique<FstWriter>(fst_out.library_path(), opt.fst);
+    }
+    OutputFile db_out;
+    std::unique_ptr<TileDatabase> db;
+    if (!opt.db.empty()) {
+        db_out = OutputFile(opt.db, OutputFile::ByName{});
+        db = std::make_unique<TileDatabase>(db_out.library_path(), opt.db, cfg.tile.width, cfg.tile.height);
+    }
+    OutputFile gtkw_out, filter_out;
+    if (!gtkw_path.empty()) {
+        gtkw_out = OutputFile(gtkw_path);
+        filter_out = OutputFile(filter_path);
+    }
 
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
@@ -127,7 +187,17 @@ int run(const Options& opt) {
     else prov_inputs.push_back({"scene", opt.scene});
     if (scene_src)
         for (const auto& m : scene_src->mesh_files()) prov_inputs.push_back({"mesh", m});
-    const nlohmann::json provenance = stats_out.active() ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
+    const nlohmann::json provenance =
+        stats_out.active() || db ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
+    if (db) {
+        db->run_fact("input", input_name);
+        db->run_fact("config", dump_config_toml(cfg));
+        db->run_fact("provenance", provenance.dump(2));
+        db->run_fact("tile_width", std::to_string(cfg.tile.width));
+        db->run_fact("tile_height", std::to_string(cfg.tile.height));
+        db->run_fact("screen_width", std::to_string(src->header().screen_w));
+        db->run_fact("screen_height", std::to_string(src->header().screen_h));
+    }
 
     std::unique_ptr<CollisionFileSink> file_sink;
     TeeSink tee;
@@ -144,6 +214,14 @@ int run(const Options& opt) {
         tee.add(images.get());
     }
     CollisionSink* sink = &tee;
+    // Heat maps into --heat-maps DIR: summed over the run; with --images, also
+    // each frame's (the images directory keeps one PNG a frame: scripts count them).
+    std::unique_ptr<HeatMaps> heat;
+    if (!opt.heat_maps.empty()) {
+        make_directory(opt.heat_maps);
+        heat = std::make_unique<HeatMaps>(opt.heat_maps, !opt.images.empty(), src->header().screen_w,
+                                          src->header().screen_h, cfg.tile.width, cfg.tile.height);
+    }
 
     // --write-trace: the stream the unit saw, replayable with --trace.
     std::unique_ptr<TraceWriter> trace_out;
@@ -169,34 +247,48 @@ int run(const Options& opt) {
         vcd = std::make_unique<VcdWriter>([&](const std::string& s) { vcd_out.write(s); }, sys.clk.period_ps(),
                                           cfg.trace.start, cfg.trace.end);
         sys.attach_vcd(*vcd);
+    } else if (fst) {
+        vcd = std::make_unique<VcdWriter>(*fst, sys.clk.period_ps(), cfg.trace.start, cfg.trace.end);
+        sys.attach_vcd(*vcd);
     }
+    std::unique_ptr<GtkwaveLayout> layout;
+    if (vcd && gtkw_out.active()) layout = std::make_unique<GtkwaveLayout>(*vcd, sys.clk.period_ps(), cfg.trace.start, cfg.trace.end);
     RunReport report(sys);               // GPU time and energy per frame, reduced as frames end
     if (frame_stats_out.active()) report.stream_to([&](const std::string& line) { frame_stats_out.write(line); });
     // Progress on stderr (only on a terminal, only after a few seconds) and --write-trace.
     struct Watch final : RasterObserver {
         rbcd_system& sys;
         TraceWriter* trace;
+        GtkwaveLayout* layout;
         Progress progress;
-        Watch(rbcd_system& s, TraceWriter* t) : sys(s), trace(t) {}
+        Watch(rbcd_system& s, TraceWriter* t, GtkwaveLayout* l) : sys(s), trace(t), layout(l) {}
         void frame_begin(std::uint64_t n) override {
             progress.on_frame(n, sys.raster.stats().fragments);
             if (trace) trace->frame(n);
+            if (layout) layout->frame_start(n, sys.clk.now());
         }
         void tile(const Tile& t) override {
             if (trace) trace->tile(t);
         }
-    } watch(sys, trace_out.get());
+    } watch(sys, trace_out.get(), layout.get());
     sys.raster.add_observer(&watch);
+    if (db) db->attach(sys);
+    if (heat) heat->attach(sys);
     sys.run();
     if (const std::string bad = self_check(self_check_counters(sys)); !bad.empty()) throw std::runtime_error(bad);
     Progress& progress = watch.progress;
     progress.finish();
     if (images) images->finish();
+    if (heat) {
+        heat->finish();
+        if (!heat->error().empty()) throw RunError(heat->error());
+    }
     if (trace_out) {
         trace_out->close();
         trace_file.commit();
     }
     image_guard.keep = true;
+    if (heat) heat->keep();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
@@ -206,6 +298,26 @@ int run(const Options& opt) {
         collisions_out.commit();
     }
     if (vcd_out.active()) vcd_out.commit();
+    if (fst) {
+        fst->close();
+        fst_out.commit();
+    }
+    if (db) {
+        db->run_fact("cycles", std::to_string(sys.total_cycles()));
+        db->run_fact("wall_seconds", std::to_string(wall));
+        db->finish();
+        db_out.commit();
+    }
+    if (layout) {
+        const std::string wave = opt.fst.empty() ? opt.vcd : opt.fst;
+        std::error_code ec;
+        const std::string dump = wave == "-" ? wave : std::filesystem::absolute(wave, ec).string();
+        const std::string filter = std::filesystem::absolute(filter_path, ec).string();
+        gtkw_out.write(layout->save_file(dump, filter));
+        filter_out.write(GtkwaveLayout::state_filter());
+        filter_out.commit();
+        gtkw_out.commit();
+    }
     if (frame_stats_out.active()) frame_stats_out.commit();
     if (stats_out.active()) {
         stats_out.write(stats.dump(2) + "\n");
@@ -222,8 +334,14 @@ int fail(int status, const std::string& msg, int argc, char* argv[]) {
     // formats.md: on a non-zero exit nothing stands at an output path, not even an
     // older file; but an output path that names one of the inputs is the input.
     const std::vector<std::string> args(argv, argv + argc);
-    rbcd::discard_outputs(rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd"}),
-                          rbcd::option_values(args, {"--trace", "--scene", "--config"}));
+    auto outputs = rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd", "--fst", "--gtkw", "--db"});
+    const auto gtkw = rbcd::option_values(args, {"--gtkw"});
+    for (const auto& wave : rbcd::option_values(args, {"--vcd", "--fst"})) {
+        const auto [g, f] = layout_paths(gtkw.empty() ? std::string() : gtkw.back(), wave);
+        outputs.push_back(g);
+        outputs.push_back(f);
+    }
+    rbcd::discard_outputs(outputs, rbcd::option_values(args, {"--trace", "--scene", "--config"}));
     return status;
 }
 
@@ -288,7 +406,15 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--stats", opt.stats, "write statistics JSON here");
     app.add_option("--frame-stats", opt.frame_stats,
                    "write per-frame figures here, one JSON object a line, as frames end (docs/stats.md)");
-    app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window)");
+    app.add_option("--vcd", opt.vcd, "write a VCD waveform dump here (trace.* keys select blocks and window; "
+                                     "a .fst name writes FST)");
+    app.add_option("--fst", opt.fst, "write the waveforms as FST here (as --vcd; docs/waveforms.md)");
+    app.add_option("--gtkw", opt.gtkw, "write the GTKWave save file for the waveform here (default: beside it, "
+                                       "NAME.gtkw, with NAME.states.txt)");
+    app.add_option("--heat-maps", opt.heat_maps,
+                   "write per-tile heat maps summed over the run into this directory (with --images: also each "
+                   "frame's; docs/tile-database.md)");
+    app.add_option("--db", opt.db, "write the per-tile SQLite database here (docs/tile-database.md)");
     app.add_flag("--dump-config", opt.dump_config, "print the effective configuration as TOML and exit");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
     app.footer("Formats and options: docs/formats.md; configuration keys: docs/config.md; statistics: docs/stats.md.");

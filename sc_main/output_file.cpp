@@ -25,7 +25,9 @@ std::vector<std::string>& cleanup_paths() {
 }
 
 extern "C" void on_fatal_signal(int sig) {
-    for (const auto& p : cleanup_paths()) ::unlink(p.c_str());
+    // A ByName output's directory is listed after the files in it.
+    for (const auto& p : cleanup_paths())
+        if (::unlink(p.c_str()) != 0) ::rmdir(p.c_str());
     ::_exit(128 + sig);
 }
 
@@ -161,6 +163,25 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
     std::setvbuf(f_, nullptr, _IOFBF, 1 << 20);
 }
 
+// What a ByName library may leave beside its file: fstapi's hierarchy, SQLite's
+// journals. Removed with the directory.
+static const char* const kCompanions[] = {"", ".hier", "-journal", "-wal", "-shm"};
+
+OutputFile::OutputFile(std::string path, ByName) : path_(std::move(path)) {
+    struct stat st {};
+    if (::stat(path_.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+        throw InputError(path_ + ": cannot create: is a directory");
+    if (needs_in_place(path_))
+        throw InputError(path_ + ": cannot write here: must be a regular file or a new path (the file is written with seeks)");
+    ::unlink(path_.c_str());
+    std::string tmpl = dir_of(path_) + "/." + base_of(path_) + ".XXXXXX";
+    if (!::mkdtemp(tmpl.data())) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
+    dir_ = tmpl;
+    named_ = dir_ + "/" + base_of(path_);
+    for (const char* c : kCompanions) remove_on_interrupt(named_ + c);
+    remove_on_interrupt(dir_);
+}
+
 OutputFile::~OutputFile() { abandon(); }
 
 OutputFile::OutputFile(OutputFile&& o) noexcept { *this = std::move(o); }
@@ -170,6 +191,8 @@ OutputFile& OutputFile::operator=(OutputFile&& o) noexcept {
         abandon();
         path_ = std::move(o.path_);
         tmp_ = std::exchange(o.tmp_, std::string());
+        dir_ = std::exchange(o.dir_, std::string());
+        named_ = std::exchange(o.named_, std::string());
         f_ = std::exchange(o.f_, nullptr);
         in_place_ = o.in_place_;
         failed_ = o.failed_;
@@ -186,6 +209,20 @@ void OutputFile::write(const char* p, std::size_t n) {
 }
 
 void OutputFile::commit() {
+    if (!dir_.empty()) {
+        struct stat st {};
+        if (::stat(named_.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+            abandon();
+            throw std::runtime_error(path_ + ": write failed: the file was not written");
+        }
+        if (std::rename(named_.c_str(), path_.c_str()) != 0) {
+            const std::string why = std::strerror(errno);
+            abandon();
+            throw std::runtime_error(path_ + ": cannot rename into place: " + why);
+        }
+        abandon();   // the directory and what else the library left in it
+        return;
+    }
     if (!f_) return;
     const bool flushed = std::fflush(f_) == 0 && !std::ferror(f_);
     const int flush_errno = errno;
@@ -207,6 +244,16 @@ void OutputFile::commit() {
 }
 
 void OutputFile::abandon() {
+    if (!dir_.empty()) {
+        for (const char* c : kCompanions) {
+            ::unlink((named_ + c).c_str());
+            forget_on_interrupt(named_ + c);
+        }
+        ::rmdir(dir_.c_str());
+        forget_on_interrupt(dir_);
+        dir_.clear();
+        named_.clear();
+    }
     if (f_) {
         std::fclose(f_);
         f_ = nullptr;

@@ -43,18 +43,28 @@ public:
     // Opens the temporary (or the path in place); throws InputError naming the
     // path when it cannot.
     explicit OutputFile(std::string path);
+    // For a library that opens its file by name and keeps companions beside it
+    // (fstapi's NAME.hier, SQLite's NAME-journal): a private directory (mkdtemp,
+    // mode 0700) beside the path holds the file, library_path() names it;
+    // commit() renames it over the path and removes the directory with whatever
+    // else the library left there. Such writers seek and rename, so the path
+    // must be a regular file or new: anything else is an InputError.
+    struct ByName {};
+    OutputFile(std::string path, ByName);
     ~OutputFile();
     OutputFile(const OutputFile&) = delete;
     OutputFile& operator=(const OutputFile&) = delete;
     OutputFile(OutputFile&& o) noexcept;
     OutputFile& operator=(OutputFile&& o) noexcept;
 
-    bool active() const { return f_ != nullptr; }
+    bool active() const { return f_ != nullptr || !dir_.empty(); }
     bool in_place() const { return in_place_; }
     const std::string& path() const { return path_; }
     // A path naming the open file itself (/proc/self/fd/N), for writers that
     // open their own stream by name; what they write is committed with this.
     std::string open_file_path() const;
+    // ByName: the file the library creates (empty otherwise).
+    const std::string& library_path() const { return named_; }
     void write(const std::string& s) { write(s.data(), s.size()); }
     void write(const char* p, std::size_t n);
     // Flush, close, rename over the path (in place: flush and close). Throws
@@ -65,6 +75,7 @@ public:
 
 private:
     std::string path_, tmp_;
+    std::string dir_, named_;   // ByName
     std::FILE* f_ = nullptr;
     bool in_place_ = false;
     bool failed_ = false;

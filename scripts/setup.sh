@@ -15,6 +15,9 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #   --gl     apitrace, Xvfb and Mesa (llvmpipe) to capture OpenGL programs, numpy for
 #            scripts/rbcd-gl2rbt, and the GL and X11 headers for the test program
 #            (docs/gl-capture.md)
+#   --waves  verilator (its copy of GTKWave's fstapi sources: rbcd-sim --fst),
+#            gtkwave (fst2vcd for the FST test; the viewer) and libsqlite3-dev
+#            (rbcd-sim --db), docs/waveforms.md and docs/tile-database.md
 #   --list   print the packages (with the options given) one a line, install nothing
 # Besides the build: what the test suite runs that a minimal Debian lacks
 # (testbench/scripts/check_test_programs.sh checks the list against the suite).
@@ -28,7 +31,8 @@ for opt in "$@"; do
     --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib) ;;
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
     --gl) pkgs+=(apitrace xvfb xauth libgl1-mesa-dri libglx-mesa0 libgl-dev libx11-dev python3-numpy) ;;
-    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl --list)" >&2; exit 2 ;;
+    --waves) pkgs+=(verilator gtkwave libsqlite3-dev) ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl --waves --list)" >&2; exit 2 ;;
   esac
 done
 if [ "$list" = yes ]; then
