@@ -206,6 +206,8 @@ CdInput load_geometry_text(std::string_view text, const std::string& path) {
             if (v2) g.extra.emplace_back();
         } else if (k == "m") {
             if (!in_frames) r.fail("m: before the first frame");
+            // A format-2 frame may hold meshes alone: then there is no part to move.
+            if (g.parts.empty()) r.fail("m: no part to give a matrix (parts come before the first frame)");
             r.expect_fields(14, "m");
             const std::size_t pi = std::size_t(r.count(1, g.parts.size() - 1));
             if (seen[pi]) r.fail("m: part " + std::to_string(pi) + " given twice in this frame");
