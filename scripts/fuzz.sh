@@ -24,7 +24,8 @@ launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
 if [ ! -f "$dir/CMakeCache.txt" ]; then
   cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang-14 \
-    -DCMAKE_CXX_COMPILER=clang++-14 -DRBCD_FUZZ=ON -DRBCD_BUILD_TESTS=OFF "${launcher[@]}" >/dev/null
+    -DCMAKE_CXX_COMPILER=clang++-14 -DRBCD_FUZZ=ON -DRBCD_BUILD_TESTS=OFF "${launcher[@]}" \
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" >/dev/null
 fi
 cmake --build "$dir" --target "fuzz_$target" >/dev/null
 

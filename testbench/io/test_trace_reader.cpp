@@ -699,7 +699,7 @@ TEST_CASE("io: hostile: bytes after the last gzip member are an error", "[io][re
     // Two members are one stream.
     auto two = read_path(d.write("two.rbt", gz + slurp(d.write_gz("b.gz", "frame 1\n"))));
     CHECK(two.size() == 3);
-    for (const std::string tail : {std::string("x"), std::string("\n"), std::string(100, '\0'), std::string("\x1f")}) {
+    for (const std::string& tail : {std::string("x"), std::string("\n"), std::string(100, '\0'), std::string("\x1f")}) {
         const std::string p = d.write("tail.rbt", gz + tail);
         CHECK_THAT(error_in_path(p, "tail.rbt"), Contains("bytes after the last gzip member"));
     }
