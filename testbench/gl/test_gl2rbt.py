@@ -73,7 +73,9 @@ def read_trace(path):
 class Case:
     def __init__(self, a, tmp):
         self.a, self.tmp = a, tmp
-        self.env = dict(os.environ, RBCD_GL_RASTER=a.raster)
+        # The converter's temporaries go to this case's own directory, where
+        # what is left behind can be seen.
+        self.env = dict(os.environ, RBCD_GL_RASTER=a.raster, TMPDIR=tmp)
 
     def capture_path(self, name="boxes"):
         p = os.path.join(self.a.dir, name + ".trace")
@@ -263,6 +265,42 @@ class Case:
         last, _ = self.convert("--frames", "2:", out="last.rbt")
         check(read_trace(last)[0] == {0: a[2]}, "--frames 2: is not the last frame")
 
+    def reduced(self):
+        """--reduced-out: the reduced capture converts into the same trace and
+        geometry as the capture (all frames and a range), is a fraction of its
+        size, and a damaged one is refused in one line."""
+        red = os.path.join(self.tmp, "boxes.calls.xz")
+        self.convert("--reduced-out", red)
+        for extra, tag in (([], "all"), (["--frames", "1:2"], "1:2")):
+            a_path, _ = self.convert(*extra, "--geometry", os.path.join(self.tmp, f"c-{tag}.geo"), out=f"c-{tag}.rbt")
+            r = self.gl2rbt(red, "-o", os.path.join(self.tmp, f"r-{tag}.rbt"),
+                            "--geometry", os.path.join(self.tmp, f"r-{tag}.geo"), *extra)
+            check(r.returncode == 0, f"the reduced capture does not convert: {r.stderr.strip()}")
+            for ext in ("rbt", "geo"):
+                with open(os.path.join(self.tmp, f"c-{tag}.{ext}"), "rb") as f1, \
+                        open(os.path.join(self.tmp, f"r-{tag}.{ext}"), "rb") as f2:
+                    check(f1.read() == f2.read(), f"frames {tag}: the reduced capture's .{ext} differs")
+        size, full = os.path.getsize(red), os.path.getsize(self.capture_path())
+        check(size < full / 2, f"the reduced capture is {size} bytes, the capture {full}")
+        with open(red, "rb") as f:
+            data = f.read()
+        bad = os.path.join(self.tmp, "bad.calls.xz")
+        out = os.path.join(self.tmp, "bad.rbt")
+        for body, words in ((data[:len(data) // 2], "reduced capture"),
+                            (data[:-1], "reduced capture"),
+                            (data[:6] + b"\0" * 40, "does not decode")):
+            with open(bad, "wb") as f:
+                f.write(body)
+            r = self.gl2rbt(bad, "-o", out)
+            lines = r.stderr.strip().splitlines()
+            check(r.returncode == 2 and len(lines) == 1 and words in lines[0] and "bad.calls.xz" in lines[0],
+                  f"a damaged reduced capture: exit {r.returncode}, {lines}")
+            check(not os.path.exists(out), "an output was left after a damaged reduced capture")
+        r = self.gl2rbt(red, "--check-depth")
+        check(r.returncode == 2 and "reduced capture" in r.stderr, f"--check-depth on a reduced capture: {r.stderr}")
+        r = self.gl2rbt(red, "-o", out, "--reduced-out", os.path.join(self.tmp, "again.xz"))
+        check(r.returncode == 2 and "already a reduced capture" in r.stderr, f"reducing twice: {r.stderr}")
+
     def cli(self):
         cap = self.capture_path()
         out = os.path.join(self.tmp, "x.rbt")
@@ -284,6 +322,8 @@ class Case:
             check(r.returncode == 2 and len(lines) == 1 and words in lines[0],
                   f"{args[1:]}: exit {r.returncode}, {lines}")
             check(not os.path.exists(out), f"{args[1:]}: an output was left")
+        left = [d for d in os.listdir(self.tmp) if d.startswith("rbcd-gl2rbt")]
+        check(not left, f"temporary directories left by the refusals: {left}")
         with open(cap, "rb") as f:
             before = f.read()
         self.gl2rbt(cap, "-o", cap)
