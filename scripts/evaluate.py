@@ -141,9 +141,33 @@ def scenes_of(out):
     return list(SCENE_PATHS)
 
 
+TRACE_SUFFIXES = (".rbt.gz", ".rbt")
+
+
+def input_name(path):
+    """A suite input's name: its file name without .toml, .rbt or .rbt.gz."""
+    base = os.path.basename(path)
+    for suf in TRACE_SUFFIXES + (".toml",):
+        if base.endswith(suf):
+            return base[:-len(suf)]
+    return base
+
+
+def is_trace(path):
+    return path.endswith(TRACE_SUFFIXES)
+
+
 def scene_objects(name):
-    """(collisionable ids, scenery objects) of a scene file."""
-    with open(need(SCENE_PATHS[name]), "rb") as f:
+    """(collisionable ids, scenery objects) of a scene file; for a converted game
+    capture (a trace with NAME.summary.jsonl beside it, scripts/game-suite), the
+    mean collisionable objects a frame and "-"."""
+    path = SCENE_PATHS[name]
+    if is_trace(path):
+        summary = path[:-len(".rbt.gz" if path.endswith(".gz") else ".rbt")] + ".summary.jsonl"
+        with open(need(summary)) as f:
+            frames = [json.loads(line) for line in f if line.strip()]
+        return fmt(sum(len(fr["objects"]) for fr in frames) / max(1, len(frames)), 1), "-"
+    with open(need(path), "rb") as f:
         sc = tomllib.load(f)
     objs = sc.get("object", [])
     return len({o["id"] for o in objs if "id" in o}), sum(1 for o in objs if "id" not in o)
@@ -188,7 +212,7 @@ def sweep_rows(out, name, axis, scenes):
         raise InputMissing(f"{path}: no column {axis} (the sweep must sweep {axis})")
     table, values = {}, []
     for r in rows:
-        scene = os.path.basename(r["input"]).removesuffix(".toml")
+        scene = input_name(r["input"])
         v = value(r, axis)
         if v not in values:
             values.append(v)
@@ -217,7 +241,10 @@ def rbcd_plot(table, png, y, x, lines, title, logx=False):
 
 
 def id_bits(scene_path):
-    """The smallest zeb.id_bits (at least the paper's 7) holding a scene's object ids."""
+    """The smallest zeb.id_bits (at least the paper's 7) holding a scene's object ids
+    (a game capture's: 7, its selection rules' max_entity_id = 127)."""
+    if is_trace(scene_path):
+        return 7
     with open(need(scene_path), "rb") as f:
         objs = tomllib.load(f).get("object", [])
     top = max([o["id"] for o in objs if isinstance(o.get("id"), int)] or [0])
@@ -270,7 +297,7 @@ def sweep_file(template, suite, dest):
     inputs = {"suites": [suite]}
     sets = {}
     for name in sorted(os.listdir(suite)):
-        if name.endswith(".toml"):
+        if name.endswith(".toml") or is_trace(name):
             b = id_bits(os.path.join(suite, name))
             if b != 7:
                 sets[os.path.join(suite, name)] = {"zeb.id_bits": b}
@@ -327,6 +354,86 @@ def target_workloads(out, scenes):
             px = sum(int(h["pixels"]) for h in hist)
             cells = ", ".join(f"{h['fragments_per_pixel']}: {share(int(h['pixels']), px)}" for h in hist)
             f.write(f"- {s}: {cells}\n")
+    game_pairs(out, scenes)
+
+
+# What collides in a captured game (docs/games.md). A game's objects carry no
+# names (the GL stream has none), so each object is classed in each frame by
+# the size of its surface there, a reading aid that no figure uses:
+# (game prefix of the entry's name, [(test on (vertices, box diagonal), class)]).
+GAME_CLASSES = {
+    # A bot is legs, torso, head and weapon: 700 to 1000 welded vertices; the
+    # pickups, projectiles and gibs are tens to a few hundred.
+    "openarena": [(lambda nv, d: nv >= 500, "player"), (lambda nv, d: True, "item/projectile")],
+    # Neverball (metres): coins 0.3 m, the ball under 1 m, moving platforms and
+    # switches' bodies larger.
+    "neverball": [(lambda nv, d: d <= 0.5, "coin"), (lambda nv, d: d <= 1.5, "ball"),
+                  (lambda nv, d: True, "moving body")],
+}
+
+
+def geometry_classes(path, rules):
+    """{(frame, id): class} from a geometry file's mesh records (format 2)."""
+    sizes = {}
+    with open(need(path)) as f:
+        frame = None
+        for line in f:
+            if line.startswith("frame "):
+                frame = int(line.split()[1])
+            elif line.startswith("mesh "):
+                _, oid, nv, nt = line.split()[:4]
+                nv, nt = int(nv), int(nt)
+                lo, hi = [math.inf] * 3, [-math.inf] * 3
+                for _ in range(nv):
+                    v = next(f).split()
+                    for k in range(3):
+                        x = float(v[1 + k])
+                        lo[k], hi[k] = min(lo[k], x), max(hi[k], x)
+                for _ in range(nt):
+                    next(f)
+                key = (frame, int(oid))
+                n0, lo0, hi0 = sizes.get(key, (0, [math.inf] * 3, [-math.inf] * 3))
+                sizes[key] = (n0 + nv, [min(a, b) for a, b in zip(lo0, lo)], [max(a, b) for a, b in zip(hi0, hi)])
+    out = {}
+    for key, (nv, lo, hi) in sizes.items():
+        d = math.dist(lo, hi)
+        out[key] = next(label for test, label in rules if test(nv, d))
+    return out
+
+
+def game_pairs(out, scenes):
+    """Per captured game, the pairs in contact (rbcd-cpucd's ground truth) by the
+    classes of their two objects: pair-frames, of them on screen, distinct pairs."""
+    rows = []
+    for s in scenes:
+        path = SCENE_PATHS[s]
+        game = next((g for g in GAME_CLASSES if s.startswith(g + "-")), None)
+        if not is_trace(path) or game is None:
+            continue
+        classes = geometry_classes(path[:-len(".rbt.gz")] + ".geo", GAME_CLASSES[game])
+        frames = len(read_csv(run(out, s, "cpucd_frames.csv")))
+        table = {}
+        for r in read_csv(run(out, s, "cpucd_pairs.csv")):
+            if r["exact"] != "1":
+                continue
+            f, a, b = int(r["frame"]), int(r["id_a"]), int(r["id_b"])
+            kind = " - ".join(sorted((classes.get((f, a), "?"), classes.get((f, b), "?"))))
+            t = table.setdefault(kind, [0, 0, set(), set()])
+            t[0] += 1
+            t[1] += r.get("on_screen", "0") == "1"
+            t[2].add((a, b))
+            t[3].add(f)
+        if not table:
+            rows.append([s, "(none)", 0, 0, 0, 0, frames])
+        for kind, (n, on, ids, fs) in sorted(table.items(), key=lambda kv: -kv[1][0]):
+            rows.append([s, kind, n, on, len(ids), len(fs), frames])
+    if not rows:
+        return
+    header = ["capture", "pair (object classes)", "pair-frames in contact", "of them on screen",
+              "distinct id pairs", "frames with such a contact", "frames"]
+    write_csv(os.path.join(out, "pairs.csv"), header, rows)
+    with open(os.path.join(out, "pairs.md"), "w") as f:
+        f.write(md_table(header, rows))
 
 
 # ---------------------------------------------------------------- table3
@@ -609,20 +716,23 @@ def target_accuracy(out, scenes):
 
 
 # ---------------------------------------------------------------- splice
-def splice(out, doc):
-    """Replaces every <!-- NAME:begin --> ... <!-- NAME:end --> block of doc by OUT/NAME.md."""
+def splice(out, doc, prefix=""):
+    """Replaces every <!-- PREFIXNAME:begin --> ... <!-- PREFIXNAME:end --> block of doc by
+    OUT/NAME.md (the game suite's tables sit in blocks named games-NAME)."""
     with open(doc) as f:
         text = f.read()
 
     def repl(m):
         name = m.group(1)
-        path = os.path.join(out, name + ".md")
+        if not name.startswith(prefix) or (not prefix and name.startswith("games-")):
+            return m.group(0)
+        path = os.path.join(out, name[len(prefix):] + ".md")
         if not os.path.exists(path):
             return m.group(0)   # a target not run this time keeps its last table
         with open(path) as g:
             body = g.read()
         return f"<!-- {name}:begin -->\n{body}<!-- {name}:end -->"
-    text = re.sub(r"<!-- (\w+):begin -->.*?<!-- \1:end -->", repl, text, flags=re.S)
+    text = re.sub(r"<!-- ([\w-]+):begin -->.*?<!-- \1:end -->", repl, text, flags=re.S)
     with open(doc, "w") as f:
         f.write(text)
 
@@ -642,6 +752,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="results")
     ap.add_argument("--splice", nargs=2, metavar=("OUT", "DOC"))
+    ap.add_argument("--splice-prefix", default="", help="with --splice: the blocks' name prefix (games-)")
     ap.add_argument("--thumbnail", nargs=2, metavar=("SRC", "DST"))
     ap.add_argument("--sweep-file", nargs=3, metavar=("SWEEP", "SUITE", "DEST"))
     ap.add_argument("--id-bits", metavar="SCENE")
@@ -649,7 +760,7 @@ def main():
     a = ap.parse_args()
     try:
         if a.splice:
-            splice(*a.splice)
+            splice(*a.splice, prefix=a.splice_prefix)
             return 0
         if a.thumbnail:
             thumbnail(*a.thumbnail)

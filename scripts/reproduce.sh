@@ -4,13 +4,19 @@
 #   scripts/reproduce.sh [options] TARGET...
 #     TARGET: workloads | table3 | fig8 | fig9 | accuracy | all
 #   --out DIR          results directory (default results/, gitignored)
-#   --workloads DIR    scenes to run (default workloads/; every *.toml in it)
+#   --workloads DIR    inputs to run (default workloads/): every scene (*.toml) in it, and
+#                      every converted game capture (NAME.rbt.gz with NAME.geo and
+#                      NAME.summary.jsonl beside it, as scripts/game-suite writes them)
+#   --games [ENTRY]    the captured game-frame suite instead (docs/games.md): every entry
+#                      of workloads/games/ (or the entries given, comma-separated),
+#                      expanded by scripts/game-suite into OUT/inputs/ and run as above
 #   --build DIR        build directory (default build/); built first unless --no-build
 #   --no-build         use the binaries as they are
 #   --repeat N         rbcd-cpucd's timed repeats per frame (default 5)
 #   --jobs N           rbcd-sim runs at once (default: number of cores)
 #   --update-docs      copy the tables into docs/results.md and docs/workloads.md
-#                      and the scene pictures into docs/img/workloads/
+#                      and the scene pictures into docs/img/workloads/ (with --games:
+#                      the games-NAME blocks of docs/results.md and docs/games.md)
 #
 # Every run starts from scratch: OUT/runs/ and OUT/sweep/ are emptied first,
 # then each target runs what it needs: the sweeps workloads/sweeps/table3.toml
@@ -23,7 +29,8 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=results workloads=$root/workloads build=$root/build repeat=5 jobs=$(nproc) do_build=1 update_docs=0
 targets=()
-usage() { sed -n '2,21p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,27p' "$0" | sed 's/^# \{0,1\}//'; }
+games=0 game_entries=()
 while (($#)); do
   case $1 in
     --out) out=$2; shift 2 ;;
@@ -33,6 +40,11 @@ while (($#)); do
     --repeat) repeat=$2; shift 2 ;;
     --jobs) jobs=$2; shift 2 ;;
     --update-docs) update_docs=1; shift ;;
+    --games) games=1
+             if [ $# -ge 2 ] && [[ $2 != -* ]] && [[ ! $2 =~ ^(workloads|table3|fig8|fig9|accuracy|all)$ ]]; then
+               IFS=, read -r -a game_entries <<<"$2"; shift
+             fi
+             shift ;;
     -h|--help) usage; exit 0 ;;
     workloads|table3|fig8|fig9|accuracy) targets+=("$1"); shift ;;
     all) targets+=(workloads table3 fig9 fig8 accuracy); shift ;;
@@ -43,8 +55,34 @@ done
 [[ $repeat =~ ^[1-9][0-9]*$ ]] || { echo "reproduce.sh: --repeat: '$repeat' is not a positive integer" >&2; exit 2; }
 [[ $jobs =~ ^[1-9][0-9]*$ ]] || { echo "reproduce.sh: --jobs: '$jobs' is not a positive integer" >&2; exit 2; }
 shopt -s nullglob
-scenes=("$workloads"/*.toml)
-((${#scenes[@]})) || { echo "reproduce.sh: $workloads: no scene (*.toml)" >&2; exit 2; }
+if ((games)); then
+  # The game suite's traces and geometry, regenerated from the committed
+  # reduced captures and checked against their recorded checksums.
+  mkdir -p "$out"
+  echo "reproduce.sh: scripts/game-suite expand -o $out/inputs ${game_entries[*]}" >&2
+  /usr/bin/python3 "$root/scripts/game-suite" expand -o "$out/inputs" -j "$jobs" "${game_entries[@]}" >&2 ||
+    { echo "reproduce.sh: the game suite could not be expanded" >&2; exit 1; }
+  workloads=$out/inputs
+  for f in "$workloads"/*.rbt.gz; do
+    keep=0
+    if ((${#game_entries[@]})); then
+      for e in "${game_entries[@]}"; do [ "$(basename "${e%/}")" = "$(basename "$f" .rbt.gz)" ] && keep=1; done
+    else
+      [ -f "$root/workloads/games/$(basename "$f" .rbt.gz)/capture.toml" ] && keep=1
+    fi
+    ((keep)) || rm -f "$f" "${f%.rbt.gz}.geo" "${f%.rbt.gz}.summary.jsonl"   # an entry not asked for this time
+  done
+fi
+scenes=("$workloads"/*.toml "$workloads"/*.rbt.gz)
+((${#scenes[@]})) || { echo "reproduce.sh: $workloads: no scene (*.toml) and no converted capture (*.rbt.gz)" >&2; exit 2; }
+# A scene's name is its file name without .toml; a capture's without .rbt.gz.
+input_name() { local b; b=$(basename "$1"); b=${b%.toml}; echo "${b%.rbt.gz}"; }
+is_trace() { [[ $1 == *.rbt.gz ]]; }
+for s in "${scenes[@]}"; do
+  if is_trace "$s" && [ ! -f "${s%.rbt.gz}.geo" ]; then
+    echo "reproduce.sh: $s: no geometry ${s%.rbt.gz}.geo beside the trace (scripts/game-suite writes both)" >&2; exit 2
+  fi
+done
 
 if ((do_build)); then
   if [ ! -f "$build/CMakeCache.txt" ]; then
@@ -63,8 +101,8 @@ rm -rf "$out/runs" "$out/sweep"
 mkdir -p "$out/runs"
 : > "$out/runs/scenes.txt"
 for s in "${scenes[@]}"; do
-  echo "$(basename "$s" .toml) $s" >> "$out/runs/scenes.txt"
-  mkdir -p "$out/runs/$(basename "$s" .toml)"
+  echo "$(input_name "$s") $s" >> "$out/runs/scenes.txt"
+  mkdir -p "$out/runs/$(input_name "$s")"
 done
 
 # Object ids above 127 need more than the default 7 id bits (docs/workloads.md).
@@ -127,19 +165,20 @@ done
 n=${#jobs_list[@]} k=0 failed=0
 progress() { printf '\rreproduce.sh: %s %d/%d %-40s' "$1" "$2" "$3" "$4" >&2; }
 run_sim() {
-  local s=${1%%|*} c=${1##*|} name d sets=()
-  name=$(basename "$s" .toml)
+  local s=${1%%|*} c=${1##*|} name d sets=() input=(--scene "$s")
+  name=$(input_name "$s")
+  is_trace "$s" && input=(--trace "$s")
   d=$out/runs/$name
   mkdir -p "$d"
   for kv in ${cfg[$c]}; do sets+=(--set "$kv"); done
   "$sim" --config "$root/sc_main/configs/paper.toml" --set "zeb.id_bits=${idb[$s]}" "${sets[@]}" \
-    --scene "$s" --stats "$d/$c.json" --collisions "$d/$c.col" -q 2> "$d/$c.err" ||
+    "${input[@]}" --stats "$d/$c.json" --collisions "$d/$c.col" -q 2> "$d/$c.err" ||
     { echo; echo "reproduce.sh: rbcd-sim failed on $name ($c):" >&2; cat "$d/$c.err" >&2; return 1; }
 }
 for j in "${jobs_list[@]}"; do
   while (($(jobs -rp | wc -l) >= jobs)); do wait -n || failed=1; done
   k=$((k + 1))
-  progress "rbcd-sim" "$k" "$n" "$(basename "${j%%|*}" .toml) ${j##*|}"
+  progress "rbcd-sim" "$k" "$n" "$(input_name "${j%%|*}") ${j##*|}"
   run_sim "$j" &
 done
 while (($(jobs -rp | wc -l))); do wait -n || failed=1; done
@@ -150,7 +189,9 @@ while (($(jobs -rp | wc -l))); do wait -n || failed=1; done
 if ((need_images)); then
   k=0
   for s in "${scenes[@]}"; do
-    name=$(basename "$s" .toml) k=$((k + 1))
+    name=$(input_name "$s") k=$((k + 1))
+    # A game capture's picture is the converter's (docs/games.md), not rbcd-sim's.
+    is_trace "$s" && continue
     progress "images" "$k" "${#scenes[@]}" "$name"
     rm -rf "$out/runs/$name/images"
     "$sim" --config "$root/sc_main/configs/paper.toml" --set "zeb.id_bits=${idb[$s]}" --scene "$s" \
@@ -166,9 +207,11 @@ fi
 if ((need_cpucd)); then
   k=0
   for s in "${scenes[@]}"; do
-    name=$(basename "$s" .toml) k=$((k + 1))
+    name=$(input_name "$s") k=$((k + 1))
     progress "rbcd-cpucd" "$k" "${#scenes[@]}" "$name"
-    "$cpucd" --scene "$s" --pixels --repeat "$repeat" -q --pairs "$out/runs/$name/cpucd_pairs.csv" \
+    input=(--scene "$s")
+    is_trace "$s" && input=(--geometry "${s%.rbt.gz}.geo" --trace "$s")
+    "$cpucd" "${input[@]}" --pixels --repeat "$repeat" -q --pairs "$out/runs/$name/cpucd_pairs.csv" \
       --frames "$out/runs/$name/cpucd_frames.csv" --depth-histogram "$out/runs/$name/depth_hist.csv"
   done
   echo >&2
@@ -184,7 +227,16 @@ for t in "${targets[@]}"; do
   for f in "$out/$t.csv" "$out/$t.png"; do [ -f "$f" ] && echo "reproduce.sh: wrote $f"; done
 done
 
-if ((update_docs)); then
+if ((update_docs && games)); then
+  # The game suite's tables: the games-NAME blocks of docs/results.md and docs/games.md.
+  /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/results.md" --splice-prefix games-
+  /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/games.md" --splice-prefix games-
+  mkdir -p "$root/docs/img/games"
+  for t in table3 fig9 fig8 accuracy workloads; do
+    [[ " ${targets[*]} " == *" $t "* ]] && cp "$out/$t.png" "$root/docs/img/games/$t.png"
+  done
+  echo "reproduce.sh: updated the game suite's tables in docs/results.md and docs/games.md"
+elif ((update_docs)); then
   /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/results.md"
   mkdir -p "$root/docs/img/results"
   for t in table3 fig9 fig8 accuracy; do
@@ -195,7 +247,7 @@ if ((update_docs)); then
     mkdir -p "$root/docs/img/workloads"
     cp "$out/workloads.png" "$root/docs/img/workloads/depth.png"
     for s in "${scenes[@]}"; do
-      name=$(basename "$s" .toml)
+      name=$(input_name "$s")
       /usr/bin/python3 "$root/scripts/evaluate.py" --thumbnail "$out/$name.png" "$root/docs/img/workloads/$name.png"
     done
   fi

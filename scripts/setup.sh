@@ -18,6 +18,8 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #   --waves  verilator (its copy of GTKWave's fstapi sources: rbcd-sim --fst),
 #            gtkwave (fst2vcd for the FST test; the viewer) and libsqlite3-dev
 #            (rbcd-sim --db), docs/waveforms.md and docs/tile-database.md
+#   --games  openarena and neverball, the games scripts/capture-game.sh captures for
+#            the game-frame suite (docs/games.md; with --gl for the capture tools)
 #   --list   print the packages (with the options given) one a line, install nothing
 # Besides the build: what the test suite runs that a minimal Debian lacks
 # (testbench/scripts/check_test_programs.sh checks the list against the suite).
@@ -32,7 +34,8 @@ for opt in "$@"; do
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
     --gl) pkgs+=(apitrace xvfb xauth libgl1-mesa-dri libglx-mesa0 libgl-dev libx11-dev python3-numpy) ;;
     --waves) pkgs+=(verilator gtkwave libsqlite3-dev) ;;
-    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl --waves --list)" >&2; exit 2 ;;
+    --games) pkgs+=(openarena neverball) ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl --waves --games --list)" >&2; exit 2 ;;
   esac
 done
 if [ "$list" = yes ]; then

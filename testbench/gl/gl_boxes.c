@@ -10,7 +10,7 @@
  * nan (a NaN matrix), index (an index past a buffer's vertices), ortho (an
  * empty glOrtho volume), list (a display list), shader (a draw under a
  * program), line (glPolygonMode GL_LINE), underflow (glPopMatrix on an
- * empty stack).
+ * empty stack). FAULT point is no fault: an object scaled to a point.
  *
  * Collisionable objects are tagged as rbcd-gl2rbt reads them: a KHR_debug
  * group "rbcd-object" whose id is the object id, or an EXT_debug_marker group
@@ -44,6 +44,10 @@ static PFNGLCREATEPROGRAMPROC create_program;
 static PFNGLATTACHSHADERPROC attach_shader;
 static PFNGLLINKPROGRAMPROC link_program;
 static PFNGLUSEPROGRAMPROC use_program;
+
+static void begin_object(unsigned id);
+static void end_object(void);
+static void box_client(float x0, float y0, float z0, float x1, float y1, float z1);
 
 /* The one refusable call of frame 1 (see the header comment). */
 static void inject_fault(void) {
@@ -89,6 +93,15 @@ static void inject_fault(void) {
         glMatrixMode(GL_PROJECTION);
         glPopMatrix();
         glMatrixMode(GL_MODELVIEW);
+    } else if (!strcmp(fault, "point")) {
+        /* Not a fault: object 9 scaled to a point, as OpenArena shrinks some
+         * effects. It covers no pixel and has no surface, so it must not
+         * reach the geometry either (every triangle welds into one vertex). */
+        glPushMatrix();
+        glTranslatef(90, 20, -10);
+        glScalef(0, 0, 0);
+        begin_object(9); box_client(0, 0, 0, 10, 10, 10); end_object();
+        glPopMatrix();
     }
 }
 

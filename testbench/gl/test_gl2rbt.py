@@ -99,7 +99,8 @@ class Case:
             print(f"skipped: {', '.join(missing)} not installed (scripts/setup.sh --gl installs them)")
             raise SystemExit(SKIP)
         os.makedirs(self.a.dir, exist_ok=True)
-        for name, extra in [("boxes", [])] + [(f"fault-{f}", ["128", "96", f]) for f in FAULTS]:
+        for name, extra in [("boxes", []), ("point", ["128", "96", "point"])] + \
+                [(f"fault-{f}", ["128", "96", f]) for f in FAULTS]:
             out = os.path.join(self.a.dir, name + ".trace")
             if os.path.exists(out):
                 os.unlink(out)
@@ -256,6 +257,19 @@ class Case:
         exact = {(int(r[0]), int(r[1]), int(r[2])): (r[5], r[6], r[7]) for r in rows if r[5] == "1"}
         check(exact == {(0, 1, 2): ("1", "0", "1"), (1, 1, 2): ("1", "1", "1"), (2, 1, 4): ("1", "0", "1")},
               f"ground truth pairs (frame, a, b): (exact, contained, on_screen) = {exact}")
+        # An object scaled to a point (object 9 in frame 1 of the "point"
+        # capture) has no surface: no fragment, no mesh record, and the file
+        # stays readable (rbcd-cpucd refuses a mesh of fewer than 3 vertices).
+        geo9 = os.path.join(self.tmp, "point.geo")
+        path, _ = self.convert("--geometry", geo9, name="point", out="point.rbt")
+        with open(geo9) as f:
+            meshes = [l.split()[1] for l in f if l.startswith("mesh ")]
+        check("9" not in meshes and {"1", "2", "3"} <= set(meshes), f"mesh ids of the point capture: {sorted(set(meshes))}")
+        frames9, _ = read_trace(path)
+        check(all(obj != 9 for pixels in frames9.values() for frags in pixels.values() for _, obj, _, _ in frags),
+              "object 9 has fragments")
+        r = run([self.a.cpucd, "--geometry", geo9, "--pairs", os.path.join(self.tmp, "p9.csv"), "-q"])
+        check(r.returncode == 0, f"rbcd-cpucd on the point capture's geometry: {r.stderr.strip()}")
 
     def frames(self):
         whole, _ = self.convert()

@@ -1,0 +1,168 @@
+#!/usr/bin/env bash
+# Captures a game headless and turns it into a game-suite entry (docs/games.md):
+#
+#   scripts/capture-game.sh openarena MAP FRAMES OUT_DIR [--bots N] [--skip K] [--keep-trace] [--from-trace T]
+#   scripts/capture-game.sh neverball REPLAY.nbr|LEVEL.sol FRAMES OUT_DIR [--skip K] [--keep-trace] [--from-trace T]
+#
+# The game runs under Xvfb at 800x480 with Mesa (llvmpipe) and apitrace, from
+# a fresh home directory (no user configuration can leak in). The capture is
+# converted by scripts/rbcd-gl2rbt with the game's selection rules
+# (workloads/games/GAME-select.toml): FRAMES frames after the first K, which
+# the warm-up takes (loading, bots joining, the camera reaching its player).
+# OUT_DIR receives the entry in its committed form: the reduced capture
+# (calls.xz: the calls that can change the unit's input, a few per cent of the
+# capture), the settings used and the checksums of the converted trace and
+# geometry (capture.toml), and the converter's per-frame figures
+# (summary.jsonl). scripts/game-suite regenerates the trace and the
+# geometry from it. --keep-trace also keeps the capture and both outputs;
+# --from-trace T makes the entry from T, a capture this script kept, with the
+# same arguments, without running the game again.
+#
+# Exit 2 with one line on a bad argument; 1 when the game, Xvfb, apitrace or
+# the conversion fails. OUT_DIR is written only at the end, complete.
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/.." && pwd)
+usage() { echo "capture-game.sh: $1 (usage: capture-game.sh openarena|neverball MAP FRAMES OUT_DIR [--bots N] [--skip K] [--keep-trace])" >&2; exit 2; }
+
+[ $# -ge 4 ] || usage "four arguments needed"
+game=$1 map=$2 frames=$3 out=$4
+shift 4
+bots=4 skip= keep=no from=
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --bots) [ $# -ge 2 ] || usage "--bots needs a number"; bots=$2; shift 2 ;;
+    --skip) [ $# -ge 2 ] || usage "--skip needs a number"; skip=$2; shift 2 ;;
+    --keep-trace) keep=yes; shift ;;
+    --from-trace) [ $# -ge 2 ] || usage "--from-trace needs a capture"; from=$2; shift 2 ;;
+    *) usage "unknown option '$1'" ;;
+  esac
+done
+case "$game" in openarena|neverball) ;; *) usage "unknown game '$game'" ;; esac
+[[ "$frames" =~ ^[1-9][0-9]{0,4}$ ]] || usage "FRAMES '$frames' is not a number from 1 to 99999"
+[[ "$bots" =~ ^[1-9]$ ]] || usage "--bots '$bots' is not a number from 1 to 9"
+[ -z "$skip" ] || [[ "$skip" =~ ^[0-9]{1,4}$ ]] || usage "--skip '$skip' is not a number below 10000"
+[ ! -e "$out" ] || usage "$out exists: the entry is written only into a new directory"
+[ -z "$from" ] || [ -f "$from" ] || usage "--from-trace $from: not a file"
+# Games and tools: scripts/setup.sh --games (and --gl for the converter).
+need=(apitrace gzip sha256sum)
+if [ -z "$from" ]; then
+  need+=(xvfb-run)
+  [ "$game" = openarena ] && need+=(/usr/games/openarena) || need+=(/usr/games/neverball)
+fi
+for t in "${need[@]}"; do
+  command -v "$t" >/dev/null || { echo "capture-game.sh: $t is missing (scripts/setup.sh --gl --games installs it)" >&2; exit 1; }
+done
+raster=${RBCD_GL_RASTER:-}
+[ -n "$raster" ] || raster=$(command -v rbcd-gl-raster || true)
+[ -n "$raster" ] || [ ! -x "$root/build/bin/rbcd-gl-raster" ] || raster=$root/build/bin/rbcd-gl-raster
+[ -n "$raster" ] || { echo "capture-game.sh: rbcd-gl-raster not found (build the project, or set RBCD_GL_RASTER)" >&2; exit 1; }
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/capture-game.XXXXXXXX")
+trap 'rm -rf "$work"' EXIT
+mkdir -p "$work/home" "$work/entry"
+width=800 height=480
+version=$(dpkg-query -W -f='${Version}' "$game" 2>/dev/null || echo unknown)
+
+if [ "$game" = openarena ]; then
+  [[ "$map" =~ ^[A-Za-z0-9_]{1,64}$ ]] || usage "MAP '$map' is not a map name"
+  : "${skip:=60}"
+  # The engine counts a `wait` about twice a frame; the margin covers the
+  # frames the loading screen and the bots' arrival take.
+  waits=$(( 2 * (skip + frames) + 100 ))
+  names=(sarge grism major kyonshi angelyss arachna beret kyonshi sergei)
+  {
+    echo "set fixedtime 33"
+    for ((i = 0; i < bots; i++)); do echo "addbot ${names[$i]} 3"; done
+    echo "wait 30"
+    echo "team spectator"
+    echo "wait 10"
+    echo "follow 1"
+    echo "wait $waits"
+    echo "quit"
+  } >"$work/rbcdcap.cfg"
+  mkdir -p "$work/home/baseoa"
+  cp "$work/rbcdcap.cfg" "$work/home/baseoa/"
+  cmd=(/usr/games/openarena +set fs_homepath "$work/home" +set cl_renderer opengl1
+       +set r_mode -1 +set r_customwidth $width +set r_customheight $height +set r_fullscreen 0
+       +set s_initsound 0 +set cg_draw2D 0 +set cg_drawGun 0 +set cg_thirdPerson 1
+       +set con_notifytime -1 +set com_introplayed 1 +devmap "$map" +exec rbcdcap.cfg)
+  rules=$root/workloads/games/openarena-select.toml
+  limit=$(( 120 + 2 * (skip + frames) ))
+else
+  [ -f "$map" ] || usage "$map is not a file"
+  case "$map" in
+    *.nbr) mode=(-r "$(realpath "$map")") ;;
+    *.sol) mode=(-l "$map") ;;
+    *) usage "MAP '$map' is neither a replay (.nbr) nor a level (.sol)" ;;
+  esac
+  : "${skip:=30}"
+  mkdir -p "$work/home/.neverball"
+  printf 'fullscreen 0\nwidth %d\nheight %d\naudio 0\nmultisample 0\nreflection 1\nbackground 1\nshadow 1\nfps 0\n' \
+    $width $height >"$work/home/.neverball/neverballrc"
+  cmd=(env HOME="$work/home" /usr/games/neverball "${mode[@]}")
+  rules=$root/workloads/games/neverball-select.toml
+  # A replay ends on a screen that waits for a key: the capture stops on a
+  # time limit, and frames past the replay are simply not converted.
+  limit=$(( 60 + (skip + frames) / 5 ))
+fi
+
+if [ -n "$from" ]; then
+  cp "$from" "$work/capture.trace"
+  rc=0
+else
+echo "capture-game.sh: capturing $game $map under Xvfb (at most ${limit} s)" >&2
+set +e
+SDL_AUDIODRIVER=dummy timeout --signal=TERM --kill-after=30 "$limit" \
+  xvfb-run -a -s "-screen 0 1024x768x24" apitrace trace -o "$work/capture.trace" "${cmd[@]}" \
+  >"$work/game.log" 2>&1
+rc=$?
+set -e
+fi
+# OpenArena quits by itself (0); a replay is stopped by the time limit (124),
+# after apitrace has flushed the capture on SIGTERM.
+if [ ! -s "$work/capture.trace" ] || { [ $rc -ne 0 ] && [ $rc -ne 124 ]; }; then
+  echo "capture-game.sh: the game or its capture failed (exit $rc); its log:" >&2
+  tail -n 20 "$work/game.log" >&2
+  exit 1
+fi
+
+last=$(( skip + frames - 1 ))
+echo "capture-game.sh: converting frames $skip to $last" >&2
+RBCD_GL_RASTER=$raster "$here/rbcd-gl2rbt" "$work/capture.trace" -o "$work/trace.rbt.gz" --frames "$skip:$last" \
+  --screen $width $height --select "$rules" --geometry "$work/geometry.geo" \
+  --summary "$work/entry/summary.jsonl" --reduced-out "$work/entry/calls.xz" -q
+got=$(wc -l <"$work/entry/summary.jsonl")
+[ "$got" = "$frames" ] || { echo "capture-game.sh: the capture holds only $got of the $frames frames asked for after the first $skip" >&2; exit 1; }
+sum() { sha256sum | cut -d' ' -f1; }
+{
+  echo "# How this game-suite entry was captured (scripts/capture-game.sh; docs/games.md)."
+  echo "game = \"$game\""
+  echo "game_version = \"$version\""
+  echo "map = \"$(basename "$map")\""
+  echo "frames = $frames"
+  echo "first_frame = $skip      # of the capture: the warm-up before it is emulated, not converted"
+  echo "screen = [$width, $height]"
+  if [ "$game" = openarena ]; then
+    echo "bots = $bots"
+    echo "bot_skill = 3"
+    echo "fixed_time_ms = 33"
+  fi
+  echo "apitrace_version = \"$(dpkg-query -W -f='${Version}' apitrace 2>/dev/null || echo unknown)\""
+  echo "mesa_version = \"$(dpkg-query -W -f='${Version}' libgl1-mesa-dri 2>/dev/null || echo unknown)\""
+  echo "selection = \"workloads/games/$(basename "$rules")\""
+  printf 'command = ['; printf '"%s", ' "${cmd[@]}" | sed "s|$work|TMP|g; s/, \$//"; echo ']'
+  if [ "$game" = openarena ]; then echo "config = '''"; cat "$work/rbcdcap.cfg"; echo "'''"; fi
+  echo ""
+  echo "[sha256]   # scripts/game-suite checks the regenerated files against these"
+  echo "calls = \"$(sum <"$work/entry/calls.xz")\""
+  echo "trace = \"$(gzip -dc "$work/trace.rbt.gz" | sum)\"      # uncompressed"
+  echo "geometry = \"$(sum <"$work/geometry.geo")\""
+} >"$work/entry/capture.toml"
+if [ "$keep" = yes ]; then
+  cp "$work/capture.trace" "$work/entry/capture.trace"
+  mv "$work/trace.rbt.gz" "$work/geometry.geo" "$work/entry/"
+fi
+mv "$work/entry" "$out.tmp.$$"
+mv -T "$out.tmp.$$" "$out"
+echo "capture-game.sh: wrote $out ($(du -sh "$out" | cut -f1))" >&2

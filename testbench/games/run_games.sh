@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# CTest entries for the captured game-frame suite (docs/games.md):
+#   run_games.sh SOURCE_DIR BUILD_DIR check          the committed entries match their checksums
+#   run_games.sh SOURCE_DIR BUILD_DIR capture        scripts/capture-game.sh on a few frames of
+#                                                    OpenArena (skipped without the game)
+#   run_games.sh SOURCE_DIR BUILD_DIR TARGET         scripts/reproduce.sh TARGET on one entry cut
+#                                                    to a few frames (workloads table3 fig9 fig8 accuracy)
+# Exit 77 (skipped, saying why) when what the case needs is missing.
+set -euo pipefail
+src=$1 build=$2 what=$3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "run_games.sh $what: $*" >&2; exit 1; }
+skip() { echo "skipped: $*"; exit 77; }
+export RBCD_GL_RASTER=$build/bin/rbcd-gl-raster
+/usr/bin/python3 -c "import numpy" 2>/dev/null || skip "numpy is missing (scripts/setup.sh --gl)"
+[ -x "$RBCD_GL_RASTER" ] || skip "rbcd-gl-raster is not built"
+entry=$src/workloads/games/openarena-oa_dm1
+
+case $what in
+  check)
+    /usr/bin/python3 "$src/scripts/game-suite" check >"$tmp/out" || fail "$(cat "$tmp/out")"
+    n=$(ls -d "$src"/workloads/games/*/capture.toml | wc -l)
+    [ "$(grep -c 'matches capture.toml' "$tmp/out")" = "$n" ] || fail "not every entry was checked"
+    [ "$n" -ge 4 ] || fail "$n entries: the suite has three OpenArena maps and a Neverball level"
+    # A changed byte is caught, naming the file.
+    cp -r "$entry" "$tmp/e"
+    printf 'x' | dd of="$tmp/e/calls.xz" bs=1 seek=1000 conv=notrunc 2>/dev/null
+    if /usr/bin/python3 "$src/scripts/game-suite" check "$tmp/e" 2>"$tmp/err"; then fail "a changed capture passed"; fi
+    grep -q "calls.xz: checksum" "$tmp/err" || fail "message: $(cat "$tmp/err")"
+    # A malformed description: one line naming the file and the key, exit 2.
+    sed -i 's/^frames = .*/frames = "many"/' "$tmp/e/capture.toml"
+    set +e; /usr/bin/python3 "$src/scripts/game-suite" check "$tmp/e" 2>"$tmp/err"; rc=$?; set -e
+    [ $rc = 2 ] && [ "$(wc -l <"$tmp/err")" = 1 ] && grep -q "capture.toml: frames" "$tmp/err" ||
+      fail "malformed capture.toml: exit $rc, $(cat "$tmp/err")"
+    ;;
+  capture)
+    for t in /usr/games/openarena xvfb-run apitrace; do
+      command -v "$t" >/dev/null || skip "$t is missing (scripts/setup.sh --gl --games installs the capture tools and games)"
+    done
+    # The warm-up is cut short: the settings are what is checked, not the bots.
+    "$src/scripts/capture-game.sh" openarena oa_dm1 3 "$tmp/e" --skip 20 >"$tmp/log" 2>&1 ||
+      fail "capture failed: $(tail -5 "$tmp/log")"
+    t=$tmp/e/capture.toml
+    for k in 'game = "openarena"' 'map = "oa_dm1"' 'frames = 3' 'first_frame = 20' 'screen = \[800, 480\]' \
+             'fixed_time_ms = 33' 'set fixedtime 33' 'follow 1' '"cl_renderer", "opengl1"' '"cg_draw2D", "0"' \
+             '"cg_drawGun", "0"' '"cg_thirdPerson", "1"' '"r_customwidth", "800"'; do
+      grep -q "$k" "$t" || fail "capture.toml lacks $k"
+    done
+    [ "$(wc -l <"$tmp/e/summary.jsonl")" = 3 ] || fail "not 3 frames"
+    # The entry regenerates into the recorded checksums.
+    /usr/bin/python3 "$src/scripts/game-suite" expand -o "$tmp/x" "$tmp/e" >/dev/null || fail "expand failed"
+    [ -s "$tmp/x/e.rbt.gz" ] && [ -s "$tmp/x/e.geo" ] || fail "no trace or geometry"
+    ;;
+  workloads|table3|fig9|fig8|accuracy)
+    case $what in
+      workloads|fig8|accuracy) [ -x "$build/bin/rbcd-cpucd" ] || skip "rbcd-cpucd not built (scripts/setup.sh --eval)" ;;
+    esac
+    /usr/bin/python3 "$src/scripts/game-suite" expand -o "$tmp/in" --frames 3 "$entry" >/dev/null ||
+      fail "expand failed"
+    "$src/scripts/reproduce.sh" --no-build --build "$build" --workloads "$tmp/in" --out "$tmp/out" \
+      --repeat 1 --jobs 1 "$what" >"$tmp/log" 2>&1 || fail "reproduce.sh failed: $(tail -5 "$tmp/log")"
+    for f in "$what.csv" "$what.md"; do [ -s "$tmp/out/$f" ] || fail "$f missing or empty"; done
+    name=$(basename "$entry")
+    grep -q "^$name," "$tmp/out/$what.csv" || grep -q ",$name," "$tmp/out/$what.csv" ||
+      fail "$what.csv has no row for $name"
+    ;;
+  *) fail "unknown case" ;;
+esac
+echo "run_games.sh $what: ok"
