@@ -64,6 +64,11 @@ case $what in
     name=$(basename "$entry")
     grep -q "^$name," "$tmp/out/$what.csv" || grep -q ",$name," "$tmp/out/$what.csv" ||
       fail "$what.csv has no row for $name"
+    if [ "$what" = workloads ]; then
+      # What collides, by object class: a row per class pair (or "(none)") of this capture.
+      grep -qE "^$name,(player|item/projectile|\(none\))" "$tmp/out/pairs.csv" ||
+        fail "pairs.csv has no row for $name: $(cat "$tmp/out/pairs.csv" 2>/dev/null)"
+    fi
     ;;
   *) fail "unknown case" ;;
 esac
