@@ -66,6 +66,22 @@ version=$(dpkg-query -W -f='${Version}' "$game" 2>/dev/null || echo unknown)
 
 if [ "$game" = openarena ]; then
   [[ "$map" =~ ^[A-Za-z0-9_]{1,64}$ ]] || usage "MAP '$map' is not a map name"
+  # A map the game lacks would leave the engine at its console until the time
+  # limit: refuse it now, from the game's own archives.
+  if [ -z "$from" ] && [ -d /usr/share/games/openarena/baseoa ]; then
+    maps=$(/usr/bin/python3 -c '
+import glob, sys, zipfile
+names = set()
+for p in glob.glob("/usr/share/games/openarena/baseoa/*.pk3"):
+    try:
+        names |= {n[5:-4] for n in zipfile.ZipFile(p).namelist() if n.startswith("maps/") and n.endswith(".bsp")}
+    except (OSError, zipfile.BadZipFile):
+        pass
+print(" ".join(sorted(names)))') || maps=
+    if [ -n "$maps" ] && [[ " $maps " != *" $map "* ]]; then
+      usage "MAP '$map' is not one of OpenArena's maps ($(wc -w <<<"$maps") installed, e.g. $(tr ' ' '\n' <<<"$maps" | grep -m4 '^oa_' | tr '\n' ' ')...)"
+    fi
+  fi
   : "${skip:=60}"
   # The engine counts a `wait` about twice a frame; the margin covers the
   # frames the loading screen and the bots' arrival take.

@@ -407,10 +407,19 @@ def game_pairs(out, scenes):
     rows = []
     for s in scenes:
         path = SCENE_PATHS[s]
-        game = next((g for g in GAME_CLASSES if s.startswith(g + "-")), None)
-        if not is_trace(path) or game is None:
+        if not is_trace(path):
             continue
-        classes = geometry_classes(path[:-len(".rbt.gz")] + ".geo", GAME_CLASSES[game])
+        # The game: from the capture's description beside the trace
+        # (scripts/game-suite expand writes it), else from the entry's name.
+        game = None
+        desc = path[:-len(".rbt.gz")] + ".capture"
+        if os.path.isfile(desc):
+            with open(desc, "rb") as f:
+                game = tomllib.load(f).get("game")
+        if game not in GAME_CLASSES:
+            game = next((g for g in GAME_CLASSES if s.startswith(g + "-")), None)
+        rules = GAME_CLASSES.get(game, [(lambda nv, d: True, "object")])
+        classes = geometry_classes(path[:-len(".rbt.gz")] + ".geo", rules)
         frames = len(read_csv(run(out, s, "cpucd_frames.csv")))
         table = {}
         for r in read_csv(run(out, s, "cpucd_pairs.csv")):

@@ -70,7 +70,7 @@ if ((games)); then
     else
       [ -f "$root/workloads/games/$(basename "$f" .rbt.gz)/capture.toml" ] && keep=1
     fi
-    ((keep)) || rm -f "$f" "${f%.rbt.gz}.geo" "${f%.rbt.gz}.summary.jsonl"   # an entry not asked for this time
+    ((keep)) || rm -f "$f" "${f%.rbt.gz}".{geo,summary.jsonl,capture}   # an entry not asked for this time
   done
 fi
 scenes=("$workloads"/*.toml "$workloads"/*.rbt.gz)

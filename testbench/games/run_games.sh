@@ -34,6 +34,39 @@ case $what in
     [ $rc = 2 ] && [ "$(wc -l <"$tmp/err")" = 1 ] && grep -q "capture.toml: frames" "$tmp/err" ||
       fail "malformed capture.toml: exit $rc, $(cat "$tmp/err")"
     ;;
+  cli)
+    # Bad arguments to both commands: exit 2, one line naming what is wrong, nothing written.
+    expect2() {   # WORD COMMAND...: exit 2, one line on stderr containing WORD
+      local word=$1 rc; shift
+      set +e; "$@" >"$tmp/o" 2>"$tmp/err"; rc=$?; set -e
+      [ $rc = 2 ] || fail "$* exited $rc, not 2: $(head -c 300 "$tmp/err")"
+      [ "$(wc -l <"$tmp/err")" = 1 ] || fail "$*: not one line: $(cat "$tmp/err")"
+      grep -q -- "$word" "$tmp/err" || fail "$*: message lacks '$word': $(cat "$tmp/err")"
+    }
+    cg=$src/scripts/capture-game.sh gs=$src/scripts/game-suite
+    expect2 "unknown game" "$cg" quake oa_dm1 3 "$tmp/n1"
+    expect2 "FRAMES" "$cg" openarena oa_dm1 many "$tmp/n2"
+    expect2 "FRAMES" "$cg" openarena oa_dm1 0 "$tmp/n3"
+    expect2 "bots" "$cg" openarena oa_dm1 3 "$tmp/n4" --bots 0
+    expect2 "skip" "$cg" openarena oa_dm1 3 "$tmp/n5" --skip -1
+    expect2 "unknown option" "$cg" openarena oa_dm1 3 "$tmp/n6" --fast
+    expect2 "four arguments" "$cg" openarena oa_dm1 3
+    mkdir "$tmp/exists"; touch "$tmp/exists/keep"
+    expect2 "exists" "$cg" openarena oa_dm1 3 "$tmp/exists"
+    [ -f "$tmp/exists/keep" ] || fail "an existing OUT_DIR was touched"
+    expect2 "not a map name" "$cg" openarena "../x" 3 "$tmp/n7"
+    expect2 "not a file" "$cg" neverball /nonexistent.nbr 3 "$tmp/n8"
+    expect2 "not a file" "$cg" openarena oa_dm1 3 "$tmp/n9" --from-trace /nonexistent.trace
+    if [ -d /usr/share/games/openarena/baseoa ]; then
+      expect2 "not one of OpenArena's maps" "$cg" openarena nosuchmap 3 "$tmp/n10"
+    fi
+    for n in n1 n2 n3 n4 n5 n6 n7 n8 n9 n10; do [ ! -e "$tmp/$n" ] || fail "$n was created"; done
+    expect2 "not a game-suite entry" /usr/bin/python3 "$gs" check "$tmp/nonexistent"
+    expect2 "capture.toml" /usr/bin/python3 "$gs" check "$tmp/exists"
+    expect2 "jobs" /usr/bin/python3 "$gs" expand -o "$tmp/x1" -j 0 "$entry"
+    expect2 "frames" /usr/bin/python3 "$gs" expand -o "$tmp/x2" --frames 0 "$entry"
+    expect2 "out" /usr/bin/python3 "$gs" expand "$entry"
+    ;;
   capture)
     for t in /usr/games/openarena xvfb-run apitrace; do
       command -v "$t" >/dev/null || skip "$t is missing (scripts/setup.sh --gl --games installs the capture tools and games)"
