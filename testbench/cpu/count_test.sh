@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# rbcd-cpucd --count-instructions (docs/cpucd.md, "Counted work"): the same
+# input gives the same counts run after run, wherever the input and outputs
+# lie (the paths change the heap's history), for a scene and for a format-2
+# geometry file; the counted run finds the timed run's pairs; a counted run
+# that would write more than its counts is refused (exit 2, one line, nothing
+# left). Exit 77 (skipped) without valgrind or valgrind/callgrind.h.
+#   count_test.sh SOURCE_DIR BUILD_DIR
+set -euo pipefail
+src=$1 build=$2
+cpucd=$build/bin/rbcd-cpucd
+command -v valgrind >/dev/null || { echo "valgrind missing (scripts/setup.sh --eval): counting tests skipped"; exit 77; }
+d=$(mktemp -d)
+trap 'rm -rf "$d"' EXIT
+fail() { echo "count_test.sh: $*" >&2; exit 1; }
+
+set +e
+msg=$("$cpucd" --scene "$src/testbench/eval/mini/mini.toml" --count-instructions --frames "$d/probe.csv" -q 2>&1)
+rc=$?
+set -e
+if [ "$rc" -eq 2 ] && [[ $msg == *"built without valgrind/callgrind.h"* ]]; then
+  echo "rbcd-cpucd built without valgrind/callgrind.h: counting tests skipped"; exit 77
+fi
+[ "$rc" -eq 0 ] || fail "counted run failed ($rc): $msg"
+
+# A format-2 file: a box part moving along x, and each frame a mesh of its
+# own (a tetrahedron, object 2) that the box reaches in frame 1.
+{
+  echo "rbcd-geometry 2"
+  echo "part 1 8 12 box"
+  for i in 0 1 2 3 4 5 6 7; do echo "v $(( (i & 1) * 2 - 1 )) $(( (i >> 1 & 1) * 2 - 1 )) $(( (i >> 2 & 1) * 2 - 1 ))"; done
+  printf 't 0 2 1\nt 1 2 3\nt 4 5 6\nt 5 7 6\nt 0 1 4\nt 1 5 4\nt 2 6 3\nt 3 6 7\nt 0 4 2\nt 2 4 6\nt 1 3 5\nt 3 7 5\n'
+  for f in 0 1 2; do
+    echo "frame $f"
+    echo "m 0 1 0 0 $((f * 2)) 0 1 0 0 0 0 1 0"
+    printf 'mesh 2 4 4 tet\nv 3 0 0\nv 5 0 0\nv 4 2 0\nv 4 1 2\nt 0 2 1\nt 0 1 3\nt 1 2 3\nt 2 0 3\n'
+  done
+} > "$d/game.geo"
+
+counts() { cut -d, -f1-4,9-11,14-18 "$1"; }
+mkdir -p "$d/a/much/longer/directory/name/than/the/other/one"
+cp "$src/testbench/eval/mini/mini.toml" "$d/a/much/longer/directory/name/than/the/other/one/"
+cp "$d/game.geo" "$d/a/much/longer/directory/name/than/the/other/one/"
+for input in "--scene $src/testbench/eval/mini/mini.toml" "--geometry $d/game.geo"; do
+  set -- $input
+  name=$(basename "$2")
+  far=$d/a/much/longer/directory/name/than/the/other/one/$name
+  "$cpucd" "$1" "$2" --count-instructions --frames "$d/1.csv" -q
+  "$cpucd" "$1" "$2" --count-instructions --frames "$d/2.csv" -q
+  "$cpucd" "$1" "$far" --count-instructions --frames "$d/a/much/longer/directory/name/than/the/other/one/3.csv" -q
+  cmp -s <(counts "$d/1.csv") <(counts "$d/2.csv") || { diff <(counts "$d/1.csv") <(counts "$d/2.csv"); fail "$name: counts differ between two runs"; }
+  cmp -s <(counts "$d/1.csv") <(counts "$d/a/much/longer/directory/name/than/the/other/one/3.csv") ||
+    fail "$name: counts differ with the input in another directory"
+  # Every counted section executed something; times and the exact phase left empty.
+  awk -F, -v n="$name" 'NR > 1 { for (k = 15; k <= 18; ++k) if ($k !~ /^[1-9][0-9]*$/) { print n ": frame " $1 " column " k ": " $k; exit 1 }
+                                  if ($5 != "" || $6 != "" || $12 != "") { print n ": frame " $1 ": a counted run wrote times"; exit 1 } }' "$d/1.csv" ||
+    fail "$name: bad counts"
+  # The timed run finds the same pairs (aabb, gjk, world aabb, world).
+  "$cpucd" "$1" "$2" --repeat 1 --frames "$d/t.csv" -q
+  cmp -s <(cut -d, -f1-4,10,11 "$d/1.csv") <(cut -d, -f1-4,10,11 "$d/t.csv") || fail "$name: counted and timed pairs differ"
+done
+grep -q '^1,2,1,1,,' "$d/1.csv" || fail "game.geo: the box should reach the tetrahedron in frame 1"
+
+# Refusals: one line, exit 2, no output left.
+refuse() {
+  local what=$1; shift
+  set +e
+  msg=$("$cpucd" "$@" 2>&1 >/dev/null)
+  rc=$?
+  set -e
+  [ "$rc" -eq 2 ] || fail "$what: exit $rc, expected 2"
+  [ "$(printf '%s\n' "$msg" | wc -l)" -eq 1 ] || fail "$what: more than one line: $msg"
+  [[ $msg == "rbcd-cpucd: "* ]] || fail "$what: message '$msg'"
+  [ ! -e "$d/out.csv" ] && [ ! -e "$d/f.csv" ] || fail "$what: output left behind"
+}
+refuse "--pairs with counting" --scene "$src/testbench/eval/mini/mini.toml" --count-instructions --frames "$d/f.csv" --pairs "$d/out.csv"
+refuse "--repeat with counting" --scene "$src/testbench/eval/mini/mini.toml" --count-instructions --repeat 3 --frames "$d/f.csv"
+printf 'rbcd-geometry 2\npart 1 3 1\nv 0 0 0\nv 1 0 0\nv 0 1 x\n' > "$d/bad.geo"
+refuse "bad geometry under counting" --geometry "$d/bad.geo" --count-instructions --frames "$d/f.csv"
+[[ $msg == "rbcd-cpucd: $d/bad.geo:5: "* ]] || fail "bad geometry: '$msg' does not name the line"
+echo "count_test.sh: ok"
