@@ -189,7 +189,7 @@ positions: line
 events: Ir
 summary: 1000
 
-ob=/lib/libc.so.6
+ob=libc.so.6
 fn=_int_malloc
 10 80
 
@@ -205,7 +205,7 @@ cfn=malloc
 calls=1 5
 3 50
 
-ob=/bin/x
+ob=build/bin/program
 fn=main
 1 600
 cfn=malloc
