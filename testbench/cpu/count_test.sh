@@ -2,9 +2,9 @@
 # rbcd-cpucd --count-instructions (docs/cpucd.md, "Counted work"): the same
 # input gives the same counts run after run, wherever the input and outputs
 # lie (the paths change the heap's history), for a scene and for a format-2
-# geometry file; the counted run finds the timed run's pairs; a counted run
-# that would write more than its counts is refused (exit 2, one line, nothing
-# left). Exit 77 (skipped) without valgrind or valgrind/callgrind.h.
+# geometry file; a scene and its format-1 geometry file count alike; the
+# counted run finds the timed run's pairs; a counted run that would write
+# more than its counts is refused (exit 2, one line, nothing left). Exit 77 (skipped) without valgrind or valgrind/callgrind.h.
 #   count_test.sh SOURCE_DIR BUILD_DIR
 set -euo pipefail
 src=$1 build=$2
@@ -60,6 +60,12 @@ for input in "--scene $src/testbench/eval/mini/mini.toml" "--geometry $d/game.ge
   cmp -s <(cut -d, -f1-4,10,11 "$d/1.csv") <(cut -d, -f1-4,10,11 "$d/t.csv") || fail "$name: counted and timed pairs differ"
 done
 grep -q '^1,2,1,1,,' "$d/1.csv" || fail "game.geo: the box should reach the tetrahedron in frame 1"
+
+# A scene and its geometry file (format 1, the same numbers) are one input: one count.
+"$cpucd" --scene "$src/testbench/eval/mini/mini.toml" --repeat 1 -q --write-geometry "$d/mini.geo"
+"$cpucd" --scene "$src/testbench/eval/mini/mini.toml" --count-instructions --frames "$d/s.csv" -q
+"$cpucd" --geometry "$d/mini.geo" --count-instructions --frames "$d/g.csv" -q
+cmp -s <(counts "$d/s.csv") <(counts "$d/g.csv") || fail "mini: the scene and its geometry file count differently"
 
 # Refusals: one line, exit 2, no output left.
 refuse() {
