@@ -116,8 +116,9 @@ struct CpuDetector::Impl {
         std::vector<int> gidx;
         std::unique_ptr<btTriangleIndexVertexArray> gmesh;
         std::unique_ptr<btGImpactMeshShape> gimpact;
+        btVector3 g_scale{1, 1, 1};   // the GImpact shape's, rescaled by the world steps only
         btBroadphaseProxy* proxy = nullptr;
-        Eigen::Vector3d bt_scale{1, 1, 1};
+        btVector3 bt_scale{1, 1, 1};
         btTransform tr;
         // FCL model in scaled object space, rebuilt when the scale changes.
         std::shared_ptr<Bvh> bvh;
@@ -206,7 +207,14 @@ struct CpuDetector::Impl {
     void world_step(World& w, std::uint64_t f, bool narrow) {
         for (std::size_t i = 0; i < ps.size(); ++i) {
             set_pose(i, in.model[f][i]);
-            w.objs[i]->setWorldTransform(ps[i].tr);
+            PartState& p = ps[i];
+            // A scaled concave shape refits its tree: the world's work, not the bare queries'.
+            if (p.gimpact && p.g_scale != p.bt_scale) {
+                p.gimpact->setLocalScaling(p.bt_scale);
+                p.gimpact->updateBound();
+                p.g_scale = p.bt_scale;
+            }
+            w.objs[i]->setWorldTransform(p.tr);
         }
         if (narrow) {
             w.world.performDiscreteCollisionDetection();
@@ -219,14 +227,15 @@ struct CpuDetector::Impl {
     void set_pose(std::size_t i, const Eigen::Matrix4d& m) {
         const Decomposed d = decompose(m);
         PartState& p = ps[i];
-        if (d.scale != p.bt_scale) {
-            const btVector3 s(btScalar(d.scale.x()), btScalar(d.scale.y()), btScalar(d.scale.z()));
+        // A rotating object's scale, recovered from its matrix, wobbles in
+        // the last bits of a double; Bullet keeps it in floats. Rescaling
+        // only when the float changes keeps a constant scale constant, as a
+        // game sets it once (rescaling recomputes the hull's box and refits
+        // a GImpact tree), and changes no result.
+        const btVector3 s(btScalar(d.scale.x()), btScalar(d.scale.y()), btScalar(d.scale.z()));
+        if (s != p.bt_scale) {
             p.hull->setLocalScaling(s);
-            if (p.gimpact) {
-                p.gimpact->setLocalScaling(s);
-                p.gimpact->updateBound();
-            }
-            p.bt_scale = d.scale;
+            p.bt_scale = s;
         }
         p.tr = to_bt(d);
     }
