@@ -202,6 +202,20 @@ struct CpuDetector::Impl {
         return ps[i].convex ? static_cast<btCollisionShape*>(ps[i].hull.get()) : ps[i].gimpact.get();
     }
 
+    // Empty broad phase and worlds (fresh inputs): the next broad() or
+    // world_step() inserts every part again.
+    void clear_broad() {
+        for (auto& p : ps)
+            if (p.proxy) {
+                broadphase.destroyProxy(p.proxy, &dispatcher);
+                p.proxy = nullptr;
+            }
+    }
+    static void clear_world(World& w) {
+        for (auto& o : w.objs)
+            if (o->getBroadphaseHandle()) w.world.removeCollisionObject(o.get());
+    }
+
     // (d) (narrow = false: the world's AABBs and overlapping pairs, what
     // performDiscreteCollisionDetection does before dispatching) or (e).
     void world_step(World& w, std::uint64_t f, bool narrow) {
@@ -215,6 +229,7 @@ struct CpuDetector::Impl {
                 p.g_scale = p.bt_scale;
             }
             w.objs[i]->setWorldTransform(p.tr);
+            if (!w.objs[i]->getBroadphaseHandle()) w.world.addCollisionObject(w.objs[i].get());
         }
         if (narrow) {
             w.world.performDiscreteCollisionDetection();
@@ -246,7 +261,10 @@ struct CpuDetector::Impl {
             set_pose(i, in.model[f][i]);
             btVector3 lo, hi;
             ps[i].hull->getAabb(ps[i].tr, lo, hi);
-            broadphase.setAabb(ps[i].proxy, lo, hi, &dispatcher);
+            if (ps[i].proxy)
+                broadphase.setAabb(ps[i].proxy, lo, hi, &dispatcher);
+            else
+                ps[i].proxy = broadphase.createProxy(lo, hi, CONVEX_HULL_SHAPE_PROXYTYPE, &ps[i], 1, -1, &dispatcher);
         }
         broadphase.calculateOverlappingPairs(&dispatcher);
         out.clear();
@@ -335,19 +353,28 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats, SectionCou
             if (c) fr.instr[std::size_t(sec)] = c->stop(sec);
             times.push_back(us_since(t0));
         };
-        s.broad(prev, cand);   // unmeasured: back to the previous frame
+        // Unmeasured: back to the previous frame, or (fresh) to nothing.
+        const auto reset_broad = [&] {
+            if (s.opt.fresh) s.clear_broad();
+            else s.broad(prev, cand);
+        };
+        const auto reset_world = [&](World& w, bool narrow) {
+            if (s.opt.fresh) Impl::clear_world(w);
+            else s.world_step(w, prev, narrow);
+        };
+        reset_broad();
         measure(Section::broad, tb, [&] { s.broad(f, cand); });
 
-        s.broad(prev, cand);
+        reset_broad();
         measure(Section::gjk, tg, [&] {
             s.broad(f, cand);
             gres.assign(cand.size(), 0);
             for (std::size_t k = 0; k < cand.size(); ++k) gres[k] = s.gjk(cand[k].first, cand[k].second);
         });
 
-        s.world_step(s.wbroad, prev, false);
+        reset_world(s.wbroad, false);
         measure(Section::world_broad, twb, [&] { s.world_step(s.wbroad, f, false); });
-        s.world_step(s.wfull, prev, true);
+        reset_world(s.wfull, true);
         measure(Section::world, tw, [&] { s.world_step(s.wfull, f, true); });
     }
     fr.t.broad_us = median(tb);

@@ -62,6 +62,10 @@ public:
 
 struct DetectorOptions {
     bool exact = true;   // run (c) (and build its BVHs); a counted run leaves it out
+    // Each measured section starts from an empty broad phase and world
+    // instead of the previous frame's state: a frame of a format-2 file,
+    // whose objects are its own (docs/cpucd.md).
+    bool fresh = false;
 };
 
 struct FrameResult {

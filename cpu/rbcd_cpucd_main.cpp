@@ -138,7 +138,9 @@ int run(const Options& opt) {
         } else {
             const CdInput one = in.frame_input(f);
             frame_parts = one.parts.size();
-            CpuDetector det(one, dopt);
+            DetectorOptions fresh = dopt;
+            fresh.fresh = true;
+            CpuDetector det(one, fresh);
             frame_concave = det.concave_parts();
             concave = std::max(concave, frame_concave);
             r = det.run_frame(0, opt.repeat, counter.get());

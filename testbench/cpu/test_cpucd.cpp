@@ -140,10 +140,15 @@ TEST_CASE("collision world: the bare queries' pairs on the analytic cases", "[cp
         {"rod through a ring", two(shape("torus"), place({0, 0, 0}), shape("cylinder", 16), place({0, 0, 0}, {0.2, 1.5, 0.2})),
          false},
     };
+    // Fresh (a format-2 frame: every section from an empty broad phase and
+    // world, repeated) or incremental: the same pairs.
+    for (const bool fresh : {false, true})
     for (const Case& c : cases) {
-        INFO(c.what);
-        CpuDetector d(c.in);
-        const FrameResult r = d.run_frame(0, 1);
+        INFO(c.what << (fresh ? ", fresh" : ""));
+        DetectorOptions opt;
+        opt.fresh = fresh;
+        CpuDetector d(c.in, opt);
+        const FrameResult r = d.run_frame(0, fresh ? 3 : 1);
         REQUIRE(r.pairs.size() <= 1);
         const PairResult p = r.pairs.empty() ? PairResult{1, 2} : r.pairs[0];
         CHECK(p.world_aabb == p.aabb);
