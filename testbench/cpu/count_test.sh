@@ -84,4 +84,11 @@ refuse "--repeat with counting" --scene "$src/testbench/eval/mini/mini.toml" --c
 printf 'rbcd-geometry 2\npart 1 3 1\nv 0 0 0\nv 1 0 0\nv 0 1 x\n' > "$d/bad.geo"
 refuse "bad geometry under counting" --geometry "$d/bad.geo" --count-instructions --frames "$d/f.csv"
 [[ $msg == "rbcd-cpucd: $d/bad.geo:5: "* ]] || fail "bad geometry: '$msg' does not name the line"
+# Without valgrind: a message naming the package, before anything is read or written.
+set +e
+msg=$(PATH=/nonexistent "$cpucd" --scene "$src/testbench/eval/mini/mini.toml" --count-instructions --frames "$d/f.csv" 2>&1)
+rc=$?
+set -e
+[ "$rc" -eq 2 ] && [[ $msg == "rbcd-cpucd: --count-instructions: valgrind not found"* ]] && [ ! -e "$d/f.csv" ] ||
+  fail "without valgrind: exit $rc, '$msg'"
 echo "count_test.sh: ok"
