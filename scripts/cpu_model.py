@@ -30,9 +30,10 @@ EXYNOS_CPU_W, EXYNOS_CORES, EXYNOS_GHZ = 4.0, 2, 1.7
 ACTIVE_CORE_W = EXYNOS_CPU_W / EXYNOS_CORES * CLOCK_GHZ / EXYNOS_GHZ
 
 # The other core idles, leaking. McPAT's stock dual Cortex-A9 configuration
-# (ARM_A9_2GHz.xml, 40 nm) gives 1.742 W peak for the two cores, 0.109 W of it
-# leakage; an A15 core has about twice an A9's area, so one idle A15 at 32 nm
-# is taken to leak what two A9s do.
+# (ARM_A9_2GHz.xml, 40 nm, low-operating-power devices; McPAT 1.3's output):
+# processor peak power 1.742 W, total leakage 0.109 W (two cores, their
+# first-level directory and bus). An A15 core has about twice an A9's area,
+# so one idle A15 at 32 nm is taken to leak what that dual A9 does.
 IDLE_CORE_W = 0.109
 
 POWER_W = ACTIVE_CORE_W + IDLE_CORE_W
