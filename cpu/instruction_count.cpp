@@ -140,6 +140,11 @@ bool counting_under_callgrind() {
 }
 
 int run_under_callgrind(int argc, char* argv[]) {
+#ifdef __SANITIZE_ADDRESS__
+    // ASan's shadow memory and valgrind's own address space cannot coexist.
+    throw InputError("--count-instructions: this rbcd-cpucd was built with AddressSanitizer (RBCD_SANITIZE), which "
+                     "valgrind cannot run; count with a build without it");
+#endif
     if (!callgrind_compiled_in())
         throw InputError("--count-instructions: this rbcd-cpucd was built without valgrind/callgrind.h "
                          "(Debian's valgrind, scripts/setup.sh --eval; then rebuild)");
