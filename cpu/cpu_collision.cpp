@@ -106,7 +106,6 @@ struct CpuDetector::Impl {
     btGjkEpaPenetrationDepthSolver epa;
 
     DetectorOptions opt;
-    World wbroad, wfull;   // (d), (e)
 
     struct PartState {
         std::unique_ptr<btConvexHullShape> hull;
@@ -126,6 +125,9 @@ struct CpuDetector::Impl {
         bool closed = false;
     };
     std::vector<PartState> ps;
+    // (d), (e). After the parts: a world's objects point at the parts'
+    // shapes, so the worlds go first.
+    World wbroad, wfull;
 
     Impl(const CdInput& input, DetectorOptions o) : in(input), opt(o) {
         ps.resize(in.parts.size());
