@@ -179,6 +179,9 @@ int run_under_callgrind(int argc, char* argv[]) {
     if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
     if (pid == 0) {
         ::setenv(kDumpEnv, prefix.c_str(), 1);
+        // Every symbol bound at start: lazily, the dynamic linker's lookup
+        // would be counted in whichever section first calls a function.
+        ::setenv("LD_BIND_NOW", "1", 1);
         ::execvp("valgrind", av.data());
         std::fprintf(stderr, "rbcd-cpucd: --count-instructions: cannot run valgrind: %s\n", std::strerror(errno));
         ::_exit(2);
