@@ -161,7 +161,7 @@ int run_under_callgrind(int argc, char* argv[]) {
 
     // Collection off until the first section; instrumentation on from the
     // start, since switching it later flushes every translation.
-    std::vector<std::string> args = {"valgrind", "--tool=callgrind", "-q", "--collect-atstart=no",
+    std::vector<std::string> args = {"valgrind", "--tool=callgrind", "-q", "--vgdb=no", "--collect-atstart=no",
                                      "--compress-strings=no", "--compress-pos=no",
                                      "--callgrind-out-file=" + prefix, exe};
     for (int i = 1; i < argc; ++i) args.emplace_back(argv[i]);

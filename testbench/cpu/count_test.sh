@@ -4,7 +4,8 @@
 # lie (the paths change the heap's history), for a scene and for a format-2
 # geometry file; a scene and its format-1 geometry file count alike; the
 # counted run finds the timed run's pairs; a counted run that would write
-# more than its counts is refused (exit 2, one line, nothing left). Exit 77
+# more than its counts is refused (exit 2, one line, nothing left); one
+# stopped by SIGTERM leaves nothing, in TMPDIR neither. Exit 77
 # (skipped) without valgrind or valgrind/callgrind.h, or in a sanitizer build
 # (valgrind cannot run ASan's binaries).
 #   count_test.sh SOURCE_DIR BUILD_DIR
@@ -93,4 +94,22 @@ rc=$?
 set -e
 [ "$rc" -eq 2 ] && [[ $msg == "rbcd-cpucd: --count-instructions: valgrind not found"* ]] && [ ! -e "$d/f.csv" ] ||
   fail "without valgrind: exit $rc, '$msg'"
+# SIGTERM to a counting run (to rbcd-cpucd, which forwards it to valgrind's
+# child): no output, no temporary directory left. Sent once the output's
+# temporary exists, so the run is under way; the scene is long enough to be.
+mkdir -p "$d/tmp" "$d/sig"
+TMPDIR=$d/tmp "$cpucd" --scene "$src/workloads/snowboard.toml" --count-instructions --frames "$d/sig/f.csv" -q 2>/dev/null &
+pid=$!
+until compgen -G "$d/sig/.f.csv.*" >/dev/null; do
+  kill -0 "$pid" 2>/dev/null || fail "SIGTERM: the run ended before its output was opened"
+  sleep 0.2
+done
+kill -TERM "$pid"
+set +e
+wait "$pid"
+rc=$?
+set -e
+[ "$rc" -ne 0 ] || fail "SIGTERM: exit 0"
+[ -z "$(ls -A "$d/sig")" ] || fail "SIGTERM: left $(ls -A "$d/sig")"
+[ -z "$(ls -A "$d/tmp")" ] || fail "SIGTERM: left $(ls -A "$d/tmp") in TMPDIR"
 echo "count_test.sh: ok"
