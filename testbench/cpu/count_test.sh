@@ -96,9 +96,12 @@ set -e
   fail "without valgrind: exit $rc, '$msg'"
 # SIGTERM to a counting run (to rbcd-cpucd, which forwards it to valgrind's
 # child): no output, no temporary directory left. Sent once the output's
-# temporary exists, so the run is under way; the scene is long enough to be.
+# temporary exists, so the run is under way; the input (the mini scene's last
+# frame held for 4000 frames) is long enough to still be.
 mkdir -p "$d/tmp" "$d/sig"
-TMPDIR=$d/tmp "$cpucd" --scene "$src/workloads/snowboard.toml" --count-instructions --frames "$d/sig/f.csv" -q 2>/dev/null &
+awk '/^frame 3$/ { last = 1 } { print } last && /^m / { held = held $0 "\n" }
+     END { for (f = 4; f < 4000; ++f) printf "frame %d\n%s", f, held }' "$d/mini.geo" > "$d/long.geo"
+TMPDIR=$d/tmp "$cpucd" --geometry "$d/long.geo" --count-instructions --frames "$d/sig/f.csv" -q 2>/dev/null &
 pid=$!
 until compgen -G "$d/sig/.f.csv.*" >/dev/null; do
   kill -0 "$pid" 2>/dev/null || fail "SIGTERM: the run ended before its output was opened"
