@@ -6,6 +6,8 @@
 #include <map>
 
 #include <btBulletCollisionCommon.h>
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkPairDetector.h>
 #include <BulletCollision/NarrowPhaseCollision/btVoronoiSimplexSolver.h>
@@ -70,6 +72,29 @@ struct GjkResult : btDiscreteCollisionDetectorInterface::Result {
 
 using Bvh = fcl::BVHModel<fcl::OBBRSSd>;
 
+// Parts of one object never collide (what a game does with a ragdoll's
+// limbs); the collision object's user index is its part.
+struct SameObjectFilter : btOverlapFilterCallback {
+    const CdInput* in = nullptr;
+    bool needBroadphaseCollision(btBroadphaseProxy* a, btBroadphaseProxy* b) const override {
+        const auto* oa = static_cast<const btCollisionObject*>(a->m_clientObject);
+        const auto* ob = static_cast<const btCollisionObject*>(b->m_clientObject);
+        return in->parts[std::size_t(oa->getUserIndex())].id != in->parts[std::size_t(ob->getUserIndex())].id;
+    }
+};
+
+// A btCollisionWorld as a game sets one up. Members in this order: the world's
+// destructor removes the objects' proxies, so the objects, the broad phase
+// and the filter outlive it.
+struct World {
+    SameObjectFilter filter;
+    std::vector<std::unique_ptr<btCollisionObject>> objs;
+    btDefaultCollisionConfiguration config;
+    btCollisionDispatcher dispatcher{&config};
+    btDbvtBroadphase broadphase;
+    btCollisionWorld world{&dispatcher, &broadphase, &config};
+};
+
 } // namespace
 
 struct CpuDetector::Impl {
@@ -80,10 +105,19 @@ struct CpuDetector::Impl {
     btVoronoiSimplexSolver simplex;
     btGjkEpaPenetrationDepthSolver epa;
 
+    DetectorOptions opt;
+
     struct PartState {
         std::unique_ptr<btConvexHullShape> hull;
+        // (e)'s shape for a concave part: GImpact over the mesh (single precision, as Bullet stores it).
+        bool convex = true;
+        std::vector<btScalar> gverts;
+        std::vector<int> gidx;
+        std::unique_ptr<btTriangleIndexVertexArray> gmesh;
+        std::unique_ptr<btGImpactMeshShape> gimpact;
+        btVector3 g_scale{1, 1, 1};   // the GImpact shape's, rescaled by the world steps only
         btBroadphaseProxy* proxy = nullptr;
-        Eigen::Vector3d bt_scale{1, 1, 1};
+        btVector3 bt_scale{1, 1, 1};
         btTransform tr;
         // FCL model in scaled object space, rebuilt when the scale changes.
         std::shared_ptr<Bvh> bvh;
@@ -91,10 +125,13 @@ struct CpuDetector::Impl {
         bool closed = false;
     };
     std::vector<PartState> ps;
+    // (d), (e). After the parts: a world's objects point at the parts'
+    // shapes, so the worlds go first.
+    World wbroad, wfull;
 
-    explicit Impl(const CdInput& input) : in(input) {
+    Impl(const CdInput& input, DetectorOptions o) : in(input), opt(o) {
         ps.resize(in.parts.size());
-        std::map<const PartMesh*, bool> closed;
+        std::map<const PartMesh*, bool> closed, convex;
         for (std::size_t i = 0; i < in.parts.size(); ++i) {
             const PartMesh& m = *in.parts[i].mesh;
             auto hull = std::make_unique<btConvexHullShape>();
@@ -108,6 +145,24 @@ struct CpuDetector::Impl {
             auto it = closed.find(&m);
             if (it == closed.end()) it = closed.emplace(&m, is_closed(m)).first;
             ps[i].closed = it->second;
+            auto cv = convex.find(&m);
+            if (cv == convex.end()) cv = convex.emplace(&m, is_convex(m)).first;
+            ps[i].convex = cv->second;
+            if (!ps[i].convex) {
+                PartState& p = ps[i];
+                p.gverts.reserve(3 * m.verts.size());
+                for (const auto& v : m.verts)
+                    for (int k = 0; k < 3; ++k) p.gverts.push_back(btScalar(v[k]));
+                p.gidx.reserve(3 * m.tris.size());
+                for (const auto& t : m.tris)
+                    for (int k = 0; k < 3; ++k) p.gidx.push_back(int(t[k]));
+                p.gmesh = std::make_unique<btTriangleIndexVertexArray>(int(m.tris.size()), p.gidx.data(), 3 * int(sizeof(int)),
+                                                                       int(m.verts.size()), p.gverts.data(),
+                                                                       3 * int(sizeof(btScalar)));
+                p.gimpact = std::make_unique<btGImpactMeshShape>(p.gmesh.get());
+                p.gimpact->setMargin(0);
+                p.gimpact->updateBound();
+            }
         }
         // Proxies at frame 0.
         for (std::size_t i = 0; i < ps.size(); ++i) {
@@ -117,8 +172,26 @@ struct CpuDetector::Impl {
             ps[i].proxy = broadphase.createProxy(lo, hi, CONVEX_HULL_SHAPE_PROXYTYPE, &ps[i], 1, -1, &dispatcher);
         }
         broadphase.calculateOverlappingPairs(&dispatcher);
+        // The worlds at frame 0, their pairs found: loading, as the proxies above.
+        btGImpactCollisionAlgorithm::registerAlgorithm(&wfull.dispatcher);
+        for (World* w : {&wbroad, &wfull}) {
+            w->filter.in = &in;
+            w->world.getPairCache()->setOverlapFilterCallback(&w->filter);
+            for (std::size_t i = 0; i < ps.size(); ++i) {
+                auto o = std::make_unique<btCollisionObject>();
+                o->setCollisionShape(shape(i));
+                o->setWorldTransform(ps[i].tr);
+                o->setUserIndex(int(i));
+                w->world.addCollisionObject(o.get());
+                w->objs.push_back(std::move(o));
+            }
+        }
+        if (!in.model.empty()) {
+            world_step(wbroad, 0, false);
+            world_step(wfull, 0, true);
+        }
         // FCL models at frame 0's scale: building them is loading, not detection.
-        if (!in.model.empty())
+        if (opt.exact && !in.model.empty())
             for (std::size_t i = 0; i < ps.size(); ++i) bvh(i, decompose(in.model[0][i]).scale);
     }
 
@@ -127,12 +200,59 @@ struct CpuDetector::Impl {
             if (p.proxy) broadphase.destroyProxy(p.proxy, &dispatcher);
     }
 
+    btCollisionShape* shape(std::size_t i) {
+        return ps[i].convex ? static_cast<btCollisionShape*>(ps[i].hull.get()) : ps[i].gimpact.get();
+    }
+
+    // Empty broad phase and worlds (fresh inputs): the next broad() or
+    // world_step() inserts every part again.
+    void clear_broad() {
+        for (auto& p : ps)
+            if (p.proxy) {
+                broadphase.destroyProxy(p.proxy, &dispatcher);
+                p.proxy = nullptr;
+            }
+    }
+    static void clear_world(World& w) {
+        for (auto& o : w.objs)
+            if (o->getBroadphaseHandle()) w.world.removeCollisionObject(o.get());
+    }
+
+    // (d) (narrow = false: the world's AABBs and overlapping pairs, what
+    // performDiscreteCollisionDetection does before dispatching) or (e).
+    void world_step(World& w, std::uint64_t f, bool narrow) {
+        for (std::size_t i = 0; i < ps.size(); ++i) {
+            set_pose(i, in.model[f][i]);
+            PartState& p = ps[i];
+            // A scaled concave shape refits its tree: the world's work, not the bare queries'.
+            if (p.gimpact && p.g_scale != p.bt_scale) {
+                p.gimpact->setLocalScaling(p.bt_scale);
+                p.gimpact->updateBound();
+                p.g_scale = p.bt_scale;
+            }
+            w.objs[i]->setWorldTransform(p.tr);
+            if (!w.objs[i]->getBroadphaseHandle()) w.world.addCollisionObject(w.objs[i].get());
+        }
+        if (narrow) {
+            w.world.performDiscreteCollisionDetection();
+        } else {
+            w.world.updateAabbs();
+            w.world.computeOverlappingPairs();
+        }
+    }
+
     void set_pose(std::size_t i, const Eigen::Matrix4d& m) {
         const Decomposed d = decompose(m);
         PartState& p = ps[i];
-        if (d.scale != p.bt_scale) {
-            p.hull->setLocalScaling(btVector3(btScalar(d.scale.x()), btScalar(d.scale.y()), btScalar(d.scale.z())));
-            p.bt_scale = d.scale;
+        // A rotating object's scale, recovered from its matrix, wobbles in
+        // the last bits of a double; Bullet keeps it in floats. Rescaling
+        // only when the float changes keeps a constant scale constant, as a
+        // game sets it once (rescaling recomputes the hull's box and refits
+        // a GImpact tree), and changes no result.
+        const btVector3 s(btScalar(d.scale.x()), btScalar(d.scale.y()), btScalar(d.scale.z()));
+        if (s != p.bt_scale) {
+            p.hull->setLocalScaling(s);
+            p.bt_scale = s;
         }
         p.tr = to_bt(d);
     }
@@ -143,7 +263,10 @@ struct CpuDetector::Impl {
             set_pose(i, in.model[f][i]);
             btVector3 lo, hi;
             ps[i].hull->getAabb(ps[i].tr, lo, hi);
-            broadphase.setAabb(ps[i].proxy, lo, hi, &dispatcher);
+            if (ps[i].proxy)
+                broadphase.setAabb(ps[i].proxy, lo, hi, &dispatcher);
+            else
+                ps[i].proxy = broadphase.createProxy(lo, hi, CONVEX_HULL_SHAPE_PROXYTYPE, &ps[i], 1, -1, &dispatcher);
         }
         broadphase.calculateOverlappingPairs(&dispatcher);
         out.clear();
@@ -192,10 +315,16 @@ struct CpuDetector::Impl {
     }
 };
 
-CpuDetector::CpuDetector(const CdInput& in) : impl_(std::make_unique<Impl>(in)) {}
+CpuDetector::CpuDetector(const CdInput& in, DetectorOptions opt) : impl_(std::make_unique<Impl>(in, opt)) {}
+
+std::size_t CpuDetector::concave_parts() const {
+    std::size_t n = 0;
+    for (const auto& p : impl_->ps) n += !p.convex;
+    return n;
+}
 CpuDetector::~CpuDetector() = default;
 
-FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats) {
+FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats, SectionCounter* counter) {
     Impl& s = *impl_;
     const CdInput& in = s.in;
     FrameResult fr;
@@ -211,35 +340,85 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats) {
         return p;
     };
 
-    // ---- (a) and (b), timed, each repeat starting from frame f-1's state.
+    // ---- (a), (b), (d), (e), timed, each repeat starting from frame f-1's
+    // state; the first repeat also counted when a counter is given.
     std::vector<std::pair<std::size_t, std::size_t>> cand;
-    std::vector<double> tb, tg;
+    std::vector<double> tb, tg, twb, tw;
     std::vector<int> gres;
     const std::uint64_t prev = f ? f - 1 : 0;
     for (unsigned r = 0; r < std::max(1u, repeats); ++r) {
-        s.broad(prev, cand);   // untimed: back to the previous frame
-        auto t0 = Clock::now();
-        s.broad(f, cand);
-        tb.push_back(us_since(t0));
+        SectionCounter* c = r == 0 ? counter : nullptr;
+        const auto measure = [&](Section sec, std::vector<double>& times, auto&& work) {
+            const auto t0 = Clock::now();
+            if (c) c->start();
+            work();
+            if (c) fr.instr[std::size_t(sec)] = c->stop(sec);
+            times.push_back(us_since(t0));
+        };
+        // Unmeasured: back to the previous frame, or (fresh) to nothing.
+        const auto reset_broad = [&] {
+            if (s.opt.fresh) s.clear_broad();
+            else s.broad(prev, cand);
+        };
+        const auto reset_world = [&](World& w, bool narrow) {
+            if (s.opt.fresh) Impl::clear_world(w);
+            else s.world_step(w, prev, narrow);
+        };
+        reset_broad();
+        measure(Section::broad, tb, [&] { s.broad(f, cand); });
 
-        s.broad(prev, cand);
-        t0 = Clock::now();
-        s.broad(f, cand);
-        gres.assign(cand.size(), 0);
-        for (std::size_t k = 0; k < cand.size(); ++k) gres[k] = s.gjk(cand[k].first, cand[k].second);
-        tg.push_back(us_since(t0));
+        reset_broad();
+        measure(Section::gjk, tg, [&] {
+            s.broad(f, cand);
+            gres.assign(cand.size(), 0);
+            for (std::size_t k = 0; k < cand.size(); ++k) gres[k] = s.gjk(cand[k].first, cand[k].second);
+        });
+
+        reset_world(s.wbroad, false);
+        measure(Section::world_broad, twb, [&] { s.world_step(s.wbroad, f, false); });
+        reset_world(s.wfull, true);
+        measure(Section::world, tw, [&] { s.world_step(s.wfull, f, true); });
     }
     fr.t.broad_us = median(tb);
     fr.t.gjk_us = median(tg);
+    fr.t.world_broad_us = median(twb);
+    fr.t.world_us = median(tw);
     for (std::size_t k = 0; k < cand.size(); ++k) {
         PairResult& p = pair_of(cand[k].first, cand[k].second);
         p.aabb = true;
         if (gres[k]) p.gjk = true;
         if (gres[k] == 2) ++fr.t.gjk_no_result;
     }
+    // (d)'s pairs: the world's pair cache, kept when the shapes' own AABBs
+    // overlap (the world's proxies are enlarged by the contact-breaking
+    // threshold, the tree's leaves further).
+    {
+        const btBroadphasePairArray& arr = s.wbroad.world.getPairCache()->getOverlappingPairArray();
+        for (int k = 0; k < arr.size(); ++k) {
+            const auto* o0 = static_cast<const btCollisionObject*>(arr[k].m_pProxy0->m_clientObject);
+            const auto* o1 = static_cast<const btCollisionObject*>(arr[k].m_pProxy1->m_clientObject);
+            btVector3 lo0, hi0, lo1, hi1;
+            o0->getCollisionShape()->getAabb(o0->getWorldTransform(), lo0, hi0);
+            o1->getCollisionShape()->getAabb(o1->getWorldTransform(), lo1, hi1);
+            if (!TestAabbAgainstAabb2(lo0, hi0, lo1, hi1)) continue;
+            pair_of(std::size_t(o0->getUserIndex()), std::size_t(o1->getUserIndex())).world_aabb = true;
+        }
+    }
+    // (e)'s: a manifold holding a point at distance <= 0 (the manifolds also
+    // keep points within the contact-breaking threshold, not touching).
+    for (int k = 0; k < s.wfull.dispatcher.getNumManifolds(); ++k) {
+        const btPersistentManifold* m = s.wfull.dispatcher.getManifoldByIndexInternal(k);
+        bool touching = false;
+        for (int q = 0; q < m->getNumContacts(); ++q) touching = touching || m->getContactPoint(q).getDistance() <= 0;
+        if (touching) pair_of(std::size_t(m->getBody0()->getUserIndex()), std::size_t(m->getBody1()->getUserIndex())).world = true;
+    }
 
     // ---- (c) exact, over the pairs whose exact (double) world AABBs overlap.
     const auto t0 = Clock::now();
+    if (!s.opt.exact) {
+        for (auto& [k, p] : pairs) fr.pairs.push_back(p);
+        return fr;
+    }
     const std::size_t n = in.parts.size();
     std::vector<Decomposed> dec(n);
     for (std::size_t i = 0; i < n; ++i) dec[i] = decompose(in.model[f][i]);
@@ -344,6 +523,42 @@ AabbPairs overlapping_aabb_pairs(const CdInput& in, std::uint64_t f, std::uint64
     }
     std::sort(out.pairs.begin(), out.pairs.end());
     return out;
+}
+
+bool is_convex(const PartMesh& m) {
+    if (m.verts.empty()) return true;
+    Eigen::Vector3d lo = m.verts[0], hi = m.verts[0];
+    for (const auto& v : m.verts) {
+        lo = lo.cwiseMin(v);
+        hi = hi.cwiseMax(v);
+    }
+    // Tessellation and file precision leave vertices slightly off a flat
+    // face; a millionth of the mesh's size is far below any concavity that
+    // changes which objects touch.
+    const double tol = 1e-6 * (hi - lo).norm();
+    // Only the vertices that can be in front of a plane matter: those of the
+    // hull. Bullet's optimizeConvexHull keeps exactly those.
+    btConvexHullShape hull;
+    for (const auto& v : m.verts) hull.addPoint(btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())), false);
+    hull.optimizeConvexHull();
+    std::vector<Eigen::Vector3d> hv;
+    hv.reserve(std::size_t(hull.getNumPoints()));
+    for (int k = 0; k < hull.getNumPoints(); ++k) {
+        const btVector3& p = hull.getUnscaledPoints()[k];
+        hv.emplace_back(double(p.x()), double(p.y()), double(p.z()));
+    }
+    // The hull is single precision: a vertex off by its rounding is not a concavity.
+    const double tol_f = tol + 1e-6 * std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+    for (const auto& t : m.tris) {
+        const Eigen::Vector3d& a = m.verts[t[0]];
+        const Eigen::Vector3d n = (m.verts[t[1]] - a).cross(m.verts[t[2]] - a);
+        const double len = n.norm();
+        if (len == 0) continue;   // degenerate: no plane
+        const Eigen::Vector3d u = n / len;
+        for (const auto& v : hv)
+            if (u.dot(v - a) > tol_f) return false;
+    }
+    return true;
 }
 
 bool point_in_mesh(const PartMesh& m, const Eigen::Vector3d& p) {

@@ -12,6 +12,7 @@
 #include "rbcd/common/input_file.h"
 #include "rbcd/cpu/cd_input.h"
 #include "rbcd/cpu/cpu_collision.h"
+#include "rbcd/cpu/instruction_count.h"
 #include "rbcd/cpu/pixel_overlap.h"
 #include "rbcd/io/trace_reader.h"
 #include "rbcd/sc_main/output_file.h"
@@ -31,6 +32,7 @@ struct Options {
     bool pixels = false;
     unsigned tolerance = 1;
     bool quiet = false;
+    bool count = false;
 };
 
 std::string fmt(const char* f, double v) {
@@ -50,6 +52,12 @@ int run(const Options& opt) {
     if (opt.repeat < 1 || opt.repeat > kMaxRepeat)
         throw InputError("--repeat: " + std::to_string(opt.repeat) + " is out of range 1.." + std::to_string(kMaxRepeat));
     if (opt.max_pairs < 1) throw InputError("--max-pairs: must be at least 1");
+    // A counted run is the detection alone under callgrind (50 times slower):
+    // its times mean nothing and the exact phase and pixels are left out, so
+    // it writes the frames' counts and nothing that would look like a full run.
+    if (opt.count && (!opt.pairs.empty() || opt.pixels || !opt.write_geometry.empty() || !opt.trace.empty()))
+        throw InputError("command line: --count-instructions writes --frames only (no --pairs, --pixels, --trace, "
+                         "--write-geometry)");
 
     if (!opt.depth_hist.empty() && !opt.pixels) throw InputError("command line: --depth-histogram needs --pixels");
     // Before any output is opened: opening one removes an older file there.
@@ -107,33 +115,48 @@ int run(const Options& opt) {
         for (const auto& p : fx.meshes) note_closed(p);
     }
 
+    DetectorOptions dopt;
+    dopt.exact = !opt.count;
+    std::unique_ptr<CallgrindCounter> counter;
+    if (opt.count) counter = std::make_unique<CallgrindCounter>();
     std::unique_ptr<CpuDetector> whole;   // the parts of the whole run; per-frame inputs get their own
-    if (!in.per_frame()) whole = std::make_unique<CpuDetector>(in);
-    pairs_out.write("frame,id_a,id_b,aabb,gjk,exact,contained,on_screen,contacts,px_overlap,px_near,open\n");
-    frames_out.write("frame,parts,aabb_pairs,gjk_pairs,exact_pairs,broad_us,gjk_us,exact_us,gjk_no_result\n");
-    double sum_broad = 0, sum_gjk = 0, sum_exact = 0;
-    std::uint64_t n_aabb = 0, n_gjk = 0, n_exact = 0;
+    if (!in.per_frame()) whole = std::make_unique<CpuDetector>(in, dopt);
+    pairs_out.write("frame,id_a,id_b,aabb,gjk,exact,contained,on_screen,contacts,px_overlap,px_near,open,world_aabb,"
+                    "world\n");
+    frames_out.write("frame,parts,aabb_pairs,gjk_pairs,exact_pairs,broad_us,gjk_us,exact_us,gjk_no_result,"
+                     "world_aabb_pairs,world_pairs,world_broad_us,world_us,concave_parts,broad_instr,gjk_instr,"
+                     "world_broad_instr,world_instr\n");
+    double sum_broad = 0, sum_gjk = 0, sum_exact = 0, sum_wb = 0, sum_w = 0;
+    std::uint64_t n_aabb = 0, n_gjk = 0, n_exact = 0, n_wa = 0, n_w = 0;
+    std::uint64_t instr[std::size_t(Section::count)] = {};
+    std::size_t concave = whole ? whole->concave_parts() : 0;
     for (std::uint64_t f = 0; f < in.frames(); ++f) {
-        std::size_t frame_parts = in.parts.size();
+        std::size_t frame_parts = in.parts.size(), frame_concave = concave;
         FrameResult r;
         if (whole) {
-            r = whole->run_frame(f, opt.repeat);
+            r = whole->run_frame(f, opt.repeat, counter.get());
         } else {
             const CdInput one = in.frame_input(f);
             frame_parts = one.parts.size();
-            CpuDetector det(one);
-            r = det.run_frame(0, opt.repeat);
+            DetectorOptions fresh = dopt;
+            fresh.fresh = true;
+            CpuDetector det(one, fresh);
+            frame_concave = det.concave_parts();
+            concave = std::max(concave, frame_concave);
+            r = det.run_frame(0, opt.repeat, counter.get());
         }
         std::map<PairKey, PairResult> all;
         for (const auto& p : r.pairs) all[{p.a, p.b}] = p;
         if (opt.pixels)
             for (const auto& [k, c] : px[f])
                 if (!all.count(k)) all[k] = PairResult{k.first, k.second};
-        unsigned na = 0, ng = 0, ne = 0;
+        unsigned na = 0, ng = 0, ne = 0, nwa = 0, nw = 0;
         for (const auto& [k, p] : all) {
             na += p.aabb;
             ng += p.gjk;
             ne += p.exact;
+            nwa += p.world_aabb;
+            nw += p.world;
             PixelCounts c;
             if (opt.pixels)
                 if (auto it = px[f].find(k); it != px[f].end()) c = it->second;
@@ -142,31 +165,52 @@ int run(const Options& opt) {
                             std::to_string(p.contained) + "," + std::to_string(p.on_screen) + "," +
                             std::to_string(p.contacts) + "," + std::to_string(c.overlap) + "," +
                             std::to_string(c.near) + "," + std::to_string(open_ids.count(p.a) || open_ids.count(p.b)) +
-                            "\n");
+                            "," + std::to_string(p.world_aabb) + "," + std::to_string(p.world) + "\n");
+        }
+        // A counted run leaves empty what it did not measure: its times are
+        // valgrind's, and it runs no exact phase.
+        const auto us = [&](double v) { return opt.count ? std::string() : fmt("%.3f", v); };
+        std::string counts;
+        for (std::size_t k = 0; k < std::size_t(Section::count); ++k) {
+            counts += "," + (opt.count ? std::to_string(r.instr[k]) : std::string());
+            instr[k] += r.instr[k];
         }
         frames_out.write(std::to_string(f) + "," + std::to_string(frame_parts) + "," + std::to_string(na) + "," +
-                         std::to_string(ng) + "," + std::to_string(ne) + "," + fmt("%.3f", r.t.broad_us) + "," +
-                         fmt("%.3f", r.t.gjk_us) + "," + fmt("%.3f", r.t.exact_us) + "," +
-                         std::to_string(r.t.gjk_no_result) + "\n");
+                         std::to_string(ng) + "," + (opt.count ? std::string() : std::to_string(ne)) + "," +
+                         us(r.t.broad_us) + "," + us(r.t.gjk_us) + "," + us(r.t.exact_us) + "," +
+                         std::to_string(r.t.gjk_no_result) + "," + std::to_string(nwa) + "," + std::to_string(nw) +
+                         "," + us(r.t.world_broad_us) + "," + us(r.t.world_us) + "," + std::to_string(frame_concave) +
+                         counts + "\n");
         sum_broad += r.t.broad_us;
         sum_gjk += r.t.gjk_us;
         sum_exact += r.t.exact_us;
+        sum_wb += r.t.world_broad_us;
+        sum_w += r.t.world_us;
         n_aabb += na;
         n_gjk += ng;
         n_exact += ne;
+        n_wa += nwa;
+        n_w += nw;
     }
     pairs_out.commit();
     frames_out.commit();
     geo_out.commit();
     hist_out.commit();
     if (!opt.quiet) {
-        const double nf = double(in.frames());
-        std::printf("rbcd-cpucd: %s\n  frames %llu  parts %zu (%zu closed meshes)\n", escape_for_message(in.name).c_str(),
-                    (unsigned long long)in.frames(), parts, closed);
-        std::printf("  pair-frames: aabb %llu  gjk %llu  exact %llu\n", (unsigned long long)n_aabb,
-                    (unsigned long long)n_gjk, (unsigned long long)n_exact);
-        std::printf("  mean time per frame: broad phase %.1f us, broad + GJK %.1f us, exact %.1f us (median of %u repeats)\n",
-                    sum_broad / nf, sum_gjk / nf, sum_exact / nf, opt.repeat);
+        const double nf = double(std::max<std::uint64_t>(in.frames(), 1));
+        std::printf("rbcd-cpucd: %s\n  frames %llu  parts %zu (%zu closed meshes, %zu concave in the world)\n",
+                    escape_for_message(in.name).c_str(), (unsigned long long)in.frames(), parts, closed, concave);
+        std::printf("  pair-frames: aabb %llu  gjk %llu  exact %llu  world aabb %llu  world contact %llu\n",
+                    (unsigned long long)n_aabb, (unsigned long long)n_gjk, (unsigned long long)n_exact,
+                    (unsigned long long)n_wa, (unsigned long long)n_w);
+        if (opt.count)
+            std::printf("  mean instructions per frame: broad phase %.0f, broad + GJK %.0f, world broad phase %.0f, "
+                        "world %.0f\n",
+                        double(instr[0]) / nf, double(instr[1]) / nf, double(instr[2]) / nf, double(instr[3]) / nf);
+        else
+            std::printf("  mean time per frame: broad phase %.1f us, broad + GJK %.1f us, exact %.1f us, world broad "
+                        "phase %.1f us, world %.1f us (median of %u repeats)\n",
+                        sum_broad / nf, sum_gjk / nf, sum_exact / nf, sum_wb / nf, sum_w / nf, opt.repeat);
     }
     return 0;
 }
@@ -184,6 +228,8 @@ int fail(int status, const std::string& msg, const Options& opt) {
 } // namespace
 
 int main(int argc, char* argv[]) {
+    // Before anything allocates through Bullet (docs/cpucd.md, "Counted work").
+    if (rbcd::cpucd::counting_under_callgrind()) rbcd::cpucd::use_deterministic_bullet_heap();
     Options opt;
     CLI::App app{"rbcd-cpucd: CPU collision detection (Bullet broad phase, GJK on hulls, FCL ground truth) per frame"};
     app.add_option("--scene", opt.scene, "scene (TOML): its collisionable objects at each frame");
@@ -200,6 +246,9 @@ int main(int argc, char* argv[]) {
     app.add_option("--depth-histogram", opt.depth_hist, "with --pixels: CSV of pixels by fragments on them (all frames)");
     app.add_option("--depth-tolerance", opt.tolerance, "depth units for --pixels' near overlaps, default 1");
     app.add_flag("-q,--quiet", opt.quiet, "no summary on stdout");
+    app.add_flag("--count-instructions", opt.count,
+                 "run under valgrind's callgrind and write each frame's executed instructions per detector to "
+                 "--frames instead of times (docs/cpucd.md)");
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
@@ -208,6 +257,14 @@ int main(int argc, char* argv[]) {
         return fail(2, std::string(e.what()) + " (see --help)", opt);
     }
     try {
+        // The counting run is this program again, under callgrind.
+        if (opt.count) {
+            // A count is exact: one run of each section, whatever the default repeats.
+            if (app.count("--repeat") && opt.repeat != 1)
+                throw rbcd::InputError("--repeat: a count is exact, --count-instructions takes no repeats");
+            opt.repeat = 1;
+            if (!rbcd::cpucd::counting_under_callgrind()) return rbcd::cpucd::run_under_callgrind(argc, argv);
+        }
         return run(opt);
     } catch (const rbcd::InputError& e) {
         return fail(2, e.what(), opt);

@@ -26,14 +26,9 @@ import tomllib
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from rbcd_cli import main_wrapper, say  # noqa: E402  (one-line messages, no tracebacks)
 
-# ---- The CPU model of Figure 8 (docs/results.md, "CPU energy model").
-# The paper's CPU (Table 2): 2 cores at 1.5 GHz, 32 nm, 1 V. Collision
-# detection runs on one core; the time measured here is scaled by the clock
-# ratio (same cycle count per detection: stated, not measured) and multiplied
-# by the power of one active core plus the idle one's leakage.
-PAPER_CPU_GHZ = 1.5
-CPU_ACTIVE_CORE_W = 0.8
-CPU_IDLE_CORE_W = 0.1
+# The CPU model of Figure 8 (instructions to time and energy, each constant
+# with its source) is scripts/cpu_model.py.
+import cpu_model  # noqa: E402
 
 PAPER = {
     "table3": {4: 3.68, 8: 0.08, 16: 0.0},
@@ -544,74 +539,109 @@ def host_ghz():
     return None
 
 
+# The CPU versions of Figure 8 (docs/cpucd.md): rbcd-cpucd's column stem, the
+# label, and the paper's figure it stands beside (broad phase or broad + GJK).
+FIG8_VERSIONS = [("broad", "(a) bare broad phase", "broad"), ("world_broad", "(d) world, broad phase", "broad"),
+                 ("gjk", "(b) bare broad + GJK", "gjk"), ("world", "(e) world, broad + narrow", "gjk")]
+
+
+def g3(v):
+    """Three significant digits, without an exponent from 1000 up (186000, not 1.86e+05)."""
+    return f"{v:.0f}" if abs(v) >= 1000 else f"{v:.3g}"
+
+
 def target_fig8(out, scenes):
-    ghz = host_ghz() or PAPER_CPU_GHZ
-    scale = ghz / PAPER_CPU_GHZ
-    power = CPU_ACTIVE_CORE_W + CPU_IDLE_CORE_W
-    rows, ratios = [], {k: [] for k in PAPER["fig8"]}
+    """Speed-up and energy reduction (the paper's equations 1 and 2) per CPU
+    version, the CPU side from counted instructions through cpu_model (the
+    same on any machine), the host's wall-clock time beside it in the CSV."""
+    ghz = host_ghz()
+    rows, md_rows, ratios = [], [], {}
     fallback = False
-    # The GPU side: Figure 9's runs (one ZEB and two, M = 8).
     sw, _ = sweep_rows(out, "fig9", "zeb.banks", scenes)
     for s in scenes:
-        fr = read_csv(run(out, s, "cpucd_frames.csv"))
-        t_host = {"broad": sum(float(r["broad_us"]) for r in fr) * 1e-6,
-                  "gjk": sum(float(r["gjk_us"]) for r in fr) * 1e-6}
+        counted = read_csv(run(out, s, "cpucd_counts.csv"))
+        timed = read_csv(run(out, s, "cpucd_frames.csv"))
+        nf = len(counted)
+        if nf == 0 or len(timed) != nf:
+            raise InputMissing(f"{run(out, s, 'cpucd_counts.csv')}: {nf} frames counted, {len(timed)} timed")
+        instr, host_ms = {}, {}
+        for col, _, _ in FIG8_VERSIONS:
+            try:
+                instr[col] = sum(int(r[f"{col}_instr"]) for r in counted) / nf
+                host_ms[col] = sum(float(r[f"{col}_us"]) for r in timed) / nf * 1e-3
+            except (KeyError, ValueError):
+                raise InputMissing(f"{run(out, s, 'cpucd_counts.csv')}: no {col}_instr counts "
+                                   "(rbcd-cpucd --count-instructions)") from None
         for banks in (1, 2):
             r = sw[(s, banks)]
+            # Per frame: the GPU run and rbcd-cpucd cover the same frames.
             t_gpu = (value(r, "gpu.cycles_with_unit") - value(r, "gpu.baseline_cycles")) / \
-                (value(r, "config.clock.mhz") * 1e6)
+                (value(r, "config.clock.mhz") * 1e6) / nf
             with_pj, base_pj = value(r, "energy.gpu.with_unit_pj"), value(r, "energy.gpu.baseline_pj")
             if with_pj is not None and base_pj is not None:
-                e_gpu = (float(with_pj) - float(base_pj)) * 1e-12
+                e_gpu = (float(with_pj) - float(base_pj)) * 1e-12 / nf
             else:
-                e_gpu = value(r, "energy.total_pj") * 1e-12
+                e_gpu = value(r, "energy.total_pj") * 1e-12 / nf
                 fallback = True
-            for kind in ("broad", "gjk"):
-                t_cpu = t_host[kind] * scale
-                e_cpu = t_cpu * power
+            for col, label, paper_kind in FIG8_VERSIONS:
+                t_cpu = cpu_model.seconds(instr[col])
+                e_cpu = cpu_model.joules(instr[col])
                 sp = t_cpu / t_gpu if t_gpu > 0 else math.inf
                 er = e_cpu / e_gpu if e_gpu > 0 else math.inf
-                ratios[(kind, banks)].append((sp, er))
-                rows.append([s, kind, banks, f"{t_host[kind] * 1e3:.3f}", f"{t_cpu * 1e3:.3f}", f"{t_gpu * 1e3:.4f}",
-                             sig(sp), f"{e_cpu * 1e3:.4f}", f"{e_gpu * 1e3:.5f}", sig(er)])
-    header = ["scene", "cpu version", "ZEBs", "host CPU ms", "paper CPU ms (scaled)", "extra GPU ms",
-              "speed-up", "CPU mJ (model)", "extra GPU mJ", "energy reduction"]
-    write_csv(os.path.join(out, "fig8.csv"), header, rows)
+                paper_sp, paper_er = PAPER["fig8"][(paper_kind, banks)]
+                implied_ms = paper_sp * t_gpu * 1e3
+                ratios.setdefault((col, banks), []).append((sp, er, implied_ms, instr[col]))
+                host_cpi = host_ms[col] * 1e-3 * ghz * 1e9 / instr[col] if ghz and instr[col] else None
+                common = [s, label, banks, f"{instr[col]:.0f}", g3(t_cpu * 1e3)]
+                tail = [g3(t_gpu * 1e3), sig(sp), g3(e_cpu * 1e6), g3(e_gpu * 1e6), sig(er),
+                        g3(implied_ms)]
+                rows.append(common + [g3(host_ms[col]), fmt(host_cpi)] + tail)
+                md_rows.append(common + tail)
+    host_cols = ["host CPU ms/frame (wall clock)", "host cycles per instruction"]
+    head = ["scene", "CPU version", "ZEBs", "instructions/frame", "modelled CPU ms/frame"]
+    tail = ["extra GPU ms/frame", "speed-up", "modelled CPU uJ/frame", "extra GPU uJ/frame", "energy reduction",
+            "CPU ms/frame the paper's speed-up implies"]
+    write_csv(os.path.join(out, "fig8.csv"), head + host_cols + tail, rows)
 
     def gmean(v):
         v = [x for x in v if x > 0 and not math.isinf(x)]
         return math.exp(sum(math.log(x) for x in v) / len(v)) if v else math.inf
     summary = []
-    for (kind, banks), paper in PAPER["fig8"].items():
-        sp = gmean([r[0] for r in ratios[(kind, banks)]])
-        er = gmean([r[1] for r in ratios[(kind, banks)]])
-        summary.append([{"broad": "(a) broad phase", "gjk": "(b) broad + GJK"}[kind], banks, sig(sp), paper[0],
-                        sig(er), paper[1]])
-    sh = ["CPU version", "ZEBs", "speed-up (geo. mean)", "paper speed-up", "energy reduction (geo. mean)",
-          "paper energy reduction"]
+    for banks in (1, 2):
+        for col, label, paper_kind in FIG8_VERSIONS:
+            rs = ratios[(col, banks)]
+            paper_sp, paper_er = PAPER["fig8"][(paper_kind, banks)]
+            summary.append([label, banks, f"{gmean([r[3] for r in rs]):.0f}",
+                            g3(cpu_model.seconds(gmean([r[3] for r in rs])) * 1e3),
+                            sig(gmean([r[0] for r in rs])), paper_sp, sig(gmean([r[1] for r in rs])), paper_er,
+                            g3(gmean([r[2] for r in rs]))])
+    sh = ["CPU version", "ZEBs", "instructions/frame (geo. mean)", "modelled CPU ms/frame", "speed-up (geo. mean)",
+          "paper speed-up", "energy reduction (geo. mean)", "paper energy reduction",
+          "CPU ms/frame the paper's speed-up implies (geo. mean)"]
     write_csv(os.path.join(out, "fig8_summary.csv"), sh, summary)
     with open(os.path.join(out, "fig8.md"), "w") as f:
         f.write(md_table(sh, summary))
-        f.write(f"\nHost: {ghz:.2f} GHz; CPU times scaled by {scale:.2f} to the paper's 1.5 GHz CPU; "
-                f"CPU power {power:.2f} W (one active core {CPU_ACTIVE_CORE_W} W + one idle {CPU_IDLE_CORE_W} W).\n")
+        f.write(f"\n{cpu_model.describe()}; instructions counted by callgrind (rbcd-cpucd --count-instructions), "
+                "the same on any machine for the same build. Host wall-clock times: fig8.csv.\n")
         if fallback:
             f.write("GPU energy: this build has no energy.gpu.with_unit_pj / baseline_pj; the unit's own energy "
                     "(energy.total_pj) stands for the extra GPU energy, so the energy ratios are upper bounds.\n")
-        f.write("\nPer scene:\n\n" + md_table(header, rows))
+        f.write("\nPer scene:\n\n" + md_table(head + tail, md_rows))
     plt = plot()
-    fig, axes = plt.subplots(1, 2, figsize=(8, 3))
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.2))
     for ax, idx, title in ((axes[0], 0, "speed-up"), (axes[1], 1, "energy reduction")):
         labels, vals, pap = [], [], []
-        for (kind, banks), paper in PAPER["fig8"].items():
-            labels.append(f"{kind}\n{banks} ZEB")
-            vals.append(gmean([r[idx] for r in ratios[(kind, banks)]]))
-            pap.append(paper[idx])
+        for banks in (1, 2):
+            for col, label, paper_kind in FIG8_VERSIONS:
+                labels.append(f"{label.split(' ', 1)[0]}\n{banks} ZEB")
+                vals.append(gmean([r[idx] for r in ratios[(col, banks)]]))
+                pap.append(PAPER["fig8"][(paper_kind, banks)][idx])
         x = range(len(labels))
-        ax.bar([i - 0.2 for i in x], [v if not math.isinf(v) else 0 for v in vals], 0.4, label="this model")
+        ax.bar([i - 0.2 for i in x], [v if not math.isinf(v) else 0 for v in vals], 0.4, label="this model (counted)")
         ax.bar([i + 0.2 for i in x], pap, 0.4, label="paper")
         ax.set_yscale("log")
-        ax.set_xticks(list(x), labels, fontsize=7)
-        ax.set_title(title, fontsize=9)
+        ax.set_xticks(list(x), labels, fontsize=6)
+        ax.set_title(title + ": (a) bare broad, (d) world broad, (b) bare GJK, (e) world full", fontsize=8)
         ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "fig8.png"), dpi=80)

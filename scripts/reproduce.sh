@@ -115,13 +115,13 @@ declare -A cfg=(
   [m8t2]="tester.stack_depth=2 tester.output=tile"
   [m64]="zeb.list_length=64 tester.output=tile" [m64t2]="zeb.list_length=64 tester.stack_depth=2 tester.output=tile"
   [m64t64]="zeb.list_length=64 tester.stack_depth=64 tester.output=tile")
-needed_cfgs=() needed_sweeps=() need_cpucd=0 need_images=0
+needed_cfgs=() needed_sweeps=() need_cpucd=0 need_images=0 need_count=0
 for t in "${targets[@]}"; do
   case $t in
     workloads) needed_sweeps+=(fig9); need_cpucd=1; need_images=1 ;;
     table3) needed_sweeps+=(table3) ;;
     fig9) needed_sweeps+=(fig9) ;;
-    fig8) needed_sweeps+=(fig9); need_cpucd=1 ;;
+    fig8) needed_sweeps+=(fig9); need_cpucd=1 need_count=1 ;;
     accuracy) needed_sweeps+=(table3); needed_cfgs+=(m8t2 m64 m64t2 m64t64); need_cpucd=1 ;;
   esac
 done
@@ -132,6 +132,15 @@ if ((need_cpucd && !have_cpucd)); then
   targets=("${kept[@]}")
   need_cpucd=0 need_images=0 needed_cfgs=() needed_sweeps=()
   for t in "${targets[@]}"; do needed_sweeps+=("$t"); done   # what is left: table3, fig9
+fi
+# fig8's CPU side is counted under valgrind (docs/results.md, "CPU model").
+if ((need_count)) && [[ " ${targets[*]} " == *" fig8 "* ]] && ! command -v valgrind >/dev/null; then
+  echo "reproduce.sh: valgrind not found (Debian's valgrind: scripts/setup.sh --eval): skipping fig8" >&2
+  kept=()
+  for t in "${targets[@]}"; do [[ $t == fig8 ]] || kept+=("$t"); done
+  targets=("${kept[@]}")
+  need_count=0
+  ((${#targets[@]})) || exit 0
 fi
 mapfile -t needed_cfgs < <(printf '%s\n' "${needed_cfgs[@]}" | sed '/^$/d' | sort -u)
 # table3 first: fig9 then finds its M = 8 runs done (with the collisions files table3 keeps).
@@ -215,6 +224,28 @@ if ((need_cpucd)); then
       --frames "$out/runs/$name/cpucd_frames.csv" --depth-histogram "$out/runs/$name/depth_hist.csv"
   done
   echo >&2
+fi
+
+# ---- fig8: each scene's detection counted in instructions (rbcd-cpucd
+# --count-instructions, under callgrind, about 50 times slower than timed; a
+# count does not depend on what else runs, so $jobs at a time). cpucd_count
+# NAME INPUT-OPTIONS... writes OUT/runs/NAME/cpucd_counts.csv.
+cpucd_count() {
+  local name=$1; shift
+  "$cpucd" "$@" --count-instructions -q --frames "$out/runs/$name/cpucd_counts.csv" 2> "$out/runs/$name/count.err" ||
+    { echo; echo "reproduce.sh: rbcd-cpucd --count-instructions failed on $name:" >&2; cat "$out/runs/$name/count.err" >&2; return 1; }
+}
+if ((need_count)); then
+  k=0 failed=0
+  for s in "${scenes[@]}"; do
+    while (($(jobs -rp | wc -l) >= jobs)); do wait -n || failed=1; done
+    k=$((k + 1))
+    progress "rbcd-cpucd --count-instructions" "$k" "${#scenes[@]}" "$(basename "$s" .toml)"
+    cpucd_count "$(basename "$s" .toml)" --scene "$s" &
+  done
+  while (($(jobs -rp | wc -l))); do wait -n || failed=1; done
+  echo >&2
+  ((failed)) && exit 1
 fi
 
 /usr/bin/python3 "$root/scripts/evaluate.py" --out "$out" "${targets[@]}"

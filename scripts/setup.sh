@@ -9,7 +9,8 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #   --slurm  slurm-wlm and munge, for the SLURM sweep backend's test (docs/sweeps.md)
 #   --plots  python3-matplotlib for scripts/rbcd-plot (gnuplot-nox also does)
 #   --eval   libbullet-dev and libfcl-dev (rbcd-cpucd), assimp-testmodels (the meshes
-#            of workloads/) and python3-matplotlib, for scripts/reproduce.sh
+#            of workloads/), python3-matplotlib, and valgrind (rbcd-cpucd
+#            --count-instructions: Figure 8's counted CPU side), for scripts/reproduce.sh
 #   --fuzz   clang-14, libclang-rt-14-dev (libFuzzer) and assimp-testmodels (mesh
 #            seeds), for scripts/fuzz.sh
 #   --gl     apitrace, Xvfb and Mesa (llvmpipe) to capture OpenGL programs, numpy for
@@ -30,7 +31,7 @@ for opt in "$@"; do
     --list) list=yes ;;
     --slurm) pkgs+=(slurm-wlm munge) ;;
     --plots) pkgs+=(python3-matplotlib) ;;
-    --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib) ;;
+    --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib valgrind) ;;
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
     --gl) pkgs+=(apitrace xvfb xauth libgl1-mesa-dri libglx-mesa0 libgl-dev libx11-dev python3-numpy) ;;
     --waves) pkgs+=(verilator gtkwave libsqlite3-dev) ;;

@@ -5,10 +5,12 @@
 #include <Eigen/Geometry>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 
 #include "rbcd/common/errors.h"
 #include "rbcd/cpu/cd_input.h"
 #include "rbcd/cpu/cpu_collision.h"
+#include "rbcd/cpu/instruction_count.h"
 #include "rbcd/cpu/pixel_overlap.h"
 #include "rbcd/scene/mesh.h"
 
@@ -116,6 +118,121 @@ TEST_CASE("parts sharing an id are one object", "[cpucd]") {
     in.parts[1].id = 1;
     CpuDetector d(in);
     CHECK(d.run_frame(0, 1).pairs.empty());
+}
+
+// The collision world, (d) and (e), against the bare queries (a) and (b) on
+// the analytic cases: (d) is (a); (e) is (b) where both shapes are convex,
+// and where one is concave (the ring, GImpact) it follows the surfaces, as
+// the ground truth does.
+TEST_CASE("collision world: the bare queries' pairs on the analytic cases", "[cpucd][world]") {
+    struct Case {
+        const char* what;
+        CdInput in;
+        bool world;   // expected (e)
+    };
+    const Case cases[] = {
+        {"apart", two(shape("sphere"), place({-1.5, 0, 0}), shape("sphere"), place({1.5, 0, 0})), false},
+        {"touching", two(shape("sphere"), place({-0.99, 0, 0}), shape("sphere"), place({0.99, 0, 0})), true},
+        {"contained", two(shape("sphere"), place({0, 0, 0}, {2, 2, 2}), shape("sphere"), place({0.3, 0.2, 0}, {0.4, 0.4, 0.4})),
+         true},
+        {"boxes overlapping, scaled", two(shape("box"), place({0, 0, 0}, {2, 1, 1}), shape("box"), place({1.9, 0.5, 0})), true},
+        {"spheres whose boxes overlap", two(shape("sphere"), place({0, 0, 0}), shape("sphere"), place({1.6, 1.6, 0})), false},
+        {"rod through a ring", two(shape("torus"), place({0, 0, 0}), shape("cylinder", 16), place({0, 0, 0}, {0.2, 1.5, 0.2})),
+         false},
+    };
+    // Fresh (a format-2 frame: every section from an empty broad phase and
+    // world, repeated) or incremental: the same pairs.
+    for (const bool fresh : {false, true})
+    for (const Case& c : cases) {
+        INFO(c.what << (fresh ? ", fresh" : ""));
+        DetectorOptions opt;
+        opt.fresh = fresh;
+        CpuDetector d(c.in, opt);
+        const FrameResult r = d.run_frame(0, fresh ? 3 : 1);
+        REQUIRE(r.pairs.size() <= 1);
+        const PairResult p = r.pairs.empty() ? PairResult{1, 2} : r.pairs[0];
+        CHECK(p.world_aabb == p.aabb);
+        CHECK(p.world == c.world);
+        if (d.concave_parts() == 0) CHECK(p.world == p.gjk);
+        else CHECK(p.world == p.exact);
+    }
+}
+
+TEST_CASE("collision world: parts of one object never pair, over moving frames", "[cpucd][world]") {
+    CdInput in = two(shape("sphere"), place({-0.5, 0, 0}), shape("sphere"), place({0.5, 0, 0}));
+    in.parts.push_back(Part{2, "c", shape("sphere")});
+    in.model[0].push_back(place({3, 0, 0}));
+    in.parts[1].id = 1;   // a and b: one object; c approaches it
+    for (double x : {2.0, 1.2, 0.8}) in.model.push_back({place({-0.5, 0, 0}), place({0.5, 0, 0}), place({x, 0, 0})});
+    CpuDetector d(in);
+    for (std::uint64_t f = 0; f < in.frames(); ++f) {
+        const FrameResult r = d.run_frame(f, 2);
+        for (const PairResult& p : r.pairs) {
+            CHECK(p.a != p.b);
+            CHECK(p.world_aabb == p.aabb);
+            CHECK(p.world == p.gjk);
+        }
+        if (f == 3) CHECK(r.pairs.size() == 1);   // c at 0.8 overlaps b (0.5), the one object's pair
+    }
+}
+
+TEST_CASE("convexity: a game's choice of shape", "[cpucd][world]") {
+    CHECK(is_convex(*shape("sphere")));
+    CHECK(is_convex(*shape("box")));
+    CHECK(is_convex(*shape("cylinder", 16)));
+    CHECK_FALSE(is_convex(*shape("torus")));
+}
+
+// A callgrind dump as `valgrind --tool=callgrind --compress-strings=no
+// --compress-pos=no` writes it: 1000 instructions in all, of which main's
+// calls to malloc (120, with _int_malloc inside) and operator new (75, calling
+// malloc: counted once) are the allocator's: 1000 - 195 = 805 counted.
+TEST_CASE("callgrind dump: the total less the allocator's inclusive cost", "[cpucd][count]") {
+    std::istringstream dump(R"(# callgrind format
+version: 1
+positions: line
+events: Ir
+summary: 1000
+
+ob=libc.so.6
+fn=_int_malloc
+10 80
+
+fn=malloc
+5 40
+cfn=_int_malloc
+calls=2 10
+5 80
+
+fn=operator new(unsigned long)
+3 25
+cfn=malloc
+calls=1 5
+3 50
+
+ob=build/bin/program
+fn=main
+1 600
+cfn=malloc
+calls=3 5
+2 120
+cfn=operator new(unsigned long)
+calls=1 3
+4 75
+cfn=btDbvt::update(btDbvtNode*, int)
+calls=2 0
+5 130
+fn=btDbvt::update(btDbvtNode*, int)
+0 130
+
+totals: 1000
+)");
+    const CallgrindCounts c = parse_callgrind_dump(dump);
+    CHECK(c.has_total);
+    CHECK(c.total == 1000);
+    CHECK(c.allocator == 195);
+    CHECK(is_allocator_function("operator delete(void*, unsigned long)"));
+    CHECK_FALSE(is_allocator_function("btAlignedAllocInternal(unsigned long, int)"));
 }
 
 TEST_CASE("a pair with an open mesh is flagged open", "[cpucd]") {
