@@ -22,14 +22,16 @@
 # then each target runs what it needs: the sweeps workloads/sweeps/table3.toml
 # (table3, accuracy) and fig9.toml (fig9, fig8, workloads) by scripts/rbcd-sweep
 # into OUT/sweep/, the accuracy's other rbcd-sim runs, rbcd-cpucd once per
-# scene, timed alone; then scripts/evaluate.py writes OUT/TARGET.csv, .png and
-# .md. Targets needing rbcd-cpucd are skipped with a message when it was not
-# built (Bullet or FCL missing).
+# input for the ground truth (timed alone, the host figures), and for fig8 once
+# more under callgrind (--count-instructions: the counted CPU side, $jobs at a
+# time); then scripts/evaluate.py writes OUT/TARGET.csv, .png and .md. Targets
+# needing rbcd-cpucd are skipped with a message when it was not built (Bullet
+# or FCL missing); fig8 also needs valgrind.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=results workloads=$root/workloads build=$root/build repeat=5 jobs=$(nproc) do_build=1 update_docs=0
 targets=()
-usage() { sed -n '2,27p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,29p' "$0" | sed 's/^# \{0,1\}//'; }
 games=0 game_entries=()
 while (($#)); do
   case $1 in
@@ -240,8 +242,13 @@ if ((need_count)); then
   for s in "${scenes[@]}"; do
     while (($(jobs -rp | wc -l) >= jobs)); do wait -n || failed=1; done
     k=$((k + 1))
-    progress "rbcd-cpucd --count-instructions" "$k" "${#scenes[@]}" "$(basename "$s" .toml)"
-    cpucd_count "$(basename "$s" .toml)" --scene "$s" &
+    name=$(input_name "$s")
+    progress "rbcd-cpucd --count-instructions" "$k" "${#scenes[@]}" "$name"
+    if is_trace "$s"; then
+      cpucd_count "$name" --geometry "${s%.rbt.gz}.geo" &
+    else
+      cpucd_count "$name" --scene "$s" &
+    fi
   done
   while (($(jobs -rp | wc -l))); do wait -n || failed=1; done
   echo >&2
