@@ -89,6 +89,12 @@ case $what in
     case $what in
       workloads|fig8|accuracy) [ -x "$build/bin/rbcd-cpucd" ] || skip "rbcd-cpucd not built (scripts/setup.sh --eval)" ;;
     esac
+    if [ "$what" = fig8 ]; then
+      # fig8 counts instructions under valgrind, which cannot run ASan's binaries.
+      command -v valgrind >/dev/null || skip "valgrind missing (scripts/setup.sh --eval): fig8 counts under it"
+      ! grep -q '^RBCD_SANITIZE:BOOL=ON' "$build/CMakeCache.txt" 2>/dev/null ||
+        skip "sanitizer build: valgrind cannot run it, fig8 skipped"
+    fi
     /usr/bin/python3 "$src/scripts/game-suite" expand -o "$tmp/in" --frames 3 "$entry" >/dev/null ||
       fail "expand failed"
     "$src/scripts/reproduce.sh" --no-build --build "$build" --workloads "$tmp/in" --out "$tmp/out" \
