@@ -179,6 +179,12 @@ if [ "$keep" = yes ]; then
   cp "$work/capture.trace" "$work/entry/capture.trace"
   mv "$work/trace.rbt.gz" "$work/geometry.geo" "$work/entry/"
 fi
-mv "$work/entry" "$out.tmp.$$"
-mv -T "$out.tmp.$$" "$out"
+# Beside OUT_DIR under an unpredictable name (no planted link to follow),
+# then renamed into place complete.
+staged=$(mktemp -d "$(dirname "$out")/.$(basename "$out").XXXXXXXX")
+trap 'rm -rf "$work" "$staged"' EXIT
+chmod "$(printf '%o' $((0777 & ~0$(umask))))" "$staged"   # mktemp's 0700, made what mkdir would
+mv "$work/entry"/* "$staged"/
+mv -T "$staged" "$out"
+staged=
 echo "capture-game.sh: wrote $out ($(du -sh "$out" | cut -f1))" >&2
