@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <future>
 #include <memory>
 #include <systemc>
 #include <sys/stat.h>
@@ -187,8 +188,13 @@ int run(Options opt) {
     else prov_inputs.push_back({"scene", opt.scene});
     if (scene_src)
         for (const auto& m : scene_src->mesh_files()) prov_inputs.push_back({"mesh", m});
-    const nlohmann::json provenance =
-        stats_out.active() || db ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
+    // With a second core to use, the hashing (a trace's every byte) runs beside
+    // the simulation instead of before it; the database records it up front.
+    nlohmann::json provenance;
+    std::future<nlohmann::json> provenance_job;
+    if (db || (stats_out.active() && opt.threads == 1)) provenance = make_provenance(opt.argv, cfg, prov_inputs);
+    else if (stats_out.active())
+        provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, prov_inputs); });
     if (db) {
         db->run_fact("input", input_name);
         db->run_fact("config", dump_config_toml(cfg));
@@ -292,6 +298,7 @@ int run(Options opt) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
+    if (provenance_job.valid()) provenance = provenance_job.get();
     if (stats_out.active()) stats["provenance"] = provenance;
     if (file_sink) {
         file_sink->finish();
