@@ -119,6 +119,7 @@ struct TraceReader::Impl {
     char* data_end = nullptr;
     bool eof = false;
     unsigned long long line = 1;   // number of the line at cur
+    std::uint64_t pulled = 0;      // bytes of data read from the stream (data_end's position)
 
     std::uint64_t depth_max = 0, id_max = 0;
     std::uint64_t cols = 0, rows = 0;
@@ -229,6 +230,7 @@ bool TraceReader::Impl::fill() {
         }
         char* fresh = data_end;
         data_end += n;
+        pulled += static_cast<std::uint64_t>(n);
         if (const void* nl = memrchr(fresh, '\n', static_cast<std::size_t>(n))) {
             lines_end = static_cast<char*>(const_cast<void*>(nl)) + 1;
             return true;
@@ -570,6 +572,23 @@ TraceReader::TraceReader(const std::string& path, const TraceLimits& limits) : i
 }
 
 TraceReader::~TraceReader() = default;
+
+void TraceReader::start_at_frame(std::uint64_t frame, std::uint64_t offset, std::uint64_t line) {
+    Impl& m = *impl_;
+    const std::uint64_t at = m.pulled - static_cast<std::uint64_t>(m.data_end - m.cur);
+    if (m.seen_frame || offset < at) throw std::logic_error("TraceReader::start_at_frame: not ahead of the reader");
+    if (offset - at <= static_cast<std::uint64_t>(m.data_end - m.cur)) {
+        m.cur += offset - at;
+        if (m.cur > m.lines_end) m.lines_end = m.cur;   // fill() reads the rest of the line
+    } else {
+        const long long got = m.in->skip(offset - m.pulled);
+        if (got < 0) m.fail(m.in->error());
+        m.pulled += static_cast<std::uint64_t>(got);
+        m.cur = m.lines_end = m.data_end = m.buf.data();
+    }
+    m.line = line;
+    m.next_frame = frame;
+}
 
 const StreamHeader& TraceReader::header() const { return impl_->hdr; }
 
