@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <future>
 #include <memory>
 #include <thread>
@@ -161,6 +162,29 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     if (stats_out.active()) {
         stats_out.write(stats.dump(2) + "\n");
         stats_out.commit();
+    }
+    if (!opt.quiet) {
+        // The summary's frame rows from the workers' per-frame lines.
+        SummaryFrames sf;
+        sf.totals = snapshot_totals(all);
+        sf.frames = all.frames.frames;
+        sf.mean_overhead_pct = all.frames.mean_overhead_pct();
+        const bool worst = all.frames.has_worst;
+        for (const PartFiles& p : files) {
+            const bool has_worst = worst && all.frames.worst_frame >= p.first_frame &&
+                                   all.frames.worst_frame - p.first_frame < p.frames;
+            if (sf.first.size() >= RunReport::kFirstFrames && !has_worst) continue;
+            std::ifstream in(p.frame_stats);
+            std::string line;
+            while (std::getline(in, line)) {
+                nlohmann::json f = nlohmann::json::parse(line);
+                const std::uint64_t n = f.value("frame", std::uint64_t(0));
+                if (has_worst && n == all.frames.worst_frame) sf.worst = f;
+                if (sf.first.size() < RunReport::kFirstFrames) sf.first.push_back(std::move(f));
+                else if (!has_worst || n >= all.frames.worst_frame) break;
+            }
+        }
+        std::fputs(make_summary(stats, sf).c_str(), stdout);
     }
     return true;
 }
