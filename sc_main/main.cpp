@@ -152,7 +152,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     if (all.counters.raster.fragments + all.counters.raster.other_fragments == 0 &&
         opt.trace.empty())
         return false;
-    if (collisions_out.active()) copy_part_collisions(files, collisions_out);
+    if (collisions_out.active()) copy_own_part_collisions(files, collisions_out);
     if (frame_stats_out.active()) copy_part_frame_stats(files, frame_stats_out);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     nlohmann::json stats = make_stats(all, wall);

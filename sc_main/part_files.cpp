@@ -89,6 +89,36 @@ void copy_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out) 
     out.write(buf);
 }
 
+void copy_own_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out) {
+    const std::string magic(kCollisionsMagic);
+    out.write(magic);
+    std::vector<char> buf(std::size_t(1) << 20);
+    for (const auto& p : parts) {
+        const int fd = open_input(p.collisions, "collisions file");
+        struct Closer {
+            int fd;
+            ~Closer() { ::close(fd); }
+        } closer{fd};
+        std::size_t skip = magic.size();   // the part's own magic line
+        bool checked = false;
+        for (;;) {
+            const ssize_t got = ::read(fd, buf.data(), buf.size());
+            if (got < 0 && errno == EINTR) continue;
+            if (got < 0) throw RunError(cannot_read_message(p.collisions, "collisions file", std::strerror(errno)));
+            if (got == 0) break;
+            std::size_t at = 0;
+            if (!checked) {
+                if (std::size_t(got) < magic.size() || std::memcmp(buf.data(), magic.data(), magic.size()) != 0)
+                    throw RunError(p.collisions + ": a worker's collisions file does not start with its magic line");
+                checked = true;
+                at = skip;
+            }
+            out.write(buf.data() + at, std::size_t(got) - at);
+        }
+        if (!checked) throw RunError(p.collisions + ": a worker's collisions file is empty");
+    }
+}
+
 // The parts' per-frame lines, their cycles counted from the whole run's start;
 // each part's lines must be its frames, in order.
 void copy_part_frame_stats(const std::vector<PartFiles>& parts, OutputFile& out) {

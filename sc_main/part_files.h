@@ -20,6 +20,10 @@ struct PartFiles {
 
 // The magic line once, then every part's records in order.
 void copy_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out);
+// The same for files this process's own workers just wrote (rbcd-sim --jobs,
+// in its private directory): copied in blocks, not read line by line, the
+// magic line checked and written once. Throws RunError on a read error.
+void copy_own_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out);
 // Every part's lines, their start_cycle and end_cycle counted from the first part's start.
 void copy_part_frame_stats(const std::vector<PartFiles>& parts, OutputFile& out);
 
