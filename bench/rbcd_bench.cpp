@@ -142,7 +142,8 @@ int sc_main(int argc, char* argv[]) {
     // fragments, collisionable and other, from the stats) and 600 frames.
     {
         const std::string t600 = dir + "/rbcd-bench-600.rbt";
-        if (run_child({gen, t600, std::to_string(2 * fragments), "600"}).status != 0) {
+        // The busy trace's density (about ten occupied tiles a frame), over 600 frames.
+        if (run_child({gen, t600, std::to_string(2 * fragments), "600", "--tiles", "10"}).status != 0) {
             std::fprintf(stderr, "rbcd-bench: trace generation failed\n");
             return 1;
         }
