@@ -158,12 +158,12 @@ void Workers::wait() {
     }
 }
 
-TempDirectory::TempDirectory() {
-    std::string tmpl = (std::filesystem::temp_directory_path() / "rbcd-sim-jobs.XXXXXX").string();
+TempDirectory::TempDirectory(const std::string& parent) {
+    std::string tmpl = (std::filesystem::path(parent) / ".rbcd-sim-jobs.XXXXXX").string();
     std::vector<char> b(tmpl.begin(), tmpl.end());
     b.push_back('\0');
-    if (!::mkdtemp(b.data())) throw RunError("--jobs: cannot create a temporary directory in " +
-                                             std::filesystem::temp_directory_path().string() + ": " + std::strerror(errno));
+    if (!::mkdtemp(b.data()))
+        throw RunError("--jobs: cannot create the workers' directory in " + parent + ": " + std::strerror(errno));
     dir_ = b.data();
 }
 

@@ -61,10 +61,13 @@ private:
     bool waited_ = false;
 };
 
-// A private temporary directory (mkdtemp under TMPDIR), removed with what it holds.
+// A private temporary directory (mkdtemp, mode 0700) in `parent`, removed
+// with what it holds. The workers' collision files, as large as the run's,
+// go beside the output they become (the same file system, which must hold
+// them anyway), not into a TMPDIR that may be memory.
 class TempDirectory {
 public:
-    TempDirectory();
+    explicit TempDirectory(const std::string& parent);
     ~TempDirectory();
     TempDirectory(const TempDirectory&) = delete;
     TempDirectory& operator=(const TempDirectory&) = delete;

@@ -115,7 +115,13 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     // A worker reads its trace on one thread unless there are cores to spare.
     const unsigned threads = std::thread::hardware_concurrency() >= 2 * parts.size() ? opt.threads : 1;
     const bool trace = !opt.trace.empty();
-    TempDirectory dir;
+    std::string parent;
+    if (collisions_out.active() && opt.collisions != "-") {
+        std::error_code pe;
+        parent = std::filesystem::absolute(opt.collisions, pe).parent_path().string();
+    }
+    if (parent.empty()) parent = std::filesystem::temp_directory_path().string();
+    TempDirectory dir(parent);
     std::vector<std::vector<std::string>> argvs;
     std::vector<std::string> errs;
     for (std::size_t k = 0; k < parts.size(); ++k) {
