@@ -16,6 +16,7 @@
 #include <stdexcept>
 
 #include "rbcd/common/errors.h"
+#include "rbcd/sc_main/output_file.h"
 
 extern char** environ;
 
@@ -122,6 +123,7 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
         posix_spawn_file_actions_destroy(&fa);
         if (rc != 0) throw RunError("--jobs: cannot start a worker (" + argvs[k][0] + "): " + std::strerror(rc));
         pids_.push_back(pid);
+        stop_on_interrupt(pid);
     }
 }
 
@@ -167,9 +169,19 @@ TempDirectory::TempDirectory(const std::string& parent) {
     dir_ = b.data();
 }
 
+void TempDirectory::will_hold(const std::string& name) {
+    // The handler removes paths in order: the directory must come after its files.
+    if (!held_.empty()) forget_on_interrupt(dir_);
+    held_.push_back(path(name));
+    remove_on_interrupt(held_.back());
+    remove_on_interrupt(dir_);
+}
+
 TempDirectory::~TempDirectory() {
     std::error_code ec;
     std::filesystem::remove_all(dir_, ec);
+    for (const auto& p : held_) forget_on_interrupt(p);
+    forget_on_interrupt(dir_);
 }
 
 } // namespace rbcd

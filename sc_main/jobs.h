@@ -72,9 +72,14 @@ public:
     TempDirectory(const TempDirectory&) = delete;
     TempDirectory& operator=(const TempDirectory&) = delete;
     std::string path(const std::string& name) const { return dir_ + "/" + name; }
+    // The file `name` will be written in it: removed, and the directory with
+    // it, if the run is interrupted (SIGINT, SIGTERM, SIGHUP; output_file.h).
+    // Call before the workers start.
+    void will_hold(const std::string& name);
 
 private:
     std::string dir_;
+    std::vector<std::string> held_;
 };
 
 } // namespace rbcd

@@ -137,6 +137,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         if (collisions_out.active()) a.insert(a.end(), {"--collisions", dir.path(n + ".txt")});
         argvs.push_back(std::move(a));
         errs.push_back(dir.path(n + ".err"));
+        for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
     }
     Workers workers(argvs, errs);
     // The inputs are hashed while the workers run.

@@ -7,7 +7,9 @@
 #include "rbcd/testbench/sim/cli_util.h"
 
 #include <nlohmann/json.hpp>
+#include <chrono>
 #include <regex>
+#include <thread>
 
 using namespace rbcd::cli_test;
 
@@ -189,4 +191,38 @@ TEST_CASE("rbcd-sim --jobs: a scene with nothing in view says so as one process 
     const Result n = run_with_outputs(td, {"-q", "--scene", scene, "--jobs", "2"});
     expect_input_error(td, n, {"nothing in view"});
     CHECK(n.err == one.err);
+}
+
+TEST_CASE("rbcd-sim --jobs: a run stopped by SIGTERM leaves no output, no workers' directory, no workers", "[jobs]") {
+    TempDir td;
+    td.plant_old_outputs();
+    std::vector<std::string> args{RBCD_SIM, "-q", "--jobs", "2", "--collisions", td.collisions(), "--stats", td.stats()};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+    pid_t pid = 0;
+    REQUIRE(posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) == 0);
+    posix_spawn_file_actions_destroy(&fa);
+    // The workers' directory appears beside the collisions just before they start.
+    bool started = false;
+    for (int i = 0; i < 5000 && !started; ++i) {
+        for (const auto& e : td.out_entries()) started = started || e.rfind(".rbcd-sim-jobs.", 0) == 0;
+        if (!started) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    CHECK(started);
+    REQUIRE(kill(pid, SIGTERM) == 0);
+    int st = 0;
+    REQUIRE(waitpid(pid, &st, 0) == pid);
+    CHECK(WIFEXITED(st));
+    CHECK(WEXITSTATUS(st) == 128 + SIGTERM);
+    // Workers still running would write into the directory after this.
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    std::string names;
+    for (const auto& e : td.out_entries()) names += e + " ";
+    INFO("left behind: " << names);
+    CHECK(td.out_entries().empty());
 }
