@@ -33,15 +33,17 @@ bool frame_number(const char* p, const char* end, std::uint64_t& n) {
 
 } // namespace
 
-FrameScan scan_frames(const std::string& path, std::size_t max_marks) {
+FrameScan scan_frames(const std::string& path, std::size_t max_marks, std::size_t chunk) {
     FrameScan out;
     max_marks = std::max<std::size_t>(max_marks, 2);
     try {
-        GzipStream in(open_input(path, "trace", true), std::size_t(1) << 20);
+        const std::size_t step = std::max<std::size_t>(chunk, 16);
+        GzipStream in(open_input(path, "trace", true), step);
         // buf[0] is always the '\n' before the unscanned lines (a virtual one
-        // before the first), so every line start is found as "\nframe".
-        constexpr std::size_t kChunk = std::size_t(1) << 20;
-        std::vector<char> buf(2 * kChunk + 1);
+        // before the first), so every line start is found as "\nframe". A
+        // line longer than a chunk (1 MiB: input.max_line_bytes' default) is
+        // not a trace to split.
+        std::vector<char> buf(2 * step + 1);
         buf[0] = '\n';
         std::size_t have = 1;
         std::int64_t base = -1;      // data offset of buf[0]
@@ -49,8 +51,8 @@ FrameScan scan_frames(const std::string& path, std::size_t max_marks) {
         std::uint64_t stride = 1;    // every stride-th frame line is kept
         bool eof = false;
         while (!eof) {
-            if (buf.size() - have < kChunk) return out;   // a line longer than a chunk: not a trace to split
-            const long n = in.read(buf.data() + have, kChunk);
+            if (buf.size() - have < step) return out;   // a line longer than a chunk: not a trace to split
+            const long n = in.read(buf.data() + have, step);
             if (n < 0) return out;
             eof = n == 0;
             std::size_t end = have + static_cast<std::size_t>(n);

@@ -32,7 +32,8 @@ struct FrameScan {
 };
 
 // Never throws for the file's sake: an unreadable or corrupt file gives ok = false.
-FrameScan scan_frames(const std::string& path, std::size_t max_marks = 4096);
+// chunk: bytes inflated at a time; small values exercise the refills (tests).
+FrameScan scan_frames(const std::string& path, std::size_t max_marks = 4096, std::size_t chunk = std::size_t(1) << 20);
 
 // A plain trace (not gzip, a regular file) needs no pass over all of it: the
 // first frame record at or after each of `targets` (byte offsets), read from
