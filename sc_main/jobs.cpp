@@ -109,6 +109,25 @@ JobPart parse_worker_part(const std::string& text, FrameRange range) {
 
 Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::vector<std::string>& err_paths)
     : err_(err_paths) {
+    // A signal between a worker's start and its registration would leave it
+    // writing after the clean-up: held back until every worker is known; the
+    // workers start with the mask this process had.
+    sigset_t block, old;
+    sigemptyset(&block);
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
+    ::sigprocmask(SIG_BLOCK, &block, &old);
+    struct Restore {
+        sigset_t mask;
+        ~Restore() { ::sigprocmask(SIG_SETMASK, &mask, nullptr); }
+    } restore{old};
+    posix_spawnattr_t attr;
+    posix_spawnattr_init(&attr);
+    posix_spawnattr_setsigmask(&attr, &old);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
+    struct AttrGuard {
+        posix_spawnattr_t* a;
+        ~AttrGuard() { posix_spawnattr_destroy(a); }
+    } attr_guard{&attr};
     for (std::size_t k = 0; k < argvs.size(); ++k) {
         std::vector<char*> argv;
         for (const auto& a : argvs[k]) argv.push_back(const_cast<char*>(a.c_str()));
@@ -119,7 +138,7 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
         posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
         posix_spawn_file_actions_addopen(&fa, 2, err_paths[k].c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
         pid_t pid = 0;
-        const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ);
+        const int rc = posix_spawn(&pid, argv[0], &fa, &attr, argv.data(), environ);
         posix_spawn_file_actions_destroy(&fa);
         if (rc != 0) throw RunError("--jobs: cannot start a worker (" + argvs[k][0] + "): " + std::strerror(rc));
         pids_.push_back(pid);
@@ -164,14 +183,24 @@ TempDirectory::TempDirectory(const std::string& parent) {
     std::string tmpl = (std::filesystem::path(parent) / ".rbcd-sim-jobs.XXXXXX").string();
     std::vector<char> b(tmpl.begin(), tmpl.end());
     b.push_back('\0');
-    if (!::mkdtemp(b.data()))
-        throw RunError("--jobs: cannot create the workers' directory in " + parent + ": " + std::strerror(errno));
-    dir_ = b.data();
+    // Held back between the creation and the registration, as OutputFile does.
+    sigset_t block, old;
+    sigemptyset(&block);
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
+    ::sigprocmask(SIG_BLOCK, &block, &old);
+    const bool made = ::mkdtemp(b.data()) != nullptr;
+    const int err = errno;
+    if (made) {
+        dir_ = b.data();
+        remove_on_interrupt(dir_);
+    }
+    ::sigprocmask(SIG_SETMASK, &old, nullptr);
+    if (!made) throw RunError("--jobs: cannot create the workers' directory in " + parent + ": " + std::strerror(err));
 }
 
 void TempDirectory::will_hold(const std::string& name) {
     // The handler removes paths in order: the directory must come after its files.
-    if (!held_.empty()) forget_on_interrupt(dir_);
+    forget_on_interrupt(dir_);
     held_.push_back(path(name));
     remove_on_interrupt(held_.back());
     remove_on_interrupt(dir_);

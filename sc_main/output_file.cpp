@@ -160,12 +160,23 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
         // could clean up: it goes now (formats.md).
         ::unlink(path_.c_str());
         std::string tmpl = dir_of(path_) + "/." + base_of(path_) + ".XXXXXX";
+        // A signal between the creation and the registration would leave the
+        // temporary behind (an rbcd-sim --jobs worker is stopped just as it
+        // starts): held back until the handler knows the path.
+        sigset_t block, old;
+        sigemptyset(&block);
+        for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
+        ::sigprocmask(SIG_BLOCK, &block, &old);
         // mkostemp: O_CREAT|O_EXCL with a random name, so nothing planted at a
         // predictable name (a symlink) can redirect the output.
         fd = ::mkostemp(tmpl.data(), O_CLOEXEC);
-        if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
-        tmp_ = tmpl;
-        remove_on_interrupt(tmp_);
+        const int err = errno;
+        if (fd >= 0) {
+            tmp_ = tmpl;
+            remove_on_interrupt(tmp_);
+        }
+        ::sigprocmask(SIG_SETMASK, &old, nullptr);
+        if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(err));
         // mkstemp creates 0600; the result gets what fopen would give it.
         const mode_t mask = ::umask(0);
         ::umask(mask);
