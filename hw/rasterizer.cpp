@@ -109,6 +109,33 @@ void walk_tile(const Tile& tile, std::uint64_t culled, V& v) {
     }
 }
 
+// walk_tile for a tile without setups (prims = cprims = 0, as most traces'
+// tiles): the same calls, without the spreads' bookkeeping per fragment.
+template <class V>
+void walk_tile_without_setups(const Tile& tile, V& v) {
+    const std::size_t n = tile.frags.size();
+    if (tile.ordered_other) {
+        std::size_t run = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            for (; run < tile.other_runs.size() && tile.other_runs[run].before <= i; ++run)
+                if (tile.other_runs[run].count) v.others(tile.other_runs[run].count);
+            v.frag(tile.frags[i]);
+        }
+        for (; run < tile.other_runs.size(); ++run)
+            if (tile.other_runs[run].count) v.others(tile.other_runs[run].count);
+    } else {
+        EvenSplit split(tile.other, n + 1);
+        std::uint64_t done = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint64_t upto = split.next();
+            if (upto > done) v.others(upto - done);
+            done = upto;
+            v.frag(tile.frags[i]);
+        }
+        if (tile.other > done) v.others(tile.other - done);
+    }
+}
+
 inline std::uint64_t shade_one(rasterizer::Cursor& r, FragmentPipe& fp) { return fp.shade(r.t, r.used, r.rate, 1); }
 inline std::uint64_t shade_run(rasterizer::Cursor& r, FragmentPipe& fp, std::uint64_t m) {
     return fp.shade_run(r.t, r.used, r.rate, m);
@@ -332,7 +359,9 @@ void rasterizer::feed_tile(const Tile& tile) {
         pure_r_[i].busy(overhead);
     }
     Pure pure{pure_r_, pure_fp_, setup, pure_live_};
-    walk_tile(tile, culled, pure);
+    const bool no_setups = tile.prims == 0 && tile.cprims == 0;
+    if (no_setups) walk_tile_without_setups(tile, pure);
+    else walk_tile(tile, culled, pure);
     pure.finish();
     if (tile.has_base)
         for (std::size_t i = 0; i < 3; ++i)
@@ -375,7 +404,8 @@ void rasterizer::feed_tile(const Tile& tile) {
     const std::uint64_t stalls_before = cur_.stall_no_bank + cur_.stall_queue_full + cur_.stall_fragment_queue;
     unit_.busy(overhead);
     Unit unit{*this, setup, bank_ready, bank_wait_unit};
-    walk_tile(tile, culled, unit);
+    if (no_setups) walk_tile_without_setups(tile, unit);
+    else walk_tile(tile, culled, unit);
     if (tile.has_base) unit_.restart(std::max(unit_.next_free(), start + tile.base));
     const std::uint64_t end = unit_.next_free();
     const std::uint64_t stalls = cur_.stall_no_bank + cur_.stall_queue_full + cur_.stall_fragment_queue - stalls_before;
