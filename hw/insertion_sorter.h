@@ -138,11 +138,17 @@ inline void insertion_sorter::insert(zeb_bank& bank, unsigned li, std::uint64_t 
     // The comparators see every slot; invalid slots (beyond the count) answer
     // "greater", so the "<=" outputs form a thermometer code whose popcount is
     // the insertion position.
+    // Compared as stored words, not as keys rebuilt from them: a word is
+    // [dq | id | facing], so with its id zeroed it orders as (dq, facing)
+    // does, and under arrival w >> s <= key is w < (key + 1) << s.
     unsigned pos = 0;
     if (front_first_) {
-        for (unsigned i = 0; i < n; ++i) pos += ((((row[i] >> id_shift_) << 1) | (row[i] & 1u)) <= key);
+        const std::uint64_t id_mask = ((std::uint64_t(1) << (id_shift_ - 1)) - 1) << 1;
+        const std::uint64_t k = ((key >> 1) << id_shift_) | (key & 1u);
+        for (unsigned i = 0; i < n; ++i) pos += (row[i] & ~id_mask) <= k;
     } else {
-        for (unsigned i = 0; i < n; ++i) pos += ((row[i] >> id_shift_) <= key);
+        const std::uint64_t k = (key + 1) << id_shift_;
+        for (unsigned i = 0; i < n; ++i) pos += row[i] < k;
     }
 
     if (n == m_) {
