@@ -182,6 +182,47 @@ struct rasterizer::Pure {
         for (std::size_t i = 0; i < 3; ++i)
             if (live[i]) flush(i);
     }
+    // A tile without setups gives timelines 0 and 1 one run of its shaded
+    // fragments and timeline 2 that run cut at its c fragments: the events
+    // walk_tile_without_setups gives, counted instead of visited one by one.
+    void walk_without_setups(const Tile& tile, std::uint64_t culled) {
+        const std::size_t n = tile.frags.size();
+        const std::uint64_t shaded = tile.other + (n - culled);
+        pending[0] += shaded;
+        pending[1] += shaded;
+        if (!culled) {
+            pending[2] += shaded;
+            return;
+        }
+        std::uint64_t run = pending[2];   // shaded since the last c fragment
+        const auto cut = [&] {
+            pending[2] = run;
+            flush(2);
+            r[2].emit_at(r[2].slot());
+            run = 0;
+        };
+        if (tile.ordered_other) {
+            std::size_t k = 0;
+            for (std::size_t i = 0; i < n; ++i) {
+                for (; k < tile.other_runs.size() && tile.other_runs[k].before <= i; ++k) run += tile.other_runs[k].count;
+                if (tile.frags[i].culled) cut();
+                else ++run;
+            }
+            for (; k < tile.other_runs.size(); ++k) run += tile.other_runs[k].count;
+        } else {
+            EvenSplit split(tile.other, n + 1);
+            std::uint64_t done = 0;
+            for (std::size_t i = 0; i < n; ++i) {
+                const std::uint64_t upto = split.next();
+                run += upto - done;
+                done = upto;
+                if (tile.frags[i].culled) cut();
+                else ++run;
+            }
+            run += tile.other - done;
+        }
+        pending[2] = run;
+    }
 };
 
 // The with-unit timeline.
@@ -361,7 +402,7 @@ void rasterizer::feed_tile(const Tile& tile) {
     }
     Pure pure{pure_r_, pure_fp_, setup, pure_live_};
     const bool no_setups = tile.prims == 0 && tile.cprims == 0;
-    if (no_setups) walk_tile_without_setups(tile, pure);
+    if (no_setups) pure.walk_without_setups(tile, culled);
     else walk_tile(tile, culled, pure);
     pure.finish();
     if (tile.has_base)
