@@ -247,6 +247,15 @@ struct rasterizer::Unit {
                 R.fp_.push(e);
                 wait += e - slot;
             }
+        } else if (m == 1) {
+            // The common run between two collisionable fragments: shade()'s
+            // one step without loading and storing the pipe's state around it.
+            const std::uint64_t slot = R.unit_.slot();
+            const std::uint64_t e = R.fp_.room(slot);
+            R.unit_.emit_at(e);
+            R.fp_.pipe().push(e);
+            R.fp_.count(1);
+            wait = e - slot;
         } else {
             wait = shade_run(R.unit_, R.fp_.pipe(), m);
             R.fp_.count(m);
