@@ -4,6 +4,7 @@
 #include <cstring>
 
 #if defined(__x86_64__) || defined(__i386__)
+#include <cpuid.h>
 #include <immintrin.h>
 #define RBCD_SHA_NI 1
 #endif
@@ -65,9 +66,13 @@ __attribute__((target("sha,sse4.1,ssse3"))) void blocks_sha_ni(std::uint32_t* st
     _mm_storeu_si128(reinterpret_cast<__m128i*>(state + 4), s1);
 }
 
+// CPUID itself: GCC's __builtin_cpu_supports knows "sha", clang 14's does not.
 const bool kHaveShaNi = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("sha") && __builtin_cpu_supports("sse4.1");
+    unsigned a = 0, b = 0, c = 0, d = 0;
+    if (!__get_cpuid(1, &a, &b, &c, &d)) return false;
+    const bool sse = (c & bit_SSSE3) && (c & bit_SSE4_1);
+    if (!__get_cpuid_count(7, 0, &a, &b, &c, &d)) return false;
+    return sse && (b & bit_SHA);
 }();
 #endif
 
