@@ -5,8 +5,13 @@
 // 2. runs rbcd-sim end to end on each as a child process, writing collisions
 //    and stats as a user would: wall time and peak memory (ru_maxrss of the
 //    child), so the two sizes show whether memory grows with the trace;
-// 3. loads the N-fragment trace into memory and runs the model alone in this
+// 3. runs the same with --jobs J (default 2: one worker a core on this
+//    project's machine), and the default scene and a 600-frame trace at
+//    --jobs 1 and J: the scaling of one long run over the cores;
+// 4. loads the N-fragment trace into memory and runs the model alone in this
 //    process: the model's own fragments/s, parsing excluded.
+// Peak memory of a --jobs run is the largest of its processes' (ru_maxrss
+// of the child counts the descendants it waited for as a maximum, not a sum).
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -66,9 +71,11 @@ std::string sibling(const char* argv0, const std::string& name) {
 int sc_main(int argc, char* argv[]) {
     std::string dir = "/tmp";
     std::uint64_t fragments = 5000000;
+    unsigned jobs = 2;
     CLI::App app{"rbcd-bench: end-to-end and model-only speed, peak memory"};
     app.add_option("--dir", dir, "where the generated traces go");
     app.add_option("--fragments", fragments, "fragments of the base trace");
+    app.add_option("--jobs", jobs, "rbcd-sim --jobs for the parallel rows (default 2)")->check(CLI::Range(2u, 1024u));
     CLI11_PARSE(app, argc, argv);
     sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
 
@@ -93,27 +100,77 @@ int sc_main(int argc, char* argv[]) {
 
     // End to end as a user runs it: the collisions and the stats written.
     const std::string col = dir + "/rbcd-bench.collisions", st = dir + "/rbcd-bench.json";
-    std::printf("\n%-34s %12s %10s %14s %12s\n", "run (collisions, stats written)", "fragments", "seconds",
-                "fragments/s", "peak MiB");
+    // Best of three; the --jobs 1 and --jobs J runs of one input alternate, so
+    // that a machine busy with other work weighs on both alike.
+    const auto best_pair = [&](std::vector<std::string> args) {
+        args.insert(args.begin(), sim);
+        args.insert(args.end(), {"-q", "--collisions", col, "--stats", st});
+        std::vector<std::string> par = args;
+        par.insert(par.end(), {"--jobs", std::to_string(jobs)});
+        ChildRun b1, bj;
+        for (int rep = 0; rep < 3; ++rep) {
+            for (auto [a, b] : {std::pair{&args, &b1}, std::pair{&par, &bj}}) {
+                ChildRun r = run_child(*a);
+                if (r.status != 0) return std::pair{r, r};
+                if (b->status != 0 || r.seconds < b->seconds) *b = r;
+            }
+        }
+        return std::pair{b1, bj};
+    };
+    const std::string jn = "--jobs " + std::to_string(jobs);
+    std::printf("\n%-34s %12s %10s %14s %12s %10s %14s %12s %8s\n", "run (collisions, stats written)", "fragments",
+                "seconds", "fragments/s", "peak MiB", jn.c_str(), "fragments/s", "peak MiB", "speedup");
+    const auto row = [&](const std::string& label, std::uint64_t n, const std::pair<ChildRun, ChildRun>& r) {
+        std::printf("%-34s %12llu %10.3f %14.0f %12.1f %10.3f %14.0f %12.1f %7.2fx\n", label.c_str(),
+                    (unsigned long long)n, r.first.seconds, double(n) / r.first.seconds, r.first.max_rss_kb / 1024.0,
+                    r.second.seconds, double(n) / r.second.seconds, r.second.max_rss_kb / 1024.0,
+                    r.first.seconds / r.second.seconds);
+    };
     for (const auto& [trace, n, kind] : {std::tuple{t1, fragments, ""}, std::tuple{t2, 2 * fragments, ""},
                                          std::tuple{i1, fragments, " interleaved"},
                                          std::tuple{i2, 2 * fragments, " interleaved"}}) {
-        const ChildRun best = [&] {
-            ChildRun b;
-            for (int rep = 0; rep < 3; ++rep) {
-                ChildRun r = run_child({sim, "--trace", trace, "-q", "--collisions", col, "--stats", st});
-                if (r.status != 0) return r;
-                if (b.status != 0 || r.seconds < b.seconds) b = r;
-            }
-            return b;
-        }();
-        if (best.status != 0) {
+        const auto r = best_pair({"--trace", trace});
+        if (r.first.status != 0 || r.second.status != 0) {
             std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on %s\n", trace.c_str());
             return 1;
         }
-        std::printf("%-34s %12llu %10.3f %14.0f %12.1f\n",
-                    ("rbcd-sim end to end, " + std::to_string(n / 1000000) + "M" + kind).c_str(), (unsigned long long)n,
-                    best.seconds, double(n) / best.seconds, best.max_rss_kb / 1024.0);
+        row("rbcd-sim end to end, " + std::to_string(n / 1000000) + "M" + kind, n, r);
+    }
+    for (const auto& t : {t2, i1, i2}) std::remove(t.c_str());
+
+    // One long input over the cores: the default scene (60 frames; its
+    // fragments, collisionable and other, from the stats) and 600 frames.
+    {
+        const std::string t600 = dir + "/rbcd-bench-600.rbt";
+        // The busy trace's density (about ten occupied tiles a frame), over 600 frames.
+        if (run_child({gen, t600, std::to_string(2 * fragments), "600", "--tiles", "10"}).status != 0) {
+            std::fprintf(stderr, "rbcd-bench: trace generation failed\n");
+            return 1;
+        }
+        const auto scene = best_pair({});
+        const auto frames600 = best_pair({"--trace", t600});
+        if (scene.first.status != 0 || frames600.first.status != 0 || scene.second.status != 0 ||
+            frames600.second.status != 0) {
+            std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on the scaling runs\n");
+            return 1;
+        }
+        // The scene's fragment count is that of the last run's stats.
+        std::uint64_t scene_n = 0;
+        if (run_child({sim, "-q", "--stats", st}).status == 0) {
+            if (std::FILE* f = std::fopen(st.c_str(), "r")) {
+                char line[512];
+                unsigned long long v = 0;
+                while (std::fgets(line, sizeof line, f))
+                    if (std::sscanf(line, " \"fragments\": %llu", &v) == 1) {
+                        scene_n = v;
+                        break;
+                    }
+                std::fclose(f);
+            }
+        }
+        row("default scene (60 frames)", scene_n, scene);
+        row("600-frame trace", 2 * fragments, frames600);
+        std::remove(t600.c_str());
     }
     std::remove(col.c_str());
     std::remove(st.c_str());
@@ -160,6 +217,6 @@ int sc_main(int argc, char* argv[]) {
                 double(n) / secs, "-");
     std::printf("\nsimulated: %llu cycles, %llu hits, %llu overflows\n", (unsigned long long)sys.total_cycles(),
                 (unsigned long long)sys.tester.stats().hits, (unsigned long long)sys.sorter.stats().overflows);
-    for (const auto& t : {t1, t2, i1, i2}) std::remove(t.c_str());
+    std::remove(t1.c_str());
     return 0;
 }

@@ -3,6 +3,12 @@
 #include <algorithm>
 #include <cstring>
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <cpuid.h>
+#include <immintrin.h>
+#define RBCD_SHA_NI 1
+#endif
+
 namespace rbcd {
 namespace {
 
@@ -17,6 +23,58 @@ constexpr std::uint32_t kK[64] = {
     0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2};
 
 constexpr std::uint32_t rotr(std::uint32_t x, int n) { return (x >> n) | (x << (32 - n)); }
+
+#ifdef RBCD_SHA_NI
+// The x86 SHA extensions hash about five times faster than the portable
+// rounds: provenance hashes every input file, and a trace of 5 M fragments is
+// 120 MB, which the portable code took longer to hash (0.35 s) than the model
+// took to simulate. The state is kept as the instructions want it (ABEF, CDGH).
+__attribute__((target("sha,sse4.1,ssse3"))) void blocks_sha_ni(std::uint32_t* state, const std::uint8_t* p,
+                                                                 std::size_t n) {
+    const __m128i kSwap = _mm_set_epi64x(0x0c0d0e0f08090a0bLL, 0x0405060700010203LL);
+    __m128i tmp = _mm_shuffle_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(state)), 0xB1);   // CDAB
+    __m128i s1 = _mm_shuffle_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(state + 4)), 0x1B); // EFGH
+    __m128i s0 = _mm_alignr_epi8(tmp, s1, 8);       // ABEF
+    s1 = _mm_blend_epi16(s1, tmp, 0xF0);            // CDGH
+    for (; n; --n, p += 64) {
+        const __m128i abef = s0, cdgh = s1;
+        __m128i w[4];
+        // Sixteen groups of four rounds; the schedule's group g + 1 is finished
+        // during group g and group g + 3 started, in a ring of four registers.
+        for (int g = 0; g < 16; ++g) {
+            if (g < 4)
+                w[g] = _mm_shuffle_epi8(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16 * g)), kSwap);
+            __m128i msg = _mm_add_epi32(w[g & 3], _mm_loadu_si128(reinterpret_cast<const __m128i*>(kK + 4 * g)));
+            s1 = _mm_sha256rnds2_epu32(s1, s0, msg);
+            if (g >= 3 && g <= 14) {
+                __m128i& next = w[(g + 1) & 3];
+                next = _mm_add_epi32(next, _mm_alignr_epi8(w[g & 3], w[(g + 3) & 3], 4));
+                next = _mm_sha256msg2_epu32(next, w[g & 3]);
+            }
+            msg = _mm_shuffle_epi32(msg, 0x0E);
+            s0 = _mm_sha256rnds2_epu32(s0, s1, msg);
+            if (g >= 1 && g <= 12) w[(g + 3) & 3] = _mm_sha256msg1_epu32(w[(g + 3) & 3], w[g & 3]);
+        }
+        s0 = _mm_add_epi32(s0, abef);
+        s1 = _mm_add_epi32(s1, cdgh);
+    }
+    tmp = _mm_shuffle_epi32(s0, 0x1B);              // FEBA
+    s1 = _mm_shuffle_epi32(s1, 0xB1);               // DCHG
+    s0 = _mm_blend_epi16(tmp, s1, 0xF0);            // DCBA
+    s1 = _mm_alignr_epi8(s1, tmp, 8);               // HGFE
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(state), s0);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(state + 4), s1);
+}
+
+// CPUID itself: GCC's __builtin_cpu_supports knows "sha", clang 14's does not.
+const bool kHaveShaNi = [] {
+    unsigned a = 0, b = 0, c = 0, d = 0;
+    if (!__get_cpuid(1, &a, &b, &c, &d)) return false;
+    const bool sse = (c & bit_SSSE3) && (c & bit_SSE4_1);
+    if (!__get_cpuid_count(7, 0, &a, &b, &c, &d)) return false;
+    return sse && (b & bit_SHA);
+}();
+#endif
 
 } // namespace
 
@@ -63,6 +121,13 @@ void Sha256::update(const void* data, std::size_t len) {
         block(buf_.data());
         buf_len_ = 0;
     }
+#ifdef RBCD_SHA_NI
+    if (kHaveShaNi && len >= 64) {
+        blocks_sha_ni(h_.data(), p, len / 64);
+        p += len / 64 * 64;
+        len %= 64;
+    }
+#endif
     for (; len >= 64; p += 64, len -= 64) block(p);
     std::memcpy(buf_.data(), p, len);
     buf_len_ = len;

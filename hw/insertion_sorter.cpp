@@ -70,41 +70,4 @@ void insertion_sorter::restart(std::uint64_t t) {
     prev_list_[0] = prev_list_[1] = ~0u;
 }
 
-void insertion_sorter::insert(zeb_bank& bank, unsigned li, std::uint64_t word, std::uint64_t key) {
-    std::uint64_t* row = bank.list(li);
-    std::uint8_t& n = bank.count(li);
-    bank.note_read();
-    stats_.comparator_activations += m_;
-
-    // The comparators see every slot; invalid slots (beyond the count) answer
-    // "greater", so the "<=" outputs form a thermometer code whose popcount is
-    // the insertion position.
-    unsigned pos = 0;
-    for (unsigned i = 0; i < n; ++i) {
-        const std::uint64_t w = row[i];
-        const std::uint64_t k = front_first_ ? ((w >> id_shift_) << 1) | (w & 1u) : (w >> id_shift_);
-        pos += (k <= key);
-    }
-
-    if (n == m_) {
-        bank.note_overflow(li);
-        ++stats_.overflows;
-        if (pos == m_) {
-            // Write enable stays low: the row is unchanged.
-            ++stats_.dropped_new;
-            return;
-        }
-        ++stats_.dropped_last;
-        for (unsigned i = m_ - 1; i > pos; --i) row[i] = row[i - 1];
-        stats_.mux_shifts += m_ - 1 - pos;
-    } else {
-        for (unsigned i = n; i > pos; --i) row[i] = row[i - 1];
-        stats_.mux_shifts += n - pos;
-        ++n;
-        bank.mark_occupied(li);
-    }
-    row[pos] = word;
-    bank.note_write();
-}
-
 } // namespace rbcd

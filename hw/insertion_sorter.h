@@ -127,4 +127,49 @@ private:
     VcdWriter::Sig vcd_issue_ = 0, vcd_hazard_ = 0, vcd_bank_ = 0;
 };
 
+// Per fragment: in the header, so that accept() and the rasterizer's walk
+// inline it (a call a fragment was a tenth of its cost).
+inline void insertion_sorter::insert(zeb_bank& bank, unsigned li, std::uint64_t word, std::uint64_t key) {
+    std::uint64_t* row = bank.list(li);
+    std::uint8_t& n = bank.count(li);
+    bank.note_read();
+    stats_.comparator_activations += m_;
+
+    // The comparators see every slot; invalid slots (beyond the count) answer
+    // "greater", so the "<=" outputs form a thermometer code whose popcount is
+    // the insertion position.
+    // Compared as stored words, not as keys rebuilt from them: a word is
+    // [dq | id | facing], so with its id zeroed it orders as (dq, facing)
+    // does, and under arrival w >> s <= key is w < (key + 1) << s.
+    unsigned pos = 0;
+    if (front_first_) {
+        const std::uint64_t id_mask = ((std::uint64_t(1) << (id_shift_ - 1)) - 1) << 1;
+        const std::uint64_t k = ((key >> 1) << id_shift_) | (key & 1u);
+        for (unsigned i = 0; i < n; ++i) pos += (row[i] & ~id_mask) <= k;
+    } else {
+        const std::uint64_t k = (key + 1) << id_shift_;
+        for (unsigned i = 0; i < n; ++i) pos += row[i] < k;
+    }
+
+    if (n == m_) {
+        bank.note_overflow(li);
+        ++stats_.overflows;
+        if (pos == m_) {
+            // Write enable stays low: the row is unchanged.
+            ++stats_.dropped_new;
+            return;
+        }
+        ++stats_.dropped_last;
+        for (unsigned i = m_ - 1; i > pos; --i) row[i] = row[i - 1];
+        stats_.mux_shifts += m_ - 1 - pos;
+    } else {
+        for (unsigned i = n; i > pos; --i) row[i] = row[i - 1];
+        stats_.mux_shifts += n - pos;
+        ++n;
+        bank.mark_occupied(li);
+    }
+    row[pos] = word;
+    bank.note_write();
+}
+
 } // namespace rbcd

@@ -1,5 +1,6 @@
 #include "rbcd/io/gzip_stream.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -42,6 +43,38 @@ bool GzipStream::refill() {
         in_end_ += static_cast<std::size_t>(n);
         return n > 0;
     }
+}
+
+long long GzipStream::skip(unsigned long long n) {
+    unsigned long long done = 0;
+    if (started_ && !gz_) {
+        const std::size_t k = static_cast<std::size_t>(std::min<unsigned long long>(n, in_end_ - in_pos_));
+        in_pos_ += k;
+        done += k;
+        if (done < n && !raw_eof_ && n - done <= static_cast<unsigned long long>(LLONG_MAX)) {
+            // lseek moves past the end of a file without complaint: where the
+            // file ends is seen by the next read.
+            const off_t here = ::lseek(fd_, 0, SEEK_CUR);
+            struct stat st {};
+            if (here >= 0 && ::fstat(fd_, &st) == 0 && S_ISREG(st.st_mode)) {
+                const unsigned long long left = st.st_size > here ? static_cast<unsigned long long>(st.st_size - here) : 0;
+                const unsigned long long k2 = std::min(n - done, left);
+                if (::lseek(fd_, static_cast<off_t>(k2), SEEK_CUR) >= 0) {
+                    done += k2;
+                    if (done < n) raw_eof_ = true;
+                    return static_cast<long long>(done);
+                }
+            }
+        }
+    }
+    std::vector<char> scratch(std::size_t(1) << 16);
+    while (done < n) {
+        const long got = read(scratch.data(), static_cast<std::size_t>(std::min<unsigned long long>(n - done, scratch.size())));
+        if (got < 0) return -1;
+        if (got == 0) break;
+        done += static_cast<unsigned long long>(got);
+    }
+    return static_cast<long long>(done);
 }
 
 long GzipStream::read(char* dst, std::size_t n) {

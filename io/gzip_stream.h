@@ -25,6 +25,11 @@ public:
     // error() then describes ("corrupt or truncated gzip stream: ...", "read
     // error: ...").
     long read(char* dst, std::size_t n);
+    // Drops the next n bytes of the data: inflated and thrown away from a gzip
+    // file, passed over with lseek(2) in a plain one (so that a worker of
+    // rbcd-sim --jobs starts at its frames without reading those before).
+    // Returns the bytes dropped, fewer at the end of the data; -1 on an error.
+    long long skip(unsigned long long n);
     const std::string& error() const { return error_; }
     bool compressed() const { return gz_; }
 

@@ -47,7 +47,14 @@ struct CharTable {
 constexpr CharTable kChars{};
 
 inline bool tok_end(char c) { return kChars.tok_end[static_cast<unsigned char>(c)]; }
-inline void skip_ws(const char*& p) { while (*p == ' ' || *p == '\t') ++p; }
+inline void skip_ws(const char*& p) {
+    // Fields are almost always one space apart: one test, not a loop's two.
+    if (p[0] == ' ' && static_cast<unsigned char>(p[1]) > ' ') {
+        ++p;
+        return;
+    }
+    while (*p == ' ' || *p == '\t') ++p;
+}
 
 // A token quoted for a message: printable, and short enough for one line.
 std::string show(std::string_view s) {
@@ -119,6 +126,7 @@ struct TraceReader::Impl {
     char* data_end = nullptr;
     bool eof = false;
     unsigned long long line = 1;   // number of the line at cur
+    std::uint64_t pulled = 0;      // bytes of data read from the stream (data_end's position)
 
     std::uint64_t depth_max = 0, id_max = 0;
     std::uint64_t cols = 0, rows = 0;
@@ -229,6 +237,7 @@ bool TraceReader::Impl::fill() {
         }
         char* fresh = data_end;
         data_end += n;
+        pulled += static_cast<std::uint64_t>(n);
         if (const void* nl = memrchr(fresh, '\n', static_cast<std::size_t>(n))) {
             lines_end = static_cast<char*>(const_cast<void*>(nl)) + 1;
             return true;
@@ -353,11 +362,33 @@ namespace {
 // One number of a fragment line on the fast path: false means "let the slow
 // path look at this line" (not a number, too long to be safe from overflow,
 // glued to another character, missing).
-inline bool fast_num(const char*& p, std::uint64_t& out) {
+inline bool fast_num(const char*& p, std::uint64_t& out, const char* end) {
     skip_ws(p);
     const char* s = p;
     std::uint64_t v = 0;
     unsigned d;
+    if (end - p >= 8) {
+        // Up to eight digits at once (a 24-bit depth has eight): the run of
+        // digits at the low end of the word, then three multiplies combine
+        // them in pairs, fours and eights. A carry or borrow out of a byte
+        // only reaches the bytes after the first non-digit, which go unused.
+        std::uint64_t w;
+        std::memcpy(&w, p, 8);
+        const std::uint64_t nd = ((w & 0xF0F0F0F0F0F0F0F0ull) ^ 0x3030303030303030ull) |
+                                 (((w + 0x0606060606060606ull) & 0xF0F0F0F0F0F0F0F0ull) ^ 0x3030303030303030ull);
+        const unsigned len = nd ? static_cast<unsigned>(__builtin_ctzll(nd)) / 8 : 8;
+        if (len == 0) return false;
+        std::uint64_t x = w << (8 * (8 - len));   // as if padded with leading zeros
+        x = (x & 0x0F0F0F0F0F0F0F0Full) * 2561 >> 8;
+        x = (x & 0x00FF00FF00FF00FFull) * 6553601 >> 16;
+        v = static_cast<std::uint32_t>((x & 0x0000FFFF0000FFFFull) * 42949672960001ull >> 32);
+        p += len;
+        if (len < 8) {
+            if (!tok_end(*p)) return false;
+            out = v;
+            return true;
+        }
+    }
     while ((d = static_cast<unsigned char>(*p) - unsigned('0')) < 10) {
         v = v * 10 + d;
         ++p;
@@ -372,7 +403,9 @@ inline bool fast_num(const char*& p, std::uint64_t& out) {
 bool TraceReader::Impl::fast_fragment(std::vector<Fragment>& out) {
     const char* p = cur + 2;
     std::uint64_t x, y, d, id;
-    if (!fast_num(p, x) || !fast_num(p, y) || !fast_num(p, d) || !fast_num(p, id)) return false;
+    if (!fast_num(p, x, lines_end) || !fast_num(p, y, lines_end) || !fast_num(p, d, lines_end) ||
+        !fast_num(p, id, lines_end))
+        return false;
     skip_ws(p);
     Facing facing;
     if (*p == 'F') facing = Facing::Front;
@@ -570,6 +603,23 @@ TraceReader::TraceReader(const std::string& path, const TraceLimits& limits) : i
 }
 
 TraceReader::~TraceReader() = default;
+
+void TraceReader::start_at_frame(std::uint64_t frame, std::uint64_t offset, std::uint64_t line) {
+    Impl& m = *impl_;
+    const std::uint64_t at = m.pulled - static_cast<std::uint64_t>(m.data_end - m.cur);
+    if (m.seen_frame || offset < at) throw std::logic_error("TraceReader::start_at_frame: not ahead of the reader");
+    if (offset - at <= static_cast<std::uint64_t>(m.data_end - m.cur)) {
+        m.cur += offset - at;
+        if (m.cur > m.lines_end) m.lines_end = m.cur;   // fill() reads the rest of the line
+    } else {
+        const long long got = m.in->skip(offset - m.pulled);
+        if (got < 0) m.fail(m.in->error());
+        m.pulled += static_cast<std::uint64_t>(got);
+        m.cur = m.lines_end = m.data_end = m.buf.data();
+    }
+    m.line = line;
+    m.next_frame = frame;
+}
 
 const StreamHeader& TraceReader::header() const { return impl_->hdr; }
 

@@ -44,6 +44,12 @@ public:
     Event next(Tile& tile) override;
     std::string name() const override;
 
+    // rbcd-sim --jobs: a worker whose frames start at `frame` goes straight to
+    // that frame's record, at byte `offset` of the (inflated) data, line `line`
+    // (as scan_frames() found them); the frames before it are the previous
+    // worker's to read and check. Call before the first next().
+    void start_at_frame(std::uint64_t frame, std::uint64_t offset, std::uint64_t line);
+
 private:
     struct Impl;
     std::unique_ptr<Impl> impl_;

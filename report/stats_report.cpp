@@ -205,7 +205,25 @@ using ull = unsigned long long;
 
 } // namespace
 
-std::string make_summary(const nlohmann::json& s, const RunReport& report) {
+SummaryFrames summary_frames(const RunReport& report) {
+    SummaryFrames f;
+    f.totals = report.totals();
+    f.frames = report.frames();
+    f.mean_overhead_pct = report.mean_frame_overhead_pct();
+    for (const auto& x : report.first_frames()) f.first.push_back(frame_json(x));
+    if (const FrameFigures* w = report.worst_frame()) f.worst = frame_json(*w);
+    return f;
+}
+
+FrameFigures snapshot_totals(const RunSnapshot& s) {
+    FrameFigures t = s.gpu;
+    fill_energies(t, energy_costs(s.cfg), activity_of(s.counters));
+    return t;
+}
+
+std::string make_summary(const nlohmann::json& s, const RunReport& report) { return make_summary(s, summary_frames(report)); }
+
+std::string make_summary(const nlohmann::json& s, const SummaryFrames& frames) {
     const auto& t = s["totals"];
     const auto& b = s["blocks"];
     const std::uint64_t cycles = u(t, "cycles");
@@ -276,7 +294,7 @@ std::string make_summary(const nlohmann::json& s, const RunReport& report) {
     // ---- GPU time and energy
     const auto& g = s["gpu"];
     const auto& oc = g["overhead_cycles"];
-    const FrameFigures tot = report.totals();
+    const FrameFigures& tot = frames.totals;
     const auto pct_text = [](double v) { return std::isnan(v) ? std::string("n/a") : fmt("%+.2f%%", v); };
     out += fmt("\n  GPU time (docs/gpu-model.md, bank wait: %s): baseline %llu cycles, with the unit %llu: %s\n",
                g["bank_wait"].get<std::string>().c_str(), ull(u(g, "baseline_cycles")), ull(u(g, "cycles_with_unit")),
@@ -287,22 +305,25 @@ std::string make_summary(const nlohmann::json& s, const RunReport& report) {
     out += fmt("  GPU energy (docs/energy.md): baseline %.1f nJ, with the unit %.1f nJ (unit %.1f): %s\n",
                tot.gpu_baseline_pj * 1e-3, tot.with_unit_pj() * 1e-3, tot.unit_pj() * 1e-3,
                pct_text(tot.energy_overhead_pct()).c_str());
-    const std::uint64_t n = report.frames();
+    const std::uint64_t n = frames.frames;
     if (n) {
         out += fmt("  %10s %12s %12s %10s %10s %11s\n", "frame", "baseline", "with unit", "time", "energy", "unit nJ");
-        auto frame_row = [&](const std::string& label, const FrameFigures& f) {
-            out += fmt("  %10s %12llu %12llu %10s %10s %11.1f\n", label.c_str(), ull(f.t.baseline), ull(f.t.with_unit),
-                       pct_text(f.overhead_pct()).c_str(), pct_text(f.energy_overhead_pct()).c_str(),
-                       f.unit_pj() * 1e-3);
+        // From the frame's --frame-stats object, whose numbers read back to the same bits.
+        auto frame_row = [&](const std::string& label, const nlohmann::json& f) {
+            const auto pct = [](const nlohmann::json& v) { return v.is_number() ? v.get<double>() : std::nan(""); };
+            const nlohmann::json& e = f["energy_pj"];
+            out += fmt("  %10s %12llu %12llu %10s %10s %11.1f\n", label.c_str(), ull(u(f, "baseline_cycles")),
+                       ull(u(f, "cycles_with_unit")), pct_text(pct(f["overhead_pct"])).c_str(),
+                       pct_text(pct(e["overhead_pct"])).c_str(), d(e, "unit") * 1e-3);
         };
-        for (const auto& f : report.first_frames()) frame_row(std::to_string(f.t.frame), f);
-        if (n > report.first_frames().size()) {
+        for (const auto& f : frames.first) frame_row(std::to_string(u(f, "frame")), f);
+        if (n > frames.first.size()) {
             out += fmt("  %10s\n", "...");
-            if (const FrameFigures* w = report.worst_frame()) frame_row("worst " + std::to_string(w->t.frame), *w);
+            if (frames.worst.is_object()) frame_row("worst " + std::to_string(u(frames.worst, "frame")), frames.worst);
             out += fmt("  %10s %12.0f %12.0f %10s %10s %11.1f   (over %llu frames; mean of per-frame %%: %s)\n", "mean",
                        double(tot.t.baseline) / double(n), double(tot.t.with_unit) / double(n),
                        pct_text(tot.overhead_pct()).c_str(), pct_text(tot.energy_overhead_pct()).c_str(),
-                       tot.unit_pj() * 1e-3 / double(n), ull(n), pct_text(report.mean_frame_overhead_pct()).c_str());
+                       tot.unit_pj() * 1e-3 / double(n), ull(n), pct_text(frames.mean_overhead_pct).c_str());
         }
     }
     return out;

@@ -9,7 +9,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <future>
 #include <memory>
+#include <thread>
 #include <systemc>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -18,6 +21,7 @@
 #include "rbcd/common/config.h"
 #include "rbcd/common/errors.h"
 #include "rbcd/io/prefetch_source.h"
+#include "rbcd/io/frame_scan.h"
 #include "rbcd/io/frame_range_source.h"
 #include "rbcd/common/input_file.h"
 #include "rbcd/io/trace_reader.h"
@@ -28,6 +32,9 @@
 #include "rbcd/sc_main/heat_maps.h"
 #include "rbcd/sc_main/tile_database.h"
 #include "rbcd/sc_main/image_sink.h"
+#include "rbcd/sc_main/jobs.h"
+#include "rbcd/sc_main/part_files.h"
+#include "rbcd/report/run_snapshot.h"
 #include "rbcd/sc_main/output_file.h"
 #include "rbcd/sc_main/progress.h"
 #include "rbcd/report/run_report.h"
@@ -49,6 +56,8 @@ struct Options {
     std::string frames;   // --frames A:B
     bool frames_given = false;   // --frames '' is an error, not "all frames"
     unsigned threads = 2;  // 2: a trace is parsed on its own thread
+    unsigned jobs = 1;     // worker processes, each a contiguous range of the frames (sc_main/jobs.h)
+    std::string worker_part;   // set in a worker: where its frames start (jobs.h)
     bool dump_config = false;
     bool config_reference = false;
     bool quiet = false;
@@ -88,6 +97,105 @@ std::pair<std::string, std::string> layout_paths(const std::string& gtkw, const 
     return {path, rbcd::GtkwaveLayout::filter_path_for(path)};
 }
 
+std::string range_text(const rbcd::FrameRange& r) {
+    return std::to_string(r.first) + ":" + (r.last == UINT64_MAX ? std::string() : std::to_string(r.last));
+}
+
+// --jobs: the parts run by workers (sc_main/jobs.h) and their files joined
+// into the outputs, which are already open. False when the parts' frames hold
+// no fragment at all (the caller then runs as one process: see there).
+bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
+              const std::vector<rbcd::ProvenanceInput>& prov_inputs, const rbcd::SimConfig& cfg,
+              rbcd::OutputFile& collisions_out, rbcd::OutputFile& stats_out, rbcd::OutputFile& frame_stats_out) {
+    using namespace rbcd;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::error_code ec;
+    std::string exe = std::filesystem::read_symlink("/proc/self/exe", ec).string();
+    if (ec) exe = "/proc/self/exe";
+    // A worker reads its trace on one thread unless there are cores to spare.
+    const unsigned threads = std::thread::hardware_concurrency() >= 2 * parts.size() ? opt.threads : 1;
+    const bool trace = !opt.trace.empty();
+    std::string parent;
+    if (collisions_out.active() && opt.collisions != "-") {
+        std::error_code pe;
+        parent = std::filesystem::absolute(opt.collisions, pe).parent_path().string();
+    }
+    if (parent.empty()) parent = std::filesystem::temp_directory_path().string();
+    TempDirectory dir(parent);
+    std::vector<std::vector<std::string>> argvs;
+    std::vector<std::string> errs;
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+        const std::string n = std::to_string(k);
+        std::vector<std::string> a{exe};
+        if (!opt.config_file.empty()) a.insert(a.end(), {"--config", opt.config_file});
+        for (const auto& set : opt.sets) a.insert(a.end(), {"--set", set});
+        if (trace) a.insert(a.end(), {"--trace", opt.trace});
+        else if (!opt.scene.empty()) a.insert(a.end(), {"--scene", opt.scene});
+        a.insert(a.end(), {"--frames", range_text(parts[k].range), "--threads", std::to_string(threads), "-q",
+                           "--stats", dir.path(n + ".json"), "--frame-stats", dir.path(n + ".jsonl"),
+                           "--worker-part", worker_part_text(parts[k], trace)});
+        if (collisions_out.active()) a.insert(a.end(), {"--collisions", dir.path(n + ".txt")});
+        argvs.push_back(std::move(a));
+        errs.push_back(dir.path(n + ".err"));
+        for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
+    }
+    Workers workers(argvs, errs);
+    // The inputs are hashed while the workers run.
+    const nlohmann::json provenance = stats_out.active() ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
+    workers.wait();
+
+    RunSnapshot all;
+    std::vector<PartFiles> files;
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+        const std::string n = std::to_string(k);
+        const std::string path = dir.path(n + ".json");
+        const nlohmann::json j = nlohmann::json::parse(read_input_text(path, "stats file", std::uint64_t(1) << 30, ""));
+        RunSnapshot snap = snapshot_from_stats(j);
+        files.push_back({dir.path(n + ".txt"), dir.path(n + ".jsonl"), snap.frames.first_frame, snap.frames.frames,
+                         snap.cycles});
+        if (k == 0) all = std::move(snap);
+        else merge_snapshots(all, snap);
+    }
+    if (all.counters.raster.fragments + all.counters.raster.other_fragments == 0 &&
+        opt.trace.empty())
+        return false;
+    if (collisions_out.active()) copy_own_part_collisions(files, collisions_out);
+    if (frame_stats_out.active()) copy_part_frame_stats(files, frame_stats_out);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    nlohmann::json stats = make_stats(all, wall);
+    if (stats_out.active()) stats["provenance"] = provenance;
+    if (collisions_out.active()) collisions_out.commit();
+    if (frame_stats_out.active()) frame_stats_out.commit();
+    if (stats_out.active()) {
+        stats_out.write(stats.dump(2) + "\n");
+        stats_out.commit();
+    }
+    if (!opt.quiet) {
+        // The summary's frame rows from the workers' per-frame lines.
+        SummaryFrames sf;
+        sf.totals = snapshot_totals(all);
+        sf.frames = all.frames.frames;
+        sf.mean_overhead_pct = all.frames.mean_overhead_pct();
+        const bool worst = all.frames.has_worst;
+        for (const PartFiles& p : files) {
+            const bool has_worst = worst && all.frames.worst_frame >= p.first_frame &&
+                                   all.frames.worst_frame - p.first_frame < p.frames;
+            if (sf.first.size() >= RunReport::kFirstFrames && !has_worst) continue;
+            std::ifstream in(p.frame_stats);
+            std::string line;
+            while (std::getline(in, line)) {
+                nlohmann::json f = nlohmann::json::parse(line);
+                const std::uint64_t n = f.value("frame", std::uint64_t(0));
+                if (has_worst && n == all.frames.worst_frame) sf.worst = f;
+                if (sf.first.size() < RunReport::kFirstFrames) sf.first.push_back(std::move(f));
+                else if (!has_worst || n >= all.frames.worst_frame) break;
+            }
+        }
+        std::fputs(make_summary(stats, sf).c_str(), stdout);
+    }
+    return true;
+}
+
 int run(Options opt) {
     using namespace rbcd;
     // --vcd run.fst: the format follows the file's extension.
@@ -119,6 +227,21 @@ int run(Options opt) {
         std::fputs(dump_config_toml(cfg).c_str(), stdout);
         return 0;
     }
+
+    if (opt.jobs > 1) {
+        // Outputs that only one process can write: refused rather than run on one core unasked.
+        const std::pair<const char*, const std::string*> whole[] = {
+            {"--vcd", &opt.vcd},     {"--fst", &opt.fst},           {"--gtkw", &opt.gtkw},
+            {"--db", &opt.db},       {"--images", &opt.images},     {"--heat-maps", &opt.heat_maps},
+            {"--write-trace", &opt.write_trace}};
+        for (const auto& [flag, path] : whole)
+            if (!path->empty())
+                throw InputError(std::string("--jobs: cannot be combined with ") + flag +
+                                 " (written by one process; use --jobs 1)");
+        if (opt.trace == "-") throw InputError("--jobs: cannot split standard input (--trace -); use --jobs 1");
+    }
+    const bool worker = !opt.worker_part.empty();
+    if (worker && !opt.frames_given) throw InputError("--worker-part: needs --frames");
 
     // An output over an input would destroy it before it is read.
     const std::pair<const char*, const std::string*> outs[] = {
@@ -158,18 +281,59 @@ int run(Options opt) {
     const scene::SceneLimits scene_limits{cfg.tile.width,           cfg.tile.height,
                                           cfg.zeb.id_bits,          cfg.input.max_scene_bytes,
                                           cfg.input.max_scene_triangles, cfg.input.max_tile_fragments};
+    const FrameRange range = opt.frames_given ? parse_frame_range(opt.frames) : FrameRange{};
+    const JobPart part = worker ? parse_worker_part(opt.worker_part, range) : JobPart{};
+    std::vector<JobPart> parts;   // more than one: the frames are the workers'
     if (!opt.trace.empty()) {
-        // Parsed a few tiles ahead on another core (io/prefetch_source.h),
-        // unless the cores are the caller's to share (rbcd-sweep's workers).
-        auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
-        if (opt.threads > 1) src = std::make_unique<PrefetchSource>(std::move(reader));
-        else src = std::move(reader);
+        if (opt.jobs > 1) {
+            // A plain file is read only near the cuts; a gzip one (or a range
+            // to find) needs a pass over the data, fragments unparsed.
+            FrameScan scan;
+            if (const std::uint64_t bytes = opt.frames_given ? 0 : plain_trace_bytes(opt.trace)) {
+                std::vector<std::uint64_t> cuts;
+                for (unsigned k = 1; k < opt.jobs; ++k) cuts.push_back(bytes / opt.jobs * k + bytes % opt.jobs * k / opt.jobs);
+                scan = find_frames_near(opt.trace, cuts);
+            }
+            if (!scan.ok) scan = scan_frames(opt.trace);
+            parts = plan_trace_parts(scan, range, opt.jobs);
+        }
+        if (parts.size() < 2) {
+            // Parsed a few tiles ahead on another core (io/prefetch_source.h),
+            // unless the cores are the caller's to share (rbcd-sweep's workers).
+            auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
+            if (part.skip)
+                reader->start_at_frame(range.first, part.offset,
+                                       part.line ? part.line : count_lines_before(opt.trace, part.offset));
+            if (opt.threads > 1) src = std::make_unique<PrefetchSource>(std::move(reader));
+            else src = std::move(reader);
+        }
     } else {
         auto s = opt.scene.empty()
                      ? scene::SceneSource::from_text(scene::default_scene_text(), "", "<default scene>", scene_limits)
                      : std::make_unique<scene::SceneSource>(opt.scene, scene_limits);
+        if (part.skip) s->start_at_frame(range.first);
+        if (opt.jobs > 1) parts = plan_scene_parts(s->frame_count(), range, opt.jobs);
         scene_src = s.get();
         src = std::move(s);
+    }
+    if (parts.size() >= 2) {
+        const std::string input_name = src ? src->name() : opt.trace;
+        std::vector<ProvenanceInput> prov_inputs;
+        const std::string default_scene = scene::default_scene_text();
+        if (!opt.config_file.empty()) prov_inputs.push_back({"config", opt.config_file});
+        if (!opt.trace.empty()) prov_inputs.push_back({"trace", opt.trace});
+        else if (opt.scene.empty()) prov_inputs.push_back({"scene", input_name, &default_scene});
+        else prov_inputs.push_back({"scene", opt.scene});
+        if (scene_src)
+            for (const auto& m : scene_src->mesh_files()) prov_inputs.push_back({"mesh", m});
+        if (run_jobs(opt, parts, prov_inputs, cfg, collisions_out, stats_out, frame_stats_out)) return 0;
+        // No fragment in any of the parts' frames: whether the scene has none
+        // at all is one process's to say (it reads every frame).
+    }
+    if (!src) {
+        auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
+        if (opt.threads > 1) src = std::make_unique<PrefetchSource>(std::move(reader));
+        else src = std::move(reader);
     }
     if (opt.frames_given) {
         // A trace's frames count from 0: a range written out would not read back.
@@ -187,8 +351,15 @@ int run(Options opt) {
     else prov_inputs.push_back({"scene", opt.scene});
     if (scene_src)
         for (const auto& m : scene_src->mesh_files()) prov_inputs.push_back({"mesh", m});
-    const nlohmann::json provenance =
-        stats_out.active() || db ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
+    // With a second core to use, the hashing (a trace's every byte) runs beside
+    // the simulation instead of before it; the database records it up front.
+    nlohmann::json provenance;
+    std::future<nlohmann::json> provenance_job;
+    if (worker) {
+        // The run's provenance is the one that started the workers.
+    } else if (db || (stats_out.active() && opt.threads == 1)) provenance = make_provenance(opt.argv, cfg, prov_inputs);
+    else if (stats_out.active())
+        provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, prov_inputs); });
     if (db) {
         db->run_fact("input", input_name);
         db->run_fact("config", dump_config_toml(cfg));
@@ -292,6 +463,7 @@ int run(Options opt) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
+    if (provenance_job.valid()) provenance = provenance_job.get();
     if (stats_out.active()) stats["provenance"] = provenance;
     if (file_sink) {
         file_sink->finish();
@@ -400,6 +572,11 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--threads", opt.threads,
                    "2 (default): a trace is parsed on a second thread; 1: one thread (what rbcd-sweep runs)")
         ->check(CLI::Range(1u, 2u));
+    app.add_option("--jobs", opt.jobs,
+                   "N: simulate the frames in N worker processes, contiguous ranges joined into the outputs one "
+                   "process writes (docs/performance.md); default 1")
+        ->check(CLI::Range(1u, 1024u));
+    app.add_option("--worker-part", opt.worker_part, "internal: a --jobs worker's start")->group("");
     app.add_option("--write-trace", opt.write_trace, "also save the fragment stream the unit saw as a .rbt trace");
     app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");
     app.add_option("--collisions", opt.collisions, "write the collision records here (- for standard output)");

@@ -33,6 +33,7 @@
 #include "rbcd/report/run_snapshot.h"
 #include "rbcd/report/stats_report.h"
 #include "rbcd/sc_main/output_file.h"
+#include "rbcd/sc_main/part_files.h"
 #include "rbcd/sc_main/provenance.h"
 
 namespace {
@@ -41,9 +42,6 @@ using rbcd::InputError;
 
 // The kernel prints its banner before sc_main runs, unless told not to.
 const bool banner_off = [] { return ::setenv("SYSTEMC_DISABLE_COPYRIGHT_MESSAGE", "1", 0) == 0; }();
-
-// A --frame-stats line is one frame's figures, well under a kilobyte.
-constexpr std::size_t kMaxFrameStatsLineBytes = 64 << 10;
 
 // What is kept of a part: its stats document is parsed, read and dropped, so
 // that memory holds one document at a time whatever the parts' number.
@@ -123,107 +121,6 @@ std::vector<std::string> whole_run_argv(const std::vector<std::string>& argv,
         if (!handled) out.push_back(a);
     }
     return out;
-}
-
-// Calls line(text) for every line of a regular file (text without its LF),
-// refusing a line longer than max_line before it is held. Returns whether the
-// file ended with LF (true for an empty file).
-template <class F>
-bool for_each_line(const std::string& path, const std::string& what, std::size_t max_line, F line) {
-    const int fd = rbcd::open_input(path, what);
-    struct Closer {
-        int fd;
-        ~Closer() { ::close(fd); }
-    } closer{fd};
-    std::string carry;
-    char buf[1 << 16];
-    std::uint64_t n = 0;
-    for (;;) {
-        const ssize_t got = ::read(fd, buf, sizeof buf);
-        if (got < 0) {
-            if (errno == EINTR) continue;
-            throw InputError(rbcd::cannot_read_message(path, what, std::strerror(errno)));
-        }
-        if (got == 0) break;
-        std::size_t b = 0;
-        for (std::size_t i = 0; i < std::size_t(got); ++i) {
-            if (buf[i] != '\n') continue;
-            carry.append(buf + b, i - b);
-            ++n;
-            if (carry.size() > max_line)
-                throw rbcd::input_error_at(path, n, "line longer than " + std::to_string(max_line) + " bytes");
-            line(std::string_view(carry));
-            carry.clear();
-            b = i + 1;
-        }
-        carry.append(buf + b, std::size_t(got) - b);
-        if (carry.size() > max_line)
-            throw rbcd::input_error_at(path, n + 1, "line longer than " + std::to_string(max_line) + " bytes");
-    }
-    if (carry.empty()) return true;
-    line(std::string_view(carry));
-    return false;
-}
-
-// The parts' collision files, each read and checked against its part's
-// frames (io/collision_check.h) as it is copied.
-void copy_collisions(const std::vector<Part>& parts, rbcd::OutputFile& out) {
-    out.write(std::string(rbcd::kCollisionsMagic));
-    std::string buf;
-    for (const auto& p : parts) {
-        rbcd::CollisionFileCheck check(p.collisions, p.snapshot.frames.first_frame, p.snapshot.frames.frames);
-        bool first = true;
-        const bool lf = for_each_line(p.collisions, "collisions file", rbcd::CollisionFileCheck::kMaxLineBytes,
-                                      [&](std::string_view line) {
-                                          check.line(line);
-                                          if (first) {
-                                              first = false;   // the magic line, written once
-                                              return;
-                                          }
-                                          buf.append(line);
-                                          buf += '\n';
-                                          if (buf.size() >= (1u << 16)) {
-                                              out.write(buf);
-                                              buf.clear();
-                                          }
-                                      });
-        check.finish(lf);
-    }
-    out.write(buf);
-}
-
-// The parts' per-frame lines, their cycles counted from the whole run's start;
-// each part's lines must be its frames, in order.
-void copy_frame_stats(const std::vector<Part>& parts, rbcd::OutputFile& out) {
-    std::uint64_t offset = 0;
-    for (const auto& p : parts) {
-        const std::string& path = p.frame_stats;
-        std::uint64_t n = 0;
-        const bool lf = for_each_line(path, "frame stats file", kMaxFrameStatsLineBytes, [&](std::string_view line) {
-            ++n;
-            nlohmann::json f = nlohmann::json::parse(line, nullptr, false);
-            if (!f.is_object()) throw rbcd::input_error_at(path, n, "not a JSON object");
-            const std::uint64_t expected = p.snapshot.frames.first_frame + n - 1;
-            if (n > p.snapshot.frames.frames || !f.contains("frame") || !f["frame"].is_number_unsigned() ||
-                f["frame"].get<std::uint64_t>() != expected)
-                throw rbcd::input_error_at(path, n, "frame: expected frame " + std::to_string(expected) +
-                                                        (n > p.snapshot.frames.frames ? " (beyond the part's frames)" : ""));
-            for (const char* key : {"start_cycle", "end_cycle"}) {
-                if (!f.contains(key) || !f[key].is_number_unsigned())
-                    throw rbcd::input_error_at(path, n, std::string(key) + ": missing");
-                std::uint64_t v = 0;
-                if (__builtin_add_overflow(f[key].get<std::uint64_t>(), offset, &v))
-                    throw rbcd::input_error_at(path, n, std::string(key) + ": beyond 2^64 - 1 once offset");
-                f[key] = v;
-            }
-            out.write(f.dump() + "\n");
-        });
-        if (!lf) throw rbcd::input_error_at(path, n, "the last line does not end with LF (the file is cut short)");
-        if (n != p.snapshot.frames.frames)
-            throw InputError(path + ": " + std::to_string(n) + " lines where the part has " +
-                             std::to_string(p.snapshot.frames.frames) + " frames");
-        offset += p.snapshot.cycles;
-    }
 }
 
 struct Options {
@@ -345,13 +242,17 @@ int run(const Options& opt) {
         {{"--stats", opt.stats}, {"--collisions", opt.collisions}, {"--frame-stats", opt.frame_stats}}, inputs);
 
     rbcd::OutputFile stats_out(opt.stats), collisions_out, frames_out;
+    std::vector<rbcd::PartFiles> files;
+    for (const auto& p : parts)
+        files.push_back({p.collisions, p.frame_stats, p.snapshot.frames.first_frame, p.snapshot.frames.frames,
+                         p.snapshot.cycles});
     if (!opt.collisions.empty()) {
         collisions_out = rbcd::OutputFile(opt.collisions);
-        copy_collisions(parts, collisions_out);
+        rbcd::copy_part_collisions(files, collisions_out);
     }
     if (!opt.frame_stats.empty()) {
         frames_out = rbcd::OutputFile(opt.frame_stats);
-        copy_frame_stats(parts, frames_out);
+        rbcd::copy_part_frame_stats(files, frames_out);
     }
     stats_out.write(stats.dump(2) + "\n");
     if (collisions_out.active()) collisions_out.commit();

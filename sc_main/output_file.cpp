@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -24,19 +25,22 @@ std::vector<std::string>& cleanup_paths() {
     return paths;
 }
 
+// Worker processes (rbcd-sim --jobs) that write into those paths: stopped and
+// waited for first, so that nothing is written there after the removal.
+constexpr int kMaxChildren = 1024;
+pid_t g_children[kMaxChildren];
+volatile sig_atomic_t g_child_count = 0;
+
 extern "C" void on_fatal_signal(int sig) {
+    for (int i = 0; i < g_child_count; ++i) ::kill(g_children[i], SIGTERM);
+    for (int i = 0; i < g_child_count; ++i)
+        while (::waitpid(g_children[i], nullptr, 0) < 0 && errno == EINTR) {}
     // A ByName output's directory is listed after the files in it.
     for (const auto& p : cleanup_paths())
         if (::unlink(p.c_str()) != 0) ::rmdir(p.c_str());
     ::_exit(128 + sig);
 }
 
-void forget_on_interrupt(const std::string& path) {
-    // Only before the simulation runs (see cleanup_paths), or after it.
-    auto& v = cleanup_paths();
-    for (auto& p : v)
-        if (p == path) p.clear();
-}
 
 // What lstat says stands at the path: written in place unless it is a regular
 // file or nothing.
@@ -59,6 +63,20 @@ std::string base_of(const std::string& path) {
     return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 } // namespace
+
+void forget_on_interrupt(const std::string& path) {
+    // Only before the simulation runs (see cleanup_paths), or after it.
+    auto& v = cleanup_paths();
+    for (auto& p : v)
+        if (p == path) p.clear();
+}
+
+void stop_on_interrupt(int pid) {
+    if (g_child_count < kMaxChildren) {
+        g_children[g_child_count] = pid;
+        g_child_count = g_child_count + 1;
+    }
+}
 
 void remove_on_interrupt(const std::string& path) {
     static const bool installed = [] {
@@ -142,12 +160,23 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
         // could clean up: it goes now (formats.md).
         ::unlink(path_.c_str());
         std::string tmpl = dir_of(path_) + "/." + base_of(path_) + ".XXXXXX";
+        // A signal between the creation and the registration would leave the
+        // temporary behind (an rbcd-sim --jobs worker is stopped just as it
+        // starts): held back until the handler knows the path.
+        sigset_t block, old;
+        sigemptyset(&block);
+        for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
+        ::sigprocmask(SIG_BLOCK, &block, &old);
         // mkostemp: O_CREAT|O_EXCL with a random name, so nothing planted at a
         // predictable name (a symlink) can redirect the output.
         fd = ::mkostemp(tmpl.data(), O_CLOEXEC);
-        if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
-        tmp_ = tmpl;
-        remove_on_interrupt(tmp_);
+        const int err = errno;
+        if (fd >= 0) {
+            tmp_ = tmpl;
+            remove_on_interrupt(tmp_);
+        }
+        ::sigprocmask(SIG_SETMASK, &old, nullptr);
+        if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(err));
         // mkstemp creates 0600; the result gets what fopen would give it.
         const mode_t mask = ::umask(0);
         ::umask(mask);

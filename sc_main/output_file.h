@@ -20,6 +20,11 @@ void discard_output(const std::string& path);
 // On SIGINT, SIGTERM or SIGHUP the path is unlinked before the process exits.
 // Call before the simulation starts.
 void remove_on_interrupt(const std::string& path);
+// A child process that writes into such paths: on those signals it is sent
+// SIGTERM and waited for before the paths are removed.
+void stop_on_interrupt(int pid);
+// No longer: the path is gone or is the run's result.
+void forget_on_interrupt(const std::string& path);
 // Both paths exist and name the same file.
 bool same_file(const std::string& a, const std::string& b);
 // After a failed run: discard_output() for every output path that is not one

@@ -1,5 +1,7 @@
 #include "rbcd/scene/scene_source.h"
 
+#include <stdexcept>
+
 #include <algorithm>
 #include <filesystem>
 
@@ -63,6 +65,12 @@ std::vector<std::string> SceneSource::mesh_files() const {
 
 void SceneSource::enable_images(bool on) { images_ = on; }
 
+void SceneSource::start_at_frame(std::uint64_t frame) {
+    if (state_ != State::BeforeFrame || frame_ != 0) throw std::logic_error("SceneSource::start_at_frame: already started");
+    frame_ = frame;
+    partial_ = frame > 0;
+}
+
 std::optional<SceneSource::FrameImage> SceneSource::take_frame_image(std::uint64_t frame) {
     auto it = ready_images_.find(frame);
     if (it == ready_images_.end()) return std::nullopt;
@@ -88,7 +96,7 @@ FragmentSource::Event SceneSource::next(Tile& tile) {
         case State::BeforeFrame:
             if (frame_ >= r_->desc().frames) {
                 state_ = State::Done;
-                if (total_fragments_ == 0)
+                if (total_fragments_ == 0 && !partial_)
                     throw InputError(name_ +
                                      ": nothing in view in any frame (no object's triangle covers a pixel; check "
                                      "camera.eye, camera.target, near/far and the objects' positions)");

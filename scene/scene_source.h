@@ -52,6 +52,12 @@ public:
 
     std::uint64_t frame_count() const;
 
+    // rbcd-sim --jobs: a worker whose frames start at `frame` renders none
+    // before it (a frame is a function of its number alone); the previous
+    // worker renders and checks them. "Nothing in view in any frame", which
+    // needs every frame, is then not this source's to say. Call before next().
+    void start_at_frame(std::uint64_t frame);
+
     // Per-object information, in submission order (the order of [[object]]).
     struct ObjectInfo {
         std::string name;
@@ -100,6 +106,7 @@ private:
     enum class State { BeforeFrame, InFrame, Done } state_ = State::BeforeFrame;
     std::uint64_t frame_ = 0;             // the frame being produced (InFrame) or the next one
     std::uint64_t total_fragments_ = 0;   // collisionable and other, over all frames so far
+    bool partial_ = false;                // started past frame 0 (start_at_frame)
     std::uint64_t max_tile_fragments_;
     bool images_ = false;
     std::optional<FrameImage> current_image_;

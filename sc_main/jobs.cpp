@@ -1,0 +1,216 @@
+#include "rbcd/sc_main/jobs.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "rbcd/common/errors.h"
+#include "rbcd/sc_main/output_file.h"
+
+extern char** environ;
+
+namespace rbcd {
+
+namespace {
+
+bool parse_u64(const std::string& s, std::uint64_t& v) {
+    if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos) return false;
+    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+    return r.ec == std::errc() && r.ptr == s.data() + s.size();
+}
+
+// Part k's range ends where part k + 1 starts; the last keeps the run's end.
+std::vector<JobPart> close_ranges(std::vector<JobPart> parts, std::uint64_t last) {
+    for (std::size_t k = 0; k + 1 < parts.size(); ++k) parts[k].range.last = parts[k + 1].range.first - 1;
+    if (!parts.empty()) parts.back().range.last = last;
+    return parts;
+}
+
+} // namespace
+
+std::vector<JobPart> plan_trace_parts(const FrameScan& scan, FrameRange range, unsigned jobs) {
+    if (!scan.ok || scan.marks.empty() || jobs < 2) return {};
+    // The bytes the range spans, as far as the marks tell.
+    std::uint64_t lo = 0, hi = scan.bytes;
+    bool any = false;
+    for (const FrameMark& m : scan.marks) {
+        if (m.frame <= range.first) lo = m.offset;
+        if (m.frame >= range.first && m.frame <= range.last) any = true;
+        if (m.frame > range.last) {
+            hi = m.offset;
+            break;
+        }
+    }
+    if (!any || hi <= lo) return {};
+    std::vector<JobPart> parts(1);
+    parts[0].range.first = range.first;
+    std::size_t i = 0;
+    for (unsigned k = 1; k < jobs; ++k) {
+        const std::uint64_t target = lo + (hi - lo) / jobs * k + (hi - lo) % jobs * k / jobs;
+        while (i < scan.marks.size() &&
+               (scan.marks[i].offset < target || scan.marks[i].frame <= parts.back().range.first))
+            ++i;
+        if (i == scan.marks.size() || scan.marks[i].frame > range.last) break;
+        JobPart p;
+        p.range.first = scan.marks[i].frame;
+        p.skip = true;
+        p.offset = scan.marks[i].offset;
+        p.line = scan.marks[i].line;
+        parts.push_back(p);
+    }
+    return close_ranges(std::move(parts), range.last);
+}
+
+std::vector<JobPart> plan_scene_parts(std::uint64_t frames, FrameRange range, unsigned jobs) {
+    if (jobs < 2 || range.first >= frames) return {};
+    const std::uint64_t last = std::min(range.last, frames - 1), n = last - range.first + 1;
+    const std::uint64_t count = std::min<std::uint64_t>(jobs, n);
+    std::vector<JobPart> parts(count);
+    for (std::uint64_t k = 0; k < count; ++k) {
+        // n * k / count without overflow: n < 2^64, count <= jobs.
+        parts[k].range.first = range.first + n / count * k + n % count * k / count;
+        parts[k].skip = k > 0;
+    }
+    return close_ranges(std::move(parts), range.last);
+}
+
+std::string worker_part_text(const JobPart& p, bool trace) {
+    if (!p.skip) return "first";
+    if (!trace) return "scene";
+    return "trace:" + std::to_string(p.offset) + ":" + std::to_string(p.line);
+}
+
+JobPart parse_worker_part(const std::string& text, FrameRange range) {
+    JobPart p;
+    p.range = range;
+    if (text == "first") return p;
+    p.skip = true;
+    if (text == "scene") return p;
+    const auto bad = [&] { return InputError("--worker-part: \"" + text + "\" is not first, scene or trace:OFFSET:LINE"); };
+    if (text.rfind("trace:", 0) != 0) throw bad();
+    const std::string rest = text.substr(6);
+    const auto colon = rest.find(':');
+    if (colon == std::string::npos || !parse_u64(rest.substr(0, colon), p.offset) ||
+        !parse_u64(rest.substr(colon + 1), p.line))
+        throw bad();
+    return p;
+}
+
+Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::vector<std::string>& err_paths)
+    : err_(err_paths) {
+    // A signal between a worker's start and its registration would leave it
+    // writing after the clean-up: held back until every worker is known; the
+    // workers start with the mask this process had.
+    sigset_t block, old;
+    sigemptyset(&block);
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
+    ::sigprocmask(SIG_BLOCK, &block, &old);
+    struct Restore {
+        sigset_t mask;
+        ~Restore() { ::sigprocmask(SIG_SETMASK, &mask, nullptr); }
+    } restore{old};
+    posix_spawnattr_t attr;
+    posix_spawnattr_init(&attr);
+    posix_spawnattr_setsigmask(&attr, &old);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
+    struct AttrGuard {
+        posix_spawnattr_t* a;
+        ~AttrGuard() { posix_spawnattr_destroy(a); }
+    } attr_guard{&attr};
+    for (std::size_t k = 0; k < argvs.size(); ++k) {
+        std::vector<char*> argv;
+        for (const auto& a : argvs[k]) argv.push_back(const_cast<char*>(a.c_str()));
+        argv.push_back(nullptr);
+        posix_spawn_file_actions_t fa;
+        posix_spawn_file_actions_init(&fa);
+        posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+        posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+        posix_spawn_file_actions_addopen(&fa, 2, err_paths[k].c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+        pid_t pid = 0;
+        const int rc = posix_spawn(&pid, argv[0], &fa, &attr, argv.data(), environ);
+        posix_spawn_file_actions_destroy(&fa);
+        if (rc != 0) throw RunError("--jobs: cannot start a worker (" + argvs[k][0] + "): " + std::strerror(rc));
+        pids_.push_back(pid);
+        stop_on_interrupt(pid);
+    }
+}
+
+Workers::~Workers() {
+    if (waited_) return;
+    for (int pid : pids_) ::kill(pid, SIGTERM);
+    for (int pid : pids_) {
+        int st = 0;
+        while (::waitpid(pid, &st, 0) < 0 && errno == EINTR) {}
+    }
+}
+
+void Workers::wait() {
+    std::vector<int> status(pids_.size(), 0);
+    for (std::size_t k = 0; k < pids_.size(); ++k)
+        while (::waitpid(pids_[k], &status[k], 0) < 0 && errno == EINTR) {}
+    waited_ = true;
+    for (std::size_t k = 0; k < pids_.size(); ++k) {
+        const int st = status[k];
+        if (WIFEXITED(st) && WEXITSTATUS(st) == 0) continue;
+        // The worker's own one line, without its program name (the caller's
+        // message adds it); its other lines (a scene's warnings) were said once
+        // by the caller already.
+        std::ifstream in(err_[k]);
+        std::string line, last;
+        while (std::getline(in, line))
+            if (line.rfind("rbcd-sim: ", 0) == 0) last = line.substr(10);
+        if (WIFEXITED(st) && WEXITSTATUS(st) == 2) throw InputError(last.empty() ? "a worker refused its input" : last);
+        if (last.empty())
+            last = WIFSIGNALED(st) ? "--jobs: worker " + std::to_string(k) + " killed by signal " +
+                                         std::to_string(WTERMSIG(st))
+                                   : "--jobs: worker " + std::to_string(k) + " failed";
+        throw RunError(last);
+    }
+}
+
+TempDirectory::TempDirectory(const std::string& parent) {
+    std::string tmpl = (std::filesystem::path(parent) / ".rbcd-sim-jobs.XXXXXX").string();
+    std::vector<char> b(tmpl.begin(), tmpl.end());
+    b.push_back('\0');
+    // Held back between the creation and the registration, as OutputFile does.
+    sigset_t block, old;
+    sigemptyset(&block);
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
+    ::sigprocmask(SIG_BLOCK, &block, &old);
+    const bool made = ::mkdtemp(b.data()) != nullptr;
+    const int err = errno;
+    if (made) {
+        dir_ = b.data();
+        remove_on_interrupt(dir_);
+    }
+    ::sigprocmask(SIG_SETMASK, &old, nullptr);
+    if (!made) throw RunError("--jobs: cannot create the workers' directory in " + parent + ": " + std::strerror(err));
+}
+
+void TempDirectory::will_hold(const std::string& name) {
+    // The handler removes paths in order: the directory must come after its files.
+    forget_on_interrupt(dir_);
+    held_.push_back(path(name));
+    remove_on_interrupt(held_.back());
+    remove_on_interrupt(dir_);
+}
+
+TempDirectory::~TempDirectory() {
+    std::error_code ec;
+    std::filesystem::remove_all(dir_, ec);
+    for (const auto& p : held_) forget_on_interrupt(p);
+    forget_on_interrupt(dir_);
+}
+
+} // namespace rbcd

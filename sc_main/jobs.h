@@ -1,0 +1,85 @@
+// rbcd-sim --jobs N: one run on N cores. Frames are independent (every frame
+// starts on a drained unit with its memory latency reseeded: docs/timing.md),
+// so the run's frames are cut into N contiguous ranges, each simulated by a
+// worker (rbcd-sim itself, --frames A:B, one thread) into a private
+// directory, and the workers' stats, collision and per-frame files are joined
+// as rbcd-merge joins them: the same bytes as one process.
+//
+//     const auto parts = plan_trace_parts(scan_frames(trace), range, 2);
+//     Workers w(parts, worker_argv);      // starts them
+//     w.wait();                           // throws the first failed part's error
+//
+// A worker does not read what comes before its frames: it starts at its
+// first frame's byte of a trace (found by scan_frames, io/frame_scan.h), or
+// renders a scene from that frame on. The frames before it are the previous
+// worker's, which reads and checks them; the first worker reads from the
+// start, so that an input error before the range is reported as one process
+// reports it.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rbcd/io/frame_range_source.h"
+#include "rbcd/io/frame_scan.h"
+
+namespace rbcd {
+
+struct JobPart {
+    FrameRange range;            // its --frames (last open, UINT64_MAX, for the part that runs to the input's end)
+    bool skip = false;           // starts at range.first without reading the frames before it
+    std::uint64_t offset = 0, line = 0;   // a trace's: where frame range.first's record is (line 0: to be counted)
+};
+
+// Contiguous parts covering `range` of a trace, balanced by bytes; fewer than
+// `jobs` when the trace has fewer frames in the range. One part (or none, when
+// the range selects nothing) means: run as one process.
+std::vector<JobPart> plan_trace_parts(const FrameScan& scan, FrameRange range, unsigned jobs);
+// The same for a scene of `frames` frames, balanced by frames.
+std::vector<JobPart> plan_scene_parts(std::uint64_t frames, FrameRange range, unsigned jobs);
+
+// The hidden option a worker gets: "first", "scene" or "trace:OFFSET:LINE".
+std::string worker_part_text(const JobPart& p, bool trace);
+// Its parse; throws InputError naming --worker-part.
+JobPart parse_worker_part(const std::string& text, FrameRange range);
+
+// The workers, started by the constructor with argvs[k] (argvs[k][0] the
+// program), standard output discarded, standard error into err_paths[k].
+class Workers {
+public:
+    Workers(const std::vector<std::vector<std::string>>& argvs, const std::vector<std::string>& err_paths);
+    ~Workers();   // waits for any still running (after killing them)
+    Workers(const Workers&) = delete;
+    Workers& operator=(const Workers&) = delete;
+    // Waits for all. When some failed: throws the error of the first one (in
+    // frame order), the exit status it had (InputError for 2, RunError else).
+    void wait();
+
+private:
+    std::vector<int> pids_;
+    std::vector<std::string> err_;
+    bool waited_ = false;
+};
+
+// A private temporary directory (mkdtemp, mode 0700) in `parent`, removed
+// with what it holds. The workers' collision files, as large as the run's,
+// go beside the output they become (the same file system, which must hold
+// them anyway), not into a TMPDIR that may be memory.
+class TempDirectory {
+public:
+    explicit TempDirectory(const std::string& parent);
+    ~TempDirectory();
+    TempDirectory(const TempDirectory&) = delete;
+    TempDirectory& operator=(const TempDirectory&) = delete;
+    std::string path(const std::string& name) const { return dir_ + "/" + name; }
+    // The file `name` will be written in it: removed, and the directory with
+    // it, if the run is interrupted (SIGINT, SIGTERM, SIGHUP; output_file.h).
+    // Call before the workers start.
+    void will_hold(const std::string& name);
+
+private:
+    std::string dir_;
+    std::vector<std::string> held_;
+};
+
+} // namespace rbcd

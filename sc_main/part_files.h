@@ -1,0 +1,30 @@
+// The collision and per-frame files of rbcd-sim runs over consecutive frame
+// ranges, joined into one run's (rbcd-merge, and rbcd-sim --jobs for its
+// workers' files): each file is read line by line and checked against its
+// part's frames as it is copied, so another part's file, garbage or a file cut
+// short is refused (InputError naming the file and line), never copied.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "rbcd/sc_main/output_file.h"
+
+namespace rbcd {
+
+struct PartFiles {
+    std::string collisions, frame_stats;   // the part's files (empty: not merged)
+    std::uint64_t first_frame = 0, frames = 0;
+    std::uint64_t cycles = 0;              // the part's totals.cycles: the next part's clock starts there
+};
+
+// The magic line once, then every part's records in order.
+void copy_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out);
+// The same for files this process's own workers just wrote (rbcd-sim --jobs,
+// in its private directory): copied in blocks, not read line by line, the
+// magic line checked and written once. Throws RunError on a read error.
+void copy_own_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out);
+// Every part's lines, their start_cycle and end_cycle counted from the first part's start.
+void copy_part_frame_stats(const std::vector<PartFiles>& parts, OutputFile& out);
+
+} // namespace rbcd

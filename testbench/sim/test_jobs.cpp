@@ -1,0 +1,228 @@
+// rbcd-sim --jobs N (sc_main/jobs.h): the frames run by N workers give the
+// bytes one process writes (collisions, --frame-stats, the stats document
+// apart from the wall time and the command line that ran), for traces plain
+// and gzip and for scenes, with and without --frames; bad values and what
+// cannot be split are refused; an input error is the one a single process
+// reports.
+#include "rbcd/testbench/sim/cli_util.h"
+
+#include <nlohmann/json.hpp>
+#include <chrono>
+#include <regex>
+#include <thread>
+
+using namespace rbcd::cli_test;
+
+namespace {
+
+struct Outputs {
+    std::string stats, collisions, frames, out;
+};
+
+// The stats document with what documents the run itself (its wall time, its
+// command line) set to what the reference run had; everything else is compared byte for byte.
+std::string as_reference(const std::string& stats, const std::string& reference) {
+    static const std::regex wall(R"re("(wall_seconds|fragments_per_second)": [^,\n]+)re");
+    const std::string a = std::regex_replace(stats, wall, "\"$1\": 0");
+    const std::string b = std::regex_replace(reference, wall, "\"$1\": 0");
+    nlohmann::json ja = nlohmann::json::parse(a), jb = nlohmann::json::parse(b);
+    if (ja.contains("provenance") && jb.contains("provenance"))
+        for (const char* key : {"argv", "command_line"}) ja["provenance"][key] = jb["provenance"][key];
+    return ja.dump(2) + "\n";
+}
+
+Outputs run(const TempDir& td, std::vector<std::string> args, const std::string& jobs) {
+    td.plant_old_outputs();
+    args.insert(args.end(), {"--collisions", td.collisions(), "--stats", td.stats(), "--frame-stats",
+                             td.path("out/frames.jsonl")});
+    if (!jobs.empty()) args.insert(args.end(), {"--jobs", jobs});
+    const Result r = run_sim(td, args);
+    INFO(r.cmd);
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    CHECK(r.err.empty());
+    return {slurp(td.stats()), slurp(td.collisions()), slurp(td.path("out/frames.jsonl")), r.out};
+}
+
+void expect_same_as_one_process(const TempDir& td, const std::vector<std::string>& args) {
+    const Outputs one = run(td, args, "");
+    REQUIRE(one.collisions.size() > 20);
+    for (const char* jobs : {"1", "2", "3"}) {
+        INFO("--jobs " << jobs);
+        const Outputs n = run(td, args, jobs);
+        CHECK(n.collisions == one.collisions);
+        CHECK(n.frames == one.frames);
+        CHECK(as_reference(n.stats, one.stats) == std::regex_replace(one.stats, std::regex(R"re("(wall_seconds|fragments_per_second)": [^,\n]+)re"), "\"$1\": 0"));
+        CHECK(n.out == one.out);
+        const auto argv = nlohmann::json::parse(n.stats)["provenance"]["argv"];
+        CHECK(argv.back() == jobs);
+    }
+}
+
+// The default scene at 200 x 120 pixels: its 60 frames and collisions at a
+// sixteenth of the fragments (the tests run it many times).
+std::string small_scene(const TempDir& td) {
+    std::string text = slurp(std::string(RBCD_SOURCE_DIR) + "/scene/default_scene.toml");
+    for (const auto& [from, to] : {std::pair<std::string, std::string>{"width = 800", "width = 200"},
+                                   {"height = 480", "height = 120"}}) {
+        const std::size_t at = text.find(from);
+        REQUIRE(at != std::string::npos);
+        text.replace(at, from.size(), to);
+    }
+    return td.write("small.toml", text);
+}
+
+// That scene as a trace.
+std::string default_trace(const TempDir& td, bool gzip) {
+    const std::string t = td.path(gzip ? "scene.rbt.gz" : "scene.rbt");
+    const Result w = run_sim(td, {"-q", "--scene", small_scene(td), "--write-trace", td.path("scene.rbt")});
+    REQUIRE(w.status == 0);
+    if (gzip) td.write_gz("scene.rbt.gz", slurp(td.path("scene.rbt")));
+    return t;
+}
+
+} // namespace
+
+TEST_CASE("rbcd-sim --jobs: a plain trace gives one process's bytes", "[jobs]") {
+    TempDir td;
+    const std::string t = default_trace(td, false);
+    const auto frames = GENERATE(as<std::string>{}, "", "5:40", "7:", "12");
+    INFO("--frames " << frames);
+    std::vector<std::string> a{"-q", "--trace", t};
+    if (!frames.empty()) a.insert(a.end(), {"--frames", frames});
+    expect_same_as_one_process(td, a);
+}
+
+TEST_CASE("rbcd-sim --jobs: a gzip trace gives one process's bytes", "[jobs]") {
+    TempDir td;
+    const std::string t = default_trace(td, true);
+    const auto frames = GENERATE(as<std::string>{}, "", "3:50");
+    INFO("--frames " << frames);
+    std::vector<std::string> a{"-q", "--trace", t, "--set", "zeb.banks=1", "--set", "zeb.list_length=4"};
+    if (!frames.empty()) a.insert(a.end(), {"--frames", frames});
+    expect_same_as_one_process(td, a);
+}
+
+TEST_CASE("rbcd-sim --jobs: a scene gives one process's bytes", "[jobs]") {
+    TempDir td;
+    const auto frames = GENERATE(as<std::string>{}, "", "10:45", "58:");
+    INFO("--frames " << frames);
+    std::vector<std::string> a{"-q", "--scene", small_scene(td)};
+    if (!frames.empty()) a.insert(a.end(), {"--frames", frames});
+    expect_same_as_one_process(td, a);
+}
+
+TEST_CASE("rbcd-sim --jobs: the summary on standard output is one process's", "[jobs]") {
+    TempDir td;
+    const std::string t = default_trace(td, false);
+    expect_same_as_one_process(td, {"--trace", t});
+    // The built-in scene, as it is: a part of it.
+    expect_same_as_one_process(td, {"--frames", "20:29"});
+}
+
+TEST_CASE("rbcd-sim --jobs: more workers than frames", "[jobs]") {
+    TempDir td;
+    const std::string t = default_trace(td, false);
+    const Outputs one = run(td, {"-q", "--trace", t, "--frames", "30:31"}, "");
+    const Outputs n = run(td, {"-q", "--trace", t, "--frames", "30:31"}, "8");
+    CHECK(n.collisions == one.collisions);
+    CHECK(n.frames == one.frames);
+}
+
+TEST_CASE("rbcd-sim --jobs: bad values are refused", "[jobs]") {
+    TempDir td;
+    const std::string t = default_trace(td, false);
+    for (const char* v : {"0", "-1", "two", "", "1025", "2.5"}) {
+        INFO("--jobs '" << v << "'");
+        expect_input_error(td, run_with_outputs(td, {"-q", "--trace", t, "--jobs", v}), {"--jobs"});
+    }
+}
+
+TEST_CASE("rbcd-sim --jobs: what one process must write is refused with more than one", "[jobs]") {
+    TempDir td;
+    const std::string t = default_trace(td, false);
+    expect_input_error(td, run_with_outputs(td, {"-q", "--trace", t, "--jobs", "2", "--vcd", td.path("out/w.vcd")}),
+                       {"--jobs", "--vcd"});
+    expect_input_error(td, run_with_outputs(td, {"-q", "--jobs", "2", "--images", td.path("out/img")}),
+                       {"--jobs", "--images"});
+    expect_input_error(td, run_with_outputs(td, {"-q", "--jobs", "2", "--write-trace", td.path("out/t.rbt")}),
+                       {"--jobs", "--write-trace"});
+    expect_input_error(td, run_with_outputs(td, {"-q", "--trace", "-", "--jobs", "2"}), {"--jobs", "standard input"});
+    // --jobs 1 is one process, whatever else is asked.
+    td.plant_old_outputs();
+    CHECK(run_sim(td, {"-q", "--frames", "0:1", "--jobs", "1", "--write-trace", td.path("t2.rbt")}).status == 2);
+    CHECK(run_sim(td, {"-q", "--jobs", "1", "--frames", "0:1", "--vcd", td.path("w.vcd")}).status == 0);
+}
+
+TEST_CASE("rbcd-sim --jobs: an input error is the one a single process reports", "[jobs]") {
+    TempDir td;
+    const std::string t = default_trace(td, false);
+    std::string text = slurp(t);
+    // A fragment line broken in frame 50, then one in frame 10: each is the first error in its turn.
+    const auto break_in = [&](std::string s, unsigned frame) {
+        const std::size_t at = s.find("\nf ", s.find("\nframe " + std::to_string(frame) + "\n"));
+        REQUIRE(at != std::string::npos);
+        s.replace(at + 1, 1, "g");
+        return s;
+    };
+    for (const std::string& bad : {break_in(text, 50), break_in(break_in(text, 50), 10)}) {
+        for (const bool gz : {false, true}) {
+            const std::string path = gz ? td.write_gz("bad.rbt.gz", bad) : td.write("bad.rbt", bad);
+            td.plant_old_outputs();
+            const Result one = run_with_outputs(td, {"-q", "--trace", path});
+            REQUIRE(one.status == 2);
+            for (const char* jobs : {"2", "3"}) {
+                INFO("--jobs " << jobs << (gz ? " gzip" : ""));
+                const Result n = run_with_outputs(td, {"-q", "--trace", path, "--jobs", jobs});
+                expect_input_error(td, n, {});
+                CHECK(n.err == one.err);
+            }
+        }
+    }
+}
+
+TEST_CASE("rbcd-sim --jobs: a scene with nothing in view says so as one process does", "[jobs]") {
+    TempDir td;
+    const std::string scene =
+        td.write("empty.toml", "format = \"rbcd-scene 1\"\nframes = 40\n[screen]\nwidth = 64\nheight = 48\n"
+                               "[camera]\neye = [0.0, 0.0, 0.0]\ntarget = [0.0, 0.0, -1.0]\nfov_y = 60.0\n"
+                               "near = 0.1\nfar = 100.0\n");
+    const Result one = run_with_outputs(td, {"-q", "--scene", scene});
+    const Result n = run_with_outputs(td, {"-q", "--scene", scene, "--jobs", "2"});
+    expect_input_error(td, n, {"nothing in view"});
+    CHECK(n.err == one.err);
+}
+
+TEST_CASE("rbcd-sim --jobs: a run stopped by SIGTERM leaves no output, no workers' directory, no workers", "[jobs]") {
+    TempDir td;
+    td.plant_old_outputs();
+    std::vector<std::string> args{RBCD_SIM, "-q", "--jobs", "2", "--collisions", td.collisions(), "--stats", td.stats()};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+    pid_t pid = 0;
+    REQUIRE(posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) == 0);
+    posix_spawn_file_actions_destroy(&fa);
+    // The workers' directory appears beside the collisions just before they start.
+    bool started = false;
+    for (int i = 0; i < 5000 && !started; ++i) {
+        for (const auto& e : td.out_entries()) started = started || e.rfind(".rbcd-sim-jobs.", 0) == 0;
+        if (!started) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    CHECK(started);
+    REQUIRE(kill(pid, SIGTERM) == 0);
+    int st = 0;
+    REQUIRE(waitpid(pid, &st, 0) == pid);
+    CHECK(WIFEXITED(st));
+    CHECK(WEXITSTATUS(st) == 128 + SIGTERM);
+    // Workers still running would write into the directory after this.
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    std::string names;
+    for (const auto& e : td.out_entries()) names += e + " ";
+    INFO("left behind: " << names);
+    CHECK(td.out_entries().empty());
+}
