@@ -316,16 +316,21 @@ int run(Options opt) {
         scene_src = s.get();
         src = std::move(s);
     }
-    if (parts.size() >= 2) {
-        const std::string input_name = src ? src->name() : opt.trace;
-        std::vector<ProvenanceInput> prov_inputs;
-        const std::string default_scene = scene::default_scene_text();
-        if (!opt.config_file.empty()) prov_inputs.push_back({"config", opt.config_file});
-        if (!opt.trace.empty()) prov_inputs.push_back({"trace", opt.trace});
-        else if (opt.scene.empty()) prov_inputs.push_back({"scene", input_name, &default_scene});
-        else prov_inputs.push_back({"scene", opt.scene});
+    // The files the run read, for provenance (docs/provenance.md); the default
+    // scene is named and hashed from its text.
+    const std::string default_scene = scene::default_scene_text();
+    const auto provenance_inputs = [&](const std::string& input_name) {
+        std::vector<ProvenanceInput> inputs;
+        if (!opt.config_file.empty()) inputs.push_back({"config", opt.config_file});
+        if (!opt.trace.empty()) inputs.push_back({"trace", opt.trace});
+        else if (opt.scene.empty()) inputs.push_back({"scene", input_name, &default_scene});
+        else inputs.push_back({"scene", opt.scene});
         if (scene_src)
-            for (const auto& m : scene_src->mesh_files()) prov_inputs.push_back({"mesh", m});
+            for (const auto& m : scene_src->mesh_files()) inputs.push_back({"mesh", m});
+        return inputs;
+    };
+    if (parts.size() >= 2) {
+        const auto prov_inputs = provenance_inputs(src ? src->name() : opt.trace);
         if (run_jobs(opt, parts, prov_inputs, cfg, collisions_out, stats_out, frame_stats_out)) return 0;
         // No fragment in any of the parts' frames: whether the scene has none
         // at all is one process's to say (it reads every frame).
@@ -343,14 +348,7 @@ int run(Options opt) {
     const std::string input_name = src->name();
     // Inputs are hashed now, as they were read, and only for a stats file
     // (docs/provenance.md).
-    std::vector<ProvenanceInput> prov_inputs;
-    const std::string default_scene = scene::default_scene_text();
-    if (!opt.config_file.empty()) prov_inputs.push_back({"config", opt.config_file});
-    if (!opt.trace.empty()) prov_inputs.push_back({"trace", opt.trace});
-    else if (opt.scene.empty()) prov_inputs.push_back({"scene", input_name, &default_scene});
-    else prov_inputs.push_back({"scene", opt.scene});
-    if (scene_src)
-        for (const auto& m : scene_src->mesh_files()) prov_inputs.push_back({"mesh", m});
+    const auto prov_inputs = provenance_inputs(input_name);
     // With a second core to use, the hashing (a trace's every byte) runs beside
     // the simulation instead of before it; the database records it up front.
     nlohmann::json provenance;
