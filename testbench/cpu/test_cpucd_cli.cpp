@@ -102,12 +102,7 @@ TEST_CASE("rbcd-cpucd: outputs go through unpredictable temporaries", "[cpucd_cl
     for (int f = 0; f < 2000; ++f) s2 += "frame " + std::to_string(f) + "\nm 0 " + kIdentity + "\nm 1 " + kIdentity + "\n";
     const std::string long_geo = td.write("long.geo", s2);
     const std::string out2 = td.out_dir() + "/second.csv";
-    std::vector<std::string> args{RBCD_CPUCD, "-q", "--repeat", "1000", "--geometry", long_geo, "--pairs", out2};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    pid_t pid = 0;
-    REQUIRE(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) == 0);
+    const pid_t pid = spawn_program({RBCD_CPUCD, "-q", "--repeat", "1000", "--geometry", long_geo, "--pairs", out2});
     std::string temp;
     for (int i = 0; i < 200 && temp.empty(); ++i) {
         for (const auto& e : td.out_entries())
@@ -188,12 +183,7 @@ TEST_CASE("rbcd-cpucd: SIGTERM during a run leaves nothing at the output paths",
     for (int f = 0; f < 2000; ++f) s += "frame " + std::to_string(f) + "\nm 0 " + kIdentity + "\nm 1 " + kIdentity + "\n";
     const std::string geo = td.write("long.geo", s);
     const std::string pairs = td.out_dir() + "/pairs.csv";
-    std::vector<std::string> args{RBCD_CPUCD, "-q", "--repeat", "1000", "--geometry", geo, "--pairs", pairs};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    pid_t pid = 0;
-    REQUIRE(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) == 0);
+    const pid_t pid = spawn_program({RBCD_CPUCD, "-q", "--repeat", "1000", "--geometry", geo, "--pairs", pairs});
     // Until its temporary exists (the output is open), then stop it.
     for (int i = 0; i < 200 && td.out_entries().empty(); ++i) ::usleep(20000);
     REQUIRE_FALSE(td.out_entries().empty());

@@ -104,15 +104,17 @@ inline bool leak_checker_crashed(const std::string& err) {
            err.find("LeakSanitizer has encountered a fatal error") != std::string::npos;
 }
 
-inline Result run_program_once(const TempDir& td, const std::string& program, const std::vector<std::string>& args) {
-    Result r;
-    const std::string out_path = td.path("stdout.txt"), err_path = td.path("stderr.txt");
-    std::vector<std::string> argv_s{program};
-    argv_s.insert(argv_s.end(), args.begin(), args.end());
+// Starts argv[0] with argv, SYSTEMC_DISABLE_COPYRIGHT_MESSAGE=1 added to the
+// environment, standard input from `stdin_fd` (or /dev/null) with `close_fd`
+// closed in the child, standard output and error to the paths given. The
+// caller waits for it (or stops it first: the signal tests).
+inline pid_t spawn_program(std::vector<std::string> argv_s, const std::string& out_path = "/dev/null",
+                           const std::string& err_path = "/dev/null", int stdin_fd = -1, int close_fd = -1) {
     std::vector<char*> argv;
+    std::string cmd;
     for (auto& a : argv_s) {
         argv.push_back(a.data());
-        r.cmd += (r.cmd.empty() ? "" : " ") + a;
+        cmd += (cmd.empty() ? "" : " ") + a;
     }
     argv.push_back(nullptr);
 
@@ -126,14 +128,27 @@ inline Result run_program_once(const TempDir& td, const std::string& program, co
 
     posix_spawn_file_actions_t fa;
     posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    if (stdin_fd >= 0) posix_spawn_file_actions_adddup2(&fa, stdin_fd, 0);
+    else posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    if (close_fd >= 0) posix_spawn_file_actions_addclose(&fa, close_fd);
     posix_spawn_file_actions_addopen(&fa, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&fa, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     pid_t pid = 0;
     const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), envp.data());
     posix_spawn_file_actions_destroy(&fa);
-    INFO(r.cmd);
+    INFO(cmd);
     REQUIRE(rc == 0);
+    return pid;
+}
+
+inline Result run_program_once(const TempDir& td, const std::string& program, const std::vector<std::string>& args) {
+    Result r;
+    const std::string out_path = td.path("stdout.txt"), err_path = td.path("stderr.txt");
+    std::vector<std::string> argv_s{program};
+    argv_s.insert(argv_s.end(), args.begin(), args.end());
+    for (const auto& a : argv_s) r.cmd += (r.cmd.empty() ? "" : " ") + a;
+    const pid_t pid = spawn_program(argv_s, out_path, err_path);
+    INFO(r.cmd);
     int st = 0;
     REQUIRE(waitpid(pid, &st, 0) == pid);
     if (WIFEXITED(st)) r.status = WEXITSTATUS(st);

@@ -196,17 +196,8 @@ TEST_CASE("rbcd-sim --jobs: a scene with nothing in view says so as one process 
 TEST_CASE("rbcd-sim --jobs: a run stopped by SIGTERM leaves no output, no workers' directory, no workers", "[jobs]") {
     TempDir td;
     td.plant_old_outputs();
-    std::vector<std::string> args{RBCD_SIM, "-q", "--jobs", "2", "--collisions", td.collisions(), "--stats", td.stats()};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
-    pid_t pid = 0;
-    REQUIRE(posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) == 0);
-    posix_spawn_file_actions_destroy(&fa);
+    const pid_t pid =
+        spawn_program({RBCD_SIM, "-q", "--jobs", "2", "--collisions", td.collisions(), "--stats", td.stats()});
     // The workers' directory appears beside the collisions just before they start.
     bool started = false;
     for (int i = 0; i < 5000 && !started; ++i) {

@@ -62,19 +62,8 @@ TEST_CASE("cli outputs: a run killed by SIGTERM leaves neither the older outputs
     // Standard input is a pipe nobody writes to: rbcd-sim blocks reading it.
     int pfd[2];
     REQUIRE(::pipe(pfd) == 0);
-    std::vector<std::string> args{RBCD_SIM, "--trace", "-", "--collisions", td.collisions(), "--stats", td.stats()};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_adddup2(&fa, pfd[0], 0);
-    posix_spawn_file_actions_addclose(&fa, pfd[1]);
-    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
-    pid_t pid = 0;
-    REQUIRE(posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), environ) == 0);
-    posix_spawn_file_actions_destroy(&fa);
+    const pid_t pid = spawn_program({RBCD_SIM, "--trace", "-", "--collisions", td.collisions(), "--stats", td.stats()},
+                                    "/dev/null", "/dev/null", pfd[0], pfd[1]);
     ::close(pfd[0]);
     // rbcd-sim creates its outputs, then blocks reading the pipe: wait for the
     // temporaries to appear, then stop it as a user would.
