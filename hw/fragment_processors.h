@@ -27,6 +27,7 @@
 
 #include "rbcd/common/config.h"
 #include "rbcd/common/vcd_writer.h"
+#include "rbcd/hw/branch_free.h"
 #include "rbcd/hw/clocking.h"
 
 namespace rbcd {
@@ -51,13 +52,15 @@ public:
     }
     // Earliest cycle >= t at which the queue has a free slot for the next fragment.
     std::uint64_t room(std::uint64_t t) const { return std::max(t, slot_free_[qi_]); }
+    // The cycle the next fragment's queue slot frees (room() is its max with t).
+    std::uint64_t slot_free_next() const { return slot_free_[qi_]; }
     // The next fragment enters at e (>= room(e)); returns its dispatch cycle.
     std::uint64_t push(std::uint64_t e) {
         const std::uint64_t s = std::max(e + ez_, proc_free_[pi_]);
         proc_free_[pi_] = s + c_;
         slot_free_[qi_] = s;
-        if (++pi_ == p_) pi_ = 0;
-        if (++qi_ == q_) qi_ = 0;
+        pi_ = branch_free::next(pi_, p_);
+        qi_ = branch_free::next(qi_, q_);
         done_ = std::max(done_, s + c_);
         return s;
     }
@@ -71,17 +74,16 @@ public:
         std::uint64_t* const slot_free = slot_free_.data();
         std::uint64_t* const proc_free = proc_free_.data();
         for (std::uint64_t k = 0; k < m; ++k) {
-            if (used == rate) {
-                ++t;
-                used = 0;
-            }
-            const std::uint64_t room = slot_free[qi];
-            if (room > t) {
-                wait += room - t;
-                t = room;
-                used = 0;
-            }
-            ++used;
+            // Masks, not branches (hw/branch_free.h): full cycles and waits
+            // follow the input.
+            const unsigned full = used == rate;
+            t += full;
+            used &= full - 1u;
+            const std::uint64_t room = std::max(t, slot_free[qi]);
+            const unsigned late = room != t;
+            wait += room - t;
+            t = room;
+            used = (used & (late - 1u)) + 1;
             const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
             proc_free[pi] = s + c_;
             slot_free[qi] = s;

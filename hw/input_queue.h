@@ -42,11 +42,17 @@ public:
     void push(std::uint64_t enq, std::uint64_t issue) {
         // Occupancy seen by this entry: older fragments not issued by `enq`, plus
         // this one. Read before the slot of the fragment Q places earlier is reused.
-        while (head_ < n_ && issue_[hi_] <= enq) {
-            ++head_;
-            if (++hi_ == depth_) hi_ = 0;
+        // It cannot exceed the depth (room() holds an entry back until the one
+        // Q places earlier has issued), so once the deepest occupancy is the
+        // depth nothing is left to measure, and a busy trace stops paying for
+        // the pops early in the run.
+        if (stats_.max_occupancy < depth_) {
+            while (head_ < n_ && issue_[hi_] <= enq) {
+                ++head_;
+                if (++hi_ == depth_) hi_ = 0;
+            }
+            stats_.max_occupancy = std::max<std::uint64_t>(stats_.max_occupancy, n_ - head_ + 1);
         }
-        stats_.max_occupancy = std::max<std::uint64_t>(stats_.max_occupancy, n_ - head_ + 1);
         issue_[i_] = issue;
         if (++i_ == depth_) i_ = 0;
         ++n_;

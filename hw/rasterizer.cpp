@@ -48,10 +48,9 @@ struct EvenSplit {
     std::uint64_t next() {
         q += whole;
         r += frac;
-        if (r >= parts) {
-            ++q;
-            r -= parts;
-        }
+        const bool carry = r >= parts;
+        q += carry;
+        r -= carry ? parts : 0;
         return q;
     }
 };
@@ -265,7 +264,8 @@ struct rasterizer::Unit {
     [[gnu::always_inline]] void frag(const Fragment& f) {
         const std::uint64_t slot = R.unit_.slot();
         const std::uint64_t uq = R.iq_.room(slot);
-        const std::uint64_t fq = f.culled ? slot : R.fp_.room(slot);
+        // c fragments skip the fragment queue; a mask, not a branch on the input.
+        const std::uint64_t fq = std::max(slot, R.fp_.pipe().slot_free_next() & (std::uint64_t(f.culled) - 1));
         const std::uint64_t e = std::max(uq, fq);
         if (e > slot) {
             if (uq >= fq) {

@@ -40,6 +40,7 @@
 #include "rbcd/common/config.h"
 #include "rbcd/common/fragment.h"
 #include "rbcd/common/vcd_writer.h"
+#include "rbcd/hw/branch_free.h"
 #include "rbcd/hw/clocking.h"
 #include "rbcd/hw/fragment_processors.h"
 #include "rbcd/hw/input_queue.h"
@@ -159,19 +160,18 @@ public:
     struct Cursor {
         std::uint64_t t = 0;
         unsigned used = 0, rate = 1;
+        // Masks, not branches: whether a cycle is full or a fragment waited
+        // follows the input (hw/branch_free.h).
         std::uint64_t slot() {
-            if (used == rate) {
-                ++t;
-                used = 0;
-            }
+            const unsigned full = used == rate;
+            t += full;
+            used &= full - 1u;
             return t;
         }
         void emit_at(std::uint64_t e) {
-            if (e > t) {
-                t = e;
-                used = 0;
-            }
-            ++used;
+            const unsigned later = e > t;
+            t = std::max(t, e);
+            used = (used & (later - 1u)) + 1;
         }
         void busy(std::uint64_t cycles) {
             if (!cycles) return;
