@@ -5,7 +5,7 @@
 namespace rbcd {
 
 PrefetchSource::PrefetchSource(std::unique_ptr<FragmentSource> inner, std::size_t depth)
-    : inner_(std::move(inner)), ring_(depth < 2 ? 2 : depth) {
+    : inner_(std::move(inner)), ring_(depth < 2 ? 2 : depth), resume_(ring_.size() / 2) {
     thread_ = std::thread([this] { produce(); });
 }
 
@@ -22,8 +22,10 @@ void PrefetchSource::produce() {
     std::size_t tail = 0;
     for (;;) {
         {
+            // A full ring waits until the simulation has taken half of it:
+            // waking per tile cost a context switch each on both threads.
             std::unique_lock<std::mutex> lock(m_);
-            not_full_.wait(lock, [&] { return stop_ || count_ < ring_.size(); });
+            if (count_ == ring_.size()) not_full_.wait(lock, [&] { return stop_ || count_ <= resume_; });
             if (stop_) return;
         }
         // The slot at `tail` is the producer's alone until count_ covers it.
@@ -60,12 +62,13 @@ FragmentSource::Event PrefetchSource::next(Tile& tile) {
     if (ev == Event::End) return ev;                  // stays too: End is final
     if (ev == Event::Tile) std::swap(tile, s->tile);  // the caller's old storage goes back for reuse
     else tile.frame = s->tile.frame;
+    bool wake;
     {
         std::lock_guard<std::mutex> lock(m_);
         head_ = (head_ + 1) % ring_.size();
-        --count_;
+        wake = --count_ == resume_;
     }
-    not_full_.notify_one();
+    if (wake) not_full_.notify_one();
     return ev;
 }
 

@@ -25,7 +25,7 @@ namespace rbcd {
 
 class PrefetchSource final : public FragmentSource {
 public:
-    explicit PrefetchSource(std::unique_ptr<FragmentSource> inner, std::size_t depth = 8);
+    explicit PrefetchSource(std::unique_ptr<FragmentSource> inner, std::size_t depth = 16);
     ~PrefetchSource() override;
     PrefetchSource(const PrefetchSource&) = delete;
     PrefetchSource& operator=(const PrefetchSource&) = delete;
@@ -45,6 +45,7 @@ private:
     std::unique_ptr<FragmentSource> inner_;
     std::vector<Slot> ring_;
     std::size_t head_ = 0, count_ = 0;
+    std::size_t resume_;   // a full ring's producer resumes at this count
     bool stop_ = false;
     std::mutex m_;
     std::condition_variable not_empty_, not_full_;
