@@ -17,7 +17,6 @@
 //   std::uint64_t s = sorter.accept(frag, enqueue_cycle, depth_bits);
 //   std::uint64_t filled = sorter.end_tile();   // the bank holds the whole tile
 #pragma once
-#include <algorithm>
 #include <cstdint>
 #include <systemc>
 #include <vector>
@@ -104,40 +103,6 @@ public:
 
 private:
     void insert(zeb_bank& bank, unsigned list, std::uint64_t word, std::uint64_t key);
-    // The M comparators for the common list lengths (4, 8, 16) as straight
-    // code over every slot, masked by the count, as the hardware's
-    // comparators: a loop over the count mispredicts its exit on every trace
-    // whose fragments do not arrive in per-object bursts (callgrind
-    // --branch-sim: 0.7 mispredictions a fragment on rbcd-bench's
-    // interleaved trace). (A binary search over the sorted list has fewer
-    // steps but each waits for the one before: slower.) Other lengths loop
-    // over the count.
-    template <class LessEq>
-    unsigned position(const std::uint64_t* row, unsigned n, LessEq le) const {
-        switch (m_) {
-        case 4: return position_all<4>(row, n, le);
-        case 8: return position_all<8>(row, n, le);
-        case 16: return position_all<16>(row, n, le);
-        default: {
-            unsigned pos = 0;
-            for (unsigned i = 0; i < n; ++i) pos += le(row[i]);
-            return pos;
-        }
-        }
-    }
-    template <unsigned M, class LessEq>
-    static unsigned position_all(const std::uint64_t* row, unsigned n, LessEq le) {
-        unsigned pos = 0;
-        for (unsigned i = 0; i < M; ++i) pos += (i < n) & le(row[i]);
-        return pos;
-    }
-    // Slots from pos on move down one; slots past the count take whatever is
-    // shifted in (they are not read). An index, not a select: gcc turns the
-    // select back into a branch.
-    template <unsigned M>
-    static void shift_all(std::uint64_t* row, unsigned pos) {
-        for (unsigned i = M - 1; i > 0; --i) row[i] = row[i - (i > pos)];
-    }
     std::uint64_t hazard(unsigned li, std::uint64_t issue);
     void trace_issue(std::uint64_t issue);
 
@@ -176,14 +141,14 @@ inline void insertion_sorter::insert(zeb_bank& bank, unsigned li, std::uint64_t 
     // Compared as stored words, not as keys rebuilt from them: a word is
     // [dq | id | facing], so with its id zeroed it orders as (dq, facing)
     // does, and under arrival w >> s <= key is w < (key + 1) << s.
-    unsigned pos;
+    unsigned pos = 0;
     if (front_first_) {
         const std::uint64_t id_mask = ((std::uint64_t(1) << (id_shift_ - 1)) - 1) << 1;
         const std::uint64_t k = ((key >> 1) << id_shift_) | (key & 1u);
-        pos = position(row, n, [=](std::uint64_t w) { return (w & ~id_mask) <= k; });
+        for (unsigned i = 0; i < n; ++i) pos += (row[i] & ~id_mask) <= k;
     } else {
         const std::uint64_t k = (key + 1) << id_shift_;
-        pos = position(row, n, [=](std::uint64_t w) { return w < k; });
+        for (unsigned i = 0; i < n; ++i) pos += row[i] < k;
     }
 
     if (n == m_) {
@@ -195,18 +160,13 @@ inline void insertion_sorter::insert(zeb_bank& bank, unsigned li, std::uint64_t 
             return;
         }
         ++stats_.dropped_last;
+        for (unsigned i = m_ - 1; i > pos; --i) row[i] = row[i - 1];
         stats_.mux_shifts += m_ - 1 - pos;
     } else {
+        for (unsigned i = n; i > pos; --i) row[i] = row[i - 1];
         stats_.mux_shifts += n - pos;
         ++n;
         bank.mark_occupied(li);
-    }
-    switch (m_) {
-    case 4: shift_all<4>(row, pos); break;
-    case 8: shift_all<8>(row, pos); break;
-    case 16: shift_all<16>(row, pos); break;
-    default:
-        for (unsigned i = n - 1u; i > pos; --i) row[i] = row[i - 1];
     }
     row[pos] = word;
     bank.note_write();
