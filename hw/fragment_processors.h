@@ -55,7 +55,7 @@ public:
     // The cycle the next fragment's queue slot frees (room() is its max with t).
     std::uint64_t slot_free_next() const { return slot_free_[qi_]; }
     // The next fragment enters at e (>= room(e)); returns its dispatch cycle.
-    std::uint64_t push(std::uint64_t e) {
+    [[gnu::always_inline]] std::uint64_t push(std::uint64_t e) {
         const std::uint64_t s = std::max(e + ez_, proc_free_[pi_]);
         proc_free_[pi_] = s + c_;
         slot_free_[qi_] = s;
@@ -68,7 +68,7 @@ public:
     // (t, used): each leaves at the rasterizer's next slot or when the queue
     // has room. Returns the cycles the rasterizer waited. The same as m times
     // room() and push(), with the state in registers.
-    std::uint64_t shade(std::uint64_t& t_io, unsigned& used_io, unsigned rate, std::uint64_t m) {
+    [[gnu::always_inline]] std::uint64_t shade(std::uint64_t& t_io, unsigned& used_io, unsigned rate, std::uint64_t m) {
         std::uint64_t t = t_io, done = done_, wait = 0;
         unsigned used = used_io, qi = qi_, pi = pi_;
         std::uint64_t* const slot_free = slot_free_.data();
@@ -105,7 +105,7 @@ public:
     // clock) by the same number of cycles, and every later block does the
     // same (the recurrences are shift-invariant). Long runs jump over those
     // blocks, so their cost does not grow with their length.
-    std::uint64_t shade_run(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
+    [[gnu::always_inline]] std::uint64_t shade_run(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
         if (m <= kLongRun) return shade(t, used, rate, m);
         return shade_long(t, used, rate, m);
     }
@@ -202,7 +202,7 @@ public:
     fragment_processors(sc_core::sc_module_name name, const GpuConfig& g) : sc_module(name), pipe_(g) {}
 
     std::uint64_t room(std::uint64_t t) const { return pipe_.room(t); }
-    std::uint64_t push(std::uint64_t e) {
+    [[gnu::always_inline]] std::uint64_t push(std::uint64_t e) {
         const std::uint64_t s = pipe_.push(e);
         ++stats_.fragments;
         if (vcd_) {

@@ -39,7 +39,7 @@ public:
     unsigned depth() const { return depth_; }
     std::uint64_t room(std::uint64_t t) const { return n_ >= depth_ ? std::max(t, issue_[i_]) : t; }
 
-    void push(std::uint64_t enq, std::uint64_t issue) {
+    [[gnu::always_inline]] void push(std::uint64_t enq, std::uint64_t issue) {
         // Occupancy seen by this entry: older fragments not issued by `enq`, plus
         // this one. Read before the slot of the fragment Q places earlier is reused.
         // It cannot exceed the depth (room() holds an entry back until the one

@@ -27,6 +27,23 @@ void insertion_sorter::begin_tile(zeb_bank& bank, std::uint64_t ready, const Til
     bank_ready_ = ready;
     x0_ = tile.col * tile_w_;
     y0_ = tile.row * tile_h_;
+    // insert()'s path (path() in the header): all slots when the count
+    // changed in more than an eighth of the insertions of the tiles counted,
+    // weighted by their fragments and halved each counted tile, so that one
+    // sparse tile does not send a busy trace back to the loops.
+    if (path_ != Loops && tile_frags_) {
+        recent_changes_ = recent_changes_ / 2 + count_changes_;
+        recent_insertions_ = recent_insertions_ / 2 + tile_frags_;
+        const bool fixed_m = m_ == 4 || m_ == 8 || m_ == 16;
+        path_ = fixed_m && recent_changes_ * 8 > recent_insertions_ ? AllSlots : Loops;
+    } else if (path_ == LoopsCounted) {
+        path_ = Loops;
+    }
+    if (path_ == Loops && tiles_to_sample_-- == 0) {
+        path_ = LoopsCounted;
+        tiles_to_sample_ = kSampleEvery - 1;
+    }
+    count_changes_ = 0;
     tile_frags_ = 0;
     // Hazards are between rows of one bank: a new tile starts a new window.
     prev_list_[0] = prev_list_[1] = ~0u;

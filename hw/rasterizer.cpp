@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <type_traits>
 
 namespace rbcd {
 
@@ -136,7 +137,7 @@ void walk_tile_without_setups(const Tile& tile, V& v) {
 }
 
 inline std::uint64_t shade_one(rasterizer::Cursor& r, FragmentPipe& fp) { return fp.shade(r.t, r.used, r.rate, 1); }
-inline std::uint64_t shade_run(rasterizer::Cursor& r, FragmentPipe& fp, std::uint64_t m) {
+[[gnu::always_inline]] inline std::uint64_t shade_run(rasterizer::Cursor& r, FragmentPipe& fp, std::uint64_t m) {
     return fp.shade_run(r.t, r.used, r.rate, m);
 }
 
@@ -225,6 +226,7 @@ struct rasterizer::Pure {
 };
 
 // The with-unit timeline.
+template <insertion_sorter::Path P>
 struct rasterizer::Unit {
     rasterizer& R;
     std::uint64_t setup_cycles;
@@ -283,7 +285,7 @@ struct rasterizer::Unit {
         }
         R.unit_.emit_at(e);
         if (!f.culled) R.fp_.push(e);
-        R.iq_.push(e, R.sorter_.accept(f, e, R.depth_bits_));
+        R.iq_.push(e, R.sorter_.template accept<P>(f, e, R.depth_bits_));
     }
 };
 
@@ -454,9 +456,18 @@ void rasterizer::feed_tile(const Tile& tile) {
     if (vcd_) vcd_->set(vcd_emit_, start, 1);
     const std::uint64_t stalls_before = cur_.stall_no_bank + cur_.stall_queue_full + cur_.stall_fragment_queue;
     unit_.busy(overhead);
-    Unit unit{*this, setup, bank_ready, bank_wait_unit};
-    if (no_setups) walk_tile_without_setups(tile, unit);
-    else walk_tile(tile, culled, unit);
+    const auto walk_with_unit = [&](auto path) {
+        Unit<decltype(path)::value> unit{*this, setup, bank_ready, bank_wait_unit};
+        if (no_setups) walk_tile_without_setups(tile, unit);
+        else walk_tile(tile, culled, unit);
+    };
+    // One walk per sorter path, each its own straight code (insertion_sorter::path()).
+    using Path = insertion_sorter::Path;
+    switch (sorter_.path()) {
+    case Path::Loops: walk_with_unit(std::integral_constant<Path, Path::Loops>{}); break;
+    case Path::LoopsCounted: walk_with_unit(std::integral_constant<Path, Path::LoopsCounted>{}); break;
+    case Path::AllSlots: walk_with_unit(std::integral_constant<Path, Path::AllSlots>{}); break;
+    }
     if (tile.has_base) unit_.restart(std::max(unit_.next_free(), start + tile.base));
     const std::uint64_t end = unit_.next_free();
     const std::uint64_t stalls = cur_.stall_no_bank + cur_.stall_queue_full + cur_.stall_fragment_queue - stalls_before;

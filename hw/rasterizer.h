@@ -187,7 +187,8 @@ public:
 
 private:
     struct Pure;   // the GPU-only timelines
-    struct Unit;   // the with-unit timeline's per-element steps
+    template <insertion_sorter::Path P>
+    struct Unit;   // the with-unit timeline's per-element steps, for the sorter's path P
 
     void run();
     void begin_frame(std::uint64_t frame);

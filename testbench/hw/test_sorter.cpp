@@ -9,7 +9,9 @@
 // One TEST_CASE per process (catch_discover_tests): no SECTIONs.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -545,4 +547,51 @@ TEST_CASE("hw sorter: hazards do not reach across tiles", "[sorter][timing]") {
     const auto r1 = b.fill(*b.bank1, tb::tile(0, 1, 0, {frag(16, 0, 10, 1, 'F')}), r0.feed_done);
     CHECK(r1.first_issue == 3);
     CHECK(b.sorter->stats().hazard_stall_cycles == 0);
+}
+
+// insert() sorts a tile by loops over the list count or by fixed work over
+// all M slots, chosen per tile from how often the count changed in the tiles
+// before (insertion_sorter::path()). Both must leave every list as the
+// contract's sorted insertion does: the M smallest (depth, then front before
+// back), equal keys in arrival order. Tiles whose fragments come in
+// per-pixel bursts, then tiles of random pixels: both paths must be taken.
+TEST_CASE("sorter: loops and all-slots paths sort alike", "[sorter]") {
+    SimConfig cfg;   // 16x16 tiles, M = 8, front first
+    SorterBench b(cfg);
+    std::mt19937_64 gen(2027);
+    const auto range = [&](unsigned lo, unsigned hi) { return lo + static_cast<unsigned>(gen() % (hi - lo + 1)); };
+    bool saw_loops = false, saw_all = false;
+    for (unsigned t = 0; t < 48; ++t) {
+        const bool bursts = t < 16 || t >= 40;
+        std::vector<Fragment> frags;
+        for (unsigned k = 0; k < 1200; ++k) {
+            const unsigned px = bursts ? (k / 6) % 256 : range(0, 255);
+            frags.push_back(frag(px % 16, px / 16, range(0, 63) * 4096, range(1, 9), range(0, 1) ? 'F' : 'B'));
+        }
+        const Tile tile = tb::tile(0, 0, 0, frags);
+        zeb_bank bank(("zeb_paths" + std::to_string(t)).c_str(), cfg.zeb, cfg.tile, 0);
+        b.fill(bank, tile);
+        (b.sorter->path() == insertion_sorter::AllSlots ? saw_all : saw_loops) = true;
+        // Expected lists: stable sort of each pixel's arrivals by (dq, back after front), first M.
+        std::vector<std::vector<Fragment>> expect(256);
+        for (const Fragment& f : frags) expect[f.y * 16 + f.x].push_back(f);
+        for (unsigned li = 0; li < 256; ++li) {
+            auto& v = expect[li];
+            std::stable_sort(v.begin(), v.end(), [&](const Fragment& a, const Fragment& c) {
+                const auto qa = quantize_depth(a.depth, 24, cfg.zeb.z_bits), qc = quantize_depth(c.depth, 24, cfg.zeb.z_bits);
+                return qa != qc ? qa < qc : (a.facing == Facing::Front && c.facing == Facing::Back);
+            });
+            if (v.size() > cfg.zeb.list_length) v.resize(cfg.zeb.list_length);
+            std::string want;
+            for (const Fragment& f : v) {
+                if (!want.empty()) want += ' ';
+                want += std::to_string(quantize_depth(f.depth, 24, cfg.zeb.z_bits)) + ":" + std::to_string(f.id) +
+                        (f.facing == Facing::Back ? "B" : "F");
+            }
+            INFO("tile " << t << " list " << li << " path " << b.sorter->path());
+            REQUIRE(b.row(bank, li) == want);
+        }
+    }
+    CHECK(saw_loops);
+    CHECK(saw_all);
 }
