@@ -74,16 +74,17 @@ public:
         std::uint64_t* const slot_free = slot_free_.data();
         std::uint64_t* const proc_free = proc_free_.data();
         for (std::uint64_t k = 0; k < m; ++k) {
-            // Masks, not branches (hw/branch_free.h): full cycles and waits
-            // follow the input.
-            const unsigned full = used == rate;
-            t += full;
-            used &= full - 1u;
-            const std::uint64_t room = std::max(t, slot_free[qi]);
-            const unsigned late = room != t;
-            wait += room - t;
-            t = room;
-            used = (used & (late - 1u)) + 1;
+            if (used == rate) {
+                ++t;
+                used = 0;
+            }
+            const std::uint64_t room = slot_free[qi];
+            if (room > t) {
+                wait += room - t;
+                t = room;
+                used = 0;
+            }
+            ++used;
             const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
             proc_free[pi] = s + c_;
             slot_free[qi] = s;
