@@ -3,6 +3,7 @@
 // anything unusual on a line falls back to a general tokenizer that either
 // accepts the line or says precisely what is wrong with it.
 #include "rbcd/io/trace_reader.h"
+#include "rbcd/io/frame_scan.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -126,6 +127,14 @@ struct TraceReader::Impl {
     char* data_end = nullptr;
     bool eof = false;
     unsigned long long line = 1;   // number of the line at cur
+    // start_at_frame() without a line number: `line` counts from 1 at byte
+    // line_from of the file, and a message counts the lines before that byte
+    // then (a pass over the data no successful run needs).
+    bool line_relative = false;
+    std::uint64_t line_from = 0;
+    unsigned long long line_in_file(unsigned long long l) const {
+        return line_relative ? count_lines_before(path, line_from) - 1 + l : l;
+    }
     std::uint64_t pulled = 0;      // bytes of data read from the stream (data_end's position)
 
     std::uint64_t depth_max = 0, id_max = 0;
@@ -145,7 +154,7 @@ struct TraceReader::Impl {
     std::vector<std::uint64_t> tiles_in_frame;
     std::unordered_set<std::uint64_t> tile_set;
 
-    [[noreturn]] void fail(const std::string& what) const { throw input_error_at(path, line, what); }
+    [[noreturn]] void fail(const std::string& what) const { throw input_error_at(path, line_in_file(line), what); }
 
     void open();
     bool fill();
@@ -178,7 +187,7 @@ FragmentSource::Event TraceReader::Impl::end_tile(const Tile& t) {
         std::ostringstream mhz;
         mhz << lim.clock_mhz;
         // The tile's last line is the one before cur.
-        throw input_error_at(path, line > 1 ? line - 1 : line,
+        throw input_error_at(path, line_in_file(line > 1 ? line - 1 : line),
                              "the run is too long to simulate: the work declared up to tile " + num_str(tcol) + " " +
                                  num_str(trow) + " of frame " + num_str(frame) +
                                  " ((fragments + other=) x gpu.cycles_per_fragment + (prims= + cprims=) x gpu.setup_cycles_per_primitive + base=) exceeds " +
@@ -617,7 +626,9 @@ void TraceReader::start_at_frame(std::uint64_t frame, std::uint64_t offset, std:
         m.pulled += static_cast<std::uint64_t>(got);
         m.cur = m.lines_end = m.data_end = m.buf.data();
     }
-    m.line = line;
+    m.line = line ? line : 1;
+    m.line_relative = line == 0;
+    m.line_from = offset;
     m.next_frame = frame;
 }
 

@@ -47,7 +47,9 @@ public:
     // rbcd-sim --jobs: a worker whose frames start at `frame` goes straight to
     // that frame's record, at byte `offset` of the (inflated) data, line `line`
     // (as scan_frames() found them); the frames before it are the previous
-    // worker's to read and check. Call before the first next().
+    // worker's to read and check. Call before the first next(). line = 0: not
+    // known (a plain file, found by find_frames_near()); a message counts the
+    // lines before `offset` in the file when it needs the number.
     void start_at_frame(std::uint64_t frame, std::uint64_t offset, std::uint64_t line);
 
 private:

@@ -301,9 +301,8 @@ int run(Options opt) {
             // Parsed a few tiles ahead on another core (io/prefetch_source.h),
             // unless the cores are the caller's to share (rbcd-sweep's workers).
             auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
-            if (part.skip)
-                reader->start_at_frame(range.first, part.offset,
-                                       part.line ? part.line : count_lines_before(opt.trace, part.offset));
+            // A plain trace's line number is counted only if a message needs it.
+            if (part.skip) reader->start_at_frame(range.first, part.offset, part.line);
             if (opt.threads > 1) src = std::make_unique<PrefetchSource>(std::move(reader));
             else src = std::move(reader);
         }
