@@ -37,8 +37,8 @@ FrameScan scan_frames(const std::string& path, std::size_t max_marks = 4096, std
 
 // A plain trace (not gzip, a regular file) needs no pass over all of it: the
 // first frame record at or after each of `targets` (byte offsets), read from
-// there, a few KiB each. Their line numbers are left 0 (unknown): the worker
-// counts them (count_lines_before), in parallel with the others. ok = false
+// there, a few KiB each. Their line numbers are left 0 (unknown): a worker's
+// reader counts them (count_lines_before) only if a message needs one. ok = false
 // for a gzip file or anything that is not a regular file: use scan_frames.
 FrameScan find_frames_near(const std::string& path, const std::vector<std::uint64_t>& targets);
 // The size of the file, 0 when it is gzip or not a regular file.
