@@ -70,8 +70,9 @@ public:
     // 4, 8, 16), cheaper when they vary (a rasterizer's order over many
     // small primitives), where each loop's exit mispredicts (callgrind
     // --branch-sim: 1.2 a fragment on rbcd-bench's interleaved trace). The
-    // choice follows how often the count changed in the last tile counted;
-    // loops count one tile in kSampleEvery, all slots every tile. The
+    // choice follows how often the count changed in recent counted tiles
+    // (begin_tile()); loops count one tile in kSampleEvery, all slots every
+    // tile. The
     // caller runs a tile's fragments with accept<path()>, so that each path
     // is its own straight code (one path with a test per fragment cost the
     // default scene 4%).
@@ -198,26 +199,21 @@ template <insertion_sorter::Path P>
     // the insertion position.
     // Compared as stored words, not as keys rebuilt from them: a word is
     // [dq | id | facing], so with its id zeroed it orders as (dq, facing)
-    // does, and under arrival w >> s <= key is w < (key + 1) << s.
+    // does, and under arrival w >> s <= key is w <= ((key + 1) << s) - 1
+    // (no overflow: an element is at most 49 bits wide).
     if (P != Loops) {
         count_changes_ += n != last_count_;
         last_count_ = n;
     }
+    const std::uint64_t id_mask = ((std::uint64_t(1) << (id_shift_ - 1)) - 1) << 1;
+    const std::uint64_t keep = front_first_ ? ~id_mask : ~std::uint64_t(0);
+    const std::uint64_t limit =
+        front_first_ ? ((key >> 1) << id_shift_) | (key & 1u) : ((key + 1) << id_shift_) - 1;
+    const auto le = [=](std::uint64_t w) { return (w & keep) <= limit; };
     unsigned pos = 0;
-    if (front_first_) {
-        const std::uint64_t id_mask = ((std::uint64_t(1) << (id_shift_ - 1)) - 1) << 1;
-        const std::uint64_t k = ((key >> 1) << id_shift_) | (key & 1u);
-        const auto le = [=](std::uint64_t w) { return (w & ~id_mask) <= k; };
-        if (P == AllSlots) pos = position_all(row, n, le);
-        else
-            for (unsigned i = 0; i < n; ++i) pos += le(row[i]);
-    } else {
-        const std::uint64_t k = (key + 1) << id_shift_;
-        const auto le = [=](std::uint64_t w) { return w < k; };
-        if (P == AllSlots) pos = position_all(row, n, le);
-        else
-            for (unsigned i = 0; i < n; ++i) pos += le(row[i]);
-    }
+    if (P == AllSlots) pos = position_all(row, n, le);
+    else
+        for (unsigned i = 0; i < n; ++i) pos += le(row[i]);
 
     if (n == m_) {
         bank.note_overflow(li);

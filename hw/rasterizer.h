@@ -40,7 +40,6 @@
 #include "rbcd/common/config.h"
 #include "rbcd/common/fragment.h"
 #include "rbcd/common/vcd_writer.h"
-#include "rbcd/hw/branch_free.h"
 #include "rbcd/hw/clocking.h"
 #include "rbcd/hw/fragment_processors.h"
 #include "rbcd/hw/input_queue.h"
