@@ -435,8 +435,16 @@ bool TraceReader::Impl::fast_fragment(std::vector<Fragment>& out) {
     else return false;
     // Unsigned differences also reject values below the window's start.
     if (x - x0 >= xw || y - y0 >= yh || d > depth_max || id > id_max) return false;
-    out.push_back(Fragment{static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y), static_cast<std::uint32_t>(d),
-                           static_cast<std::uint32_t>(id), facing, culled});
+    // Stored field by field in place: a Fragment built on the stack and then
+    // copied is read back with wider loads than the stores that made it, which
+    // stall store forwarding (a quarter of this function's time, measured).
+    Fragment& f = out.emplace_back();
+    f.x = static_cast<std::uint32_t>(x);
+    f.y = static_cast<std::uint32_t>(y);
+    f.depth = static_cast<std::uint32_t>(d);
+    f.id = static_cast<std::uint32_t>(id);
+    f.facing = facing;
+    f.culled = culled;
     cur = const_cast<char*>(p);
     ++line;
     return true;

@@ -33,13 +33,19 @@ std::vector<std::string> option_values(const std::vector<std::string>& argv,
                                        std::initializer_list<const char*> options);
 
 // An input as it was read: role ("trace", "scene", "mesh", "config"), path and,
-// for a file, its size in bytes and SHA-256. `text` set: an embedded input
-// (the default scene) hashed from memory.
+// for a file, its size in bytes and XXH3-128 digest. `text` set: an embedded
+// input (the default scene) hashed from memory.
 struct ProvenanceInput {
     std::string role, path;
     const std::string* text = nullptr;
 };
 nlohmann::json input_info(const ProvenanceInput& in);
+
+// An input's digest: XXH3-128 (libxxhash), 32 lower-case hex digits, as
+// `xxhsum -H2` prints it. Not SHA-256: a trace of gigabytes is hashed on every
+// run, and SHA-256 (1.7 GB/s with the x86 SHA extensions) cost as much CPU as
+// parsing the trace (docs/provenance.md).
+std::string xxh128_hex(const void* data, std::size_t len);
 
 // The "provenance" object of stats.json: {"build": build_info(), "command_line",
 // "argv", "working_directory", "config_sha256" (of dump_config_toml(cfg)),

@@ -12,6 +12,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
+// The inputs' digests of the stats' provenance, computed here from the
+// library rather than through the program's own code.
+#define XXH_INLINE_ALL
+#include <xxhash.h>
 
 #include <cstdint>
 #include <cstring>
@@ -42,6 +46,18 @@ inline std::string slurp(const std::string& path) {
     std::ostringstream os;
     os << in.rdbuf();
     return os.str();
+}
+
+// As `xxhsum -H2` prints it.
+inline std::string xxh128_of(const std::string& bytes) {
+    XXH128_canonical_t c;
+    XXH128_canonicalFromHash(&c, XXH3_128bits(bytes.data(), bytes.size()));
+    std::string s;
+    for (unsigned char b : c.digest) {
+        s += "0123456789abcdef"[b >> 4];
+        s += "0123456789abcdef"[b & 15];
+    }
+    return s;
 }
 
 struct TempDir : rbcd::test::TempDir {

@@ -55,7 +55,7 @@ TEST_CASE("cli: stats carry the provenance: build, command line, configuration h
         REQUIRE(by_role.count(role));
         CHECK(by_role[role]["path"] == path);
         CHECK(by_role[role]["size"] == fs::file_size(path));
-        CHECK(by_role[role]["sha256"] == rbcd::sha256_hex(slurp(path)));
+        CHECK(by_role[role]["xxh128"] == xxh128_of(slurp(path)));
     }
 }
 

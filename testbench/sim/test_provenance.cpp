@@ -1,6 +1,7 @@
-// Provenance (docs/provenance.md): SHA-256 against the FIPS 180-4 / NIST
-// example vectors, shell quoting, input sizes and hashes, and the hash of the
-// effective configuration.
+// Provenance (docs/provenance.md): SHA-256 (the configuration's hash) against
+// the FIPS 180-4 / NIST example vectors, the inputs' XXH3-128 against digests
+// `xxhsum -H2` printed, shell quoting, input sizes and hashes, and the hash of
+// the effective configuration.
 #include <catch2/catch.hpp>
 
 #include "rbcd/testbench/common/temp_dir.h"
@@ -54,6 +55,26 @@ TEST_CASE("sha256: the bulk path (SHA extensions where the CPU has them) equals 
     }
 }
 
+TEST_CASE("xxh128: digests as xxhsum -H2 prints them") {
+    CHECK(xxh128_hex("", 0) == "99aa06d3014798d86001c324468d497f");
+    CHECK(xxh128_hex("abc", 3) == "06b05ab6733a618578af5f94892f3950");
+    const std::string a(1000000, 'a');
+    CHECK(xxh128_hex(a.data(), a.size()) == "a545df8e384a9579b1fd6fae5285c4eb");
+}
+
+TEST_CASE("provenance: a file read in several blocks hashes as xxhsum -H2 hashes it") {
+    test::TempDir td;
+    // Three 1 MiB reads and a short one.
+    std::string bytes(3000017, '\0');
+    for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<char>(i % 251);
+    const std::string path = td.write("big.rbt", bytes);
+    const auto j = input_info({"trace", path});
+    CHECK(j["size"] == bytes.size());
+    CHECK(j["xxh128"] == "24b128e0c946640038162c5844f0f8ef");
+    CHECK(j["xxh128"] == xxh128_hex(bytes.data(), bytes.size()));
+    CHECK_FALSE(j.contains("note"));
+}
+
 TEST_CASE("provenance: shell quoting reads back as the same words") {
     CHECK(shell_quote("build/bin/rbcd-sim") == "build/bin/rbcd-sim");
     CHECK(shell_quote("--set=zeb.tie=arrival") == "--set=zeb.tie=arrival");
@@ -64,7 +85,7 @@ TEST_CASE("provenance: shell quoting reads back as the same words") {
     CHECK(shell_quote("x;rm") == "'x;rm'");
 }
 
-TEST_CASE("provenance: inputs carry path, size and SHA-256, the configuration its hash") {
+TEST_CASE("provenance: inputs carry path, size and XXH3-128, the configuration its SHA-256") {
     test::TempDir td;
     const std::string trace = td.write("t.rbt", "rbcd-trace 1\n");
     const std::string embedded = "format = 1\n";
@@ -81,10 +102,11 @@ TEST_CASE("provenance: inputs carry path, size and SHA-256, the configuration it
     CHECK(p["inputs"][0]["role"] == "trace");
     CHECK(p["inputs"][0]["path"] == trace);
     CHECK(p["inputs"][0]["size"] == 13);
-    CHECK(p["inputs"][0]["sha256"] == sha256_hex("rbcd-trace 1\n"));
+    CHECK(p["inputs"][0]["xxh128"] == "babbd33b98e1446b42e375e71cf8bda4");
     CHECK(p["inputs"][1]["size"] == embedded.size());
-    CHECK(p["inputs"][1]["sha256"] == sha256_hex(embedded));
-    CHECK(p["inputs"][2]["sha256"].is_null());
+    CHECK(p["inputs"][1]["xxh128"] == xxh128_hex(embedded.data(), embedded.size()));
+    CHECK(p["inputs"][2]["xxh128"].is_null());
+    CHECK(p["inputs"][2]["size"].is_null());
     CHECK_THAT(p["inputs"][2]["note"].get<std::string>(), Contains("cannot read"));
 
     SimConfig other;

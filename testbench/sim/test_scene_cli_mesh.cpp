@@ -5,7 +5,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "rbcd/common/sha256.h"
 
 using namespace rbcd::cli_test;
 
@@ -96,9 +95,9 @@ TEST_CASE("cli scene: the provenance lists the scene and each mesh file once wit
     REQUIRE(p["inputs"].size() == 2);
     CHECK(p["inputs"][0]["role"] == "scene");
     CHECK(p["inputs"][0]["path"] == sc);
-    CHECK(p["inputs"][0]["sha256"] == rbcd::sha256_hex(slurp(sc)));
+    CHECK(p["inputs"][0]["xxh128"] == xxh128_of(slurp(sc)));
     CHECK(p["inputs"][1]["role"] == "mesh");
     CHECK(fs::equivalent(p["inputs"][1]["path"].get<std::string>(), obj));
     CHECK(p["inputs"][1]["size"] == fs::file_size(obj));
-    CHECK(p["inputs"][1]["sha256"] == rbcd::sha256_hex(slurp(obj)));
+    CHECK(p["inputs"][1]["xxh128"] == xxh128_of(slurp(obj)));
 }
