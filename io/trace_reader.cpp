@@ -8,6 +8,7 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <emmintrin.h>   // SSE2, part of x86-64 itself
 #include <zlib.h>
 
 #include <algorithm>
@@ -164,6 +165,7 @@ struct TraceReader::Impl {
     void read_headers();
     void header_record(const Fields& fl, unsigned long long first_line[3]);
     bool fast_fragment(std::vector<Fragment>& out);
+    bool whole_line_fragment(std::vector<Fragment>& out);
     void slow_fragment(const Fields& fl, std::vector<Fragment>& out, bool in_tile);
     void start_tile(const Fields& fl, Tile& t);
     void other_run(const Fields& fl, Tile& t, bool in_tile);
@@ -392,7 +394,10 @@ inline bool fast_num(const char*& p, std::uint64_t& out, const char* end) {
         x = (x & 0x00FF00FF00FF00FFull) * 6553601 >> 16;
         v = static_cast<std::uint32_t>((x & 0x0000FFFF0000FFFFull) * 42949672960001ull >> 32);
         p += len;
-        if (len < 8) {
+        // Eight digits followed by a ninth is rare; seven against eight (a
+        // 24-bit depth) is a coin toss, so that test is not a branch of its own.
+        const bool longer = (len == 8) & (static_cast<unsigned char>(*p) - unsigned('0') < 10);
+        if (!longer) {
             if (!tok_end(*p)) return false;
             out = v;
             return true;
@@ -407,9 +412,97 @@ inline bool fast_num(const char*& p, std::uint64_t& out, const char* end) {
     out = v;
     return true;
 }
+
+// A bit per byte of the 32 at p: those equal to c.
+inline std::uint32_t bytes_equal(__m128i lo, __m128i hi, char c) {
+    const __m128i v = _mm_set1_epi8(c);
+    return static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(lo, v))) |
+           static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(hi, v))) << 16;
+}
+
+// One to eight digits at p, already checked, as a number: the multiplies of
+// fast_num without its search for the end.
+inline std::uint64_t swar_digits(const char* p, unsigned len) {
+    std::uint64_t w;
+    std::memcpy(&w, p, 8);
+    std::uint64_t x = w << (8 * (8 - len));   // the bytes after the field shifted out
+    x = (x & 0x0F0F0F0F0F0F0F0Full) * 2561 >> 8;
+    x = (x & 0x00FF00FF00FF00FFull) * 6553601 >> 16;
+    return static_cast<std::uint32_t>((x & 0x0000FFFF0000FFFFull) * 42949672960001ull >> 32);
+}
+
+// Whether m has four bits set or more (popcount is a library call without -mpopcnt).
+inline bool at_least_four(std::uint32_t m) {
+    m &= m - 1;
+    m &= m - 1;
+    m &= m - 1;
+    return m != 0;
+}
+
+// The bytes the whole-line parse reads from the line's start: 32 compared,
+// and a field's eight-byte load may reach up to 37.
+constexpr std::ptrdiff_t kWholeLineBytes = 40;
 } // namespace
 
+// The usual line, "f X Y DEPTH ID F|B[ c]" with single spaces and numbers of
+// at most eight digits, found with a few compares over its 32 bytes instead of
+// byte by byte: the separators and digits are bit masks, the fields' bounds
+// their set bits. Anything else (tabs, CR, comments, longer numbers, a short
+// buffer) is left to the byte-by-byte path, which takes or refuses it.
+bool TraceReader::Impl::whole_line_fragment(std::vector<Fragment>& out) {
+    const char* p = cur;
+    const __m128i lo = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+    const __m128i hi = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16));
+    const std::uint32_t lfs = bytes_equal(lo, hi, '\n');
+    if (lfs == 0) return false;
+    const unsigned end = static_cast<unsigned>(__builtin_ctz(lfs));
+    const std::uint32_t before_end = (std::uint32_t(1) << end) - 1;
+    std::uint32_t spaces = bytes_equal(lo, hi, ' ') & before_end & ~std::uint32_t(3);
+    if (!at_least_four(spaces)) return false;
+    const unsigned s2 = static_cast<unsigned>(__builtin_ctz(spaces));
+    spaces &= spaces - 1;
+    const unsigned s3 = static_cast<unsigned>(__builtin_ctz(spaces));
+    spaces &= spaces - 1;
+    const unsigned s4 = static_cast<unsigned>(__builtin_ctz(spaces));
+    spaces &= spaces - 1;
+    const unsigned s5 = static_cast<unsigned>(__builtin_ctz(spaces));
+    // Digits: '0' <= c <= '9' (bytes of 0x80 and up compare as negative).
+    const __m128i below0 = _mm_set1_epi8('0' - 1), above9 = _mm_set1_epi8('9' + 1);
+    const std::uint32_t digits =
+        static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_and_si128(_mm_cmpgt_epi8(lo, below0), _mm_cmplt_epi8(lo, above9)))) |
+        static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_and_si128(_mm_cmpgt_epi8(hi, below0), _mm_cmplt_epi8(hi, above9))))
+            << 16;
+    const std::uint32_t numbers = ((std::uint32_t(1) << s5) - 1) & ~std::uint32_t(3) &
+                                  ~((std::uint32_t(1) << s2) | (std::uint32_t(1) << s3) | (std::uint32_t(1) << s4));
+    const unsigned lx = s2 - 2, ly = s3 - s2 - 1, ld = s4 - s3 - 1, li = s5 - s4 - 1;
+    // Every number byte a digit, no field empty (two spaces in a row) or
+    // longer than eight digits.
+    if ((numbers & ~digits) != 0 || lx - 1 > 7 || ly - 1 > 7 || ld - 1 > 7 || li - 1 > 7) return false;
+    const char f = p[s5 + 1];
+    if (f != 'F' && f != 'B') return false;
+    bool culled = false;
+    if (end != s5 + 2) {
+        if (end != s5 + 4 || p[s5 + 2] != ' ' || p[s5 + 3] != 'c') return false;
+        culled = true;
+    }
+    const std::uint64_t x = swar_digits(p + 2, lx), y = swar_digits(p + s2 + 1, ly),
+                        d = swar_digits(p + s3 + 1, ld), id = swar_digits(p + s4 + 1, li);
+    // Unsigned differences also reject values below the window's start.
+    if (x - x0 >= xw || y - y0 >= yh || d > depth_max || id > id_max) return false;
+    Fragment& fr = out.emplace_back();
+    fr.x = static_cast<std::uint32_t>(x);
+    fr.y = static_cast<std::uint32_t>(y);
+    fr.depth = static_cast<std::uint32_t>(d);
+    fr.id = static_cast<std::uint32_t>(id);
+    fr.facing = f == 'B' ? Facing::Back : Facing::Front;
+    fr.culled = culled;
+    cur = const_cast<char*>(p + end + 1);
+    ++line;
+    return true;
+}
+
 bool TraceReader::Impl::fast_fragment(std::vector<Fragment>& out) {
+    if (lines_end - cur >= kWholeLineBytes && whole_line_fragment(out)) return true;
     const char* p = cur + 2;
     std::uint64_t x, y, d, id;
     if (!fast_num(p, x, lines_end) || !fast_num(p, y, lines_end) || !fast_num(p, d, lines_end) ||

@@ -723,6 +723,51 @@ TEST_CASE("io: hostile: every read chunk size gives the same stream (refill boun
     }
 }
 
+// The usual fragment line is parsed from its 32 bytes at once when at least 40
+// bytes of whole lines follow its start; a line at the end of the buffered
+// data goes byte by byte. Both must read every line alike: the fragment, or
+// the same error.
+TEST_CASE("io: a fragment line reads the same with and without 40 bytes after it (whole-line path)", "[io][reader]") {
+    const std::vector<std::string> lines = {
+        "f 16 0 0 1 F", "f 31 15 16777215 127 B c", "f 16 0 12345678 1 F", "f 16 0 1234567 1 B",
+        "f 16 0 00000001 1 F", "f 0016 00015 000000001 0000127 B c", "f 16 0 99999999 1 F",
+        "f 16  0 5 1 F", "f  16 0 5 1 F", "f 16 0 5 1  F", "f 16 0 5 1 F  c", "f 16\t0 5 1 F", "f\t16 0 5 1 F",
+        "f 16 0 5 1 F\r", "f 16 0 5 1 F c\r", "f 16 0 5 1 F # note", "f 16 0 5 1 F#note", "f 16 0 5 1 F c#x",
+        "f 16 0 5 1 F ", "f 16 0 5 1 F c ", "f 16 0 5 1 F c c", "f 16 0 5 1 Fc", "f 16 0 5 1 X", "f 16 0 5 1 f",
+        "f 16 0 5 1 F d", "f 16 0 5 1 F C", "f 16 0 5 1 FB", "f 16 0 5 1 0", "f 40 0 0 1 F", "f 15 0 0 1 F",
+        "f 16 16 0 1 F", "f 16 0 16777216 1 F", "f 16 0 123456789 1 F", "f 16 0 0 128 F", "f 16 0 1a 1 F",
+        "f 16 0 +5 1 F", "f 16 0 5", "f 16 0 5 1", "f 16 0 5 1 # F", "f 16 0 5 1 F c x", "f 1\x80 0 5 1 F",
+        "f 16 0 5\x001 F", "f 16 0 0x10 1 F", "f 16 0 18446744073709551616 1 F", "f 16 0 5 1 F\x0bc"};
+    const std::string head = M + "frame 0\ntile 1 0\n", tail = "# " + std::string(60, 'x') + "\n";
+    const auto outcome = [](const std::string& text) -> std::string {
+        TempDir d;
+        const std::string path = d.write("t.rbt", text);
+        try {
+            TraceReader r(path, {});
+            Tile t;
+            std::string s;
+            while (r.next(t) != Event::End)
+                for (const Fragment& f : t.frags)
+                    s += std::to_string(f.x) + "," + std::to_string(f.y) + "," + std::to_string(f.depth) + "," +
+                         std::to_string(f.id) + (f.facing == Facing::Back ? ",B" : ",F") + (f.culled ? ",c" : "") + ";";
+            return s;
+        } catch (const InputError& e) {
+            std::string msg = e.what();
+            return "error " + msg.substr(msg.find(':'));
+        }
+    };
+    for (const std::string& l : lines) {
+        INFO(l);
+        const std::string alone = outcome(head + l + "\n"), followed = outcome(head + l + "\n" + tail);
+        CHECK(alone == followed);
+        // And between two usual lines, each read on the whole-line path.
+        const std::string ok = "f 17 1 7 2 B\n";
+        CHECK(outcome(head + ok + l + "\n" + ok) == outcome(head + ok + l + "\n" + ok + tail));
+    }
+    CHECK(outcome(head + "f 31 15 16777215 127 B c\n" + tail) == "31,15,16777215,127,B,c;");
+    CHECK(outcome(head + "f 0016 00015 000000001 0000127 B c\n" + tail) == "16,15,1,127,B,c;");
+}
+
 TEST_CASE("io: error: magic record", "[io][reader][error]") {
     CHECK_THAT(error_of(""), Equals("t.rbt:1: end of file before the magic record 'rbcd-trace 1': not an .rbt trace"));
     CHECK_ERR("# only\n# comments\n", 2, "end of file before the magic record");
