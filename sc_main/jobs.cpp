@@ -107,7 +107,8 @@ JobPart parse_worker_part(const std::string& text, FrameRange range) {
     return p;
 }
 
-Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::vector<std::string>& err_paths)
+Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::vector<std::string>& err_paths,
+                 const std::vector<int>& out_fds)
     : err_(err_paths) {
     // A signal between a worker's start and its registration would leave it
     // writing after the clean-up: held back until every worker is known; the
@@ -135,33 +136,44 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
         posix_spawn_file_actions_t fa;
         posix_spawn_file_actions_init(&fa);
         posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-        posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+        if (k < out_fds.size() && out_fds[k] >= 0) posix_spawn_file_actions_adddup2(&fa, out_fds[k], 1);
+        else posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
         posix_spawn_file_actions_addopen(&fa, 2, err_paths[k].c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
         pid_t pid = 0;
         const int rc = posix_spawn(&pid, argv[0], &fa, &attr, argv.data(), environ);
         posix_spawn_file_actions_destroy(&fa);
         if (rc != 0) throw RunError("--jobs: cannot start a worker (" + argvs[k][0] + "): " + std::strerror(rc));
         pids_.push_back(pid);
+        status_.push_back(0);
+        done_.push_back(false);
         stop_on_interrupt(pid);
     }
 }
 
 Workers::~Workers() {
     if (waited_) return;
-    for (int pid : pids_) ::kill(pid, SIGTERM);
-    for (int pid : pids_) {
+    for (std::size_t k = 0; k < pids_.size(); ++k)
+        if (!done_[k]) ::kill(pids_[k], SIGTERM);
+    for (std::size_t k = 0; k < pids_.size(); ++k) {
         int st = 0;
-        while (::waitpid(pid, &st, 0) < 0 && errno == EINTR) {}
+        if (!done_[k])
+            while (::waitpid(pids_[k], &st, 0) < 0 && errno == EINTR) {}
     }
 }
 
+bool Workers::wait_for(std::size_t k) {
+    if (!done_[k]) {
+        while (::waitpid(pids_[k], &status_[k], 0) < 0 && errno == EINTR) {}
+        done_[k] = true;
+    }
+    return WIFEXITED(status_[k]) && WEXITSTATUS(status_[k]) == 0;
+}
+
 void Workers::wait() {
-    std::vector<int> status(pids_.size(), 0);
-    for (std::size_t k = 0; k < pids_.size(); ++k)
-        while (::waitpid(pids_[k], &status[k], 0) < 0 && errno == EINTR) {}
+    for (std::size_t k = 0; k < pids_.size(); ++k) wait_for(k);
     waited_ = true;
     for (std::size_t k = 0; k < pids_.size(); ++k) {
-        const int st = status[k];
+        const int st = status_[k];
         if (WIFEXITED(st) && WEXITSTATUS(st) == 0) continue;
         // The worker's own one line, without its program name (the caller's
         // message adds it); its other lines (a scene's warnings) were said once

@@ -44,19 +44,25 @@ std::string worker_part_text(const JobPart& p, bool trace);
 JobPart parse_worker_part(const std::string& text, FrameRange range);
 
 // The workers, started by the constructor with argvs[k] (argvs[k][0] the
-// program), standard output discarded, standard error into err_paths[k].
+// program), standard output into out_fds[k] (missing or -1: discarded),
+// standard error into err_paths[k].
 class Workers {
 public:
-    Workers(const std::vector<std::vector<std::string>>& argvs, const std::vector<std::string>& err_paths);
+    Workers(const std::vector<std::vector<std::string>>& argvs, const std::vector<std::string>& err_paths,
+            const std::vector<int>& out_fds = {});
     ~Workers();   // waits for any still running (after killing them)
     Workers(const Workers&) = delete;
     Workers& operator=(const Workers&) = delete;
+    // Waits for worker k alone; whether it succeeded. The others run on, so
+    // what a part wrote is joined while the later parts are still simulated.
+    bool wait_for(std::size_t k);
     // Waits for all. When some failed: throws the error of the first one (in
     // frame order), the exit status it had (InputError for 2, RunError else).
     void wait();
 
 private:
-    std::vector<int> pids_;
+    std::vector<int> pids_, status_;
+    std::vector<bool> done_;
     std::vector<std::string> err_;
     bool waited_ = false;
 };

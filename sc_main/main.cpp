@@ -124,6 +124,12 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     TempDirectory dir(parent);
     std::vector<std::vector<std::string>> argvs;
     std::vector<std::string> errs;
+    std::vector<int> out_fds;
+    // The first part of a trace writes its collisions straight into the
+    // output (its standard output, --collisions -): the largest copy of the
+    // join is not made. Not for a scene, which may be run again as one
+    // process (below) after its workers wrote nothing worth keeping.
+    const bool first_direct = trace && collisions_out.active();
     for (std::size_t k = 0; k < parts.size(); ++k) {
         const std::string n = std::to_string(k);
         std::vector<std::string> a{exe};
@@ -134,19 +140,24 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         a.insert(a.end(), {"--frames", range_text(parts[k].range), "--threads", std::to_string(threads), "-q",
                            "--stats", dir.path(n + ".json"), "--frame-stats", dir.path(n + ".jsonl"),
                            "--worker-part", worker_part_text(parts[k], trace)});
-        if (collisions_out.active()) a.insert(a.end(), {"--collisions", dir.path(n + ".txt")});
+        if (k == 0 && first_direct) {
+            a.insert(a.end(), {"--collisions", "-"});
+            out_fds.push_back(collisions_out.shared_fd());
+        } else {
+            if (collisions_out.active()) a.insert(a.end(), {"--collisions", dir.path(n + ".txt")});
+            out_fds.push_back(-1);
+        }
         argvs.push_back(std::move(a));
         errs.push_back(dir.path(n + ".err"));
         for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
     }
-    Workers workers(argvs, errs);
+    Workers workers(argvs, errs, out_fds);
     // The inputs are hashed while the workers run.
     const nlohmann::json provenance = stats_out.active() ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
-    workers.wait();
 
     RunSnapshot all;
     std::vector<PartFiles> files;
-    for (std::size_t k = 0; k < parts.size(); ++k) {
+    const auto read_part = [&](std::size_t k) {
         const std::string n = std::to_string(k);
         const std::string path = dir.path(n + ".json");
         const nlohmann::json j = nlohmann::json::parse(read_input_text(path, "stats file", std::uint64_t(1) << 30, ""));
@@ -155,12 +166,32 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
                          snap.cycles});
         if (k == 0) all = std::move(snap);
         else merge_snapshots(all, snap);
+    };
+    std::uint64_t cycles_before = 0;   // of the parts already joined
+    const auto join_part = [&](std::size_t k) {
+        if (collisions_out.active() && !(k == 0 && first_direct))
+            append_own_part_collisions(files[k], k == 0, collisions_out);
+        if (frame_stats_out.active()) append_part_frame_stats(files[k], cycles_before, frame_stats_out);
+        cycles_before += files[k].cycles;
+    };
+    if (trace) {
+        // A part is joined as soon as it and the parts before it are done,
+        // while the later ones still run: only the last part's join is left
+        // when the last worker ends. A failed part stops the joining; wait()
+        // reports the first failure, and the outputs are abandoned.
+        for (std::size_t k = 0; k < parts.size() && workers.wait_for(k); ++k) {
+            read_part(k);
+            join_part(k);
+        }
+        workers.wait();
+    } else {
+        // A scene whose parts hold no fragment at all is run again as one
+        // process (below): nothing is written before that is known.
+        workers.wait();
+        for (std::size_t k = 0; k < parts.size(); ++k) read_part(k);
+        if (all.counters.raster.fragments + all.counters.raster.other_fragments == 0) return false;
+        for (std::size_t k = 0; k < parts.size(); ++k) join_part(k);
     }
-    if (all.counters.raster.fragments + all.counters.raster.other_fragments == 0 &&
-        opt.trace.empty())
-        return false;
-    if (collisions_out.active()) copy_own_part_collisions(files, collisions_out);
-    if (frame_stats_out.active()) copy_part_frame_stats(files, frame_stats_out);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     nlohmann::json stats = make_stats(all, wall);
     if (stats_out.active()) stats["provenance"] = provenance;

@@ -237,6 +237,47 @@ void OutputFile::write(const char* p, std::size_t n) {
     if (f_ && n && std::fwrite(p, 1, n, f_) != n) failed_ = true;
 }
 
+int OutputFile::shared_fd() {
+    if (!f_) return -1;
+    if (std::fflush(f_) != 0) failed_ = true;
+    return ::fileno(f_);
+}
+
+std::uint64_t OutputFile::append_from(int fd, std::uint64_t offset, const std::string& what) {
+    if (!f_) return 0;
+    const auto cannot_read = [&](int err) { return RunError(what + ": cannot read: " + std::strerror(err)); };
+    std::uint64_t copied = 0;
+    // The kernel copies between the page caches (or shares the blocks, on a
+    // file system that can), without the two passes through user space.
+    bool kernel = !in_place_ && std::fflush(f_) == 0;
+    loff_t in_off = static_cast<loff_t>(offset);
+    while (kernel) {
+        const ssize_t n = ::copy_file_range(fd, &in_off, ::fileno(f_), nullptr, std::size_t(1) << 30, 0);
+        if (n > 0) {
+            copied += static_cast<std::uint64_t>(n);
+            continue;
+        }
+        if (n == 0) return copied;
+        if (errno == EINTR) continue;
+        // Another file system, or one that cannot: copied here instead. Nothing
+        // was written by the failed call.
+        if (errno == EXDEV || errno == EINVAL || errno == ENOSYS || errno == EOPNOTSUPP || errno == EBADF) break;
+        if (errno == EIO) throw cannot_read(errno);
+        failed_ = true;   // the output's error, reported at commit
+        return copied;
+    }
+    std::vector<char> buf(std::size_t(1) << 20);
+    for (;;) {
+        const ssize_t n = ::pread(fd, buf.data(), buf.size(), in_off);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) throw cannot_read(errno);
+        if (n == 0) return copied;
+        write(buf.data(), static_cast<std::size_t>(n));
+        in_off += n;
+        copied += static_cast<std::uint64_t>(n);
+    }
+}
+
 void OutputFile::commit() {
     if (!dir_.empty()) {
         struct stat st {};

@@ -8,6 +8,7 @@
 // /dev/stdout, or "-" for standard output) is written in place: opened as it
 // is, never unlinked, never replaced by a regular file. docs/limits.md.
 #pragma once
+#include <cstdint>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -72,6 +73,16 @@ public:
     const std::string& library_path() const { return named_; }
     void write(const std::string& s) { write(s.data(), s.size()); }
     void write(const char* p, std::size_t n);
+    // Appends the rest of the regular file open at `fd`, from byte `offset` to
+    // its end, as write() would, but copied by the kernel (copy_file_range)
+    // where the two files allow it. Returns the bytes appended; throws
+    // RunError naming `what` when `fd` cannot be read.
+    std::uint64_t append_from(int fd, std::uint64_t offset, const std::string& what);
+    // The open file's descriptor, flushed, for another process to write into
+    // before this one writes more (-1 for ByName). Whatever it writes lands
+    // where write() would have, and write() goes on after it: the two share
+    // the file's offset.
+    int shared_fd();
     // Flush, close, rename over the path (in place: flush and close). Throws
     // std::runtime_error on I/O errors.
     void commit();

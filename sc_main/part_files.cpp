@@ -89,34 +89,26 @@ void copy_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out) 
     out.write(buf);
 }
 
-void copy_own_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out) {
+void append_own_part_collisions(const PartFiles& part, bool first, OutputFile& out) {
     const std::string magic(kCollisionsMagic);
-    out.write(magic);
-    std::vector<char> buf(std::size_t(1) << 20);
-    for (const auto& p : parts) {
-        const int fd = open_input(p.collisions, "collisions file");
-        struct Closer {
-            int fd;
-            ~Closer() { ::close(fd); }
-        } closer{fd};
-        std::size_t skip = magic.size();   // the part's own magic line
-        bool checked = false;
-        for (;;) {
-            const ssize_t got = ::read(fd, buf.data(), buf.size());
-            if (got < 0 && errno == EINTR) continue;
-            if (got < 0) throw RunError(cannot_read_message(p.collisions, "collisions file", std::strerror(errno)));
-            if (got == 0) break;
-            std::size_t at = 0;
-            if (!checked) {
-                if (std::size_t(got) < magic.size() || std::memcmp(buf.data(), magic.data(), magic.size()) != 0)
-                    throw RunError(p.collisions + ": a worker's collisions file does not start with its magic line");
-                checked = true;
-                at = skip;
-            }
-            out.write(buf.data() + at, std::size_t(got) - at);
-        }
-        if (!checked) throw RunError(p.collisions + ": a worker's collisions file is empty");
+    const int fd = open_input(part.collisions, "collisions file");
+    struct Closer {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
+    std::string head(magic.size(), '\0');
+    std::size_t got = 0;
+    while (got < head.size()) {
+        const ssize_t n = ::pread(fd, head.data() + got, head.size() - got, static_cast<off_t>(got));
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) throw RunError(cannot_read_message(part.collisions, "collisions file", std::strerror(errno)));
+        if (n == 0) break;
+        got += static_cast<std::size_t>(n);
     }
+    if (got == 0) throw RunError(part.collisions + ": a worker's collisions file is empty");
+    if (head != magic) throw RunError(part.collisions + ": a worker's collisions file does not start with its magic line");
+    if (first) out.write(magic);
+    out.append_from(fd, magic.size(), part.collisions);
 }
 
 // The parts' per-frame lines, their cycles counted from the whole run's start;
@@ -124,33 +116,37 @@ void copy_own_part_collisions(const std::vector<PartFiles>& parts, OutputFile& o
 void copy_part_frame_stats(const std::vector<PartFiles>& parts, OutputFile& out) {
     std::uint64_t offset = 0;
     for (const auto& p : parts) {
-        const std::string& path = p.frame_stats;
-        std::uint64_t n = 0;
-        const bool lf = for_each_line(path, "frame stats file", kMaxFrameStatsLineBytes, [&](std::string_view line) {
-            ++n;
-            nlohmann::json f = nlohmann::json::parse(line, nullptr, false);
-            if (!f.is_object()) throw input_error_at(path, n, "not a JSON object");
-            const std::uint64_t expected = p.first_frame + n - 1;
-            if (n > p.frames || !f.contains("frame") || !f["frame"].is_number_unsigned() ||
-                f["frame"].get<std::uint64_t>() != expected)
-                throw input_error_at(path, n, "frame: expected frame " + std::to_string(expected) +
-                                                        (n > p.frames ? " (beyond the part's frames)" : ""));
-            for (const char* key : {"start_cycle", "end_cycle"}) {
-                if (!f.contains(key) || !f[key].is_number_unsigned())
-                    throw input_error_at(path, n, std::string(key) + ": missing");
-                std::uint64_t v = 0;
-                if (__builtin_add_overflow(f[key].get<std::uint64_t>(), offset, &v))
-                    throw input_error_at(path, n, std::string(key) + ": beyond 2^64 - 1 once offset");
-                f[key] = v;
-            }
-            out.write(f.dump() + "\n");
-        });
-        if (!lf) throw input_error_at(path, n, "the last line does not end with LF (the file is cut short)");
-        if (n != p.frames)
-            throw InputError(path + ": " + std::to_string(n) + " lines where the part has " +
-                             std::to_string(p.frames) + " frames");
+        append_part_frame_stats(p, offset, out);
         offset += p.cycles;
     }
+}
+
+void append_part_frame_stats(const PartFiles& p, std::uint64_t offset, OutputFile& out) {
+    const std::string& path = p.frame_stats;
+    std::uint64_t n = 0;
+    const bool lf = for_each_line(path, "frame stats file", kMaxFrameStatsLineBytes, [&](std::string_view line) {
+        ++n;
+        nlohmann::json f = nlohmann::json::parse(line, nullptr, false);
+        if (!f.is_object()) throw input_error_at(path, n, "not a JSON object");
+        const std::uint64_t expected = p.first_frame + n - 1;
+        if (n > p.frames || !f.contains("frame") || !f["frame"].is_number_unsigned() ||
+            f["frame"].get<std::uint64_t>() != expected)
+            throw input_error_at(path, n, "frame: expected frame " + std::to_string(expected) +
+                                                    (n > p.frames ? " (beyond the part's frames)" : ""));
+        for (const char* key : {"start_cycle", "end_cycle"}) {
+            if (!f.contains(key) || !f[key].is_number_unsigned())
+                throw input_error_at(path, n, std::string(key) + ": missing");
+            std::uint64_t v = 0;
+            if (__builtin_add_overflow(f[key].get<std::uint64_t>(), offset, &v))
+                throw input_error_at(path, n, std::string(key) + ": beyond 2^64 - 1 once offset");
+            f[key] = v;
+        }
+        out.write(f.dump() + "\n");
+    });
+    if (!lf) throw input_error_at(path, n, "the last line does not end with LF (the file is cut short)");
+    if (n != p.frames)
+        throw InputError(path + ": " + std::to_string(n) + " lines where the part has " + std::to_string(p.frames) +
+                         " frames");
 }
 
 } // namespace rbcd

@@ -20,11 +20,15 @@ struct PartFiles {
 
 // The magic line once, then every part's records in order.
 void copy_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out);
-// The same for files this process's own workers just wrote (rbcd-sim --jobs,
-// in its private directory): copied in blocks, not read line by line, the
-// magic line checked and written once. Throws RunError on a read error.
-void copy_own_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out);
+// One part's file, written by this process's own worker (rbcd-sim --jobs, in
+// its private directory), appended to `out`: checked only for its magic line,
+// which goes to `out` only for the first part; the rest is copied by the
+// kernel where it can (OutputFile::append_from). Throws RunError on a read
+// error.
+void append_own_part_collisions(const PartFiles& part, bool first, OutputFile& out);
 // Every part's lines, their start_cycle and end_cycle counted from the first part's start.
 void copy_part_frame_stats(const std::vector<PartFiles>& parts, OutputFile& out);
+// One part's lines, counted from `offset` (the cycles of the parts before it).
+void append_part_frame_stats(const PartFiles& part, std::uint64_t offset, OutputFile& out);
 
 } // namespace rbcd

@@ -120,6 +120,24 @@ TEST_CASE("rbcd-sim --jobs: the summary on standard output is one process's", "[
     expect_same_as_one_process(td, {"--frames", "20:29"});
 }
 
+// The first worker writes its collisions straight into the output; here the
+// output is the standard output (a pipe), which the later parts are copied
+// to without copy_file_range.
+TEST_CASE("rbcd-sim --jobs: collisions on standard output are one process's", "[jobs]") {
+    TempDir td;
+    const std::string t = default_trace(td, false);
+    const Result one = run_sim(td, {"-q", "--trace", t, "--collisions", "-"});
+    REQUIRE(one.status == 0);
+    REQUIRE(count_lines(one.out) > 20);
+    for (const char* jobs : {"2", "3"}) {
+        INFO("--jobs " << jobs);
+        const Result n = run_sim(td, {"-q", "--trace", t, "--collisions", "-", "--stats", td.stats(), "--jobs", jobs});
+        INFO(n.err);
+        REQUIRE(n.status == 0);
+        CHECK(n.out == one.out);
+    }
+}
+
 TEST_CASE("rbcd-sim --jobs: more workers than frames", "[jobs]") {
     TempDir td;
     const std::string t = default_trace(td, false);
