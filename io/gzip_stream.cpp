@@ -10,7 +10,10 @@
 
 namespace rbcd {
 
-GzipStream::GzipStream(int fd, std::size_t chunk_bytes) : fd_(fd), in_(std::max<std::size_t>(chunk_bytes, 2)) {}
+// The magic is read with a small buffer: a plain file is then read straight
+// into the caller's buffer, and only a gzip one needs a raw buffer of its own.
+GzipStream::GzipStream(int fd, std::size_t chunk_bytes)
+    : fd_(fd), chunk_(std::max<std::size_t>(chunk_bytes, 2)), in_(std::min<std::size_t>(chunk_, 4096)) {}
 
 GzipStream::~GzipStream() {
     if (z_init_) inflateEnd(&zs_);
@@ -87,12 +90,24 @@ long GzipStream::read(char* dst, std::size_t n) {
         started_ = true;
         gz_ = in_end_ - in_pos_ >= 2 && in_[in_pos_] == 0x1f && in_[in_pos_ + 1] == 0x8b;
         if (gz_) {
+            in_.resize(chunk_);
             if (inflateInit2(&zs_, 15 + 16) != Z_OK) return fail("cannot start zlib: out of memory");
             z_init_ = true;
         }
     }
     if (!gz_) {
-        if (in_pos_ == in_end_ && !refill()) return error_.empty() ? 0 : -1;
+        if (in_pos_ == in_end_) {
+            // Straight into the caller's buffer: the bytes would only be copied
+            // out of ours (a trace's every byte, once more).
+            if (raw_eof_) return 0;
+            for (;;) {
+                const ssize_t got = ::read(fd_, dst, std::min(n, chunk_));
+                if (got < 0 && errno == EINTR) continue;
+                if (got < 0) return fail(std::string("read error: ") + std::strerror(errno));
+                if (got == 0) raw_eof_ = true;
+                return static_cast<long>(got);
+            }
+        }
         const std::size_t k = std::min(n, in_end_ - in_pos_);
         std::memcpy(dst, in_.data() + in_pos_, k);
         in_pos_ += k;

@@ -38,7 +38,8 @@ private:
     long fail(const std::string& what);
 
     int fd_;
-    std::vector<unsigned char> in_;
+    std::size_t chunk_;               // the raw reads' size, once the stream is known to be gzip
+    std::vector<unsigned char> in_;   // raw input: the first bytes, then (gzip) what inflate has not taken
     std::size_t in_pos_ = 0, in_end_ = 0;
     bool raw_eof_ = false;
     bool started_ = false, gz_ = false;

@@ -16,6 +16,7 @@
 #include <climits>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string_view>
 #include <unordered_set>
@@ -47,6 +48,26 @@ struct CharTable {
     }
 };
 constexpr CharTable kChars{};
+
+// A byte buffer left uninitialized: a vector would zero a megabyte, touching
+// every page of it, before the first read fills what it needs (a short trace,
+// and every process of a sweep or of --jobs, paid for all of it).
+class RawBuffer {
+public:
+    char* data() { return p_.get(); }
+    std::size_t size() const { return n_; }
+    // Keeps the contents.
+    void resize(std::size_t n) {
+        std::unique_ptr<char[]> q(new char[n]);
+        if (n_) std::memcpy(q.get(), p_.get(), std::min(n, n_));
+        p_ = std::move(q);
+        n_ = n;
+    }
+
+private:
+    std::unique_ptr<char[]> p_;
+    std::size_t n_ = 0;
+};
 
 inline bool tok_end(char c) { return kChars.tok_end[static_cast<unsigned char>(c)]; }
 inline void skip_ws(const char*& p) {
@@ -122,7 +143,7 @@ struct TraceReader::Impl {
     // Buffer invariants: [cur, data_end) is unread data; [cur, lines_end) holds
     // only whole lines, lines_end being just past a '\n'. One byte is kept spare
     // so a last line without '\n' can be given one.
-    std::vector<char> buf;
+    RawBuffer buf;
     char* cur = nullptr;
     char* lines_end = nullptr;
     char* data_end = nullptr;

@@ -47,7 +47,10 @@ memory_controller::memory_controller(sc_core::sc_module_name name, const MemoryC
     // base + size - 1 is the last address; it must still be a 64-bit address.
     if (cfg.size_bytes - 1 > std::numeric_limits<std::uint64_t>::max() - cfg.base)
         throw InputError(who + "memory mapping extends past the 64-bit address space");
-    store_.assign(cfg.size_bytes, 0);
+    if (cfg.size_bytes > std::numeric_limits<std::size_t>::max()) throw std::bad_alloc();
+    store_.reset(static_cast<unsigned char*>(std::calloc(static_cast<std::size_t>(cfg.size_bytes), 1)));
+    if (!store_) throw std::bad_alloc();
+    size_ = cfg.size_bytes;
 
     for (auto* port : {&unit_port, &host_port}) {
         port->register_b_transport(this, &memory_controller::b_transport);
@@ -61,7 +64,7 @@ bool memory_controller::in_map(std::uint64_t address, std::uint64_t length) cons
     // a request near 2^64 would otherwise wrap around into the mapping.
     if (address < base_) return false;
     const std::uint64_t offset = address - base_;
-    return offset < store_.size() && length <= store_.size() - offset;
+    return offset < size_ && length <= size_ - offset;
 }
 
 tlm::tlm_response_status memory_controller::check(const tlm_generic_payload& t) const {
@@ -102,11 +105,11 @@ void memory_controller::b_transport(tlm_generic_payload& t, sc_time& delay) {
     const std::uint64_t length = t.get_data_length();
     // LT: data moves at call time; only the timing is deferred to `delay`.
     if (t.is_read()) {
-        std::memcpy(t.get_data_ptr(), store_.data() + offset, length);
+        std::memcpy(t.get_data_ptr(), store_.get() + offset, length);
         ++stats_.reads;
         stats_.bytes_read += length;
     } else {
-        std::memcpy(store_.data() + offset, t.get_data_ptr(), length);
+        std::memcpy(store_.get() + offset, t.get_data_ptr(), length);
         ++stats_.writes;
         stats_.bytes_written += length;
     }
@@ -157,11 +160,11 @@ unsigned int memory_controller::transport_dbg(tlm_generic_payload& t) {
         return 0;
     }
     const std::uint64_t offset = address - base_;
-    const std::uint64_t n = std::min<std::uint64_t>(t.get_data_length(), store_.size() - offset);
+    const std::uint64_t n = std::min<std::uint64_t>(t.get_data_length(), size_ - offset);
     if (t.is_read())
-        std::memcpy(t.get_data_ptr(), store_.data() + offset, n);
+        std::memcpy(t.get_data_ptr(), store_.get() + offset, n);
     else
-        std::memcpy(store_.data() + offset, t.get_data_ptr(), n);
+        std::memcpy(store_.get() + offset, t.get_data_ptr(), n);
     ++stats_.debug_accesses;
     t.set_response_status(tlm::TLM_OK_RESPONSE);
     return static_cast<unsigned int>(n);
@@ -177,14 +180,14 @@ bool memory_controller::get_direct_mem_ptr(tlm_generic_payload& t, tlm::tlm_dmi&
             dmi.set_start_address(0);
             dmi.set_end_address(base_ - 1);
         } else {
-            dmi.set_start_address(base_ + store_.size());
+            dmi.set_start_address(base_ + size_);
             dmi.set_end_address(std::numeric_limits<std::uint64_t>::max());
         }
         return false;
     }
-    dmi.set_dmi_ptr(store_.data());
+    dmi.set_dmi_ptr(store_.get());
     dmi.set_start_address(base_);
-    dmi.set_end_address(base_ + (store_.size() - 1));
+    dmi.set_end_address(base_ + (size_ - 1));
     dmi.set_granted_access(tlm::tlm_dmi::DMI_ACCESS_READ_WRITE);
     // A DMI access bypasses the channel queue, so the only honest single
     // figure is the worst case of one beat: 1 transfer cycle + latency_max.

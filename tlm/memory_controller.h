@@ -36,6 +36,8 @@
 //   ... sc_start(); mem.stats().for_each([](auto name, auto v, auto help) {...});
 #pragma once
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
 #include <vector>
 
 #include <systemc>
@@ -111,10 +113,10 @@ public:
         vcd_channel_busy_ = vcd.add(scope, "channel_busy", 1);
     }
     // The backing store; data()[0] is the byte at base().
-    unsigned char* data() { return store_.data(); }
-    const unsigned char* data() const { return store_.data(); }
+    unsigned char* data() { return store_.get(); }
+    const unsigned char* data() const { return store_.get(); }
     std::uint64_t base() const { return base_; }
-    std::uint64_t size() const { return store_.size(); }
+    std::uint64_t size() const { return size_; }
 
     // Completion cycle of the most recent successful b_transport (0 before any).
     std::uint64_t last_completion_cycle() const { return last_completion_; }
@@ -140,7 +142,14 @@ private:
     bool in_map(std::uint64_t address, std::uint64_t length) const;
     std::uint64_t draw_latency();
 
-    std::vector<unsigned char> store_;
+    struct Free {
+        void operator()(unsigned char* p) const { std::free(p); }
+    };
+    // calloc: a large store is mapped zero pages, touched only where written
+    // (a run writes its records into a small part of it), not zeroed at
+    // start-up by every process of a sweep or of --jobs.
+    std::unique_ptr<unsigned char[], Free> store_;
+    std::uint64_t size_ = 0;
     std::uint64_t base_;
     std::uint64_t latency_min_, latency_max_;
     std::uint64_t bytes_per_cycle_;
