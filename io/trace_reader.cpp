@@ -166,6 +166,7 @@ struct TraceReader::Impl {
     std::uint64_t next_frame = 0;
     std::uint64_t frame = 0;
     bool ended = false;
+    std::uint64_t stop_after = UINT64_MAX;   // the last frame read (stop_after_frame)
 
     // Current tile's pixel window, clipped to the screen.
     std::uint64_t x0 = 0, xw = 0, y0 = 0, yh = 0;
@@ -754,6 +755,12 @@ void TraceReader::start_at_frame(std::uint64_t frame, std::uint64_t offset, std:
     m.next_frame = frame;
 }
 
+std::uint64_t TraceReader::declared_work() const { return impl_->work; }
+
+void TraceReader::count_work_from(std::uint64_t work_before) { impl_->work = work_before; }
+
+void TraceReader::stop_after_frame(std::uint64_t last) { impl_->stop_after = last; }
+
 const StreamHeader& TraceReader::header() const { return impl_->hdr; }
 
 std::string TraceReader::name() const { return impl_->path; }
@@ -802,6 +809,10 @@ FragmentSource::Event TraceReader::next(Tile& t) {
         if (key == "frame") {
             if (in_tile) return m.end_tile(t);
             t.frame = m.start_frame(fl);
+            if (t.frame > m.stop_after) {
+                m.ended = true;
+                return Event::End;
+            }
             m.advance(fl.next);
             return Event::Frame;
         }

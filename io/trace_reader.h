@@ -51,6 +51,14 @@ public:
     // known (a plain file, found by find_frames_near()); a message counts the
     // lines before `offset` in the file when it needs the number.
     void start_at_frame(std::uint64_t frame, std::uint64_t offset, std::uint64_t line);
+    // The work the tiles read so far declared (see TraceLimits::max_work_cycles),
+    // counted from `work_before`: what the frames before a --jobs worker's
+    // first declared, so that the run's bound is checked as one process checks it.
+    std::uint64_t declared_work() const;
+    void count_work_from(std::uint64_t work_before);
+    // The data ends at the record of frame last + 1 (checked, not passed on):
+    // a --jobs worker reads nothing of the next worker's frames.
+    void stop_after_frame(std::uint64_t last);
 
 private:
     struct Impl;

@@ -157,10 +157,38 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
 
     RunSnapshot all;
     std::vector<PartFiles> files;
+    // A trace's bound on the run's declared work (docs/limits.md) is one
+    // process's: each worker counts its own frames' work, the parts' sums are
+    // added in frame order, and the part that crosses the bound is read again
+    // from the work before it, which raises the error one process raises.
+    const TraceLimits limits = trace_limits(cfg);
+    std::uint64_t work_before = 0;   // declared by the parts already read
+    // Part k's frames read again from the work before them: throws the first
+    // error one process meets there; returns when there is none.
+    const auto read_again = [&](std::size_t k) {
+        TraceReader again(opt.trace, limits);
+        if (parts[k].skip) again.start_at_frame(parts[k].range.first, parts[k].offset, parts[k].line);
+        again.stop_after_frame(parts[k].range.last);
+        again.count_work_from(work_before);
+        Tile t;
+        while (again.next(t) != FragmentSource::Event::End) {}
+    };
+    const auto check_work = [&](std::size_t k, const nlohmann::json& j) {
+        if (!trace || limits.max_work_cycles == 0) return;
+        const std::uint64_t w = j.at("worker").at("declared_work").get<std::uint64_t>();
+        std::uint64_t sum = 0;
+        if (!__builtin_add_overflow(work_before, w, &sum) && sum <= limits.max_work_cycles) {
+            work_before = sum;
+            return;
+        }
+        read_again(k);
+        throw RunError("--jobs: part " + std::to_string(k) + " declared less work when read again");
+    };
     const auto read_part = [&](std::size_t k) {
         const std::string n = std::to_string(k);
         const std::string path = dir.path(n + ".json");
         const nlohmann::json j = nlohmann::json::parse(read_input_text(path, "stats file", std::uint64_t(1) << 30, ""));
+        check_work(k, j);
         RunSnapshot snap = snapshot_from_stats(j);
         files.push_back({dir.path(n + ".txt"), dir.path(n + ".jsonl"), snap.frames.first_frame, snap.frames.frames,
                          snap.cycles});
@@ -179,7 +207,14 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         // while the later ones still run: only the last part's join is left
         // when the last worker ends. A failed part stops the joining; wait()
         // reports the first failure, and the outputs are abandoned.
-        for (std::size_t k = 0; k < parts.size() && workers.wait_for(k); ++k) {
+        for (std::size_t k = 0; k < parts.size(); ++k) {
+            if (!workers.wait_for(k)) {
+                // The worker counted its frames' work from zero; one process,
+                // counting from the frames before them, may cross the bound
+                // before the error the worker met.
+                if (work_before > 0) read_again(k);
+                break;
+            }
             read_part(k);
             join_part(k);
         }
@@ -315,6 +350,7 @@ int run(Options opt) {
     const FrameRange range = opt.frames_given ? parse_frame_range(opt.frames) : FrameRange{};
     const JobPart part = worker ? parse_worker_part(opt.worker_part, range) : JobPart{};
     std::vector<JobPart> parts;   // more than one: the frames are the workers'
+    TraceReader* trace_reader = nullptr;   // the trace's reader, when one process runs it
     if (!opt.trace.empty()) {
         if (opt.jobs > 1) {
             // A plain file is read only near the cuts; a gzip one (or a range
@@ -334,6 +370,9 @@ int run(Options opt) {
             auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
             // A plain trace's line number is counted only if a message needs it.
             if (part.skip) reader->start_at_frame(range.first, part.offset, part.line);
+            // Not even read ahead: what follows the range is another worker's.
+            if (opt.frames_given) reader->stop_after_frame(range.last);
+            trace_reader = reader.get();
             if (opt.threads > 1) src = std::make_unique<PrefetchSource>(std::move(reader));
             else src = std::move(reader);
         }
@@ -491,6 +530,9 @@ int run(Options opt) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
+    // For the parent, which checks the run's bound on declared work over all
+    // the parts as one process checks it (run_jobs); not in its stats.
+    if (worker && trace_reader) stats["worker"] = {{"declared_work", trace_reader->declared_work()}};
     if (provenance_job.valid()) provenance = provenance_job.get();
     if (stats_out.active()) stats["provenance"] = provenance;
     if (file_sink) {

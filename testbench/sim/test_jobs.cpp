@@ -199,6 +199,43 @@ TEST_CASE("rbcd-sim --jobs: an input error is the one a single process reports",
     }
 }
 
+// The trace reader's bound on the run's declared work (docs/limits.md) counts
+// the whole run: each worker sees only its frames, so the parent adds the
+// parts' work and reads again the part where one process crosses the bound.
+TEST_CASE("rbcd-sim --jobs: the bound on declared work counts the whole run, as one process does", "[jobs]") {
+    TempDir td;
+    // At 400 MHz the bound is 2^62 ps of cycles / 4 = 461,168,601,842,738
+    // cycles; a tile may declare base=2^40. Four frames of 120 such tiles
+    // declare 1.3e14 each: every frame is far below the bound, the run
+    // crosses it in frame 3.
+    std::string text = "rbcd-trace 1\n";
+    for (unsigned f = 0; f < 4; ++f) {
+        text += "frame " + std::to_string(f) + "\n";
+        for (unsigned i = 0; i < 120; ++i)
+            text += "tile " + std::to_string(i % 40) + " " + std::to_string(i / 40) + " base=1099511627776\nf " +
+                    std::to_string(16 * (i % 40)) + " " + std::to_string(16 * (i / 40)) + " 5 1 F\n";
+    }
+    const std::string t = td.write("work.rbt", text);
+    for (const bool gz : {false, true}) {
+        const std::string path = gz ? td.write_gz("work.rbt.gz", text) : t;
+        td.plant_old_outputs();
+        const Result one = run_with_outputs(td, {"-q", "--trace", path});
+        REQUIRE(one.status == 2);
+        CHECK_THAT(one.err, Contains("the run is too long to simulate: the work declared up to tile ") && Contains(" of frame 3 "));
+        for (const char* jobs : {"2", "4"}) {
+            INFO("--jobs " << jobs << (gz ? " gzip" : ""));
+            const Result n = run_with_outputs(td, {"-q", "--trace", path, "--jobs", jobs});
+            expect_input_error(td, n, {});
+            CHECK(n.err == one.err);
+        }
+    }
+    // Within the bound, --frames alone: the frames before the range count too,
+    // as one process reads and checks them.
+    const std::string three = td.write("three.rbt", text.substr(0, text.find("frame 3\n")));
+    const Result ok = run_sim(td, {"-q", "--trace", three, "--jobs", "3"});
+    CHECK(ok.status == 0);
+}
+
 TEST_CASE("rbcd-sim --jobs: a scene with nothing in view says so as one process does", "[jobs]") {
     TempDir td;
     const std::string scene =
