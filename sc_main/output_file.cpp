@@ -204,11 +204,22 @@ OutputFile::OutputFile(std::string path, ByName) : path_(std::move(path)) {
         throw InputError(path_ + ": cannot write here: must be a regular file or a new path (the file is written with seeks)");
     ::unlink(path_.c_str());
     std::string tmpl = dir_of(path_) + "/." + base_of(path_) + ".XXXXXX";
-    if (!::mkdtemp(tmpl.data())) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
-    dir_ = tmpl;
-    named_ = dir_ + "/" + base_of(path_);
-    for (const char* c : kCompanions) remove_on_interrupt(named_ + c);
-    remove_on_interrupt(dir_);
+    // Held back between the creation and the registration, as for a plain
+    // output: a signal there would leave the directory behind.
+    sigset_t block, old;
+    sigemptyset(&block);
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
+    ::sigprocmask(SIG_BLOCK, &block, &old);
+    const bool made = ::mkdtemp(tmpl.data()) != nullptr;
+    const int err = errno;
+    if (made) {
+        dir_ = tmpl;
+        named_ = dir_ + "/" + base_of(path_);
+        for (const char* c : kCompanions) remove_on_interrupt(named_ + c);
+        remove_on_interrupt(dir_);
+    }
+    ::sigprocmask(SIG_SETMASK, &old, nullptr);
+    if (!made) throw InputError(path_ + ": cannot create: " + std::strerror(err));
 }
 
 OutputFile::~OutputFile() { abandon(); }
