@@ -187,7 +187,7 @@ struct TraceReader::Impl {
     void read_headers();
     void header_record(const Fields& fl, unsigned long long first_line[3]);
     bool fast_fragment(std::vector<Fragment>& out);
-    bool whole_line_fragment(std::vector<Fragment>& out);
+    std::size_t whole_lines(std::vector<Fragment>& out, std::size_t room);
     void slow_fragment(const Fields& fl, std::vector<Fragment>& out, bool in_tile);
     void start_tile(const Fields& fl, Tile& t);
     void other_run(const Fields& fl, Tile& t, bool in_tile);
@@ -469,62 +469,67 @@ constexpr std::ptrdiff_t kWholeLineBytes = 40;
 // The usual line, "f X Y DEPTH ID F|B[ c]" with single spaces and numbers of
 // at most eight digits, found with a few compares over its 32 bytes instead of
 // byte by byte: the separators and digits are bit masks, the fields' bounds
-// their set bits. Anything else (tabs, CR, comments, longer numbers, a short
-// buffer) is left to the byte-by-byte path, which takes or refuses it.
-bool TraceReader::Impl::whole_line_fragment(std::vector<Fragment>& out) {
+// their set bits. A run of such lines is taken in one loop that keeps the
+// reader's state in registers; the first other line (tabs, CR, comments,
+// longer numbers, another record, fewer than 40 bytes of whole lines left)
+// ends the run and is left to the byte-by-byte path, which takes or refuses
+// it. At most `room` fragments. Returns how many were taken.
+std::size_t TraceReader::Impl::whole_lines(std::vector<Fragment>& out, std::size_t room) {
     const char* p = cur;
-    const __m128i lo = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
-    const __m128i hi = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16));
-    const std::uint32_t lfs = bytes_equal(lo, hi, '\n');
-    if (lfs == 0) return false;
-    const unsigned end = static_cast<unsigned>(__builtin_ctz(lfs));
-    const std::uint32_t before_end = (std::uint32_t(1) << end) - 1;
-    std::uint32_t spaces = bytes_equal(lo, hi, ' ') & before_end & ~std::uint32_t(3);
-    if (!at_least_four(spaces)) return false;
-    const unsigned s2 = static_cast<unsigned>(__builtin_ctz(spaces));
-    spaces &= spaces - 1;
-    const unsigned s3 = static_cast<unsigned>(__builtin_ctz(spaces));
-    spaces &= spaces - 1;
-    const unsigned s4 = static_cast<unsigned>(__builtin_ctz(spaces));
-    spaces &= spaces - 1;
-    const unsigned s5 = static_cast<unsigned>(__builtin_ctz(spaces));
-    // Digits: '0' <= c <= '9' (bytes of 0x80 and up compare as negative).
+    const char* const end = lines_end;
+    const std::uint64_t x_lo = x0, x_n = xw, y_lo = y0, y_n = yh, d_max = depth_max, i_max = id_max;
     const __m128i below0 = _mm_set1_epi8('0' - 1), above9 = _mm_set1_epi8('9' + 1);
-    const std::uint32_t digits =
-        static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_and_si128(_mm_cmpgt_epi8(lo, below0), _mm_cmplt_epi8(lo, above9)))) |
-        static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_and_si128(_mm_cmpgt_epi8(hi, below0), _mm_cmplt_epi8(hi, above9))))
-            << 16;
-    const std::uint32_t numbers = ((std::uint32_t(1) << s5) - 1) & ~std::uint32_t(3) &
-                                  ~((std::uint32_t(1) << s2) | (std::uint32_t(1) << s3) | (std::uint32_t(1) << s4));
-    const unsigned lx = s2 - 2, ly = s3 - s2 - 1, ld = s4 - s3 - 1, li = s5 - s4 - 1;
-    // Every number byte a digit, no field empty (two spaces in a row) or
-    // longer than eight digits.
-    if ((numbers & ~digits) != 0 || lx - 1 > 7 || ly - 1 > 7 || ld - 1 > 7 || li - 1 > 7) return false;
-    const char f = p[s5 + 1];
-    if (f != 'F' && f != 'B') return false;
-    bool culled = false;
-    if (end != s5 + 2) {
-        if (end != s5 + 4 || p[s5 + 2] != ' ' || p[s5 + 3] != 'c') return false;
-        culled = true;
+    std::size_t n = 0;
+    while (n < room && end - p >= kWholeLineBytes && p[0] == 'f' && p[1] == ' ') {
+        const __m128i lo = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+        const __m128i hi = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16));
+        const std::uint32_t lfs = bytes_equal(lo, hi, '\n');
+        if (lfs == 0) break;
+        const unsigned e = static_cast<unsigned>(__builtin_ctz(lfs));
+        std::uint32_t spaces = bytes_equal(lo, hi, ' ') & ((std::uint32_t(1) << e) - 1) & ~std::uint32_t(3);
+        if (!at_least_four(spaces)) break;
+        const unsigned s2 = static_cast<unsigned>(__builtin_ctz(spaces));
+        spaces &= spaces - 1;
+        const unsigned s3 = static_cast<unsigned>(__builtin_ctz(spaces));
+        spaces &= spaces - 1;
+        const unsigned s4 = static_cast<unsigned>(__builtin_ctz(spaces));
+        spaces &= spaces - 1;
+        const unsigned s5 = static_cast<unsigned>(__builtin_ctz(spaces));
+        // Digits: '0' <= c <= '9' (bytes of 0x80 and up compare as negative).
+        const std::uint32_t digits =
+            static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_and_si128(_mm_cmpgt_epi8(lo, below0), _mm_cmplt_epi8(lo, above9)))) |
+            static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_and_si128(_mm_cmpgt_epi8(hi, below0), _mm_cmplt_epi8(hi, above9))))
+                << 16;
+        const std::uint32_t numbers = ((std::uint32_t(1) << s5) - 1) & ~std::uint32_t(3) &
+                                      ~((std::uint32_t(1) << s2) | (std::uint32_t(1) << s3) | (std::uint32_t(1) << s4));
+        const unsigned lx = s2 - 2, ly = s3 - s2 - 1, ld = s4 - s3 - 1, li = s5 - s4 - 1;
+        // Every number byte a digit, no field empty (two spaces in a row) or
+        // longer than eight digits.
+        if ((numbers & ~digits) != 0 || lx - 1 > 7 || ly - 1 > 7 || ld - 1 > 7 || li - 1 > 7) break;
+        const char f = p[s5 + 1];
+        if (f != 'F' && f != 'B') break;
+        const bool culled = e != s5 + 2;
+        if (culled && (e != s5 + 4 || p[s5 + 2] != ' ' || p[s5 + 3] != 'c')) break;
+        const std::uint64_t x = swar_digits(p + 2, lx), y = swar_digits(p + s2 + 1, ly),
+                            d = swar_digits(p + s3 + 1, ld), id = swar_digits(p + s4 + 1, li);
+        // Unsigned differences also reject values below the window's start.
+        if (x - x_lo >= x_n || y - y_lo >= y_n || d > d_max || id > i_max) break;
+        Fragment& fr = out.emplace_back();
+        fr.x = static_cast<std::uint32_t>(x);
+        fr.y = static_cast<std::uint32_t>(y);
+        fr.depth = static_cast<std::uint32_t>(d);
+        fr.id = static_cast<std::uint32_t>(id);
+        fr.facing = f == 'B' ? Facing::Back : Facing::Front;
+        fr.culled = culled;
+        p += e + 1;
+        ++n;
     }
-    const std::uint64_t x = swar_digits(p + 2, lx), y = swar_digits(p + s2 + 1, ly),
-                        d = swar_digits(p + s3 + 1, ld), id = swar_digits(p + s4 + 1, li);
-    // Unsigned differences also reject values below the window's start.
-    if (x - x0 >= xw || y - y0 >= yh || d > depth_max || id > id_max) return false;
-    Fragment& fr = out.emplace_back();
-    fr.x = static_cast<std::uint32_t>(x);
-    fr.y = static_cast<std::uint32_t>(y);
-    fr.depth = static_cast<std::uint32_t>(d);
-    fr.id = static_cast<std::uint32_t>(id);
-    fr.facing = f == 'B' ? Facing::Back : Facing::Front;
-    fr.culled = culled;
-    cur = const_cast<char*>(p + end + 1);
-    ++line;
-    return true;
+    cur = const_cast<char*>(p);
+    line += n;
+    return n;
 }
 
 bool TraceReader::Impl::fast_fragment(std::vector<Fragment>& out) {
-    if (lines_end - cur >= kWholeLineBytes && whole_line_fragment(out)) return true;
     const char* p = cur + 2;
     std::uint64_t x, y, d, id;
     if (!fast_num(p, x, lines_end) || !fast_num(p, y, lines_end) || !fast_num(p, d, lines_end) ||
@@ -780,6 +785,7 @@ FragmentSource::Event TraceReader::next(Tile& t) {
             m.fail("tile " + num_str(m.tcol) + " " + num_str(m.trow) + " has more than " +
                    num_str(m.lim.max_tile_fragments) +
                    " fragments (the limit input.max_tile_fragments; docs/limits.md)");
+        if (in_tile && m.cur[0] == 'f' && m.whole_lines(t.frags, m.lim.max_tile_fragments - t.frags.size())) continue;
         if (in_tile && m.cur[0] == 'f' && (m.cur[1] == ' ' || m.cur[1] == '\t') && m.fast_fragment(t.frags)) continue;
 
         m.tokenize(m.cur, fl);
