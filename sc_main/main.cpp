@@ -11,8 +11,6 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
-#include <pthread.h>
-#include <sched.h>
 #include <memory>
 #include <thread>
 #include <systemc>
@@ -154,30 +152,8 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
     }
     Workers workers(argvs, errs, out_fds);
-    // The inputs are hashed while the workers run, on a thread that only gets
-    // a core the workers leave idle (SCHED_IDLE): with as many workers as
-    // cores it would otherwise take a core from one of them, and it finds one
-    // when the first worker ends. Once they all have, it runs as any thread
-    // does (an idle thread on a machine kept busy by others would wait).
-    nlohmann::json provenance;
-    std::thread hashing;
-    const sched_param no_priority{};
-    if (stats_out.active()) {
-        hashing = std::thread([&] { provenance = make_provenance(opt.argv, cfg, prov_inputs); });
-        (void)::pthread_setschedparam(hashing.native_handle(), SCHED_IDLE, &no_priority);
-    }
-    const auto hash_as_any_thread = [&] {
-        if (hashing.joinable()) (void)::pthread_setschedparam(hashing.native_handle(), SCHED_OTHER, &no_priority);
-    };
-    struct Join {
-        std::thread& t;
-        const sched_param& normal;
-        ~Join() {
-            if (!t.joinable()) return;
-            (void)::pthread_setschedparam(t.native_handle(), SCHED_OTHER, &normal);
-            t.join();
-        }
-    } join_hashing{hashing, no_priority};
+    // The inputs are hashed while the workers run.
+    const nlohmann::json provenance = stats_out.active() ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
 
     RunSnapshot all;
     std::vector<PartFiles> files;
@@ -243,18 +219,15 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
             join_part(k);
         }
         workers.wait();
-        hash_as_any_thread();
     } else {
         // A scene whose parts hold no fragment at all is run again as one
         // process (below): nothing is written before that is known.
         workers.wait();
-        hash_as_any_thread();
         for (std::size_t k = 0; k < parts.size(); ++k) read_part(k);
         if (all.counters.raster.fragments + all.counters.raster.other_fragments == 0) return false;
         for (std::size_t k = 0; k < parts.size(); ++k) join_part(k);
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (hashing.joinable()) hashing.join();
     nlohmann::json stats = make_stats(all, wall);
     if (stats_out.active()) stats["provenance"] = provenance;
     if (collisions_out.active()) collisions_out.commit();
