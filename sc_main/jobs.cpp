@@ -121,6 +121,12 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
         sigset_t mask;
         ~Restore() { ::sigprocmask(SIG_SETMASK, &mask, nullptr); }
     } restore{old};
+    // A SIGCHLD ignored by whoever started this process would have the kernel
+    // reap the workers itself, and their statuses would be lost.
+    struct sigaction dfl {};
+    dfl.sa_handler = SIG_DFL;
+    sigemptyset(&dfl.sa_mask);
+    ::sigaction(SIGCHLD, &dfl, nullptr);
     posix_spawnattr_t attr;
     posix_spawnattr_init(&attr);
     posix_spawnattr_setsigmask(&attr, &old);
@@ -135,9 +141,12 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
         argv.push_back(nullptr);
         posix_spawn_file_actions_t fa;
         posix_spawn_file_actions_init(&fa);
+        // The output first: started without a standard input or error, this
+        // process may hold it as descriptor 0 or 2, which the opens replace.
+        const bool out = k < out_fds.size() && out_fds[k] >= 0;
+        if (out) posix_spawn_file_actions_adddup2(&fa, out_fds[k], 1);
         posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-        if (k < out_fds.size() && out_fds[k] >= 0) posix_spawn_file_actions_adddup2(&fa, out_fds[k], 1);
-        else posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+        if (!out) posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
         posix_spawn_file_actions_addopen(&fa, 2, err_paths[k].c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
         pid_t pid = 0;
         const int rc = posix_spawn(&pid, argv[0], &fa, &attr, argv.data(), environ);
@@ -145,6 +154,7 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
         if (rc != 0) throw RunError("--jobs: cannot start a worker (" + argvs[k][0] + "): " + std::strerror(rc));
         pids_.push_back(pid);
         status_.push_back(0);
+        lost_.push_back(0);
         done_.push_back(false);
         stop_on_interrupt(pid);
     }
@@ -163,10 +173,25 @@ Workers::~Workers() {
 
 bool Workers::wait_for(std::size_t k) {
     if (!done_[k]) {
-        while (::waitpid(pids_[k], &status_[k], 0) < 0 && errno == EINTR) {}
+        // Waited for without reaping, so that its pid cannot be reused while
+        // the interrupt handler still knows it; then forgotten, then reaped.
+        siginfo_t info{};
+        int rc;
+        while ((rc = ::waitid(P_PID, static_cast<id_t>(pids_[k]), &info, WEXITED | WNOWAIT)) < 0 && errno == EINTR) {}
+        if (rc < 0) lost_[k] = errno;
+        forget_child(pids_[k]);
+        while (::waitpid(pids_[k], &status_[k], 0) < 0) {
+            if (errno == EINTR) continue;
+            if (!lost_[k]) lost_[k] = errno;
+            break;
+        }
         done_[k] = true;
     }
-    return WIFEXITED(status_[k]) && WEXITSTATUS(status_[k]) == 0;
+    return !lost_[k] && WIFEXITED(status_[k]) && WEXITSTATUS(status_[k]) == 0;
+}
+
+bool Workers::refused_input(std::size_t k) const {
+    return done_[k] && !lost_[k] && WIFEXITED(status_[k]) && WEXITSTATUS(status_[k]) == 2;
 }
 
 void Workers::wait() {
@@ -174,6 +199,9 @@ void Workers::wait() {
     waited_ = true;
     for (std::size_t k = 0; k < pids_.size(); ++k) {
         const int st = status_[k];
+        if (lost_[k])
+            throw RunError("--jobs: worker " + std::to_string(k) + ": its exit status is lost (" +
+                           std::strerror(lost_[k]) + ")");
         if (WIFEXITED(st) && WEXITSTATUS(st) == 0) continue;
         // The worker's own one line, without its program name (the caller's
         // message adds it); its other lines (a scene's warnings) were said once

@@ -56,12 +56,15 @@ public:
     // Waits for worker k alone; whether it succeeded. The others run on, so
     // what a part wrote is joined while the later parts are still simulated.
     bool wait_for(std::size_t k);
+    // After wait_for(k): whether worker k refused its input (exit status 2).
+    bool refused_input(std::size_t k) const;
     // Waits for all. When some failed: throws the error of the first one (in
     // frame order), the exit status it had (InputError for 2, RunError else).
     void wait();
 
 private:
     std::vector<int> pids_, status_;
+    std::vector<int> lost_;   // errno of a wait that failed: the status is unknown
     std::vector<bool> done_;
     std::vector<std::string> err_;
     bool waited_ = false;

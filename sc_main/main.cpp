@@ -209,10 +209,10 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         // reports the first failure, and the outputs are abandoned.
         for (std::size_t k = 0; k < parts.size(); ++k) {
             if (!workers.wait_for(k)) {
-                // The worker counted its frames' work from zero; one process,
-                // counting from the frames before them, may cross the bound
-                // before the error the worker met.
-                if (work_before > 0) read_again(k);
+                // A worker that refused its input counted its frames' work
+                // from zero; one process, counting from the frames before
+                // them, may cross the bound before the error the worker met.
+                if (work_before > 0 && workers.refused_input(k)) read_again(k);
                 break;
             }
             read_part(k);

@@ -28,13 +28,15 @@ std::vector<std::string>& cleanup_paths() {
 // Worker processes (rbcd-sim --jobs) that write into those paths: stopped and
 // waited for first, so that nothing is written there after the removal.
 constexpr int kMaxChildren = 1024;
-pid_t g_children[kMaxChildren];
+volatile sig_atomic_t g_children[kMaxChildren];   // 0: ended and forgotten
 volatile sig_atomic_t g_child_count = 0;
 
 extern "C" void on_fatal_signal(int sig) {
-    for (int i = 0; i < g_child_count; ++i) ::kill(g_children[i], SIGTERM);
     for (int i = 0; i < g_child_count; ++i)
-        while (::waitpid(g_children[i], nullptr, 0) < 0 && errno == EINTR) {}
+        if (g_children[i] > 0) ::kill(g_children[i], SIGTERM);
+    for (int i = 0; i < g_child_count; ++i)
+        if (g_children[i] > 0)
+            while (::waitpid(g_children[i], nullptr, 0) < 0 && errno == EINTR) {}
     // A ByName output's directory is listed after the files in it.
     for (const auto& p : cleanup_paths())
         if (::unlink(p.c_str()) != 0) ::rmdir(p.c_str());
@@ -69,6 +71,11 @@ void forget_on_interrupt(const std::string& path) {
     auto& v = cleanup_paths();
     for (auto& p : v)
         if (p == path) p.clear();
+}
+
+void forget_child(int pid) {
+    for (int i = 0; i < g_child_count; ++i)
+        if (g_children[i] == pid) g_children[i] = 0;
 }
 
 void stop_on_interrupt(int pid) {
@@ -236,6 +243,7 @@ OutputFile& OutputFile::operator=(OutputFile&& o) noexcept {
         f_ = std::exchange(o.f_, nullptr);
         in_place_ = o.in_place_;
         failed_ = o.failed_;
+        failed_errno_ = o.failed_errno_;
     }
     return *this;
 }
@@ -245,12 +253,17 @@ std::string OutputFile::open_file_path() const {
 }
 
 void OutputFile::write(const char* p, std::size_t n) {
-    if (f_ && n && std::fwrite(p, 1, n, f_) != n) failed_ = true;
+    if (f_ && n && std::fwrite(p, 1, n, f_) != n) fail_with(errno);
+}
+
+void OutputFile::fail_with(int err) {
+    if (!failed_) failed_errno_ = err;
+    failed_ = true;
 }
 
 int OutputFile::shared_fd() {
     if (!f_) return -1;
-    if (std::fflush(f_) != 0) failed_ = true;
+    if (std::fflush(f_) != 0) fail_with(errno);
     return ::fileno(f_);
 }
 
@@ -273,8 +286,9 @@ std::uint64_t OutputFile::append_from(int fd, std::uint64_t offset, const std::s
         // Another file system, or one that cannot: copied here instead. Nothing
         // was written by the failed call.
         if (errno == EXDEV || errno == EINVAL || errno == ENOSYS || errno == EOPNOTSUPP || errno == EBADF) break;
-        if (errno == EIO) throw cannot_read(errno);
-        failed_ = true;   // the output's error, reported at commit
+        // A full disk, a quota, an I/O error: the output's failure, which
+        // commit() reports with this errno.
+        fail_with(errno);
         return copied;
     }
     std::vector<char> buf(std::size_t(1) << 20);
@@ -310,7 +324,7 @@ void OutputFile::commit() {
     const bool closed = std::fclose(f_) == 0;
     f_ = nullptr;
     if (failed_ || !flushed || !closed) {
-        const std::string why = std::strerror(flushed ? errno : flush_errno);
+        const std::string why = std::strerror(failed_ && failed_errno_ ? failed_errno_ : flushed ? errno : flush_errno);
         abandon();
         throw std::runtime_error(path_ + ": write failed: " + why);
     }

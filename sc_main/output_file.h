@@ -24,6 +24,8 @@ void remove_on_interrupt(const std::string& path);
 // A child process that writes into such paths: on those signals it is sent
 // SIGTERM and waited for before the paths are removed.
 void stop_on_interrupt(int pid);
+// The process has ended (waited for, not yet reaped): no longer signalled.
+void forget_child(int pid);
 // No longer: the path is gone or is the run's result.
 void forget_on_interrupt(const std::string& path);
 // Both paths exist and name the same file.
@@ -95,6 +97,8 @@ private:
     std::FILE* f_ = nullptr;
     bool in_place_ = false;
     bool failed_ = false;
+    int failed_errno_ = 0;   // the first failure's
+    void fail_with(int err);
 };
 
 } // namespace rbcd

@@ -138,6 +138,35 @@ TEST_CASE("rbcd-sim --jobs: collisions on standard output are one process's", "[
     }
 }
 
+// Started by a shell with standard input closed, or with SIGCHLD ignored: the
+// output may then be descriptor 0 (the first worker writes into it), and the
+// workers' statuses must still be known.
+TEST_CASE("rbcd-sim --jobs: started without standard input, or with SIGCHLD ignored", "[jobs]") {
+    TempDir td;
+    const std::string t = default_trace(td, false);
+    const Outputs one = run(td, {"-q", "--trace", t}, "");
+    fs::remove(td.path("out/frames.jsonl"));
+    for (const char* how : {"exec \"$0\" \"$@\" <&-", "trap '' CHLD; exec \"$0\" \"$@\""}) {
+        INFO(how);
+        td.plant_old_outputs();
+        const Result r = run_program(td, "/bin/sh", {"-c", how, RBCD_SIM, "-q", "--trace", t, "--jobs", "2",
+                                                     "--collisions", td.collisions(), "--stats", td.stats()});
+        INFO(r.err);
+        REQUIRE(r.status == 0);
+        CHECK(slurp(td.collisions()) == one.collisions);
+        // A worker's failure is still seen.
+        std::string bad = slurp(t);
+        const std::size_t at = bad.find("\nf ", bad.find("\nframe 50\n"));
+        REQUIRE(at != std::string::npos);
+        bad.replace(at + 1, 1, "g");
+        const std::string bad_path = td.write("bad.rbt", bad);
+        td.plant_old_outputs();
+        const Result b = run_program(td, "/bin/sh", {"-c", how, RBCD_SIM, "-q", "--trace", bad_path, "--jobs", "2",
+                                                     "--collisions", td.collisions(), "--stats", td.stats()});
+        expect_input_error(td, b, {"bad.rbt:"});
+    }
+}
+
 TEST_CASE("rbcd-sim --jobs: more workers than frames", "[jobs]") {
     TempDir td;
     const std::string t = default_trace(td, false);
