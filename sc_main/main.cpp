@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <sys/wait.h>
 #include <memory>
 #include <thread>
 #include <systemc>
@@ -152,8 +153,16 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
     }
     Workers workers(argvs, errs, out_fds);
-    // The inputs are hashed while the workers run.
-    const nlohmann::json provenance = stats_out.active() ? make_provenance(opt.argv, cfg, prov_inputs) : nlohmann::json();
+    // The inputs are hashed while the workers run, from when the first of them
+    // ends: before, the hash would take a core from them (as many workers as
+    // cores); after, it has the core that worker leaves, beside the join.
+    // (Waited for without reaping: the joins below reap the workers in order.)
+    std::future<nlohmann::json> provenance_job;
+    if (stats_out.active()) {
+        siginfo_t first_end{};
+        while (::waitid(P_ALL, 0, &first_end, WEXITED | WNOWAIT) < 0 && errno == EINTR) {}
+        provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, prov_inputs); });
+    }
 
     RunSnapshot all;
     std::vector<PartFiles> files;
@@ -229,7 +238,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     nlohmann::json stats = make_stats(all, wall);
-    if (stats_out.active()) stats["provenance"] = provenance;
+    if (provenance_job.valid()) stats["provenance"] = provenance_job.get();
     if (collisions_out.active()) collisions_out.commit();
     if (frame_stats_out.active()) frame_stats_out.commit();
     if (stats_out.active()) {
