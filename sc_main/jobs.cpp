@@ -151,7 +151,12 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
         pid_t pid = 0;
         const int rc = posix_spawn(&pid, argv[0], &fa, &attr, argv.data(), environ);
         posix_spawn_file_actions_destroy(&fa);
-        if (rc != 0) throw RunError("--jobs: cannot start a worker (" + argvs[k][0] + "): " + std::strerror(rc));
+        if (rc != 0) {
+            // The workers already started would run on, writing where this
+            // run's error leaves nothing: stopped first.
+            stop_all();
+            throw RunError("--jobs: cannot start a worker (" + argvs[k][0] + "): " + std::strerror(rc));
+        }
         pids_.push_back(pid);
         status_.push_back(0);
         lost_.push_back(0);
@@ -161,14 +166,14 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
 }
 
 Workers::~Workers() {
-    if (waited_) return;
+    if (!waited_) stop_all();
+}
+
+void Workers::stop_all() {
     for (std::size_t k = 0; k < pids_.size(); ++k)
         if (!done_[k]) ::kill(pids_[k], SIGTERM);
-    for (std::size_t k = 0; k < pids_.size(); ++k) {
-        int st = 0;
-        if (!done_[k])
-            while (::waitpid(pids_[k], &st, 0) < 0 && errno == EINTR) {}
-    }
+    for (std::size_t k = 0; k < pids_.size(); ++k)
+        if (!done_[k]) wait_for(k);
 }
 
 bool Workers::wait_for(std::size_t k) {

@@ -63,6 +63,7 @@ public:
     void wait();
 
 private:
+    void stop_all();   // SIGTERM to those still running, then each waited for
     std::vector<int> pids_, status_;
     std::vector<int> lost_;   // errno of a wait that failed: the status is unknown
     std::vector<bool> done_;

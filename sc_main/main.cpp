@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cerrno>
+#include <csignal>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -152,16 +153,26 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         errs.push_back(dir.path(n + ".err"));
         for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
     }
+    // Declared before the workers, so that on an error they are stopped
+    // before the hash is waited for.
+    std::future<nlohmann::json> provenance_job;
     Workers workers(argvs, errs, out_fds);
     // The inputs are hashed while the workers run, from when the first of them
     // ends: before, the hash would take a core from them (as many workers as
     // cores); after, it has the core that worker leaves, beside the join.
     // (Waited for without reaping: the joins below reap the workers in order.)
-    std::future<nlohmann::json> provenance_job;
     if (stats_out.active()) {
         siginfo_t first_end{};
         while (::waitid(P_ALL, 0, &first_end, WEXITED | WNOWAIT) < 0 && errno == EINTR) {}
+        // The hashing thread starts with the interrupts blocked: the handler,
+        // which signals the workers, runs on this thread only, never beside
+        // the joins that forget and reap them.
+        sigset_t block, old;
+        sigemptyset(&block);
+        for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
+        ::pthread_sigmask(SIG_BLOCK, &block, &old);
         provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, prov_inputs); });
+        ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
     }
 
     RunSnapshot all;

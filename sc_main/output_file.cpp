@@ -285,9 +285,12 @@ std::uint64_t OutputFile::append_from(int fd, std::uint64_t offset, const std::s
         if (errno == EINTR) continue;
         // Another file system, or one that cannot: copied here instead. Nothing
         // was written by the failed call.
-        if (errno == EXDEV || errno == EINVAL || errno == ENOSYS || errno == EOPNOTSUPP || errno == EBADF) break;
-        // A full disk, a quota, an I/O error: the output's failure, which
-        // commit() reports with this errno.
+        // (EIO: the read or the write; the copy below tells which.)
+        if (errno == EXDEV || errno == EINVAL || errno == ENOSYS || errno == EOPNOTSUPP || errno == EBADF ||
+            errno == EIO)
+            break;
+        // A full disk, a quota: the output's failure, which commit() reports
+        // with this errno.
         fail_with(errno);
         return copied;
     }
