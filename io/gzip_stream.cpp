@@ -35,16 +35,19 @@ bool GzipStream::refill() {
         in_pos_ = in_end_ = 0;
     }
     if (in_end_ == in_.size()) return true;
+    const long n = read_raw(in_.data() + in_end_, in_.size() - in_end_);
+    if (n <= 0) return false;
+    in_end_ += static_cast<std::size_t>(n);
+    return true;
+}
+
+long GzipStream::read_raw(void* dst, std::size_t n) {
     for (;;) {
-        const ssize_t n = ::read(fd_, in_.data() + in_end_, in_.size() - in_end_);
-        if (n < 0 && errno == EINTR) continue;
-        if (n < 0) {
-            error_ = std::string("read error: ") + std::strerror(errno);
-            return false;
-        }
-        if (n == 0) raw_eof_ = true;
-        in_end_ += static_cast<std::size_t>(n);
-        return n > 0;
+        const ssize_t got = ::read(fd_, dst, n);
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0) return fail(std::string("read error: ") + std::strerror(errno));
+        if (got == 0) raw_eof_ = true;
+        return static_cast<long>(got);
     }
 }
 
@@ -99,14 +102,7 @@ long GzipStream::read(char* dst, std::size_t n) {
         if (in_pos_ == in_end_) {
             // Straight into the caller's buffer: the bytes would only be copied
             // out of ours (a trace's every byte, once more).
-            if (raw_eof_) return 0;
-            for (;;) {
-                const ssize_t got = ::read(fd_, dst, std::min(n, chunk_));
-                if (got < 0 && errno == EINTR) continue;
-                if (got < 0) return fail(std::string("read error: ") + std::strerror(errno));
-                if (got == 0) raw_eof_ = true;
-                return static_cast<long>(got);
-            }
+            return raw_eof_ ? 0 : read_raw(dst, std::min(n, chunk_));
         }
         const std::size_t k = std::min(n, in_end_ - in_pos_);
         std::memcpy(dst, in_.data() + in_pos_, k);

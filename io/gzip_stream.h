@@ -35,6 +35,8 @@ public:
 
 private:
     bool refill();   // more raw input; false at end of file or on error
+    // One read(2) of the file; -1 with error() set on a failure, 0 at its end.
+    long read_raw(void* dst, std::size_t n);
     long fail(const std::string& what);
 
     int fd_;

@@ -113,14 +113,7 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
     // A signal between a worker's start and its registration would leave it
     // writing after the clean-up: held back until every worker is known; the
     // workers start with the mask this process had.
-    sigset_t block, old;
-    sigemptyset(&block);
-    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
-    ::sigprocmask(SIG_BLOCK, &block, &old);
-    struct Restore {
-        sigset_t mask;
-        ~Restore() { ::sigprocmask(SIG_SETMASK, &mask, nullptr); }
-    } restore{old};
+    const InterruptsHeld held;
     // A SIGCHLD ignored by whoever started this process would have the kernel
     // reap the workers itself, and their statuses would be lost.
     struct sigaction dfl {};
@@ -129,7 +122,7 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
     ::sigaction(SIGCHLD, &dfl, nullptr);
     posix_spawnattr_t attr;
     posix_spawnattr_init(&attr);
-    posix_spawnattr_setsigmask(&attr, &old);
+    posix_spawnattr_setsigmask(&attr, &held.previous());
     posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
     struct AttrGuard {
         posix_spawnattr_t* a;
@@ -229,18 +222,11 @@ TempDirectory::TempDirectory(const std::string& parent) {
     std::vector<char> b(tmpl.begin(), tmpl.end());
     b.push_back('\0');
     // Held back between the creation and the registration, as OutputFile does.
-    sigset_t block, old;
-    sigemptyset(&block);
-    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
-    ::sigprocmask(SIG_BLOCK, &block, &old);
-    const bool made = ::mkdtemp(b.data()) != nullptr;
-    const int err = errno;
-    if (made) {
-        dir_ = b.data();
-        remove_on_interrupt(dir_);
-    }
-    ::sigprocmask(SIG_SETMASK, &old, nullptr);
-    if (!made) throw RunError("--jobs: cannot create the workers' directory in " + parent + ": " + std::strerror(err));
+    const InterruptsHeld held;
+    if (!::mkdtemp(b.data()))
+        throw RunError("--jobs: cannot create the workers' directory in " + parent + ": " + std::strerror(errno));
+    dir_ = b.data();
+    remove_on_interrupt(dir_);
 }
 
 void TempDirectory::will_hold(const std::string& name) {

@@ -4,7 +4,6 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cerrno>
-#include <csignal>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -167,12 +166,8 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         // The hashing thread starts with the interrupts blocked: the handler,
         // which signals the workers, runs on this thread only, never beside
         // the joins that forget and reap them.
-        sigset_t block, old;
-        sigemptyset(&block);
-        for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
-        ::pthread_sigmask(SIG_BLOCK, &block, &old);
+        const InterruptsHeld held;
         provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, prov_inputs); });
-        ::pthread_sigmask(SIG_SETMASK, &old, nullptr);
     }
 
     RunSnapshot all;

@@ -27,6 +27,8 @@ std::vector<std::string>& cleanup_paths() {
 
 // Worker processes (rbcd-sim --jobs) that write into those paths: stopped and
 // waited for first, so that nothing is written there after the removal.
+constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP};
+
 constexpr int kMaxChildren = 1024;
 volatile sig_atomic_t g_children[kMaxChildren];   // 0: ended and forgotten
 volatile sig_atomic_t g_child_count = 0;
@@ -85,12 +87,21 @@ void stop_on_interrupt(int pid) {
     }
 }
 
+InterruptsHeld::InterruptsHeld() {
+    sigset_t block;
+    sigemptyset(&block);
+    for (int sig : kInterrupts) sigaddset(&block, sig);
+    ::pthread_sigmask(SIG_BLOCK, &block, &old_);
+}
+
+InterruptsHeld::~InterruptsHeld() { ::pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
+
 void remove_on_interrupt(const std::string& path) {
     static const bool installed = [] {
         struct sigaction sa {};
         sa.sa_handler = on_fatal_signal;
         sigemptyset(&sa.sa_mask);
-        for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &sa, nullptr);
+        for (int sig : kInterrupts) ::sigaction(sig, &sa, nullptr);
         return true;
     }();
     (void)installed;
@@ -167,23 +178,18 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
         // could clean up: it goes now (formats.md).
         ::unlink(path_.c_str());
         std::string tmpl = dir_of(path_) + "/." + base_of(path_) + ".XXXXXX";
-        // A signal between the creation and the registration would leave the
-        // temporary behind (an rbcd-sim --jobs worker is stopped just as it
-        // starts): held back until the handler knows the path.
-        sigset_t block, old;
-        sigemptyset(&block);
-        for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
-        ::sigprocmask(SIG_BLOCK, &block, &old);
-        // mkostemp: O_CREAT|O_EXCL with a random name, so nothing planted at a
-        // predictable name (a symlink) can redirect the output.
-        fd = ::mkostemp(tmpl.data(), O_CLOEXEC);
-        const int err = errno;
-        if (fd >= 0) {
+        {
+            // A signal between the creation and the registration would leave
+            // the temporary behind (an rbcd-sim --jobs worker is stopped just
+            // as it starts): held back until the handler knows the path.
+            const InterruptsHeld held;
+            // mkostemp: O_CREAT|O_EXCL with a random name, so nothing planted at
+            // a predictable name (a symlink) can redirect the output.
+            fd = ::mkostemp(tmpl.data(), O_CLOEXEC);
+            if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
             tmp_ = tmpl;
             remove_on_interrupt(tmp_);
         }
-        ::sigprocmask(SIG_SETMASK, &old, nullptr);
-        if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(err));
         // mkstemp creates 0600; the result gets what fopen would give it.
         const mode_t mask = ::umask(0);
         ::umask(mask);
@@ -213,20 +219,12 @@ OutputFile::OutputFile(std::string path, ByName) : path_(std::move(path)) {
     std::string tmpl = dir_of(path_) + "/." + base_of(path_) + ".XXXXXX";
     // Held back between the creation and the registration, as for a plain
     // output: a signal there would leave the directory behind.
-    sigset_t block, old;
-    sigemptyset(&block);
-    for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&block, sig);
-    ::sigprocmask(SIG_BLOCK, &block, &old);
-    const bool made = ::mkdtemp(tmpl.data()) != nullptr;
-    const int err = errno;
-    if (made) {
-        dir_ = tmpl;
-        named_ = dir_ + "/" + base_of(path_);
-        for (const char* c : kCompanions) remove_on_interrupt(named_ + c);
-        remove_on_interrupt(dir_);
-    }
-    ::sigprocmask(SIG_SETMASK, &old, nullptr);
-    if (!made) throw InputError(path_ + ": cannot create: " + std::strerror(err));
+    const InterruptsHeld held;
+    if (!::mkdtemp(tmpl.data())) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
+    dir_ = tmpl;
+    named_ = dir_ + "/" + base_of(path_);
+    for (const char* c : kCompanions) remove_on_interrupt(named_ + c);
+    remove_on_interrupt(dir_);
 }
 
 OutputFile::~OutputFile() { abandon(); }

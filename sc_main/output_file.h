@@ -8,6 +8,8 @@
 // /dev/stdout, or "-" for standard output) is written in place: opened as it
 // is, never unlinked, never replaced by a regular file. docs/limits.md.
 #pragma once
+#include <signal.h>
+
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -26,6 +28,22 @@ void remove_on_interrupt(const std::string& path);
 void stop_on_interrupt(int pid);
 // The process has ended (waited for, not yet reaped): no longer signalled.
 void forget_child(int pid);
+// SIGINT, SIGTERM and SIGHUP (the signals above) held back on this thread for
+// the object's life: between creating a temporary or a worker and registering
+// it, where a signal would leave it behind; a thread started meanwhile keeps
+// them blocked.
+class InterruptsHeld {
+public:
+    InterruptsHeld();
+    ~InterruptsHeld();
+    InterruptsHeld(const InterruptsHeld&) = delete;
+    InterruptsHeld& operator=(const InterruptsHeld&) = delete;
+    // The mask before: what a child should start with.
+    const sigset_t& previous() const { return old_; }
+
+private:
+    sigset_t old_;
+};
 // No longer: the path is gone or is the run's result.
 void forget_on_interrupt(const std::string& path);
 // Both paths exist and name the same file.
