@@ -395,6 +395,22 @@ namespace {
 // One number of a fragment line on the fast path: false means "let the slow
 // path look at this line" (not a number, too long to be safe from overflow,
 // glued to another character, missing).
+// One to eight digits at w's low end (the first at the lowest byte), `len` of
+// them, as a number: the word shifted so the bytes after the field are gone
+// (as if padded with leading zeros), then three multiplies combine the digits
+// in pairs, fours and eights.
+inline std::uint64_t swar_digits(std::uint64_t w, unsigned len) {
+    std::uint64_t x = w << (8 * (8 - len));
+    x = (x & 0x0F0F0F0F0F0F0F0Full) * 2561 >> 8;
+    x = (x & 0x00FF00FF00FF00FFull) * 6553601 >> 16;
+    return static_cast<std::uint32_t>((x & 0x0000FFFF0000FFFFull) * 42949672960001ull >> 32);
+}
+inline std::uint64_t swar_digits(const char* p, unsigned len) {
+    std::uint64_t w;
+    std::memcpy(&w, p, 8);
+    return swar_digits(w, len);
+}
+
 inline bool fast_num(const char*& p, std::uint64_t& out, const char* end) {
     skip_ws(p);
     const char* s = p;
@@ -402,8 +418,7 @@ inline bool fast_num(const char*& p, std::uint64_t& out, const char* end) {
     unsigned d;
     if (end - p >= 8) {
         // Up to eight digits at once (a 24-bit depth has eight): the run of
-        // digits at the low end of the word, then three multiplies combine
-        // them in pairs, fours and eights. A carry or borrow out of a byte
+        // digits at the low end of the word. A carry or borrow out of a byte
         // only reaches the bytes after the first non-digit, which go unused.
         std::uint64_t w;
         std::memcpy(&w, p, 8);
@@ -411,10 +426,7 @@ inline bool fast_num(const char*& p, std::uint64_t& out, const char* end) {
                                  (((w + 0x0606060606060606ull) & 0xF0F0F0F0F0F0F0F0ull) ^ 0x3030303030303030ull);
         const unsigned len = nd ? static_cast<unsigned>(__builtin_ctzll(nd)) / 8 : 8;
         if (len == 0) return false;
-        std::uint64_t x = w << (8 * (8 - len));   // as if padded with leading zeros
-        x = (x & 0x0F0F0F0F0F0F0F0Full) * 2561 >> 8;
-        x = (x & 0x00FF00FF00FF00FFull) * 6553601 >> 16;
-        v = static_cast<std::uint32_t>((x & 0x0000FFFF0000FFFFull) * 42949672960001ull >> 32);
+        v = swar_digits(w, len);
         p += len;
         // Eight digits followed by a ninth is rare; seven against eight (a
         // 24-bit depth) is a coin toss, so that test is not a branch of its own.
@@ -440,17 +452,6 @@ inline std::uint32_t bytes_equal(__m128i lo, __m128i hi, char c) {
     const __m128i v = _mm_set1_epi8(c);
     return static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(lo, v))) |
            static_cast<std::uint32_t>(_mm_movemask_epi8(_mm_cmpeq_epi8(hi, v))) << 16;
-}
-
-// One to eight digits at p, already checked, as a number: the multiplies of
-// fast_num without its search for the end.
-inline std::uint64_t swar_digits(const char* p, unsigned len) {
-    std::uint64_t w;
-    std::memcpy(&w, p, 8);
-    std::uint64_t x = w << (8 * (8 - len));   // the bytes after the field shifted out
-    x = (x & 0x0F0F0F0F0F0F0F0Full) * 2561 >> 8;
-    x = (x & 0x00FF00FF00FF00FFull) * 6553601 >> 16;
-    return static_cast<std::uint32_t>((x & 0x0000FFFF0000FFFFull) * 42949672960001ull >> 32);
 }
 
 // Whether m has four bits set or more (popcount is a library call without -mpopcnt).
@@ -555,16 +556,8 @@ bool TraceReader::Impl::fast_fragment(std::vector<Fragment>& out) {
     else return false;
     // Unsigned differences also reject values below the window's start.
     if (x - x0 >= xw || y - y0 >= yh || d > depth_max || id > id_max) return false;
-    // Stored field by field in place: a Fragment built on the stack and then
-    // copied is read back with wider loads than the stores that made it, which
-    // stall store forwarding (a quarter of this function's time, measured).
-    Fragment& f = out.emplace_back();
-    f.x = static_cast<std::uint32_t>(x);
-    f.y = static_cast<std::uint32_t>(y);
-    f.depth = static_cast<std::uint32_t>(d);
-    f.id = static_cast<std::uint32_t>(id);
-    f.facing = facing;
-    f.culled = culled;
+    out.push_back(Fragment{static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y), static_cast<std::uint32_t>(d),
+                           static_cast<std::uint32_t>(id), facing, culled});
     cur = const_cast<char*>(p);
     ++line;
     return true;

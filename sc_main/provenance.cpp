@@ -98,8 +98,10 @@ nlohmann::json input_info(const ProvenanceInput& in) {
         return j;
     }
     ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
-    const std::unique_ptr<XXH3_state_t, XXH_errorcode (*)(XXH3_state_t*)> state(XXH3_createState(), XXH3_freeState);
-    XXH3_128bits_reset(state.get());
+    // On the stack (the inline build defines the state), nothing to allocate.
+    XXH3_state_t state;
+    XXH3_INITSTATE(&state);
+    XXH3_128bits_reset(&state);
     std::uint64_t size = 0;
     bool bad = false;
     const std::unique_ptr<char[]> buf(new char[kHashReadBytes]);
@@ -110,12 +112,12 @@ nlohmann::json input_info(const ProvenanceInput& in) {
             bad = n < 0;
             break;
         }
-        XXH3_128bits_update(state.get(), buf.get(), static_cast<std::size_t>(n));
+        XXH3_128bits_update(&state, buf.get(), static_cast<std::size_t>(n));
         size += static_cast<std::uint64_t>(n);
     }
     ::close(fd);
     j["size"] = size;
-    j["xxh128"] = bad ? nlohmann::json(nullptr) : nlohmann::json(canonical_hex(XXH3_128bits_digest(state.get())));
+    j["xxh128"] = bad ? nlohmann::json(nullptr) : nlohmann::json(canonical_hex(XXH3_128bits_digest(&state)));
     if (bad) j["note"] = "read error";
     return j;
 }
