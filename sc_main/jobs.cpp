@@ -2,13 +2,13 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -17,8 +17,6 @@
 
 #include "rbcd/common/errors.h"
 #include "rbcd/sc_main/output_file.h"
-
-extern char** environ;
 
 namespace rbcd {
 
@@ -107,8 +105,48 @@ JobPart parse_worker_part(const std::string& text, FrameRange range) {
     return p;
 }
 
-Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::vector<std::string>& err_paths,
-                 const std::vector<int>& out_fds)
+namespace {
+
+// Descriptor `target` opened on `path`; false when it cannot be.
+bool open_as(int target, const char* path, int flags) {
+    const int fd = ::open(path, flags, 0600);
+    if (fd < 0) return false;
+    if (fd == target) return true;
+    const bool ok = ::dup2(fd, target) == target;
+    ::close(fd);
+    return ok;
+}
+
+// The forked worker: its descriptors and signals as a new process would have
+// them, then its program. Never returns: the frames below are the parent's,
+// whose objects (its outputs, its workers) are not the worker's to destroy.
+[[noreturn]] void become_worker(WorkerMain main, const std::vector<std::string>& argv, int out_fd,
+                                const std::string& err_path, const sigset_t& mask) {
+    forget_parents_cleanup();
+    // The output first: started without a standard input or error, the parent
+    // may hold it as descriptor 0 or 2, which the opens replace.
+    if (out_fd >= 0 && out_fd != 1 && ::dup2(out_fd, 1) != 1) ::_exit(127);
+    if (!open_as(0, "/dev/null", O_RDONLY)) ::_exit(127);
+    if (out_fd < 0 && !open_as(1, "/dev/null", O_WRONLY)) ::_exit(127);
+    if (!open_as(2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC)) ::_exit(127);
+    // The parent's files (its outputs, the input it scanned) are not the
+    // worker's: a pipe held open here would not see its end.
+    ::close_range(3, ~0u, 0);
+    ::pthread_sigmask(SIG_SETMASK, &mask, nullptr);
+    int status = 1;
+    try {
+        status = main(argv);
+    } catch (...) {
+        status = 1;
+    }
+    std::fflush(nullptr);
+    ::_exit(status);
+}
+
+} // namespace
+
+Workers::Workers(WorkerMain main, const std::vector<std::vector<std::string>>& argvs,
+                 const std::vector<std::string>& err_paths, const std::vector<int>& out_fds)
     : err_(err_paths) {
     // A signal between a worker's start and its registration would leave it
     // writing after the clean-up: held back until every worker is known; the
@@ -120,35 +158,18 @@ Workers::Workers(const std::vector<std::vector<std::string>>& argvs, const std::
     dfl.sa_handler = SIG_DFL;
     sigemptyset(&dfl.sa_mask);
     ::sigaction(SIGCHLD, &dfl, nullptr);
-    posix_spawnattr_t attr;
-    posix_spawnattr_init(&attr);
-    posix_spawnattr_setsigmask(&attr, &held.previous());
-    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK);
-    struct AttrGuard {
-        posix_spawnattr_t* a;
-        ~AttrGuard() { posix_spawnattr_destroy(a); }
-    } attr_guard{&attr};
+    // Nothing buffered here may be written twice, by a worker too.
+    std::fflush(nullptr);
     for (std::size_t k = 0; k < argvs.size(); ++k) {
-        std::vector<char*> argv;
-        for (const auto& a : argvs[k]) argv.push_back(const_cast<char*>(a.c_str()));
-        argv.push_back(nullptr);
-        posix_spawn_file_actions_t fa;
-        posix_spawn_file_actions_init(&fa);
-        // The output first: started without a standard input or error, this
-        // process may hold it as descriptor 0 or 2, which the opens replace.
-        const bool out = k < out_fds.size() && out_fds[k] >= 0;
-        if (out) posix_spawn_file_actions_adddup2(&fa, out_fds[k], 1);
-        posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-        if (!out) posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-        posix_spawn_file_actions_addopen(&fa, 2, err_paths[k].c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-        pid_t pid = 0;
-        const int rc = posix_spawn(&pid, argv[0], &fa, &attr, argv.data(), environ);
-        posix_spawn_file_actions_destroy(&fa);
-        if (rc != 0) {
+        const int out = k < out_fds.size() ? out_fds[k] : -1;
+        const pid_t pid = ::fork();
+        if (pid == 0) become_worker(main, argvs[k], out, err_paths[k], held.previous());
+        if (pid < 0) {
+            const int err = errno;
             // The workers already started would run on, writing where this
             // run's error leaves nothing: stopped first.
             stop_all();
-            throw RunError("--jobs: cannot start a worker (" + argvs[k][0] + "): " + std::strerror(rc));
+            throw RunError("--jobs: cannot start a worker: " + std::string(std::strerror(err)));
         }
         pids_.push_back(pid);
         status_.push_back(0);

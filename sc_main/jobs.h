@@ -1,12 +1,12 @@
 // rbcd-sim --jobs N: one run on N cores. Frames are independent (every frame
 // starts on a drained unit with its memory latency reseeded: docs/timing.md),
 // so the run's frames are cut into N contiguous ranges, each simulated by a
-// worker (rbcd-sim itself, --frames A:B, one thread) into a private
+// worker (a fork of rbcd-sim running its own --frames A:B command line) into a private
 // directory, and the workers' stats, collision and per-frame files are joined
 // as rbcd-merge joins them: the same bytes as one process.
 //
 //     const auto parts = plan_trace_parts(scan_frames(trace), range, 2);
-//     Workers w(parts, worker_argv);      // starts them
+//     Workers w(main, worker_argvs, errs);   // starts them
 //     w.wait();                           // throws the first failed part's error
 //
 // A worker does not read what comes before its frames: it starts at its
@@ -43,13 +43,20 @@ std::string worker_part_text(const JobPart& p, bool trace);
 // Its parse; throws InputError naming --worker-part.
 JobPart parse_worker_part(const std::string& text, FrameRange range);
 
+// A worker's program: what the process would run from its command line
+// `argv` (argv[0] the program); returns the exit status.
+using WorkerMain = int (*)(const std::vector<std::string>& argv);
+
 // The workers, started by the constructor with argvs[k] (argvs[k][0] the
 // program), standard output into out_fds[k] (missing or -1: discarded),
-// standard error into err_paths[k].
+// standard error into err_paths[k]. Each is a fork of this process that runs
+// `main` on its argv and exits, not a new program: the dynamic linking and
+// the SystemC library's start-up (about 5 ms a process) are already done.
+// Call with no other thread running in this process.
 class Workers {
 public:
-    Workers(const std::vector<std::vector<std::string>>& argvs, const std::vector<std::string>& err_paths,
-            const std::vector<int>& out_fds = {});
+    Workers(WorkerMain main, const std::vector<std::vector<std::string>>& argvs,
+            const std::vector<std::string>& err_paths, const std::vector<int>& out_fds = {});
     ~Workers();   // waits for any still running (after killing them)
     Workers(const Workers&) = delete;
     Workers& operator=(const Workers&) = delete;

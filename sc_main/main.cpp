@@ -44,6 +44,8 @@
 #include "rbcd/hw/rbcd_system.h"
 #include "rbcd/hw/self_check.h"
 
+int rbcd_sim_main(const std::vector<std::string>& args);
+
 namespace {
 
 // The kernel prints its banner before sc_main runs; it would precede every
@@ -110,9 +112,6 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
               rbcd::OutputFile& collisions_out, rbcd::OutputFile& stats_out, rbcd::OutputFile& frame_stats_out) {
     using namespace rbcd;
     const auto t0 = std::chrono::steady_clock::now();
-    std::error_code ec;
-    std::string exe = std::filesystem::read_symlink("/proc/self/exe", ec).string();
-    if (ec) exe = "/proc/self/exe";
     // A worker reads its trace on one thread unless there are cores to spare.
     const unsigned threads = std::thread::hardware_concurrency() >= 2 * parts.size() ? opt.threads : 1;
     const bool trace = !opt.trace.empty();
@@ -133,7 +132,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     const bool first_direct = trace && collisions_out.active();
     for (std::size_t k = 0; k < parts.size(); ++k) {
         const std::string n = std::to_string(k);
-        std::vector<std::string> a{exe};
+        std::vector<std::string> a{opt.argv.empty() ? std::string("rbcd-sim") : opt.argv[0]};
         if (!opt.config_file.empty()) a.insert(a.end(), {"--config", opt.config_file});
         for (const auto& set : opt.sets) a.insert(a.end(), {"--set", set});
         if (trace) a.insert(a.end(), {"--trace", opt.trace});
@@ -155,7 +154,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     // Declared before the workers, so that on an error they are stopped
     // before the hash is waited for.
     std::future<nlohmann::json> provenance_job;
-    Workers workers(argvs, errs, out_fds);
+    Workers workers(rbcd_sim_main, argvs, errs, out_fds);
     // The inputs are hashed while the workers run, from when the first of them
     // ends: before, the hash would take a core from them (as many workers as
     // cores); after, it has the core that worker leaves, beside the join.
@@ -643,9 +642,16 @@ std::string unknown_argument_message(const CLI::App& app, const std::vector<std:
 
 } // namespace
 
-int sc_main(int argc, char* argv[]) {
+// The program from its command line: sc_main's, and a --jobs worker's (a fork
+// of this process, sc_main/jobs.h).
+int rbcd_sim_main(const std::vector<std::string>& args) {
+    std::vector<char*> argv_buf;
+    for (const auto& a : args) argv_buf.push_back(const_cast<char*>(a.c_str()));
+    argv_buf.push_back(nullptr);
+    const int argc = static_cast<int>(args.size());
+    char** const argv = argv_buf.data();
     Options opt;
-    opt.argv.assign(argv, argv + argc);
+    opt.argv = args;
     CLI::App app{"rbcd-sim: SystemC/TLM-2.0 model of the RBCD collision-detection unit"};
     app.add_option("--config", opt.config_file, "TOML configuration file");
     app.add_option("--set", opt.sets, "KEY=VALUE, applied after --config in order (repeatable)")->take_all();
@@ -706,3 +712,5 @@ int sc_main(int argc, char* argv[]) {
         return fail(1, std::string("internal error: ") + e.what(), argc, argv);
     }
 }
+
+int sc_main(int argc, char* argv[]) { return rbcd_sim_main(std::vector<std::string>(argv, argv + argc)); }

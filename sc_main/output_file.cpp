@@ -80,6 +80,11 @@ void forget_child(int pid) {
         if (g_children[i] == pid) g_children[i] = 0;
 }
 
+void forget_parents_cleanup() {
+    cleanup_paths().clear();
+    g_child_count = 0;
+}
+
 void stop_on_interrupt(int pid) {
     if (g_child_count < kMaxChildren) {
         g_children[g_child_count] = pid;

@@ -28,6 +28,9 @@ void remove_on_interrupt(const std::string& path);
 void stop_on_interrupt(int pid);
 // The process has ended (waited for, not yet reaped): no longer signalled.
 void forget_child(int pid);
+// In a process just forked from one that registered paths and children: none
+// of them is its own to remove or stop.
+void forget_parents_cleanup();
 // SIGINT, SIGTERM and SIGHUP (the signals above) held back on this thread for
 // the object's life: between creating a temporary or a worker and registering
 // it, where a signal would leave it behind; a thread started meanwhile keeps
