@@ -18,6 +18,10 @@
 #include "rbcd/common/errors.h"
 #include "rbcd/sc_main/output_file.h"
 
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/lsan_interface.h>
+#endif
+
 namespace rbcd {
 
 namespace {
@@ -107,7 +111,8 @@ JobPart parse_worker_part(const std::string& text, FrameRange range) {
 
 namespace {
 
-// Descriptor `target` opened on `path`; false when it cannot be.
+// Descriptor `target` opened on `path` (the descriptors above 2 are closed,
+// so the open cannot run out of them); false when it cannot be.
 bool open_as(int target, const char* path, int flags) {
     const int fd = ::open(path, flags, 0600);
     if (fd < 0) return false;
@@ -117,6 +122,19 @@ bool open_as(int target, const char* path, int flags) {
     return ok;
 }
 
+// Every descriptor above 2: the parent's files (its outputs, the input it
+// scanned) are not the worker's, and a pipe held open here would not see its
+// end. close_range(2) where the kernel has it (5.9 on), else one by one.
+void close_above_2() {
+    if (::close_range(3, ~0u, 0) == 0) return;
+    const long max = ::sysconf(_SC_OPEN_MAX);
+    for (long fd = 3; fd < (max > 0 ? std::min(max, 1L << 20) : 1024); ++fd) ::close(static_cast<int>(fd));
+}
+
+// A worker that could not set itself up: its status, which the parent reads
+// as "cannot start" (a program exits 127 when it cannot be run).
+constexpr int kCannotStart = 127;
+
 // The forked worker: its descriptors and signals as a new process would have
 // them, then its program. Never returns: the frames below are the parent's,
 // whose objects (its outputs, its workers) are not the worker's to destroy.
@@ -125,13 +143,17 @@ bool open_as(int target, const char* path, int flags) {
     forget_parents_cleanup();
     // The output first: started without a standard input or error, the parent
     // may hold it as descriptor 0 or 2, which the opens replace.
-    if (out_fd >= 0 && out_fd != 1 && ::dup2(out_fd, 1) != 1) ::_exit(127);
-    if (!open_as(0, "/dev/null", O_RDONLY)) ::_exit(127);
-    if (out_fd < 0 && !open_as(1, "/dev/null", O_WRONLY)) ::_exit(127);
-    if (!open_as(2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC)) ::_exit(127);
-    // The parent's files (its outputs, the input it scanned) are not the
-    // worker's: a pipe held open here would not see its end.
-    ::close_range(3, ~0u, 0);
+    if (out_fd >= 0 && out_fd != 1 && ::dup2(out_fd, 1) != 1) ::_exit(kCannotStart);
+    close_above_2();
+    if (!open_as(2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC)) ::_exit(kCannotStart);
+    const auto cannot = [](const char* what) {
+        std::fprintf(stderr, "rbcd-sim: --jobs: a worker cannot open /dev/null as its %s: %s\n", what,
+                     std::strerror(errno));
+        std::fflush(stderr);
+        ::_exit(kCannotStart);
+    };
+    if (!open_as(0, "/dev/null", O_RDONLY)) cannot("standard input");
+    if (out_fd < 0 && !open_as(1, "/dev/null", O_WRONLY)) cannot("standard output");
     ::pthread_sigmask(SIG_SETMASK, &mask, nullptr);
     int status = 1;
     try {
@@ -140,6 +162,12 @@ bool open_as(int target, const char* path, int flags) {
         status = 1;
     }
     std::fflush(nullptr);
+#if defined(__SANITIZE_ADDRESS__)
+    // _exit skips LeakSanitizer's check at exit: a worker's leaks would go
+    // unseen by the sanitizer build. Checked here; a leak ends the worker
+    // with a failure, and so the run.
+    __lsan_do_leak_check();
+#endif
     ::_exit(status);
 }
 
@@ -233,7 +261,10 @@ void Workers::wait() {
         if (last.empty())
             last = WIFSIGNALED(st) ? "--jobs: worker " + std::to_string(k) + " killed by signal " +
                                          std::to_string(WTERMSIG(st))
-                                   : "--jobs: worker " + std::to_string(k) + " failed";
+                   : WEXITSTATUS(st) == kCannotStart
+                       ? "--jobs: cannot start worker " + std::to_string(k) + " (its error file " + err_[k] +
+                             " cannot be opened)"
+                       : "--jobs: worker " + std::to_string(k) + " failed";
         throw RunError(last);
     }
 }
