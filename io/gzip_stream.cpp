@@ -47,6 +47,7 @@ long GzipStream::read_raw(void* dst, std::size_t n) {
         if (got < 0 && errno == EINTR) continue;
         if (got < 0) return fail(std::string("read error: ") + std::strerror(errno));
         if (got == 0) raw_eof_ = true;
+        else if (observer_) observer_->raw(dst, static_cast<std::size_t>(got));
         return static_cast<long>(got);
     }
 }
@@ -66,6 +67,7 @@ long long GzipStream::skip(unsigned long long n) {
                 const unsigned long long left = st.st_size > here ? static_cast<unsigned long long>(st.st_size - here) : 0;
                 const unsigned long long k2 = std::min(n - done, left);
                 if (::lseek(fd_, static_cast<off_t>(k2), SEEK_CUR) >= 0) {
+                    if (observer_ && k2) observer_->gap();
                     done += k2;
                     if (done < n) raw_eof_ = true;
                     return static_cast<long long>(done);

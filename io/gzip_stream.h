@@ -12,6 +12,17 @@
 
 namespace rbcd {
 
+// Sees the file's bytes as they are read (before any inflating), in order from
+// the file's start: what hashes an input without reading it a second time
+// (rbcd-sim's provenance). A stream that skips ahead tells it gap(): the bytes
+// it saw no longer run unbroken from the start.
+class RawObserver {
+public:
+    virtual ~RawObserver() = default;
+    virtual void raw(const void* bytes, std::size_t n) = 0;
+    virtual void gap() = 0;
+};
+
 class GzipStream {
 public:
     // Takes ownership of fd (closed by the destructor unless it is 0).
@@ -32,6 +43,8 @@ public:
     long long skip(unsigned long long n);
     const std::string& error() const { return error_; }
     bool compressed() const { return gz_; }
+    // Every byte read from the file from now on is shown to `o` (null: none).
+    void observe(RawObserver* o) { observer_ = o; }
 
 private:
     bool refill();   // more raw input; false at end of file or on error
@@ -49,6 +62,7 @@ private:
     bool z_init_ = false;
     z_stream zs_{};
     std::string error_;
+    RawObserver* observer_ = nullptr;
 };
 
 } // namespace rbcd

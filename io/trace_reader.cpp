@@ -723,12 +723,14 @@ TraceLimits trace_limits(const SimConfig& cfg) {
     return l;
 }
 
-TraceReader::TraceReader(const std::string& path, const TraceLimits& limits) : impl_(std::make_unique<Impl>()) {
+TraceReader::TraceReader(const std::string& path, const TraceLimits& limits, RawObserver* observer)
+    : impl_(std::make_unique<Impl>()) {
     if (limits.tile_w < 1 || limits.tile_h < 1 || limits.id_bits < 1 || limits.read_chunk < 1)
         throw std::invalid_argument("TraceReader: tile size and id_bits must be at least 1");
     impl_->path = path;
     impl_->lim = limits;
     impl_->open();
+    impl_->in->observe(observer);
     impl_->read_headers();
 }
 

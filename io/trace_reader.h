@@ -10,6 +10,8 @@ namespace rbcd { struct SimConfig; }
 
 namespace rbcd {
 
+class RawObserver;   // io/gzip_stream.h
+
 // What the unit accepts; the trace is checked against it while it is read.
 struct TraceLimits {
     unsigned tile_w = 16, tile_h = 16;   // must equal the trace's tile_size
@@ -38,7 +40,9 @@ public:
     // Reads the magic and header records. Throws InputError ("file:line: ...")
     // on malformed input, or cannot_read_message() when the file cannot be
     // opened or is not a regular file. "-" reads standard input.
-    TraceReader(const std::string& path, const TraceLimits& limits);
+    // observer: shown every byte read from the file (io/gzip_stream.h), the
+    // header's included.
+    TraceReader(const std::string& path, const TraceLimits& limits, RawObserver* observer = nullptr);
     ~TraceReader() override;
     const StreamHeader& header() const override;
     Event next(Tile& tile) override;

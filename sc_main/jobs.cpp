@@ -241,6 +241,14 @@ bool Workers::refused_input(std::size_t k) const {
     return done_[k] && !lost_[k] && WIFEXITED(status_[k]) && WEXITSTATUS(status_[k]) == 2;
 }
 
+std::size_t Workers::first_to_end() const {
+    siginfo_t info{};
+    while (::waitid(P_ALL, 0, &info, WEXITED | WNOWAIT) < 0 && errno == EINTR) {}
+    for (std::size_t k = 0; k < pids_.size(); ++k)
+        if (pids_[k] == info.si_pid) return k;
+    return 0;
+}
+
 void Workers::wait() {
     for (std::size_t k = 0; k < pids_.size(); ++k) wait_for(k);
     waited_ = true;

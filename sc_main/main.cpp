@@ -151,22 +151,31 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         errs.push_back(dir.path(n + ".err"));
         for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
     }
-    // Declared before the workers, so that on an error they are stopped
-    // before the hash is waited for.
+    // The hash's inputs outlive it; it is declared before the workers, so
+    // that on an error they are stopped before the hash is waited for.
+    std::vector<ProvenanceInput> inputs = prov_inputs;
+    ReadDigest first_read;   // the part of a trace the first worker read
     std::future<nlohmann::json> provenance_job;
     Workers workers(rbcd_sim_main, argvs, errs, out_fds);
     // The inputs are hashed while the workers run, from when the first of them
     // ends: before, the hash would take a core from them (as many workers as
     // cores); after, it has the core that worker leaves, beside the join.
-    // (Waited for without reaping: the joins below reap the workers in order.)
-    if (stats_out.active()) {
-        siginfo_t first_end{};
-        while (::waitid(P_ALL, 0, &first_end, WEXITED | WNOWAIT) < 0 && errno == EINTR) {}
+    // A trace's first worker hashes the bytes it reads (ReadDigest): when it
+    // is the first to end, the hash goes on from its state over the rest of
+    // the file (read_part); when another is, the whole file is hashed then,
+    // on the core that one leaves, while the first part still runs.
+    bool hash_from_first_part = false;
+    const auto start_hash = [&] {
         // The hashing thread starts with the interrupts blocked: the handler,
         // which signals the workers, runs on this thread only, never beside
         // the joins that forget and reap them.
         const InterruptsHeld held;
-        provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, prov_inputs); });
+        provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, inputs); });
+    };
+    if (stats_out.active()) {
+        // (Waited for without reaping: the joins below reap the workers in order.)
+        if (trace && workers.first_to_end() == 0) hash_from_first_part = true;
+        else start_hash();
     }
 
     RunSnapshot all;
@@ -203,6 +212,13 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         const std::string path = dir.path(n + ".json");
         const nlohmann::json j = nlohmann::json::parse(read_input_text(path, "stats file", std::uint64_t(1) << 30, ""));
         check_work(k, j);
+        if (k == 0 && hash_from_first_part) {
+            const auto w = j.find("worker");
+            if (w != j.end() && w->contains("trace_read") && first_read.restore((*w)["trace_read"]))
+                for (auto& in : inputs)
+                    if (in.role == "trace") in.read = &first_read;
+            start_hash();
+        }
         RunSnapshot snap = snapshot_from_stats(j);
         files.push_back({dir.path(n + ".txt"), dir.path(n + ".jsonl"), snap.frames.first_frame, snap.frames.frames,
                          snap.cycles});
@@ -356,13 +372,23 @@ int run(Options opt) {
         filter_out = OutputFile(filter_path);
     }
 
+    const FrameRange range = opt.frames_given ? parse_frame_range(opt.frames) : FrameRange{};
+    const JobPart part = worker ? parse_worker_part(opt.worker_part, range) : JobPart{};
+    // A trace read from its first byte is hashed as it is read, and the
+    // provenance reads only what the reader did not (docs/provenance.md):
+    // one process writing stats (not for --db, which records the provenance
+    // before the run, nor --frames, whose reader stops early), or the --jobs
+    // worker of the first part, from whose state its parent goes on.
+    // Declared before the reader, which holds it.
+    std::unique_ptr<ReadDigest> read_digest;
+    if (!opt.trace.empty() && opt.trace != "-" && !part.skip &&
+        (worker || (stats_out.active() && !opt.frames_given && opt.db.empty())))
+        read_digest = std::make_unique<ReadDigest>();
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
     const scene::SceneLimits scene_limits{cfg.tile.width,           cfg.tile.height,
                                           cfg.zeb.id_bits,          cfg.input.max_scene_bytes,
                                           cfg.input.max_scene_triangles, cfg.input.max_tile_fragments};
-    const FrameRange range = opt.frames_given ? parse_frame_range(opt.frames) : FrameRange{};
-    const JobPart part = worker ? parse_worker_part(opt.worker_part, range) : JobPart{};
     std::vector<JobPart> parts;   // more than one: the frames are the workers'
     TraceReader* trace_reader = nullptr;   // the trace's reader, when one process runs it
     if (!opt.trace.empty()) {
@@ -381,7 +407,7 @@ int run(Options opt) {
         if (parts.size() < 2) {
             // Parsed a few tiles ahead on another core (io/prefetch_source.h),
             // unless the cores are the caller's to share (rbcd-sweep's workers).
-            auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
+            auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg), read_digest.get());
             // A plain trace's line number is counted only if a message needs it.
             if (part.skip) reader->start_at_frame(range.first, part.offset, part.line);
             // Not even read ahead: what follows the range is another worker's.
@@ -405,7 +431,7 @@ int run(Options opt) {
     const auto provenance_inputs = [&](const std::string& input_name) {
         std::vector<ProvenanceInput> inputs;
         if (!opt.config_file.empty()) inputs.push_back({"config", opt.config_file});
-        if (!opt.trace.empty()) inputs.push_back({"trace", opt.trace});
+        if (!opt.trace.empty()) inputs.push_back({"trace", opt.trace, nullptr, read_digest.get()});
         else if (opt.scene.empty()) inputs.push_back({"scene", input_name, &default_scene});
         else inputs.push_back({"scene", opt.scene});
         if (scene_src)
@@ -419,7 +445,7 @@ int run(Options opt) {
         // at all is one process's to say (it reads every frame).
     }
     if (!src) {
-        auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg));
+        auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg), read_digest.get());
         if (opt.threads > 1) src = std::make_unique<PrefetchSource>(std::move(reader));
         else src = std::move(reader);
     }
@@ -438,6 +464,8 @@ int run(Options opt) {
     std::future<nlohmann::json> provenance_job;
     if (worker) {
         // The run's provenance is the one that started the workers.
+    } else if (read_digest) {
+        // Hashed as it is read: finished after the run.
     } else if (db || (stats_out.active() && opt.threads == 1)) provenance = make_provenance(opt.argv, cfg, prov_inputs);
     else if (stats_out.active())
         provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, prov_inputs); });
@@ -546,7 +574,11 @@ int run(Options opt) {
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
     // For the parent, which checks the run's bound on declared work over all
     // the parts as one process checks it (run_jobs); not in its stats.
-    if (worker && trace_reader) stats["worker"] = {{"declared_work", trace_reader->declared_work()}};
+    if (worker && trace_reader) {
+        stats["worker"] = {{"declared_work", trace_reader->declared_work()}};
+        if (read_digest && read_digest->usable()) stats["worker"]["trace_read"] = read_digest->save();
+    }
+    if (!worker && read_digest && stats_out.active()) provenance = make_provenance(opt.argv, cfg, prov_inputs);
     if (provenance_job.valid()) provenance = provenance_job.get();
     if (stats_out.active()) stats["provenance"] = provenance;
     if (file_sink) {

@@ -79,6 +79,102 @@ std::string xxh128_hex(const void* data, std::size_t len) {
     return canonical_hex(XXH3_128bits(data, len));
 }
 
+namespace {
+
+// The rest of an open file, from its current offset, into `state`; adds the
+// bytes to `size`. False on a read error.
+bool hash_rest(int fd, XXH3_state_t& state, std::uint64_t& size) {
+    ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
+    const std::unique_ptr<char[]> buf(new char[kHashReadBytes]);
+    for (;;) {
+        const ssize_t n = ::read(fd, buf.get(), kHashReadBytes);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) return n == 0;
+        XXH3_128bits_update(&state, buf.get(), static_cast<std::size_t>(n));
+        size += static_cast<std::uint64_t>(n);
+    }
+}
+
+// A regular file opened for hashing; -1 with `note` set when it is not one or
+// cannot be opened.
+int open_regular(const std::string& path, std::string& note) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    struct stat st {};
+    if (fd < 0 || ::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        const int err = errno;
+        const bool opened = fd >= 0;
+        if (opened) ::close(fd);
+        note = opened ? "not a regular file" : std::string("cannot read: ") + std::strerror(err);
+        return -1;
+    }
+    return fd;
+}
+
+} // namespace
+
+struct ReadDigest::State {
+    XXH3_state_t s;
+};
+
+ReadDigest::ReadDigest() : st_(std::make_unique<State>()) {
+    XXH3_INITSTATE(&st_->s);
+    XXH3_128bits_reset(&st_->s);
+}
+
+ReadDigest::~ReadDigest() = default;
+
+void ReadDigest::raw(const void* bytes, std::size_t n) {
+    XXH3_128bits_update(&st_->s, bytes, n);
+    bytes_ += n;
+}
+
+nlohmann::json ReadDigest::save() const {
+    static const char* const digits = "0123456789abcdef";
+    const auto* p = reinterpret_cast<const unsigned char*>(&st_->s);
+    std::string hex;
+    hex.reserve(2 * sizeof(XXH3_state_t));
+    for (std::size_t i = 0; i < sizeof(XXH3_state_t); ++i) {
+        hex += digits[p[i] >> 4];
+        hex += digits[p[i] & 15];
+    }
+    return {{"bytes", bytes_}, {"xxh3_state", hex}};
+}
+
+bool ReadDigest::restore(const nlohmann::json& saved) {
+    if (!saved.is_object() || !saved.contains("bytes") || !saved["bytes"].is_number_unsigned() ||
+        !saved.contains("xxh3_state") || !saved["xxh3_state"].is_string())
+        return false;
+    const std::string& hex = saved["xxh3_state"].get_ref<const std::string&>();
+    if (hex.size() != 2 * sizeof(XXH3_state_t)) return false;
+    const auto nibble = [](char c) { return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1; };
+    XXH3_state_t s;
+    auto* p = reinterpret_cast<unsigned char*>(&s);
+    for (std::size_t i = 0; i < sizeof s; ++i) {
+        const int hi = nibble(hex[2 * i]), lo = nibble(hex[2 * i + 1]);
+        if (hi < 0 || lo < 0) return false;
+        p[i] = static_cast<unsigned char>(hi << 4 | lo);
+    }
+    XXH3_copyState(&st_->s, &s);
+    bytes_ = saved["bytes"].get<std::uint64_t>();
+    whole_ = true;
+    return true;
+}
+
+bool ReadDigest::finish(const std::string& path, std::uint64_t& size, std::string& hex) const {
+    std::string note;
+    const int fd = open_regular(path, note);
+    if (fd < 0) return false;
+    XXH3_state_t s;
+    XXH3_copyState(&s, &st_->s);
+    size = bytes_;
+    // Gone past the file's end (it shrank since): the read continues from
+    // there, and the digest is of the bytes the run read.
+    const bool ok = ::lseek(fd, static_cast<off_t>(bytes_), SEEK_SET) >= 0 && hash_rest(fd, s, size);
+    ::close(fd);
+    if (ok) hex = canonical_hex(XXH3_128bits_digest(&s));
+    return ok;
+}
+
 nlohmann::json input_info(const ProvenanceInput& in) {
     nlohmann::json j;
     j["role"] = in.role;
@@ -88,40 +184,31 @@ nlohmann::json input_info(const ProvenanceInput& in) {
         j["xxh128"] = xxh128_hex(in.text->data(), in.text->size());
         return j;
     }
-    // The file was read successfully already; if it cannot be read again (a
-    // pipe, or it went away), say so rather than fail the run at its end.
-    const int fd = ::open(in.path.c_str(), O_RDONLY | O_CLOEXEC);
-    struct stat st {};
-    if (fd < 0 || ::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        const int err = errno;
-        const bool opened = fd >= 0;
-        if (opened) ::close(fd);
-        j["size"] = nullptr;
-        j["xxh128"] = nullptr;
-        j["note"] = opened ? "not a regular file" : std::string("cannot read: ") + std::strerror(err);
+    std::uint64_t size = 0;
+    std::string hex;
+    if (in.read && in.read->usable() && in.read->finish(in.path, size, hex)) {
+        j["size"] = size;
+        j["xxh128"] = hex;
         return j;
     }
-    ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
+    // The file was read successfully already; if it cannot be read again (a
+    // pipe, or it went away), say so rather than fail the run at its end.
+    std::string note;
+    const int fd = open_regular(in.path, note);
+    if (fd < 0) {
+        j["size"] = nullptr;
+        j["xxh128"] = nullptr;
+        j["note"] = note;
+        return j;
+    }
     XXH3_state_t state;
     XXH3_INITSTATE(&state);
     XXH3_128bits_reset(&state);
-    std::uint64_t size = 0;
-    bool bad = false;
-    const std::unique_ptr<char[]> buf(new char[kHashReadBytes]);
-    for (;;) {
-        const ssize_t n = ::read(fd, buf.get(), kHashReadBytes);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) {
-            bad = n < 0;
-            break;
-        }
-        XXH3_128bits_update(&state, buf.get(), static_cast<std::size_t>(n));
-        size += static_cast<std::uint64_t>(n);
-    }
+    const bool good = hash_rest(fd, state, size);
     ::close(fd);
     j["size"] = size;
-    j["xxh128"] = bad ? nlohmann::json(nullptr) : nlohmann::json(canonical_hex(XXH3_128bits_digest(&state)));
-    if (bad) j["note"] = "read error";
+    j["xxh128"] = good ? nlohmann::json(canonical_hex(XXH3_128bits_digest(&state))) : nlohmann::json(nullptr);
+    if (!good) j["note"] = "read error";
     return j;
 }
 

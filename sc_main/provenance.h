@@ -4,12 +4,14 @@
 #pragma once
 #include <cstdint>
 #include <initializer_list>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "rbcd/common/config.h"
+#include "rbcd/io/gzip_stream.h"
 
 namespace rbcd {
 
@@ -32,12 +34,46 @@ std::string command_line(const std::vector<std::string>& argv);
 std::vector<std::string> option_values(const std::vector<std::string>& argv,
                                        std::initializer_list<const char*> options);
 
+// A file's XXH3-128 state over the bytes its reader read, from its first, as
+// they passed (a RawObserver given to the reader): the provenance goes on from
+// there and reads only what the reader did not (none, when it read to the
+// end), instead of reading the whole file a second time. A --jobs worker
+// saves it (save()), and the parent goes on from it (restore()).
+class ReadDigest final : public RawObserver {
+public:
+    ReadDigest();
+    ~ReadDigest() override;
+    ReadDigest(const ReadDigest&) = delete;
+    ReadDigest& operator=(const ReadDigest&) = delete;
+    void raw(const void* bytes, std::size_t n) override;
+    void gap() override { whole_ = false; }
+    // The bytes seen run unbroken from the file's start.
+    bool usable() const { return whole_; }
+    std::uint64_t bytes() const { return bytes_; }
+    // {"bytes", "xxh3_state"}: the state's bytes in hex, for a process of
+    // this same build (the layout is the library's); restore() refuses any
+    // other length or a malformed text.
+    nlohmann::json save() const;
+    bool restore(const nlohmann::json& saved);
+    // The digest of the file at `path`: this state, then the file's bytes
+    // from bytes() on. Sets size to the file's. False when they cannot be read.
+    bool finish(const std::string& path, std::uint64_t& size, std::string& hex) const;
+
+private:
+    struct State;
+    std::unique_ptr<State> st_;
+    std::uint64_t bytes_ = 0;
+    bool whole_ = true;
+};
+
 // An input as it was read: role ("trace", "scene", "mesh", "config"), path and,
 // for a file, its size in bytes and XXH3-128 digest. `text` set: an embedded
-// input (the default scene) hashed from memory.
+// input (the default scene) hashed from memory. `read` set: the file as its
+// reader read it (ReadDigest), hashed on from there.
 struct ProvenanceInput {
     std::string role, path;
     const std::string* text = nullptr;
+    const ReadDigest* read = nullptr;
 };
 nlohmann::json input_info(const ProvenanceInput& in);
 

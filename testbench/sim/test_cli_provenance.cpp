@@ -104,3 +104,26 @@ TEST_CASE("cli: --help sends the reader to the repository's own docs only") {
         CHECK(fs::exists(std::string(RBCD_SOURCE_DIR) + "/" + doc));
     }
 }
+
+TEST_CASE("cli: a trace hashed as it is read has the digest of the whole file, plain or gzip, on one thread or two") {
+    // The reader's bytes are hashed as they pass (ReadDigest); with --frames
+    // the reader stops early and the rest is read for the hash; --db records
+    // the provenance before the run and hashes the file then.
+    TempDir td;
+    const std::string plain = kVectors + "/rule-stack-overflow.rbt";
+    const std::string gz = td.write_gz("t.rbt.gz", slurp(plain));
+    const auto trace = GENERATE_COPY(plain, gz);
+    const auto threads = GENERATE(as<std::string>{}, "1", "2");
+    const auto frames = GENERATE(as<std::string>{}, "", "0:0");
+    INFO(trace << " --threads " << threads << " --frames " << frames);
+    std::vector<std::string> args{"--trace", trace, "-q", "--threads", threads};
+    if (!frames.empty()) args.insert(args.end(), {"--frames", frames});
+    const Result r = run_with_outputs(td, args);
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    const auto p = nlohmann::json::parse(slurp(td.stats()))["provenance"];
+    REQUIRE(p["inputs"].size() == 1);
+    CHECK(p["inputs"][0]["size"] == fs::file_size(trace));
+    CHECK(p["inputs"][0]["xxh128"] == xxh128_of(slurp(trace)));
+    CHECK_FALSE(p["inputs"][0].contains("note"));
+}

@@ -47,6 +47,15 @@ Outputs run(const TempDir& td, std::vector<std::string> args, const std::string&
 void expect_same_as_one_process(const TempDir& td, const std::vector<std::string>& args) {
     const Outputs one = run(td, args, "");
     REQUIRE(one.collisions.size() > 20);
+    // The reference's own digests are the files' (the parts' equal the
+    // reference's below): the first worker hashes what it reads and the
+    // parent goes on from there, or the parent hashes the whole file.
+    for (const auto& in : nlohmann::json::parse(one.stats)["provenance"]["inputs"]) {
+        if (in["role"] != "trace") continue;
+        const std::string bytes = slurp(in["path"].get<std::string>());
+        CHECK(in["size"] == bytes.size());
+        CHECK(in["xxh128"] == xxh128_of(bytes));
+    }
     for (const char* jobs : {"1", "2", "3"}) {
         INFO("--jobs " << jobs);
         const Outputs n = run(td, args, jobs);

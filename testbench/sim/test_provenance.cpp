@@ -6,6 +6,7 @@
 
 #include "rbcd/testbench/common/temp_dir.h"
 
+#include <algorithm>
 #include <string>
 
 #include "rbcd/common/config.h"
@@ -112,4 +113,63 @@ TEST_CASE("provenance: inputs carry path, size and XXH3-128, the configuration i
     SimConfig other;
     apply_config_set(other, "zeb.list_length=4");
     CHECK(make_provenance({}, other, {})["config_sha256"] != p["config_sha256"]);
+}
+
+namespace {
+// A file of n bytes that no two offsets of which look alike for long.
+std::string patterned(std::size_t n) {
+    std::string b(n, '\0');
+    for (std::size_t i = 0; i < n; ++i) b[i] = static_cast<char>((i * 7 + i / 251) % 256);
+    return b;
+}
+} // namespace
+
+TEST_CASE("provenance: a file hashed as it was read, then from where the reader stopped, hashes whole") {
+    test::TempDir td;
+    const std::string bytes = patterned(2500003);
+    const std::string path = td.write("t.rbt", bytes);
+    const std::string whole = xxh128_hex(bytes.data(), bytes.size());
+    const std::size_t seen = GENERATE(std::size_t(0), std::size_t(1), std::size_t(4096), std::size_t(1048577),
+                                      std::size_t(2500003));
+    INFO("the reader read " << seen << " bytes");
+    ReadDigest d;
+    // As a reader reads: pieces of uneven sizes.
+    for (std::size_t at = 0, piece = 1; at < seen; at += piece, piece = piece * 3 + 1)
+        d.raw(bytes.data() + at, std::min(piece, seen - at));
+    CHECK(d.bytes() == seen);
+    REQUIRE(d.usable());
+    const auto j = input_info({"trace", path, nullptr, &d});
+    CHECK(j["size"] == bytes.size());
+    CHECK(j["xxh128"] == whole);
+
+    // The state as a --jobs worker saves it and its parent restores it.
+    ReadDigest again;
+    REQUIRE(again.restore(d.save()));
+    CHECK(again.bytes() == seen);
+    CHECK(input_info({"trace", path, nullptr, &again})["xxh128"] == whole);
+}
+
+TEST_CASE("provenance: a read with a gap, or a state that does not restore, is not gone on from") {
+    test::TempDir td;
+    const std::string bytes = patterned(100000);
+    const std::string path = td.write("t.rbt", bytes);
+    ReadDigest d;
+    d.raw(bytes.data(), 10);
+    d.gap();
+    d.raw(bytes.data() + 5000, 10);
+    CHECK_FALSE(d.usable());
+    // Hashed whole from the file instead.
+    CHECK(input_info({"trace", path, nullptr, &d})["xxh128"] == xxh128_hex(bytes.data(), bytes.size()));
+
+    ReadDigest r;
+    const nlohmann::json good = d.save();
+    nlohmann::json short_state = good, not_hex = good, no_bytes = good;
+    short_state["xxh3_state"] = good["xxh3_state"].get<std::string>().substr(2);
+    std::string bad = good["xxh3_state"].get<std::string>();
+    bad[7] = 'g';
+    not_hex["xxh3_state"] = bad;
+    no_bytes.erase("bytes");
+    for (const auto& j : {short_state, not_hex, no_bytes, nlohmann::json(42), nlohmann::json::object()})
+        CHECK_FALSE(r.restore(j));
+    CHECK(r.restore(good));
 }
