@@ -46,8 +46,11 @@ long GzipStream::read_raw(void* dst, std::size_t n) {
         const ssize_t got = ::read(fd_, dst, n);
         if (got < 0 && errno == EINTR) continue;
         if (got < 0) return fail(std::string("read error: ") + std::strerror(errno));
+        if (observer_) {
+            if (got == 0) observer_->end();
+            else observer_->raw(dst, static_cast<std::size_t>(got));
+        }
         if (got == 0) raw_eof_ = true;
-        else if (observer_) observer_->raw(dst, static_cast<std::size_t>(got));
         return static_cast<long>(got);
     }
 }

@@ -14,12 +14,15 @@ namespace rbcd {
 
 // Sees the file's bytes as they are read (before any inflating), in order from
 // the file's start: what hashes an input without reading it a second time
-// (rbcd-sim's provenance). A stream that skips ahead tells it gap(): the bytes
-// it saw no longer run unbroken from the start.
+// (rbcd-sim's provenance). file() comes first, with the descriptor read; end()
+// when a read finds the end of the file. A stream that skips ahead tells it
+// gap(): the bytes it saw no longer run unbroken from the start.
 class RawObserver {
 public:
     virtual ~RawObserver() = default;
+    virtual void file(int fd) = 0;
     virtual void raw(const void* bytes, std::size_t n) = 0;
+    virtual void end() = 0;
     virtual void gap() = 0;
 };
 
@@ -44,7 +47,10 @@ public:
     const std::string& error() const { return error_; }
     bool compressed() const { return gz_; }
     // Every byte read from the file from now on is shown to `o` (null: none).
-    void observe(RawObserver* o) { observer_ = o; }
+    void observe(RawObserver* o) {
+        observer_ = o;
+        if (o) o->file(fd_);
+    }
 
 private:
     bool refill();   // more raw input; false at end of file or on error

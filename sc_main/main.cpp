@@ -378,10 +378,11 @@ int run(Options opt) {
     // provenance reads only what the reader did not (docs/provenance.md):
     // one process writing stats (not for --db, which records the provenance
     // before the run, nor --frames, whose reader stops early), or the --jobs
-    // worker of the first part, from whose state its parent goes on.
+    // worker of the first part, from whose state its parent goes on. So
+    // standard input, which cannot be read again, gets a digest too.
     // Declared before the reader, which holds it.
     std::unique_ptr<ReadDigest> read_digest;
-    if (!opt.trace.empty() && opt.trace != "-" && !part.skip &&
+    if (!opt.trace.empty() && !part.skip &&
         (worker || (stats_out.active() && !opt.frames_given && opt.db.empty())))
         read_digest = std::make_unique<ReadDigest>();
     std::unique_ptr<FragmentSource> src;

@@ -116,6 +116,32 @@ struct ReadDigest::State {
     XXH3_state_t s;
 };
 
+namespace {
+std::int64_t mtime_ns(const struct stat& st) {
+    return static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
+}
+std::string to_hex(const unsigned char* p, std::size_t n) {
+    static const char* const digits = "0123456789abcdef";
+    std::string hex;
+    hex.reserve(2 * n);
+    for (std::size_t i = 0; i < n; ++i) {
+        hex += digits[p[i] >> 4];
+        hex += digits[p[i] & 15];
+    }
+    return hex;
+}
+bool from_hex(const std::string& hex, unsigned char* p, std::size_t n) {
+    if (hex.size() != 2 * n) return false;
+    const auto nibble = [](char c) { return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1; };
+    for (std::size_t i = 0; i < n; ++i) {
+        const int hi = nibble(hex[2 * i]), lo = nibble(hex[2 * i + 1]);
+        if (hi < 0 || lo < 0) return false;
+        p[i] = static_cast<unsigned char>(hi << 4 | lo);
+    }
+    return true;
+}
+} // namespace
+
 ReadDigest::ReadDigest() : st_(std::make_unique<State>()) {
     XXH3_INITSTATE(&st_->s);
     XXH3_128bits_reset(&st_->s);
@@ -123,56 +149,119 @@ ReadDigest::ReadDigest() : st_(std::make_unique<State>()) {
 
 ReadDigest::~ReadDigest() = default;
 
+void ReadDigest::file(int fd) {
+    struct stat st {};
+    identified_ = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
+    if (!identified_) return;
+    dev_ = static_cast<std::uint64_t>(st.st_dev);
+    ino_ = static_cast<std::uint64_t>(st.st_ino);
+    mtime_ns_ = mtime_ns(st);
+}
+
 void ReadDigest::raw(const void* bytes, std::size_t n) {
     XXH3_128bits_update(&st_->s, bytes, n);
     bytes_ += n;
 }
 
+// The state's running values: the accumulators, the buffer (all of it: the
+// digest of a short tail takes the bytes before it from the buffer's end), how
+// much of it is filled, the stripes of the current block and the length. The
+// rest (the secret, its size, the seed) is the reset's.
 nlohmann::json ReadDigest::save() const {
-    static const char* const digits = "0123456789abcdef";
-    const auto* p = reinterpret_cast<const unsigned char*>(&st_->s);
-    std::string hex;
-    hex.reserve(2 * sizeof(XXH3_state_t));
-    for (std::size_t i = 0; i < sizeof(XXH3_state_t); ++i) {
-        hex += digits[p[i] >> 4];
-        hex += digits[p[i] & 15];
-    }
-    return {{"bytes", bytes_}, {"xxh3_state", hex}};
+    const XXH3_state_t& s = st_->s;
+    return {{"bytes", bytes_},
+            {"acc", to_hex(reinterpret_cast<const unsigned char*>(s.acc), sizeof s.acc)},
+            {"buffer", to_hex(s.buffer, sizeof s.buffer)},
+            {"buffered", s.bufferedSize},
+            {"stripes", s.nbStripesSoFar},
+            {"file", identified_ ? nlohmann::json{{"dev", dev_}, {"ino", ino_}, {"mtime_ns", mtime_ns_}}
+                                 : nlohmann::json(nullptr)}};
 }
 
 bool ReadDigest::restore(const nlohmann::json& saved) {
-    if (!saved.is_object() || !saved.contains("bytes") || !saved["bytes"].is_number_unsigned() ||
-        !saved.contains("xxh3_state") || !saved["xxh3_state"].is_string())
+    const auto uint = [&](const char* k) { return saved.contains(k) && saved[k].is_number_unsigned(); };
+    const auto text = [&](const char* k) { return saved.contains(k) && saved[k].is_string(); };
+    if (!saved.is_object() || !uint("bytes") || !text("acc") || !text("buffer") || !uint("buffered") ||
+        !uint("stripes") || !saved.contains("file"))
         return false;
-    const std::string& hex = saved["xxh3_state"].get_ref<const std::string&>();
-    if (hex.size() != 2 * sizeof(XXH3_state_t)) return false;
-    const auto nibble = [](char c) { return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1; };
-    XXH3_state_t s;
-    auto* p = reinterpret_cast<unsigned char*>(&s);
-    for (std::size_t i = 0; i < sizeof s; ++i) {
-        const int hi = nibble(hex[2 * i]), lo = nibble(hex[2 * i + 1]);
-        if (hi < 0 || lo < 0) return false;
-        p[i] = static_cast<unsigned char>(hi << 4 | lo);
+    auto fresh = std::make_unique<State>();
+    XXH3_INITSTATE(&fresh->s);
+    XXH3_128bits_reset(&fresh->s);
+    XXH3_state_t& s = fresh->s;
+    const std::uint64_t bytes = saved["bytes"].get<std::uint64_t>();
+    const std::uint64_t buffered = saved["buffered"].get<std::uint64_t>();
+    const std::uint64_t stripes = saved["stripes"].get<std::uint64_t>();
+    // Held to what update() leaves: a buffer filled at most to its size (and
+    // holding bytes when any were hashed), fewer stripes than a block has.
+    if (buffered > sizeof s.buffer || stripes >= s.nbStripesPerBlock || (bytes > 0 && buffered == 0) ||
+        buffered > bytes)
+        return false;
+    if (!from_hex(saved["acc"].get_ref<const std::string&>(), reinterpret_cast<unsigned char*>(s.acc), sizeof s.acc) ||
+        !from_hex(saved["buffer"].get_ref<const std::string&>(), s.buffer, sizeof s.buffer))
+        return false;
+    const nlohmann::json& f = saved["file"];
+    bool identified = false;
+    std::uint64_t dev = 0, ino = 0;
+    std::int64_t mtime = 0;
+    if (!f.is_null()) {
+        if (!f.is_object() || !f.contains("dev") || !f["dev"].is_number_unsigned() || !f.contains("ino") ||
+            !f["ino"].is_number_unsigned() || !f.contains("mtime_ns") || !f["mtime_ns"].is_number_integer())
+            return false;
+        identified = true;
+        dev = f["dev"].get<std::uint64_t>();
+        ino = f["ino"].get<std::uint64_t>();
+        mtime = f["mtime_ns"].get<std::int64_t>();
     }
-    XXH3_copyState(&st_->s, &s);
-    bytes_ = saved["bytes"].get<std::uint64_t>();
+    s.bufferedSize = static_cast<XXH32_hash_t>(buffered);
+    s.nbStripesSoFar = static_cast<std::size_t>(stripes);
+    s.totalLen = bytes;
+    st_ = std::move(fresh);
+    bytes_ = bytes;
     whole_ = true;
+    complete_ = false;
+    identified_ = identified;
+    dev_ = dev;
+    ino_ = ino;
+    mtime_ns_ = mtime;
     return true;
 }
 
-bool ReadDigest::finish(const std::string& path, std::uint64_t& size, std::string& hex) const {
+bool ReadDigest::finish(const std::string& path, nlohmann::json& j) const {
+    if (!whole_) return false;
+    XXH3_state_t s;
+    XXH3_copyState(&s, &st_->s);
+    if (complete_) {
+        // Every byte the run read, to the end: nothing to read again (the
+        // file may have gone, or been replaced, since).
+        j["size"] = bytes_;
+        j["xxh128"] = canonical_hex(XXH3_128bits_digest(&s));
+        return true;
+    }
+    if (path == "-") {
+        j["size"] = nullptr;
+        j["xxh128"] = nullptr;
+        j["note"] = "standard input, not read to its end";
+        return true;
+    }
     std::string note;
     const int fd = open_regular(path, note);
     if (fd < 0) return false;
-    XXH3_state_t s;
-    XXH3_copyState(&s, &st_->s);
-    size = bytes_;
-    // Gone past the file's end (it shrank since): the read continues from
-    // there, and the digest is of the bytes the run read.
+    struct stat st {};
+    if (identified_ && (::fstat(fd, &st) != 0 || static_cast<std::uint64_t>(st.st_dev) != dev_ ||
+                        static_cast<std::uint64_t>(st.st_ino) != ino_ || mtime_ns(st) != mtime_ns_)) {
+        ::close(fd);
+        j["size"] = nullptr;
+        j["xxh128"] = nullptr;
+        j["note"] = "the file was replaced or rewritten during the run";
+        return true;
+    }
+    std::uint64_t size = bytes_;
     const bool ok = ::lseek(fd, static_cast<off_t>(bytes_), SEEK_SET) >= 0 && hash_rest(fd, s, size);
     ::close(fd);
-    if (ok) hex = canonical_hex(XXH3_128bits_digest(&s));
-    return ok;
+    j["size"] = size;
+    j["xxh128"] = ok ? nlohmann::json(canonical_hex(XXH3_128bits_digest(&s))) : nlohmann::json(nullptr);
+    if (!ok) j["note"] = "read error";
+    return true;
 }
 
 nlohmann::json input_info(const ProvenanceInput& in) {
@@ -184,13 +273,15 @@ nlohmann::json input_info(const ProvenanceInput& in) {
         j["xxh128"] = xxh128_hex(in.text->data(), in.text->size());
         return j;
     }
-    std::uint64_t size = 0;
-    std::string hex;
-    if (in.read && in.read->usable() && in.read->finish(in.path, size, hex)) {
-        j["size"] = size;
-        j["xxh128"] = hex;
+    if (in.read && in.read->finish(in.path, j)) return j;
+    if (in.path == "-") {
+        // Read once, by the run: nothing to hash again.
+        j["size"] = nullptr;
+        j["xxh128"] = nullptr;
+        j["note"] = "standard input";
         return j;
     }
+    std::uint64_t size = 0;
     // The file was read successfully already; if it cannot be read again (a
     // pipe, or it went away), say so rather than fail the run at its end.
     std::string note;

@@ -36,34 +36,43 @@ std::vector<std::string> option_values(const std::vector<std::string>& argv,
 
 // A file's XXH3-128 state over the bytes its reader read, from its first, as
 // they passed (a RawObserver given to the reader): the provenance goes on from
-// there and reads only what the reader did not (none, when it read to the
+// there and reads only what the reader did not (nothing, when it read to the
 // end), instead of reading the whole file a second time. A --jobs worker
-// saves it (save()), and the parent goes on from it (restore()).
+// saves it (save()) and the parent goes on from it (restore()).
 class ReadDigest final : public RawObserver {
 public:
     ReadDigest();
     ~ReadDigest() override;
     ReadDigest(const ReadDigest&) = delete;
     ReadDigest& operator=(const ReadDigest&) = delete;
+    void file(int fd) override;
     void raw(const void* bytes, std::size_t n) override;
+    void end() override { complete_ = true; }
     void gap() override { whole_ = false; }
     // The bytes seen run unbroken from the file's start.
     bool usable() const { return whole_; }
     std::uint64_t bytes() const { return bytes_; }
-    // {"bytes", "xxh3_state"}: the state's bytes in hex, for a process of
-    // this same build (the layout is the library's); restore() refuses any
-    // other length or a malformed text.
+    // The hash's running values (not the library's whole state, which holds
+    // a pointer into the library) and the file's identity, as JSON; restore()
+    // rebuilds the state from a fresh one and refuses anything inconsistent.
     nlohmann::json save() const;
     bool restore(const nlohmann::json& saved);
-    // The digest of the file at `path`: this state, then the file's bytes
-    // from bytes() on. Sets size to the file's. False when they cannot be read.
-    bool finish(const std::string& path, std::uint64_t& size, std::string& hex) const;
+    // input_info's "size" and "xxh128" (or a null digest and a "note") for
+    // the file at `path`: this state, then the file's bytes from bytes() on;
+    // nothing read again when the reader read to the end. False when this
+    // state cannot serve (a gap, or the file cannot be opened): hash it whole.
+    bool finish(const std::string& path, nlohmann::json& j) const;
 
 private:
     struct State;
     std::unique_ptr<State> st_;
     std::uint64_t bytes_ = 0;
-    bool whole_ = true;
+    bool whole_ = true, complete_ = false;
+    // The file read (a regular file's): a different one at the path when the
+    // hash goes on means it was replaced or rewritten during the run.
+    bool identified_ = false;
+    std::uint64_t dev_ = 0, ino_ = 0;
+    std::int64_t mtime_ns_ = 0;
 };
 
 // An input as it was read: role ("trace", "scene", "mesh", "config"), path and,

@@ -127,3 +127,26 @@ TEST_CASE("cli: a trace hashed as it is read has the digest of the whole file, p
     CHECK(p["inputs"][0]["xxh128"] == xxh128_of(slurp(trace)));
     CHECK_FALSE(p["inputs"][0].contains("note"));
 }
+
+TEST_CASE("cli: a trace on standard input gets the digest of what was read; with --frames, a note") {
+    TempDir td;
+    const std::string trace = kVectors + "/rule-stack-overflow.rbt";
+    for (const bool frames : {false, true}) {
+        INFO("--frames " << frames);
+        std::vector<std::string> args{"-c", "f=$1; shift; exec \"$0\" \"$@\" < \"$f\"", RBCD_SIM, trace, "--trace", "-", "-q",
+                                      "--stats", td.stats()};
+        if (frames) args.insert(args.end(), {"--frames", "0:0"});
+        const Result r = run_program(td, "/bin/sh", args);
+        INFO(r.err);
+        REQUIRE(r.status == 0);
+        const auto in = nlohmann::json::parse(slurp(td.stats()))["provenance"]["inputs"][0];
+        CHECK(in["path"] == "-");
+        if (frames) {
+            CHECK(in["xxh128"].is_null());
+            CHECK(in["note"] == "standard input");
+        } else {
+            CHECK(in["size"] == fs::file_size(trace));
+            CHECK(in["xxh128"] == xxh128_of(slurp(trace)));
+        }
+    }
+}

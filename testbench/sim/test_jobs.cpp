@@ -112,6 +112,39 @@ TEST_CASE("rbcd-sim --jobs: a gzip trace gives one process's bytes", "[jobs]") {
     expect_same_as_one_process(td, a);
 }
 
+// Two frames of about equal bytes: one of fragments (simulated), one mostly
+// comment lines (read, nothing to simulate), in either order.
+std::string light_and_heavy(const TempDir& td, bool heavy_first) {
+    std::string heavy = "tile 3 2\n", light = "tile 3 2\nf 48 32 100 1 F\nf 48 32 200 2 B\n";
+    std::uint64_t rng = 12345;
+    const auto next = [&rng] { return (rng = rng * 6364136223846793005ull + 1442695040888963407ull) >> 33; };
+    for (int i = 0; i < 100000; ++i)
+        heavy += "f " + std::to_string(48 + next() % 16) + " " + std::to_string(32 + next() % 16) + " " +
+                 std::to_string(next() % (1u << 24)) + " " + std::to_string(1 + next() % 30) + (next() % 2 ? " F\n" : " B\n");
+    while (light.size() < heavy.size()) light += "# " + std::string(78, 'x') + "\n";
+    const std::string head = "rbcd-trace 1\nscreen 800 480\ntile_size 16 16\ndepth_bits 24\n";
+    return td.write(heavy_first ? "heavy-first.rbt" : "light-first.rbt",
+                    head + "frame 0\n" + (heavy_first ? heavy : light) + "frame 1\n" + (heavy_first ? light : heavy));
+}
+
+TEST_CASE("rbcd-sim --jobs: a trace's digest is the file's whichever worker ends first", "[jobs]") {
+    // The first worker hashes what it reads; when it ends first (a light first
+    // part) the parent goes on from its state, otherwise (a heavy first part)
+    // the parent hashes the whole file. Either way: the file's digest.
+    TempDir td;
+    for (const bool heavy_first : {false, true}) {
+        INFO("heavy part first: " << heavy_first);
+        const std::string t = light_and_heavy(td, heavy_first);
+        const Result r = run_sim(td, {"-q", "--trace", t, "--jobs", "2", "--stats", td.stats()});
+        INFO(r.err);
+        REQUIRE(r.status == 0);
+        const auto in = nlohmann::json::parse(slurp(td.stats()))["provenance"]["inputs"][0];
+        const std::string bytes = slurp(t);
+        CHECK(in["size"] == bytes.size());
+        CHECK(in["xxh128"] == xxh128_of(bytes));
+    }
+}
+
 TEST_CASE("rbcd-sim --jobs: a scene gives one process's bytes", "[jobs]") {
     TempDir td;
     const auto frames = GENERATE(as<std::string>{}, "", "10:45", "58:");

@@ -6,7 +6,11 @@
 
 #include "rbcd/testbench/common/temp_dir.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstdio>
 #include <string>
 
 #include "rbcd/common/config.h"
@@ -161,15 +165,66 @@ TEST_CASE("provenance: a read with a gap, or a state that does not restore, is n
     // Hashed whole from the file instead.
     CHECK(input_info({"trace", path, nullptr, &d})["xxh128"] == xxh128_hex(bytes.data(), bytes.size()));
 
+    ReadDigest seen;
+    seen.raw(bytes.data(), 5000);
+    const nlohmann::json good = seen.save();
+    std::vector<nlohmann::json> bad(8, good);
+    bad[0]["acc"] = good["acc"].get<std::string>().substr(2);
+    std::string not_hex = good["buffer"].get<std::string>();
+    not_hex[7] = 'g';
+    bad[1]["buffer"] = not_hex;
+    bad[2].erase("bytes");
+    bad[3]["buffered"] = 257;                 // more than the buffer holds
+    bad[4]["stripes"] = 16;                   // a whole block
+    bad[5]["bytes"] = 3;                      // fewer bytes than buffered
+    bad[6]["file"] = {{"dev", 1}};            // an identity without its inode
+    bad[7]["acc"] = 7;
     ReadDigest r;
-    const nlohmann::json good = d.save();
-    nlohmann::json short_state = good, not_hex = good, no_bytes = good;
-    short_state["xxh3_state"] = good["xxh3_state"].get<std::string>().substr(2);
-    std::string bad = good["xxh3_state"].get<std::string>();
-    bad[7] = 'g';
-    not_hex["xxh3_state"] = bad;
-    no_bytes.erase("bytes");
-    for (const auto& j : {short_state, not_hex, no_bytes, nlohmann::json(42), nlohmann::json::object()})
-        CHECK_FALSE(r.restore(j));
-    CHECK(r.restore(good));
+    for (std::size_t i = 0; i < bad.size(); ++i) {
+        INFO("malformed state " << i);
+        CHECK_FALSE(r.restore(bad[i]));
+    }
+    for (const auto& j : {nlohmann::json(42), nlohmann::json::object()}) CHECK_FALSE(r.restore(j));
+    REQUIRE(r.restore(good));
+    CHECK(input_info({"trace", path, nullptr, &r})["xxh128"] == xxh128_hex(bytes.data(), bytes.size()));
+}
+
+TEST_CASE("provenance: a file read to its end is not read again; one replaced since is not hashed as the run's") {
+    test::TempDir td;
+    const std::string bytes = patterned(300000), other = patterned(300001);
+    const std::string path = td.write("t.rbt", bytes);
+    {
+        // Read to the end (a read saw it): the digest is of what was read,
+        // even with the file gone since.
+        ReadDigest d;
+        const int fd = ::open(path.c_str(), O_RDONLY);
+        REQUIRE(fd >= 0);
+        d.file(fd);
+        d.raw(bytes.data(), bytes.size());
+        d.end();
+        ::close(fd);
+        REQUIRE(std::remove(path.c_str()) == 0);
+        const auto j = input_info({"trace", path, nullptr, &d});
+        CHECK(j["size"] == bytes.size());
+        CHECK(j["xxh128"] == xxh128_hex(bytes.data(), bytes.size()));
+    }
+    {
+        // Half read, then another file put at the path: no digest, a note.
+        td.write("t.rbt", bytes);
+        ReadDigest d;
+        const int fd = ::open(path.c_str(), O_RDONLY);
+        REQUIRE(fd >= 0);
+        d.file(fd);
+        d.raw(bytes.data(), 1000);
+        ::close(fd);
+        const std::string moved = td.write("new.rbt", other);
+        REQUIRE(std::rename(moved.c_str(), path.c_str()) == 0);
+        const auto j = input_info({"trace", path, nullptr, &d});
+        CHECK(j["xxh128"].is_null());
+        CHECK_THAT(j["note"].get<std::string>(), Contains("replaced"));
+        // The state as a worker saves it carries the identity too.
+        ReadDigest again;
+        REQUIRE(again.restore(d.save()));
+        CHECK(input_info({"trace", path, nullptr, &again})["xxh128"].is_null());
+    }
 }
