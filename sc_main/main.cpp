@@ -106,10 +106,12 @@ std::string range_text(const rbcd::FrameRange& r) {
 
 // --jobs: the parts run by workers (sc_main/jobs.h) and their files joined
 // into the outputs, which are already open. False when the parts' frames hold
-// no fragment at all (the caller then runs as one process: see there).
+// no fragment at all (the caller then runs as one process: see there), with
+// the provenance already computed in `provenance` (null when none was).
 bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
               const std::vector<rbcd::ProvenanceInput>& prov_inputs, const rbcd::SimConfig& cfg,
-              rbcd::OutputFile& collisions_out, rbcd::OutputFile& stats_out, rbcd::OutputFile& frame_stats_out) {
+              rbcd::OutputFile& collisions_out, rbcd::OutputFile& stats_out, rbcd::OutputFile& frame_stats_out,
+              nlohmann::json& provenance) {
     using namespace rbcd;
     const auto t0 = std::chrono::steady_clock::now();
     // A worker reads its trace on one thread unless there are cores to spare.
@@ -254,7 +256,12 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         // process (below): nothing is written before that is known.
         workers.wait();
         for (std::size_t k = 0; k < parts.size(); ++k) read_part(k);
-        if (all.counters.raster.fragments + all.counters.raster.other_fragments == 0) return false;
+        if (all.counters.raster.fragments + all.counters.raster.other_fragments == 0) {
+            // The same inputs and command line as the one process that follows:
+            // its provenance, not hashed again.
+            if (provenance_job.valid()) provenance = provenance_job.get();
+            return false;
+        }
         for (std::size_t k = 0; k < parts.size(); ++k) join_part(k);
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -439,9 +446,10 @@ int run(Options opt) {
             for (const auto& m : scene_src->mesh_files()) inputs.push_back({"mesh", m});
         return inputs;
     };
+    nlohmann::json provenance;   // for stats_out (computed by run_jobs, or below)
     if (parts.size() >= 2) {
         const auto prov_inputs = provenance_inputs(src ? src->name() : opt.trace);
-        if (run_jobs(opt, parts, prov_inputs, cfg, collisions_out, stats_out, frame_stats_out)) return 0;
+        if (run_jobs(opt, parts, prov_inputs, cfg, collisions_out, stats_out, frame_stats_out, provenance)) return 0;
         // No fragment in any of the parts' frames: whether the scene has none
         // at all is one process's to say (it reads every frame).
     }
@@ -461,10 +469,11 @@ int run(Options opt) {
     const auto prov_inputs = provenance_inputs(input_name);
     // With a second core to use, the hashing (a trace's every byte) runs beside
     // the simulation instead of before it; the database records it up front.
-    nlohmann::json provenance;
     std::future<nlohmann::json> provenance_job;
     if (worker) {
         // The run's provenance is the one that started the workers.
+    } else if (!provenance.is_null()) {
+        // Computed by the workers' run that found nothing to simulate.
     } else if (read_digest) {
         // Hashed as it is read: finished after the run.
     } else if (db || (stats_out.active() && opt.threads == 1)) provenance = make_provenance(opt.argv, cfg, prov_inputs);
