@@ -64,89 +64,40 @@ public:
         done_ = std::max(done_, s + c_);
         return s;
     }
-    // The recurrence with its state in locals, for walks that alternate runs
-    // of shaded fragments with fragments that take a rasterizer slot but not
-    // the queue (a GPU-only timeline's c fragments): the state is loaded once
-    // and stored once (by store() or the destructor), not around every run.
-    // The rasterizer's clock is (t, used), emitting `rate` a cycle.
-    class Stepper {
-    public:
-        [[gnu::always_inline]] Stepper(FragmentPipe& p, std::uint64_t& t, unsigned& used, unsigned rate)
-            : p_(p), t_io_(t), used_io_(used), t_(t), done_(p.done_), used_(used), rate_(rate), qi_(p.qi_), pi_(p.pi_) {}
-        [[gnu::always_inline]] ~Stepper() { store(); }
-        Stepper(const Stepper&) = delete;
-        Stepper& operator=(const Stepper&) = delete;
-        // m shaded fragments, each at the rasterizer's next slot or when the
-        // queue has room; returns the cycles the rasterizer waited.
-        [[gnu::always_inline]] std::uint64_t shade(std::uint64_t m) {
-            std::uint64_t wait = 0;
-            std::uint64_t* const slot_free = p_.slot_free_.data();
-            std::uint64_t* const proc_free = p_.proc_free_.data();
-            const unsigned q = p_.q_, np = p_.p_, c = p_.c_, ez = p_.ez_;
-            for (std::uint64_t k = 0; k < m; ++k) {
-                if (used_ == rate_) {
-                    ++t_;
-                    used_ = 0;
-                }
-                const std::uint64_t room = slot_free[qi_];
-                if (room > t_) {
-                    wait += room - t_;
-                    t_ = room;
-                    used_ = 0;
-                }
-                ++used_;
-                const std::uint64_t s = std::max(t_ + ez, proc_free[pi_]);
-                proc_free[pi_] = s + c;
-                slot_free[qi_] = s;
-                if (++pi_ == np) pi_ = 0;
-                if (++qi_ == q) qi_ = 0;
-                done_ = std::max(done_, s + c);
-            }
-            return wait;
-        }
-        // As shade(), for any m: long runs jump over their periodic blocks.
-        [[gnu::always_inline]] std::uint64_t shade_run(std::uint64_t m) {
-            if (m <= kLongRun) return shade(m);
-            store();
-            const std::uint64_t wait = p_.shade_long(t_io_, used_io_, rate_, m);
-            t_ = t_io_;
-            used_ = used_io_;
-            done_ = p_.done_;
-            qi_ = p_.qi_;
-            pi_ = p_.pi_;
-            return wait;
-        }
-        // One fragment that takes the rasterizer's next slot and nothing else.
-        [[gnu::always_inline]] void slot_only() {
-            if (used_ == rate_) {
-                ++t_;
-                used_ = 0;
-            }
-            ++used_;
-        }
-        [[gnu::always_inline]] void store() {
-            t_io_ = t_;
-            used_io_ = used_;
-            p_.done_ = done_;
-            p_.qi_ = qi_;
-            p_.pi_ = pi_;
-        }
-
-    private:
-        FragmentPipe& p_;
-        std::uint64_t& t_io_;
-        unsigned& used_io_;
-        std::uint64_t t_, done_;
-        unsigned used_, rate_, qi_, pi_;
-    };
-
     // m fragments from a rasterizer emitting `rate` a cycle, whose clock is
     // (t, used): each leaves at the rasterizer's next slot or when the queue
     // has room. Returns the cycles the rasterizer waited. The same as m times
     // room() and push(), with the state in registers.
     [[gnu::always_inline]] std::uint64_t shade(std::uint64_t& t_io, unsigned& used_io, unsigned rate, std::uint64_t m) {
-        Stepper s(*this, t_io, used_io, rate);
-        return s.shade(m);
+        std::uint64_t t = t_io, done = done_, wait = 0;
+        unsigned used = used_io, qi = qi_, pi = pi_;
+        std::uint64_t* const slot_free = slot_free_.data();
+        std::uint64_t* const proc_free = proc_free_.data();
+        for (std::uint64_t k = 0; k < m; ++k) {
+            if (used == rate) {
+                ++t;
+                used = 0;
+            }
+            const std::uint64_t room = slot_free[qi];
+            if (room > t) {
+                wait += room - t;
+                t = room;
+                used = 0;
+            }
+            ++used;
+            const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
+            proc_free[pi] = s + c_;
+            slot_free[qi] = s;
+            if (++pi == p_) pi = 0;
+            if (++qi == q_) qi = 0;
+            done = std::max(done, s + c_);
+        }
+        t_io = t;
+        used_io = used;
+        done_ = done;
+        qi_ = qi;
+        pi_ = pi;
+        return wait;
     }
 
     // The same as shade(), for any m: a run of identical fragments is a

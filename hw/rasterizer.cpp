@@ -195,13 +195,10 @@ struct rasterizer::Pure {
             return;
         }
         std::uint64_t run = pending[2];   // shaded since the last c fragment
-        // Timeline 2's state in registers for the tile, not loaded and
-        // stored around each of its runs (as short as one fragment when the
-        // c fragments come interleaved with the others).
-        FragmentPipe::Stepper two(fp[2], r[2].t, r[2].used, r[2].rate);
         const auto cut = [&] {
-            two.shade_run(run);
-            two.slot_only();
+            pending[2] = run;
+            flush(2);
+            r[2].emit_at(r[2].slot());
             run = 0;
         };
         if (tile.ordered_other) {
