@@ -27,7 +27,9 @@ std::vector<std::string>& cleanup_paths() {
 
 // Worker processes (rbcd-sim --jobs) that write into those paths: stopped and
 // waited for first, so that nothing is written there after the removal.
-constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP};
+// SIGPIPE too: an output on a pipe whose reader went away (`| head`) ends the
+// run as an interrupt does, its temporaries and workers' directory removed.
+constexpr int kInterrupts[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
 
 constexpr int kMaxChildren = 1024;
 volatile sig_atomic_t g_children[kMaxChildren];   // 0: ended and forgotten

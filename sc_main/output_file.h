@@ -20,7 +20,7 @@ namespace rbcd {
 // Removes a regular file left at an output path by an earlier run; anything
 // else there (directory, device, FIFO, symlink) is left alone.
 void discard_output(const std::string& path);
-// On SIGINT, SIGTERM or SIGHUP the path is unlinked before the process exits.
+// On SIGINT, SIGTERM, SIGHUP or SIGPIPE the path is unlinked before the process exits.
 // Call before the simulation starts.
 void remove_on_interrupt(const std::string& path);
 // A child process that writes into such paths: on those signals it is sent
@@ -31,7 +31,7 @@ void forget_child(int pid);
 // In a process just forked from one that registered paths and children: none
 // of them is its own to remove or stop.
 void forget_parents_cleanup();
-// SIGINT, SIGTERM and SIGHUP (the signals above) held back on this thread for
+// SIGINT, SIGTERM, SIGHUP and SIGPIPE (the signals above) held back on this thread for
 // the object's life: between creating a temporary or a worker and registering
 // it, where a signal would leave it behind; a thread started meanwhile keeps
 // them blocked.

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 #include <chrono>
+#include <fstream>
 #include <regex>
 #include <thread>
 
@@ -317,6 +318,31 @@ TEST_CASE("rbcd-sim --jobs: a scene with nothing in view says so as one process 
     const Result n = run_with_outputs(td, {"-q", "--scene", scene, "--jobs", "2"});
     expect_input_error(td, n, {"nothing in view"});
     CHECK(n.err == one.err);
+}
+
+TEST_CASE("rbcd-sim --jobs: collisions into a pipe whose reader goes away leave nothing behind", "[jobs]") {
+    // SIGPIPE ends the run as an interrupt does: the stats' temporary and the
+    // workers' directory (in TMPDIR for collisions on standard output) go.
+    // The reader closes its end at once, so that the first write fails.
+    TempDir td;
+    const std::string trace = default_trace(td, false);
+    for (const bool scene : {true, false}) {
+        INFO((scene ? "a scene" : "a trace"));
+        std::ofstream(td.stats()) << "an older result\n";   // gone too: the run failed
+        std::vector<std::string> args{"-c", "set -o pipefail; TMPDIR=\"$1\" \"$0\" \"${@:2}\" | { exec 0<&-; sleep 0.5; }",
+                                      RBCD_SIM, td.path("out"), "-q", "--jobs", "3", "--collisions", "-", "--stats",
+                                      td.stats()};
+        if (!scene) args.insert(args.end(), {"--trace", trace});
+        else args.insert(args.end(), {"--scene", small_scene(td)});
+        const Result r = run_program(td, "/bin/bash", args);
+        INFO(r.err);
+        CHECK(r.status != 0);
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        std::string names;
+        for (const auto& e : td.out_entries()) names += e + " ";
+        INFO("left behind: " << names);
+        CHECK(td.out_entries().empty());
+    }
 }
 
 TEST_CASE("rbcd-sim --jobs: a run stopped by SIGTERM leaves no output, no workers' directory, no workers", "[jobs]") {
