@@ -7,6 +7,7 @@
 #include "rbcd/testbench/sim/cli_util.h"
 
 #include <nlohmann/json.hpp>
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <regex>
@@ -51,7 +52,8 @@ void expect_same_as_one_process(const TempDir& td, const std::vector<std::string
     // The reference's own digests are the files' (the parts' equal the
     // reference's below): the first worker hashes what it reads and the
     // parent goes on from there, or the parent hashes the whole file.
-    for (const auto& in : nlohmann::json::parse(one.stats)["provenance"]["inputs"]) {
+    const nlohmann::json one_stats = nlohmann::json::parse(one.stats);
+    for (const auto& in : one_stats["provenance"]["inputs"]) {
         if (in["role"] != "trace") continue;
         const std::string bytes = slurp(in["path"].get<std::string>());
         CHECK(in["size"] == bytes.size());
@@ -143,6 +145,43 @@ TEST_CASE("rbcd-sim --jobs: a trace's digest is the file's whichever worker ends
         const std::string bytes = slurp(t);
         CHECK(in["size"] == bytes.size());
         CHECK(in["xxh128"] == xxh128_of(bytes));
+    }
+}
+
+TEST_CASE("rbcd-sim --jobs: a worker's command line run alone", "[jobs]") {
+    // The workers are forks that _exit, which LeakSanitizer does not check;
+    // run as programs of their own, their code is (the sanitizer build).
+    TempDir td;
+    const std::string t = default_trace(td, false);
+    const std::string text = slurp(t);
+    const std::size_t at = text.find("frame 30\n");
+    REQUIRE(at != std::string::npos);
+    const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+    struct Part {
+        std::vector<std::string> args;
+        bool first;
+    };
+    const Part parts[] = {
+        {{"--trace", t, "--frames", "0:29", "--worker-part", "first"}, true},
+        {{"--trace", t, "--frames", "30:", "--worker-part", "trace:" + std::to_string(at) + ":" + std::to_string(line)},
+         false},
+        {{"--scene", small_scene(td), "--frames", "20:39", "--worker-part", "scene"}, false},
+    };
+    for (const Part& p : parts) {
+        std::vector<std::string> a = p.args;
+        a.insert(a.end(), {"-q", "--threads", "1", "--stats", td.stats(), "--frame-stats", td.path("out/f.jsonl"),
+                           "--collisions", td.collisions()});
+        const Result r = run_sim(td, a);
+        INFO(r.cmd);
+        INFO(r.err);
+        REQUIRE(r.status == 0);
+        CHECK(r.err.empty());
+        const auto stats = nlohmann::json::parse(slurp(td.stats()));
+        const bool trace = p.args[0] == "--trace";
+        CHECK(stats.contains("worker") == trace);
+        // The first part of a trace hashed what it read, for its parent.
+        if (trace) CHECK(stats["worker"].contains("trace_read") == p.first);
+        CHECK((!stats.contains("provenance") || stats["provenance"].is_null()));   // the parent's to say
     }
 }
 
