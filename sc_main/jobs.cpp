@@ -18,7 +18,6 @@
 #include "rbcd/common/errors.h"
 #include "rbcd/sc_main/output_file.h"
 
-
 namespace rbcd {
 
 namespace {
