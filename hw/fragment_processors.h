@@ -32,6 +32,8 @@
 
 namespace rbcd {
 
+struct Tile;   // common/fragment.h
+
 class FragmentPipe {
 public:
     explicit FragmentPipe(const GpuConfig& g)
@@ -111,6 +113,17 @@ public:
         return shade_long(t, used, rate, m);
     }
     static constexpr std::uint64_t kLongRun = 256;
+
+    // A GPU-only timeline's walk of a tile without setups whose c fragments cut
+    // its shaded run (rasterizer.cpp, Pure): `run` shaded fragments pending
+    // before the tile's first, then the tile's fragments in order, its
+    // non-collisionable ones spread as the rasterizer spreads them; each c
+    // fragment takes the rasterizer's next slot after the run before it is
+    // shaded. Returns the shaded fragments left pending after the last c
+    // fragment. The same as shade_run() of each run and a slot between, with
+    // the state loaded once a tile.
+    std::uint64_t walk_tile_cut_at_c(const Tile& tile, std::uint64_t& t, unsigned& used, unsigned rate,
+                                     std::uint64_t run);
 
     // The cycle every fragment pushed since restart() has finished.
     std::uint64_t done() const { return done_; }

@@ -1,4 +1,5 @@
 #include "rbcd/hw/rasterizer.h"
+#include "rbcd/hw/even_split.h"
 
 #include <algorithm>
 #include <limits>
@@ -39,20 +40,6 @@ struct SetupSpread {
     void skip(std::uint64_t n) {
         i += n;
         if (free != kNever) free -= n;
-    }
-};
-
-// floor(j * total / parts) for j = 1, 2, ...: incremental, no division per step.
-struct EvenSplit {
-    std::uint64_t whole, frac, parts, q = 0, r = 0;
-    EvenSplit(std::uint64_t total, std::uint64_t p) : whole(total / p), frac(total % p), parts(p) {}
-    std::uint64_t next() {
-        q += whole;
-        r += frac;
-        const bool carry = r >= parts;
-        q += carry;
-        r -= carry ? parts : 0;
-        return q;
     }
 };
 
@@ -194,34 +181,9 @@ struct rasterizer::Pure {
             pending[2] += shaded;
             return;
         }
-        std::uint64_t run = pending[2];   // shaded since the last c fragment
-        const auto cut = [&] {
-            pending[2] = run;
-            flush(2);
-            r[2].emit_at(r[2].slot());
-            run = 0;
-        };
-        if (tile.ordered_other) {
-            std::size_t k = 0;
-            for (std::size_t i = 0; i < n; ++i) {
-                for (; k < tile.other_runs.size() && tile.other_runs[k].before <= i; ++k) run += tile.other_runs[k].count;
-                if (tile.frags[i].culled) cut();
-                else ++run;
-            }
-            for (; k < tile.other_runs.size(); ++k) run += tile.other_runs[k].count;
-        } else {
-            EvenSplit split(tile.other, n + 1);
-            std::uint64_t done = 0;
-            for (std::size_t i = 0; i < n; ++i) {
-                const std::uint64_t upto = split.next();
-                run += upto - done;
-                done = upto;
-                if (tile.frags[i].culled) cut();
-                else ++run;
-            }
-            run += tile.other - done;
-        }
-        pending[2] = run;
+        // Timeline 2 cut at the c fragments, walked by the pipe in one call
+        // (its own translation unit: fragment_processors.cpp says why).
+        pending[2] = fp[2].walk_tile_cut_at_c(tile, r[2].t, r[2].used, r[2].rate, pending[2]);
     }
 };
 
