@@ -11,55 +11,27 @@ namespace rbcd {
 // default scene 3 to 5% (docs/performance.md, fourth pass).
 std::uint64_t FragmentPipe::walk_tile_cut_at_c(const Tile& tile, std::uint64_t& t_io, unsigned& used_io,
                                                unsigned rate, std::uint64_t run) {
-    std::uint64_t t = t_io, done = done_;
-    unsigned used = used_io, qi = qi_, pi = pi_;
-    std::uint64_t* const slot_free = slot_free_.data();
-    std::uint64_t* const proc_free = proc_free_.data();
-    // shade() with the state in these locals; a long run stores them for
-    // shade_long and loads them back.
+    Regs r = load(t_io, used_io);
+    // A long run goes through shade_long, which takes the state from the
+    // members: stored for it, and loaded back.
     const auto shade_run_here = [&](std::uint64_t m) {
-        if (m > kLongRun) {
-            t_io = t;
-            used_io = used;
-            done_ = done;
-            qi_ = qi;
-            pi_ = pi;
-            shade_long(t_io, used_io, rate, m);
-            t = t_io;
-            used = used_io;
-            done = done_;
-            qi = qi_;
-            pi = pi_;
+        if (m <= kLongRun) {
+            shade_in(r, rate, m);
             return;
         }
-        for (std::uint64_t k = 0; k < m; ++k) {
-            if (used == rate) {
-                ++t;
-                used = 0;
-            }
-            const std::uint64_t room = slot_free[qi];
-            if (room > t) {
-                t = room;
-                used = 0;
-            }
-            ++used;
-            const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
-            proc_free[pi] = s + c_;
-            slot_free[qi] = s;
-            if (++pi == p_) pi = 0;
-            if (++qi == q_) qi = 0;
-            done = std::max(done, s + c_);
-        }
+        store(r, t_io, used_io);
+        shade_long(t_io, used_io, rate, m);
+        r = load(t_io, used_io);
     };
     const auto cut = [&] {
         shade_run_here(run);
         run = 0;
         // The c fragment: the rasterizer's next slot, nothing else.
-        if (used == rate) {
-            ++t;
-            used = 0;
+        if (r.used == rate) {
+            ++r.t;
+            r.used = 0;
         }
-        ++used;
+        ++r.used;
     };
     const std::size_t n = tile.frags.size();
     if (tile.ordered_other) {
@@ -82,11 +54,7 @@ std::uint64_t FragmentPipe::walk_tile_cut_at_c(const Tile& tile, std::uint64_t& 
         }
         run += tile.other - before;
     }
-    t_io = t;
-    used_io = used;
-    done_ = done;
-    qi_ = qi;
-    pi_ = pi;
+    store(r, t_io, used_io);
     return run;
 }
 

@@ -71,34 +71,9 @@ public:
     // has room. Returns the cycles the rasterizer waited. The same as m times
     // room() and push(), with the state in registers.
     [[gnu::always_inline]] std::uint64_t shade(std::uint64_t& t_io, unsigned& used_io, unsigned rate, std::uint64_t m) {
-        std::uint64_t t = t_io, done = done_, wait = 0;
-        unsigned used = used_io, qi = qi_, pi = pi_;
-        std::uint64_t* const slot_free = slot_free_.data();
-        std::uint64_t* const proc_free = proc_free_.data();
-        for (std::uint64_t k = 0; k < m; ++k) {
-            if (used == rate) {
-                ++t;
-                used = 0;
-            }
-            const std::uint64_t room = slot_free[qi];
-            if (room > t) {
-                wait += room - t;
-                t = room;
-                used = 0;
-            }
-            ++used;
-            const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
-            proc_free[pi] = s + c_;
-            slot_free[qi] = s;
-            if (++pi == p_) pi = 0;
-            if (++qi == q_) qi = 0;
-            done = std::max(done, s + c_);
-        }
-        t_io = t;
-        used_io = used;
-        done_ = done;
-        qi_ = qi;
-        pi_ = pi;
+        Regs r = load(t_io, used_io);
+        const std::uint64_t wait = shade_in(r, rate, m);
+        store(r, t_io, used_io);
         return wait;
     }
 
@@ -157,6 +132,50 @@ public:
     }
 
 private:
+    // The recurrence's running state, held in locals by the loops below: the
+    // rasterizer's clock (t, used), the last finish, the rings' positions.
+    struct Regs {
+        std::uint64_t t, done;
+        unsigned used, qi, pi;
+    };
+    [[gnu::always_inline]] Regs load(std::uint64_t t, unsigned used) const { return Regs{t, done_, used, qi_, pi_}; }
+    [[gnu::always_inline]] void store(const Regs& r, std::uint64_t& t, unsigned& used) {
+        t = r.t;
+        used = r.used;
+        done_ = r.done;
+        qi_ = r.qi;
+        pi_ = r.pi;
+    }
+    // shade()'s loop on that state; shade() and walk_tile_cut_at_c() load it
+    // once and store it once around as many runs as they have.
+    [[gnu::always_inline]] std::uint64_t shade_in(Regs& r, unsigned rate, std::uint64_t m) {
+        std::uint64_t t = r.t, done = r.done, wait = 0;
+        unsigned used = r.used, qi = r.qi, pi = r.pi;
+        std::uint64_t* const slot_free = slot_free_.data();
+        std::uint64_t* const proc_free = proc_free_.data();
+        for (std::uint64_t k = 0; k < m; ++k) {
+            if (used == rate) {
+                ++t;
+                used = 0;
+            }
+            const std::uint64_t room = slot_free[qi];
+            if (room > t) {
+                wait += room - t;
+                t = room;
+                used = 0;
+            }
+            ++used;
+            const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
+            proc_free[pi] = s + c_;
+            slot_free[qi] = s;
+            if (++pi == p_) pi = 0;
+            if (++qi == q_) qi = 0;
+            done = std::max(done, s + c_);
+        }
+        r = Regs{t, done, used, qi, pi};
+        return wait;
+    }
+
     std::uint64_t shade_long(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
         std::uint64_t wait = 0;
         const std::uint64_t block = period_hint(rate);
