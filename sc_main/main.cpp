@@ -134,6 +134,9 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     const bool first_direct = trace && collisions_out.active();
     for (std::size_t k = 0; k < parts.size(); ++k) {
         const std::string n = std::to_string(k);
+        // The first part of a trace hashes what it reads only for stats here.
+        JobPart part_k = parts[k];
+        part_k.digest = trace && !part_k.skip && stats_out.active();
         std::vector<std::string> a{opt.argv.empty() ? std::string("rbcd-sim") : opt.argv[0]};
         if (!opt.config_file.empty()) a.insert(a.end(), {"--config", opt.config_file});
         for (const auto& set : opt.sets) a.insert(a.end(), {"--set", set});
@@ -141,7 +144,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         else if (!opt.scene.empty()) a.insert(a.end(), {"--scene", opt.scene});
         a.insert(a.end(), {"--frames", range_text(parts[k].range), "--threads", std::to_string(threads), "-q",
                            "--stats", dir.path(n + ".json"), "--frame-stats", dir.path(n + ".jsonl"),
-                           "--worker-part", worker_part_text(parts[k], trace)});
+                           "--worker-part", worker_part_text(part_k, trace)});
         if (k == 0 && first_direct) {
             a.insert(a.end(), {"--collisions", "-"});
             out_fds.push_back(collisions_out.shared_fd());
@@ -385,12 +388,13 @@ int run(Options opt) {
     // provenance reads only what the reader did not (docs/provenance.md):
     // one process writing stats (not for --db, which records the provenance
     // before the run, nor --frames, whose reader stops early), or the --jobs
-    // worker of the first part, from whose state its parent goes on. So
+    // worker of the first part when its parent writes stats and goes on from
+    // its state. So
     // standard input, which cannot be read again, gets a digest too.
     // Declared before the reader, which holds it.
     std::unique_ptr<ReadDigest> read_digest;
     if (!opt.trace.empty() && !part.skip &&
-        (worker || (stats_out.active() && !opt.frames_given && opt.db.empty())))
+        (worker ? part.digest : stats_out.active() && !opt.frames_given && opt.db.empty()))
         read_digest = std::make_unique<ReadDigest>();
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
