@@ -17,8 +17,12 @@
 //   std::uint64_t s = sorter.accept(frag, enqueue_cycle, depth_bits);
 //   std::uint64_t filled = sorter.end_tile();   // the bank holds the whole tile
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <systemc>
+#if defined(__SSE2__)
+#include <emmintrin.h>   // part of x86-64 itself
+#endif
 #include <vector>
 
 #include "rbcd/common/config.h"
@@ -28,6 +32,17 @@
 #include "rbcd/hw/zeb_bank.h"
 
 namespace rbcd {
+
+namespace sorter_detail {
+// Set bits of a byte (popcount is a library call without -mpopcnt).
+struct Popcount8 {
+    std::uint8_t v[256] = {};
+    constexpr Popcount8() {
+        for (unsigned i = 1; i < 256; ++i) v[i] = static_cast<std::uint8_t>(v[i >> 1] + (i & 1));
+    }
+};
+inline constexpr Popcount8 kPopcount8{};
+} // namespace sorter_detail
 
 class insertion_sorter : public sc_core::sc_module {
 public:
@@ -128,31 +143,71 @@ public:
 private:
     template <Path P>
     void insert(zeb_bank& bank, unsigned list, std::uint64_t word, std::uint64_t key);
-    // The M comparators as straight code over every slot, masked by the
-    // count, and the M muxes as an index per slot (gcc makes a select a branch).
-    template <unsigned M, class LessEq>
-    static unsigned position_all(const std::uint64_t* row, unsigned n, LessEq le) {
+    // The M comparators over every slot, masked by the count, two slots to an
+    // SSE2 compare: a masked word is below 2^49, so with the exponent bits of
+    // 2^52 set it reads as the double 2^52 + w, ordered as the word is (SSE2
+    // has no 64-bit integer compare). Their popcount is the position.
+    template <unsigned M>
+    [[gnu::always_inline]] static unsigned position_all(const std::uint64_t* row, unsigned n, std::uint64_t keep,
+                                                        std::uint64_t limit) {
+#if defined(__SSE2__)
+        constexpr std::uint64_t kTwo52 = 0x4330000000000000ull;
+        // Past 2^52 - 1 the limit is above every word either way.
+        const std::uint64_t lim = std::min<std::uint64_t>(limit, (std::uint64_t(1) << 52) - 1);
+        const __m128i magic = _mm_set1_epi64x(static_cast<long long>(kTwo52));
+        const __m128i k = _mm_set1_epi64x(static_cast<long long>(keep));
+        const __m128d l = _mm_castsi128_pd(_mm_set1_epi64x(static_cast<long long>(kTwo52 | lim)));
+        unsigned le = 0;
+        for (unsigned j = 0; j < M / 2; ++j) {
+            const __m128i w = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + 2 * j));
+            const __m128d d = _mm_castsi128_pd(_mm_or_si128(_mm_and_si128(w, k), magic));
+            le |= static_cast<unsigned>(_mm_movemask_pd(_mm_cmple_pd(d, l))) << (2 * j);
+        }
+        le &= (1u << n) - 1;
+        return sorter_detail::kPopcount8.v[le & 0xFFu] + (M > 8 ? sorter_detail::kPopcount8.v[le >> 8] : 0u);
+#else
         unsigned pos = 0;
-        for (unsigned i = 0; i < M; ++i) pos += (i < n) & le(row[i]);
+        for (unsigned i = 0; i < M; ++i) pos += (i < n) & ((row[i] & keep) <= limit);
         return pos;
+#endif
     }
-    template <class LessEq>
-    unsigned position_all(const std::uint64_t* row, unsigned n, LessEq le) const {
+    unsigned position_all(const std::uint64_t* row, unsigned n, std::uint64_t keep, std::uint64_t limit) const {
         switch (m_) {
-        case 4: return position_all<4>(row, n, le);
-        case 8: return position_all<8>(row, n, le);
-        default: return position_all<16>(row, n, le);
+        case 4: return position_all<4>(row, n, keep, limit);
+        case 8: return position_all<8>(row, n, keep, limit);
+        default: return position_all<16>(row, n, keep, limit);
         }
     }
+    // The M muxes: slot i keeps its element below pos, takes the new one at
+    // pos and its upper neighbour's above (slots past the count take whatever
+    // comes), as selects between the row and the row moved down one slot.
     template <unsigned M>
-    static void shift_all(std::uint64_t* row, unsigned pos) {
-        for (unsigned i = M - 1; i > 0; --i) row[i] = row[i - (i > pos)];
+    [[gnu::always_inline]] static void place_all(std::uint64_t* row, unsigned pos, std::uint64_t word) {
+#if defined(__SSE2__)
+        const __m128i w = _mm_set1_epi64x(static_cast<long long>(word));
+        const __m128i p = _mm_set1_epi32(static_cast<int>(pos));
+        __m128i above = w;   // the pair of slots before this one (none: the new element)
+        for (unsigned j = 0; j < M / 2; ++j) {
+            const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + 2 * j));
+            // Slots 2j and 2j+1 moved down: slot 2j - 1's element, then slot 2j's.
+            const __m128i down = _mm_castpd_si128(_mm_shuffle_pd(_mm_castsi128_pd(above), _mm_castsi128_pd(v), 1));
+            const __m128i slot = _mm_set_epi32(int(2 * j + 1), int(2 * j + 1), int(2 * j), int(2 * j));
+            const __m128i gt = _mm_cmpgt_epi32(slot, p), eq = _mm_cmpeq_epi32(slot, p);
+            __m128i r = _mm_or_si128(_mm_andnot_si128(gt, v), _mm_and_si128(gt, down));
+            r = _mm_or_si128(_mm_andnot_si128(eq, r), _mm_and_si128(eq, w));
+            _mm_storeu_si128(reinterpret_cast<__m128i*>(row + 2 * j), r);
+            above = v;
+        }
+#else
+        for (unsigned i = M - 1; i > pos; --i) row[i] = row[i - 1];
+        row[pos] = word;
+#endif
     }
-    void shift_all(std::uint64_t* row, unsigned pos) const {
+    void place_all(std::uint64_t* row, unsigned pos, std::uint64_t word) const {
         switch (m_) {
-        case 4: return shift_all<4>(row, pos);
-        case 8: return shift_all<8>(row, pos);
-        default: return shift_all<16>(row, pos);
+        case 4: return place_all<4>(row, pos, word);
+        case 8: return place_all<8>(row, pos, word);
+        default: return place_all<16>(row, pos, word);
         }
     }
     std::uint64_t hazard(unsigned li, std::uint64_t issue);
@@ -209,11 +264,26 @@ template <insertion_sorter::Path P>
     const std::uint64_t keep = front_first_ ? ~id_mask : ~std::uint64_t(0);
     const std::uint64_t limit =
         front_first_ ? ((key >> 1) << id_shift_) | (key & 1u) : ((key + 1) << id_shift_) - 1;
+    if constexpr (P == AllSlots) {
+        // Straight code, no branch on the outcome (each one mispredicts on a
+        // trace whose counts vary): a full list counts its overflow, and
+        // pos = M (the new element sorts last) leaves the row as it was.
+        const unsigned pos = position_all(row, n, keep, limit);
+        const unsigned full = n == m_, dropped_new = full & (pos == m_);
+        bank.note_overflow_if(li, full);
+        stats_.overflows += full;
+        stats_.dropped_new += dropped_new;
+        stats_.dropped_last += full - dropped_new;
+        stats_.mux_shifts += n - pos - full + dropped_new;
+        n = static_cast<std::uint8_t>(n + 1 - full);
+        bank.mark_occupied(li);
+        place_all(row, pos, word);
+        bank.note_writes(1 - dropped_new);
+        return;
+    }
     const auto le = [=](std::uint64_t w) { return (w & keep) <= limit; };
     unsigned pos = 0;
-    if (P == AllSlots) pos = position_all(row, n, le);
-    else
-        for (unsigned i = 0; i < n; ++i) pos += le(row[i]);
+    for (unsigned i = 0; i < n; ++i) pos += le(row[i]);
 
     if (n == m_) {
         bank.note_overflow(li);
@@ -224,18 +294,14 @@ template <insertion_sorter::Path P>
             return;
         }
         ++stats_.dropped_last;
-        if (P != AllSlots)
-            for (unsigned i = m_ - 1; i > pos; --i) row[i] = row[i - 1];
+        for (unsigned i = m_ - 1; i > pos; --i) row[i] = row[i - 1];
         stats_.mux_shifts += m_ - 1 - pos;
     } else {
-        if (P != AllSlots)
-            for (unsigned i = n; i > pos; --i) row[i] = row[i - 1];
+        for (unsigned i = n; i > pos; --i) row[i] = row[i - 1];
         stats_.mux_shifts += n - pos;
         ++n;
         bank.mark_occupied(li);
     }
-    // Slots past the count take whatever is shifted in.
-    if (P == AllSlots) shift_all(row, pos);
     row[pos] = word;
     bank.note_write();
 }

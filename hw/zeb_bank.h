@@ -66,9 +66,18 @@ public:
     const std::vector<std::uint64_t>& occupancy() const { return occupancy_; }
     void note_read() { ++stats_.row_reads; }
     void note_write() { ++stats_.row_writes; }
+    void note_writes(unsigned k) { stats_.row_writes += k; }
 
     // Overflow bookkeeping of the tile held (contract: "Sorted insertion").
     void note_overflow(unsigned i);
+    // The same when `full` (0 or 1) is 1, without a branch on it.
+    void note_overflow_if(unsigned i, unsigned full) {
+        dropped_ += full;
+        std::uint64_t& w = overflowed_[i >> 6];
+        const std::uint64_t bit = std::uint64_t(full) << (i & 63);
+        lists_overflowed_ += (~w & bit) != 0;
+        w |= bit;
+    }
     std::uint32_t lists_overflowed() const { return lists_overflowed_; }
     std::uint64_t fragments_dropped() const { return dropped_; }
 

@@ -553,45 +553,71 @@ TEST_CASE("hw sorter: hazards do not reach across tiles", "[sorter][timing]") {
 // all M slots, chosen per tile from how often the count changed in the tiles
 // before (insertion_sorter::path()). Both must leave every list as the
 // contract's sorted insertion does: the M smallest (depth, then front before
-// back), equal keys in arrival order. Tiles whose fragments come in
-// per-pixel bursts, then tiles of random pixels: both paths must be taken.
+// back under front_first), equal keys in arrival order; and count the same
+// overflows: every arrival past M drops one element, the new one when it
+// sorts last. Tiles whose fragments come in per-pixel bursts, then tiles of
+// random pixels: both paths must be taken, for each M the all-slots path has
+// (4, 8, 16) and both tie policies.
 TEST_CASE("sorter: loops and all-slots paths sort alike", "[sorter]") {
-    SimConfig cfg;   // 16x16 tiles, M = 8, front first
-    SorterBench b(cfg);
-    std::mt19937_64 gen(2027);
-    const auto range = [&](unsigned lo, unsigned hi) { return lo + static_cast<unsigned>(gen() % (hi - lo + 1)); };
-    bool saw_loops = false, saw_all = false;
-    for (unsigned t = 0; t < 48; ++t) {
-        const bool bursts = t < 16 || t >= 40;
-        std::vector<Fragment> frags;
-        for (unsigned k = 0; k < 1200; ++k) {
-            const unsigned px = bursts ? (k / 6) % 256 : range(0, 255);
-            frags.push_back(frag(px % 16, px / 16, range(0, 63) * 4096, range(1, 9), range(0, 1) ? 'F' : 'B'));
-        }
-        const Tile tile = tb::tile(0, 0, 0, frags);
-        zeb_bank bank(("zeb_paths" + std::to_string(t)).c_str(), cfg.zeb, cfg.tile, 0);
-        b.fill(bank, tile);
-        (b.sorter->path() == insertion_sorter::AllSlots ? saw_all : saw_loops) = true;
-        // Expected lists: stable sort of each pixel's arrivals by (dq, back after front), first M.
-        std::vector<std::vector<Fragment>> expect(256);
-        for (const Fragment& f : frags) expect[f.y * 16 + f.x].push_back(f);
-        for (unsigned li = 0; li < 256; ++li) {
-            auto& v = expect[li];
-            std::stable_sort(v.begin(), v.end(), [&](const Fragment& a, const Fragment& c) {
-                const auto qa = quantize_depth(a.depth, 24, cfg.zeb.z_bits), qc = quantize_depth(c.depth, 24, cfg.zeb.z_bits);
-                return qa != qc ? qa < qc : (a.facing == Facing::Front && c.facing == Facing::Back);
-            });
-            if (v.size() > cfg.zeb.list_length) v.resize(cfg.zeb.list_length);
-            std::string want;
-            for (const Fragment& f : v) {
-                if (!want.empty()) want += ' ';
-                want += std::to_string(quantize_depth(f.depth, 24, cfg.zeb.z_bits)) + ":" + std::to_string(f.id) +
-                        (f.facing == Facing::Back ? "B" : "F");
+    for (const unsigned m : {4u, 8u, 16u}) {
+        for (const TiePolicy tie : {TiePolicy::FrontFirst, TiePolicy::Arrival}) {
+            SimConfig cfg;   // 16x16 tiles
+            cfg.zeb.list_length = m;
+            cfg.zeb.tie = tie;
+            SorterBench b(cfg);
+            std::mt19937_64 gen(2027 + m);
+            const auto range = [&](unsigned lo, unsigned hi) { return lo + static_cast<unsigned>(gen() % (hi - lo + 1)); };
+            bool saw_loops = false, saw_all = false;
+            std::uint64_t want_overflows = 0, want_dropped_new = 0;
+            for (unsigned t = 0; t < 48; ++t) {
+                const bool bursts = t < 16 || t >= 40;
+                std::vector<Fragment> frags;
+                for (unsigned k = 0; k < 1200; ++k) {
+                    const unsigned px = bursts ? (k / 6) % 256 : range(0, 255);
+                    frags.push_back(frag(px % 16, px / 16, range(0, 63) * 4096, range(1, 9), range(0, 1) ? 'F' : 'B'));
+                }
+                const Tile tile = tb::tile(0, 0, 0, frags);
+                zeb_bank bank(("zeb_paths" + std::to_string(m) + "_" + std::to_string(int(tie)) + "_" + std::to_string(t)).c_str(),
+                              cfg.zeb, cfg.tile, 0);
+                b.fill(bank, tile);
+                (b.sorter->path() == insertion_sorter::AllSlots ? saw_all : saw_loops) = true;
+                const auto dq = [&](const Fragment& f) { return quantize_depth(f.depth, 24, cfg.zeb.z_bits); };
+                const auto before = [&](const Fragment& a, const Fragment& c) {
+                    if (dq(a) != dq(c)) return dq(a) < dq(c);
+                    return tie == TiePolicy::FrontFirst && a.facing == Facing::Front && c.facing == Facing::Back;
+                };
+                // Overflows replayed per pixel: a full list drops the new
+                // element when none of its M sorts after it.
+                std::vector<std::vector<Fragment>> held(256);
+                for (const Fragment& f : frags) {
+                    auto& v = held[f.y * 16 + f.x];
+                    if (v.size() == m) {
+                        ++want_overflows;
+                        if (!before(f, v.back())) {
+                            ++want_dropped_new;
+                            continue;
+                        }
+                        v.pop_back();
+                    }
+                    v.insert(std::upper_bound(v.begin(), v.end(), f, before), f);
+                }
+                for (unsigned li = 0; li < 256; ++li) {
+                    std::string want;
+                    for (const Fragment& f : held[li]) {
+                        if (!want.empty()) want += ' ';
+                        want += std::to_string(dq(f)) + ":" + std::to_string(f.id) + (f.facing == Facing::Back ? "B" : "F");
+                    }
+                    INFO("M " << m << " tie " << int(tie) << " tile " << t << " list " << li << " path " << b.sorter->path());
+                    REQUIRE(b.row(bank, li) == want);
+                }
+                INFO("M " << m << " tie " << int(tie) << " tile " << t);
+                REQUIRE(b.sorter->stats().overflows == want_overflows);
+                REQUIRE(b.sorter->stats().dropped_new == want_dropped_new);
+                REQUIRE(b.sorter->stats().dropped_last == want_overflows - want_dropped_new);
             }
-            INFO("tile " << t << " list " << li << " path " << b.sorter->path());
-            REQUIRE(b.row(bank, li) == want);
+            INFO("M " << m << " tie " << int(tie));
+            CHECK(saw_loops);
+            CHECK(saw_all);
         }
     }
-    CHECK(saw_loops);
-    CHECK(saw_all);
 }
