@@ -18,8 +18,10 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include <dlfcn.h>
+
 #include <Eigen/Geometry>
-#include <assimp/Importer.hpp>
+#include <assimp/cimport.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
@@ -360,12 +362,59 @@ bool ply_file_ok(const std::string& path, std::string& error) {
 }
 } // namespace
 
+namespace {
+// assimp's C interface, opened the first time a mesh file is read: nothing
+// links assimp, so a run that reads no mesh file (every trace, the default
+// scene, a --jobs worker) starts without loading and relocating it, a
+// library of 44,000 relocations that was 1.4 ms of rbcd-sim's 5 ms start.
+// A library that cannot be opened is that mesh file's error.
+struct AssimpC {
+    decltype(&aiImportFile) import_file = nullptr;
+    decltype(&aiReleaseImport) release_import = nullptr;
+    decltype(&aiGetErrorString) error_string = nullptr;
+    std::string missing;   // why it could not be opened
+};
+const AssimpC& assimp_c() {
+    static const AssimpC a = [] {
+        AssimpC r;
+        void* h = ::dlopen(RBCD_ASSIMP_SONAME, RTLD_NOW | RTLD_LOCAL);
+        if (!h) {
+            const char* why = ::dlerror();
+            r.missing = std::string("cannot load assimp (" RBCD_ASSIMP_SONAME "), which reads mesh files: ") +
+                        (why ? why : "dlopen failed") + " (Debian: libassimp5)";
+            return r;
+        }
+        r.import_file = reinterpret_cast<decltype(&aiImportFile)>(::dlsym(h, "aiImportFile"));
+        r.release_import = reinterpret_cast<decltype(&aiReleaseImport)>(::dlsym(h, "aiReleaseImport"));
+        r.error_string = reinterpret_cast<decltype(&aiGetErrorString)>(::dlsym(h, "aiGetErrorString"));
+        if (!r.import_file || !r.release_import || !r.error_string) {
+            r.import_file = nullptr;
+            r.missing = "cannot load assimp (" RBCD_ASSIMP_SONAME "): it lacks aiImportFile, aiReleaseImport or aiGetErrorString";
+        }
+        return r;
+    }();
+    return a;
+}
+} // namespace
+
 bool load_mesh_file_in_process(const std::string& path, Mesh& out, std::string& error) {
     if (!ply_file_ok(path, error)) return false;
-    Assimp::Importer imp;
-    const aiScene* s = imp.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+    const AssimpC& ai = assimp_c();
+    if (!ai.import_file) {
+        error = ai.missing;
+        return false;
+    }
+    const aiScene* s = ai.import_file(path.c_str(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+    struct Release {
+        const AssimpC& ai;
+        const aiScene* s;
+        ~Release() {
+            if (s) ai.release_import(s);
+        }
+    } release{ai, s};
     if (!s || !s->mRootNode || (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
-        error = imp.GetErrorString();
+        // (assimp says why only when it returned no scene.)
+        if (!s) error = ai.error_string();
         if (error.empty()) error = "assimp could not import it";
         error = explain_import_error(path, error);
         return false;
@@ -419,6 +468,12 @@ void abort_next_mesh_reader_for_test() { abort_next_reader = true; }
 
 bool load_mesh_file(const std::string& path, Mesh& out, std::string& error, unsigned timeout_s) {
     const bool abort_reader = abort_next_reader.exchange(false);
+    // Opened here, before the fork, never first in the child (a library
+    // loaded after a fork can meet a lock another thread held then).
+    if (!assimp_c().import_file) {
+        error = assimp_c().missing;
+        return false;
+    }
     int p[2];
     if (::pipe2(p, O_CLOEXEC) != 0) return load_mesh_file_in_process(path, out, error);
     std::fflush(nullptr);
