@@ -176,6 +176,10 @@ private:
         return wait;
     }
 
+    // walk_tile_cut_at_c's tiles whose others are spread evenly, thinly.
+    std::uint64_t walk_spread_cut_at_c(const Tile& tile, std::uint64_t& t, unsigned& used, unsigned rate,
+                                       std::uint64_t run);
+
     std::uint64_t shade_long(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
         std::uint64_t wait = 0;
         const std::uint64_t block = period_hint(rate);

@@ -5,7 +5,11 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
+#include "rbcd/hw/even_split.h"
+#include "rbcd/hw/fragment_processors.h"
 #include "rbcd/testbench/instruments/instruments_util.h"
 
 using namespace rbcd;
@@ -232,6 +236,106 @@ TEST_CASE("gpu: a long run of fragments is computed in bulk exactly", "[gpu]") {
             bulk.state(sb);
             step.state(ss);
             CHECK(sb == ss);
+        }
+    }
+}
+
+// FragmentPipe::walk_tile_cut_at_c walks GPU-only timeline 2 through a tile
+// without setups (the shaded fragments pushed, each c fragment one rasterizer
+// slot) in bulk: by runs between c fragments, or for thinly spread others in
+// two passes that list the shaded fragments first. Both must leave the state
+// stepping fragment by fragment leaves, with the fragments after the last c
+// fragment left pending. Random tiles: c fragments alone, in runs and at the
+// ends; others spread evenly (thin and thick) or ordered by o records;
+// pending runs before the tile short and long; rasterizer- and shader-bound
+// configurations, rates below and above a run of c fragments.
+TEST_CASE("gpu: timeline 2's tile walk equals stepping fragment by fragment", "[gpu]") {
+    struct Case {
+        unsigned rate, queue, procs, cycles, ez;
+    };
+    std::mt19937_64 gen(2026);
+    const auto pick = [&](std::uint64_t lo, std::uint64_t hi) { return lo + gen() % (hi - lo + 1); };
+    for (const Case c : {Case{4, 64, 4, 8, 1}, Case{1, 64, 4, 1, 1}, Case{3, 7, 5, 2, 0}, Case{64, 3, 2, 9, 4},
+                         Case{2, 16, 16, 32, 2}, Case{5, 1, 1, 1, 0}}) {
+        GpuConfig g;
+        g.fragment_queue_depth = c.queue;
+        g.fragment_processors = c.procs;
+        g.cycles_per_fragment = c.cycles;
+        g.early_z_cycles = c.ez;
+        for (int trial = 0; trial < 200; ++trial) {
+            Tile tile;
+            const std::size_t n = pick(1, 300);
+            const unsigned c_pct = static_cast<unsigned>(pick(0, 4)) * 25;   // 0, 25, 50, 75, 100 % c
+            for (std::size_t i = 0; i < n; ++i) {
+                Fragment f = frag(0, 0, 1, 1, 'F');
+                f.culled = pick(1, 100) <= c_pct;
+                tile.frags.push_back(f);
+            }
+            tile.frags[pick(0, n - 1)].culled = true;   // the walk's tiles have one
+            const int others = static_cast<int>(pick(0, 3));
+            if (others == 3) {
+                tile.ordered_other = true;
+                for (std::size_t i = 0; i <= n; i += pick(1, 40)) {
+                    tile.other_runs.push_back({static_cast<std::uint32_t>(i), pick(0, 5)});
+                    tile.other += tile.other_runs.back().count;
+                }
+            } else {
+                tile.other = others == 0 ? 0 : others == 1 ? pick(0, 2 * n) : pick(2 * n + 1, 5 * n + 3);
+            }
+            const std::uint64_t pending = pick(0, 1) ? pick(0, 8) : pick(257, 2000);
+            INFO("rate " << c.rate << " queue " << c.queue << " procs " << c.procs << " trial " << trial << " n " << n
+                         << " other " << tile.other << (tile.ordered_other ? " ordered" : "") << " pending " << pending);
+            FragmentPipe walk(g), step(g);
+            walk.restart(3);
+            step.restart(3);
+            std::uint64_t tw = 7, ts = 7;
+            unsigned uw = 2 % c.rate + 1, us = uw;
+            // Stepping: the pending run, then the tile's order (others before
+            // fragment i as the rasterizer spreads or orders them).
+            std::uint64_t after_last_c = 0;
+            const auto shade_one = [&] {
+                step.shade(ts, us, c.rate, 1);
+                ++after_last_c;
+            };
+            for (std::uint64_t k = 0; k < pending; ++k) shade_one();
+            EvenSplit split(tile.other, n + 1);
+            std::uint64_t done_others = 0;
+            std::size_t run = 0;
+            for (std::size_t i = 0; i <= n; ++i) {
+                std::uint64_t upto = 0;
+                if (tile.ordered_other) {
+                    upto = done_others;
+                    for (; run < tile.other_runs.size() && tile.other_runs[run].before <= i; ++run)
+                        upto += tile.other_runs[run].count;
+                    if (i == n)
+                        for (; run < tile.other_runs.size(); ++run) upto += tile.other_runs[run].count;
+                } else {
+                    upto = i < n ? split.next() : tile.other;
+                }
+                for (; done_others < upto; ++done_others) shade_one();
+                if (i == n) break;
+                if (tile.frags[i].culled) {
+                    if (us == c.rate) {
+                        ++ts;
+                        us = 0;
+                    }
+                    ++us;
+                    after_last_c = 0;
+                } else {
+                    shade_one();
+                }
+            }
+            const std::uint64_t left = walk.walk_tile_cut_at_c(tile, tw, uw, c.rate, pending);
+            REQUIRE(left == after_last_c);
+            // The pending fragments shaded on both sides, then the whole state compared.
+            walk.shade_run(tw, uw, c.rate, left);
+            REQUIRE(tw == ts);
+            REQUIRE(uw == us);
+            REQUIRE(walk.done() == step.done());
+            std::vector<std::uint64_t> sw, ss;
+            walk.state(sw);
+            step.state(ss);
+            REQUIRE(sw == ss);
         }
     }
 }
