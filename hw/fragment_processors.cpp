@@ -137,12 +137,7 @@ std::uint64_t FragmentPipe::walk_spread_cut_at_c(const Tile& tile, std::uint64_t
             t = room;
             used = 1;
         }
-        const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
-        proc_free[pi] = s + c_;
-        slot_free[qi] = s;
-        if (++pi == p_) pi = 0;
-        if (++qi == q_) qi = 0;
-        done = std::max(done, s + c_);
+        enter(t, done, qi, pi, slot_free, proc_free);
     }
     take_slots(pc);
     r = Regs{t, done, used, qi, pi};

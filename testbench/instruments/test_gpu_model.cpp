@@ -37,6 +37,30 @@ Tile front_and_culled_backs() {
     return tb::tile(0, 0, 0, fs);
 }
 
+// Rasterizer- and shader-bound fragment pipes, rates from 1 to 64.
+struct PipeCase {
+    unsigned rate, queue, procs, cycles, ez;
+    GpuConfig gpu() const {
+        GpuConfig g;
+        g.fragment_queue_depth = queue;
+        g.fragment_processors = procs;
+        g.cycles_per_fragment = cycles;
+        g.early_z_cycles = ez;
+        return g;
+    }
+};
+// Two pipes and their rasterizer clocks in the same state: clock, last
+// finish, and both rings in age order.
+bool same_pipe(const FragmentPipe& a, std::uint64_t ta, unsigned ua, const FragmentPipe& b, std::uint64_t tb,
+               unsigned ub) {
+    std::vector<std::uint64_t> sa, sb;
+    a.state(sa);
+    b.state(sb);
+    return ta == tb && ua == ub && a.done() == b.done() && sa == sb;
+}
+const PipeCase kPipeCases[] = {{4, 64, 4, 8, 1}, {1, 64, 4, 1, 1}, {3, 7, 5, 2, 0},
+                               {64, 3, 2, 9, 4}, {2, 16, 16, 32, 2}, {5, 1, 1, 1, 0}};
+
 } // namespace
 
 TEST_CASE("gpu: c fragments cost rasterizer slots, not shading", "[gpu]") {
@@ -207,16 +231,8 @@ TEST_CASE("gpu: a long run of fragments is computed in bulk exactly", "[gpu]") {
     // FragmentPipe::shade_run jumps over the periodic part of a long run; it must give
     // the same state as going fragment by fragment, for rasterizer- and shader-bound
     // configurations alike.
-    struct Case {
-        unsigned rate, queue, procs, cycles, ez;
-    };
-    for (const Case c : {Case{4, 64, 4, 8, 1}, Case{1, 64, 4, 1, 1}, Case{3, 7, 5, 2, 0}, Case{64, 3, 2, 9, 4},
-                         Case{2, 16, 16, 32, 2}, Case{5, 1, 1, 1, 0}}) {
-        GpuConfig g;
-        g.fragment_queue_depth = c.queue;
-        g.fragment_processors = c.procs;
-        g.cycles_per_fragment = c.cycles;
-        g.early_z_cycles = c.ez;
+    for (const PipeCase c : kPipeCases) {
+        const GpuConfig g = c.gpu();
         for (const std::uint64_t m : {257ull, 1000ull, 123457ull}) {
             INFO("rate " << c.rate << " queue " << c.queue << " procs " << c.procs << " cycles " << c.cycles
                          << " run " << m);
@@ -228,14 +244,8 @@ TEST_CASE("gpu: a long run of fragments is computed in bulk exactly", "[gpu]") {
             const std::uint64_t wb = bulk.shade_run(tb, ub, c.rate, m);
             std::uint64_t ws = 0;
             for (std::uint64_t k = 0; k < m; ++k) ws += step.shade(ts, us, c.rate, 1);
-            CHECK(tb == ts);
-            CHECK(ub == us);
             CHECK(wb == ws);
-            CHECK(bulk.done() == step.done());
-            std::vector<std::uint64_t> sb, ss;
-            bulk.state(sb);
-            step.state(ss);
-            CHECK(sb == ss);
+            CHECK(same_pipe(bulk, tb, ub, step, ts, us));
         }
     }
 }
@@ -250,18 +260,10 @@ TEST_CASE("gpu: a long run of fragments is computed in bulk exactly", "[gpu]") {
 // pending runs before the tile short and long; rasterizer- and shader-bound
 // configurations, rates below and above a run of c fragments.
 TEST_CASE("gpu: timeline 2's tile walk equals stepping fragment by fragment", "[gpu]") {
-    struct Case {
-        unsigned rate, queue, procs, cycles, ez;
-    };
     std::mt19937_64 gen(2026);
     const auto pick = [&](std::uint64_t lo, std::uint64_t hi) { return lo + gen() % (hi - lo + 1); };
-    for (const Case c : {Case{4, 64, 4, 8, 1}, Case{1, 64, 4, 1, 1}, Case{3, 7, 5, 2, 0}, Case{64, 3, 2, 9, 4},
-                         Case{2, 16, 16, 32, 2}, Case{5, 1, 1, 1, 0}}) {
-        GpuConfig g;
-        g.fragment_queue_depth = c.queue;
-        g.fragment_processors = c.procs;
-        g.cycles_per_fragment = c.cycles;
-        g.early_z_cycles = c.ez;
+    for (const PipeCase c : kPipeCases) {
+        const GpuConfig g = c.gpu();
         for (int trial = 0; trial < 200; ++trial) {
             Tile tile;
             const std::size_t n = pick(1, 300);
@@ -329,13 +331,7 @@ TEST_CASE("gpu: timeline 2's tile walk equals stepping fragment by fragment", "[
             REQUIRE(left == after_last_c);
             // The pending fragments shaded on both sides, then the whole state compared.
             walk.shade_run(tw, uw, c.rate, left);
-            REQUIRE(tw == ts);
-            REQUIRE(uw == us);
-            REQUIRE(walk.done() == step.done());
-            std::vector<std::uint64_t> sw, ss;
-            walk.state(sw);
-            step.state(ss);
-            REQUIRE(sw == ss);
+            REQUIRE(same_pipe(walk, tw, uw, step, ts, us));
         }
     }
 }
