@@ -165,26 +165,16 @@ private:
                 used = 0;
             }
             ++used;
-            enter(t, done, qi, pi, slot_free, proc_free);
+            const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
+            proc_free[pi] = s + c_;
+            slot_free[qi] = s;
+            if (++pi == p_) pi = 0;
+            if (++qi == q_) qi = 0;
+            done = std::max(done, s + c_);
         }
         r = Regs{t, done, used, qi, pi};
         return wait;
     }
-    // A fragment entering the queue at t (the state in the caller's locals):
-    // dispatched to the earliest-free processor, its queue slot freed then.
-    [[gnu::always_inline]] void enter(std::uint64_t t, std::uint64_t& done, unsigned& qi, unsigned& pi,
-                                      std::uint64_t* slot_free, std::uint64_t* proc_free) const {
-        const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
-        proc_free[pi] = s + c_;
-        slot_free[qi] = s;
-        if (++pi == p_) pi = 0;
-        if (++qi == q_) qi = 0;
-        done = std::max(done, s + c_);
-    }
-
-    // walk_tile_cut_at_c's tiles whose others are spread evenly, thinly.
-    std::uint64_t walk_spread_cut_at_c(const Tile& tile, std::uint64_t& t, unsigned& used, unsigned rate,
-                                       std::uint64_t run);
 
     std::uint64_t shade_long(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
         std::uint64_t wait = 0;

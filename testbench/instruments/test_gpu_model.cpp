@@ -252,13 +252,12 @@ TEST_CASE("gpu: a long run of fragments is computed in bulk exactly", "[gpu]") {
 
 // FragmentPipe::walk_tile_cut_at_c walks GPU-only timeline 2 through a tile
 // without setups (the shaded fragments pushed, each c fragment one rasterizer
-// slot) in bulk: by runs between c fragments, or for thinly spread others in
-// two passes that list the shaded fragments first. Both must leave the state
-// stepping fragment by fragment leaves, with the fragments after the last c
-// fragment left pending. Random tiles: c fragments alone, in runs and at the
-// ends; others spread evenly (thin and thick) or ordered by o records;
-// pending runs before the tile short and long; rasterizer- and shader-bound
-// configurations, rates below and above a run of c fragments.
+// slot) by runs between c fragments, with the state held in locals. It must
+// leave the state stepping fragment by fragment leaves, with the fragments
+// after the last c fragment left pending. Random tiles: c fragments alone, in
+// runs and at the ends; others spread evenly (thin and thick) or ordered by o
+// records; pending runs before the tile short and long; rasterizer- and
+// shader-bound configurations, rates below and above a run of c fragments.
 TEST_CASE("gpu: timeline 2's tile walk equals stepping fragment by fragment", "[gpu]") {
     std::mt19937_64 gen(2026);
     const auto pick = [&](std::uint64_t lo, std::uint64_t hi) { return lo + gen() % (hi - lo + 1); };
