@@ -199,6 +199,7 @@ private:
             above = v;
         }
 #else
+        if (pos >= M) return;   // the new element sorts last: the row stays
         for (unsigned i = M - 1; i > pos; --i) row[i] = row[i - 1];
         row[pos] = word;
 #endif

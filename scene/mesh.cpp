@@ -414,7 +414,8 @@ bool load_mesh_file_in_process(const std::string& path, Mesh& out, std::string& 
     } release{ai, s};
     if (!s || !s->mRootNode || (s->mFlags & AI_SCENE_FLAGS_INCOMPLETE)) {
         // (assimp says why only when it returned no scene.)
-        if (!s) error = ai.error_string();
+        const char* why = s ? nullptr : ai.error_string();
+        error = why ? why : "";
         if (error.empty()) error = "assimp could not import it";
         error = explain_import_error(path, error);
         return false;
