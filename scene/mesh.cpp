@@ -378,6 +378,8 @@ const AssimpC& assimp_c() {
     static const AssimpC a = [] {
         AssimpC r;
         void* h = ::dlopen(RBCD_ASSIMP_SONAME, RTLD_NOW | RTLD_LOCAL);
+        // An assimp outside the loader's paths: the file the build found.
+        if (!h) h = ::dlopen(RBCD_ASSIMP_FILE, RTLD_NOW | RTLD_LOCAL);
         if (!h) {
             const char* why = ::dlerror();
             r.missing = std::string("cannot load assimp (" RBCD_ASSIMP_SONAME "), which reads mesh files: ") +

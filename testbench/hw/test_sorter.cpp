@@ -553,11 +553,15 @@ TEST_CASE("hw sorter: hazards do not reach across tiles", "[sorter][timing]") {
 // all M slots, chosen per tile from how often the count changed in the tiles
 // before (insertion_sorter::path()). Both must leave every list as the
 // contract's sorted insertion does: the M smallest (depth, then front before
-// back under front_first), equal keys in arrival order; and count the same
-// overflows: every arrival past M drops one element, the new one when it
-// sorts last. Tiles whose fragments come in per-pixel bursts, then tiles of
-// random pixels: both paths must be taken, for each M the all-slots path has
-// (4, 8, 16) and both tie policies.
+// back under front_first), equal keys in arrival order; and count alike:
+// every arrival past M drops one element (the new one when it sorts last),
+// the muxes shift the elements below the new one, a row is written unless
+// the new element is dropped, and the bank counts each tile's dropped
+// fragments and overflowed lists. Tiles of long per-pixel bursts (full
+// lists, the count repeats: the loops), then tiles of random pixels (the
+// count changes: all slots), then bursts again; for each M the all-slots
+// path has (4, 8, 16, with enough fragments a pixel to fill 16) and both tie
+// policies. The expected lists and counts are replayed here.
 TEST_CASE("sorter: loops and all-slots paths sort alike", "[sorter]") {
     for (const unsigned m : {4u, 8u, 16u}) {
         for (const TiePolicy tie : {TiePolicy::FrontFirst, TiePolicy::Arrival}) {
@@ -567,39 +571,49 @@ TEST_CASE("sorter: loops and all-slots paths sort alike", "[sorter]") {
             SorterBench b(cfg);
             std::mt19937_64 gen(2027 + m);
             const auto range = [&](unsigned lo, unsigned hi) { return lo + static_cast<unsigned>(gen() % (hi - lo + 1)); };
-            bool saw_loops = false, saw_all = false;
-            std::uint64_t want_overflows = 0, want_dropped_new = 0;
+            const unsigned random_pixels = m == 16 ? 48 : 256;   // 25 or 4.7 fragments a pixel
+            unsigned loops_tiles = 0, all_slots_tiles = 0;
+            std::uint64_t want_overflows = 0, want_dropped_new = 0, want_shifts = 0;
             for (unsigned t = 0; t < 48; ++t) {
                 const bool bursts = t < 16 || t >= 40;
                 std::vector<Fragment> frags;
                 for (unsigned k = 0; k < 1200; ++k) {
-                    const unsigned px = bursts ? (k / 6) % 256 : range(0, 255);
+                    const unsigned px = bursts ? (k / 300) * 37 % 256 : range(0, random_pixels - 1) * 5 % 256;
                     frags.push_back(frag(px % 16, px / 16, range(0, 63) * 4096, range(1, 9), range(0, 1) ? 'F' : 'B'));
                 }
                 const Tile tile = tb::tile(0, 0, 0, frags);
                 zeb_bank bank(("zeb_paths" + std::to_string(m) + "_" + std::to_string(int(tie)) + "_" + std::to_string(t)).c_str(),
                               cfg.zeb, cfg.tile, 0);
                 b.fill(bank, tile);
-                (b.sorter->path() == insertion_sorter::AllSlots ? saw_all : saw_loops) = true;
+                ++(b.sorter->path() == insertion_sorter::AllSlots ? all_slots_tiles : loops_tiles);
                 const auto dq = [&](const Fragment& f) { return quantize_depth(f.depth, 24, cfg.zeb.z_bits); };
                 const auto before = [&](const Fragment& a, const Fragment& c) {
                     if (dq(a) != dq(c)) return dq(a) < dq(c);
                     return tie == TiePolicy::FrontFirst && a.facing == Facing::Front && c.facing == Facing::Back;
                 };
-                // Overflows replayed per pixel: a full list drops the new
-                // element when none of its M sorts after it.
                 std::vector<std::vector<Fragment>> held(256);
+                std::vector<bool> overflowed(256, false);
+                std::uint64_t tile_dropped = 0, tile_writes = 0;
                 for (const Fragment& f : frags) {
                     auto& v = held[f.y * 16 + f.x];
-                    if (v.size() == m) {
+                    const std::size_t n = v.size();
+                    const auto at = std::upper_bound(v.begin(), v.end(), f, before);
+                    const std::size_t pos = static_cast<std::size_t>(at - v.begin());
+                    if (n == m) {
                         ++want_overflows;
-                        if (!before(f, v.back())) {
+                        ++tile_dropped;
+                        overflowed[f.y * 16 + f.x] = true;
+                        if (pos == m) {
                             ++want_dropped_new;
                             continue;
                         }
+                        want_shifts += m - 1 - pos;
                         v.pop_back();
+                    } else {
+                        want_shifts += n - pos;
                     }
-                    v.insert(std::upper_bound(v.begin(), v.end(), f, before), f);
+                    v.insert(v.begin() + static_cast<std::ptrdiff_t>(pos), f);
+                    ++tile_writes;
                 }
                 for (unsigned li = 0; li < 256; ++li) {
                     std::string want;
@@ -610,14 +624,21 @@ TEST_CASE("sorter: loops and all-slots paths sort alike", "[sorter]") {
                     INFO("M " << m << " tie " << int(tie) << " tile " << t << " list " << li << " path " << b.sorter->path());
                     REQUIRE(b.row(bank, li) == want);
                 }
-                INFO("M " << m << " tie " << int(tie) << " tile " << t);
+                INFO("M " << m << " tie " << int(tie) << " tile " << t << " path " << b.sorter->path());
                 REQUIRE(b.sorter->stats().overflows == want_overflows);
                 REQUIRE(b.sorter->stats().dropped_new == want_dropped_new);
                 REQUIRE(b.sorter->stats().dropped_last == want_overflows - want_dropped_new);
+                REQUIRE(b.sorter->stats().mux_shifts == want_shifts);
+                REQUIRE(bank.stats().row_writes == tile_writes);
+                REQUIRE(bank.fragments_dropped() == tile_dropped);
+                REQUIRE(bank.lists_overflowed() == std::count(overflowed.begin(), overflowed.end(), true));
             }
-            INFO("M " << m << " tie " << int(tie));
-            CHECK(saw_loops);
-            CHECK(saw_all);
+            INFO("M " << m << " tie " << int(tie) << ": " << loops_tiles << " tiles by the loops, " << all_slots_tiles
+                      << " by all slots");
+            CHECK(loops_tiles >= 8);
+            CHECK(all_slots_tiles >= 8);
+            CHECK(want_dropped_new > 0);
+            CHECK(want_overflows > want_dropped_new);
         }
     }
 }
