@@ -389,8 +389,8 @@ int run(Options opt) {
     // one process writing stats (not for --db, which records the provenance
     // before the run, nor --frames, whose reader stops early), or the --jobs
     // worker of the first part when its parent writes stats and goes on from
-    // its state. So
-    // standard input, which cannot be read again, gets a digest too.
+    // its state. So standard input, which cannot be read again, gets a digest
+    // too.
     // Declared before the reader, which holds it.
     std::unique_ptr<ReadDigest> read_digest;
     if (!opt.trace.empty() && !part.skip &&

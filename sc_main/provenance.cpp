@@ -28,17 +28,22 @@ namespace {
 // Large reads: the hash runs at memory speed, so the calls are what cost.
 constexpr std::size_t kHashReadBytes = std::size_t(1) << 20;
 
+std::string to_hex(const unsigned char* p, std::size_t n) {
+    static const char* const digits = "0123456789abcdef";
+    std::string hex;
+    hex.reserve(2 * n);
+    for (std::size_t i = 0; i < n; ++i) {
+        hex += digits[p[i] >> 4];
+        hex += digits[p[i] & 15];
+    }
+    return hex;
+}
+
 // The digest as xxhsum -H2 prints it: the canonical (big-endian) bytes in hex.
 std::string canonical_hex(XXH128_hash_t h) {
     XXH128_canonical_t c;
     XXH128_canonicalFromHash(&c, h);
-    static const char digits[] = "0123456789abcdef";
-    std::string s(2 * sizeof c.digest, '0');
-    for (std::size_t i = 0; i < sizeof c.digest; ++i) {
-        s[2 * i] = digits[c.digest[i] >> 4];
-        s[2 * i + 1] = digits[c.digest[i] & 15];
-    }
-    return s;
+    return to_hex(c.digest, sizeof c.digest);
 }
 
 } // namespace
@@ -95,6 +100,20 @@ bool hash_rest(int fd, XXH3_state_t& state, std::uint64_t& size) {
     }
 }
 
+// An input's "size" and "xxh128" from `state` over `size` bytes; after a read
+// error, a null digest and the note.
+void put_digest(nlohmann::json& j, std::uint64_t size, const XXH3_state_t& state, bool read_ok) {
+    j["size"] = size;
+    j["xxh128"] = read_ok ? nlohmann::json(canonical_hex(XXH3_128bits_digest(&state))) : nlohmann::json(nullptr);
+    if (!read_ok) j["note"] = "read error";
+}
+// No digest for an input, and why.
+void put_no_digest(nlohmann::json& j, const std::string& note) {
+    j["size"] = nullptr;
+    j["xxh128"] = nullptr;
+    j["note"] = note;
+}
+
 // A regular file opened for hashing; -1 with `note` set when it is not one or
 // cannot be opened.
 int open_regular(const std::string& path, std::string& note) {
@@ -119,16 +138,6 @@ struct ReadDigest::State {
 namespace {
 std::int64_t mtime_ns(const struct stat& st) {
     return static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
-}
-std::string to_hex(const unsigned char* p, std::size_t n) {
-    static const char* const digits = "0123456789abcdef";
-    std::string hex;
-    hex.reserve(2 * n);
-    for (std::size_t i = 0; i < n; ++i) {
-        hex += digits[p[i] >> 4];
-        hex += digits[p[i] & 15];
-    }
-    return hex;
 }
 bool from_hex(const std::string& hex, unsigned char* p, std::size_t n) {
     if (hex.size() != 2 * n) return false;
@@ -233,14 +242,11 @@ bool ReadDigest::finish(const std::string& path, nlohmann::json& j) const {
     if (complete_) {
         // Every byte the run read, to the end: nothing to read again (the
         // file may have gone, or been replaced, since).
-        j["size"] = bytes_;
-        j["xxh128"] = canonical_hex(XXH3_128bits_digest(&s));
+        put_digest(j, bytes_, s, true);
         return true;
     }
     if (path == "-") {
-        j["size"] = nullptr;
-        j["xxh128"] = nullptr;
-        j["note"] = "standard input, not read to its end";
+        put_no_digest(j, "standard input, not read to its end");
         return true;
     }
     std::string note;
@@ -250,17 +256,13 @@ bool ReadDigest::finish(const std::string& path, nlohmann::json& j) const {
     if (identified_ && (::fstat(fd, &st) != 0 || static_cast<std::uint64_t>(st.st_dev) != dev_ ||
                         static_cast<std::uint64_t>(st.st_ino) != ino_ || mtime_ns(st) != mtime_ns_)) {
         ::close(fd);
-        j["size"] = nullptr;
-        j["xxh128"] = nullptr;
-        j["note"] = "the file was replaced or rewritten during the run";
+        put_no_digest(j, "the file was replaced or rewritten during the run");
         return true;
     }
     std::uint64_t size = bytes_;
     const bool ok = ::lseek(fd, static_cast<off_t>(bytes_), SEEK_SET) >= 0 && hash_rest(fd, s, size);
     ::close(fd);
-    j["size"] = size;
-    j["xxh128"] = ok ? nlohmann::json(canonical_hex(XXH3_128bits_digest(&s))) : nlohmann::json(nullptr);
-    if (!ok) j["note"] = "read error";
+    put_digest(j, size, s, ok);
     return true;
 }
 
@@ -276,9 +278,7 @@ nlohmann::json input_info(const ProvenanceInput& in) {
     if (in.read && in.read->finish(in.path, j)) return j;
     if (in.path == "-") {
         // Read once, by the run: nothing to hash again.
-        j["size"] = nullptr;
-        j["xxh128"] = nullptr;
-        j["note"] = "standard input";
+        put_no_digest(j, "standard input");
         return j;
     }
     std::uint64_t size = 0;
@@ -287,9 +287,7 @@ nlohmann::json input_info(const ProvenanceInput& in) {
     std::string note;
     const int fd = open_regular(in.path, note);
     if (fd < 0) {
-        j["size"] = nullptr;
-        j["xxh128"] = nullptr;
-        j["note"] = note;
+        put_no_digest(j, note);
         return j;
     }
     XXH3_state_t state;
@@ -297,9 +295,7 @@ nlohmann::json input_info(const ProvenanceInput& in) {
     XXH3_128bits_reset(&state);
     const bool good = hash_rest(fd, state, size);
     ::close(fd);
-    j["size"] = size;
-    j["xxh128"] = good ? nlohmann::json(canonical_hex(XXH3_128bits_digest(&state))) : nlohmann::json(nullptr);
-    if (!good) j["note"] = "read error";
+    put_digest(j, size, state, good);
     return j;
 }
 
