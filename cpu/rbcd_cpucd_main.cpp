@@ -268,6 +268,8 @@ int main(int argc, char* argv[]) {
         return run(opt);
     } catch (const rbcd::InputError& e) {
         return fail(2, e.what(), opt);
+    } catch (const rbcd::RunError& e) {
+        return fail(1, e.what(), opt);
     } catch (const std::exception& e) {
         return fail(1, std::string("internal error: ") + e.what(), opt);
     }

@@ -61,6 +61,7 @@ struct Options {
     unsigned threads = 2;  // 2: a trace is parsed on its own thread
     unsigned jobs = 1;     // worker processes, each a contiguous range of the frames (sc_main/jobs.h)
     std::string worker_part;   // set in a worker: where its frames start (jobs.h)
+    std::string worker_collisions_name;   // a worker's --collisions -: the run's output, named in errors
     bool dump_config = false;
     bool config_reference = false;
     bool quiet = false;
@@ -146,7 +147,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
                            "--stats", dir.path(n + ".json"), "--frame-stats", dir.path(n + ".jsonl"),
                            "--worker-part", worker_part_text(part_k, trace)});
         if (k == 0 && first_direct) {
-            a.insert(a.end(), {"--collisions", "-"});
+            a.insert(a.end(), {"--collisions", "-", "--worker-collisions-name", opt.collisions});
             out_fds.push_back(collisions_out.shared_fd());
         } else {
             if (collisions_out.active()) a.insert(a.end(), {"--collisions", dir.path(n + ".txt")});
@@ -362,6 +363,7 @@ int run(Options opt) {
     // Outputs are created before the run so an uncreatable path fails fast.
     OutputFile collisions_out, stats_out, frame_stats_out, vcd_out, fst_out;
     if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions);
+    if (!opt.worker_collisions_name.empty()) collisions_out.show_as(opt.worker_collisions_name);
     if (!opt.stats.empty()) stats_out = OutputFile(opt.stats);
     if (!opt.frame_stats.empty()) frame_stats_out = OutputFile(opt.frame_stats);
     if (!opt.vcd.empty()) vcd_out = OutputFile(opt.vcd);
@@ -714,6 +716,9 @@ int rbcd_sim_main(const std::vector<std::string>& args) {
                    "process writes (docs/performance.md); default 1")
         ->check(CLI::Range(1u, 1024u));
     app.add_option("--worker-part", opt.worker_part, "internal: a --jobs worker's start")->group("");
+    app.add_option("--worker-collisions-name", opt.worker_collisions_name,
+                   "internal: what a --jobs worker's --collisions - is, for its errors")
+        ->group("");
     app.add_option("--write-trace", opt.write_trace, "also save the fragment stream the unit saw as a .rbt trace");
     app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");
     app.add_option("--collisions", opt.collisions, "write the collision records here (- for standard output)");

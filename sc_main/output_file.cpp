@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/vfs.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -242,6 +243,7 @@ OutputFile& OutputFile::operator=(OutputFile&& o) noexcept {
     if (this != &o) {
         abandon();
         path_ = std::move(o.path_);
+        shown_ = std::move(o.shown_);
         tmp_ = std::exchange(o.tmp_, std::string());
         dir_ = std::exchange(o.dir_, std::string());
         named_ = std::exchange(o.named_, std::string());
@@ -272,13 +274,33 @@ int OutputFile::shared_fd() {
     return ::fileno(f_);
 }
 
+namespace {
+// File systems whose copy_file_range copies on the server's side: the bytes
+// do not cross the network twice. Elsewhere (ext4, XFS, btrfs, tmpfs) the
+// kernel copies through a pipe, slower than plain reads and writes: 3.7 ms
+// against 2.7 ms for 10 MB on ext4, 8 ms against 6 ms on a --jobs 2 run's
+// tail. (XFS and btrfs would share blocks instead, but only for offsets on
+// block boundaries, which an append after a part's magic line never is.)
+bool copies_on_server(int fd) {
+    struct statfs fs {};
+    if (::fstatfs(fd, &fs) != 0) return false;
+    switch (static_cast<unsigned long>(fs.f_type)) {
+    case 0x6969ul:       // NFS
+    case 0xFF534D42ul:   // CIFS
+    case 0xFE534D42ul:   // SMB2
+    case 0x00C36400ul:   // Ceph
+        return true;
+    default:
+        return false;
+    }
+}
+} // namespace
+
 std::uint64_t OutputFile::append_from(int fd, std::uint64_t offset, const std::string& what) {
     if (!f_) return 0;
     const auto cannot_read = [&](int err) { return RunError(what + ": cannot read: " + std::strerror(err)); };
     std::uint64_t copied = 0;
-    // The kernel copies between the page caches (or shares the blocks, on a
-    // file system that can), without the two passes through user space.
-    bool kernel = !in_place_ && std::fflush(f_) == 0;
+    bool kernel = !in_place_ && std::fflush(f_) == 0 && copies_on_server(::fileno(f_));
     loff_t in_off = static_cast<loff_t>(offset);
     while (kernel) {
         const ssize_t n = ::copy_file_range(fd, &in_off, ::fileno(f_), nullptr, std::size_t(1) << 30, 0);
@@ -299,13 +321,27 @@ std::uint64_t OutputFile::append_from(int fd, std::uint64_t offset, const std::s
         fail_with(errno);
         return copied;
     }
-    std::vector<char> buf(std::size_t(1) << 20);
+    // Chunks of 256 KiB: the buffer stays in the core's L2 cache between the
+    // read and the write (1 MiB chunks took 10% longer).
+    // Written past stdio's buffer (flushed first), not copied into it too.
+    std::vector<char> buf(std::size_t(1) << 18);
+    const bool direct = std::fflush(f_) == 0;
     for (;;) {
         const ssize_t n = ::pread(fd, buf.data(), buf.size(), in_off);
         if (n < 0 && errno == EINTR) continue;
         if (n < 0) throw cannot_read(errno);
         if (n == 0) return copied;
-        write(buf.data(), static_cast<std::size_t>(n));
+        if (!direct) write(buf.data(), static_cast<std::size_t>(n));
+        for (std::size_t done = 0; direct && done < static_cast<std::size_t>(n);) {
+            const ssize_t w = ::write(::fileno(f_), buf.data() + done, static_cast<std::size_t>(n) - done);
+            if (w < 0 && errno == EINTR) continue;
+            if (w <= 0) {
+                // A full disk, a quota: reported by commit().
+                fail_with(w < 0 ? errno : EIO);
+                return copied;
+            }
+            done += static_cast<std::size_t>(w);
+        }
         in_off += n;
         copied += static_cast<std::uint64_t>(n);
     }
@@ -316,12 +352,12 @@ void OutputFile::commit() {
         struct stat st {};
         if (::stat(named_.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
             abandon();
-            throw std::runtime_error(path_ + ": write failed: the file was not written");
+            throw RunError(shown() + ": write failed: the file was not written");
         }
         if (std::rename(named_.c_str(), path_.c_str()) != 0) {
             const std::string why = std::strerror(errno);
             abandon();
-            throw std::runtime_error(path_ + ": cannot rename into place: " + why);
+            throw RunError(shown() + ": cannot rename into place: " + why);
         }
         abandon();   // the directory and what else the library left in it
         return;
@@ -334,13 +370,13 @@ void OutputFile::commit() {
     if (failed_ || !flushed || !closed) {
         const std::string why = std::strerror(failed_ && failed_errno_ ? failed_errno_ : flushed ? errno : flush_errno);
         abandon();
-        throw std::runtime_error(path_ + ": write failed: " + why);
+        throw RunError(shown() + ": write failed: " + why);
     }
     if (in_place_) return;
     if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
         const std::string why = std::strerror(errno);
         abandon();
-        throw std::runtime_error(path_ + ": cannot rename into place: " + why);
+        throw RunError(shown() + ": cannot rename into place: " + why);
     }
     forget_on_interrupt(tmp_);
     tmp_.clear();

@@ -97,9 +97,10 @@ public:
     void write(const std::string& s) { write(s.data(), s.size()); }
     void write(const char* p, std::size_t n);
     // Appends the rest of the regular file open at `fd`, from byte `offset` to
-    // its end, as write() would, but copied by the kernel (copy_file_range)
-    // where the two files allow it. Returns the bytes appended; throws
-    // RunError naming `what` when `fd` cannot be read.
+    // its end, as write() would: read and written in 256 KiB chunks, or by
+    // copy_file_range on a network file system that copies on the server.
+    // Returns the bytes appended; throws RunError naming `what` when `fd`
+    // cannot be read.
     std::uint64_t append_from(int fd, std::uint64_t offset, const std::string& what);
     // The open file's descriptor, flushed, for another process to write into
     // before this one writes more (-1 for ByName). Whatever it writes lands
@@ -107,13 +108,18 @@ public:
     // the file's offset.
     int shared_fd();
     // Flush, close, rename over the path (in place: flush and close). Throws
-    // std::runtime_error on I/O errors.
+    // RunError on I/O errors.
     void commit();
+    // The name its errors give: a --jobs worker writes its collisions into
+    // the run's output as its standard output ("-"), whose errors are the
+    // user's file's.
+    void show_as(std::string name) { shown_ = std::move(name); }
     // Removes the temporary this run created; nothing else.
     void abandon();
 
 private:
-    std::string path_, tmp_;
+    const std::string& shown() const { return shown_.empty() ? path_ : shown_; }
+    std::string path_, tmp_, shown_;
     std::string dir_, named_;   // ByName
     std::FILE* f_ = nullptr;
     bool in_place_ = false;

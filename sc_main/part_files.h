@@ -22,9 +22,8 @@ struct PartFiles {
 void copy_part_collisions(const std::vector<PartFiles>& parts, OutputFile& out);
 // One part's file, written by this process's own worker (rbcd-sim --jobs, in
 // its private directory), appended to `out`: checked only for its magic line,
-// which goes to `out` only for the first part; the rest is copied by the
-// kernel where it can (OutputFile::append_from). Throws RunError on a read
-// error.
+// which goes to `out` only for the first part; the rest is copied by
+// OutputFile::append_from. Throws RunError on a read error.
 void append_own_part_collisions(const PartFiles& part, bool first, OutputFile& out);
 // Every part's lines, their start_cycle and end_cycle counted from the first part's start.
 void copy_part_frame_stats(const std::vector<PartFiles>& parts, OutputFile& out);

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <thread>
@@ -382,6 +383,36 @@ TEST_CASE("rbcd-sim --jobs: collisions into a pipe whose reader goes away leave 
         for (const auto& e : td.out_entries()) names += e + " ";
         INFO("left behind: " << names);
         CHECK(td.out_entries().empty());
+    }
+}
+
+// A full disk is the output's failure, named as the user named it: the first
+// worker writes into the run's output as its standard output ("-"), and its
+// error is relayed; not an "internal error". The other outputs are left as a
+// failed run leaves them (none).
+TEST_CASE("rbcd-sim --jobs: a full disk names the output, as one process does", "[jobs]") {
+    if (!std::filesystem::exists("/dev/full")) {
+        WARN("skipped: no /dev/full here");
+        return;
+    }
+    TempDir td;
+    const std::string trace = default_trace(td, false);
+    for (const char* jobs : {"1", "2", "3"}) {
+        for (const char* flag : {"--collisions", "--stats"}) {
+            INFO("--jobs " << jobs << " " << flag << " /dev/full");
+            // The run's other output: an older result there goes too.
+            const bool stats_full = std::string(flag) == "--stats";
+            const std::string other = stats_full ? td.collisions() : td.stats();
+            std::ofstream(other) << "an older result\n";
+            std::vector<std::string> args{"-q", "--trace", trace, "--jobs", jobs, flag, "/dev/full"};
+            args.insert(args.end(), {stats_full ? "--collisions" : "--stats", other});
+            const Result r = run_sim(td, args);
+            INFO(r.err);
+            CHECK(r.status == 1);
+            CHECK(r.err == "rbcd-sim: /dev/full: write failed: No space left on device\n");
+            CHECK_FALSE(std::filesystem::exists(other));
+            CHECK(td.out_entries().empty());
+        }
     }
 }
 
