@@ -118,8 +118,10 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     // A worker reads its trace on one thread unless there are cores to spare.
     const unsigned threads = std::thread::hardware_concurrency() >= 2 * parts.size() ? opt.threads : 1;
     const bool trace = !opt.trace.empty();
+    // Beside a regular output (the same file system), else in TMPDIR: a
+    // device or FIFO's directory (/dev) is seldom writable.
     std::string parent;
-    if (collisions_out.active() && opt.collisions != "-") {
+    if (collisions_out.active() && !collisions_out.in_place()) {
         std::error_code pe;
         parent = std::filesystem::absolute(opt.collisions, pe).parent_path().string();
     }

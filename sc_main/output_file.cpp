@@ -300,7 +300,13 @@ std::uint64_t OutputFile::append_from(int fd, std::uint64_t offset, const std::s
     if (!f_) return 0;
     const auto cannot_read = [&](int err) { return RunError(what + ": cannot read: " + std::strerror(err)); };
     std::uint64_t copied = 0;
-    bool kernel = !in_place_ && std::fflush(f_) == 0 && copies_on_server(::fileno(f_));
+    // What stdio holds goes first; a failed flush is the output's failure
+    // (stdio drops its buffer then, and a second flush would say nothing).
+    if (std::fflush(f_) != 0) {
+        fail_with(errno);
+        return copied;
+    }
+    bool kernel = !in_place_ && copies_on_server(::fileno(f_));
     loff_t in_off = static_cast<loff_t>(offset);
     while (kernel) {
         const ssize_t n = ::copy_file_range(fd, &in_off, ::fileno(f_), nullptr, std::size_t(1) << 30, 0);
@@ -323,16 +329,14 @@ std::uint64_t OutputFile::append_from(int fd, std::uint64_t offset, const std::s
     }
     // Chunks of 256 KiB: the buffer stays in the core's L2 cache between the
     // read and the write (1 MiB chunks took 10% longer).
-    // Written past stdio's buffer (flushed first), not copied into it too.
+    // Written past stdio's buffer (flushed above), not copied into it too.
     std::vector<char> buf(std::size_t(1) << 18);
-    const bool direct = std::fflush(f_) == 0;
     for (;;) {
         const ssize_t n = ::pread(fd, buf.data(), buf.size(), in_off);
         if (n < 0 && errno == EINTR) continue;
         if (n < 0) throw cannot_read(errno);
         if (n == 0) return copied;
-        if (!direct) write(buf.data(), static_cast<std::size_t>(n));
-        for (std::size_t done = 0; direct && done < static_cast<std::size_t>(n);) {
+        for (std::size_t done = 0; done < static_cast<std::size_t>(n);) {
             const ssize_t w = ::write(::fileno(f_), buf.data() + done, static_cast<std::size_t>(n) - done);
             if (w < 0 && errno == EINTR) continue;
             if (w <= 0) {

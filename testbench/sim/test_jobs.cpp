@@ -416,6 +416,32 @@ TEST_CASE("rbcd-sim --jobs: a full disk names the output, as one process does", 
     }
 }
 
+// The join's own write failing: a file size limit stands for the full disk
+// (writes past it fail with EFBIG once SIGXFSZ is ignored, as ENOSPC would),
+// set just below the whole collisions file: each part's own file is well
+// under it (two parts of about 20 KiB each here), so the workers write theirs
+// and the parent's append of the second part is what fails.
+TEST_CASE("rbcd-sim --jobs: the join's append failing names the output and leaves nothing", "[jobs]") {
+    TempDir td;
+    const std::string trace = default_trace(td, false);
+    const Result one = run_sim(td, {"-q", "--trace", trace, "--collisions", td.collisions()});
+    REQUIRE(one.status == 0);
+    const std::uint64_t whole = std::filesystem::file_size(td.collisions());
+    std::filesystem::remove(td.collisions());
+    // sh's ulimit -f counts 512-byte blocks (POSIX).
+    const std::uint64_t blocks = (whole - 1) / 512;
+    INFO("collisions " << whole << " bytes, limit " << blocks * 512);
+    REQUIRE(whole > 16 * 1024);
+    std::ofstream(td.stats()) << "an older result\n";
+    const std::string cmd = "ulimit -f " + std::to_string(blocks) + "; trap '' XFSZ; exec \"$0\" \"$@\"";
+    const Result r = run_program(td, "/bin/sh", {"-c", cmd, RBCD_SIM, "-q", "--trace", trace, "--jobs", "2",
+                                                 "--collisions", td.collisions(), "--stats", td.stats()});
+    INFO(r.err);
+    CHECK(r.status == 1);
+    CHECK(r.err == "rbcd-sim: " + td.collisions() + ": write failed: File too large\n");
+    CHECK(td.out_entries().empty());
+}
+
 TEST_CASE("rbcd-sim --jobs: a run stopped by SIGTERM leaves no output, no workers' directory, no workers", "[jobs]") {
     TempDir td;
     td.plant_old_outputs();
