@@ -351,6 +351,8 @@ int run(Options opt) {
     }
     const bool worker = !opt.worker_part.empty();
     if (worker && !opt.frames_given) throw InputError("--worker-part: needs --frames");
+    if (!worker && !opt.worker_collisions_name.empty())
+        throw InputError("--worker-collisions-name: only for a --jobs worker (with --worker-part)");
 
     // An output over an input would destroy it before it is read.
     const std::pair<const char*, const std::string*> outs[] = {

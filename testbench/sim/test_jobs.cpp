@@ -267,6 +267,9 @@ TEST_CASE("rbcd-sim --jobs: bad values are refused", "[jobs]") {
         INFO("--jobs '" << v << "'");
         expect_input_error(td, run_with_outputs(td, {"-q", "--trace", t, "--jobs", v}), {"--jobs"});
     }
+    // A worker's own option, outside a worker.
+    expect_input_error(td, run_with_outputs(td, {"-q", "--trace", t, "--worker-collisions-name", "x.txt"}),
+                       {"--worker-collisions-name", "--worker-part"});
 }
 
 TEST_CASE("rbcd-sim --jobs: what one process must write is refused with more than one", "[jobs]") {
