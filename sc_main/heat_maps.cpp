@@ -13,6 +13,7 @@
 #include <cstring>
 
 #include "rbcd/common/errors.h"
+#include "rbcd/common/write_all.h"
 #include "rbcd/hw/rbcd_system.h"
 
 namespace rbcd {
@@ -115,16 +116,10 @@ std::string write_whole(const std::string& path, const std::string& bytes) {
                       (slash == std::string::npos ? path : path.substr(slash + 1)) + ".XXXXXX";
     const int fd = ::mkostemp(tmp.data(), O_CLOEXEC);
     if (fd < 0) return path + ": cannot create: " + std::strerror(errno);
-    std::size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n <= 0) {
-            const std::string why = std::strerror(n < 0 ? errno : ENOSPC);
-            ::close(fd);
-            ::unlink(tmp.c_str());
-            return path + ": write failed: " + why;
-        }
-        done += static_cast<std::size_t>(n);
+    if (const int err = write_all(fd, bytes.data(), bytes.size())) {
+        ::close(fd);
+        ::unlink(tmp.c_str());
+        return path + ": write failed: " + std::strerror(err);
     }
     const mode_t mask = ::umask(0);
     ::umask(mask);

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <linux/magic.h>
 #include <sys/vfs.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "rbcd/common/errors.h"
+#include "rbcd/common/write_all.h"
 
 namespace rbcd {
 
@@ -285,10 +287,10 @@ bool copies_on_server(int fd) {
     struct statfs fs {};
     if (::fstatfs(fd, &fs) != 0) return false;
     switch (static_cast<unsigned long>(fs.f_type)) {
-    case 0x6969ul:       // NFS
-    case 0xFF534D42ul:   // CIFS
-    case 0xFE534D42ul:   // SMB2
-    case 0x00C36400ul:   // Ceph
+    case NFS_SUPER_MAGIC:
+    case CIFS_SUPER_MAGIC:
+    case SMB2_SUPER_MAGIC:
+    case CEPH_SUPER_MAGIC:
         return true;
     default:
         return false;
@@ -336,15 +338,10 @@ std::uint64_t OutputFile::append_from(int fd, std::uint64_t offset, const std::s
         if (n < 0 && errno == EINTR) continue;
         if (n < 0) throw cannot_read(errno);
         if (n == 0) return copied;
-        for (std::size_t done = 0; done < static_cast<std::size_t>(n);) {
-            const ssize_t w = ::write(::fileno(f_), buf.data() + done, static_cast<std::size_t>(n) - done);
-            if (w < 0 && errno == EINTR) continue;
-            if (w <= 0) {
-                // A full disk, a quota: reported by commit().
-                fail_with(w < 0 ? errno : EIO);
-                return copied;
-            }
-            done += static_cast<std::size_t>(w);
+        if (const int err = write_all(::fileno(f_), buf.data(), static_cast<std::size_t>(n))) {
+            // A full disk, a quota: reported by commit().
+            fail_with(err);
+            return copied;
         }
         in_off += n;
         copied += static_cast<std::uint64_t>(n);

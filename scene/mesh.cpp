@@ -25,6 +25,8 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include "rbcd/common/write_all.h"
+
 namespace rbcd::scene {
 namespace {
 
@@ -445,19 +447,6 @@ bool load_mesh_file_in_process(const std::string& path, Mesh& out, std::string& 
 } // namespace rbcd::scene
 
 namespace rbcd::scene {
-namespace {
-bool write_all(int fd, const void* p, std::size_t n) {
-    const char* c = static_cast<const char*>(p);
-    while (n) {
-        const ssize_t k = ::write(fd, c, n);
-        if (k < 0 && errno == EINTR) continue;
-        if (k <= 0) return false;
-        c += k;
-        n -= static_cast<std::size_t>(k);
-    }
-    return true;
-}
-} // namespace
 
 // assimp is a large parser of hostile files that can abort or loop (fuzzing
 // found both, docs/limits.md): it runs in a child process with a time limit,
@@ -497,10 +486,10 @@ bool load_mesh_file(const std::string& path, Mesh& out, std::string& error, unsi
         std::string err;
         const std::uint8_t ok = load_mesh_file_in_process(path, m, err) ? 1 : 0;
         const std::uint64_t nv = m.verts.size(), nt = m.tris.size(), ne = err.size();
-        bool w = write_all(p[1], &ok, 1) && write_all(p[1], &nv, 8) && write_all(p[1], &nt, 8) &&
-                 write_all(p[1], &ne, 8) && write_all(p[1], err.data(), err.size());
-        for (const auto& v : m.verts) w = w && write_all(p[1], v.data(), 3 * sizeof(double));
-        if (nt) w = w && write_all(p[1], m.tris.data(), nt * sizeof(m.tris[0]));
+        bool w = !write_all(p[1], &ok, 1) && !write_all(p[1], &nv, 8) && !write_all(p[1], &nt, 8) &&
+                 !write_all(p[1], &ne, 8) && !write_all(p[1], err.data(), err.size());
+        for (const auto& v : m.verts) w = w && !write_all(p[1], v.data(), 3 * sizeof(double));
+        if (nt) w = w && !write_all(p[1], m.tris.data(), nt * sizeof(m.tris[0]));
         ::_exit(w ? 0 : 1);
     }
     ::close(p[1]);
