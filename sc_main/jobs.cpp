@@ -84,7 +84,7 @@ std::vector<JobPart> plan_scene_parts(std::uint64_t frames, FrameRange range, un
 }
 
 std::string worker_part_text(const JobPart& p, bool trace) {
-    if (!p.skip) return p.digest ? "first:digest" : "first";
+    if (!p.skip) return "first";
     if (!trace) return "scene";
     return "trace:" + std::to_string(p.offset) + ":" + std::to_string(p.line);
 }
@@ -93,13 +93,9 @@ JobPart parse_worker_part(const std::string& text, FrameRange range) {
     JobPart p;
     p.range = range;
     if (text == "first") return p;
-    if (text == "first:digest") {
-        p.digest = true;
-        return p;
-    }
     p.skip = true;
     if (text == "scene") return p;
-    const auto bad = [&] { return InputError("--worker-part: \"" + text + "\" is not first, first:digest, scene or trace:OFFSET:LINE"); };
+    const auto bad = [&] { return InputError("--worker-part: \"" + text + "\" is not first, scene or trace:OFFSET:LINE"); };
     if (text.rfind("trace:", 0) != 0) throw bad();
     const std::string rest = text.substr(6);
     const auto colon = rest.find(':');

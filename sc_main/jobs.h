@@ -29,7 +29,6 @@ struct JobPart {
     FrameRange range;            // its --frames (last open, UINT64_MAX, for the part that runs to the input's end)
     bool skip = false;           // starts at range.first without reading the frames before it
     std::uint64_t offset = 0, line = 0;   // a trace's: where frame range.first's record is (line 0: to be counted)
-    bool digest = false;         // the first part of a trace: hash what it reads for the parent's provenance
 };
 
 // Contiguous parts covering `range` of a trace, balanced by bytes; fewer than
@@ -39,9 +38,7 @@ std::vector<JobPart> plan_trace_parts(const FrameScan& scan, FrameRange range, u
 // The same for a scene of `frames` frames, balanced by frames.
 std::vector<JobPart> plan_scene_parts(std::uint64_t frames, FrameRange range, unsigned jobs);
 
-// The hidden option a worker gets: "first" ("first:digest" when the parent
-// writes stats and goes on from the worker's hash, docs/provenance.md),
-// "scene" or "trace:OFFSET:LINE".
+// The hidden option a worker gets: "first", "scene" or "trace:OFFSET:LINE".
 std::string worker_part_text(const JobPart& p, bool trace);
 // Its parse; throws InputError naming --worker-part.
 JobPart parse_worker_part(const std::string& text, FrameRange range);

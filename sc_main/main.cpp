@@ -137,9 +137,6 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     const bool first_direct = trace && collisions_out.active();
     for (std::size_t k = 0; k < parts.size(); ++k) {
         const std::string n = std::to_string(k);
-        // The first part of a trace hashes what it reads only for stats here.
-        JobPart part_k = parts[k];
-        part_k.digest = trace && !part_k.skip && stats_out.active();
         std::vector<std::string> a{opt.argv.empty() ? std::string("rbcd-sim") : opt.argv[0]};
         if (!opt.config_file.empty()) a.insert(a.end(), {"--config", opt.config_file});
         for (const auto& set : opt.sets) a.insert(a.end(), {"--set", set});
@@ -147,7 +144,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         else if (!opt.scene.empty()) a.insert(a.end(), {"--scene", opt.scene});
         a.insert(a.end(), {"--frames", range_text(parts[k].range), "--threads", std::to_string(threads), "-q",
                            "--stats", dir.path(n + ".json"), "--frame-stats", dir.path(n + ".jsonl"),
-                           "--worker-part", worker_part_text(part_k, trace)});
+                           "--worker-part", worker_part_text(parts[k], trace)});
         if (k == 0 && first_direct) {
             a.insert(a.end(), {"--collisions", "-", "--worker-collisions-name", opt.collisions});
             out_fds.push_back(collisions_out.shared_fd());
@@ -161,18 +158,16 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     }
     // The hash's inputs outlive it; it is declared before the workers, so
     // that on an error they are stopped before the hash is waited for.
-    std::vector<ProvenanceInput> inputs = prov_inputs;
-    ReadDigest first_read;   // the part of a trace the first worker read
+    const std::vector<ProvenanceInput> inputs = prov_inputs;
     std::future<nlohmann::json> provenance_job;
     Workers workers(rbcd_sim_main, argvs, errs, out_fds);
-    // The inputs are hashed while the workers run, from when the first of them
+    // A trace is hashed while the workers run, from when the first of them
     // ends: before, the hash would take a core from them (as many workers as
-    // cores); after, it has the core that worker leaves, beside the join.
-    // A trace's first worker hashes the bytes it reads (ReadDigest): when it
-    // is the first to end, the hash goes on from its state over the rest of
-    // the file (read_part); when another is, the whole file is hashed then,
-    // on the core that one leaves, while the first part still runs.
-    bool hash_from_first_part = false;
+    // cores); after, it has the core that worker leaves, beside the join. The
+    // whole file: no worker hashes what it reads, as one process does. The
+    // first part, cut at the first frame at or after its share of the bytes,
+    // is the largest, so its worker seldom ends first, and hashing there
+    // made it later still (docs/performance.md, seventh pass).
     const auto start_hash = [&] {
         // The hashing thread starts with the interrupts blocked: the handler,
         // which signals the workers, runs on this thread only, never beside
@@ -182,8 +177,8 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     };
     if (stats_out.active()) {
         // (Waited for without reaping: the joins below reap the workers in order.)
-        if (trace && workers.first_to_end() == 0) hash_from_first_part = true;
-        else start_hash();
+        if (trace) workers.first_to_end();
+        start_hash();
     }
 
     RunSnapshot all;
@@ -220,13 +215,6 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         const std::string path = dir.path(n + ".json");
         const nlohmann::json j = nlohmann::json::parse(read_input_text(path, "stats file", std::uint64_t(1) << 30, ""));
         check_work(k, j);
-        if (k == 0 && hash_from_first_part) {
-            const auto w = j.find("worker");
-            if (w != j.end() && w->contains("trace_read") && first_read.restore((*w)["trace_read"]))
-                for (auto& in : inputs)
-                    if (in.role == "trace") in.read = &first_read;
-            start_hash();
-        }
         RunSnapshot snap = snapshot_from_stats(j);
         files.push_back({dir.path(n + ".txt"), dir.path(n + ".jsonl"), snap.frames.first_frame, snap.frames.frames,
                          snap.cycles});
@@ -393,14 +381,11 @@ int run(Options opt) {
     // A trace read from its first byte is hashed as it is read, and the
     // provenance reads only what the reader did not (docs/provenance.md):
     // one process writing stats (not for --db, which records the provenance
-    // before the run, nor --frames, whose reader stops early), or the --jobs
-    // worker of the first part when its parent writes stats and goes on from
-    // its state. So standard input, which cannot be read again, gets a digest
-    // too.
+    // before the run, nor --frames, whose reader stops early). So standard
+    // input, which cannot be read again, gets a digest too.
     // Declared before the reader, which holds it.
     std::unique_ptr<ReadDigest> read_digest;
-    if (!opt.trace.empty() && !part.skip &&
-        (worker ? part.digest : stats_out.active() && !opt.frames_given && opt.db.empty()))
+    if (!opt.trace.empty() && !worker && stats_out.active() && !opt.frames_given && opt.db.empty())
         read_digest = std::make_unique<ReadDigest>();
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
@@ -594,10 +579,7 @@ int run(Options opt) {
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
     // For the parent, which checks the run's bound on declared work over all
     // the parts as one process checks it (run_jobs); not in its stats.
-    if (worker && trace_reader) {
-        stats["worker"] = {{"declared_work", trace_reader->declared_work()}};
-        if (read_digest && read_digest->usable()) stats["worker"]["trace_read"] = read_digest->save();
-    }
+    if (worker && trace_reader) stats["worker"] = {{"declared_work", trace_reader->declared_work()}};
     if (!worker && read_digest && stats_out.active()) provenance = make_provenance(opt.argv, cfg, prov_inputs);
     if (provenance_job.valid()) provenance = provenance_job.get();
     if (stats_out.active()) stats["provenance"] = provenance;

@@ -139,16 +139,6 @@ namespace {
 std::int64_t mtime_ns(const struct stat& st) {
     return static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
 }
-bool from_hex(const std::string& hex, unsigned char* p, std::size_t n) {
-    if (hex.size() != 2 * n) return false;
-    const auto nibble = [](char c) { return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1; };
-    for (std::size_t i = 0; i < n; ++i) {
-        const int hi = nibble(hex[2 * i]), lo = nibble(hex[2 * i + 1]);
-        if (hi < 0 || lo < 0) return false;
-        p[i] = static_cast<unsigned char>(hi << 4 | lo);
-    }
-    return true;
-}
 } // namespace
 
 ReadDigest::ReadDigest() : st_(std::make_unique<State>()) {
@@ -170,69 +160,6 @@ void ReadDigest::file(int fd) {
 void ReadDigest::raw(const void* bytes, std::size_t n) {
     XXH3_128bits_update(&st_->s, bytes, n);
     bytes_ += n;
-}
-
-// The state's running values: the accumulators, the buffer (all of it: the
-// digest of a short tail takes the bytes before it from the buffer's end), how
-// much of it is filled, the stripes of the current block and the length. The
-// rest (the secret, its size, the seed) is the reset's.
-nlohmann::json ReadDigest::save() const {
-    const XXH3_state_t& s = st_->s;
-    return {{"bytes", bytes_},
-            {"acc", to_hex(reinterpret_cast<const unsigned char*>(s.acc), sizeof s.acc)},
-            {"buffer", to_hex(s.buffer, sizeof s.buffer)},
-            {"buffered", s.bufferedSize},
-            {"stripes", s.nbStripesSoFar},
-            {"file", identified_ ? nlohmann::json{{"dev", dev_}, {"ino", ino_}, {"mtime_ns", mtime_ns_}}
-                                 : nlohmann::json(nullptr)}};
-}
-
-bool ReadDigest::restore(const nlohmann::json& saved) {
-    const auto uint = [&](const char* k) { return saved.contains(k) && saved[k].is_number_unsigned(); };
-    const auto text = [&](const char* k) { return saved.contains(k) && saved[k].is_string(); };
-    if (!saved.is_object() || !uint("bytes") || !text("acc") || !text("buffer") || !uint("buffered") ||
-        !uint("stripes") || !saved.contains("file"))
-        return false;
-    auto fresh = std::make_unique<State>();
-    XXH3_INITSTATE(&fresh->s);
-    XXH3_128bits_reset(&fresh->s);
-    XXH3_state_t& s = fresh->s;
-    const std::uint64_t bytes = saved["bytes"].get<std::uint64_t>();
-    const std::uint64_t buffered = saved["buffered"].get<std::uint64_t>();
-    const std::uint64_t stripes = saved["stripes"].get<std::uint64_t>();
-    // Held to what update() leaves: a buffer filled at most to its size (and
-    // holding bytes when any were hashed), fewer stripes than a block has.
-    if (buffered > sizeof s.buffer || stripes >= s.nbStripesPerBlock || (bytes > 0 && buffered == 0) ||
-        buffered > bytes)
-        return false;
-    if (!from_hex(saved["acc"].get_ref<const std::string&>(), reinterpret_cast<unsigned char*>(s.acc), sizeof s.acc) ||
-        !from_hex(saved["buffer"].get_ref<const std::string&>(), s.buffer, sizeof s.buffer))
-        return false;
-    const nlohmann::json& f = saved["file"];
-    bool identified = false;
-    std::uint64_t dev = 0, ino = 0;
-    std::int64_t mtime = 0;
-    if (!f.is_null()) {
-        if (!f.is_object() || !f.contains("dev") || !f["dev"].is_number_unsigned() || !f.contains("ino") ||
-            !f["ino"].is_number_unsigned() || !f.contains("mtime_ns") || !f["mtime_ns"].is_number_integer())
-            return false;
-        identified = true;
-        dev = f["dev"].get<std::uint64_t>();
-        ino = f["ino"].get<std::uint64_t>();
-        mtime = f["mtime_ns"].get<std::int64_t>();
-    }
-    s.bufferedSize = static_cast<XXH32_hash_t>(buffered);
-    s.nbStripesSoFar = static_cast<std::size_t>(stripes);
-    s.totalLen = bytes;
-    st_ = std::move(fresh);
-    bytes_ = bytes;
-    whole_ = true;
-    complete_ = false;
-    identified_ = identified;
-    dev_ = dev;
-    ino_ = ino;
-    mtime_ns_ = mtime;
-    return true;
 }
 
 bool ReadDigest::finish(const std::string& path, nlohmann::json& j) const {

@@ -37,8 +37,7 @@ std::vector<std::string> option_values(const std::vector<std::string>& argv,
 // A file's XXH3-128 state over the bytes its reader read, from its first, as
 // they passed (a RawObserver given to the reader): the provenance goes on from
 // there and reads only what the reader did not (nothing, when it read to the
-// end), instead of reading the whole file a second time. A --jobs worker
-// saves it (save()) and the parent goes on from it (restore()).
+// end), instead of reading the whole file a second time.
 class ReadDigest final : public RawObserver {
 public:
     ReadDigest();
@@ -52,11 +51,6 @@ public:
     // The bytes seen run unbroken from the file's start.
     bool usable() const { return whole_; }
     std::uint64_t bytes() const { return bytes_; }
-    // The hash's running values (not the library's whole state, which holds
-    // a pointer into the library) and the file's identity, as JSON; restore()
-    // rebuilds the state from a fresh one and refuses anything inconsistent.
-    nlohmann::json save() const;
-    bool restore(const nlohmann::json& saved);
     // input_info's "size" and "xxh128" (or a null digest and a "note") for
     // the file at `path`: this state, then the file's bytes from bytes() on;
     // nothing read again when the reader read to the end. False when this
