@@ -58,6 +58,7 @@ nlohmann::json build_info() {
     j["compiler"] = RBCD_COMPILER;
     j["build_type"] = RBCD_BUILD_TYPE;
     j["sanitize"] = RBCD_SANITIZE_BUILD != 0;
+    j["profile_guided"] = RBCD_PGO_BUILD != 0;
     return j;
 }
 
@@ -67,7 +68,8 @@ std::string version_text() {
     s += "git: " + (b["git"].is_null() ? std::string("(not built from a git checkout)") : b["git"].get<std::string>()) + "\n";
     s += "SystemC: " + b["systemc"].get<std::string>() + "\n";
     s += "compiler: " + b["compiler"].get<std::string>() + "\n";
-    s += "build type: " + b["build_type"].get<std::string>() + (b["sanitize"].get<bool>() ? " (sanitizers)" : "");
+    s += "build type: " + b["build_type"].get<std::string>() + (b["sanitize"].get<bool>() ? " (sanitizers)" : "") +
+         (b["profile_guided"].get<bool>() ? " (profile-guided)" : "");
     return s;   // CLI11 adds the final newline
 }
 
