@@ -1,9 +1,12 @@
 # Run at every build (target rbcd_git_describe): writes OUT with the source
 # tree's `git describe --always --dirty`, or "" when SRC is not a git checkout
-# or git is missing. configure_file leaves OUT untouched when the text is the
+# or git is missing; FIXED instead when given (the profile-guided build's
+# instrumented copy). configure_file leaves OUT untouched when the text is the
 # same, so provenance.cpp recompiles only when the revision changes.
 set(RBCD_GIT_DESCRIBE "")
-if(GIT)
+if(DEFINED FIXED)
+  set(RBCD_GIT_DESCRIBE "${FIXED}")
+elseif(GIT)
   # Only when SRC is the top of a checkout: a source tarball unpacked inside
   # some other git repository must not take that repository's revision.
   execute_process(COMMAND ${GIT} -C ${SRC} rev-parse --show-toplevel

@@ -235,12 +235,11 @@ bool Workers::refused_input(std::size_t k) const {
     return done_[k] && !lost_[k] && WIFEXITED(status_[k]) && WEXITSTATUS(status_[k]) == 2;
 }
 
-std::size_t Workers::first_to_end() const {
+bool Workers::first_end_ok() const {
     siginfo_t info{};
-    while (::waitid(P_ALL, 0, &info, WEXITED | WNOWAIT) < 0 && errno == EINTR) {}
-    for (std::size_t k = 0; k < pids_.size(); ++k)
-        if (pids_[k] == info.si_pid) return k;
-    return 0;
+    while (::waitid(P_ALL, 0, &info, WEXITED | WNOWAIT) < 0)
+        if (errno != EINTR) return true;   // the joins find out what happened
+    return info.si_code == CLD_EXITED && info.si_status == 0;
 }
 
 void Workers::wait() {

@@ -66,8 +66,8 @@ public:
     // After wait_for(k): whether worker k refused its input (exit status 2).
     bool refused_input(std::size_t k) const;
     // Blocks until some worker has ended, without reaping it (wait_for still
-    // does); which one, in frame order.
-    std::size_t first_to_end() const;
+    // does); false when it ended unsuccessfully (the run then fails).
+    bool first_end_ok() const;
     // Waits for all. When some failed: throws the error of the first one (in
     // frame order), the exit status it had (InputError for 2, RunError else).
     void wait();

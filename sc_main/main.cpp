@@ -164,10 +164,11 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     // A trace is hashed while the workers run, from when the first of them
     // ends: before, the hash would take a core from them (as many workers as
     // cores); after, it has the core that worker leaves, beside the join. The
-    // whole file: no worker hashes what it reads, as one process does. The
-    // first part, cut at the first frame at or after its share of the bytes,
-    // is the largest, so its worker seldom ends first, and hashing there
-    // made it later still (docs/performance.md, seventh pass).
+    // whole file, read again: unlike one process, no worker hashes what it
+    // reads. The first part, cut at the first frame at or after its share of
+    // the bytes, is never smaller than that share, so its worker seldom ends
+    // first, and hashing there made it later still (docs/performance.md,
+    // seventh pass).
     const auto start_hash = [&] {
         // The hashing thread starts with the interrupts blocked: the handler,
         // which signals the workers, runs on this thread only, never beside
@@ -176,9 +177,9 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, inputs); });
     };
     if (stats_out.active()) {
-        // (Waited for without reaping: the joins below reap the workers in order.)
-        if (trace) workers.first_to_end();
-        start_hash();
+        // (Waited for without reaping: the joins below reap the workers in
+        // order.) A worker that failed fails the run: nothing to hash for.
+        if (!trace || workers.first_end_ok()) start_hash();
     }
 
     RunSnapshot all;

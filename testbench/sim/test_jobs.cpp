@@ -50,9 +50,8 @@ Outputs run(const TempDir& td, std::vector<std::string> args, const std::string&
 void expect_same_as_one_process(const TempDir& td, const std::vector<std::string>& args) {
     const Outputs one = run(td, args, "");
     REQUIRE(one.collisions.size() > 20);
-    // The reference's own digests are the files' (the parts' equal the
-    // reference's below): the first worker hashes what it reads and the
-    // parent goes on from there, or the parent hashes the whole file.
+    // The reference's own digests are the files' (the --jobs runs' equal the
+    // reference's below, their parent hashing the whole file).
     const nlohmann::json one_stats = nlohmann::json::parse(one.stats);
     for (const auto& in : one_stats["provenance"]["inputs"]) {
         if (in["role"] != "trace") continue;
@@ -133,8 +132,8 @@ std::string light_and_heavy(const TempDir& td, bool heavy_first) {
 
 TEST_CASE("rbcd-sim --jobs: a trace's digest is the file's whichever worker ends first", "[jobs]") {
     // The parent hashes the file from when the first worker ends: with a
-    // light first part, while the second still runs; with a heavy one, beside
-    // the join. Either way: the file's digest.
+    // light first part, while the second still runs; with a heavy one, while
+    // the first still runs. Either way: the file's digest.
     TempDir td;
     for (const bool heavy_first : {false, true}) {
         INFO("heavy part first: " << heavy_first);

@@ -103,6 +103,9 @@ TEST_CASE("provenance: inputs carry path, size and XXH3-128, the configuration i
     CHECK(p["build"]["program"] == "rbcd-sim");
     CHECK(p["build"]["systemc"].get<std::string>().rfind("2.3", 0) == 0);
     for (const char* k : {"version", "compiler", "build_type"}) CHECK_FALSE(p["build"][k].get<std::string>().empty());
+    for (const char* k : {"sanitize", "profile_guided"}) CHECK(p["build"][k].is_boolean());
+    // A sanitizer build is never profile-guided (RBCD_PGO refuses it).
+    CHECK_FALSE((p["build"]["sanitize"].get<bool>() && p["build"]["profile_guided"].get<bool>()));
     REQUIRE(p["inputs"].size() == 3);
     CHECK(p["inputs"][0]["role"] == "trace");
     CHECK(p["inputs"][0]["path"] == trace);
