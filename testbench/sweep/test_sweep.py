@@ -262,6 +262,34 @@ traces = ["{VEC}/default.rbt"]
     check("2 already complete, 2 to run" in r.stderr, f"rerun retries the failed: {r.stderr}")
 
 
+def case_unstartable(c):
+    """rbcd-sim that cannot be started in the middle of a sweep (here: no longer executable
+    after its first run): the sweep stops with one line and exit 1, the finished run stays,
+    and the run that could not start leaves no folder behind."""
+    sim = os.path.join(c.tmp, "rbcd-sim")
+    with open(sim, "w") as f:
+        f.write(f'#!/bin/sh\nchmod -x "$0"\nexec {shlex.quote(c.sim)} "$@"\n')
+    os.chmod(sim, 0o755)
+    s = c.sweep_file("s.toml", """
+[axes]
+zeb.list_length = [4, 8]
+[inputs]
+traces = ["%s/default.rbt"]
+""" % VEC)
+    out = os.path.join(c.tmp, "out")
+    env = dict(os.environ, RBCD_CONFIG_CHECK=c.checker)
+    r = run(["/usr/bin/python3", SWEEP, "run", s, "-o", out, "-j", "1", "-q", "--rbcd-sim", sim], env=env)
+    check(r.returncode == 1, f"exit {r.returncode}, expected 1: {r.stderr}")
+    lines = r.stderr.strip().splitlines()
+    check(len(lines) == 1 and "Permission denied" in lines[0], f"one line naming the error: {r.stderr!r}")
+    check(not os.path.exists(os.path.join(out, "results.csv")), "no table from a stopped sweep")
+    runs = os.path.join(out, "runs")
+    left = sorted(os.listdir(runs))
+    done = [d for d in left if os.path.exists(os.path.join(runs, d, "result.json"))]
+    check(len(done) == 1, f"the first run finished: {left}")
+    check(left == done, f"the run that could not start left a folder: {sorted(set(left) - set(done))}")
+
+
 def case_resume(c):
     """A sweep killed mid-way keeps its finished runs; the rerun runs only the rest and gives
     the table an uninterrupted sweep gives."""
