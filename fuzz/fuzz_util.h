@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <string>
 
+#include "rbcd/common/write_all.h"
+
 namespace rbcd::fuzz {
 
 class MemFile {
@@ -17,13 +19,7 @@ public:
     MemFile(const void* data, std::size_t size) {
         fd_ = ::memfd_create("rbcd-fuzz", MFD_CLOEXEC);
         if (fd_ < 0) std::abort();
-        const char* p = static_cast<const char*>(data);
-        while (size) {
-            const ssize_t n = ::write(fd_, p, size);
-            if (n <= 0) std::abort();
-            p += n;
-            size -= static_cast<std::size_t>(n);
-        }
+        if (write_all(fd_, data, size) != 0) std::abort();
     }
     ~MemFile() { ::close(fd_); }
     MemFile(const MemFile&) = delete;

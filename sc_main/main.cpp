@@ -156,9 +156,9 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         errs.push_back(dir.path(n + ".err"));
         for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
     }
-    // The hash's inputs outlive it; it is declared before the workers, so
-    // that on an error they are stopped before the hash is waited for.
-    const std::vector<ProvenanceInput> inputs = prov_inputs;
+    // The hash (of prov_inputs, the caller's, which outlive it) is declared
+    // before the workers, so that on an error they are stopped before the
+    // hash is waited for.
     std::future<nlohmann::json> provenance_job;
     Workers workers(rbcd_sim_main, argvs, errs, out_fds);
     // A trace is hashed while the workers run, from when the first of them
@@ -174,7 +174,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         // which signals the workers, runs on this thread only, never beside
         // the joins that forget and reap them.
         const InterruptsHeld held;
-        provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, inputs); });
+        provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, prov_inputs); });
     };
     if (stats_out.active()) {
         // (Waited for without reaping: the joins below reap the workers in
