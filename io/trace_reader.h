@@ -30,7 +30,16 @@ struct TraceLimits {
     double clock_mhz = 0;                // for the message only
     // Bytes per read(2) of the file; small values exercise buffer refills (tests, fuzzing).
     std::size_t read_chunk = std::size_t(1) << 20;
+    // The usual fragment line parsed with AVX-512 where the CPU has it; false:
+    // the portable parse everywhere. Both take the same lines to the same
+    // fragments (tests and the trace fuzz target compare them).
+    bool wide_parse = true;
 };
+
+// Whether this machine parses the usual fragment line with AVX-512
+// (TraceLimits::wide_parse): the CPU has AVX-512 F, BW, VL, VBMI and VBMI2
+// and the operating system saves their registers.
+bool trace_wide_parse_available();
 
 // The limits rbcd-sim applies for a configuration.
 TraceLimits trace_limits(const SimConfig& cfg);

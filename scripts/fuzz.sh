@@ -42,7 +42,7 @@ add() { # add MODE_BYTE_OCTAL|"" FILE...
   done
 }
 case "$target" in
-  trace) add 007 vectors/*.rbt; add 207 vectors/*.rbt; add 000 vectors/*.rbt ;;
+  trace) add 007 vectors/*.rbt; add 207 vectors/*.rbt; add 000 vectors/*.rbt; add 077 vectors/*.rbt ;;
   config) add 000 sc_main/configs/*.toml vectors/*.toml ;;
   scene) add "" scene/default_scene.toml testbench/golden/determinism/scene.toml ;;
   mesh) add 000 /usr/share/assimp/models/OBJ/box.obj; add 001 /usr/share/assimp/models/PLY/cube.ply

@@ -739,11 +739,13 @@ TEST_CASE("io: a fragment line reads the same with and without 40 bytes after it
         "f 16 0 +5 1 F", "f 16 0 5", "f 16 0 5 1", "f 16 0 5 1 # F", "f 16 0 5 1 F c x", "f 1\x80 0 5 1 F",
         "f 16 0 5\x001 F", "f 16 0 0x10 1 F", "f 16 0 18446744073709551616 1 F", "f 16 0 5 1 F\x0bc"};
     const std::string head = M + "frame 0\ntile 1 0\n", tail = "# " + std::string(60, 'x') + "\n";
-    const auto outcome = [](const std::string& text) -> std::string {
+    const auto outcome = [](const std::string& text, bool wide = true) -> std::string {
         TempDir d;
         const std::string path = d.write("t.rbt", text);
         try {
-            TraceReader r(path, {});
+            TraceLimits lim;
+            lim.wide_parse = wide;
+            TraceReader r(path, lim);
             Tile t;
             std::string s;
             while (r.next(t) != Event::End)
@@ -760,12 +762,86 @@ TEST_CASE("io: a fragment line reads the same with and without 40 bytes after it
         INFO(l);
         const std::string alone = outcome(head + l + "\n"), followed = outcome(head + l + "\n" + tail);
         CHECK(alone == followed);
+        // The AVX-512 whole-line parse (where this CPU has it) and the portable one alike.
+        CHECK(outcome(head + l + "\n" + tail, false) == followed);
         // And between two usual lines, each read on the whole-line path.
         const std::string ok = "f 17 1 7 2 B\n";
-        CHECK(outcome(head + ok + l + "\n" + ok) == outcome(head + ok + l + "\n" + ok + tail));
+        const std::string between = outcome(head + ok + l + "\n" + ok + tail);
+        CHECK(outcome(head + ok + l + "\n" + ok) == between);
+        CHECK(outcome(head + ok + l + "\n" + ok + tail, false) == between);
     }
     CHECK(outcome(head + "f 31 15 16777215 127 B c\n" + tail) == "31,15,16777215,127,B,c;");
     CHECK(outcome(head + "f 0016 00015 000000001 0000127 B c\n" + tail) == "16,15,1,127,B,c;");
+}
+
+// Random fragment lines, most of them the usual shape and some bent by one
+// byte (a digit too many, a separator doubled or changed, a value just outside
+// its bound), read with the AVX-512 whole-line parse and with the portable
+// one: the same fragments, or the same error at the same line.
+TEST_CASE("io: the AVX-512 and portable whole-line parses read random lines alike", "[io][reader]") {
+    if (!trace_wide_parse_available())
+        WARN("this CPU has no AVX-512 (F, BW, VL, VBMI, VBMI2): both reads below use the portable parse");
+    std::uint64_t seed = 0x9e3779b97f4a7c15ull;
+    const auto rnd = [&](std::uint64_t n) {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        return seed % n;
+    };
+    const std::string bytes = " \t\r#cFB0123456789x\x80";
+    TempDir d;
+    for (int file = 0; file < 60; ++file) {
+        // Screen 65520 x 64 with 16 x 16 tiles: x has up to five digits.
+        // 32-bit depths have nine and ten digits too, which the whole-line
+        // parses leave to the byte-by-byte path.
+        const unsigned depth_bits = file % 4 == 0 ? 32 : rnd(4) == 0 ? 20 + static_cast<unsigned>(rnd(13)) : 24;
+        std::string text = M + "screen 65520 64\ndepth_bits " + std::to_string(depth_bits) + "\nframe 0\n";
+        TraceLimits lim;
+        lim.id_bits = rnd(4) == 0 ? 1 + static_cast<unsigned>(rnd(16)) : 7;
+        lim.max_tile_fragments = 1u << 20;
+        // One line of a third of the files bent by a byte, of another third
+        // given a coordinate outside its tile.
+        const int bent = file % 3 == 2 ? -1 : static_cast<int>(rnd(1200));
+        for (int tile = 0; tile < 4; ++tile) {
+            const std::uint64_t col = rnd(4095), row = rnd(4);
+            text += "tile " + std::to_string(col) + " " + std::to_string(row) + "\n";
+            for (int i = 0; i < 300; ++i) {
+                const bool outside = file % 3 == 1 && tile * 300 + i == bent;
+                const std::uint64_t x = outside && rnd(2) ? col * 16 + 16 + rnd(3) : col * 16 + rnd(16);
+                const std::uint64_t y = outside && x < col * 16 + 16 ? (row + 1) * 16 + rnd(3) : row * 16 + rnd(16);
+                std::string l = "f " + std::string(rnd(8) == 0 ? rnd(4) : 0, '0') + std::to_string(x) + " " +
+                                std::to_string(y) + " " + std::string(rnd(6) == 0 ? rnd(3) : 0, '0') +
+                                std::to_string(rnd(std::uint64_t(1) << (depth_bits == 32 && rnd(4) == 0 ? 32 : 24))) + " " +
+                                std::string(rnd(9) == 0 ? 2 : 0, '0') + std::to_string(rnd(128)) +
+                                (rnd(2) ? " F" : " B") + (rnd(3) == 0 ? " c" : "");
+                if (file % 3 == 0 && tile * 300 + i == bent) l[2 + rnd(l.size() - 2)] = bytes[rnd(bytes.size())];
+                text += l + "\n";
+            }
+        }
+        text += "# " + std::string(60, 'x') + "\n";
+        INFO("file " << file);
+        const std::string path = d.write("r.rbt", text);
+        const auto read = [&](bool wide) -> std::string {
+            TraceLimits l = lim;
+            l.wide_parse = wide;
+            try {
+                TraceReader r(path, l);
+                Tile t;
+                std::string s;
+                while (r.next(t) != Event::End)
+                    for (const Fragment& f : t.frags)
+                        s += std::to_string(f.x) + "," + std::to_string(f.y) + "," + std::to_string(f.depth) + "," +
+                             std::to_string(f.id) + (f.facing == Facing::Back ? ",B" : ",F") + (f.culled ? ",c;" : ";");
+                return s;
+            } catch (const InputError& e) {
+                return std::string("error ") + e.what();
+            }
+        };
+        const std::string wide = read(true), portable = read(false);
+        CHECK(wide == portable);
+        // The files with no line bent and bounds every line meets read whole.
+        if (file % 3 == 2 && depth_bits >= 24 && lim.id_bits >= 7) CHECK(std::count(wide.begin(), wide.end(), ';') == 1200);
+    }
 }
 
 TEST_CASE("io: error: magic record", "[io][reader][error]") {
