@@ -4,9 +4,10 @@
 // (bit 6) and whether the rest is gzip-compressed before reading (bit 7); the
 // rest is the trace. Each input is read twice, with the AVX-512 whole-line
 // parse (where the CPU has it) and with the portable one, and both must give
-// the same events, fragments and error.
+// the same events, fragments and error, and take the same lines whole.
 #include <zlib.h>
 
+#include <memory>
 #include <string>
 
 #include "rbcd/common/errors.h"
@@ -32,8 +33,10 @@ std::string gzip(const std::uint8_t* data, std::size_t size) {
 // the error that ended it.
 std::string read_all(const std::string& path, const rbcd::TraceLimits& lim) {
     std::string got;
+    std::unique_ptr<rbcd::TraceReader> reader;
     try {
-        rbcd::TraceReader r(path, lim);
+        reader = std::make_unique<rbcd::TraceReader>(path, lim);
+        rbcd::TraceReader& r = *reader;
         rbcd::Tile t;
         for (;;) {
             const auto ev = r.next(t);
@@ -56,6 +59,9 @@ std::string read_all(const std::string& path, const rbcd::TraceLimits& lim) {
         if (m.find('\n') != std::string::npos) rbcd::fuzz::finding("multi-line message: " + m);
         got += "error " + m;
     }
+    // The lines the whole-line parse took: the same for both, or one parse
+    // would leave lines to the slow path that the other takes.
+    if (reader) got += " whole " + std::to_string(reader->lines_taken_whole());
     return got;
 }
 } // namespace

@@ -193,6 +193,7 @@ struct TraceReader::Impl {
     std::size_t whole_lines_avx512(std::vector<Fragment>& out, std::size_t room);
     // The whole-line parse to use: set once, from the CPU and TraceLimits::wide_parse.
     bool avx512 = false;
+    std::uint64_t taken_whole = 0;   // lines_taken_whole()
     void slow_fragment(const Fields& fl, std::vector<Fragment>& out, bool in_tile);
     void start_tile(const Fields& fl, Tile& t);
     void other_run(const Fields& fl, Tile& t, bool in_tile);
@@ -549,6 +550,7 @@ std::size_t TraceReader::Impl::whole_lines(std::vector<Fragment>& out, std::size
     }
     cur = const_cast<char*>(p);
     line += n;
+    taken_whole += n;
     return n;
 }
 
@@ -645,6 +647,7 @@ TraceReader::Impl::whole_lines_avx512(std::vector<Fragment>& out, std::size_t ro
     }
     cur = const_cast<char*>(p);
     line += n;
+    taken_whole += n;
     return n;
 }
 #if defined(__GNUC__) && !defined(__clang__)
@@ -882,6 +885,8 @@ std::uint64_t TraceReader::declared_work() const { return impl_->work; }
 void TraceReader::count_work_from(std::uint64_t work_before) { impl_->work = work_before; }
 
 void TraceReader::stop_after_frame(std::uint64_t last) { impl_->stop_after = last; }
+
+std::uint64_t TraceReader::lines_taken_whole() const { return impl_->taken_whole; }
 
 const StreamHeader& TraceReader::header() const { return impl_->hdr; }
 

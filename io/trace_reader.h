@@ -72,6 +72,10 @@ public:
     // The data ends at the record of frame last + 1 (checked, not passed on):
     // a --jobs worker reads nothing of the next worker's frames.
     void stop_after_frame(std::uint64_t last);
+    // Fragment lines taken by the whole-line parse (AVX-512 or portable) so
+    // far, the rest having gone byte by byte: both parses must take the same
+    // lines, or one would be slower without any output showing it (tests).
+    std::uint64_t lines_taken_whole() const;
 
 private:
     struct Impl;
