@@ -355,9 +355,7 @@ int run(Options opt) {
 
     // Outputs are created before the run so an uncreatable path fails fast.
     OutputFile collisions_out, stats_out, frame_stats_out, vcd_out, fst_out;
-    // The collisions run to tens of megabytes: a rerun writes over the older
-    // result's pages (OutputFile::ReuseOlder).
-    if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions, OutputFile::ReuseOlder{});
+    if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions);
     if (!opt.worker_collisions_name.empty()) collisions_out.show_as(opt.worker_collisions_name);
     if (!opt.stats.empty()) stats_out = OutputFile(opt.stats);
     if (!opt.frame_stats.empty()) frame_stats_out = OutputFile(opt.frame_stats);

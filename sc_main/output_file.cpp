@@ -1,8 +1,6 @@
 #include "rbcd/sc_main/output_file.h"
 
 #include <fcntl.h>
-#include <stdio.h>
-#include <sys/random.h>
 #include <sys/stat.h>
 #include <linux/magic.h>
 #include <sys/vfs.h>
@@ -173,62 +171,7 @@ void discard_output(const std::string& path) {
     ::unlink(path.c_str());   // unlink, not remove: never a directory
 }
 
-namespace {
-
-// The older results worth renaming instead of unlinking (OutputFile::ReuseOlder).
-constexpr off_t kReuseBytes = off_t(1) << 20;
-
-// tmpl with its trailing XXXXXX replaced by random letters and digits, as
-// mkstemp chooses them.
-std::string random_name(const std::string& tmpl) {
-    static const char kChars[] = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
-    unsigned char r[6];
-    if (::getrandom(r, sizeof r, 0) != static_cast<ssize_t>(sizeof r)) return {};
-    std::string name = tmpl;
-    for (std::size_t i = 0; i < 6; ++i) name[name.size() - 6 + i] = kChars[r[i] % (sizeof kChars - 1)];
-    return name;
-}
-
-// The older result at `path` renamed to a new name made from `tmpl` (stored
-// there) and opened for writing at its start; -1 when there is none worth
-// it or it cannot be, the path then as it was or emptied. RENAME_NOREPLACE:
-// a rename over an existing name would have ext4 write the renamed file's
-// pending pages to disk first (auto_da_alloc), which costs more than it
-// saves; the same inode is checked after the open, so nothing swapped in at
-// the new name is written.
-int reuse_older(const std::string& path, std::string& tmpl) {
-    struct stat st {};
-    if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1 || st.st_uid != ::geteuid() ||
-        st.st_size < kReuseBytes)
-        return -1;
-    for (int attempt = 0; attempt < 4; ++attempt) {
-        const std::string name = random_name(tmpl);
-        if (name.empty()) return -1;
-        if (::renameat2(AT_FDCWD, path.c_str(), AT_FDCWD, name.c_str(), RENAME_NOREPLACE) != 0) {
-            if (errno == EEXIST) continue;
-            return -1;
-        }
-        const int fd = ::open(name.c_str(), O_WRONLY | O_NOFOLLOW | O_NOCTTY | O_CLOEXEC);
-        struct stat now {};
-        if (fd >= 0 && ::fstat(fd, &now) == 0 && now.st_dev == st.st_dev && now.st_ino == st.st_ino) {
-            tmpl = name;
-            return fd;
-        }
-        if (fd >= 0) ::close(fd);
-        // Gone from the path all the same, as the older result goes anyway.
-        ::unlink(name.c_str());
-        return -1;
-    }
-    return -1;
-}
-
-} // namespace
-
-OutputFile::OutputFile(std::string path) : path_(std::move(path)) { open_path(false); }
-
-OutputFile::OutputFile(std::string path, ReuseOlder) : path_(std::move(path)) { open_path(true); }
-
-void OutputFile::open_path(bool reuse) {
+OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
     struct stat st {};
     if (::stat(path_.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
         throw InputError(path_ + ": cannot create: is a directory");
@@ -241,25 +184,19 @@ void OutputFile::open_path(bool reuse) {
         // A symlink to a regular file is written through, from the start.
         if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && path_ != "-") (void)::ftruncate(fd, 0);
     } else {
+        // An older result must not outlive this run, even one killed before it
+        // could clean up: it goes now (formats.md).
+        ::unlink(path_.c_str());
         std::string tmpl = dir_of(path_) + "/." + base_of(path_) + ".XXXXXX";
         {
             // A signal between the creation and the registration would leave
             // the temporary behind (an rbcd-sim --jobs worker is stopped just
             // as it starts): held back until the handler knows the path.
             const InterruptsHeld held;
-            // An older result must not outlive this run, even one killed before
-            // it could clean up: it goes now (formats.md), renamed to be written
-            // over or unlinked.
-            if (reuse) fd = reuse_older(path_, tmpl);
-            if (fd >= 0) {
-                reused_ = true;
-            } else {
-                ::unlink(path_.c_str());
-                // mkostemp: O_CREAT|O_EXCL with a random name, so nothing planted at
-                // a predictable name (a symlink) can redirect the output.
-                fd = ::mkostemp(tmpl.data(), O_CLOEXEC);
-                if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
-            }
+            // mkostemp: O_CREAT|O_EXCL with a random name, so nothing planted at
+            // a predictable name (a symlink) can redirect the output.
+            fd = ::mkostemp(tmpl.data(), O_CLOEXEC);
+            if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
             tmp_ = tmpl;
             remove_on_interrupt(tmp_);
         }
@@ -314,7 +251,6 @@ OutputFile& OutputFile::operator=(OutputFile&& o) noexcept {
         named_ = std::exchange(o.named_, std::string());
         f_ = std::exchange(o.f_, nullptr);
         in_place_ = o.in_place_;
-        reused_ = o.reused_;
         failed_ = o.failed_;
         failed_errno_ = o.failed_errno_;
     }
@@ -428,18 +364,8 @@ void OutputFile::commit() {
         return;
     }
     if (!f_) return;
-    bool flushed = std::fflush(f_) == 0 && !std::ferror(f_);
-    int flush_errno = errno;
-    if (flushed && reused_) {
-        // What the older result held past this run's end goes. The offset is
-        // the file's own, which a --jobs worker writing through shared_fd() moved too.
-        const int fd = ::fileno(f_);
-        const off_t end = ::lseek(fd, 0, SEEK_CUR);
-        if (end < 0 || ::ftruncate(fd, end) != 0) {
-            flushed = false;
-            flush_errno = errno;
-        }
-    }
+    const bool flushed = std::fflush(f_) == 0 && !std::ferror(f_);
+    const int flush_errno = errno;
     const bool closed = std::fclose(f_) == 0;
     f_ = nullptr;
     if (failed_ || !flushed || !closed) {

@@ -80,16 +80,6 @@ public:
     // must be a regular file or new: anything else is an InputError.
     struct ByName {};
     OutputFile(std::string path, ByName);
-    // As OutputFile(path), and an older result of at least 1 MiB at the path
-    // (a regular file of this user's, with no other link) becomes the
-    // temporary: renamed to a new unpredictable name beside it, written over
-    // from its start and cut to the new length on commit, so that its pages
-    // are written again instead of freed and allocated anew (a run writing
-    // tens of megabytes over its previous output: docs/performance.md, eighth
-    // pass). Only for outputs written through write(), append_from() and
-    // shared_fd(): a writer that opens the file by name truncates it.
-    struct ReuseOlder {};
-    OutputFile(std::string path, ReuseOlder);
     ~OutputFile();
     OutputFile(const OutputFile&) = delete;
     OutputFile& operator=(const OutputFile&) = delete;
@@ -133,11 +123,9 @@ private:
     std::string dir_, named_;   // ByName
     std::FILE* f_ = nullptr;
     bool in_place_ = false;
-    bool reused_ = false;   // the temporary is an older result, cut on commit
     bool failed_ = false;
     int failed_errno_ = 0;   // the first failure's
     void fail_with(int err);
-    void open_path(bool reuse);
 };
 
 } // namespace rbcd

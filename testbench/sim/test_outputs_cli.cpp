@@ -193,13 +193,13 @@ TEST_CASE("cli outputs: a failed run removes only the temporaries it created") {
     CHECK(td.out_entries() == std::vector<std::string>{"unrelated.txt"});
 }
 
-// ---------------------------------------------------------------- an older collisions file written over (session 12)
+// ---------------------------------------------------------------- a large older collisions file (session 12)
 
 namespace {
 // Two frames, so that --jobs 2 splits them.
 const std::string kTwoFrames = "rbcd-trace 1\nframe 0\ntile 0 0\nf 0 0 100 1 F\nf 0 0 300 1 B\nf 0 0 200 2 F\n"
                                "frame 1\ntile 0 0\nf 1 0 100 3 F\nf 1 0 300 3 B\nf 1 0 200 4 F\n";
-// An older result of 2 MiB: large enough to be written over, not unlinked.
+// An older result of 2 MiB, as a rerun finds its previous collisions.
 std::uint64_t plant_big(const std::string& path) {
     std::ofstream(path, std::ios::binary) << std::string(std::size_t(2) << 20, 'x');
     struct stat st {};
@@ -213,7 +213,7 @@ std::uint64_t inode_of(const std::string& path) {
 }
 } // namespace
 
-TEST_CASE("cli outputs: a rerun over an older collisions file of 1 MiB or more writes over it, cut to the new length") {
+TEST_CASE("cli outputs: a rerun over a larger older collisions file gives exactly a fresh run's bytes") {
     TempDir td;
     const std::string in = td.write("in.rbt", kTwoFrames);
     const std::string fresh = td.path("fresh.txt");
@@ -222,29 +222,36 @@ TEST_CASE("cli outputs: a rerun over an older collisions file of 1 MiB or more w
     REQUIRE(want.size() < 1000);
     for (const char* jobs : {"1", "2"}) {
         INFO("--jobs " << jobs);
-        const std::uint64_t ino = plant_big(td.collisions());
+        plant_big(td.collisions());
         const Result r = run_sim(td, {"--trace", in, "--collisions", td.collisions(), "--jobs", jobs});
         CHECK(r.status == 0);
         CHECK(slurp(td.collisions()) == want);
-        // The older file's inode, renamed and written over (the path this tests).
-        CHECK(inode_of(td.collisions()) == ino);
         CHECK(td.out_entries() == std::vector<std::string>{"collisions.txt"});
     }
 }
 
-TEST_CASE("cli outputs: an older collisions file with another link is not written over, and the link keeps its bytes") {
+// The older file's other names, and whoever still has it open, keep its bytes:
+// it is unlinked, never written over.
+TEST_CASE("cli outputs: an older collisions file with another link or still open keeps its bytes there") {
     TempDir td;
-    const std::uint64_t ino = plant_big(td.collisions());
-    const std::string other = td.path("other-link.txt");
-    REQUIRE(::link(td.collisions().c_str(), other.c_str()) == 0);
-    const Result r = run_sim(td, {"--trace", td.write("in.rbt", kTwoFrames), "--collisions", td.collisions()});
-    CHECK(r.status == 0);
-    CHECK(inode_of(td.collisions()) != ino);
-    CHECK(slurp(other) == std::string(std::size_t(2) << 20, 'x'));
-    CHECK_THAT(slurp(td.collisions()), StartsWith("rbcd-collisions 1\n"));
+    for (const char* jobs : {"1", "2"}) {
+        INFO("--jobs " << jobs);
+        const std::uint64_t ino = plant_big(td.collisions());
+        const std::string other = td.path("other-link.txt");
+        fs::remove(other);
+        REQUIRE(::link(td.collisions().c_str(), other.c_str()) == 0);
+        std::ifstream open_reader(td.collisions(), std::ios::binary);
+        const Result r = run_sim(td, {"--trace", td.write("in.rbt", kTwoFrames), "--collisions", td.collisions(), "--jobs", jobs});
+        CHECK(r.status == 0);
+        CHECK(inode_of(td.collisions()) != ino);
+        CHECK(slurp(other) == std::string(std::size_t(2) << 20, 'x'));
+        const std::string seen((std::istreambuf_iterator<char>(open_reader)), std::istreambuf_iterator<char>());
+        CHECK(seen == std::string(std::size_t(2) << 20, 'x'));
+        CHECK_THAT(slurp(td.collisions()), StartsWith("rbcd-collisions 1\n"));
+    }
 }
 
-TEST_CASE("cli outputs: a failed run over an older collisions file of 1 MiB or more leaves neither it nor a temporary") {
+TEST_CASE("cli outputs: a failed run over a large older collisions file leaves neither it nor a temporary") {
     TempDir td;
     for (const char* jobs : {"1", "2"}) {
         INFO("--jobs " << jobs);
