@@ -194,6 +194,20 @@ struct TraceReader::Impl {
     // The whole-line parse to use: set once, from the CPU and TraceLimits::wide_parse.
     bool avx512 = false;
     std::uint64_t taken_whole = 0;   // lines_taken_whole()
+    // The fragment of a whole line, its facing ('F' or 'B') and tag set.
+    static Fragment& whole_line_fragment(std::vector<Fragment>& out, char facing, bool culled) {
+        Fragment& fr = out.emplace_back();
+        fr.facing = facing == 'B' ? Facing::Back : Facing::Front;
+        fr.culled = culled;
+        return fr;
+    }
+    // A whole-line run ends at p after n lines: the reader's state follows.
+    std::size_t end_whole_lines(const char* p, std::size_t n) {
+        cur = const_cast<char*>(p);
+        line += n;
+        taken_whole += n;
+        return n;
+    }
     void slow_fragment(const Fields& fl, std::vector<Fragment>& out, bool in_tile);
     void start_tile(const Fields& fl, Tile& t);
     void other_run(const Fields& fl, Tile& t, bool in_tile);
@@ -538,20 +552,15 @@ std::size_t TraceReader::Impl::whole_lines(std::vector<Fragment>& out, std::size
                             d = swar_digits(p + s3 + 1, ld), id = swar_digits(p + s4 + 1, li);
         // Unsigned differences also reject values below the window's start.
         if (x - x_lo >= x_n || y - y_lo >= y_n || d > d_max || id > i_max) break;
-        Fragment& fr = out.emplace_back();
+        Fragment& fr = whole_line_fragment(out, f, culled);
         fr.x = static_cast<std::uint32_t>(x);
         fr.y = static_cast<std::uint32_t>(y);
         fr.depth = static_cast<std::uint32_t>(d);
         fr.id = static_cast<std::uint32_t>(id);
-        fr.facing = f == 'B' ? Facing::Back : Facing::Front;
-        fr.culled = culled;
         p += e + 1;
         ++n;
     }
-    cur = const_cast<char*>(p);
-    line += n;
-    taken_whole += n;
-    return n;
+    return end_whole_lines(p, n);
 }
 
 // whole_lines() with AVX-512 (F, BW, VL, VBMI, VBMI2), taking the same lines
@@ -636,19 +645,14 @@ TraceReader::Impl::whole_lines_avx512(std::vector<Fragment>& out, std::size_t ro
         const __m256i packed = _mm256_packus_epi32(quads, quads);   // per 128-bit half: fields 0 1 0 1 | 2 3 2 3
         const __m256i eights = _mm256_madd_epi16(packed, myriads);
         const __m128i vals = _mm_unpacklo_epi64(_mm256_castsi256_si128(eights), _mm256_extracti128_si256(eights, 1));
-        // Unsigned differences also reject values below the window's start.
+        // x and y less the window's start wrap around below it, so one
+        // unsigned compare a lane checks both ends.
         if (_mm_cmple_epu32_mask(_mm_sub_epi32(vals, lo_bound), hi_bound) != 0xF) break;
-        Fragment& fr = out.emplace_back();
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(&fr.x), vals);
-        fr.facing = f == 'B' ? Facing::Back : Facing::Front;
-        fr.culled = culled;
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(&whole_line_fragment(out, f, culled).x), vals);
         p += e + 1;
         ++n;
     }
-    cur = const_cast<char*>(p);
-    line += n;
-    taken_whole += n;
-    return n;
+    return end_whole_lines(p, n);
 }
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
