@@ -32,12 +32,12 @@ int main(int argc, char** argv) {
         return rc == 0 ? 0 : 2;
     }
     lim.wide_parse = !portable;
-    std::printf("whole-line parse: %s\n", lim.wide_parse && rbcd::trace_wide_parse_available() ? "AVX-512" : "portable");
     try {
         double best = 0;
         for (unsigned r = 0; r < repeat; ++r) {
             auto t0 = std::chrono::steady_clock::now();
             rbcd::TraceReader reader(path, lim);
+            if (r == 0) std::printf("whole-line parse: %s\n", reader.parses_wide() ? "AVX-512" : "portable");
             rbcd::Tile t;
             std::uint64_t frames = 0, tiles = 0, frags = 0, sum = 0;
             for (;;) {

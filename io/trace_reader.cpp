@@ -491,8 +491,7 @@ bool trace_wide_parse_available() {
         __builtin_cpu_init();
         return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
            __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512vbmi") &&
-           __builtin_cpu_supports("avx512vbmi2") && __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2") &&
-           __builtin_cpu_supports("popcnt");
+           __builtin_cpu_supports("avx512vbmi2") && __builtin_cpu_supports("bmi") && __builtin_cpu_supports("bmi2");
     }();
     return yes;
 }
@@ -578,7 +577,7 @@ std::size_t TraceReader::Impl::whole_lines(std::vector<Fragment>& out, std::size
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #endif
-__attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi,avx512vbmi2,bmi,bmi2,popcnt"))) std::size_t
+__attribute__((target("avx512f,avx512bw,avx512vl,avx512vbmi,avx512vbmi2,bmi,bmi2"))) std::size_t
 TraceReader::Impl::whole_lines_avx512(std::vector<Fragment>& out, std::size_t room) {
     static_assert(offsetof(Fragment, x) == 0 && offsetof(Fragment, y) == 4 && offsetof(Fragment, depth) == 8 &&
                       offsetof(Fragment, id) == 12,
@@ -892,6 +891,8 @@ void TraceReader::stop_after_frame(std::uint64_t last) { impl_->stop_after = las
 
 std::uint64_t TraceReader::lines_taken_whole() const { return impl_->taken_whole; }
 
+bool TraceReader::parses_wide() const { return impl_->avx512; }
+
 const StreamHeader& TraceReader::header() const { return impl_->hdr; }
 
 std::string TraceReader::name() const { return impl_->path; }
@@ -911,10 +912,10 @@ FragmentSource::Event TraceReader::next(Tile& t) {
             m.fail("tile " + num_str(m.tcol) + " " + num_str(m.trow) + " has more than " +
                    num_str(m.lim.max_tile_fragments) +
                    " fragments (the limit input.max_tile_fragments; docs/limits.md)");
-        if (in_tile && m.cur[0] == 'f' &&
-            (m.avx512 ? m.whole_lines_avx512(t.frags, m.lim.max_tile_fragments - t.frags.size())
-                      : m.whole_lines(t.frags, m.lim.max_tile_fragments - t.frags.size())))
-            continue;
+        if (in_tile && m.cur[0] == 'f') {
+            const std::size_t room = m.lim.max_tile_fragments - t.frags.size();
+            if (m.avx512 ? m.whole_lines_avx512(t.frags, room) : m.whole_lines(t.frags, room)) continue;
+        }
         if (in_tile && m.cur[0] == 'f' && (m.cur[1] == ' ' || m.cur[1] == '\t') && m.fast_fragment(t.frags)) continue;
 
         m.tokenize(m.cur, fl);

@@ -76,6 +76,9 @@ public:
     // far, the rest having gone byte by byte: both parses must take the same
     // lines, or one would be slower without any output showing it (tests).
     std::uint64_t lines_taken_whole() const;
+    // Whether this reader's whole-line parse is the AVX-512 one (wide_parse
+    // asked for it and trace_wide_parse_available()).
+    bool parses_wide() const;
 
 private:
     struct Impl;

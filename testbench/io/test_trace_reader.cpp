@@ -98,6 +98,12 @@ Fragment frag(std::uint32_t x, std::uint32_t y, std::uint32_t d, std::uint32_t i
     return r;
 }
 
+// A fragment as text, "x,y,depth,id,F|B[,c];", for comparing whole reads.
+std::string frag_text(const Fragment& f) {
+    return std::to_string(f.x) + "," + std::to_string(f.y) + "," + std::to_string(f.depth) + "," +
+           std::to_string(f.id) + (f.facing == Facing::Back ? ",B" : ",F") + (f.culled ? ",c;" : ";");
+}
+
 void check_frag(const Fragment& got, const Fragment& want) {
     CHECK(got.x == want.x);
     CHECK(got.y == want.y);
@@ -750,9 +756,7 @@ TEST_CASE("io: a fragment line reads the same with and without 40 bytes after it
             Tile t;
             std::string s;
             while (r.next(t) != Event::End)
-                for (const Fragment& f : t.frags)
-                    s += std::to_string(f.x) + "," + std::to_string(f.y) + "," + std::to_string(f.depth) + "," +
-                         std::to_string(f.id) + (f.facing == Facing::Back ? ",B" : ",F") + (f.culled ? ",c" : "") + ";";
+                for (const Fragment& f : t.frags) s += frag_text(f);
             return s;
         } catch (const InputError& e) {
             std::string msg = e.what();
@@ -844,9 +848,7 @@ TEST_CASE("io: the AVX-512 and portable whole-line parses read random lines alik
                 r = std::make_unique<TraceReader>(path, l);
                 Tile t;
                 while (r->next(t) != Event::End)
-                    for (const Fragment& f : t.frags)
-                        s += std::to_string(f.x) + "," + std::to_string(f.y) + "," + std::to_string(f.depth) + "," +
-                             std::to_string(f.id) + (f.facing == Facing::Back ? ",B" : ",F") + (f.culled ? ",c;" : ";");
+                    for (const Fragment& f : t.frags) s += frag_text(f);
             } catch (const InputError& e) {
                 s += std::string("error ") + e.what();
             }

@@ -199,17 +199,15 @@ namespace {
 // Two frames, so that --jobs 2 splits them.
 const std::string kTwoFrames = "rbcd-trace 1\nframe 0\ntile 0 0\nf 0 0 100 1 F\nf 0 0 300 1 B\nf 0 0 200 2 F\n"
                                "frame 1\ntile 0 0\nf 1 0 100 3 F\nf 1 0 300 3 B\nf 1 0 200 4 F\n";
-// An older result of 2 MiB, as a rerun finds its previous collisions.
-std::uint64_t plant_big(const std::string& path) {
-    std::ofstream(path, std::ios::binary) << std::string(std::size_t(2) << 20, 'x');
-    struct stat st {};
-    REQUIRE(::stat(path.c_str(), &st) == 0);
-    return static_cast<std::uint64_t>(st.st_ino);
-}
 std::uint64_t inode_of(const std::string& path) {
     struct stat st {};
     REQUIRE(::stat(path.c_str(), &st) == 0);
     return static_cast<std::uint64_t>(st.st_ino);
+}
+// An older result of 2 MiB, as a rerun finds its previous collisions; its inode.
+std::uint64_t plant_big(const std::string& path) {
+    std::ofstream(path, std::ios::binary) << std::string(std::size_t(2) << 20, 'x');
+    return inode_of(path);
 }
 } // namespace
 
