@@ -69,8 +69,8 @@ long long GzipStream::skip(unsigned long long n) {
             if (here >= 0 && ::fstat(fd_, &st) == 0 && S_ISREG(st.st_mode)) {
                 const unsigned long long left = st.st_size > here ? static_cast<unsigned long long>(st.st_size - here) : 0;
                 const unsigned long long k2 = std::min(n - done, left);
-                if (::lseek(fd_, static_cast<off_t>(k2), SEEK_CUR) >= 0) {
-                    if (observer_ && k2) observer_->gap();
+                if (const off_t to = ::lseek(fd_, static_cast<off_t>(k2), SEEK_CUR); to >= 0) {
+                    if (observer_ && k2) observer_->gap(static_cast<std::uint64_t>(to));
                     done += k2;
                     if (done < n) raw_eof_ = true;
                     return static_cast<long long>(done);

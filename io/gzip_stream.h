@@ -5,6 +5,7 @@
 // silently ignoring it (formats.md: the file is gzip or it is text).
 #pragma once
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -16,14 +17,15 @@ namespace rbcd {
 // the file's start: what hashes an input without reading it a second time
 // (rbcd-sim's provenance). file() comes first, with the descriptor read; end()
 // when a read finds the end of the file. A stream that skips ahead tells it
-// gap(): the bytes it saw no longer run unbroken from the start.
+// gap(), with the file offset its reads go on from: the bytes it saw no
+// longer run unbroken from the start.
 class RawObserver {
 public:
     virtual ~RawObserver() = default;
     virtual void file(int fd) = 0;
     virtual void raw(const void* bytes, std::size_t n) = 0;
     virtual void end() = 0;
-    virtual void gap() = 0;
+    virtual void gap(std::uint64_t resume_at) = 0;
 };
 
 class GzipStream {

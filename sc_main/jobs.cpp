@@ -105,6 +105,18 @@ JobPart parse_worker_part(const std::string& text, FrameRange range) {
     return p;
 }
 
+std::string worker_digest_text(const DigestBlocks& b) { return std::to_string(b.from) + ":" + std::to_string(b.to); }
+
+DigestBlocks parse_worker_digest(const std::string& text, const std::string& sums_path) {
+    DigestBlocks b;
+    const auto colon = text.find(':');
+    if (colon == std::string::npos || !parse_u64(text.substr(0, colon), b.from) ||
+        !parse_u64(text.substr(colon + 1), b.to) || b.from % 1024 || b.to % 1024 || b.to < b.from)
+        throw InputError("--worker-digest: \"" + text + "\" is not FROM:TO, byte offsets in whole blocks of 1024, FROM <= TO");
+    if (b.from > 0 && sums_path.empty()) throw InputError("--worker-digest: a part not from byte 0 needs --worker-digest-sums");
+    return b;
+}
+
 namespace {
 
 // Descriptor `target` opened on `path` (the descriptors above 2 are closed,

@@ -43,6 +43,17 @@ std::string worker_part_text(const JobPart& p, bool trace);
 // Its parse; throws InputError naming --worker-part.
 JobPart parse_worker_part(const std::string& text, FrameRange range);
 
+// A worker's blocks of the trace's digest (sc_main/part_digest.h): bytes
+// [from, to), multiples of 1,024; a part not from 0 writes its block sums to
+// a file. The hidden option's text, "FROM:TO", and its parse, which throws
+// InputError naming --worker-digest (or --worker-digest-sums, missing for a
+// part not from 0).
+struct DigestBlocks {
+    std::uint64_t from = 0, to = 0;
+};
+std::string worker_digest_text(const DigestBlocks& b);
+DigestBlocks parse_worker_digest(const std::string& text, const std::string& sums_path);
+
 // A worker's program: what the process would run from its command line
 // `argv` (argv[0] the program); returns the exit status.
 using WorkerMain = int (*)(const std::vector<std::string>& argv);

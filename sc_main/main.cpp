@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <optional>
+#include <fcntl.h>
 #include <sys/wait.h>
 #include <memory>
 #include <thread>
@@ -34,6 +36,7 @@
 #include "rbcd/sc_main/tile_database.h"
 #include "rbcd/sc_main/image_sink.h"
 #include "rbcd/sc_main/jobs.h"
+#include "rbcd/sc_main/part_digest.h"
 #include "rbcd/sc_main/part_files.h"
 #include "rbcd/report/run_snapshot.h"
 #include "rbcd/sc_main/output_file.h"
@@ -62,6 +65,8 @@ struct Options {
     unsigned jobs = 1;     // worker processes, each a contiguous range of the frames (sc_main/jobs.h)
     std::string worker_part;   // set in a worker: where its frames start (jobs.h)
     std::string worker_collisions_name;   // a worker's --collisions -: the run's output, named in errors
+    std::string worker_digest;        // a worker's part of the trace's digest, FROM:TO (part_digest.h)
+    std::string worker_digest_sums;   // where a later part's block sums go
     bool dump_config = false;
     bool config_reference = false;
     bool quiet = false;
@@ -127,6 +132,30 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     }
     if (parent.empty()) parent = std::filesystem::temp_directory_path().string();
     TempDirectory dir(parent);
+    // A plain trace's digest is taken by the workers, each over the blocks of
+    // the bytes it reads (sc_main/part_digest.h), and joined here when the
+    // last ends: not the whole file read again. Worker k hashes from the block
+    // its frames start in to the one the next part's start in; the last, to
+    // the file's last block, which is the parent's.
+    std::optional<SplitDigest> split;
+    std::vector<DigestBlocks> digest_blocks;
+    if (trace && stats_out.active() && plain_trace_bytes(opt.trace) > 0 &&
+        std::all_of(parts.begin() + 1, parts.end(), [](const JobPart& p) { return p.skip; })) {
+        const int fd = ::open(opt.trace.c_str(), O_RDONLY | O_CLOEXEC);
+        const std::optional<FileId> id = fd >= 0 ? file_id(fd) : std::nullopt;
+        if (fd >= 0) ::close(fd);
+        if (id) {
+            split.emplace();
+            split->planned = *id;
+            const auto block_of = [](std::uint64_t off) { return off / xxh3_blocks::kBlockBytes * xxh3_blocks::kBlockBytes; };
+            for (std::size_t k = 0; k < parts.size(); ++k) {
+                const std::uint64_t from = k == 0 ? 0 : block_of(parts[k].offset);
+                const std::uint64_t to = k + 1 < parts.size() ? block_of(parts[k + 1].offset)
+                                                              : xxh3_blocks::chained_blocks(id->size) * xxh3_blocks::kBlockBytes;
+                digest_blocks.push_back({from, std::max(from, to)});
+            }
+        }
+    }
     std::vector<std::vector<std::string>> argvs;
     std::vector<std::string> errs;
     std::vector<int> out_fds;
@@ -145,6 +174,13 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         a.insert(a.end(), {"--frames", range_text(parts[k].range), "--threads", std::to_string(threads), "-q",
                            "--stats", dir.path(n + ".json"), "--frame-stats", dir.path(n + ".jsonl"),
                            "--worker-part", worker_part_text(parts[k], trace)});
+        if (split) {
+            a.insert(a.end(), {"--worker-digest", worker_digest_text(digest_blocks[k])});
+            if (digest_blocks[k].from > 0) {
+                a.insert(a.end(), {"--worker-digest-sums", dir.path(n + ".xxh")});
+                dir.will_hold(n + ".xxh");
+            }
+        }
         if (k == 0 && first_direct) {
             a.insert(a.end(), {"--collisions", "-", "--worker-collisions-name", opt.collisions});
             out_fds.push_back(collisions_out.shared_fd());
@@ -156,27 +192,28 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         errs.push_back(dir.path(n + ".err"));
         for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
     }
-    // The hash (of prov_inputs, the caller's, which outlive it) is declared
-    // before the workers, so that on an error they are stopped before the
-    // hash is waited for.
+    // The hash (of `inputs`, which outlive it) is declared before the
+    // workers, so that on an error they are stopped before the hash is
+    // waited for.
     std::future<nlohmann::json> provenance_job;
+    std::vector<ProvenanceInput> inputs = prov_inputs;
+    if (split)
+        for (ProvenanceInput& in : inputs)
+            if (in.role == "trace") in.split = &*split;
     Workers workers(rbcd_sim_main, argvs, errs, out_fds);
-    // A trace is hashed while the workers run, from when the first of them
-    // ends: before, the hash would take a core from them (as many workers as
-    // cores); after, it has the core that worker leaves, beside the join. The
-    // whole file, read again: unlike one process, no worker hashes what it
-    // reads. The first part, cut at the first frame at or after its share of
-    // the bytes, is never smaller than that share, so its worker seldom ends
-    // first, and hashing there made it later still (docs/performance.md,
-    // seventh pass).
+    // Without the workers' digest (a gzip trace, whose parts start in the
+    // inflated bytes; a scene's meshes), the inputs are hashed whole, from
+    // when the first worker ends: before, the hash would take a core from
+    // them (as many workers as cores); after, it has the core that worker
+    // leaves, beside the join (docs/performance.md, seventh pass).
     const auto start_hash = [&] {
         // The hashing thread starts with the interrupts blocked: the handler,
         // which signals the workers, runs on this thread only, never beside
         // the joins that forget and reap them.
         const InterruptsHeld held;
-        provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, prov_inputs); });
+        provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, inputs); });
     };
-    if (stats_out.active()) {
+    if (stats_out.active() && !split) {
         // (Waited for without reaping: the joins below reap the workers in
         // order.) A worker that failed fails the run: nothing to hash for.
         if (!trace || workers.first_end_ok()) start_hash();
@@ -216,6 +253,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         const std::string path = dir.path(n + ".json");
         const nlohmann::json j = nlohmann::json::parse(read_input_text(path, "stats file", std::uint64_t(1) << 30, ""));
         check_work(k, j);
+        if (split) split->add(j.at("worker").at("digest"), dir.path(n + ".xxh"));
         RunSnapshot snap = snapshot_from_stats(j);
         files.push_back({dir.path(n + ".txt"), dir.path(n + ".jsonl"), snap.frames.first_frame, snap.frames.frames,
                          snap.cycles});
@@ -243,6 +281,8 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
                 break;
             }
             read_part(k);
+            // Every part's digest is in: joined beside the last part's join.
+            if (split && k + 1 == parts.size()) start_hash();
             join_part(k);
         }
         workers.wait();
@@ -342,6 +382,10 @@ int run(Options opt) {
     if (worker && !opt.frames_given) throw InputError("--worker-part: needs --frames");
     if (!worker && !opt.worker_collisions_name.empty())
         throw InputError("--worker-collisions-name: only for a --jobs worker (with --worker-part)");
+    if ((!worker || opt.trace.empty()) && !opt.worker_digest.empty())
+        throw InputError("--worker-digest: only for a --jobs worker of a trace (with --worker-part and --trace)");
+    if (opt.worker_digest.empty() && !opt.worker_digest_sums.empty())
+        throw InputError("--worker-digest-sums: only with --worker-digest");
 
     // An output over an input would destroy it before it is read.
     const std::pair<const char*, const std::string*> outs[] = {
@@ -388,6 +432,13 @@ int run(Options opt) {
     std::unique_ptr<ReadDigest> read_digest;
     if (!opt.trace.empty() && !worker && stats_out.active() && !opt.frames_given && opt.db.empty())
         read_digest = std::make_unique<ReadDigest>();
+    // A --jobs worker's blocks of that digest, from the bytes it reads (part_digest.h).
+    std::unique_ptr<PartDigest> part_digest;
+    if (!opt.worker_digest.empty()) {
+        const DigestBlocks b = parse_worker_digest(opt.worker_digest, opt.worker_digest_sums);
+        part_digest = std::make_unique<PartDigest>(b.from, b.to, opt.worker_digest_sums);
+    }
+    RawObserver* const read_observer = read_digest ? static_cast<RawObserver*>(read_digest.get()) : part_digest.get();
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
     const scene::SceneLimits scene_limits{cfg.tile.width,           cfg.tile.height,
@@ -411,7 +462,7 @@ int run(Options opt) {
         if (parts.size() < 2) {
             // Parsed a few tiles ahead on another core (io/prefetch_source.h),
             // unless the cores are the caller's to share (rbcd-sweep's workers).
-            auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg), read_digest.get());
+            auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg), read_observer);
             // A plain trace's line number is counted only if a message needs it.
             if (part.skip) reader->start_at_frame(range.first, part.offset, part.line);
             // Not even read ahead: what follows the range is another worker's.
@@ -581,6 +632,7 @@ int run(Options opt) {
     // For the parent, which checks the run's bound on declared work over all
     // the parts as one process checks it (run_jobs); not in its stats.
     if (worker && trace_reader) stats["worker"] = {{"declared_work", trace_reader->declared_work()}};
+    if (part_digest) stats["worker"]["digest"] = part_digest->finish();
     if (!worker && read_digest && stats_out.active()) provenance = make_provenance(opt.argv, cfg, prov_inputs);
     if (provenance_job.valid()) provenance = provenance_job.get();
     if (stats_out.active()) stats["provenance"] = provenance;
@@ -705,6 +757,10 @@ int rbcd_sim_main(const std::vector<std::string>& args) {
     app.add_option("--worker-part", opt.worker_part, "internal: a --jobs worker's start")->group("");
     app.add_option("--worker-collisions-name", opt.worker_collisions_name,
                    "internal: what a --jobs worker's --collisions - is, for its errors")
+        ->group("");
+    app.add_option("--worker-digest", opt.worker_digest, "internal: a --jobs worker's blocks of the trace's digest")
+        ->group("");
+    app.add_option("--worker-digest-sums", opt.worker_digest_sums, "internal: where a --jobs worker's block sums go")
         ->group("");
     app.add_option("--write-trace", opt.write_trace, "also save the fragment stream the unit saw as a .rbt trace");
     app.add_option("--images", opt.images, "write a PNG per frame into this directory (scenes only)");

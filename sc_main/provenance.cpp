@@ -18,6 +18,7 @@
 #include <systemc>
 
 #include "rbcd/common/sha256.h"
+#include "rbcd/sc_main/part_digest.h"
 #include "rbcd/sc_main/build_info.h"    // generated at configure time (sc_main/CMakeLists.txt)
 #include "rbcd/sc_main/git_describe.h"  // generated at build time
 
@@ -202,6 +203,15 @@ nlohmann::json input_info(const ProvenanceInput& in) {
     if (in.text) {
         j["size"] = in.text->size();
         j["xxh128"] = xxh128_hex(in.text->data(), in.text->size());
+        return j;
+    }
+    if (in.split) {
+        const FileDigest d = digest_from_parts(in.path, *in.split);
+        if (d.hex.empty()) put_no_digest(j, d.note);
+        else {
+            j["size"] = d.size;
+            j["xxh128"] = d.hex;
+        }
         return j;
     }
     if (in.read && in.read->finish(in.path, j)) return j;

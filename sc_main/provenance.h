@@ -47,7 +47,7 @@ public:
     void file(int fd) override;
     void raw(const void* bytes, std::size_t n) override;
     void end() override { complete_ = true; }
-    void gap() override { whole_ = false; }
+    void gap(std::uint64_t) override { whole_ = false; }
     // The bytes seen run unbroken from the file's start.
     bool usable() const { return whole_; }
     std::uint64_t bytes() const { return bytes_; }
@@ -69,14 +69,18 @@ private:
     std::int64_t mtime_ns_ = 0;
 };
 
+struct SplitDigest;   // sc_main/part_digest.h
+
 // An input as it was read: role ("trace", "scene", "mesh", "config"), path and,
 // for a file, its size in bytes and XXH3-128 digest. `text` set: an embedded
 // input (the default scene) hashed from memory. `read` set: the file as its
-// reader read it (ReadDigest), hashed on from there.
+// reader read it (ReadDigest), hashed on from there. `split` set: the file as
+// rbcd-sim --jobs's workers read it, in parts, joined.
 struct ProvenanceInput {
     std::string role, path;
     const std::string* text = nullptr;
     const ReadDigest* read = nullptr;
+    const SplitDigest* split = nullptr;
 };
 nlohmann::json input_info(const ProvenanceInput& in);
 

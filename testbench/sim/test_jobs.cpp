@@ -157,9 +157,13 @@ TEST_CASE("rbcd-sim --jobs: a worker's command line run alone", "[jobs]") {
     const std::size_t at = text.find("frame 30\n");
     REQUIRE(at != std::string::npos);
     const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+    // Their blocks of the trace's digest (sc_main/part_digest.h): the first's
+    // chained, the second's sums in a file of 64 bytes a block.
+    const std::uint64_t cut = at / 1024 * 1024, end = (text.size() - 1) / 1024 * 1024;
     const std::vector<std::string> parts[] = {
-        {"--trace", t, "--frames", "0:29", "--worker-part", "first"},
-        {"--trace", t, "--frames", "30:", "--worker-part", "trace:" + std::to_string(at) + ":" + std::to_string(line)},
+        {"--trace", t, "--frames", "0:29", "--worker-part", "first", "--worker-digest", "0:" + std::to_string(cut)},
+        {"--trace", t, "--frames", "30:", "--worker-part", "trace:" + std::to_string(at) + ":" + std::to_string(line),
+         "--worker-digest", std::to_string(cut) + ":" + std::to_string(end), "--worker-digest-sums", td.path("1.xxh")},
         {"--scene", small_scene(td), "--frames", "20:39", "--worker-part", "scene"},
     };
     for (const auto& p : parts) {
@@ -175,8 +179,15 @@ TEST_CASE("rbcd-sim --jobs: a worker's command line run alone", "[jobs]") {
         // Only the work a trace's frames declared, for the parent's bound.
         if (p[0] == "--trace") {
             REQUIRE(stats.contains("worker"));
-            CHECK(stats["worker"].size() == 1);
+            CHECK(stats["worker"].size() == 2);
             CHECK(stats["worker"].contains("declared_work"));
+            const auto& d = stats["worker"]["digest"];
+            const bool first = p[5] == "first";
+            CHECK(d["from"] == (first ? 0 : cut));
+            CHECK(d["blocks"] == (first ? cut : end - cut) / 1024);
+            CHECK(d["file"]["size"] == text.size());
+            CHECK(d.contains("acc") == first);
+            if (!first) CHECK(std::filesystem::file_size(td.path("1.xxh")) == (end - cut) / 1024 * 64);
         } else {
             CHECK_FALSE(stats.contains("worker"));
         }
@@ -267,6 +278,19 @@ TEST_CASE("rbcd-sim --jobs: bad values are refused", "[jobs]") {
     // A worker's own option, outside a worker.
     expect_input_error(td, run_with_outputs(td, {"-q", "--trace", t, "--worker-collisions-name", "x.txt"}),
                        {"--worker-collisions-name", "--worker-part"});
+    expect_input_error(td, run_with_outputs(td, {"-q", "--trace", t, "--worker-digest", "0:1024"}),
+                       {"--worker-digest", "--worker-part"});
+    expect_input_error(td, run_with_outputs(td, {"-q", "--trace", t, "--worker-digest-sums", "x.xxh"}),
+                       {"--worker-digest-sums", "--worker-digest"});
+    // A worker's digest blocks that are not whole blocks, in order, with
+    // somewhere to put a later part's sums.
+    const std::vector<std::string> worker{"-q", "--trace", t, "--frames", "0:3", "--worker-part", "first"};
+    for (const char* v : {"0", "0:1000", "2048:1024", "a:1024", "0:-1024", ":", "1024:2048"}) {
+        INFO("--worker-digest '" << v << "'");
+        std::vector<std::string> a = worker;
+        a.insert(a.end(), {"--worker-digest", v});
+        expect_input_error(td, run_with_outputs(td, a), {"--worker-digest"});
+    }
 }
 
 TEST_CASE("rbcd-sim --jobs: what one process must write is refused with more than one", "[jobs]") {
