@@ -139,7 +139,10 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     // the file's last block, which is the parent's.
     std::optional<SplitDigest> split;
     std::vector<DigestBlocks> digest_blocks;
-    if (trace && stats_out.active() && plain_trace_bytes(opt.trace) > 0 &&
+    // Not for a range that ends before the file does: the parent would hash
+    // the rest after the last worker, where the whole file's hash from the
+    // first worker's end is mostly done by then.
+    if (trace && stats_out.active() && plain_trace_bytes(opt.trace) > 0 && parts.back().range.last == UINT64_MAX &&
         std::all_of(parts.begin() + 1, parts.end(), [](const JobPart& p) { return p.skip; })) {
         const int fd = ::open(opt.trace.c_str(), O_RDONLY | O_CLOEXEC);
         const std::optional<FileId> id = fd >= 0 ? file_id(fd) : std::nullopt;
@@ -192,14 +195,14 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         errs.push_back(dir.path(n + ".err"));
         for (const char* ext : {".json", ".jsonl", ".txt", ".err"}) dir.will_hold(n + ext);
     }
-    // The hash (of `inputs`, which outlive it) is declared before the
-    // workers, so that on an error they are stopped before the hash is
-    // waited for.
-    std::future<nlohmann::json> provenance_job;
+    // The hashed inputs, then the hash, which reads them (destroyed the other
+    // way round), before the workers, so that on an error they are stopped
+    // before the hash is waited for.
     std::vector<ProvenanceInput> inputs = prov_inputs;
     if (split)
         for (ProvenanceInput& in : inputs)
             if (in.role == "trace") in.split = &*split;
+    std::future<nlohmann::json> provenance_job;
     Workers workers(rbcd_sim_main, argvs, errs, out_fds);
     // Without the workers' digest (a gzip trace, whose parts start in the
     // inflated bytes; a scene's meshes), the inputs are hashed whole, from
@@ -253,7 +256,11 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         const std::string path = dir.path(n + ".json");
         const nlohmann::json j = nlohmann::json::parse(read_input_text(path, "stats file", std::uint64_t(1) << 30, ""));
         check_work(k, j);
-        if (split) split->add(j.at("worker").at("digest"), dir.path(n + ".xxh"));
+        if (split) {
+            if (!j.contains("worker") || !j["worker"].contains("digest"))
+                throw RunError("--jobs: part " + n + " did not say its blocks of the trace's digest");
+            split->add(j["worker"]["digest"], dir.path(n + ".xxh"));
+        }
         RunSnapshot snap = snapshot_from_stats(j);
         files.push_back({dir.path(n + ".txt"), dir.path(n + ".jsonl"), snap.frames.first_frame, snap.frames.frames,
                          snap.cycles});

@@ -403,6 +403,7 @@ bool PartDigest::flush_sums() {
             // Not the run's failure: the parent hashes the rest from the file.
             stopped_ = true;
             sums_.clear();
+            ::close(std::exchange(sums_fd_, -1));
             return false;
         }
         p += w;
@@ -422,7 +423,7 @@ nlohmann::json PartDigest::finish() {
         for (std::uint64_t w : acc_.v) acc.push_back(hex64(w));
         j["acc"] = acc;
     } else {
-        if (sums_fd_ >= 0 && !stopped_) flush_sums();
+        if (sums_fd_ >= 0) flush_sums();   // the sums before a read that failed are good
         // A close that fails may have lost what was written before it.
         if (sums_fd_ >= 0 && ::close(std::exchange(sums_fd_, -1)) != 0) written_ = 0;
         j["blocks"] = written_;
@@ -443,7 +444,7 @@ void SplitDigest::add(const nlohmann::json& j, const std::string& sums_path) {
         Part p;
         p.from = u64(j, "from");
         p.blocks = u64(j, "blocks");
-        if (p.from % kBlockBytes) throw bad();
+        if (p.from % kBlockBytes || p.blocks > (UINT64_MAX - p.from) / kBlockBytes) throw bad();
         if (j.contains("acc")) {
             const auto& a = j.at("acc");
             if (p.from != 0 || !a.is_array() || a.size() != 8) throw bad();
@@ -463,6 +464,8 @@ void SplitDigest::add(const nlohmann::json& j, const std::string& sums_path) {
             if (!f.at("mtime_ns").is_number_integer()) throw bad();
             id.mtime_ns = f.at("mtime_ns").get<std::int64_t>();
             p.file = id;
+        } else if (p.blocks > 0) {
+            throw bad();   // blocks of an unknown file
         }
         parts.push_back(std::move(p));
     } catch (const nlohmann::json::exception&) {
@@ -486,22 +489,22 @@ bool chain_from_file(int fd, std::uint64_t from, std::uint64_t to, Lanes& acc) {
     return true;
 }
 
-// A worker's sums [skip, skip + n) chained into acc; false when the file holds fewer.
-bool chain_sums(const std::string& path, std::uint64_t skip, std::uint64_t n, Lanes& acc) {
+// A worker's sums [skip, skip + n) chained into acc, as many as its file
+// holds: how many were.
+std::uint64_t chain_sums(const std::string& path, std::uint64_t skip, std::uint64_t n, Lanes& acc) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) return false;
+    if (fd < 0) return 0;
     std::vector<Lanes> buf(kSumsBuffered);
-    std::uint64_t at = skip;
-    bool ok = true;
-    while (ok && n > 0) {
-        const std::size_t k = static_cast<std::size_t>(std::min<std::uint64_t>(n, buf.size()));
-        ok = pread_all(fd, reinterpret_cast<unsigned char*>(buf.data()), k * sizeof(Lanes), at * sizeof(Lanes));
-        if (ok) chain(acc, buf.data(), k);
-        at += k;
-        n -= k;
+    std::uint64_t done = 0;
+    while (done < n) {
+        const std::size_t k = static_cast<std::size_t>(std::min<std::uint64_t>(n - done, buf.size()));
+        if (!pread_all(fd, reinterpret_cast<unsigned char*>(buf.data()), k * sizeof(Lanes), (skip + done) * sizeof(Lanes)))
+            break;
+        chain(acc, buf.data(), k);
+        done += k;
     }
     ::close(fd);
-    return ok;
+    return done;
 }
 
 std::string digest_hex(const Digest128& d) { return hex64(d.high) + hex64(d.low); }
@@ -522,10 +525,16 @@ FileDigest digest_from_parts(const std::string& path, const SplitDigest& split) 
     const std::optional<FileId> now = file_id(fd);
     bool same = now && *now == split.planned;
     for (const auto& p : split.parts) same = same && (!p.file || *p.file == split.planned);
-    if (!same) {
+    const auto changed = [&] {
         out.note = "the file was replaced or rewritten during the run";
         return out;
-    }
+    };
+    if (!same) return changed();
+    // Rewritten in place while it is read here: neither file's digest.
+    const auto unchanged_since = [&] {
+        const std::optional<FileId> after = file_id(fd);
+        return after && *after == split.planned;
+    };
     const std::uint64_t len = now->size;
     out.size = len;
     if (len <= 240) {
@@ -537,6 +546,7 @@ FileDigest digest_from_parts(const std::string& path, const SplitDigest& split) 
         }
         XXH128_canonical_t c;
         XXH128_canonicalFromHash(&c, XXH3_128bits(buf, static_cast<std::size_t>(len)));
+        if (!unchanged_since()) return changed();
         for (unsigned char b : c.digest) out.hex += hex64(b).substr(14);
         return out;
     }
@@ -554,18 +564,17 @@ FileDigest digest_from_parts(const std::string& path, const SplitDigest& split) 
         const std::uint64_t part_end = std::min(p.from + p.blocks * kBlockBytes, end);
         if (!ok || part_end <= at) continue;
         if (p.chained) {
-            // From 0 and at == 0 here: the part is the file's first.
+            // Only as the file's first part, whole: accumulators past the
+            // last block's start, or over blocks already chained, are no use.
+            if (at != 0 || p.from + p.blocks * kBlockBytes > end) continue;
             acc = p.acc;
-            if (p.from + p.blocks * kBlockBytes > end) {
-                // Chained past the last block's start: no use (a file cut short).
-                acc = start();
-                continue;
-            }
-        } else if (!chain_sums(p.sums_path, (at - p.from) / kBlockBytes, (part_end - at) / kBlockBytes, acc)) {
-            ok = false;
-            break;
+            at = part_end;
+        } else {
+            at += kBlockBytes * chain_sums(p.sums_path, (at - p.from) / kBlockBytes, (part_end - at) / kBlockBytes, acc);
+            // Fewer sums than the part said: those blocks from the file.
+            ok = chain_from_file(fd, at, part_end, acc);
+            at = part_end;
         }
-        at = part_end;
     }
     if (ok) ok = chain_from_file(fd, at, end, acc);
     std::vector<unsigned char> tail(static_cast<std::size_t>(len - tail_start(len)));
@@ -574,6 +583,7 @@ FileDigest digest_from_parts(const std::string& path, const SplitDigest& split) 
         out.note = "read error";
         return out;
     }
+    if (!unchanged_since()) return changed();
     out.hex = digest_hex(finish(acc, tail.data(), len));
     return out;
 }

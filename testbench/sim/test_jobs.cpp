@@ -131,9 +131,10 @@ std::string light_and_heavy(const TempDir& td, bool heavy_first) {
 }
 
 TEST_CASE("rbcd-sim --jobs: a trace's digest is the file's whichever worker ends first", "[jobs]") {
-    // The parent hashes the file from when the first worker ends: with a
-    // light first part, while the second still runs; with a heavy one, while
-    // the first still runs. Either way: the file's digest.
+    // Each worker hashes the blocks of its part as it reads them (the first
+    // chained, the second as block sums), and the parent joins them when the
+    // last has ended: with a light first part, after the second; with a heavy
+    // one, after the first. Either way: the file's digest.
     TempDir td;
     for (const bool heavy_first : {false, true}) {
         INFO("heavy part first: " << heavy_first);

@@ -10,7 +10,11 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <sys/resource.h>
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <random>
 
@@ -144,7 +148,9 @@ TEST_CASE("part digest: any cut into parts gives libxxhash's digest of the whole
     test::TempDir td;
     std::mt19937_64 rng(12345);
     for (int round = 0; round < 120; ++round) {
-        const std::size_t len = 241 + rng() % (round < 60 ? 5000 : 400000);
+        // Short files, files of a few hundred blocks, and a few of parts of
+        // over 1,024 blocks (their sums written in more than one piece).
+        const std::size_t len = 241 + rng() % (round < 60 ? 5000 : round < 110 ? 400000 : 4000000);
         const std::size_t parts = 2 + rng() % 4;
         INFO("round " << round << ": " << len << " bytes in " << parts << " parts");
         const std::string bytes = random_bytes(len, round);
@@ -186,6 +192,26 @@ TEST_CASE("part digest: a file replaced or rewritten since the cut has no digest
     d = digest_from_parts(path, split);
     CHECK(d.hex.empty());
     CHECK_THAT(d.note, Catch::Contains("replaced or rewritten"));
+    // Rewritten in place, the same inode and size: its time says so.
+    {
+        const std::string ours = td.write("t.bin", bytes);
+        const int f = ::open(ours.c_str(), O_RDONLY);
+        REQUIRE(f >= 0);
+        split.planned = *file_id(f);
+        ::close(f);
+        split.parts[0].file = split.planned;
+        REQUIRE(digest_from_parts(path, split).hex == xxh128_hex(bytes.data(), bytes.size()));
+        const int w = ::open(ours.c_str(), O_WRONLY);
+        REQUIRE(w >= 0);
+        REQUIRE(::pwrite(w, "x", 1, 50000) == 1);
+        // A clock coarser than the two writes would keep the time: moved on.
+        const struct timespec later[2] = {{0, UTIME_OMIT}, {static_cast<time_t>(split.planned.mtime_ns / 1000000000 + 1), 0}};
+        REQUIRE(::futimens(w, later) == 0);
+        ::close(w);
+        d = digest_from_parts(path, split);
+        CHECK(d.hex.empty());
+        CHECK_THAT(d.note, Catch::Contains("replaced or rewritten"));
+    }
     // Gone: said so.
     REQUIRE(std::remove(path.c_str()) == 0);
     d = digest_from_parts(path, split);
@@ -198,8 +224,12 @@ TEST_CASE("part digest: a worker's entry that does not parse is refused") {
     const auto acc = nlohmann::json::array({"0000000000000000", "0000000000000000", "0000000000000000",
                                             "0000000000000000", "0000000000000000", "0000000000000000",
                                             "0000000000000000", "0000000000000000"});
-    CHECK_NOTHROW(split.add({{"from", 0}, {"blocks", 3}, {"acc", acc}}, "x"));
-    CHECK_NOTHROW(split.add({{"from", 2048}, {"blocks", 3}}, "x"));
+    const nlohmann::json file = {{"dev", 1}, {"ino", 2}, {"size", 3}, {"mtime_ns", 4}};
+    CHECK_NOTHROW(split.add({{"from", 0}, {"blocks", 3}, {"acc", acc}, {"file", file}}, "x"));
+    CHECK_NOTHROW(split.add({{"from", 2048}, {"blocks", 3}, {"file", file}}, "x"));
+    CHECK_NOTHROW(split.add({{"from", 2048}, {"blocks", 0}}, "x"));
+    // Blocks of a file it does not name.
+    CHECK_THROWS_AS(split.add({{"from", 2048}, {"blocks", 3}}, "x"), RunError);
     const nlohmann::json bad[] = {
         nlohmann::json::object(),
         {{"from", 0}, {"blocks", 3}},                          // from 0 without its accumulators
@@ -209,6 +239,7 @@ TEST_CASE("part digest: a worker's entry that does not parse is refused") {
         {{"from", "0"}, {"blocks", 3}, {"acc", acc}},          // a string
         {{"from", 0}, {"blocks", -1}, {"acc", acc}},           // negative
         {{"from", 2048}, {"blocks", 3}, {"file", {{"dev", 1}}}},   // a file without its inode
+        {{"from", 2048}, {"blocks", 18014398509481982u}},          // past 2^64 bytes
     };
     for (const auto& j : bad) {
         INFO(j.dump());
@@ -262,6 +293,65 @@ TEST_CASE("part digest: an entry claiming blocks past the file's last is not use
     ::close(fd);
     nlohmann::json acc = nlohmann::json::array();
     for (int i = 0; i < 8; ++i) acc.push_back("0123456789abcdef");
-    split.add({{"from", 0}, {"blocks", 1000}, {"acc", acc}}, "");
+    const FileId& f = split.planned;
+    split.add({{"from", 0},
+               {"blocks", 1000},
+               {"acc", acc},
+               {"file", {{"dev", f.dev}, {"ino", f.ino}, {"size", f.size}, {"mtime_ns", f.mtime_ns}}}},
+              "");
     CHECK(digest_from_parts(path, split).hex == xxh128_hex(bytes.data(), bytes.size()));
+}
+
+TEST_CASE("part digest: sums that stop partway, or a sums file cut short, leave the rest to the parent") {
+    test::TempDir td;
+    const std::string bytes = random_bytes(3000000, 8);
+    const std::string path = td.write("t.bin", bytes);
+    const std::string want = xxh128_hex(bytes.data(), bytes.size());
+    const int fd = ::open(path.c_str(), O_RDONLY);
+    REQUIRE(fd >= 0);
+    SplitDigest split;
+    split.planned = *file_id(fd);
+    std::mt19937_64 rng(10);
+    split.add(run_part(td, path, bytes, {0, 500000}, 0, 501000, rng), td.path("0.xxh"));
+    const std::uint64_t from = block_of(500000), to = chained_blocks(bytes.size()) * kBlockBytes;
+    {
+        // A file size limit that lets the first 64 KiB of sums through and
+        // stops the second piece partway (EFBIG, the signal ignored).
+        struct rlimit old {};
+        REQUIRE(::getrlimit(RLIMIT_FSIZE, &old) == 0);
+        const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+        struct rlimit lim = old;
+        lim.rlim_cur = 100000;
+        REQUIRE(::setrlimit(RLIMIT_FSIZE, &lim) == 0);
+        PartDigest d(from, to, td.path("1.xxh"));
+        d.file(fd);
+        d.raw(bytes.data(), 4096);
+        d.gap(500000);
+        d.raw(bytes.data() + 500000, bytes.size() - 500000);
+        const nlohmann::json j = d.finish();
+        REQUIRE(::setrlimit(RLIMIT_FSIZE, &old) == 0);
+        std::signal(SIGXFSZ, old_handler);
+        CHECK(j["blocks"] == 1024);   // the first piece's
+        SplitDigest s = split;
+        s.add(j, td.path("1.xxh"));
+        CHECK(digest_from_parts(path, s).hex == want);
+    }
+    {
+        // All the sums written, then the file cut short behind the part's back.
+        PartDigest d(from, to, td.path("2.xxh"));
+        d.file(fd);
+        d.raw(bytes.data(), 4096);
+        d.gap(500000);
+        d.raw(bytes.data() + 500000, bytes.size() - 500000);
+        const nlohmann::json j = d.finish();
+        CHECK(j["blocks"] == (to - from) / kBlockBytes);
+        REQUIRE(::truncate(td.path("2.xxh").c_str(), 64 * 1000 + 17) == 0);
+        SplitDigest s = split;
+        s.add(j, td.path("2.xxh"));
+        CHECK(digest_from_parts(path, s).hex == want);
+        // Gone altogether.
+        REQUIRE(std::remove(td.path("2.xxh").c_str()) == 0);
+        CHECK(digest_from_parts(path, s).hex == want);
+    }
+    ::close(fd);
 }
