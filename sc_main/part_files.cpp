@@ -121,32 +121,108 @@ void copy_part_frame_stats(const std::vector<PartFiles>& parts, OutputFile& out)
     }
 }
 
-void append_part_frame_stats(const PartFiles& p, std::uint64_t offset, OutputFile& out) {
+namespace {
+
+// One part's line `n` counted from `offset`: checked as a JSON object of the
+// part's frame n - 1, its start_cycle and end_cycle moved on by `offset`.
+std::string offset_frame_line(const PartFiles& p, std::uint64_t n, std::string_view line, std::uint64_t offset) {
+    const std::string& path = p.frame_stats;
+    nlohmann::json f = nlohmann::json::parse(line, nullptr, false);
+    if (!f.is_object()) throw input_error_at(path, n, "not a JSON object");
+    const std::uint64_t expected = p.first_frame + n - 1;
+    if (n > p.frames || !f.contains("frame") || !f["frame"].is_number_unsigned() ||
+        f["frame"].get<std::uint64_t>() != expected)
+        throw input_error_at(path, n, "frame: expected frame " + std::to_string(expected) +
+                                          (n > p.frames ? " (beyond the part's frames)" : ""));
+    for (const char* key : {"start_cycle", "end_cycle"}) {
+        if (!f.contains(key) || !f[key].is_number_unsigned())
+            throw input_error_at(path, n, std::string(key) + ": missing");
+        std::uint64_t v = 0;
+        if (__builtin_add_overflow(f[key].get<std::uint64_t>(), offset, &v))
+            throw input_error_at(path, n, std::string(key) + ": beyond 2^64 - 1 once offset");
+        f[key] = v;
+    }
+    return f.dump() + "\n";
+}
+
+// Where KEY's number is in a compact JSON line, when KEY occurs once, as a
+// key, followed by a plain unsigned number: [begin, end) of its digits.
+bool key_number(std::string_view line, std::string_view key, std::size_t& begin, std::size_t& end, std::uint64_t& v) {
+    const std::size_t at = line.find(key);
+    if (at == std::string_view::npos || at == 0 || (line[at - 1] != '{' && line[at - 1] != ',') ||
+        line.find(key, at + 1) != std::string_view::npos)
+        return false;
+    begin = end = at + key.size();
+    v = 0;
+    while (end < line.size() && line[end] >= '0' && line[end] <= '9') {
+        if (__builtin_mul_overflow(v, 10u, &v) || __builtin_add_overflow(v, std::uint64_t(line[end] - '0'), &v))
+            return false;
+        ++end;
+    }
+    return end > begin && end - begin <= 20 && end < line.size() && (line[end] == ',' || line[end] == '}') &&
+           (line[begin] != '0' || end - begin == 1);
+}
+
+// The line the JSON path above writes, without parsing it: the worker wrote
+// it compact, so only the two numbers change (offset 0: none). False when
+// the line is not of that shape; the JSON path then says what is wrong.
+bool offset_frame_line_quick(const PartFiles& p, std::uint64_t n, std::string_view line, std::uint64_t offset,
+                             std::string& out) {
+    std::size_t fb = 0, fe = 0, sb = 0, se = 0, eb = 0, ee = 0;
+    std::uint64_t frame = 0, start = 0, end = 0;
+    if (n > p.frames || line.empty() || line.front() != '{' || line.back() != '}' ||
+        !key_number(line, "\"frame\":", fb, fe, frame) || frame != p.first_frame + n - 1 ||
+        !key_number(line, "\"start_cycle\":", sb, se, start) || !key_number(line, "\"end_cycle\":", eb, ee, end) ||
+        __builtin_add_overflow(start, offset, &start) || __builtin_add_overflow(end, offset, &end))
+        return false;
+    if (offset == 0) {
+        out.append(line);
+    } else {
+        // The two numbers in the order they come.
+        const bool start_first = sb < eb;
+        const std::size_t b1 = start_first ? sb : eb, e1 = start_first ? se : ee;
+        const std::size_t b2 = start_first ? eb : sb, e2 = start_first ? ee : se;
+        out.append(line.substr(0, b1));
+        out += std::to_string(start_first ? start : end);
+        out.append(line.substr(e1, b2 - e1));
+        out += std::to_string(start_first ? end : start);
+        out.append(line.substr(e2));
+    }
+    out += '\n';
+    return true;
+}
+
+template <class LineText>
+void append_frame_stats(const PartFiles& p, OutputFile& out, LineText text) {
     const std::string& path = p.frame_stats;
     std::uint64_t n = 0;
+    std::string buf;
     const bool lf = for_each_line(path, "frame stats file", kMaxFrameStatsLineBytes, [&](std::string_view line) {
-        ++n;
-        nlohmann::json f = nlohmann::json::parse(line, nullptr, false);
-        if (!f.is_object()) throw input_error_at(path, n, "not a JSON object");
-        const std::uint64_t expected = p.first_frame + n - 1;
-        if (n > p.frames || !f.contains("frame") || !f["frame"].is_number_unsigned() ||
-            f["frame"].get<std::uint64_t>() != expected)
-            throw input_error_at(path, n, "frame: expected frame " + std::to_string(expected) +
-                                                    (n > p.frames ? " (beyond the part's frames)" : ""));
-        for (const char* key : {"start_cycle", "end_cycle"}) {
-            if (!f.contains(key) || !f[key].is_number_unsigned())
-                throw input_error_at(path, n, std::string(key) + ": missing");
-            std::uint64_t v = 0;
-            if (__builtin_add_overflow(f[key].get<std::uint64_t>(), offset, &v))
-                throw input_error_at(path, n, std::string(key) + ": beyond 2^64 - 1 once offset");
-            f[key] = v;
+        text(++n, line, buf);
+        if (buf.size() >= (1u << 16)) {
+            out.write(buf);
+            buf.clear();
         }
-        out.write(f.dump() + "\n");
     });
+    out.write(buf);
     if (!lf) throw input_error_at(path, n, "the last line does not end with LF (the file is cut short)");
     if (n != p.frames)
         throw InputError(path + ": " + std::to_string(n) + " lines where the part has " + std::to_string(p.frames) +
                          " frames");
+}
+
+} // namespace
+
+void append_part_frame_stats(const PartFiles& p, std::uint64_t offset, OutputFile& out) {
+    append_frame_stats(p, out, [&](std::uint64_t n, std::string_view line, std::string& buf) {
+        buf += offset_frame_line(p, n, line, offset);
+    });
+}
+
+void append_own_part_frame_stats(const PartFiles& p, std::uint64_t offset, OutputFile& out) {
+    append_frame_stats(p, out, [&](std::uint64_t n, std::string_view line, std::string& buf) {
+        if (!offset_frame_line_quick(p, n, line, offset, buf)) buf += offset_frame_line(p, n, line, offset);
+    });
 }
 
 } // namespace rbcd

@@ -29,5 +29,13 @@ void append_own_part_collisions(const PartFiles& part, bool first, OutputFile& o
 void copy_part_frame_stats(const std::vector<PartFiles>& parts, OutputFile& out);
 // One part's lines, counted from `offset` (the cycles of the parts before it).
 void append_part_frame_stats(const PartFiles& part, std::uint64_t offset, OutputFile& out);
+// The same for a file this process's own worker wrote (rbcd-sim --jobs),
+// whose lines are JSON as the library writes it (compact, keys in order),
+// which the path above would write back unchanged but for the two numbers:
+// a line of that shape (each of "frame", "start_cycle" and "end_cycle" once,
+// as a key, a plain number) has them moved on in place, a tenth of the time
+// of parsing and writing it again; any other line takes the path above,
+// with its checks and errors.
+void append_own_part_frame_stats(const PartFiles& part, std::uint64_t offset, OutputFile& out);
 
 } // namespace rbcd
