@@ -171,6 +171,33 @@ void discard_output(const std::string& path) {
     ::unlink(path.c_str());   // unlink, not remove: never a directory
 }
 
+OlderOutput::OlderOutput(const std::string& path) {
+    if (path.empty() || needs_in_place(path)) return;
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0) return;
+    struct stat st {};
+    struct statfs fs {};
+    // Held only when it is worth it and the space it keeps cannot matter.
+    const bool hold = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size >= (off_t(1) << 20) &&
+                      ::fstatfs(fd, &fs) == 0 &&
+                      static_cast<unsigned long long>(st.st_size) / 4 <
+                          static_cast<unsigned long long>(fs.f_bavail) * static_cast<unsigned long long>(fs.f_bsize);
+    if (hold) fd_ = fd;
+    else ::close(fd);
+}
+
+OlderOutput& OlderOutput::operator=(OlderOutput&& o) noexcept {
+    if (this != &o) {
+        release();
+        fd_ = std::exchange(o.fd_, -1);
+    }
+    return *this;
+}
+
+void OlderOutput::release() {
+    if (fd_ >= 0) ::close(std::exchange(fd_, -1));
+}
+
 OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
     struct stat st {};
     if (::stat(path_.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
