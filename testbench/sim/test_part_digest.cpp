@@ -37,6 +37,26 @@ std::string random_bytes(std::size_t n, std::uint64_t seed) {
 
 std::uint64_t block_of(std::uint64_t off) { return off / kBlockBytes * kBlockBytes; }
 
+// The file at `path` as the parent finds it when it cuts the parts.
+FileId planned_id(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY);
+    REQUIRE(fd >= 0);
+    const std::optional<FileId> id = file_id(fd);
+    ::close(fd);
+    REQUIRE(id);
+    return *id;
+}
+
+// A later part's reader over all of `bytes` from `start` (its header chunk
+// first, then a skip): what its digest says.
+nlohmann::json read_from(PartDigest& d, int fd, const std::string& bytes, std::size_t start) {
+    d.file(fd);
+    d.raw(bytes.data(), 4096);
+    d.gap(start);
+    d.raw(bytes.data() + start, bytes.size() - start);
+    return d.finish();
+}
+
 // One worker of a run cut at `offsets` (offsets[0] = 0), as the parent plans
 // it and its reader feeds it: the first 4 KiB (the trace's header lines),
 // then, for a part past them, a skip to its first frame, and reads of uneven
@@ -81,10 +101,7 @@ std::string split_digest(const test::TempDir& td, const std::string& path, const
     std::sort(offsets.begin(), offsets.end());
     const std::size_t short_part = rng() % parts, dropped = rng() % parts;
     SplitDigest split;
-    const int fd = ::open(path.c_str(), O_RDONLY);
-    REQUIRE(fd >= 0);
-    split.planned = *file_id(fd);
-    ::close(fd);
+    split.planned = planned_id(path);
     for (std::size_t k = 0; k < parts; ++k) {
         std::uint64_t stop = k + 1 < parts ? std::min<std::uint64_t>(len, offsets[k + 1] + rng() % 5000) : len;
         if (early && k == short_part) stop = offsets[k] + (stop - offsets[k]) / 2;
@@ -97,6 +114,25 @@ std::string split_digest(const test::TempDir& td, const std::string& path, const
     CHECK(d.size == len);
     return d.hex;
 }
+
+// A file of `len` random bytes cut at `cut`, its first part joined: the
+// second part's to be tried; `fd` open on it.
+struct FirstPartJoined {
+    test::TempDir td;
+    std::string bytes, path;
+    int fd = -1;
+    SplitDigest split;
+    FirstPartJoined(std::size_t len, std::uint64_t seed, std::uint64_t cut)
+        : bytes(random_bytes(len, seed)), path(td.write("t.bin", bytes)) {
+        split.planned = planned_id(path);
+        std::mt19937_64 rng(seed);
+        split.add(run_part(td, path, bytes, {0, cut}, 0, cut + 500, rng), td.path("0.xxh"));
+        fd = ::open(path.c_str(), O_RDONLY);
+        REQUIRE(fd >= 0);
+    }
+    ~FirstPartJoined() { ::close(fd); }
+    std::string whole() const { return xxh128_hex(bytes.data(), bytes.size()); }
+};
 
 } // namespace
 
@@ -170,10 +206,7 @@ TEST_CASE("part digest: a file replaced or rewritten since the cut has no digest
     const std::string bytes = random_bytes(100000, 1), other = random_bytes(100000, 2);
     const std::string path = td.write("t.bin", bytes);
     SplitDigest split;
-    const int fd = ::open(path.c_str(), O_RDONLY);
-    REQUIRE(fd >= 0);
-    split.planned = *file_id(fd);
-    ::close(fd);
+    split.planned = planned_id(path);
     split.add(run_part(td, path, bytes, {0}, 0, bytes.size(), rng), td.path("0.xxh"));
     REQUIRE(digest_from_parts(path, split).hex == xxh128_hex(bytes.data(), bytes.size()));
     // Another file at the path: its digest would be neither's.
@@ -184,10 +217,7 @@ TEST_CASE("part digest: a file replaced or rewritten since the cut has no digest
     CHECK_THAT(d.note, Catch::Contains("replaced or rewritten"));
     // A worker that read another file than the one cut.
     td.write("t.bin", bytes);
-    const int fd2 = ::open(path.c_str(), O_RDONLY);
-    REQUIRE(fd2 >= 0);
-    split.planned = *file_id(fd2);
-    ::close(fd2);
+    split.planned = planned_id(path);
     split.parts[0].file->ino += 1;
     d = digest_from_parts(path, split);
     CHECK(d.hex.empty());
@@ -195,10 +225,7 @@ TEST_CASE("part digest: a file replaced or rewritten since the cut has no digest
     // Rewritten in place, the same inode and size: its time says so.
     {
         const std::string ours = td.write("t.bin", bytes);
-        const int f = ::open(ours.c_str(), O_RDONLY);
-        REQUIRE(f >= 0);
-        split.planned = *file_id(f);
-        ::close(f);
+        split.planned = planned_id(ours);
         split.parts[0].file = split.planned;
         REQUIRE(digest_from_parts(path, split).hex == xxh128_hex(bytes.data(), bytes.size()));
         const int w = ::open(ours.c_str(), O_WRONLY);
@@ -253,44 +280,28 @@ TEST_CASE("part digest: a worker's entry that does not parse is refused") {
 TEST_CASE("part digest: block sums that cannot be written leave the blocks to the parent") {
     // Not the run's failure (a full disk fails the run's own outputs, named):
     // the part says how many it wrote, and the parent hashes the rest.
-    test::TempDir td;
-    CHECK_THROWS_AS(PartDigest(1000, 4096, td.path("1.xxh")), std::invalid_argument);
-    const std::string bytes = random_bytes(300000, 3);
-    const std::string path = td.write("t.bin", bytes);
-    const int fd = ::open(path.c_str(), O_RDONLY);
-    REQUIRE(fd >= 0);
-    SplitDigest split;
-    split.planned = *file_id(fd);
-    std::mt19937_64 rng(9);
-    split.add(run_part(td, path, bytes, {0, 100000}, 0, 100500, rng), td.path("0.xxh"));
-    std::vector<std::string> sinks{td.path("no/such/dir/1.xxh")};
+    FirstPartJoined f(300000, 3, 100000);
+    CHECK_THROWS_AS(PartDigest(1000, 4096, f.td.path("1.xxh")), std::invalid_argument);
+    std::vector<std::string> sinks{f.td.path("no/such/dir/1.xxh")};
     if (::access("/dev/full", W_OK) == 0) sinks.push_back("/dev/full");
     else WARN("no /dev/full here: a full disk not tried");
     for (const std::string& sink : sinks) {
         INFO(sink);
         PartDigest d(99328, 299008, sink);
-        d.file(fd);
-        d.raw(bytes.data(), 4096);
-        d.gap(100000);
-        d.raw(bytes.data() + 100000, bytes.size() - 100000);
-        const nlohmann::json j = d.finish();
+        const nlohmann::json j = read_from(d, f.fd, f.bytes, 100000);
         CHECK(j["blocks"] == 0);
-        SplitDigest s = split;
+        SplitDigest s = f.split;
         s.add(j, sink);
-        CHECK(digest_from_parts(path, s).hex == xxh128_hex(bytes.data(), bytes.size()));
+        CHECK(digest_from_parts(f.path, s).hex == f.whole());
     }
-    ::close(fd);
 }
 
 TEST_CASE("part digest: an entry claiming blocks past the file's last is not used") {
     test::TempDir td;
     const std::string bytes = random_bytes(100000, 4);
     const std::string path = td.write("t.bin", bytes);
-    const int fd = ::open(path.c_str(), O_RDONLY);
-    REQUIRE(fd >= 0);
     SplitDigest split;
-    split.planned = *file_id(fd);
-    ::close(fd);
+    split.planned = planned_id(path);
     nlohmann::json acc = nlohmann::json::array();
     for (int i = 0; i < 8; ++i) acc.push_back("0123456789abcdef");
     const FileId& f = split.planned;
@@ -303,17 +314,9 @@ TEST_CASE("part digest: an entry claiming blocks past the file's last is not use
 }
 
 TEST_CASE("part digest: sums that stop partway, or a sums file cut short, leave the rest to the parent") {
-    test::TempDir td;
-    const std::string bytes = random_bytes(3000000, 8);
-    const std::string path = td.write("t.bin", bytes);
-    const std::string want = xxh128_hex(bytes.data(), bytes.size());
-    const int fd = ::open(path.c_str(), O_RDONLY);
-    REQUIRE(fd >= 0);
-    SplitDigest split;
-    split.planned = *file_id(fd);
-    std::mt19937_64 rng(10);
-    split.add(run_part(td, path, bytes, {0, 500000}, 0, 501000, rng), td.path("0.xxh"));
-    const std::uint64_t from = block_of(500000), to = chained_blocks(bytes.size()) * kBlockBytes;
+    FirstPartJoined f(3000000, 8, 500000);
+    const std::string want = f.whole();
+    const std::uint64_t from = block_of(500000), to = chained_blocks(f.bytes.size()) * kBlockBytes;
     {
         // A file size limit that lets the first 64 KiB of sums through and
         // stops the second piece partway (EFBIG, the signal ignored).
@@ -323,35 +326,26 @@ TEST_CASE("part digest: sums that stop partway, or a sums file cut short, leave 
         struct rlimit lim = old;
         lim.rlim_cur = 100000;
         REQUIRE(::setrlimit(RLIMIT_FSIZE, &lim) == 0);
-        PartDigest d(from, to, td.path("1.xxh"));
-        d.file(fd);
-        d.raw(bytes.data(), 4096);
-        d.gap(500000);
-        d.raw(bytes.data() + 500000, bytes.size() - 500000);
-        const nlohmann::json j = d.finish();
+        PartDigest d(from, to, f.td.path("1.xxh"));
+        const nlohmann::json j = read_from(d, f.fd, f.bytes, 500000);
         REQUIRE(::setrlimit(RLIMIT_FSIZE, &old) == 0);
         std::signal(SIGXFSZ, old_handler);
         CHECK(j["blocks"] == 1024);   // the first piece's
-        SplitDigest s = split;
-        s.add(j, td.path("1.xxh"));
-        CHECK(digest_from_parts(path, s).hex == want);
+        SplitDigest s = f.split;
+        s.add(j, f.td.path("1.xxh"));
+        CHECK(digest_from_parts(f.path, s).hex == want);
     }
     {
         // All the sums written, then the file cut short behind the part's back.
-        PartDigest d(from, to, td.path("2.xxh"));
-        d.file(fd);
-        d.raw(bytes.data(), 4096);
-        d.gap(500000);
-        d.raw(bytes.data() + 500000, bytes.size() - 500000);
-        const nlohmann::json j = d.finish();
+        PartDigest d(from, to, f.td.path("2.xxh"));
+        const nlohmann::json j = read_from(d, f.fd, f.bytes, 500000);
         CHECK(j["blocks"] == (to - from) / kBlockBytes);
-        REQUIRE(::truncate(td.path("2.xxh").c_str(), 64 * 1000 + 17) == 0);
-        SplitDigest s = split;
-        s.add(j, td.path("2.xxh"));
-        CHECK(digest_from_parts(path, s).hex == want);
+        REQUIRE(::truncate(f.td.path("2.xxh").c_str(), 64 * 1000 + 17) == 0);
+        SplitDigest s = f.split;
+        s.add(j, f.td.path("2.xxh"));
+        CHECK(digest_from_parts(f.path, s).hex == want);
         // Gone altogether.
-        REQUIRE(std::remove(td.path("2.xxh").c_str()) == 0);
-        CHECK(digest_from_parts(path, s).hex == want);
+        REQUIRE(std::remove(f.td.path("2.xxh").c_str()) == 0);
+        CHECK(digest_from_parts(f.path, s).hex == want);
     }
-    ::close(fd);
 }
