@@ -15,6 +15,7 @@
 #include <fcntl.h>
 #include <sys/wait.h>
 #include <memory>
+#include <system_error>
 #include <thread>
 #include <systemc>
 #include <sys/stat.h>
@@ -226,9 +227,13 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     std::future<void> older_gone;
     if (std::any_of(older.begin(), older.end(), [](const OlderOutput& o) { return o.held(); })) {
         const InterruptsHeld held;
-        older_gone = std::async(std::launch::async, [&older] {
-            for (OlderOutput& o : older) o.release();
-        });
+        try {
+            older_gone = std::async(std::launch::async, [&older] {
+                for (OlderOutput& o : older) o.release();
+            });
+        } catch (const std::system_error&) {
+            for (OlderOutput& o : older) o.release();   // no thread to be had: here
+        }
     }
     if (stats_out.active() && !split && trace && first_ok) start_hash();
 
@@ -516,6 +521,8 @@ int run(Options opt) {
         return inputs;
     };
     nlohmann::json provenance;   // for stats_out (computed by run_jobs, or below)
+    // One process after all: the older outputs go now, as they would have.
+    if (parts.size() < 2) older.clear();
     if (parts.size() >= 2) {
         const auto prov_inputs = provenance_inputs(src ? src->name() : opt.trace);
         if (run_jobs(opt, parts, prov_inputs, cfg, collisions_out, stats_out, frame_stats_out, older, provenance))

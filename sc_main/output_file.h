@@ -73,9 +73,12 @@ void check_output_paths(const std::vector<NamedPath>& outputs, const std::vector
 // closes, here at release() (or when the process ends, however it ends).
 // Freeing a large file's pages costs about 0.25 ms for each 2 MB (ext4);
 // rbcd-sim --jobs releases on a core a finished worker left. Not held, and
-// freed at the unlink as before, when the file system has less than four
-// times the file's size free: a new result must not run out of space
-// because the old one is still held.
+// freed at the unlink as before, when it is under 1 MiB, on a network file
+// system, or when its file system has less than four times the space it
+// takes free (older_worth_holding): a new result must not run out of space
+// because the old one is still held. (A disk quota is not looked at: the
+// held file counts against it until released.)
+bool older_worth_holding(std::uint64_t size, std::uint64_t free_bytes);
 class OlderOutput {
 public:
     OlderOutput() = default;

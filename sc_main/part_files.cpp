@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstring>
 #include <string_view>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -145,48 +146,124 @@ std::string offset_frame_line(const PartFiles& p, std::uint64_t n, std::string_v
     return f.dump() + "\n";
 }
 
-// Where KEY's number is in a compact JSON line, when KEY occurs once, as a
-// key, followed by a plain unsigned number: [begin, end) of its digits.
-bool key_number(std::string_view line, std::string_view key, std::size_t& begin, std::size_t& end, std::uint64_t& v) {
-    const std::size_t at = line.find(key);
-    if (at == std::string_view::npos || at == 0 || (line[at - 1] != '{' && line[at - 1] != ',') ||
-        line.find(key, at + 1) != std::string_view::npos)
-        return false;
-    begin = end = at + key.size();
-    v = 0;
-    while (end < line.size() && line[end] >= '0' && line[end] <= '9') {
-        if (__builtin_mul_overflow(v, 10u, &v) || __builtin_add_overflow(v, std::uint64_t(line[end] - '0'), &v))
-            return false;
-        ++end;
+// The three numbers the join needs from a line as the library writes a
+// frame's object (compact: no space outside strings; every object's keys in
+// order, none twice), found in one pass that tracks strings and nesting:
+// [begin, end) of each one's digits. False for anything else: another shape,
+// a key missing, given twice or only inside a nested object, keys out of
+// order, a number that is not a plain unsigned one, a key where a value goes
+// or a value where a key goes, brackets that do not close at the end. (It
+// does not check that the other numbers and strings are written as the
+// library writes them: the file is this process's own worker's.)
+struct FrameNumbers {
+    std::size_t begin[3] = {0, 0, 0}, end[3] = {0, 0, 0};   // end_cycle, frame, start_cycle
+    std::uint64_t value[3] = {0, 0, 0};
+};
+bool frame_numbers(std::string_view line, FrameNumbers& out) {
+    static constexpr std::string_view kKeys[3] = {"end_cycle", "frame", "start_cycle"};
+    if (line.size() < 2 || line.front() != '{' || line.back() != '}') return false;
+    struct Level {
+        bool object;
+        std::string_view last_key;   // an object's: the next must sort after it
+    };
+    std::vector<Level> levels;
+    bool key_next = false;   // in an object, after '{' or ',': a key (or '}' after '{')
+    int found = 0;
+    for (std::size_t i = 0; i < line.size(); ++i) {
+        const char c = line[i];
+        if (key_next) {
+            key_next = false;
+            if (c == '}' && line[i - 1] == '{') {
+                levels.pop_back();
+                if (levels.empty() && i + 1 != line.size()) return false;
+                continue;
+            }
+            if (c != '"') return false;
+            std::size_t e = i + 1;
+            while (e < line.size() && line[e] != '"') e += line[e] == '\\' ? 2 : 1;
+            if (e + 1 >= line.size() || line[e + 1] != ':') return false;
+            const std::string_view key = line.substr(i + 1, e - i - 1);
+            Level& lv = levels.back();
+            if (!lv.last_key.empty() && !(lv.last_key < key)) return false;   // out of order, or twice
+            lv.last_key = key;
+            i = e + 1;   // the ':'
+            if (levels.size() != 1) continue;
+            for (int k = 0; k < 3; ++k) {
+                if (key != kKeys[k]) continue;
+                std::size_t b = i + 1, d = b;
+                std::uint64_t v = 0;
+                while (d < line.size() && line[d] >= '0' && line[d] <= '9') {
+                    if (__builtin_mul_overflow(v, 10u, &v) || __builtin_add_overflow(v, std::uint64_t(line[d] - '0'), &v))
+                        return false;
+                    ++d;
+                }
+                if (d == b || (line[b] == '0' && d - b > 1) || (line[d] != ',' && line[d] != '}')) return false;
+                out.begin[k] = b;
+                out.end[k] = d;
+                out.value[k] = v;
+                ++found;
+                i = d - 1;
+            }
+            continue;
+        }
+        switch (c) {
+        case '"': {
+            std::size_t e = i + 1;
+            while (e < line.size() && line[e] != '"') e += line[e] == '\\' ? 2 : 1;
+            if (e >= line.size()) return false;
+            i = e;
+            break;
+        }
+        case '{':
+            levels.push_back({true, {}});
+            key_next = true;
+            break;
+        case '[':
+            levels.push_back({false, {}});
+            break;
+        case '}':
+        case ']':
+            if (levels.empty() || levels.back().object != (c == '}')) return false;
+            levels.pop_back();
+            if (levels.empty() && i + 1 != line.size()) return false;
+            break;
+        case ',':
+            if (levels.empty()) return false;
+            key_next = levels.back().object;
+            break;
+        case ':':
+            return false;   // only after a key, where the key's branch takes it
+        case ' ':
+        case '\t':
+        case '\n':
+        case '\r':
+            return false;   // not compact
+        default:
+            break;
+        }
     }
-    return end > begin && end - begin <= 20 && end < line.size() && (line[end] == ',' || line[end] == '}') &&
-           (line[begin] != '0' || end - begin == 1);
+    return levels.empty() && found == 3;
 }
 
-// The line the JSON path above writes, without parsing it: the worker wrote
-// it compact, so only the two numbers change (offset 0: none). False when
-// the line is not of that shape; the JSON path then says what is wrong.
+// The line the JSON path above writes, without parsing it: only the two
+// cycle numbers change (offset 0: none). False when the line is not of the
+// library's shape; the JSON path then says what is wrong.
 bool offset_frame_line_quick(const PartFiles& p, std::uint64_t n, std::string_view line, std::uint64_t offset,
                              std::string& out) {
-    std::size_t fb = 0, fe = 0, sb = 0, se = 0, eb = 0, ee = 0;
-    std::uint64_t frame = 0, start = 0, end = 0;
-    if (n > p.frames || line.empty() || line.front() != '{' || line.back() != '}' ||
-        !key_number(line, "\"frame\":", fb, fe, frame) || frame != p.first_frame + n - 1 ||
-        !key_number(line, "\"start_cycle\":", sb, se, start) || !key_number(line, "\"end_cycle\":", eb, ee, end) ||
-        __builtin_add_overflow(start, offset, &start) || __builtin_add_overflow(end, offset, &end))
+    FrameNumbers f;
+    std::uint64_t start = 0, end = 0;
+    if (n > p.frames || !frame_numbers(line, f) || f.value[1] != p.first_frame + n - 1 ||
+        __builtin_add_overflow(f.value[2], offset, &start) || __builtin_add_overflow(f.value[0], offset, &end))
         return false;
     if (offset == 0) {
         out.append(line);
     } else {
-        // The two numbers in the order they come.
-        const bool start_first = sb < eb;
-        const std::size_t b1 = start_first ? sb : eb, e1 = start_first ? se : ee;
-        const std::size_t b2 = start_first ? eb : sb, e2 = start_first ? ee : se;
-        out.append(line.substr(0, b1));
-        out += std::to_string(start_first ? start : end);
-        out.append(line.substr(e1, b2 - e1));
-        out += std::to_string(start_first ? end : start);
-        out.append(line.substr(e2));
+        // end_cycle comes first (keys in order), start_cycle last.
+        out.append(line.substr(0, f.begin[0]));
+        out += std::to_string(end);
+        out.append(line.substr(f.end[0], f.begin[2] - f.end[0]));
+        out += std::to_string(start);
+        out.append(line.substr(f.end[2]));
     }
     out += '\n';
     return true;
@@ -212,6 +289,11 @@ void append_frame_stats(const PartFiles& p, OutputFile& out, LineText text) {
 }
 
 } // namespace
+
+bool frame_line_is_library_shaped(std::string_view line) {
+    FrameNumbers f;
+    return frame_numbers(line, f);
+}
 
 void append_part_frame_stats(const PartFiles& p, std::uint64_t offset, OutputFile& out) {
     append_frame_stats(p, out, [&](std::uint64_t n, std::string_view line, std::string& buf) {

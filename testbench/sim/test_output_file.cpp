@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -44,7 +45,10 @@ std::string slurp(const std::string& path) {
 
 TEST_CASE("older output: a large older result loses its name at once and its pages at release") {
     test::TempDir td;
-    const std::string path = td.write("collisions.txt", std::string(std::size_t(2) << 20, 'x'));
+    // As /proc names it: the temporary directory's path may hold a symlink.
+    const std::string path =
+        std::filesystem::canonical(td.dir).string() + "/collisions.txt";
+    td.write("collisions.txt", std::string(std::size_t(2) << 20, 'x'));
     OlderOutput older(path);
     REQUIRE(older.held());
     OutputFile out(path);
@@ -68,10 +72,20 @@ TEST_CASE("older output: a small file, none, or not a regular file is not held")
     CHECK_FALSE(OlderOutput("/dev/null").held());
     const std::string fifo = td.path("fifo");
     REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
-    CHECK_FALSE(OlderOutput(fifo).held());   // and not blocked opening it
+    CHECK_FALSE(OlderOutput(fifo).held());   // written in place, never opened here
     // A symlink to a large file: written through (in place), never held.
     const std::string big = td.write("big.txt", std::string(std::size_t(2) << 20, 'x'));
     const std::string link = td.path("link.txt");
     REQUIRE(::symlink(big.c_str(), link.c_str()) == 0);
     CHECK_FALSE(OlderOutput(link).held());
+}
+
+TEST_CASE("older output: held only with four times the space it takes free") {
+    const std::uint64_t MiB = std::uint64_t(1) << 20;
+    CHECK_FALSE(older_worth_holding(MiB - 1, std::uint64_t(1) << 40));   // too small to be worth it
+    CHECK(older_worth_holding(MiB, 4 * MiB + 1));
+    CHECK_FALSE(older_worth_holding(MiB, 4 * MiB));
+    CHECK_FALSE(older_worth_holding(std::uint64_t(1) << 30, std::uint64_t(300) << 20));   // 1 GiB, 300 MiB free
+    CHECK_FALSE(older_worth_holding(std::uint64_t(1) << 62, ~std::uint64_t(0)));          // no overflow
+    CHECK(older_worth_holding(std::uint64_t(1) << 61, ~std::uint64_t(0)));
 }
