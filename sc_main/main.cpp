@@ -45,6 +45,7 @@
 #include "rbcd/report/run_report.h"
 #include "rbcd/report/stats_report.h"
 #include "rbcd/sc_main/provenance.h"
+#include "rbcd/sc_main/sanitizer_stack.h"
 #include "rbcd/hw/rbcd_system.h"
 #include "rbcd/hw/self_check.h"
 
@@ -641,7 +642,10 @@ int run(Options opt) {
     sys.raster.add_observer(&watch);
     if (db) db->attach(sys);
     if (heat) heat->attach(sys);
-    sys.run();
+    {
+        const rbcd::MainStackForSanitizer main_stack;
+        sys.run();
+    }
     if (const std::string bad = self_check(self_check_counters(sys)); !bad.empty()) throw std::runtime_error(bad);
     Progress& progress = watch.progress;
     progress.finish();
