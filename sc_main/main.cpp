@@ -218,7 +218,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         const InterruptsHeld held;
         provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, inputs); });
     };
-    if (stats_out.active() && !split && !trace) start_hash();
+    if (stats_out.active() && !trace) start_hash();
     // The older outputs' pages freed on the core the first worker to end
     // leaves, beside the others and the join (OlderOutput), and (without the
     // workers' digest) the trace hashed there. (Waited for without reaping:
@@ -236,7 +236,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
             for (OlderOutput& o : older) o.release();   // no thread to be had: here
         }
     }
-    if (stats_out.active() && !split && trace && first_ok) start_hash();
+    if (stats_out.active() && trace && !split && first_ok) start_hash();
 
     RunSnapshot all;
     std::vector<PartFiles> files;

@@ -342,7 +342,6 @@ int OutputFile::shared_fd() {
     return ::fileno(f_);
 }
 
-
 std::uint64_t OutputFile::append_from(int fd, std::uint64_t offset, const std::string& what) {
     if (!f_) return 0;
     const auto cannot_read = [&](int err) { return RunError(what + ": cannot read: " + std::strerror(err)); };

@@ -1,7 +1,6 @@
 #include "rbcd/sc_main/part_digest.h"
 
 #include <fcntl.h>
-#include <sys/stat.h>
 #include <unistd.h>
 #define XXH_STATIC_LINKING_ONLY
 #include <xxhash.h>
@@ -17,6 +16,8 @@
 #include <utility>
 
 #include "rbcd/common/errors.h"
+#include "rbcd/common/write_all.h"
+#include "rbcd/sc_main/provenance.h"
 
 namespace rbcd {
 
@@ -266,10 +267,6 @@ namespace {
 
 constexpr std::size_t kSumsBuffered = 1024;   // 64 KiB of sums a write
 
-std::int64_t mtime_of(const struct stat& st) {
-    return static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
-}
-
 std::string hex64(std::uint64_t v) {
     char b[17];
     std::snprintf(b, sizeof b, "%016llx", static_cast<unsigned long long>(v));
@@ -296,17 +293,6 @@ bool pread_all(int fd, unsigned char* dst, std::size_t n, std::uint64_t off) {
 }
 
 } // namespace
-
-std::optional<FileId> file_id(int fd) {
-    struct stat st {};
-    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) return std::nullopt;
-    FileId id;
-    id.dev = static_cast<std::uint64_t>(st.st_dev);
-    id.ino = static_cast<std::uint64_t>(st.st_ino);
-    id.size = static_cast<std::uint64_t>(st.st_size);
-    id.mtime_ns = mtime_of(st);
-    return id;
-}
 
 PartDigest::PartDigest(std::uint64_t from, std::uint64_t to, std::string sums_path)
     : from_(from), to_(std::max(from, to)), next_(from), stage_(new unsigned char[kBlockBytes]),
@@ -394,24 +380,15 @@ void PartDigest::take(const unsigned char* p, std::uint64_t at, std::size_t n) {
 }
 
 bool PartDigest::flush_sums() {
-    const auto* p = reinterpret_cast<const char*>(sums_.data());
-    std::size_t n = sums_.size() * sizeof(Lanes);
-    while (n > 0) {
-        const ssize_t w = ::write(sums_fd_, p, n);
-        if (w < 0 && errno == EINTR) continue;
-        if (w <= 0) {
-            // Not the run's failure: the parent hashes the rest from the file.
-            stopped_ = true;
-            sums_.clear();
-            ::close(std::exchange(sums_fd_, -1));
-            return false;
-        }
-        p += w;
-        n -= static_cast<std::size_t>(w);
-    }
-    written_ += sums_.size();
+    const bool ok = write_all(sums_fd_, sums_.data(), sums_.size() * sizeof(Lanes)) == 0;
+    if (ok) written_ += sums_.size();
     sums_.clear();
-    return true;
+    if (!ok) {
+        // Not the run's failure: the parent hashes the rest from the file.
+        stopped_ = true;
+        ::close(std::exchange(sums_fd_, -1));
+    }
+    return ok;
 }
 
 nlohmann::json PartDigest::finish() {
@@ -544,10 +521,8 @@ FileDigest digest_from_parts(const std::string& path, const SplitDigest& split) 
             out.note = "read error";
             return out;
         }
-        XXH128_canonical_t c;
-        XXH128_canonicalFromHash(&c, XXH3_128bits(buf, static_cast<std::size_t>(len)));
         if (!unchanged_since()) return changed();
-        for (unsigned char b : c.digest) out.hex += hex64(b).substr(14);
+        out.hex = xxh128_hex(buf, static_cast<std::size_t>(len));
         return out;
     }
     const std::uint64_t end = chained_blocks(len) * kBlockBytes;

@@ -30,6 +30,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rbcd/io/gzip_stream.h"
+#include "rbcd/sc_main/provenance.h"   // FileId
 
 namespace rbcd {
 
@@ -69,19 +70,6 @@ std::uint64_t tail_start(std::uint64_t len);
 Digest128 finish(Lanes acc, const unsigned char* tail, std::uint64_t len);
 
 } // namespace xxh3_blocks
-
-// A regular file as read: a different one at the path later means it was
-// replaced or rewritten.
-struct FileId {
-    std::uint64_t dev = 0, ino = 0, size = 0;
-    std::int64_t mtime_ns = 0;
-    bool operator==(const FileId& o) const {
-        return dev == o.dev && ino == o.ino && size == o.size && mtime_ns == o.mtime_ns;
-    }
-    bool operator!=(const FileId& o) const { return !(*this == o); }
-};
-// The file open at `fd`, when it is a regular one.
-std::optional<FileId> file_id(int fd);
 
 // A worker's part of the digest, given to its trace reader: the blocks of
 // bytes [from, to) (multiples of 1,024) out of the bytes the reader reads.

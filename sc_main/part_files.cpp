@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <string_view>
@@ -167,29 +168,30 @@ bool frame_numbers(std::string_view line, FrameNumbers& out) {
         std::string_view last_key;   // an object's: the next must sort after it
     };
     std::vector<Level> levels;
+    // Where the string opening at line[i] closes (line.size() when it does not).
+    const auto string_end = [&line](std::size_t i) {
+        std::size_t e = i + 1;
+        while (e < line.size() && line[e] != '"') e += line[e] == '\\' ? 2 : 1;
+        return std::min(e, line.size());
+    };
     bool key_next = false;   // in an object, after '{' or ',': a key (or '}' after '{')
     int found = 0;
     for (std::size_t i = 0; i < line.size(); ++i) {
         const char c = line[i];
-        if (key_next) {
-            key_next = false;
-            if (c == '}' && line[i - 1] == '{') {
-                levels.pop_back();
-                if (levels.empty() && i + 1 != line.size()) return false;
-                continue;
-            }
+        const bool key = key_next && !(c == '}' && line[i - 1] == '{');
+        key_next = false;
+        if (key) {
             if (c != '"') return false;
-            std::size_t e = i + 1;
-            while (e < line.size() && line[e] != '"') e += line[e] == '\\' ? 2 : 1;
+            const std::size_t e = string_end(i);
             if (e + 1 >= line.size() || line[e + 1] != ':') return false;
-            const std::string_view key = line.substr(i + 1, e - i - 1);
+            const std::string_view name = line.substr(i + 1, e - i - 1);
             Level& lv = levels.back();
-            if (!lv.last_key.empty() && !(lv.last_key < key)) return false;   // out of order, or twice
-            lv.last_key = key;
+            if (!lv.last_key.empty() && !(lv.last_key < name)) return false;   // out of order, or twice
+            lv.last_key = name;
             i = e + 1;   // the ':'
             if (levels.size() != 1) continue;
             for (int k = 0; k < 3; ++k) {
-                if (key != kKeys[k]) continue;
+                if (name != kKeys[k]) continue;
                 std::size_t b = i + 1, d = b;
                 std::uint64_t v = 0;
                 while (d < line.size() && line[d] >= '0' && line[d] <= '9') {
@@ -207,13 +209,10 @@ bool frame_numbers(std::string_view line, FrameNumbers& out) {
             continue;
         }
         switch (c) {
-        case '"': {
-            std::size_t e = i + 1;
-            while (e < line.size() && line[e] != '"') e += line[e] == '\\' ? 2 : 1;
-            if (e >= line.size()) return false;
-            i = e;
+        case '"':
+            i = string_end(i);
+            if (i == line.size()) return false;
             break;
-        }
         case '{':
             levels.push_back({true, {}});
             key_next = true;

@@ -138,11 +138,16 @@ struct ReadDigest::State {
     XXH3_state_t s;
 };
 
-namespace {
-std::int64_t mtime_ns(const struct stat& st) {
-    return static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
+std::optional<FileId> file_id(int fd) {
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) return std::nullopt;
+    FileId id;
+    id.dev = static_cast<std::uint64_t>(st.st_dev);
+    id.ino = static_cast<std::uint64_t>(st.st_ino);
+    id.size = static_cast<std::uint64_t>(st.st_size);
+    id.mtime_ns = static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
+    return id;
 }
-} // namespace
 
 ReadDigest::ReadDigest() : st_(std::make_unique<State>()) {
     XXH3_INITSTATE(&st_->s);
@@ -151,14 +156,7 @@ ReadDigest::ReadDigest() : st_(std::make_unique<State>()) {
 
 ReadDigest::~ReadDigest() = default;
 
-void ReadDigest::file(int fd) {
-    struct stat st {};
-    identified_ = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
-    if (!identified_) return;
-    dev_ = static_cast<std::uint64_t>(st.st_dev);
-    ino_ = static_cast<std::uint64_t>(st.st_ino);
-    mtime_ns_ = mtime_ns(st);
-}
+void ReadDigest::file(int fd) { id_ = file_id(fd); }
 
 void ReadDigest::raw(const void* bytes, std::size_t n) {
     XXH3_128bits_update(&st_->s, bytes, n);
@@ -182,9 +180,7 @@ bool ReadDigest::finish(const std::string& path, nlohmann::json& j) const {
     std::string note;
     const int fd = open_regular(path, note);
     if (fd < 0) return false;
-    struct stat st {};
-    if (identified_ && (::fstat(fd, &st) != 0 || static_cast<std::uint64_t>(st.st_dev) != dev_ ||
-                        static_cast<std::uint64_t>(st.st_ino) != ino_ || mtime_ns(st) != mtime_ns_)) {
+    if (id_ && file_id(fd) != id_) {
         ::close(fd);
         put_no_digest(j, "the file was replaced or rewritten during the run");
         return true;

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,19 @@ std::string command_line(const std::vector<std::string>& argv);
 // the command line itself is what failed, or when it was only recorded.
 std::vector<std::string> option_values(const std::vector<std::string>& argv,
                                        std::initializer_list<const char*> options);
+
+// A regular file as read: a different one at the path later means it was
+// replaced or rewritten.
+struct FileId {
+    std::uint64_t dev = 0, ino = 0, size = 0;
+    std::int64_t mtime_ns = 0;
+    bool operator==(const FileId& o) const {
+        return dev == o.dev && ino == o.ino && size == o.size && mtime_ns == o.mtime_ns;
+    }
+    bool operator!=(const FileId& o) const { return !(*this == o); }
+};
+// The file open at `fd`, when it is a regular one.
+std::optional<FileId> file_id(int fd);
 
 // A file's XXH3-128 state over the bytes its reader read, from its first, as
 // they passed (a RawObserver given to the reader): the provenance goes on from
@@ -64,9 +78,7 @@ private:
     bool whole_ = true, complete_ = false;
     // The file read (a regular file's): a different one at the path when the
     // hash goes on means it was replaced or rewritten during the run.
-    bool identified_ = false;
-    std::uint64_t dev_ = 0, ino_ = 0;
-    std::int64_t mtime_ns_ = 0;
+    std::optional<FileId> id_;
 };
 
 struct SplitDigest;   // sc_main/part_digest.h

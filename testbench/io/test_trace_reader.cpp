@@ -37,10 +37,7 @@ struct TempDir : rbcd::test::TempDir {
     TempDir() : rbcd::test::TempDir("rbcd_io_test") {}
 };
 
-std::string slurp(const std::string& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
+using test::slurp;
 
 std::vector<MemorySource::Item> read_path(const std::string& path, const TraceLimits& lim = {}) {
     TraceReader r(path, lim);

@@ -41,12 +41,7 @@ namespace fs = std::filesystem;
 inline const std::string kVectors = std::string(RBCD_SOURCE_DIR) + "/vectors";
 inline const std::string kOld = "older output that must not survive a failed run\n";
 
-inline std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream os;
-    os << in.rdbuf();
-    return os.str();
-}
+using rbcd::test::slurp;
 
 // As `xxhsum -H2` prints it.
 inline std::string xxh128_of(const std::string& bytes) {

@@ -8,8 +8,6 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "rbcd/sc_main/output_file.h"
 #include "rbcd/testbench/common/temp_dir.h"
@@ -34,12 +32,7 @@ bool holds_deleted(const std::string& path) {
     return found;
 }
 
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
+using test::slurp;
 
 } // namespace
 

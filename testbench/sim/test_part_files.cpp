@@ -4,9 +4,6 @@
 // goes the JSON path, with its error.
 #include <catch2/catch.hpp>
 
-#include <fstream>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
 
 #include "rbcd/common/errors.h"
@@ -19,12 +16,7 @@ using namespace rbcd;
 
 namespace {
 
-std::string slurp(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
+using test::slurp;
 
 // A frame's line as rbcd-sim writes it (report/run_report.h): fractions,
 // nested objects, and with no baseline null percentages.
