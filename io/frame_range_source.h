@@ -7,9 +7,11 @@
 //
 // A range that selects no frame of the input is an InputError at the input's
 // end, naming the input's frame count (an empty run would look like a result).
-// Frames before `first` are read and dropped (the inner source still checks
-// them, so a range run reports the same input errors a whole run would up to
-// `last`); reading stops after `last`, so what follows it is never parsed.
+// Frames before `first` that the inner source produces are dropped (a trace's
+// reader still checks them, so a range run reports the same input errors a
+// whole run would up to `last`; a scene started at `first` renders none:
+// scene/scene_source.h); reading stops after `last`, so what follows it is
+// never parsed.
 #pragma once
 #include <cstdint>
 #include <memory>

@@ -78,7 +78,7 @@ std::vector<JobPart> plan_scene_parts(std::uint64_t frames, FrameRange range, un
     for (std::uint64_t k = 0; k < count; ++k) {
         // n * k / count without overflow: n < 2^64, count <= jobs.
         parts[k].range.first = range.first + n / count * k + n % count * k / count;
-        parts[k].skip = k > 0;
+        parts[k].skip = parts[k].range.first > 0;   // as one process, no frame before the range is rendered
     }
     return close_ranges(std::move(parts), range.last);
 }

@@ -11,10 +11,10 @@
 //
 // A worker does not read what comes before its frames: it starts at its
 // first frame's byte of a trace (found by scan_frames, io/frame_scan.h), or
-// renders a scene from that frame on. The frames before it are the previous
-// worker's, which reads and checks them; the first worker reads from the
-// start, so that an input error before the range is reported as one process
-// reports it.
+// renders a scene from that frame on, as one process does. A trace's frames
+// before it are the previous worker's, which reads and checks them; the
+// first worker reads from the start, so that an input error before the range
+// is reported as one process reports it.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -27,7 +27,7 @@ namespace rbcd {
 
 struct JobPart {
     FrameRange range;            // its --frames (last open, UINT64_MAX, for the part that runs to the input's end)
-    bool skip = false;           // starts at range.first without reading the frames before it
+    bool skip = false;           // starts at range.first without reading (or rendering) the frames before it
     std::uint64_t offset = 0, line = 0;   // a trace's: where frame range.first's record is (line 0: to be counted)
 };
 

@@ -503,7 +503,13 @@ int run(Options opt) {
         auto s = opt.scene.empty()
                      ? scene::SceneSource::from_text(scene::default_scene_text(), "", "<default scene>", scene_limits)
                      : std::make_unique<scene::SceneSource>(opt.scene, scene_limits);
+        // A scene's frames before the range are not rendered: one process
+        // looks at them only to say "nothing in view" (scene_source.h). A
+        // range past the end starts at the last frame, which the range
+        // source needs to say how many frames there are.
         if (part.skip) s->start_at_frame(range.first);
+        else if (!worker && range.first > 0 && s->frame_count() > 0)
+            s->start_at_frame(std::min(range.first, s->frame_count() - 1), scene::SceneSource::BeforeStart::LookIfEmpty);
         if (opt.jobs > 1) parts = plan_scene_parts(s->frame_count(), range, opt.jobs);
         scene_src = s.get();
         src = std::move(s);
@@ -529,7 +535,7 @@ int run(Options opt) {
         if (run_jobs(opt, parts, prov_inputs, cfg, collisions_out, stats_out, frame_stats_out, older, provenance))
             return 0;
         // No fragment in any of the parts' frames: whether the scene has none
-        // at all is one process's to say (it reads every frame).
+        // at all is one process's to say (it looks at every frame).
     }
     if (!src) {
         auto reader = std::make_unique<TraceReader>(opt.trace, trace_limits(cfg), read_digest.get());

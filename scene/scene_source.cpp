@@ -65,10 +65,19 @@ std::vector<std::string> SceneSource::mesh_files() const {
 
 void SceneSource::enable_images(bool on) { images_ = on; }
 
-void SceneSource::start_at_frame(std::uint64_t frame) {
+void SceneSource::start_at_frame(std::uint64_t frame, BeforeStart before) {
     if (state_ != State::BeforeFrame || frame_ != 0) throw std::logic_error("SceneSource::start_at_frame: already started");
-    frame_ = frame;
-    partial_ = frame > 0;
+    frame_ = start_ = frame;
+    look_before_start_ = before == BeforeStart::LookIfEmpty;
+}
+
+bool SceneSource::any_fragment_before_start() {
+    Tile tile;
+    for (std::uint64_t f = 0; f < start_; ++f) {
+        r_->begin_frame(f);
+        if (r_->next_tile(tile, nullptr)) return true;   // a tile is returned only when it holds a fragment
+    }
+    return false;
 }
 
 std::optional<SceneSource::FrameImage> SceneSource::take_frame_image(std::uint64_t frame) {
@@ -96,7 +105,7 @@ FragmentSource::Event SceneSource::next(Tile& tile) {
         case State::BeforeFrame:
             if (frame_ >= r_->desc().frames) {
                 state_ = State::Done;
-                if (total_fragments_ == 0 && !partial_)
+                if (total_fragments_ == 0 && (start_ == 0 || (look_before_start_ && !any_fragment_before_start())))
                     throw InputError(name_ +
                                      ": nothing in view in any frame (no object's triangle covers a pixel; check "
                                      "camera.eye, camera.target, near/far and the objects' positions)");

@@ -52,11 +52,16 @@ public:
 
     std::uint64_t frame_count() const;
 
-    // rbcd-sim --jobs: a worker whose frames start at `frame` renders none
-    // before it (a frame is a function of its number alone); the previous
-    // worker renders and checks them. "Nothing in view in any frame", which
-    // needs every frame, is then not this source's to say. Call before next().
-    void start_at_frame(std::uint64_t frame);
+    // rbcd-sim --frames A:B, and a --jobs worker: frames before `frame` are
+    // not rendered, since a frame is a function of its number alone and
+    // nothing the run computes depends on them. "Nothing in view in any
+    // frame" needs every frame: with BeforeStart::LookIfEmpty (one process)
+    // a run that reaches the scene's end without a fragment renders the
+    // skipped frames, until one holds a fragment, to decide it as a whole run
+    // would; with OthersSay (a worker) it is the parent's to say, which runs
+    // the scene again as one process. Call before next().
+    enum class BeforeStart { OthersSay, LookIfEmpty };
+    void start_at_frame(std::uint64_t frame, BeforeStart before = BeforeStart::OthersSay);
 
     // Per-object information, in submission order (the order of [[object]]).
     struct ObjectInfo {
@@ -106,7 +111,9 @@ private:
     enum class State { BeforeFrame, InFrame, Done } state_ = State::BeforeFrame;
     std::uint64_t frame_ = 0;             // the frame being produced (InFrame) or the next one
     std::uint64_t total_fragments_ = 0;   // collisionable and other, over all frames so far
-    bool partial_ = false;                // started past frame 0 (start_at_frame)
+    std::uint64_t start_ = 0;             // the first frame rendered (start_at_frame)
+    bool look_before_start_ = false;      // BeforeStart::LookIfEmpty
+    bool any_fragment_before_start();
     std::uint64_t max_tile_fragments_;
     bool images_ = false;
     std::optional<FrameImage> current_image_;

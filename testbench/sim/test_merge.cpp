@@ -20,18 +20,23 @@ std::string mask_wall_time(const std::string& stats) {
     return std::regex_replace(stats, wall, "\"$1\": 0");
 }
 
+enum class Input { Trace, Scene };
+
 struct Split {
     TempDir td;
-    std::string trace = td.path("input.rbt");
+    std::string trace;   // empty: the default scene itself
     std::vector<std::string> sets;
 
-    explicit Split(std::vector<std::string> config) : sets(std::move(config)) {
+    explicit Split(std::vector<std::string> config, Input input = Input::Trace) : sets(std::move(config)) {
+        if (input == Input::Scene) return;
         // The default scene (60 frames) as a trace, so that parts and whole read one file.
+        trace = td.path("input.rbt");
         const Result w = run_sim(td, {"-q", "--write-trace", trace});
         REQUIRE(w.status == 0);
     }
     std::vector<std::string> base() const {
-        std::vector<std::string> a{"-q", "--trace", trace};
+        std::vector<std::string> a{"-q"};
+        if (!trace.empty()) a.insert(a.end(), {"--trace", trace});
         for (const auto& s : sets) a.insert(a.end(), {"--set", s});
         return a;
     }
@@ -57,11 +62,15 @@ struct Split {
 
 TEST_CASE("split runs merge into the whole run's stats, collisions and frame stats, byte for byte", "[merge]") {
     // The default configuration, and one that stalls on banks, overflows and
-    // filters output, so that every kind of counter moves.
+    // filters output, so that every kind of counter moves; on a trace, and on
+    // the scene itself, whose later parts render no frame before their range
+    // (a frame is a function of its number).
     const std::vector<std::string> config = GENERATE(
         std::vector<std::string>{},
         std::vector<std::string>{"zeb.banks=1", "zeb.list_length=4", "gpu.bank_wait=unit", "tester.output=tile"});
-    Split s(config);
+    const Input input = GENERATE(Input::Trace, Input::Scene);
+    INFO((input == Input::Scene ? "the default scene" : "the default scene as a trace"));
+    Split s(config, input);
     s.run_part(0, "0:6");
     s.run_part(1, "7:33");
     s.run_part(2, "34:");   // to the input's end: the merged run is the whole input's

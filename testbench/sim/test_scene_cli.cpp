@@ -167,6 +167,104 @@ TEST_CASE("cli scene: a camera looking away from everything exits 2 and leaves n
     expect_input_error(td, r, {"nothing in view"});
 }
 
+// Sphere "a" starts close to the camera, its tiles deeper than the limit
+// the tests set, and from frame 10 on sits at "b"'s place, colliding.
+const std::string kNearThenFar = R"(format = "rbcd-scene 1"
+frames = 20
+[screen]
+width = 96
+height = 64
+[camera]
+eye = [0.0, 0.0, 6.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 45.0
+near = 0.5
+far = 50.0
+[[object]]
+name = "a"
+id = 1
+mesh = "sphere"
+segments = 16
+position = [0.0, 0.0, 3.0]
+  [[object.key]]
+  frame = 10
+  position = [-0.2, 0.0, -30.0]
+[[object]]
+name = "b"
+id = 2
+mesh = "sphere"
+segments = 16
+position = [0.2, 0.0, -30.0]
+)";
+
+TEST_CASE("cli scene: --frames renders no frame before its range", "[frames_cli]") {
+    // A frame is a function of its number: the frames before the range touch
+    // nothing the run computes, so their errors are not the run's. Were they
+    // rendered, frame 0's deep tiles would refuse every range.
+    TempDir td;
+    const std::string scene = td.write("near.toml", kNearThenFar);
+    const std::vector<std::string> limit{"--set", "input.max_tile_fragments=200"};
+    std::vector<std::string> args{"-q", "--scene", scene};
+    args.insert(args.end(), limit.begin(), limit.end());
+    expect_input_error(td, run_with_outputs(td, args), {scene, "frame 0, tile", "input.max_tile_fragments"});
+    auto from_1 = args;   // the range's own frames are checked as ever
+    from_1.insert(from_1.end(), {"--frames", "1:"});
+    expect_input_error(td, run_with_outputs(td, from_1), {scene, "frame 1, tile", "input.max_tile_fragments"});
+
+    const Result whole = run_with_outputs(td, {"-q", "--scene", scene});
+    REQUIRE(whole.status == 0);
+    const std::string all = slurp(td.collisions());
+    const std::size_t at = all.find("frame 10\n");
+    REQUIRE(at != std::string::npos);
+    const std::string expected = "rbcd-collisions 1\n" + all.substr(at);
+    REQUIRE(count(expected, "hit ") > 0);
+    for (const std::vector<std::string>& more : {std::vector<std::string>{"--frames", "10:"},
+                                                 std::vector<std::string>{"--frames", "10:", "--jobs", "2"},
+                                                 std::vector<std::string>{"--frames", "10:", "--jobs", "3"}}) {
+        auto a = args;
+        a.insert(a.end(), more.begin(), more.end());
+        const Result r = run_with_outputs(td, a);
+        INFO(r.cmd << "\n" << r.err);
+        REQUIRE(r.status == 0);
+        CHECK(slurp(td.collisions()) == expected);
+        CHECK(nlohmann::json::parse(slurp(td.stats()))["totals"]["frames"] == 10);
+    }
+}
+
+TEST_CASE("cli scene: --frames says nothing in view only when no frame of the scene has a fragment", "[frames_cli]") {
+    // Rendered from the range on, a run whose frames hold nothing looks at
+    // the skipped frames (until one holds a fragment) to say it as a whole
+    // run would; a range that ends before the scene does never said it.
+    TempDir td;
+    std::string early = kNearThenFar;   // in view in frames 0 to 4 only
+    early.replace(early.find("[0.0, 0.0, 3.0]"), 15, "[0.0, 0.0, 0.0]");
+    early.replace(early.find("frame = 10"), 10, "frame = 5");
+    early.replace(early.find("[-0.2, 0.0, -30.0]"), 18, "[60.0, 0.0, 0.0]");
+    early.replace(early.find("[0.2, 0.0, -30.0]"), 17, "[-60.0, 0.0, 0.0]");
+    const std::string seen_early = td.write("early.toml", early);
+    std::string none = early;
+    none.replace(none.find("[0.0, 0.0, 0.0]"), 15, "[0.0, 60.0, 0.0]");
+    const std::string never_seen = td.write("none.toml", none);
+    for (const char* jobs : {"1", "2"}) {
+        INFO("--jobs " << jobs);
+        const Result whole_none = run_with_outputs(td, {"-q", "--scene", never_seen, "--jobs", jobs});
+        expect_input_error(td, whole_none, {"nothing in view in any frame"});
+        const Result late_none = run_with_outputs(td, {"-q", "--scene", never_seen, "--frames", "5:", "--jobs", jobs});
+        expect_input_error(td, late_none, {"nothing in view in any frame"});
+        CHECK(late_none.err == whole_none.err);
+        CHECK(run_with_outputs(td, {"-q", "--scene", never_seen, "--frames", "5:9", "--jobs", jobs}).status == 0);
+
+        const Result late = run_with_outputs(td, {"-q", "--scene", seen_early, "--frames", "5:", "--jobs", jobs});
+        INFO(late.err);
+        REQUIRE(late.status == 0);
+        const auto totals = nlohmann::json::parse(slurp(td.stats()))["totals"];
+        CHECK(totals["frames"] == 15);
+        CHECK(totals["fragments"] == 0);
+        REQUIRE(run_with_outputs(td, {"-q", "--scene", seen_early, "--frames", "0:4", "--jobs", jobs}).status == 0);
+        CHECK(nlohmann::json::parse(slurp(td.stats()))["totals"]["fragments"] > 0);
+    }
+}
+
 TEST_CASE("cli scene: an unknown scene key exits 2 naming it") {
     TempDir td;
     const std::string scene = td.write("bad.toml", kTwoSpheres + "colour = \"red\"\n");
