@@ -37,6 +37,13 @@ FrameRange parse_frame_range(const std::string& text) {
     return r;
 }
 
+InputError no_frame_selected(const FrameRange& range, std::uint64_t input_frames) {
+    const std::string last = range.last == UINT64_MAX ? "" : std::to_string(range.last);
+    return InputError("--frames: " + std::to_string(range.first) + ":" + last + " selects no frame: the input has " +
+                      std::to_string(input_frames) + " frame" + (input_frames == 1 ? "" : "s") +
+                      (input_frames ? " (0.." + std::to_string(input_frames - 1) + ")" : std::string()));
+}
+
 FrameRangeSource::FrameRangeSource(std::unique_ptr<FragmentSource> inner, FrameRange range)
     : inner_(std::move(inner)), range_(range) {}
 
@@ -48,13 +55,7 @@ FragmentSource::Event FrameRangeSource::next(Tile& tile) {
             done_ = true;
             // A range past the input's end would give an empty run that looks
             // like a result (no frame, exit 0): refused, as a bad --frames is.
-            if (!selected_) {
-                const std::string last = range_.last == UINT64_MAX ? "" : std::to_string(range_.last);
-                throw InputError("--frames: " + std::to_string(range_.first) + ":" + last +
-                                 " selects no frame: the input has " + std::to_string(input_frames_) + " frame" +
-                                 (input_frames_ == 1 ? "" : "s") +
-                                 (input_frames_ ? " (0.." + std::to_string(input_frames_ - 1) + ")" : std::string()));
-            }
+            if (!selected_) throw no_frame_selected(range_, input_frames_);
             return ev;
         }
         if (ev == Event::Frame) {

@@ -17,6 +17,7 @@
 #include <memory>
 #include <string>
 
+#include "rbcd/common/errors.h"
 #include "rbcd/common/fragment.h"
 
 namespace rbcd {
@@ -29,6 +30,11 @@ struct FrameRange {
 // "A:B" (both inclusive), "A:" (A to the end) or "A" (frame A alone); decimal.
 // Throws InputError "--frames: ..." when malformed or B < A.
 FrameRange parse_frame_range(const std::string& text);
+
+// The error of a range that selects no frame of an input of `input_frames`
+// frames: thrown at the input's end, or at once by a caller that knows the
+// count (a scene).
+InputError no_frame_selected(const FrameRange& range, std::uint64_t input_frames);
 
 class FrameRangeSource final : public FragmentSource {
 public:

@@ -503,13 +503,14 @@ int run(Options opt) {
         auto s = opt.scene.empty()
                      ? scene::SceneSource::from_text(scene::default_scene_text(), "", "<default scene>", scene_limits)
                      : std::make_unique<scene::SceneSource>(opt.scene, scene_limits);
-        // A scene's frames before the range are not rendered: one process
-        // looks at them only to say "nothing in view" (scene_source.h). A
-        // range past the end starts at the last frame, which the range
-        // source needs to say how many frames there are.
+        // No frame outside the range is rendered: one process looks at the
+        // frames before it only to say "nothing in view" (scene_source.h).
+        // A range past the end is refused before any frame is.
+        if (range.first >= s->frame_count()) throw no_frame_selected(range, s->frame_count());
         if (part.skip) s->start_at_frame(range.first);
-        else if (!worker && range.first > 0 && s->frame_count() > 0)
-            s->start_at_frame(std::min(range.first, s->frame_count() - 1), scene::SceneSource::BeforeStart::LookIfEmpty);
+        else if (!worker && range.first > 0)
+            s->start_at_frame(range.first, scene::SceneSource::BeforeStart::LookIfEmpty);
+        if (opt.frames_given) s->stop_after_frame(range.last);
         if (opt.jobs > 1) parts = plan_scene_parts(s->frame_count(), range, opt.jobs);
         scene_src = s.get();
         src = std::move(s);

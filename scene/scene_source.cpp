@@ -66,10 +66,14 @@ std::vector<std::string> SceneSource::mesh_files() const {
 void SceneSource::enable_images(bool on) { images_ = on; }
 
 void SceneSource::start_at_frame(std::uint64_t frame, BeforeStart before) {
-    if (state_ != State::BeforeFrame || frame_ != 0) throw std::logic_error("SceneSource::start_at_frame: already started");
+    if (state_ != State::BeforeFrame || frame_ != 0 || start_ != 0)
+        throw std::logic_error("SceneSource::start_at_frame: already started");
+    if (frame >= r_->desc().frames) throw std::logic_error("SceneSource::start_at_frame: past the scene's last frame");
     frame_ = start_ = frame;
     look_before_start_ = before == BeforeStart::LookIfEmpty;
 }
+
+void SceneSource::stop_after_frame(std::uint64_t last) { stop_after_ = last; }
 
 bool SceneSource::any_fragment_before_start() {
     Tile tile;
@@ -109,6 +113,11 @@ FragmentSource::Event SceneSource::next(Tile& tile) {
                     throw InputError(name_ +
                                      ": nothing in view in any frame (no object's triangle covers a pixel; check "
                                      "camera.eye, camera.target, near/far and the objects' positions)");
+                return Event::End;
+            }
+            if (frame_ > stop_after_) {
+                // Not the scene's end: whether anything is in view is not said.
+                state_ = State::Done;
                 return Event::End;
             }
             r_->begin_frame(frame_);

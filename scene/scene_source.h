@@ -52,16 +52,21 @@ public:
 
     std::uint64_t frame_count() const;
 
-    // rbcd-sim --frames A:B, and a --jobs worker: frames before `frame` are
-    // not rendered, since a frame is a function of its number alone and
-    // nothing the run computes depends on them. "Nothing in view in any
-    // frame" needs every frame: with BeforeStart::LookIfEmpty (one process)
-    // a run that reaches the scene's end without a fragment renders the
-    // skipped frames, until one holds a fragment, to decide it as a whole run
-    // would; with OthersSay (a worker) it is the parent's to say, which runs
-    // the scene again as one process. Call before next().
+    // rbcd-sim --frames A:B, and a --jobs worker: frames before `frame` (one
+    // of the scene's) are not rendered, since a frame is a function of its
+    // number alone and nothing the run computes depends on them. "Nothing in
+    // view in any frame" needs every frame: with BeforeStart::LookIfEmpty
+    // (one process) a run that reaches the scene's end without a fragment
+    // renders the skipped frames, until one holds a fragment, to decide it as
+    // a whole run would (and, as a whole run would, stops at a transform that
+    // goes out of range in one of them); with OthersSay (a worker) it is the
+    // parent's to say, which runs the scene again as one process. Call before
+    // next().
     enum class BeforeStart { OthersSay, LookIfEmpty };
     void start_at_frame(std::uint64_t frame, BeforeStart before = BeforeStart::OthersSay);
+    // Ends the stream after frame `last`: frame last + 1 is not set up (its
+    // geometry, its binning, its checks). Call before next().
+    void stop_after_frame(std::uint64_t last);
 
     // Per-object information, in submission order (the order of [[object]]).
     struct ObjectInfo {
@@ -113,6 +118,7 @@ private:
     std::uint64_t total_fragments_ = 0;   // collisionable and other, over all frames so far
     std::uint64_t start_ = 0;             // the first frame rendered (start_at_frame)
     bool look_before_start_ = false;      // BeforeStart::LookIfEmpty
+    std::uint64_t stop_after_ = UINT64_MAX;   // the last frame produced (stop_after_frame)
     bool any_fragment_before_start();
     std::uint64_t max_tile_fragments_;
     bool images_ = false;

@@ -229,6 +229,28 @@ TEST_CASE("cli scene: --frames renders no frame before its range", "[frames_cli]
         CHECK(slurp(td.collisions()) == expected);
         CHECK(nlohmann::json::parse(slurp(td.stats()))["totals"]["frames"] == 10);
     }
+
+    // Nor after it, nor any when the range is past the end: the sphere comes
+    // close in the last frames instead, and a range past them is refused for
+    // what it is.
+    std::string late = kNearThenFar;
+    late.replace(late.find("[0.0, 0.0, 3.0]"), 15, "[-0.2, 0.0, -30.0]");
+    late.replace(late.find("frame = 10"), 10, "frame = 19");
+    late.replace(late.find("  position = [-0.2, 0.0, -30.0]"), 31, "  position = [0.0, 0.0, 3.0]");
+    const std::string near_last = td.write("late.toml", late);
+    for (const char* jobs : {"1", "2"}) {
+        INFO("--jobs " << jobs);
+        auto a = limit;
+        a.insert(a.end(), {"-q", "--scene", near_last, "--jobs", jobs, "--frames"});
+        auto past = a, last = a, before = a;
+        past.push_back("25:");
+        last.push_back("19");
+        before.push_back("0:16");
+        expect_input_error(td, run_with_outputs(td, past),
+                           {"--frames: 25: selects no frame: the input has 20 frames (0..19)"});
+        expect_input_error(td, run_with_outputs(td, last), {near_last, "frame 19, tile", "input.max_tile_fragments"});
+        CHECK(run_with_outputs(td, before).status == 0);
+    }
 }
 
 TEST_CASE("cli scene: --frames says nothing in view only when no frame of the scene has a fragment", "[frames_cli]") {
@@ -245,7 +267,7 @@ TEST_CASE("cli scene: --frames says nothing in view only when no frame of the sc
     std::string none = early;
     none.replace(none.find("[0.0, 0.0, 0.0]"), 15, "[0.0, 60.0, 0.0]");
     const std::string never_seen = td.write("none.toml", none);
-    for (const char* jobs : {"1", "2"}) {
+    for (const char* jobs : {"1", "2", "3"}) {
         INFO("--jobs " << jobs);
         const Result whole_none = run_with_outputs(td, {"-q", "--scene", never_seen, "--jobs", jobs});
         expect_input_error(td, whole_none, {"nothing in view in any frame"});
@@ -253,6 +275,9 @@ TEST_CASE("cli scene: --frames says nothing in view only when no frame of the sc
         expect_input_error(td, late_none, {"nothing in view in any frame"});
         CHECK(late_none.err == whole_none.err);
         CHECK(run_with_outputs(td, {"-q", "--scene", never_seen, "--frames", "5:9", "--jobs", jobs}).status == 0);
+        // A range past the end is the command line's error, whatever the scene holds.
+        expect_input_error(td, run_with_outputs(td, {"-q", "--scene", never_seen, "--frames", "20:", "--jobs", jobs}),
+                           {"--frames: 20: selects no frame: the input has 20 frames (0..19)"});
 
         const Result late = run_with_outputs(td, {"-q", "--scene", seen_early, "--frames", "5:", "--jobs", jobs});
         INFO(late.err);
