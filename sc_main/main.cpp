@@ -75,11 +75,33 @@ struct Options {
     std::vector<std::string> argv;   // for the stats' provenance
 };
 
-void make_directory(const std::string& dir) {
+// The directories a run made for its outputs (--images, --heat-maps): a
+// failed run removes those it made, once their files are gone, so that it
+// leaves no empty output directory behind.
+struct MadeDirectories {
+    std::vector<std::string> made;   // deepest first
+    bool keep = false;
+    MadeDirectories() = default;
+    MadeDirectories(const MadeDirectories&) = delete;
+    MadeDirectories& operator=(const MadeDirectories&) = delete;
+    ~MadeDirectories() {
+        if (keep) return;
+        for (const auto& d : made) ::rmdir(d.c_str());   // fails, as it should, on one not empty
+    }
+};
+
+void make_directory(const std::string& dir, MadeDirectories& made) {
     std::error_code ec;
+    std::vector<std::string> missing;
+    for (std::filesystem::path p = dir; !p.empty() && !std::filesystem::exists(std::filesystem::symlink_status(p, ec));
+         p = p.parent_path()) {
+        missing.push_back(p.string());
+        if (p == p.parent_path()) break;
+    }
     std::filesystem::create_directories(dir, ec);
     if (ec || !std::filesystem::is_directory(dir))
         throw rbcd::InputError(dir + ": cannot create directory: " + (ec ? ec.message() : "not a directory"));
+    made.made.insert(made.made.begin(), missing.begin(), missing.end());
 }
 
 void quiet_kernel() {
@@ -580,10 +602,11 @@ int run(Options opt) {
         file_sink = std::make_unique<CollisionFileSink>(collisions_out);
         tee.add(file_sink.get());
     }
+    MadeDirectories made_dirs;   // removed after the files in them, on failure
     std::unique_ptr<ImageSink> images;
     if (!opt.images.empty()) {
         if (!scene_src) throw InputError("--images: needs a scene (--scene, or no --trace)");
-        make_directory(opt.images);
+        make_directory(opt.images, made_dirs);
         scene_src->enable_images(true);
         images = std::make_unique<ImageSink>(*scene_src, opt.images, cfg.tile.width, cfg.tile.height);
         tee.add(images.get());
@@ -593,7 +616,7 @@ int run(Options opt) {
     // each frame's (the images directory keeps one PNG a frame: scripts count them).
     std::unique_ptr<HeatMaps> heat;
     if (!opt.heat_maps.empty()) {
-        make_directory(opt.heat_maps);
+        make_directory(opt.heat_maps, made_dirs);
         heat = std::make_unique<HeatMaps>(opt.heat_maps, !opt.images.empty(), src->header().screen_w,
                                           src->header().screen_h, cfg.tile.width, cfg.tile.height);
     }
@@ -667,6 +690,7 @@ int run(Options opt) {
     }
     image_guard.keep = true;
     if (heat) heat->keep();
+    made_dirs.keep = true;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);

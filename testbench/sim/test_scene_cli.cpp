@@ -3,6 +3,7 @@
 #include "rbcd/testbench/sim/cli_util.h"
 
 #include <nlohmann/json.hpp>
+#include <filesystem>
 
 using namespace rbcd::cli_test;
 
@@ -288,6 +289,24 @@ TEST_CASE("cli scene: --frames says nothing in view only when no frame of the sc
         REQUIRE(run_with_outputs(td, {"-q", "--scene", seen_early, "--frames", "0:4", "--jobs", jobs}).status == 0);
         CHECK(nlohmann::json::parse(slurp(td.stats()))["totals"]["fragments"] > 0);
     }
+}
+
+TEST_CASE("cli scene: a failed run removes the output directories it made, and only those") {
+    TempDir td;
+    const std::string scene = td.write("near.toml", kNearThenFar);
+    const std::string made = td.path("made"), there = td.path("there");
+    std::filesystem::create_directory(there);
+    const Result r = run_with_outputs(td, {"-q", "--scene", scene, "--set", "input.max_tile_fragments=200", "--images",
+                                           made + "/deep/images", "--heat-maps", there + "/maps"});
+    expect_input_error(td, r, {"frame 0, tile", "input.max_tile_fragments"});
+    CHECK_FALSE(std::filesystem::exists(made));
+    CHECK(std::filesystem::is_directory(there));
+    CHECK_FALSE(std::filesystem::exists(there + "/maps"));
+    // A run that succeeds keeps them.
+    const Result ok = run_with_outputs(td, {"-q", "--scene", scene, "--frames", "10:11", "--images", made + "/images"});
+    INFO(ok.err);
+    REQUIRE(ok.status == 0);
+    CHECK(std::filesystem::exists(made + "/images/frame_00011.png"));
 }
 
 TEST_CASE("cli scene: an unknown scene key exits 2 naming it") {
