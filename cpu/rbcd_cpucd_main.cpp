@@ -228,6 +228,7 @@ int fail(int status, const std::string& msg, const Options& opt) {
 } // namespace
 
 int main(int argc, char* argv[]) {
+    rbcd::report_file_size_limit_as_write_error();
     // Before anything allocates through Bullet (docs/cpucd.md, "Counted work").
     if (rbcd::cpucd::counting_under_callgrind()) rbcd::cpucd::use_deterministic_bullet_heap();
     Options opt;

@@ -100,7 +100,7 @@ int run(const Options& o) {
     sh.tile_w = h.tile_w;
     sh.tile_h = h.tile_h;
     sh.depth_bits = h.depth_bits;
-    rbcd::TraceWriter trace(trace_file.open_file_path(), sh, ends_with(o.trace, ".gz"));
+    rbcd::TraceWriter trace(trace_file.open_file_path(), sh, ends_with(o.trace, ".gz"), o.trace);
     rbcd::OutputFile summary;
     if (!o.summary.empty()) {
         summary = rbcd::OutputFile(o.summary);
@@ -199,6 +199,7 @@ int run(const Options& o) {
 } // namespace
 
 int main(int argc, char** argv) {
+    rbcd::report_file_size_limit_as_write_error();
     std::ios::sync_with_stdio(false);
     try {
         return run(parse(argc, argv));

@@ -33,7 +33,8 @@ struct TraceWriter::Deflater {
     ~Deflater() { deflateEnd(&z); }
 };
 
-TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header, bool gzip) : path_(path) {
+TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header, bool gzip, const std::string& shown_as)
+    : path_(shown_as.empty() ? path : shown_as) {
     if (gzip) {
         z_ = std::make_unique<Deflater>();
         // windowBits 15 + 16: a gzip wrapper rather than zlib's. Level 1: a
@@ -43,7 +44,7 @@ TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header, bo
             throw std::runtime_error(path + ": cannot start gzip compression");
     }
     f_ = std::fopen(path.c_str(), "wb");
-    if (!f_) throw InputError(path + ": cannot create: " + std::strerror(errno));
+    if (!f_) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
     buf_.reserve(kFlushAt + kMaxTileLine);
     buf_ += "rbcd-trace 1\nscreen " + std::to_string(header.screen_w) + " " + std::to_string(header.screen_h) +
             "\ntile_size " + std::to_string(header.tile_w) + " " + std::to_string(header.tile_h) + "\ndepth_bits " +
@@ -51,10 +52,10 @@ TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header, bo
 }
 
 // Writes n bytes, through the compressor when there is one; `finish` ends the
-// gzip member. Throws std::runtime_error on a write error.
+// gzip member. Throws RunError on a write error.
 void TraceWriter::emit(const char* p, std::size_t n, bool finish) {
     if (!z_) {
-        if (n && std::fwrite(p, 1, n, f_) != n) throw std::runtime_error(path_ + ": write error: " + std::strerror(errno));
+        if (n && std::fwrite(p, 1, n, f_) != n) throw RunError(path_ + ": write failed: " + std::strerror(errno));
         return;
     }
     z_stream& z = z_->z;
@@ -68,7 +69,7 @@ void TraceWriter::emit(const char* p, std::size_t n, bool finish) {
         if (rc == Z_STREAM_ERROR) throw std::runtime_error(path_ + ": gzip compression failed");
         const std::size_t have = z_->out.size() - z.avail_out;
         if (have && std::fwrite(z_->out.data(), 1, have, f_) != have)
-            throw std::runtime_error(path_ + ": write error: " + std::strerror(errno));
+            throw RunError(path_ + ": write failed: " + std::strerror(errno));
     } while (z.avail_out == 0 || (finish && rc != Z_STREAM_END));
 }
 
@@ -182,7 +183,7 @@ void TraceWriter::close() {
     buf_.clear();
     if (ok && std::fflush(f) != 0) { ok = false; err = errno; }
     if (std::fclose(f) != 0 && ok) { ok = false; err = errno; }
-    if (!ok) throw std::runtime_error(path_ + ": write error: " + std::strerror(err));
+    if (!ok) throw RunError(path_ + ": write failed: " + std::strerror(err));
 }
 
 } // namespace rbcd

@@ -13,13 +13,16 @@ class TraceWriter {
 public:
     // Throws InputError if the file cannot be created. With `gzip` the file is
     // one gzip member (TraceReader recognises it by its first two bytes).
-    TraceWriter(const std::string& path, const StreamHeader& header, bool gzip = false);
+    // Messages name `shown_as` when given: the user's path, where `path` is
+    // the descriptor of its temporary (OutputFile::open_file_path).
+    TraceWriter(const std::string& path, const StreamHeader& header, bool gzip = false, const std::string& shown_as = {});
     ~TraceWriter();
     TraceWriter(const TraceWriter&) = delete;
     TraceWriter& operator=(const TraceWriter&) = delete;
     void frame(std::uint64_t n);
     void tile(const Tile& t);
-    // Flushes and closes; throws InputError on a write error.
+    // Flushes and closes. A write error, here or before, throws RunError
+    // "NAME: write failed: why".
     void close();
 
 private:

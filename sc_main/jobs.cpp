@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -147,8 +148,12 @@ constexpr int kCannotStart = 127;
 // them, then its program. Never returns: the frames below are the parent's,
 // whose objects (its outputs, its workers) are not the worker's to destroy.
 [[noreturn]] void become_worker(WorkerMain main, const std::vector<std::string>& argv, int out_fd,
-                                const std::string& err_path, const sigset_t& mask) {
+                                const std::string& err_path, const sigset_t& mask, pid_t parent) {
     forget_parents_cleanup();
+    // A parent killed outright (SIGKILL, which no handler sees) takes its
+    // workers with it, rather than leaving them to run their frames to the
+    // end for nobody; checked after, for a parent gone before the request.
+    if (::prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || ::getppid() != parent) ::_exit(kCannotStart);
     // The output first: started without a standard input or error, the parent
     // may hold it as descriptor 0 or 2, which the opens replace.
     if (out_fd >= 0 && out_fd != 1 && ::dup2(out_fd, 1) != 1) ::_exit(kCannotStart);
@@ -194,10 +199,11 @@ Workers::Workers(WorkerMain main, const std::vector<std::vector<std::string>>& a
     ::sigaction(SIGCHLD, &dfl, nullptr);
     // Nothing buffered here may be written twice, by a worker too.
     std::fflush(nullptr);
+    const pid_t self = ::getpid();
     for (std::size_t k = 0; k < argvs.size(); ++k) {
         const int out = k < out_fds.size() ? out_fds[k] : -1;
         const pid_t pid = ::fork();
-        if (pid == 0) become_worker(main, argvs[k], out, err_paths[k], held.previous());
+        if (pid == 0) become_worker(main, argvs[k], out, err_paths[k], held.previous(), self);
         if (pid < 0) {
             const int err = errno;
             // The workers already started would run on, writing where this
@@ -219,7 +225,10 @@ Workers::~Workers() {
 
 void Workers::stop_all() {
     for (std::size_t k = 0; k < pids_.size(); ++k)
-        if (!done_[k]) ::kill(pids_[k], SIGTERM);
+        if (!done_[k]) {
+            ::kill(pids_[k], SIGTERM);
+            ::kill(pids_[k], SIGCONT);   // a stopped worker acts on it only once continued
+        }
     for (std::size_t k = 0; k < pids_.size(); ++k)
         if (!done_[k]) wait_for(k);
 }
@@ -263,6 +272,15 @@ void Workers::wait() {
             throw RunError("--jobs: worker " + std::to_string(k) + ": its exit status is lost (" +
                            std::strerror(lost_[k]) + ")");
         if (WIFEXITED(st) && WEXITSTATUS(st) == 0) continue;
+        // Ended by a signal: killed by it, or through its interrupt handler's
+        // exit (128 + the signal).
+        const int sig = WIFSIGNALED(st)                                              ? WTERMSIG(st)
+                        : WEXITSTATUS(st) > 128 && WEXITSTATUS(st) < 128 + NSIG ? WEXITSTATUS(st) - 128
+                                                                                  : 0;
+        // A worker writing into a pipe whose reader went away (--collisions -
+        // | head) ends the run as one process would: silently, by the same
+        // signal, through this process's interrupt clean-up.
+        if (sig == SIGPIPE) ::raise(SIGPIPE);
         // The worker's own one line, without its program name (the caller's
         // message adds it); its other lines (a scene's warnings) were said once
         // by the caller already.
@@ -272,12 +290,13 @@ void Workers::wait() {
             if (line.rfind("rbcd-sim: ", 0) == 0) last = line.substr(10);
         if (WIFEXITED(st) && WEXITSTATUS(st) == 2) throw InputError(last.empty() ? "a worker refused its input" : last);
         if (last.empty())
-            last = WIFSIGNALED(st) ? "--jobs: worker " + std::to_string(k) + " killed by signal " +
-                                         std::to_string(WTERMSIG(st))
+            last = sig ? "--jobs: worker " + std::to_string(k) + " ended by signal " + std::to_string(sig) + " (" +
+                             ::strsignal(sig) + ")"
                    : WEXITSTATUS(st) == kCannotStart
                        ? "--jobs: cannot start worker " + std::to_string(k) + " (its error file " + err_[k] +
                              " cannot be opened)"
-                       : "--jobs: worker " + std::to_string(k) + " failed";
+                       : "--jobs: worker " + std::to_string(k) + " failed without a message (exit status " +
+                             std::to_string(WEXITSTATUS(st)) + ")";
         throw RunError(last);
     }
 }

@@ -154,7 +154,11 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         std::error_code pe;
         parent = std::filesystem::absolute(opt.collisions, pe).parent_path().string();
     }
-    if (parent.empty()) parent = std::filesystem::temp_directory_path().string();
+    if (parent.empty()) {
+        // TMPDIR as the C library reads it: unset or empty means /tmp.
+        const char* tmpdir = std::getenv("TMPDIR");
+        parent = tmpdir && *tmpdir ? tmpdir : "/tmp";
+    }
     TempDirectory dir(parent);
     // A plain trace's digest is taken by the workers, each over the blocks of
     // the bytes it reads (sc_main/part_digest.h), and joined here when the
@@ -212,7 +216,9 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
             a.insert(a.end(), {"--collisions", "-", "--worker-collisions-name", opt.collisions});
             out_fds.push_back(collisions_out.shared_fd());
         } else {
-            if (collisions_out.active()) a.insert(a.end(), {"--collisions", dir.path(n + ".txt")});
+            // Its write errors name the run's output, whose file system it fills.
+            if (collisions_out.active())
+                a.insert(a.end(), {"--collisions", dir.path(n + ".txt"), "--worker-collisions-name", opt.collisions});
             out_fds.push_back(-1);
         }
         argvs.push_back(std::move(a));
@@ -353,6 +359,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         stats_out.write(stats.dump(2) + "\n");
         stats_out.commit();
     }
+    outputs_complete();
     if (!opt.quiet) {
         // The summary's frame rows from the workers' per-frame lines.
         SummaryFrames sf;
@@ -377,6 +384,13 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         std::fputs(make_summary(stats, sf).c_str(), stdout);
     }
     return true;
+}
+
+// The scene's mesh files, once known: inputs that a failed run's clean-up
+// must not take for an output (fail).
+std::vector<std::string>& mesh_inputs() {
+    static std::vector<std::string> meshes;
+    return meshes;
 }
 
 int run(Options opt) {
@@ -432,15 +446,27 @@ int run(Options opt) {
     if (opt.worker_digest.empty() && !opt.worker_digest_sums.empty())
         throw InputError("--worker-digest-sums: only with --worker-digest");
 
-    // An output over an input would destroy it before it is read.
-    const std::pair<const char*, const std::string*> outs[] = {
-        {"--collisions", &opt.collisions}, {"--stats", &opt.stats}, {"--frame-stats", &opt.frame_stats},
-        {"--vcd", &opt.vcd}, {"--fst", &opt.fst}, {"--gtkw", &gtkw_path}, {"--gtkw", &filter_path},
-        {"--db", &opt.db}, {"--write-trace", &opt.write_trace}};
-    for (const std::string* in : {&opt.trace, &opt.scene, &opt.config_file})
-        for (const auto& [flag, path] : outs)
-            if (!in->empty() && !path->empty() && same_file(*path, *in))
-                throw InputError(std::string(flag) + ": " + *path + " is the input file " + *in);
+    // An output over an input (a scene's meshes too) would destroy it before
+    // it is read; two outputs in one file would leave only the last written.
+    const scene::SceneLimits scene_limits{cfg.tile.width,           cfg.tile.height,
+                                          cfg.zeb.id_bits,          cfg.input.max_scene_bytes,
+                                          cfg.input.max_scene_triangles, cfg.input.max_tile_fragments};
+    std::vector<NamedPath> inputs{{"", opt.trace}, {"", opt.scene}, {"", opt.config_file}};
+    if (!opt.scene.empty())
+        for (const std::string& mesh : scene::SceneSource::mesh_files_of(opt.scene, scene_limits)) {
+            inputs.push_back({"", mesh});
+            mesh_inputs().push_back(mesh);
+        }
+    check_output_paths({{"--collisions", opt.collisions},
+                        {"--stats", opt.stats},
+                        {"--frame-stats", opt.frame_stats},
+                        {"--vcd", opt.vcd},
+                        {"--fst", opt.fst},
+                        {"--gtkw", gtkw_path},
+                        {"--gtkw", filter_path},
+                        {"--db", opt.db},
+                        {"--write-trace", opt.write_trace}},
+                       inputs);
 
     // --jobs: older results at the outputs go as their OutputFiles are
     // opened, but are freed later, on a core a finished worker leaves.
@@ -491,9 +517,6 @@ int run(Options opt) {
     RawObserver* const read_observer = read_digest ? static_cast<RawObserver*>(read_digest.get()) : part_digest.get();
     std::unique_ptr<FragmentSource> src;
     scene::SceneSource* scene_src = nullptr;
-    const scene::SceneLimits scene_limits{cfg.tile.width,           cfg.tile.height,
-                                          cfg.zeb.id_bits,          cfg.input.max_scene_bytes,
-                                          cfg.input.max_scene_triangles, cfg.input.max_tile_fragments};
     std::vector<JobPart> parts;   // more than one: the frames are the workers'
     TraceReader* trace_reader = nullptr;   // the trace's reader, when one process runs it
     if (!opt.trace.empty()) {
@@ -626,7 +649,7 @@ int run(Options opt) {
     OutputFile trace_file;   // the temporary beside the path, or the path itself when not a regular file
     if (!opt.write_trace.empty()) {
         trace_file = OutputFile(opt.write_trace);
-        trace_out = std::make_unique<TraceWriter>(trace_file.open_file_path(), src->header());
+        trace_out = std::make_unique<TraceWriter>(trace_file.open_file_path(), src->header(), false, opt.write_trace);
     }
     struct ImageGuard {
         ImageSink* sink;
@@ -731,6 +754,7 @@ int run(Options opt) {
         stats_out.write(stats.dump(2) + "\n");
         stats_out.commit();
     }
+    outputs_complete();
     if (!opt.quiet) std::fputs(make_summary(stats, report).c_str(), stdout);
     return 0;
 }
@@ -742,14 +766,17 @@ int fail(int status, const std::string& msg, int argc, char* argv[]) {
     // formats.md: on a non-zero exit nothing stands at an output path, not even an
     // older file; but an output path that names one of the inputs is the input.
     const std::vector<std::string> args(argv, argv + argc);
-    auto outputs = rbcd::option_values(args, {"--collisions", "--stats", "--frame-stats", "--vcd", "--fst", "--gtkw", "--db"});
+    auto outputs = rbcd::option_values(
+        args, {"--collisions", "--stats", "--frame-stats", "--vcd", "--fst", "--gtkw", "--db", "--write-trace"});
     const auto gtkw = rbcd::option_values(args, {"--gtkw"});
     for (const auto& wave : rbcd::option_values(args, {"--vcd", "--fst"})) {
         const auto [g, f] = layout_paths(gtkw.empty() ? std::string() : gtkw.back(), wave);
         outputs.push_back(g);
         outputs.push_back(f);
     }
-    rbcd::discard_outputs(outputs, rbcd::option_values(args, {"--trace", "--scene", "--config"}));
+    auto inputs = rbcd::option_values(args, {"--trace", "--scene", "--config"});
+    inputs.insert(inputs.end(), mesh_inputs().begin(), mesh_inputs().end());
+    rbcd::discard_outputs(outputs, inputs);
     return status;
 }
 
@@ -872,4 +899,7 @@ int rbcd_sim_main(const std::vector<std::string>& args) {
     }
 }
 
-int sc_main(int argc, char* argv[]) { return rbcd_sim_main(std::vector<std::string>(argv, argv + argc)); }
+int sc_main(int argc, char* argv[]) {
+    rbcd::report_file_size_limit_as_write_error();
+    return rbcd_sim_main(std::vector<std::string>(argv, argv + argc));
+}

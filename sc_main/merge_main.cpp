@@ -294,6 +294,7 @@ int fail(int status, const std::string& msg, const Options& opt) {
 // A SystemC program only because the report library it shares with rbcd-sim
 // links the kernel; no module is elaborated.
 int sc_main(int argc, char* argv[]) {
+    rbcd::report_file_size_limit_as_write_error();
     Options opt;
     CLI::App app{"rbcd-merge: the outputs of rbcd-sim runs over consecutive frame ranges (--frames) as those of one "
                  "run over all their frames (docs/sweeps.md)"};

@@ -39,9 +39,19 @@ constexpr int kMaxChildren = 1024;
 volatile sig_atomic_t g_children[kMaxChildren];   // 0: ended and forgotten
 volatile sig_atomic_t g_child_count = 0;
 
+// Set once every output stands complete: a signal then ends nothing (the
+// summary on a closed pipe fails quietly; SIGTERM finds the run ending well).
+volatile sig_atomic_t g_outputs_complete = 0;
+
 extern "C" void on_fatal_signal(int sig) {
+    if (g_outputs_complete) return;
+    // SIGCONT too: a stopped worker would never act on the SIGTERM, and the
+    // wait below would never end.
     for (int i = 0; i < g_child_count; ++i)
-        if (g_children[i] > 0) ::kill(g_children[i], SIGTERM);
+        if (g_children[i] > 0) {
+            ::kill(g_children[i], SIGTERM);
+            ::kill(g_children[i], SIGCONT);
+        }
     for (int i = 0; i < g_child_count; ++i)
         if (g_children[i] > 0)
             while (::waitpid(g_children[i], nullptr, 0) < 0 && errno == EINTR) {}
@@ -73,6 +83,20 @@ std::string base_of(const std::string& path) {
     return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 } // namespace
+
+void report_file_size_limit_as_write_error() { ::signal(SIGXFSZ, SIG_IGN); }
+
+void outputs_complete() { g_outputs_complete = 1; }
+
+void result_stands(const std::string& temporary, const std::string& path) {
+    const InterruptsHeld held;
+    for (auto& p : cleanup_paths())
+        if (!temporary.empty() && p == temporary) {
+            p = path;
+            return;
+        }
+    cleanup_paths().push_back(path);
+}
 
 void forget_on_interrupt(const std::string& path) {
     // Only before the simulation runs (see cleanup_paths), or after it.
@@ -118,6 +142,13 @@ void remove_on_interrupt(const std::string& path) {
     (void)installed;
     cleanup_paths().push_back(path);
 }
+
+namespace {
+bool same_file_as_descriptor(const std::string& path, int fd) {
+    struct stat sp {}, sf {};
+    return ::stat(path.c_str(), &sp) == 0 && ::fstat(fd, &sf) == 0 && sp.st_dev == sf.st_dev && sp.st_ino == sf.st_ino;
+}
+} // namespace
 
 bool same_file(const std::string& a, const std::string& b) {
     struct stat sa {}, sb {};
@@ -244,11 +275,15 @@ OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
     int fd = -1;
     if (needs_in_place(path_)) {
         in_place_ = true;
-        fd = path_ == "-" ? ::fcntl(1, F_DUPFD_CLOEXEC, 3)
-                          : ::open(path_.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+        // A name for this process's standard output or error (/dev/stdout,
+        // /proc/self/fd/1) is that descriptor, as "-" is: opened again, a
+        // redirected file would be truncated and written from its start,
+        // under the summary written through the descriptor itself.
+        const int std_fd = path_ == "-" ? 1 : same_file_as_descriptor(path_, 1) ? 1 : same_file_as_descriptor(path_, 2) ? 2 : -1;
+        fd = std_fd >= 0 ? ::fcntl(std_fd, F_DUPFD_CLOEXEC, 3) : ::open(path_.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
         if (fd < 0) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
         // A symlink to a regular file is written through, from the start.
-        if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && path_ != "-") (void)::ftruncate(fd, 0);
+        if (std_fd < 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode)) (void)::ftruncate(fd, 0);
     } else {
         // An older result must not outlive this run, even one killed before it
         // could clean up: it goes now (formats.md).
@@ -404,6 +439,7 @@ void OutputFile::commit() {
             abandon();
             throw RunError(shown() + ": cannot rename into place: " + why);
         }
+        result_stands({}, path_);
         abandon();   // the directory and what else the library left in it
         return;
     }
@@ -423,7 +459,7 @@ void OutputFile::commit() {
         abandon();
         throw RunError(shown() + ": cannot rename into place: " + why);
     }
-    forget_on_interrupt(tmp_);
+    result_stands(tmp_, path_);
     tmp_.clear();
 }
 

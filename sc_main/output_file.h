@@ -48,8 +48,21 @@ public:
 private:
     sigset_t old_;
 };
-// No longer: the path is gone or is the run's result.
+// No longer: the path is gone.
 void forget_on_interrupt(const std::string& path);
+// An output renamed into place (OutputFile::commit) is removed on an
+// interrupt as its temporary was, in its place in the list: outputs stand
+// one by one, and a run interrupted before the last leaves none of them.
+void result_stands(const std::string& temporary, const std::string& path);
+// Every output stands complete: from now on the interrupt handler does
+// nothing, so that a signal (SIGPIPE from a summary on a closed pipe, a late
+// SIGTERM) neither removes a finished run's outputs nor says it failed.
+void outputs_complete();
+// A file-size limit (ulimit -f) fails the write that crosses it (EFBIG, "File
+// too large", reported and cleaned up as any failed write) instead of killing
+// the program with SIGXFSZ, which leaves its temporaries behind. Every
+// program that writes OutputFiles calls it first; children inherit it.
+void report_file_size_limit_as_write_error();
 // Both paths exist and name the same file.
 bool same_file(const std::string& a, const std::string& b);
 // After a failed run: discard_output() for every output path that is not one

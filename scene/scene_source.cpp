@@ -56,6 +56,15 @@ std::string SceneSource::name() const { return name_; }
 std::uint64_t SceneSource::frame_count() const { return r_->desc().frames; }
 const std::vector<SceneSource::ObjectInfo>& SceneSource::objects() const { return r_->objects(); }
 
+std::vector<std::string> SceneSource::mesh_files_of(const std::string& path, const SceneLimits& limits) {
+    const SceneDesc d =
+        parse_scene(read_text_file(path, limits), path, std::filesystem::path(path).parent_path().string(), limits);
+    std::vector<std::string> files;
+    for (const ObjectDesc& o : d.objects)
+        if (!o.builtin && std::find(files.begin(), files.end(), o.mesh) == files.end()) files.push_back(o.mesh);
+    return files;
+}
+
 std::vector<std::string> SceneSource::mesh_files() const {
     std::vector<std::string> files;
     for (const ObjectDesc& o : r_->desc().objects)

@@ -79,6 +79,9 @@ public:
     // The mesh files the scene loads, each once, in the order objects name them
     // (for provenance: their sizes and hashes go into stats.json).
     std::vector<std::string> mesh_files() const;
+    // The same from the scene file alone, read and parsed but no mesh loaded:
+    // what no output may overwrite, known before the outputs are opened.
+    static std::vector<std::string> mesh_files_of(const std::string& path, const SceneLimits& limits);
 
     // ---- Pictures (--images) ----
     static constexpr std::uint32_t kNoDepth = 0xFFFFFFFFu;

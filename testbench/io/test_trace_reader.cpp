@@ -625,7 +625,7 @@ TEST_CASE("io: writer errors name the file", "[io][writer]") {
     if (fs::exists("/dev/full")) {
         TraceWriter w("/dev/full", StreamHeader{});
         w.frame(0);
-        CHECK_THROWS_WITH(w.close(), StartsWith("/dev/full: write error: ") && Contains("No space left on device"));
+        CHECK_THROWS_WITH(w.close(), StartsWith("/dev/full: write failed: ") && Contains("No space left on device"));
     }
 }
 
