@@ -566,7 +566,10 @@ int run(Options opt) {
     const auto provenance_inputs = [&](const std::string& input_name) {
         std::vector<ProvenanceInput> inputs;
         if (!opt.config_file.empty()) inputs.push_back({"config", opt.config_file});
-        if (!opt.trace.empty()) inputs.push_back({"trace", opt.trace, nullptr, read_digest.get()});
+        if (!opt.trace.empty()) {
+            inputs.push_back({"trace", opt.trace, nullptr, read_digest.get()});
+            if (opt.trace != "-") inputs.back().expected = file_id_at(opt.trace);
+        }
         else if (opt.scene.empty()) inputs.push_back({"scene", input_name, &default_scene});
         else inputs.push_back({"scene", opt.scene});
         if (scene_src)

@@ -192,6 +192,14 @@ bool ReadDigest::finish(const std::string& path, nlohmann::json& j) const {
     return true;
 }
 
+std::optional<FileId> file_id_at(const std::string& path) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    if (fd < 0) return std::nullopt;
+    const std::optional<FileId> id = file_id(fd);
+    ::close(fd);
+    return id;
+}
+
 nlohmann::json input_info(const ProvenanceInput& in) {
     nlohmann::json j;
     j["role"] = in.role;
@@ -225,12 +233,20 @@ nlohmann::json input_info(const ProvenanceInput& in) {
         put_no_digest(j, note);
         return j;
     }
+    const auto replaced = [&] { return in.expected && file_id(fd) != in.expected; };
+    if (replaced()) {
+        ::close(fd);
+        put_no_digest(j, "the file was replaced or rewritten during the run");
+        return j;
+    }
     XXH3_state_t state;
     XXH3_INITSTATE(&state);
     XXH3_128bits_reset(&state);
     const bool good = hash_rest(fd, state, size);
+    const bool rewritten = replaced();
     ::close(fd);
-    put_digest(j, size, state, good);
+    if (rewritten) put_no_digest(j, "the file was replaced or rewritten during the run");
+    else put_digest(j, size, state, good);
     return j;
 }
 

@@ -93,7 +93,13 @@ struct ProvenanceInput {
     const std::string* text = nullptr;
     const ReadDigest* read = nullptr;
     const SplitDigest* split = nullptr;
+    // The file as the run found it, for a file hashed again by name after it
+    // was read (--jobs on a gzip trace, --frames): another file there by then
+    // (renamed over it, rewritten) gets no digest and a note, not its own.
+    std::optional<FileId> expected = std::nullopt;
 };
+// The file at `path` now, when it is a regular one.
+std::optional<FileId> file_id_at(const std::string& path);
 nlohmann::json input_info(const ProvenanceInput& in);
 
 // An input's digest: XXH3-128 (libxxhash), 32 lower-case hex digits, as

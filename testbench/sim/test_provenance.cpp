@@ -80,6 +80,25 @@ TEST_CASE("provenance: a file read in several blocks hashes as xxhsum -H2 hashes
     CHECK_FALSE(j.contains("note"));
 }
 
+TEST_CASE("provenance: a file hashed again by name is checked against the one the run found") {
+    test::TempDir td;
+    const std::string path = td.write("t.rbt", "rbcd-trace 1\nthe file the run read\n");
+    ProvenanceInput in{"trace", path};
+    in.expected = file_id_at(path);
+    REQUIRE(in.expected);
+    const auto same = input_info(in);
+    CHECK(same["xxh128"] == xxh128_hex("rbcd-trace 1\nthe file the run read\n", 35));
+    // Another file renamed over it (rbcd-sim --jobs on a gzip trace hashes
+    // by name once the first worker ends).
+    const std::string other = td.write("other.rbt", "rbcd-trace 1\nanother file\n");
+    REQUIRE(std::rename(other.c_str(), path.c_str()) == 0);
+    const auto replaced = input_info(in);
+    CHECK(replaced["xxh128"].is_null());
+    CHECK(replaced["note"] == "the file was replaced or rewritten during the run");
+    // Without the identity, the file there is hashed, as before.
+    CHECK(input_info({"trace", path})["xxh128"] == xxh128_hex("rbcd-trace 1\nanother file\n", 26));
+}
+
 TEST_CASE("provenance: shell quoting reads back as the same words") {
     CHECK(shell_quote("build/bin/rbcd-sim") == "build/bin/rbcd-sim");
     CHECK(shell_quote("--set=zeb.tie=arrival") == "--set=zeb.tie=arrival");
