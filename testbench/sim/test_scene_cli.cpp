@@ -9,10 +9,8 @@ using namespace rbcd::cli_test;
 
 namespace {
 
-// Two overlapping spheres in front of the camera: collide in every frame.
-const std::string kTwoSpheres = R"(format = "rbcd-scene 1"
-frames = 3
-[screen]
+// A 96x64 screen and a camera 6 units in front of the origin.
+const std::string kView = R"([screen]
 width = 96
 height = 64
 [camera]
@@ -21,7 +19,10 @@ target = [0.0, 0.0, 0.0]
 fov_y = 45.0
 near = 0.5
 far = 50.0
-[[object]]
+)";
+
+// Two overlapping spheres in front of the camera: collide in every frame.
+const std::string kTwoSpheres = "format = \"rbcd-scene 1\"\nframes = 3\n" + kView + R"([[object]]
 name = "a"
 id = 1
 mesh = "sphere"
@@ -170,18 +171,7 @@ TEST_CASE("cli scene: a camera looking away from everything exits 2 and leaves n
 
 // Sphere "a" starts close to the camera, its tiles deeper than the limit
 // the tests set, and from frame 10 on sits at "b"'s place, colliding.
-const std::string kNearThenFar = R"(format = "rbcd-scene 1"
-frames = 20
-[screen]
-width = 96
-height = 64
-[camera]
-eye = [0.0, 0.0, 6.0]
-target = [0.0, 0.0, 0.0]
-fov_y = 45.0
-near = 0.5
-far = 50.0
-[[object]]
+const std::string kNearThenFar = "format = \"rbcd-scene 1\"\nframes = 20\n" + kView + R"([[object]]
 name = "a"
 id = 1
 mesh = "sphere"
