@@ -143,6 +143,9 @@ void close_above_2() {
 // A worker that could not set itself up: its status, which the parent reads
 // as "cannot start" (a program exits 127 when it cannot be run).
 constexpr int kCannotStart = 127;
+// Bytes reserved for a worker's standard error: its one line, with room for
+// a scene's warnings before it.
+constexpr off_t kErrorRoom = 64 * 1024;
 
 // The forked worker: its descriptors and signals as a new process would have
 // them, then its program. Never returns: the frames below are the parent's,
@@ -158,7 +161,8 @@ constexpr int kCannotStart = 127;
     // may hold it as descriptor 0 or 2, which the opens replace.
     if (out_fd >= 0 && out_fd != 1 && ::dup2(out_fd, 1) != 1) ::_exit(kCannotStart);
     close_above_2();
-    if (!open_as(2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC)) ::_exit(kCannotStart);
+    // Not truncated: its blocks were reserved by the parent (Workers).
+    if (!open_as(2, err_path.c_str(), O_WRONLY | O_CREAT | O_APPEND)) ::_exit(kCannotStart);
     const auto cannot = [](const char* what) {
         std::fprintf(stderr, "rbcd-sim: --jobs: a worker cannot open /dev/null as its %s: %s\n", what,
                      std::strerror(errno));
@@ -199,6 +203,17 @@ Workers::Workers(WorkerMain main, const std::vector<std::vector<std::string>>& a
     ::sigaction(SIGCHLD, &dfl, nullptr);
     // Nothing buffered here may be written twice, by a worker too.
     std::fflush(nullptr);
+    // Each worker's error file is made here with room reserved for its
+    // message (without growing its size): a worker that fails because its
+    // file system filled up can still say so, where its one line used to be
+    // lost with the space ("worker 0 failed"). Best effort: a file system
+    // without fallocate, or already full, reserves nothing.
+    for (const std::string& err : err_paths) {
+        const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+        if (fd < 0) continue;   // the worker's own open says why
+        (void)::fallocate(fd, FALLOC_FL_KEEP_SIZE, 0, kErrorRoom);
+        ::close(fd);
+    }
     const pid_t self = ::getpid();
     for (std::size_t k = 0; k < argvs.size(); ++k) {
         const int out = k < out_fds.size() ? out_fds[k] : -1;

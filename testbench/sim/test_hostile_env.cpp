@@ -240,3 +240,30 @@ TEST_CASE("hostile env: workers end with a parent killed outright", "[hostile_en
     if (!gone) ::kill(worker, SIGKILL);
     CHECK(gone);
 }
+
+TEST_CASE("hostile env: a worker whose file system fills up still says so", "[hostile_env]") {
+    // A small tmpfs in a mount namespace of the test's own (it goes with the
+    // namespace), holding the collisions and so the workers' parts: a worker
+    // fails for the space, and its error file had room reserved for its line.
+    TempDir td;
+    const std::string mnt = td.path("small");
+    std::filesystem::create_directory(mnt);
+    const Result probe = run_program(td, "/usr/bin/unshare", {"-m", "/bin/sh", "-c", "mount -t tmpfs -o size=256k tmpfs \"$0\"", mnt});
+    if (probe.status != 0) {
+        WARN("skipped: no mount namespace with a tmpfs here (needs root and unshare): " << probe.err);
+        return;
+    }
+    for (int run = 0; run < 4; ++run) {
+        const Result r = run_program(
+            td, "/usr/bin/unshare",
+            {"-m", "/bin/sh", "-c",
+             "mount -t tmpfs -o size=256k tmpfs \"$1\" && \"$0\" -q --jobs 2 --collisions \"$1/c.txt\"; s=$?; "
+             "ls -A \"$1\"; exit $s",
+             RBCD_SIM, mnt});
+        INFO(r.err);
+        CHECK(r.status == 1);
+        CHECK_THAT(r.err, Contains("write failed: No space left on device"));
+        CHECK(count_lines(r.err) == 1);
+        CHECK(r.out.empty());   // nothing left on the small file system
+    }
+}
