@@ -196,6 +196,7 @@ int run(const Options& opt) {
     frames_out.commit();
     geo_out.commit();
     hist_out.commit();
+    rbcd::outputs_complete();   // a summary on a closed pipe leaves them standing
     if (!opt.quiet) {
         const double nf = double(std::max<std::uint64_t>(in.frames(), 1));
         std::printf("rbcd-cpucd: %s\n  frames %llu  parts %zu (%zu closed meshes, %zu concave in the world)\n",

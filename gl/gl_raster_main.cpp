@@ -100,7 +100,7 @@ int run(const Options& o) {
     sh.tile_w = h.tile_w;
     sh.tile_h = h.tile_h;
     sh.depth_bits = h.depth_bits;
-    rbcd::TraceWriter trace(trace_file.open_file_path(), sh, ends_with(o.trace, ".gz"), o.trace);
+    rbcd::TraceWriter trace(trace_file.shared_fd(), sh, ends_with(o.trace, ".gz"), o.trace);
     rbcd::OutputFile summary;
     if (!o.summary.empty()) {
         summary = rbcd::OutputFile(o.summary);
@@ -193,6 +193,7 @@ int run(const Options& o) {
     if (!o.ids_out.empty() && !ids.active())
         throw rbcd::InputError("--ids-frame " + std::to_string(o.ids_frame) + ": the stream has no such frame");
     if (ids.active()) ids.commit();
+    rbcd::outputs_complete();
     return 0;
 }
 

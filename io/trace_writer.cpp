@@ -1,5 +1,8 @@
 #include "rbcd/io/trace_writer.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <stdexcept>
 
 #include <algorithm>
@@ -35,16 +38,31 @@ struct TraceWriter::Deflater {
 
 TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header, bool gzip, const std::string& shown_as)
     : path_(shown_as.empty() ? path : shown_as) {
+    f_ = std::fopen(path.c_str(), "wb");
+    if (!f_) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
+    start(header, gzip);
+}
+
+TraceWriter::TraceWriter(int fd, const StreamHeader& header, bool gzip, const std::string& name) : path_(name) {
+    const int own = fd >= 0 ? ::fcntl(fd, F_DUPFD_CLOEXEC, 3) : -1;
+    f_ = own >= 0 ? ::fdopen(own, "wb") : nullptr;
+    if (!f_) {
+        const int err = errno;
+        if (own >= 0) ::close(own);
+        throw InputError(path_ + ": cannot create: " + std::strerror(err));
+    }
+    start(header, gzip);
+}
+
+void TraceWriter::start(const StreamHeader& header, bool gzip) {
     if (gzip) {
         z_ = std::make_unique<Deflater>();
         // windowBits 15 + 16: a gzip wrapper rather than zlib's. Level 1: a
         // trace is text of small numbers, and level 6 took three times the
         // CPU of the rest of a game capture's conversion for 20% less size.
         if (deflateInit2(&z_->z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
-            throw std::runtime_error(path + ": cannot start gzip compression");
+            throw std::runtime_error(path_ + ": cannot start gzip compression");
     }
-    f_ = std::fopen(path.c_str(), "wb");
-    if (!f_) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
     buf_.reserve(kFlushAt + kMaxTileLine);
     buf_ += "rbcd-trace 1\nscreen " + std::to_string(header.screen_w) + " " + std::to_string(header.screen_h) +
             "\ntile_size " + std::to_string(header.tile_w) + " " + std::to_string(header.tile_h) + "\ndepth_bits " +

@@ -16,6 +16,11 @@ public:
     // Messages name `shown_as` when given: the user's path, where `path` is
     // the descriptor of its temporary (OutputFile::open_file_path).
     TraceWriter(const std::string& path, const StreamHeader& header, bool gzip = false, const std::string& shown_as = {});
+    // The same into descriptor `fd` (duplicated: the caller keeps its own),
+    // named `name` in messages. The trace shares the descriptor's offset: on
+    // a standard output redirected to a file it is not written from the
+    // file's start again, under what else goes there.
+    TraceWriter(int fd, const StreamHeader& header, bool gzip, const std::string& name);
     ~TraceWriter();
     TraceWriter(const TraceWriter&) = delete;
     TraceWriter& operator=(const TraceWriter&) = delete;
@@ -27,6 +32,7 @@ public:
 
 private:
     struct Deflater;
+    void start(const StreamHeader& header, bool gzip);
     void flush();
     void emit(const char* p, std::size_t n, bool finish);
 

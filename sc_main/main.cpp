@@ -99,9 +99,10 @@ void make_directory(const std::string& dir, MadeDirectories& made) {
         if (p == p.parent_path()) break;
     }
     std::filesystem::create_directories(dir, ec);
+    // Recorded before the check: levels made before a failure go too.
+    made.made.insert(made.made.begin(), missing.begin(), missing.end());
     if (ec || !std::filesystem::is_directory(dir))
         throw rbcd::InputError(dir + ": cannot create directory: " + (ec ? ec.message() : "not a directory"));
-    made.made.insert(made.made.begin(), missing.begin(), missing.end());
 }
 
 void quiet_kernel() {
@@ -652,7 +653,7 @@ int run(Options opt) {
     OutputFile trace_file;   // the temporary beside the path, or the path itself when not a regular file
     if (!opt.write_trace.empty()) {
         trace_file = OutputFile(opt.write_trace);
-        trace_out = std::make_unique<TraceWriter>(trace_file.open_file_path(), src->header(), false, opt.write_trace);
+        trace_out = std::make_unique<TraceWriter>(trace_file.shared_fd(), src->header(), false, opt.write_trace);
     }
     struct ImageGuard {
         ImageSink* sink;
@@ -714,9 +715,6 @@ int run(Options opt) {
         trace_out->close();
         trace_file.commit();
     }
-    image_guard.keep = true;
-    if (heat) heat->keep();
-    made_dirs.keep = true;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
     nlohmann::json stats = make_stats(sys, RunInfo{input_name, wall}, report);
@@ -757,9 +755,40 @@ int run(Options opt) {
         stats_out.write(stats.dump(2) + "\n");
         stats_out.commit();
     }
+    // Only now: a failed commit above removes the images, maps and their
+    // directories with the rest.
+    image_guard.keep = true;
+    if (heat) heat->keep();
+    made_dirs.keep = true;
     outputs_complete();
     if (!opt.quiet) std::fputs(make_summary(stats, report).c_str(), stdout);
     return 0;
+}
+
+// The mesh files a scene names, as far as its text tells, for a run that
+// failed before it read the scene (a bad option or --set, a scene that does
+// not parse): an output named like one must not be removed as an older
+// result. Only a regular file is read (a FIFO would block the exit).
+std::vector<std::string> scene_meshes_best_effort(const std::string& scene) {
+    struct stat st {};
+    if (scene.empty() || ::stat(scene.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return {};
+    try {
+        return rbcd::scene::SceneSource::mesh_files_of(scene, rbcd::scene::SceneLimits{});
+    } catch (...) {
+    }
+    std::vector<std::string> meshes;
+    std::ifstream in(scene);
+    const std::filesystem::path dir = std::filesystem::path(scene).parent_path();
+    std::string line;
+    for (std::uint64_t read = 0; read < (std::uint64_t(64) << 20) && std::getline(in, line); read += line.size() + 1) {
+        const auto key = line.find_first_not_of(" \t");
+        if (key == std::string::npos || line.compare(key, 4, "mesh") != 0) continue;
+        const auto open = line.find('"', key), close = open == std::string::npos ? open : line.find('"', open + 1);
+        if (close == std::string::npos) continue;
+        const std::filesystem::path mesh = line.substr(open + 1, close - open - 1);
+        meshes.push_back((mesh.is_absolute() ? mesh : dir / mesh).string());
+    }
+    return meshes;
 }
 
 int fail(int status, const std::string& msg, int argc, char* argv[]) {
@@ -779,6 +808,9 @@ int fail(int status, const std::string& msg, int argc, char* argv[]) {
     }
     auto inputs = rbcd::option_values(args, {"--trace", "--scene", "--config"});
     inputs.insert(inputs.end(), mesh_inputs().begin(), mesh_inputs().end());
+    if (mesh_inputs().empty())
+        for (const auto& scene : rbcd::option_values(args, {"--scene"}))
+            for (const auto& mesh : scene_meshes_best_effort(scene)) inputs.push_back(mesh);
     rbcd::discard_outputs(outputs, inputs);
     return status;
 }

@@ -258,6 +258,7 @@ int run(const Options& opt) {
     if (collisions_out.active()) collisions_out.commit();
     if (frames_out.active()) frames_out.commit();
     stats_out.commit();
+    rbcd::outputs_complete();
     return 0;
 }
 

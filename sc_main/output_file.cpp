@@ -22,11 +22,13 @@
 namespace rbcd {
 
 namespace {
-// Paths to remove if the run is interrupted: filled before the simulation
-// starts and read-only afterwards, so the signal handler may walk it.
+// Paths to remove if the run is interrupted: changed only with the
+// interrupts held on the thread that changes it (the main thread), so the
+// handler may walk it. Never destroyed: a signal during exit() (a summary
+// flushed into a closed pipe) must not find it freed.
 std::vector<std::string>& cleanup_paths() {
-    static std::vector<std::string> paths;
-    return paths;
+    static auto* paths = new std::vector<std::string>;
+    return *paths;
 }
 
 // Worker processes (rbcd-sim --jobs) that write into those paths: stopped and
@@ -434,12 +436,16 @@ void OutputFile::commit() {
             abandon();
             throw RunError(shown() + ": write failed: the file was not written");
         }
-        if (std::rename(named_.c_str(), path_.c_str()) != 0) {
-            const std::string why = std::strerror(errno);
-            abandon();
-            throw RunError(shown() + ": cannot rename into place: " + why);
+        {
+            // No signal between the rename and the registration.
+            const InterruptsHeld held;
+            if (std::rename(named_.c_str(), path_.c_str()) == 0) result_stands({}, path_);
+            else {
+                const std::string why = std::strerror(errno);
+                abandon();
+                throw RunError(shown() + ": cannot rename into place: " + why);
+            }
         }
-        result_stands({}, path_);
         abandon();   // the directory and what else the library left in it
         return;
     }
@@ -454,12 +460,16 @@ void OutputFile::commit() {
         throw RunError(shown() + ": write failed: " + why);
     }
     if (in_place_) return;
-    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-        const std::string why = std::strerror(errno);
-        abandon();
-        throw RunError(shown() + ": cannot rename into place: " + why);
+    {
+        // No signal between the rename and the registration.
+        const InterruptsHeld held;
+        if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+            const std::string why = std::strerror(errno);
+            abandon();
+            throw RunError(shown() + ": cannot rename into place: " + why);
+        }
+        result_stands(tmp_, path_);
     }
-    result_stands(tmp_, path_);
     tmp_.clear();
 }
 

@@ -45,6 +45,16 @@ bool process_gone(pid_t pid) {
     return close != std::string::npos && close + 2 < line.size() && line[close + 2] == 'Z';
 }
 
+// A busy trace of 200,000 fragments in 4 frames (116 KB of collisions): a
+// --jobs run's first worker writes its collisions straight into a pipe.
+std::string busy_trace(const TempDir& td) {
+    const std::string t = td.path("busy.rbt");
+    const Result g = run_program(td, RBCD_GEN_BUSY_TRACE, {t, "200000", "4"});
+    INFO(g.err);
+    REQUIRE(g.status == 0);
+    return t;
+}
+
 template <class Pred>
 bool within_seconds(int seconds, Pred pred) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
@@ -115,12 +125,14 @@ TEST_CASE("hostile env: two outputs at one file are refused before either is ope
 }
 
 TEST_CASE("hostile env: --collisions /dev/stdout redirected to a file is what --collisions - writes", "[hostile_env]") {
+    TempDir td;
+    const std::string trace = busy_trace(td);   // the first worker writes into it too
     for (const char* jobs : {"1", "2"}) {
         INFO("--jobs " << jobs);
-        TempDir td;
         const std::string named = td.path("named.txt"), dash = td.path("dash.txt");
-        const Result a = run_shell(td, "exec \"$0\" \"$@\" > " + named, {"--jobs", jobs, "--collisions", "/dev/stdout"});
-        const Result b = run_shell(td, "exec \"$0\" \"$@\" > " + dash, {"--jobs", jobs, "--collisions", "-"});
+        const Result a =
+            run_shell(td, "exec \"$0\" \"$@\" > " + named, {"--trace", trace, "--jobs", jobs, "--collisions", "/dev/stdout"});
+        const Result b = run_shell(td, "exec \"$0\" \"$@\" > " + dash, {"--trace", trace, "--jobs", jobs, "--collisions", "-"});
         REQUIRE(a.status == 0);
         REQUIRE(b.status == 0);
         const std::string got = slurp(named);
@@ -143,6 +155,18 @@ TEST_CASE("hostile env: an output named like a scene's mesh file is refused and 
         const Result r = run_sim(td, {"-q", "--scene", scene, "--jobs", jobs, "--stats", mesh});
         CHECK(r.status == 2);
         CHECK_THAT(r.err, Contains("--stats: " + mesh + " is the input file"));
+        CHECK(slurp(mesh) == mesh_text);
+    }
+    // Nor by a run that fails before it reads the scene, or on the scene.
+    const std::string bad = td.write("bad.toml", slurp(scene) + "bogus = 1\n");
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"--scene", scene, "--set", "zeb.banks=foo"},
+          std::vector<std::string>{"--scene", scene, "--no-such-option"}, std::vector<std::string>{"--scene", bad}}) {
+        auto a = args;
+        a.insert(a.end(), {"-q", "--stats", mesh});
+        const Result r = run_sim(td, a);
+        INFO(r.cmd << "\n" << r.err);
+        CHECK(r.status == 2);
         CHECK(slurp(mesh) == mesh_text);
     }
 }
@@ -196,11 +220,14 @@ TEST_CASE("hostile env: a signal between two outputs' commits leaves none of the
 }
 
 TEST_CASE("hostile env: a worker's pipe reader gone ends the run as one process ends", "[hostile_env]") {
+    // A trace's first worker writes its collisions into the pipe itself, and
+    // meets the closed end first.
+    TempDir td;
+    const std::string trace = busy_trace(td);
     for (const char* jobs : {"1", "2", "3"}) {
         INFO("--jobs " << jobs);
-        TempDir td;
         const Result r = run_shell(td, "set -o pipefail; \"$0\" \"$@\" | head -c 100 > /dev/null",
-                                   {"-q", "--jobs", jobs, "--collisions", "-", "--stats", td.stats()});
+                                   {"-q", "--trace", trace, "--jobs", jobs, "--collisions", "-", "--stats", td.stats()});
         CHECK(r.status == 128 + SIGPIPE);
         CHECK(r.err.empty());
         CHECK(td.out_entries().empty());
@@ -269,5 +296,31 @@ TEST_CASE("hostile env: a worker whose file system fills up still says so", "[ho
         CHECK_THAT(r.err, Contains("write failed: No space left on device"));
         CHECK(count_lines(r.err) == 1);
         CHECK(r.out.empty());   // nothing left on the small file system
+    }
+}
+
+TEST_CASE("hostile env: --write-trace to a redirected standard output keeps the file's offset", "[hostile_env]") {
+    TempDir td;
+    const std::string scene =
+        td.write("s.toml", "format = \"rbcd-scene 1\"\nframes = 3\n[screen]\nwidth = 64\nheight = 48\n[camera]\n"
+                           "eye = [0.0, 0.0, 6.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 45.0\nnear = 0.5\nfar = 50.0\n"
+                           "[[object]]\nid = 1\nmesh = \"sphere\"\n[[object]]\nid = 2\nmesh = \"sphere\"\n"
+                           "position = [0.3, 0.0, 0.0]\n");
+    const std::string ref = td.path("ref.rbt");
+    REQUIRE(run_sim(td, {"-q", "--scene", scene, "--write-trace", ref}).status == 0);
+    const std::string trace = slurp(ref);
+    for (const char* name : {"/dev/stdout", "-"}) {
+        INFO(name);
+        // The summary follows the trace instead of overwriting its start.
+        const std::string out = td.path("out.rbt");
+        REQUIRE(run_shell(td, "exec \"$0\" \"$@\" > " + out, {"--scene", scene, "--write-trace", name}).status == 0);
+        const std::string got = slurp(out);
+        CHECK(got.substr(0, trace.size()) == trace);
+        CHECK(got.size() > trace.size());
+        // Appended to, not truncated.
+        const std::string log = td.path("log.txt");
+        std::ofstream(log) << "an earlier line\n";
+        REQUIRE(run_shell(td, "exec \"$0\" \"$@\" >> " + log, {"-q", "--scene", scene, "--write-trace", name}).status == 0);
+        CHECK(slurp(log) == "an earlier line\n" + trace);
     }
 }
