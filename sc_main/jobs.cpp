@@ -329,7 +329,11 @@ TempDirectory::TempDirectory(const std::string& parent) {
 }
 
 void TempDirectory::will_hold(const std::string& name) {
-    // The handler removes paths in order: the directory must come after its files.
+    // The handler removes paths in order: the directory must come after its
+    // files. Held back meanwhile: a signal between the two would find the
+    // directory on no list and leave it behind (a CI run caught it once in
+    // the ASan build, SIGTERM sent as the directory appeared).
+    const InterruptsHeld held;
     forget_on_interrupt(dir_);
     held_.push_back(path(name));
     remove_on_interrupt(held_.back());
