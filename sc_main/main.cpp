@@ -387,13 +387,6 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     return true;
 }
 
-// The scene's mesh files, once known: inputs that a failed run's clean-up
-// must not take for an output (fail).
-std::vector<std::string>& mesh_inputs() {
-    static std::vector<std::string> meshes;
-    return meshes;
-}
-
 int run(Options opt) {
     using namespace rbcd;
     // --vcd run.fst: the format follows the file's extension.
@@ -454,10 +447,8 @@ int run(Options opt) {
                                           cfg.input.max_scene_triangles, cfg.input.max_tile_fragments};
     std::vector<NamedPath> inputs{{"", opt.trace}, {"", opt.scene}, {"", opt.config_file}};
     if (!opt.scene.empty())
-        for (const std::string& mesh : scene::SceneSource::mesh_files_of(opt.scene, scene_limits)) {
+        for (const std::string& mesh : scene::SceneSource::mesh_files_of(opt.scene, scene_limits))
             inputs.push_back({"", mesh});
-            mesh_inputs().push_back(mesh);
-        }
     check_output_paths({{"--collisions", opt.collisions},
                         {"--stats", opt.stats},
                         {"--frame-stats", opt.frame_stats},
@@ -765,10 +756,11 @@ int run(Options opt) {
     return 0;
 }
 
-// The mesh files a scene names, as far as its text tells, for a run that
-// failed before it read the scene (a bad option or --set, a scene that does
-// not parse): an output named like one must not be removed as an older
-// result. Only a regular file is read (a FIFO would block the exit).
+// The mesh files a scene names, for a failed run's clean-up: an output named
+// like one must not be removed as an older result. Read from its text alone
+// when the scene does not parse (or not under the default limits: a run may
+// have failed before its --set was read). Only a regular file is read (a
+// FIFO would block the exit).
 std::vector<std::string> scene_meshes_best_effort(const std::string& scene) {
     struct stat st {};
     if (scene.empty() || ::stat(scene.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return {};
@@ -807,10 +799,8 @@ int fail(int status, const std::string& msg, int argc, char* argv[]) {
         outputs.push_back(f);
     }
     auto inputs = rbcd::option_values(args, {"--trace", "--scene", "--config"});
-    inputs.insert(inputs.end(), mesh_inputs().begin(), mesh_inputs().end());
-    if (mesh_inputs().empty())
-        for (const auto& scene : rbcd::option_values(args, {"--scene"}))
-            for (const auto& mesh : scene_meshes_best_effort(scene)) inputs.push_back(mesh);
+    for (const auto& scene : rbcd::option_values(args, {"--scene"}))
+        for (const auto& mesh : scene_meshes_best_effort(scene)) inputs.push_back(mesh);
     rbcd::discard_outputs(outputs, inputs);
     return status;
 }

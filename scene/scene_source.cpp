@@ -18,13 +18,15 @@ std::string read_text_file(const std::string& path, const SceneLimits& limits) {
     return read_input_text(path, "scene file", limits.max_scene_bytes, "input.max_scene_bytes");
 }
 
+// Mesh paths in it are taken relative to its directory.
+SceneDesc parse_scene_file(const std::string& path, const SceneLimits& limits) {
+    return parse_scene(read_text_file(path, limits), path, std::filesystem::path(path).parent_path().string(), limits);
+}
+
 } // namespace
 
 SceneSource::SceneSource(const std::string& path, const SceneLimits& limits)
-    : SceneSource(std::make_unique<SceneRenderer>(
-                      parse_scene(read_text_file(path, limits), path, std::filesystem::path(path).parent_path().string(), limits),
-                      limits),
-                  path, limits) {}
+    : SceneSource(std::make_unique<SceneRenderer>(parse_scene_file(path, limits), limits), path, limits) {}
 
 SceneSource::SceneSource(std::unique_ptr<SceneRenderer> r, std::string name, const SceneLimits& limits)
     : r_(std::move(r)), name_(std::move(name)), max_tile_fragments_(limits.max_tile_fragments) {
@@ -56,21 +58,21 @@ std::string SceneSource::name() const { return name_; }
 std::uint64_t SceneSource::frame_count() const { return r_->desc().frames; }
 const std::vector<SceneSource::ObjectInfo>& SceneSource::objects() const { return r_->objects(); }
 
-std::vector<std::string> SceneSource::mesh_files_of(const std::string& path, const SceneLimits& limits) {
-    const SceneDesc d =
-        parse_scene(read_text_file(path, limits), path, std::filesystem::path(path).parent_path().string(), limits);
+namespace {
+// The mesh files a scene's objects name, each once, in their order.
+std::vector<std::string> mesh_files_in(const SceneDesc& d) {
     std::vector<std::string> files;
     for (const ObjectDesc& o : d.objects)
         if (!o.builtin && std::find(files.begin(), files.end(), o.mesh) == files.end()) files.push_back(o.mesh);
     return files;
 }
+} // namespace
 
-std::vector<std::string> SceneSource::mesh_files() const {
-    std::vector<std::string> files;
-    for (const ObjectDesc& o : r_->desc().objects)
-        if (!o.builtin && std::find(files.begin(), files.end(), o.mesh) == files.end()) files.push_back(o.mesh);
-    return files;
+std::vector<std::string> SceneSource::mesh_files_of(const std::string& path, const SceneLimits& limits) {
+    return mesh_files_in(parse_scene_file(path, limits));
 }
+
+std::vector<std::string> SceneSource::mesh_files() const { return mesh_files_in(r_->desc()); }
 
 void SceneSource::enable_images(bool on) { images_ = on; }
 
