@@ -4,7 +4,9 @@
 #   P/include/rbcd/{common,hw,io,scene,tlm}/*.h
 #   P/lib/cmake/rbcd/                   find_package(rbcd CONFIG [COMPONENTS scene])
 #   P/lib/pkgconfig/rbcd.pc             the unit for pkg-config builds
-#   P/bin/rbcd-sim, P/bin/rbcd-merge, P/bin/rbcd-gl2rbt and rbcd-gl-raster
+#   P/bin/rbcd-sim, P/bin/rbcd-merge, P/bin/rbcd-gl-raster
+#   P/bin/rbcd-sweep, rbcd-plot, rbcd-gl2rbt  launchers of the Python package
+#   P/share/rbcd/python/rbcd/               the package (docs/python.md)
 #   P/share/rbcd/configs/*.toml, P/share/doc/rbcd/ (README, docs)
 include(CMakePackageConfigHelpers)
 
@@ -25,13 +27,31 @@ foreach(program rbcd-sim rbcd-merge rbcd-gl-raster)
     install(TARGETS ${program} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
   endif()
 endforeach()
-# rbcd-gl2rbt finds rbcd-gl-raster beside itself (docs/gl-capture.md).
+# The Python tools: the package, and the launchers of scripts/ with the path
+# from P/bin to the package in place of the source tree's. rbcd-gl2rbt finds
+# rbcd-gl-raster beside itself (docs/gl-capture.md).
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/python/rbcd DESTINATION ${CMAKE_INSTALL_DATADIR}/rbcd/python
+  FILES_MATCHING PATTERN "*.py" PATTERN __pycache__ EXCLUDE)
+# rbcd-sweep counts the default input's frames for [split] from the scene.
+install(FILES ${PROJECT_SOURCE_DIR}/scene/default_scene.toml DESTINATION ${CMAKE_INSTALL_DATADIR}/rbcd/scene)
+file(RELATIVE_PATH rbcd_python_rel /p/${CMAKE_INSTALL_BINDIR} /p/${CMAKE_INSTALL_DATADIR}/rbcd/python)
+set(rbcd_launchers rbcd-sweep rbcd-plot)
 if(TARGET rbcd-gl-raster)
-  install(PROGRAMS ${PROJECT_SOURCE_DIR}/scripts/rbcd-gl2rbt DESTINATION ${CMAKE_INSTALL_BINDIR})
-  install(FILES ${PROJECT_SOURCE_DIR}/scripts/rbcd_cli.py DESTINATION ${CMAKE_INSTALL_BINDIR})
+  list(APPEND rbcd_launchers rbcd-gl2rbt)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/workloads/games/ DESTINATION ${CMAKE_INSTALL_DATADIR}/rbcd/games
     FILES_MATCHING PATTERN "*.toml")
 endif()
+foreach(tool ${rbcd_launchers})
+  file(READ ${PROJECT_SOURCE_DIR}/scripts/${tool} text)
+  set(source_paths [=[("../python", "../share/rbcd/python")]=])
+  string(FIND "${text}" "${source_paths}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "scripts/${tool} is not a launcher of the package: it names no ${source_paths}")
+  endif()
+  string(REPLACE "${source_paths}" "(\"${rbcd_python_rel}\",)" text "${text}")
+  file(WRITE ${PROJECT_BINARY_DIR}/launchers/${tool} "${text}")
+  install(PROGRAMS ${PROJECT_BINARY_DIR}/launchers/${tool} DESTINATION ${CMAKE_INSTALL_BINDIR})
+endforeach()
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/sc_main/configs/ DESTINATION ${CMAKE_INSTALL_DATADIR}/rbcd/configs
   FILES_MATCHING PATTERN "*.toml")
 install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DATADIR}/doc/rbcd)

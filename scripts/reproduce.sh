@@ -24,11 +24,13 @@
 # into OUT/sweep/, the accuracy's other rbcd-sim runs, rbcd-cpucd once per
 # input for the ground truth (timed alone, the host figures), and for fig8 once
 # more under callgrind (--count-instructions: the counted CPU side, $jobs at a
-# time); then scripts/evaluate.py writes OUT/TARGET.csv, .png and .md. Targets
+# time); then python/rbcd/evaluate.py writes OUT/TARGET.csv, .png and .md. Targets
 # needing rbcd-cpucd are skipped with a message when it was not built (Bullet
 # or FCL missing); fig8 also needs valgrind.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
+# The evaluation's arithmetic is the package's rbcd.evaluate (python/rbcd/evaluate.py).
+export PYTHONPATH="$root/python${PYTHONPATH:+:$PYTHONPATH}"
 out=results workloads=$root/workloads build=$root/build repeat=5 jobs=$(nproc) do_build=1 update_docs=0
 targets=()
 usage() { sed -n '2,29p' "$0" | sed 's/^# \{0,1\}//'; }
@@ -109,7 +111,7 @@ done
 
 # Object ids above 127 need more than the default 7 id bits (docs/workloads.md).
 declare -A idb
-for s in "${scenes[@]}"; do idb[$s]=$(/usr/bin/python3 "$root/scripts/evaluate.py" --id-bits "$s"); done
+for s in "${scenes[@]}"; do idb[$s]=$(/usr/bin/python3 -m rbcd.evaluate --id-bits "$s"); done
 
 # The accuracy's runs that are no figure's sweep, on top of sc_main/configs/paper.toml
 # (the paper's Table 1); its M = 4, 8, 16 runs are Table 3's sweep.
@@ -157,7 +159,7 @@ same_dir() { [ "$(cd "$1" && pwd -P)" = "$(cd "$2" && pwd -P)" ]; }
 for sw in "${needed_sweeps[@]}"; do
   file=$root/workloads/sweeps/$sw.toml
   if ! same_dir "$workloads" "$root/workloads"; then
-    /usr/bin/python3 "$root/scripts/evaluate.py" --sweep-file "$file" "$workloads" "$out/$sw.sweep.toml"
+    /usr/bin/python3 -m rbcd.evaluate --sweep-file "$file" "$workloads" "$out/$sw.sweep.toml"
     file=$out/$sw.sweep.toml
   fi
   echo "reproduce.sh: sweep $sw: scripts/rbcd-sweep run $file -o $out/sweep" >&2
@@ -255,7 +257,7 @@ if ((need_count)); then
   ((failed)) && exit 1
 fi
 
-/usr/bin/python3 "$root/scripts/evaluate.py" --out "$out" "${targets[@]}"
+/usr/bin/python3 -m rbcd.evaluate --out "$out" "${targets[@]}"
 {
   what=${targets[*]}
   ((games)) && what="--games${game_entries[*]:+ $(IFS=,; echo "${game_entries[*]}")} $what"
@@ -269,27 +271,27 @@ done
 
 if ((update_docs && games)); then
   # The game suite's tables: the games-NAME blocks of docs/results.md and docs/games.md.
-  /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/results.md" --splice-prefix games-
-  /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/games.md" --splice-prefix games-
-  /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/workloads.md" --splice-prefix games-
+  /usr/bin/python3 -m rbcd.evaluate --splice "$out" "$root/docs/results.md" --splice-prefix games-
+  /usr/bin/python3 -m rbcd.evaluate --splice "$out" "$root/docs/games.md" --splice-prefix games-
+  /usr/bin/python3 -m rbcd.evaluate --splice "$out" "$root/docs/workloads.md" --splice-prefix games-
   mkdir -p "$root/docs/img/games"
   for t in table3 fig9 fig8 accuracy workloads; do
     [[ " ${targets[*]} " == *" $t "* ]] && cp "$out/$t.png" "$root/docs/img/games/$t.png"
   done
   echo "reproduce.sh: updated the game suite's tables in docs/results.md and docs/games.md"
 elif ((update_docs)); then
-  /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/results.md"
+  /usr/bin/python3 -m rbcd.evaluate --splice "$out" "$root/docs/results.md"
   mkdir -p "$root/docs/img/results"
   for t in table3 fig9 fig8 accuracy; do
     [[ " ${targets[*]} " == *" $t "* ]] && cp "$out/$t.png" "$root/docs/img/results/$t.png"
   done
   if [[ " ${targets[*]} " == *" workloads "* ]]; then
-    /usr/bin/python3 "$root/scripts/evaluate.py" --splice "$out" "$root/docs/workloads.md"
+    /usr/bin/python3 -m rbcd.evaluate --splice "$out" "$root/docs/workloads.md"
     mkdir -p "$root/docs/img/workloads"
     cp "$out/workloads.png" "$root/docs/img/workloads/depth.png"
     for s in "${scenes[@]}"; do
       name=$(input_name "$s")
-      /usr/bin/python3 "$root/scripts/evaluate.py" --thumbnail "$out/$name.png" "$root/docs/img/workloads/$name.png"
+      /usr/bin/python3 -m rbcd.evaluate --thumbnail "$out/$name.png" "$root/docs/img/workloads/$name.png"
     done
   fi
   echo "reproduce.sh: updated docs/results.md (and docs/workloads.md with the workloads target)"

@@ -24,6 +24,14 @@ foreach(f include/rbcd/hw/rbcd_unit.h include/rbcd/common/config.h bin/rbcd-sim 
     message(FATAL_ERROR "the install has no ${f}")
   endif()
 endforeach()
+# The Python tools: launchers that import the installed package (the path to
+# it is relative to the launcher, so the source tree's copy is not used).
+foreach(tool rbcd-sweep rbcd-plot)
+  run("the installed ${tool}" ${STAGE}/bin/${tool} --help)
+endforeach()
+if(NOT EXISTS ${STAGE}/share/rbcd/python/rbcd/cli.py)
+  message(FATAL_ERROR "the install has no Python package (share/rbcd/python/rbcd)")
+endif()
 foreach(lib rbcd_common rbcd_io rbcd_tlm rbcd_hw rbcd_scene)
   if(NOT archives MATCHES "/lib${lib}\\.a")
     message(FATAL_ERROR "the install has no lib${lib}.a (archives: ${archives})")

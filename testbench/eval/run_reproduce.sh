@@ -29,7 +29,7 @@ fail() { echo "run_reproduce.sh $target: $*" >&2; exit 1; }
 for f in "$target.csv" "$target.png" "$target.md" provenance.md; do
   [ -s "$out/$f" ] || fail "$f missing or empty"
 done
-/usr/bin/python3 - "$out" "$target" "$src" <<'PY' || exit 1
+PYTHONPATH="$src/python${PYTHONPATH:+:$PYTHONPATH}" /usr/bin/python3 - "$out" "$target" "$src" <<'PY' || exit 1
 import csv, sys
 out, target = sys.argv[1], sys.argv[2]
 rows = list(csv.DictReader(open(f"{out}/{target}.csv")))
@@ -60,8 +60,7 @@ elif target == "fig8":
     if not all(float(r["host CPU ms/frame (wall clock)"]) > 0 for r in rows): fail("CPU time not measured")
     if not all(float(r["instructions/frame"]) > 0 for r in rows): fail("CPU work not counted")
     # The counted model: time = instructions x CPI / clock, whatever the host.
-    sys.path.insert(0, f"{sys.argv[3]}/scripts")
-    import cpu_model
+    from rbcd import cpu_model
     for r in rows:
         want = cpu_model.seconds(float(r["instructions/frame"])) * 1e3
         if abs(float(r["modelled CPU ms/frame"]) - want) > 5e-3 * want: fail(f"modelled time {r}")

@@ -97,19 +97,19 @@ done
 while IFS=: read -r f p; do
   add "$p" "${f#$src/}"
 done < <(grep -roE '(^|[^A-Za-z0-9_./-])/(usr/)?s?bin/[a-z][a-z0-9_+-]*' "$src/testbench" "$src/vectors" \
-           "$src/scripts/rbcd-sweep" "$src/scripts/rbcd-plot" "$src/scripts/evaluate.py" "$src/scripts/reproduce.sh" |
+           "$src/python/rbcd" "$src/scripts/reproduce.sh" |
          grep -v '^[^:]*/check_test_programs.sh:' | sed -E 's#:[^/]*(/(usr/)?s?bin/)#:\1#')
 # CMake COMMAND words that name a program, not a variable or target.
 while IFS=: read -r f w; do
   add "$w" "${f#$src/}"
 done < <(grep -roE 'COMMAND +[A-Za-z][A-Za-z0-9_.+-]*( |$)' --include=CMakeLists.txt --include='*.cmake' \
            "$src/testbench" "$src/vectors" "$src/fuzz" | sed -E 's/COMMAND +//; s/ $//')
-# Programs named first in a Python subprocess call (in *.py and in the
-# scripts/ programs written in Python: rbcd-sweep, rbcd-plot, ...).
+# Programs named first in a Python subprocess call (in *.py, the package in
+# python/, and the scripts/ launchers written in Python).
 python_files=()
 while IFS= read -r f; do
   case "$f" in *.py) python_files+=("$f") ;; *) head -n1 "$f" | grep -q python && python_files+=("$f") ;; esac
-done < <(find "$src/testbench" "$src/scripts" -type f)
+done < <(find "$src/testbench" "$src/scripts" "$src/python" -type f -not -path '*/__pycache__/*')
 while IFS=: read -r f w; do
   add "$w" "${f#$src/}"
 done < <(grep -oE '(run|Popen|check_output|check_call|call)\(\[ *"[a-z][a-z0-9_.+-]*"' "${python_files[@]}" |

@@ -1,7 +1,7 @@
-"""What the project's Python tools (rbcd-sweep, rbcd-plot) share with rbcd-sim's
+"""What the project's Python tools share with rbcd-sim's
 rules for inputs, outputs and messages (docs/limits.md), in one place:
 
-    from rbcd_cli import UsageError, read_input, write_output, main_wrapper
+    from rbcd.cli import UsageError, read_input, write_output, main_wrapper
 
 - Messages are one line: bytes that are not printable are written as \\xNN (as
   rbcd-sim's escape_for_message does) and a token longer than 1024 characters

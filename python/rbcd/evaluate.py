@@ -1,14 +1,14 @@
-#!/usr/bin/python3
 """The evaluation's arithmetic (docs/results.md, docs/accuracy.md): reads the
 runs scripts/reproduce.sh made (the sweeps' tables OUT/sweep/NAME.csv and the
 other runs under OUT/runs/) and writes each figure's CSV, PNG and Markdown
-table into OUT.
+table into OUT. scripts/reproduce.sh runs it as `python3 -m rbcd.evaluate`
+(python/ on PYTHONPATH):
 
-    scripts/evaluate.py --out DIR TARGET...     TARGET: workloads table3 fig9 fig8 accuracy
-    scripts/evaluate.py --splice OUT DOC        copy OUT's tables into DOC between its markers
-    scripts/evaluate.py --sweep-file SWEEP SUITE DEST
-                                                SWEEP (workloads/sweeps/) over another suite
-    scripts/evaluate.py --id-bits SCENE         the zeb.id_bits a scene's ids need
+    evaluate.py --out DIR TARGET...     TARGET: workloads table3 fig9 fig8 accuracy
+    evaluate.py --splice OUT DOC        copy OUT's tables into DOC between its markers
+    evaluate.py --sweep-file SWEEP SUITE DEST
+                                        SWEEP (workloads/sweeps/) over another suite
+    evaluate.py --id-bits SCENE         the zeb.id_bits a scene's ids need
 
 Every input it needs is named in the target's function; a missing one is an
 error naming the file (exit 2).
@@ -23,12 +23,13 @@ import subprocess
 import sys
 import tomllib
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from rbcd_cli import main_wrapper, say  # noqa: E402  (one-line messages, no tracebacks)
+from rbcd.cli import main_wrapper, say  # (one-line messages, no tracebacks)
 
 # The CPU model of Figure 8 (instructions to time and energy, each constant
-# with its source) is scripts/cpu_model.py.
-import cpu_model  # noqa: E402
+# with its source) is rbcd/cpu_model.py.
+from rbcd import cpu_model
+
+PROG = "evaluate.py"
 
 PAPER = {
     "table3": {4: 3.68, 8: 0.08, 16: 0.0},
@@ -168,7 +169,7 @@ def scene_objects(name):
     return len({o["id"] for o in objs if "id" in o}), sum(1 for o in objs if "id" not in o)
 
 
-def run(out, scene, name):
+def run_file(out, scene, name):
     return os.path.join(out, "runs", scene, name)
 
 
@@ -177,8 +178,10 @@ def run(out, scene, name):
 # scripts/rbcd-sweep, one after the other, into one output directory OUT/sweep/
 # (so the run they share, M = 8 with two ZEBs, runs once); each one's
 # results.csv is kept as OUT/sweep/NAME.csv: a row per point and scene, with
-# the stats fields the sweep file lists.
-HERE = os.path.dirname(os.path.abspath(__file__))
+# the stats fields the sweep file lists. Their plots are drawn by the
+# repository's scripts/rbcd-plot (python/rbcd/ -> ../..): evaluate runs from a
+# source checkout only, as scripts/reproduce.sh does.
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def sweep_dir(out):
@@ -228,7 +231,7 @@ def sweep_run_file(out, name, row, file):
 
 def rbcd_plot(table, png, y, x, lines, title, logx=False):
     """The figure's PNG by scripts/rbcd-plot, from a table in results.csv form."""
-    cmd = ["/usr/bin/python3", os.path.join(HERE, "rbcd-plot"), table, "--y", y, "--x", x, "--lines", lines,
+    cmd = ["/usr/bin/python3", os.path.join(ROOT, "scripts", "rbcd-plot"), table, "--y", y, "--x", x, "--lines", lines,
            "--title", title, "-o", png] + (["--logx"] if logx else [])
     r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     if r.returncode != 0:
@@ -300,7 +303,7 @@ def sweep_file(template, suite, dest):
         inputs["set"] = sets
     doc["inputs"] = inputs
     with open(dest, "w") as f:
-        f.write(f"# {template} over {suite} (scripts/evaluate.py --sweep-file)\n")
+        f.write(f"# {template} over {suite} (rbcd.evaluate --sweep-file)\n")
         f.write(toml_text(doc))
 
 
@@ -315,9 +318,9 @@ def target_workloads(out, scenes):
         r = sw[(s, 2)]
         frames = value(r, "totals.frames")
         feed = {f: value(r, "blocks.rasterizer." + f) for f in ("fragments", "other_fragments", "culled_fragments")}
-        pairs = read_csv(run(out, s, "cpucd_pairs.csv"))
+        pairs = read_csv(run_file(out, s, "cpucd_pairs.csv"))
         n_coll, n_scenery = scene_objects(s)
-        hist = read_csv(run(out, s, "depth_hist.csv"))
+        hist = read_csv(run_file(out, s, "depth_hist.csv"))
         px = sum(int(h["pixels"]) for h in hist)
         mean = sum(int(h["fragments_per_pixel"].rstrip("+")) * int(h["pixels"]) for h in hist) / px if px else 0
         p4 = pct(sum(int(h["pixels"]) for h in hist if int(h["fragments_per_pixel"].rstrip("+")) > 4), px)
@@ -345,7 +348,7 @@ def target_workloads(out, scenes):
         f.write(md_table(header, rows))
         f.write("\nDepth complexity (fragments of collisionable objects per covered pixel, all frames):\n\n")
         for s in scenes:
-            hist = read_csv(run(out, s, "depth_hist.csv"))
+            hist = read_csv(run_file(out, s, "depth_hist.csv"))
             px = sum(int(h["pixels"]) for h in hist)
             cells = ", ".join(f"{h['fragments_per_pixel']}: {share(int(h['pixels']), px)}" for h in hist)
             f.write(f"- {s}: {cells}\n")
@@ -415,9 +418,9 @@ def game_pairs(out, scenes):
             game = next((g for g in GAME_CLASSES if s.startswith(g + "-")), None)
         rules = GAME_CLASSES.get(game, [(lambda nv, d: True, "object")])
         classes = geometry_classes(path[:-len(".rbt.gz")] + ".geo", rules)
-        frames = len(read_csv(run(out, s, "cpucd_frames.csv")))
+        frames = len(read_csv(run_file(out, s, "cpucd_frames.csv")))
         table = {}
-        for r in read_csv(run(out, s, "cpucd_pairs.csv")):
+        for r in read_csv(run_file(out, s, "cpucd_pairs.csv")):
             if r["exact"] != "1":
                 continue
             f, a, b = int(r["frame"]), int(r["id_a"]), int(r["id_b"])
@@ -559,18 +562,18 @@ def target_fig8(out, scenes):
     fallback = False
     sw, _ = sweep_rows(out, "fig9", "zeb.banks", scenes)
     for s in scenes:
-        counted = read_csv(run(out, s, "cpucd_counts.csv"))
-        timed = read_csv(run(out, s, "cpucd_frames.csv"))
+        counted = read_csv(run_file(out, s, "cpucd_counts.csv"))
+        timed = read_csv(run_file(out, s, "cpucd_frames.csv"))
         nf = len(counted)
         if nf == 0 or len(timed) != nf:
-            raise InputMissing(f"{run(out, s, 'cpucd_counts.csv')}: {nf} frames counted, {len(timed)} timed")
+            raise InputMissing(f"{run_file(out, s, 'cpucd_counts.csv')}: {nf} frames counted, {len(timed)} timed")
         instr, host_ms = {}, {}
         for col, _, _ in FIG8_VERSIONS:
             try:
                 instr[col] = sum(int(r[f"{col}_instr"]) for r in counted) / nf
                 host_ms[col] = sum(float(r[f"{col}_us"]) for r in timed) / nf * 1e-3
             except (KeyError, ValueError):
-                raise InputMissing(f"{run(out, s, 'cpucd_counts.csv')}: no {col}_instr counts "
+                raise InputMissing(f"{run_file(out, s, 'cpucd_counts.csv')}: no {col}_instr counts "
                                    "(rbcd-cpucd --count-instructions)") from None
         for banks in (1, 2):
             r = sw[(s, banks)]
@@ -685,7 +688,7 @@ def target_accuracy(out, scenes):
     totals = {}
     sw, _ = sweep_rows(out, "table3", "zeb.list_length", scenes)
     for s in scenes:
-        gt_rows = read_csv(run(out, s, "cpucd_pairs.csv"))
+        gt_rows = read_csv(run_file(out, s, "cpucd_pairs.csv"))
         gt = {(int(r["frame"]), int(r["id_a"]), int(r["id_b"])): r for r in gt_rows}
         truth = {k for k, r in gt.items() if r["exact"] == "1"}
         methods = {"AABB (a)": {k for k, r in gt.items() if r["aabb"] == "1"},
@@ -695,7 +698,7 @@ def target_accuracy(out, scenes):
             for n in (name, n64, n6464):
                 if n not in cf:
                     p, _ = read_collisions(sweep_run_file(out, "table3", sw[(s, ACC_FROM_TABLE3[n])], "collisions.txt")
-                                           if n in ACC_FROM_TABLE3 else run(out, s, n + ".col"))
+                                           if n in ACC_FROM_TABLE3 else run_file(out, s, n + ".col"))
                     cf[n] = {(f, a, b) for f, ps in p.items() for a, b in ps}
             methods["RBCD " + label] = cf[name]
         for mname, found in methods.items():
@@ -787,8 +790,9 @@ TARGETS = {"workloads": target_workloads, "table3": target_table3, "fig9": targe
            "accuracy": target_accuracy}
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def run(argv):
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="results")
     ap.add_argument("--splice", nargs=2, metavar=("OUT", "DOC"))
     ap.add_argument("--splice-prefix", default="", help="with --splice: the blocks' name prefix (games-)")
@@ -796,7 +800,7 @@ def main():
     ap.add_argument("--sweep-file", nargs=3, metavar=("SWEEP", "SUITE", "DEST"))
     ap.add_argument("--id-bits", metavar="SCENE")
     ap.add_argument("targets", nargs="*")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     try:
         if a.splice:
             splice(*a.splice, prefix=a.splice_prefix)
@@ -813,20 +817,24 @@ def main():
         scenes = scenes_of(a.out)
         for t in a.targets:
             if t not in TARGETS:
-                say("evaluate.py", f"unknown target '{t}' (known: {', '.join(TARGETS)})")
+                say(PROG, f"unknown target '{t}' (known: {', '.join(TARGETS)})")
                 return 2
             TARGETS[t](a.out, scenes)
     except InputMissing as e:
-        say("evaluate.py", str(e))
+        say(PROG, str(e))
         return 2
     except tomllib.TOMLDecodeError as e:
-        say("evaluate.py", str(e))
+        say(PROG, str(e))
         return 2
     except OSError as e:
-        say("evaluate.py", f"{e.filename}: {e.strerror}")
+        say(PROG, f"{e.filename}: {e.strerror}")
         return 2
     return 0
 
 
+def main(argv=None):
+    return main_wrapper(PROG, run, sys.argv[1:] if argv is None else argv)
+
+
 if __name__ == "__main__":
-    sys.exit(main_wrapper("evaluate.py", lambda _argv: main(), sys.argv[1:]))
+    sys.exit(main())

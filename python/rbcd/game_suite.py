@@ -1,0 +1,222 @@
+"""The captured game-frame suite (docs/games.md): its committed entries
+(workloads/games/NAME/: calls.xz, the reduced capture; capture.toml, how it was
+captured and the checksums of what it converts into) checked, and expanded into
+the fragment traces and geometry the figures run on.
+
+    game-suite check [ENTRY...]                 the committed files against capture.toml
+    game-suite expand -o DIR [-j N] [--frames K] [ENTRY...]
+        DIR/NAME.rbt.gz, DIR/NAME.geo, DIR/NAME.summary.jsonl and
+        DIR/NAME.capture (the entry's capture.toml) for each
+        entry (default: every workloads/games/*/ with a capture.toml), by
+        scripts/rbcd-gl2rbt, then checked against the recorded checksums. An
+        entry whose outputs are already there and match is not converted
+        again. --frames K converts only the first K frames (no checksum:
+        the tests' cut-down inputs).
+
+Exit 2 with one line on a malformed entry or argument (naming the file and
+key), 1 when a regenerated file does not match its checksum or the converter
+fails; the outputs of a failed entry are removed.
+"""
+import argparse
+import concurrent.futures
+import gzip
+import hashlib
+import os
+import subprocess
+import sys
+import tomllib
+
+from rbcd.cli import UsageError, main_wrapper, read_input_text, say, write_output
+
+# The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
+# selection rules (paths in capture.toml are relative to it) and the converter
+# scripts/rbcd-gl2rbt. An entry's calls.xz is not installed, so game-suite runs
+# from a source checkout only.
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__))))
+
+PROG = "game-suite"
+MAX_TOML = 1 << 16
+
+
+class Mismatch(Exception):
+    """A regenerated file differs from its recorded checksum, or the converter
+    failed on a well-formed entry: exit 1."""
+
+
+def sha256_file(path, gunzip=False):
+    h = hashlib.sha256()
+    opener = gzip.open if gunzip else open
+    with opener(path, "rb") as f:
+        while True:
+            b = f.read(1 << 20)
+            if not b:
+                break
+            h.update(b)
+    return h.hexdigest()
+
+
+class Entry:
+    def __init__(self, path):
+        self.dir = path.rstrip("/")
+        self.name = os.path.basename(self.dir)
+        self.toml = os.path.join(self.dir, "capture.toml")
+        self.calls = os.path.join(self.dir, "calls.xz")
+        text = read_input_text(self.toml, "the capture description", MAX_TOML)
+        try:
+            doc = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise UsageError(f"{self.toml}: {e}")
+
+        def key(k, kind, table=doc, prefix=""):
+            if k not in table:
+                raise UsageError(f"{self.toml}: {prefix}{k}: missing")
+            v = table[k]
+            if not isinstance(v, kind) or isinstance(v, bool):
+                raise UsageError(f"{self.toml}: {prefix}{k}: must be {kind.__name__}")
+            return v
+        self.frames = key("frames", int)
+        self.first = key("first_frame", int)
+        if not 1 <= self.frames <= 100000 or not 0 <= self.first <= 100000:
+            raise UsageError(f"{self.toml}: frames (1..100000) or first_frame (0..100000) out of range")
+        screen = key("screen", list)
+        if len(screen) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= 8192
+                                       for v in screen):
+            raise UsageError(f"{self.toml}: screen: must be [W, H], 1..8192")
+        self.screen = screen
+        sel = key("selection", str)
+        if os.path.isabs(sel) or ".." in sel.split("/"):
+            raise UsageError(f"{self.toml}: selection: must be a path inside the repository")
+        self.selection = os.path.join(ROOT, sel)
+        sums = key("sha256", dict)
+        self.sha = {}
+        for k in ("calls", "trace", "geometry"):
+            v = key(k, str, sums, "sha256.")
+            if len(v) != 64 or any(c not in "0123456789abcdef" for c in v):
+                raise UsageError(f"{self.toml}: sha256.{k}: not a SHA-256 in hex")
+            self.sha[k] = v
+        self.doc = doc
+
+    def check(self):
+        if not os.path.isfile(self.calls):
+            raise UsageError(f"{self.calls}: cannot read the reduced capture: missing")
+        got = sha256_file(self.calls)
+        if got != self.sha["calls"]:
+            raise Mismatch(f"{self.calls}: checksum {got[:16]}... is not capture.toml's "
+                           f"{self.sha['calls'][:16]}...: the file changed since it was captured")
+
+    def outputs(self, out):
+        base = os.path.join(out, self.name)
+        return base + ".rbt.gz", base + ".geo", base + ".summary.jsonl"
+
+    def describe(self, out):
+        """OUT/NAME.capture: the entry's capture.toml beside its trace (the
+        evaluation reads the game from it), named so that nothing takes it
+        for a scene (*.toml in a suite folder is one)."""
+        with open(self.toml, "rb") as src:
+            write_output(os.path.join(out, self.name + ".capture"), src.read(), "capture description")
+
+    def up_to_date(self, out):
+        trace, geo, summary = self.outputs(out)
+        if not all(os.path.isfile(p) for p in (trace, geo, summary)):
+            return False
+        try:
+            return (sha256_file(trace, gunzip=True) == self.sha["trace"]
+                    and sha256_file(geo) == self.sha["geometry"])
+        except (OSError, EOFError, gzip.BadGzipFile):
+            return False
+
+    def expand(self, out, frames=None):
+        self.check()
+        if frames is None and self.up_to_date(out):
+            self.describe(out)
+            return f"{self.name}: up to date"
+        trace, geo, summary = self.outputs(out)
+        last = self.first + (frames or self.frames) - 1
+        # Through its own interpreter line (Debian's python3, which has numpy),
+        # not this one's: a python3 earlier on PATH may lack it.
+        cmd = [os.path.join(ROOT, "scripts", "rbcd-gl2rbt"), self.calls, "-o", trace, "--geometry", geo,
+               "--summary", summary, "--frames", f"{self.first}:{last}",
+               "--screen", str(self.screen[0]), str(self.screen[1]), "--select", self.selection, "-q"]
+        r = subprocess.run(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True, errors="replace")
+        if r.returncode != 0:
+            msg = (r.stderr.strip().splitlines() or [f"exit {r.returncode}"])[0]
+            raise (UsageError if r.returncode == 2 else Mismatch)(f"{self.name}: conversion failed: {msg}")
+        if frames is None:
+            for path, k, gz in ((trace, "trace", True), (geo, "geometry", False)):
+                got = sha256_file(path, gunzip=gz)
+                if got != self.sha[k]:
+                    for p in (trace, geo, summary):
+                        try:
+                            os.unlink(p)
+                        except OSError:
+                            pass
+                    raise Mismatch(f"{self.name}: the regenerated {k} differs from capture.toml's checksum "
+                                   f"({got[:16]}... against {self.sha[k][:16]}...)")
+        self.describe(out)
+        return f"{self.name}: {frames or self.frames} frames"
+
+
+def entries_of(paths):
+    if not paths:
+        base = os.path.join(ROOT, "workloads", "games")
+        paths = sorted(os.path.join(base, d) for d in os.listdir(base)
+                       if os.path.isfile(os.path.join(base, d, "capture.toml")))
+        if not paths:
+            raise UsageError(f"{base}: no game-suite entry (a directory with capture.toml)")
+    names = set()
+    out = []
+    for p in paths:
+        if not os.path.isdir(p):
+            raise UsageError(f"{p}: not a game-suite entry directory")
+        e = Entry(p)
+        if e.name in names:
+            raise UsageError(f"{p}: two entries named {e.name}")
+        names.add(e.name)
+        out.append(e)
+    return out
+
+
+def run(argv):
+    ap = argparse.ArgumentParser(prog=PROG)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    c = sub.add_parser("check")
+    c.add_argument("entries", nargs="*")
+    x = sub.add_parser("expand")
+    x.add_argument("-o", "--out", required=True)
+    x.add_argument("-j", "--jobs", type=int, default=os.cpu_count() or 1)
+    x.add_argument("--frames", type=int)
+    x.add_argument("entries", nargs="*")
+
+    def error(message):
+        raise UsageError(message)
+    ap.error = c.error = x.error = error
+    args = ap.parse_args(argv)
+    entries = entries_of(args.entries)
+    try:
+        if args.cmd == "check":
+            for e in entries:
+                e.check()
+                print(f"{e.name}: calls.xz matches capture.toml")
+            return 0
+        if args.jobs < 1:
+            raise UsageError("--jobs must be at least 1")
+        if args.frames is not None and args.frames < 1:
+            raise UsageError("--frames must be at least 1")
+        os.makedirs(args.out, exist_ok=True)
+        with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
+            futs = [pool.submit(e.expand, args.out, args.frames) for e in entries]
+            for f in futs:
+                print(f.result())
+        return 0
+    except Mismatch as e:
+        say(PROG, str(e))
+        return 1
+
+
+def main(argv=None):
+    return main_wrapper(PROG, run, sys.argv[1:] if argv is None else argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

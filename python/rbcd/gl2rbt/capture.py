@@ -1,0 +1,33 @@
+"""The capture, whichever form it comes in: apitrace's, or a reduced capture."""
+import os
+import stat
+
+from .apitrace import read_apitrace_calls
+from .errors import ConvertError, printable
+from .reduced import is_reduced_capture, read_reduced_calls
+
+
+def read_calls(trace, calls=None):
+    """Yields (no, name, args, ret, flags) from `apitrace pickle`, or from a
+    reduced capture; ConvertError when apitrace refuses the file or it ends
+    early."""
+    if is_reduced_capture(trace):
+        if calls:
+            raise ConvertError("a reduced capture cannot be replayed: give the capture itself")
+        yield from read_reduced_calls(trace)
+    else:
+        yield from read_apitrace_calls(trace, calls)
+
+
+def check_input_file(path):
+    """The capture: a regular file we can read (messages follow its name)."""
+    if path == "-":
+        raise ConvertError("standard input cannot be a capture (apitrace reads files)")
+    try:
+        st = os.stat(path)
+    except OSError as e:
+        raise ConvertError(f"cannot open: {printable(e.strerror)}")
+    if not stat.S_ISREG(st.st_mode):
+        raise ConvertError("not a regular file")
+    if not os.access(path, os.R_OK):
+        raise ConvertError("cannot open: permission denied")

@@ -1,0 +1,125 @@
+"""rbcd-gl2rbt's command line."""
+import argparse
+import re
+import signal
+import sys
+
+from ..cli import UsageError
+from .errors import ConvertError, ToolError, printable
+
+PROG = "rbcd-gl2rbt"
+
+
+def parse_frames(text):
+    m = re.fullmatch(r"(\d+):(\d*)", text or "")
+    if not m:
+        raise ConvertError(f"--frames: '{printable(text)}' is not A:B (first and last frame; B may be empty)")
+    a = int(m.group(1))
+    b = int(m.group(2)) if m.group(2) else None
+    if b is not None and b < a:
+        raise ConvertError(f"--frames: {a}:{b} selects no frame")
+    return a, b
+
+
+class ArgParser(argparse.ArgumentParser):
+    def error(self, message):
+        sys.stderr.write(f"{PROG}: {printable(message)}\n")
+        sys.exit(2)
+
+
+def parse_args(argv):
+    ap = ArgParser(prog=PROG, description="A captured OpenGL stream (apitrace) into the unit's input.")
+    ap.add_argument("trace", help="the apitrace capture (.trace)")
+    ap.add_argument("-o", "--output", help="the fragment trace to write (.rbt, or .rbt.gz compressed)")
+    ap.add_argument("--geometry", help="each frame's collisionable geometry for rbcd-cpucd --geometry")
+    ap.add_argument("--frames", default="0:", help="A:B, the capture's frames to convert (B included; default all)")
+    ap.add_argument("--screen", nargs=2, type=int, metavar=("W", "H"),
+                    help="the screen (default: the window's size when the first converted frame starts)")
+    ap.add_argument("--tile", nargs=2, type=int, default=[16, 16], metavar=("W", "H"))
+    ap.add_argument("--depth-bits", type=int, default=24)
+    ap.add_argument("--select", help="selection rules (TOML) for programs that do not tag their objects")
+    ap.add_argument("--summary", help="one JSON line of figures per frame")
+    ap.add_argument("--reduced-out", metavar="FILE.xz",
+                    help="also write the reduced capture: the calls that can change the unit's input, "
+                         "xz-compressed; converting it gives the same outputs as the capture")
+    ap.add_argument("-q", "--quiet", action="store_true", help="no summary on stdout")
+    ap.add_argument("--list-draws", type=int, metavar="FRAME",
+                    help="list every draw of the capture's frame FRAME and what it became")
+    ap.add_argument("--image", help="with --list-draws: a PNG of the frame, each visible draw labelled")
+    ap.add_argument("--check-depth", action="store_true",
+                    help="compare the depth buffer at each checked frame's last 3D draw with Mesa's (glretrace)")
+    ap.add_argument("--check-frames", type=int, default=5, help="frames to check, spread over --frames (default 5)")
+    ap.add_argument("--check-timeout", type=int, default=600, help="seconds per glretrace replay (default 600)")
+    ap.add_argument("--min-agreement", type=float, default=99.0,
+                    help="with --check-depth: exit 1 below this percentage (default 99)")
+    ap.add_argument("--depth-out", help=argparse.SUPPRESS)
+    ap.add_argument("--stream-out", help=argparse.SUPPRESS)   # a copy of the draw stream (fuzz seeds)
+    ap.add_argument("--snapshot-calls", help=argparse.SUPPRESS)
+    return ap.parse_args(argv)
+
+
+def run(args):
+    """The command, with the exit status of the module's docstring."""
+    try:
+        require_numpy()
+        from . import depth_check, listing, raster   # they compute with numpy
+        if args.list_draws is not None:
+            if args.list_draws < 0:
+                raise ConvertError("--list-draws: FRAME must be a frame number")
+            return listing.list_draws(args)
+        if args.image:
+            raise ConvertError("--image goes with --list-draws")
+        if args.check_depth:
+            args.frame_range = parse_frames(args.frames)
+            args.snapshots = set()
+            if args.check_frames < 1:
+                raise ConvertError("--check-frames must be at least 1")
+            return depth_check.check_depth(args)
+        if not args.output:
+            raise ConvertError("-o OUT is required")
+        args.frame_range = parse_frames(args.frames)
+        if not 1 <= args.depth_bits <= 32:
+            raise ConvertError("--depth-bits must be 1..32")
+        if args.screen and not all(1 <= v <= 8192 for v in args.screen):
+            raise ConvertError("--screen: sides must be 1..8192")
+        if not all(1 <= v <= 8192 for v in args.tile):
+            raise ConvertError("--tile: sides must be 1..8192")
+        args.snapshots = set(int(x) for x in args.snapshot_calls.split(",")) if args.snapshot_calls else set()
+        frames, conv = raster.convert(args)
+        if not args.quiet:
+            raster.report(frames, conv)
+        return 0
+    except ConvertError as e:
+        sys.stderr.write(f"{PROG}: {printable(args.trace)}: {printable(e, 400)}\n")
+        return 2
+    except UsageError as e:   # an output rbcd.cli could not write
+        sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
+        return 2
+    except ToolError as e:
+        sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
+        return 1
+    except KeyboardInterrupt:
+        return 130
+
+
+def require_numpy():
+    """The converter's stages compute with numpy: its absence is one line."""
+    try:
+        import numpy  # noqa: F401
+    except ImportError:
+        raise ToolError("numpy is not installed (Debian: python3-numpy)")
+
+
+def on_signal(signum, frame):
+    # Unwinds through the finally blocks: temporaries removed, rbcd-gl-raster stopped.
+    raise SystemExit(128 + signum)
+
+
+def main(argv=None):
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, on_signal)
+    return run(parse_args(sys.argv[1:] if argv is None else argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

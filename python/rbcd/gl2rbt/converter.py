@@ -1,0 +1,174 @@
+"""The converter: the GL state of a captured stream, call by call, into the
+draw stream rbcd-gl-raster reads (docs/gl-capture.md)."""
+import struct
+
+import numpy as np
+
+from .entities import EntityTracker
+from .errors import ConvertError, RasterStopped, fail_call, printable
+from .geometry import GeometryOutput
+from .gl_tables import CALL_FLAG_END_FRAME, IGNORED_PREFIXES
+from .glstate import GLState
+from .glstate.draws import DrawCalls
+from .glstate.objects import ObjectCalls
+from .glstate.per_fragment import PerFragmentCalls
+from .glstate.polygon import PolygonCalls
+from .glstate.transform import TransformCalls
+from .glstate.vertex_arrays import VertexArrayCalls
+from .selection import Selection
+
+STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, DrawCalls, ObjectCalls)
+
+
+class Converter(*STATE_GROUPS, GeometryOutput):
+    def __init__(self, args, raster_in, geometry_out):
+        self.args = args
+        self.s = GLState()
+        self.raster = raster_in          # binary stream to rbcd-gl-raster, or None
+        self.stream_copy = open(args.stream_out, "wb") if getattr(args, "stream_out", None) else None
+        self.geo = geometry_out          # text, or None
+        self.frame = 0                   # capture frame (swaps seen)
+        self.out_frame = -1              # output frame number
+        self.frame_open = False          # its start record is written
+        self.frame_view = None           # the frame's view matrix (the first perspective draw's model-view)
+        self.screen = tuple(args.screen) if args.screen else None
+        self.drawable = None             # the window's size, as apitrace records it at each MakeCurrent
+        self.flags = 0                   # of the call being handled
+        self.select = Selection(args.select) if args.select else None
+        self.tracker = EntityTracker(self.select.settings) if self.select else None
+        self.drawn_surfaces = set()
+        self.frame_draws = []            # (call, description) for --list-draws
+        self.geo_objects = {}            # object id -> list of (eye verts, tris)
+        self.geo_view = None             # the projection of the frame's collisionable draws
+        self.last_depth_draw = None
+        self.ignored_prims = 0
+        self.partial_frame_dropped = False
+        self.listing = None              # --list-draws: one dict per draw of the frame
+        self.last_rule = "untagged"
+        self.last_3d_draws = []          # (output frame, capture frame, call of its last draw with depth test)
+        self.last_call = None
+        self.header_written = False
+        self.first_frame, self.last_frame = args.frame_range
+        self.active = self.in_range(0)   # the current frame is converted
+
+    # ---- output
+    def emit(self, data):
+        if self.stream_copy is not None:
+            self.stream_copy.write(data)
+        if self.raster is not None and self.raster is not False:
+            try:
+                self.raster.write(data)
+            except BrokenPipeError:
+                raise RasterStopped()
+
+    def write_header(self):
+        if self.header_written:
+            return
+        if self.screen is None:
+            self.screen = self.drawable or (self.s.viewport[2:4] if self.s.viewport else None)
+        if self.screen is None or min(self.screen) < 1:
+            raise ConvertError("the capture sets no viewport before its first draw: give --screen W H")
+        w, h = self.screen
+        self.emit(b"RBCDGLD1" + struct.pack("<5I", w, h, self.args.tile[0], self.args.tile[1], self.args.depth_bits))
+        self.header_written = True
+
+    # ---- frames
+    def in_range(self, frame):
+        return self.first_frame <= frame and (self.last_frame is None or frame <= self.last_frame)
+
+    def open_frame(self, no):
+        """Writes the frame's start record before its first record."""
+        if self.frame_open:
+            return
+        self.write_header()
+        self.out_frame += 1
+        self.emit(b"F" + struct.pack("<Q", no))
+        self.frame_open = True
+
+    def end_frame(self, no):
+        if self.active:
+            self.open_frame(no)
+            self.emit(b"E" + struct.pack("<Q", no))
+            self.last_3d_draws.append((self.out_frame, self.frame, self.last_depth_draw))
+            if self.geo is not None:
+                self.write_geometry_frame()
+        self.frame += 1
+        self.frame_open = False
+        self.active = self.in_range(self.frame)
+        self.drawn_surfaces = set()
+        self.geo_objects = {}
+        self.geo_view = None
+        self.last_depth_draw = None
+        self.frame_view = None
+        if self.tracker:
+            self.tracker.begin_frame()
+
+    # ---- the call handlers
+    def handle(self, call):
+        no, name, args, ret, flags = call
+        self.flags = flags
+        s = self.s
+        a = [v for _, v in args]
+        if name.endswith("ARB") or name.endswith("EXT"):
+            base = name[:-3]
+        else:
+            base = name
+        if s.begin_mode is not None:
+            if base.startswith("glVertex"):
+                self.immediate_vertex(no, base, a)
+                return
+            if base == "glEnd":
+                mode, verts = s.begin_mode, s.begin_verts
+                s.begin_mode, s.begin_verts = None, []
+                if verts:
+                    self.draw(no, mode, np.array(verts, dtype=np.float64), "glBegin/glEnd")
+                return
+            if base.startswith(("glColor", "glNormal", "glTexCoord", "glMultiTexCoord", "glMaterial",
+                                "glSecondaryColor", "glFogCoord", "glEdgeFlag", "glIndex")):
+                return
+            fail_call(no, f"{printable(name)} between glBegin and glEnd is not emulated")
+        h = self.HANDLERS.get(base)
+        if h is not None:
+            h(self, no, name, a, args)
+        elif base.startswith("glVertex"):
+            fail_call(no, f"{printable(name)} outside glBegin/glEnd")
+        elif base.startswith(IGNORED_PREFIXES):
+            pass
+        else:
+            fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
+        if flags & CALL_FLAG_END_FRAME:
+            self.end_frame(no)
+
+    def h_refuse(self, no, name, a, args):
+        fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
+
+    def h_ignore(self, no, name, a, args):
+        pass
+
+    # Calls that can change geometry or visibility in ways not emulated.
+    REFUSED = {
+        "glCallList": h_refuse,
+        "glCallLists": h_refuse,
+        "glNewList": h_refuse,
+        "glMultiDrawArrays": h_refuse,
+        "glMultiDrawElements": h_refuse,
+        "glDrawArraysInstanced": h_refuse,
+        "glDrawElementsInstanced": h_refuse,
+        "glDrawElementsBaseVertex": h_refuse,
+        "glVertexAttribPointer": h_ignore,
+        "glEnableVertexAttribArray": h_refuse,
+        "glArrayElement": h_refuse,
+        "glEvalMesh1": h_refuse,
+        "glEvalMesh2": h_refuse,
+        "glEvalCoord1f": h_refuse,
+        "glEvalCoord2f": h_refuse,
+        "glEvalPoint1": h_refuse,
+        "glEvalPoint2": h_refuse,
+        "glPushAttrib": h_refuse,
+        "glPopAttrib": h_refuse,
+        "glBindFramebuffer": h_refuse,
+        "glBindVertexArray": h_refuse,
+        "glPushClientAttrib": h_refuse,
+        "glPopClientAttrib": h_refuse,
+    }
+    HANDLERS = {k: v for group in STATE_GROUPS for k, v in group.HANDLERS.items()} | REFUSED

@@ -1,0 +1,117 @@
+"""--check-depth: the converted frames' depth against Mesa's (glretrace -D)."""
+import base64
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+
+import numpy as np
+
+from .capture import check_input_file, read_calls
+from .converter import Converter
+from .errors import ConvertError, ToolError, printable
+from .raster import convert
+from .reduced import is_reduced_capture
+
+def mesa_depth_at(trace, call, timeout):
+    """Mesa's depth buffer after `call` (glretrace -D), as (width, height, rows
+    from the top of float32 values in [0, 1])."""
+    exe = shutil.which("glretrace")
+    if not exe:
+        raise ToolError("glretrace is not installed (scripts/setup.sh --gl installs apitrace)")
+    cmd = [exe, "-D", str(call), trace]
+    if not os.environ.get("DISPLAY"):
+        xvfb = shutil.which("xvfb-run")
+        if not xvfb:
+            raise ToolError("no DISPLAY and no xvfb-run for glretrace (scripts/setup.sh --gl installs xvfb)")
+        cmd = [xvfb, "-a", "-s", "-screen 0 1280x1024x24"] + cmd
+    try:
+        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=timeout,
+                           stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        raise ToolError(f"glretrace -D {call} did not finish in {timeout} s")
+    text = r.stdout.decode("utf-8", "replace")
+    # A lenient reading: the state is JSON, but the base64 text carries
+    # newlines, so the depth image is found by its keys.
+    m = re.search(r'"GL_DEPTH_COMPONENT"\s*:\s*\{(.*?)"__data__"\s*:\s*"([^"]*)"', text, re.S)
+    if not m:
+        raise ToolError(f"glretrace -D {call} dumped no depth buffer"
+                        f" ({printable((r.stderr.decode('utf-8', 'replace').strip().splitlines() or ['no message'])[-1])})")
+    data = base64.b64decode(re.sub(r"\s+", "", m.group(2)).replace("\\n", ""))
+    # PFM: "Pf\nW H\nSCALE\n", then rows from the bottom; the floats are
+    # little endian whatever the scale's sign says (as glretrace writes them).
+    parts = data.split(b"\n", 3)
+    if len(parts) < 4 or parts[0] != b"Pf":
+        raise ToolError(f"glretrace -D {call}: the depth image is not a one-channel PFM")
+    w, h = (int(x) for x in parts[1].split())
+    vals = np.frombuffer(parts[3], dtype="<f4", count=w * h).reshape(h, w)
+    return w, h, vals   # rows from the top, as glretrace writes them (not PFM's bottom-up)
+
+
+def read_depth_file(path):
+    with open(path, "rb") as f:
+        head = f.readline().split()
+        if len(head) != 5 or head[0] != b"rbcd-depth":
+            raise ToolError(f"{path}: not a depth dump")
+        w, h, bits = int(head[2]), int(head[3]), int(head[4])
+        vals = np.frombuffer(f.read(), dtype="<u4", count=w * h).reshape(h, w)
+    return w, h, bits, vals
+
+
+def check_depth(args):
+    """Converts the selected frames with a depth snapshot at each frame's last
+    draw with the depth test on, replays the capture to the same call with
+    Mesa (glretrace -D) and prints, per frame, the share of covered pixels
+    (drawn in either buffer) where the two depths agree within one step of
+    depth_bits."""
+    check_input_file(args.trace)
+    if is_reduced_capture(args.trace):
+        raise ConvertError("--check-depth replays the capture with Mesa: give the capture itself, "
+                           "not a reduced capture")
+    # Pass 1: the calls, from the GL state alone.
+    probe = Converter(args, False, None)
+    for call in read_calls(args.trace):
+        probe.last_call = call[0]
+        probe.handle(call)
+        if probe.last_frame is not None and probe.frame > probe.last_frame:
+            break
+    frames = [(o, c, call) for o, c, call in probe.last_3d_draws if call is not None]
+    # glretrace replays a capture's first frame wrongly at times (seen: the
+    # test program's first frame replays without its clear): it is checked
+    # only when it is the one frame asked for.
+    if len(frames) > 1 and frames[0][1] == 0:
+        frames = frames[1:]
+    if not frames:
+        raise ConvertError("no selected frame draws with the depth test on: nothing to check")
+    if len(frames) > args.check_frames:
+        step = len(frames) / args.check_frames
+        frames = [frames[int(i * step)] for i in range(args.check_frames)]
+    tmp = tempfile.mkdtemp(prefix="rbcd-gl2rbt-check.")
+    try:
+        args.output = os.path.join(tmp, "check.rbt")
+        args.geometry = args.summary = None
+        args.depth_out = os.path.join(tmp, "depth")
+        args.snapshots = {call for _, _, call in frames}
+        convert(args)
+        total_cov = total_ok = 0
+        step = 1.0 / ((1 << args.depth_bits) - 1)
+        for out_frame, cap_frame, call in frames:
+            w, h, bits, ours = read_depth_file(f"{args.depth_out}.{out_frame}.depth")
+            mw, mh, mesa = mesa_depth_at(args.trace, call, args.check_timeout)
+            if (mw, mh) != (w, h):
+                raise ToolError(f"frame {cap_frame}: Mesa's depth buffer is {mw}x{mh}, the screen {w}x{h}")
+            ours01 = ours.astype(np.float64) * step
+            covered = (ours < (1 << bits) - 1) | (mesa < 1.0)
+            agree = np.abs(ours01 - mesa.astype(np.float64)) <= step * 1.0001 + 1e-7
+            cov = int(covered.sum())
+            ok = int((agree & covered).sum())
+            total_cov += cov
+            total_ok += ok
+            pct = 100.0 * ok / cov if cov else 100.0
+            print(f"frame {cap_frame} (call {call}): {pct:.2f}% of {cov} covered pixels agree with Mesa")
+        pct = 100.0 * total_ok / total_cov if total_cov else 100.0
+        print(f"agreement: {pct:.2f}% of {total_cov} covered pixels in {len(frames)} frames")
+        return 0 if pct >= args.min_agreement else 1
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)

@@ -1,0 +1,24 @@
+"""The converter's errors and how it names what it read."""
+from ..cli import escape
+
+
+class ConvertError(Exception):
+    """Bad input: one line, exit 2."""
+
+
+class ToolError(Exception):
+    """A tool failed: one line, exit 1."""
+
+
+class RasterStopped(Exception):
+    """rbcd-gl-raster exited early: its own message says why."""
+
+
+def printable(s, limit=200):
+    """One line (rbcd_cli.escape: non-printable bytes as \\xNN), cut at `limit`."""
+    s = escape(s)
+    return s if len(s) <= limit else s[:limit] + "..."
+
+
+def fail_call(no, what):
+    raise ConvertError(f"call {no}: {what}")

@@ -1,0 +1,54 @@
+"""GL's enumerants as the converter reads them, and the calls it may pass over."""
+
+# apitrace's call flags (trace_model.hpp): a call apitrace made up to record
+# state (the window's size at MakeCurrent), and a call that ends a frame.
+CALL_FLAG_FAKE = 1 << 0
+CALL_FLAG_END_FRAME = 1 << 5
+
+PRIM_TRIANGLES = {"GL_TRIANGLES", "GL_TRIANGLE_STRIP", "GL_TRIANGLE_FAN", "GL_QUADS", "GL_QUAD_STRIP", "GL_POLYGON"}
+PRIM_NO_AREA = {"GL_POINTS", "GL_LINES", "GL_LINE_STRIP", "GL_LINE_LOOP"}
+DEPTH_FUNCS = ["GL_NEVER", "GL_LESS", "GL_EQUAL", "GL_LEQUAL", "GL_GREATER", "GL_NOTEQUAL", "GL_GEQUAL", "GL_ALWAYS"]
+CULL = {"GL_BACK": 1, "GL_FRONT": 2, "GL_FRONT_AND_BACK": 3}
+ARRAY_TYPES = {"GL_FLOAT": "<f4", "GL_DOUBLE": "<f8", "GL_SHORT": "<i2", "GL_INT": "<i4", "GL_BYTE": "i1",
+               "GL_UNSIGNED_BYTE": "u1", "GL_UNSIGNED_SHORT": "<u2", "GL_UNSIGNED_INT": "<u4", "GL_HALF_FLOAT": "<f2"}
+INDEX_TYPES = {"GL_UNSIGNED_BYTE": "u1", "GL_UNSIGNED_SHORT": "<u2", "GL_UNSIGNED_INT": "<u4"}
+MAX_CLIP_PLANES = 8
+
+# Calls that cannot change where a fragment lands or which reach the unit:
+# texturing, colour, blending, lighting, fog, materials, queries, the window
+# system. Listed in docs/gl-capture.md; anything else that is neither
+# emulated nor here is refused.
+IGNORED_PREFIXES = (
+    "glTex", "glBindTexture", "glGenTextures", "glDeleteTextures", "glActiveTexture", "glClientActiveTexture",
+    "glCompressedTex", "glCopyTex", "glPixelStore", "glPixelTransfer", "glPixelZoom", "glGenerateMipmap",
+    "glColor", "glSecondaryColor", "glNormal", "glFog", "glLight", "glMaterial", "glShadeModel", "glBlend",
+    "glAlphaFunc", "glLogicOp", "glClearColor", "glClearStencil", "glClearAccum", "glStencil", "glColorMask",
+    "glHint", "glLineWidth", "glPointSize", "glPointParameter", "glLineStipple", "glPolygonStipple",
+    "glGet", "glIs", "glFinish", "glFlush", "glReadPixels", "glReadBuffer", "glDrawBuffer", "glPixelMap",
+    "glX", "egl", "wgl", "glDebugMessage", "glObjectLabel", "glObjectPtrLabel", "glGetError", "glLockArrays",
+    "glUnlockArrays", "glNormalPointer", "glColorPointer", "glTexCoordPointer", "glSecondaryColorPointer",
+    "glFogCoordPointer", "glEdgeFlagPointer", "glIndexPointer", "glMultiTexCoord", "glTexCoord", "glFogCoord",
+    "glEdgeFlag", "glIndex", "glAccum", "glSampleCoverage", "glGenQueries", "glBeginQuery", "glEndQuery",
+    "glDeleteQueries", "glQueryCounter", "glStringMarker", "glFrameTerminator", "glInsertEventMarker",
+    "glDebugMessageInsert", "glGenBuffers", "glClipControl", "glSampleMask",
+    "glDepthBounds", "glGenFramebuffers",
+    "glRasterPos", "glBitmap", "glDrawPixels", "glCopyPixels", "glScissorIndexed", "glViewportIndexed",
+    "glPrimitiveRestart", "glLoadName", "glPushName", "glPopName", "glInitNames", "glRenderMode",
+    "glGenLists", "glDeleteLists", "glListBase", "glCompileShader", "glShaderSource", "glCreateShader",
+    "glCreateProgram", "glAttachShader", "glLinkProgram", "glDeleteShader", "glDeleteProgram", "glDetachShader",
+    "glBindAttribLocation", "glUniform", "glValidateProgram", "glBindFragDataLocation", "glTexEnv", "glTexGen",
+    "glColorTable", "glConvolution", "glHistogram", "glMinmax", "glResetHistogram", "glResetMinmax",
+    "glSeparableFilter", "glMap1", "glMap2", "glMapGrid", "memcpy", "glMemcpy", "glBlendEquation",
+)
+# Capabilities of glEnable/glDisable whose effect on the unit's input is nil or
+# emulated; others are refused when enabled.
+CAPS_IGNORED = {
+    "GL_TEXTURE_1D", "GL_TEXTURE_2D", "GL_TEXTURE_3D", "GL_TEXTURE_CUBE_MAP", "GL_TEXTURE_RECTANGLE",
+    "GL_BLEND", "GL_ALPHA_TEST", "GL_STENCIL_TEST", "GL_FOG", "GL_LIGHTING", "GL_COLOR_MATERIAL",
+    "GL_NORMALIZE", "GL_RESCALE_NORMAL", "GL_DITHER", "GL_MULTISAMPLE", "GL_LINE_SMOOTH", "GL_POINT_SMOOTH",
+    "GL_POLYGON_SMOOTH", "GL_LINE_STIPPLE", "GL_POLYGON_STIPPLE", "GL_TEXTURE_GEN_S", "GL_TEXTURE_GEN_T",
+    "GL_TEXTURE_GEN_R", "GL_TEXTURE_GEN_Q", "GL_COLOR_LOGIC_OP", "GL_SAMPLE_ALPHA_TO_COVERAGE",
+    "GL_SAMPLE_COVERAGE", "GL_POLYGON_OFFSET_LINE", "GL_POLYGON_OFFSET_POINT", "GL_FRAMEBUFFER_SRGB",
+    "GL_DEBUG_OUTPUT", "GL_DEBUG_OUTPUT_SYNCHRONOUS", "GL_VERTEX_PROGRAM_POINT_SIZE", "GL_POINT_SPRITE",
+    "GL_COLOR_SUM", "GL_AUTO_NORMAL", "GL_INDEX_LOGIC_OP", "GL_PROGRAM_POINT_SIZE", "GL_TEXTURE_CUBE_MAP_SEAMLESS",
+} | {f"GL_LIGHT{i}" for i in range(8)}

@@ -1,0 +1,97 @@
+"""Which object a draw is: the application's debug groups, or the selection rules."""
+import re
+
+import numpy as np
+
+from ..errors import fail_call
+
+class ObjectCalls:
+    """Debug groups and markers, the program and texture bindings, and a draw's description for the rules."""
+
+    def note_draw(self, no, name, obj_id, nverts, mv, proj, clip):
+        if self.listing is None:
+            return
+        d = self.describe(no, mv, proj, nverts, clip)
+        w, h = self.screen
+        (x0, y0), (x1, y1) = d["box"]
+        box = (int((x0 + 1) * w / 2), int((1 - y1) * h / 2), int((x1 + 1) * w / 2), int((1 - y0) * h / 2))
+        self.listing.append({"index": len(self.listing), "call": no, "function": name, "vertices": nverts,
+                             "texture": d["texture"], "projection": d["projection"],
+                             "own_modelview": d["own_modelview"], "depth_write": d["depth_write"],
+                             "depth_func": self.s.depth_func, "box": box, "object": obj_id,
+                             "rule": self.last_rule, "translation": [round(float(v), 2) for v in mv[0:3, 3]]})
+
+    def object_of(self, no, mv, proj, nverts, clip):
+        for g in reversed(self.s.groups):
+            if g is not None:
+                self.last_rule = "debug group"
+                return g
+        if self.select is None:
+            self.last_rule = "untagged"
+            return None
+        d = self.describe(no, mv, proj, nverts, clip)
+        obj, self.last_rule = self.select.classify(d)
+        if obj == "entity":
+            obj = self.tracker.id_for(mv, self.frame_view, no)
+        return obj
+
+    def describe(self, no, mv, proj, nverts, clip):
+        view = getattr(self, "frame_view", None)
+        w, h = self.screen
+        ndc = clip[:, 0:2] / np.maximum(np.abs(clip[:, 3:4]), 1e-30)
+        lo, hi = np.clip(ndc.min(axis=0), -1, 1), np.clip(ndc.max(axis=0), -1, 1)
+        area = float(max(0.0, hi[0] - lo[0]) * max(0.0, hi[1] - lo[1]) * w * h / 4.0)
+        return {"call": no, "frame": self.frame, "vertices": nverts, "texture": self.s.texture,
+                "depth_write": self.s.depth_test and self.s.depth_mask,
+                "projection": "perspective" if abs(proj[3, 3]) < 1e-12 else "orthographic",
+                "own_modelview": view is not None and not np.allclose(mv, view, atol=1e-6),
+                "screen_area": area, "box": (lo, hi)}
+
+    def h_push_debug_group(self, no, name, a, args):
+        d = dict(args)
+        obj = None
+        if d.get("source") == "GL_DEBUG_SOURCE_APPLICATION" and d.get("message") == "rbcd-object":
+            i = d.get("id")
+            if not isinstance(i, int) or i < 0:
+                fail_call(no, "rbcd-object group with an impossible id")
+            obj = i
+        if len(self.s.groups) >= 64:
+            fail_call(no, "debug groups nested more than 64 deep")
+        self.s.groups.append(obj)
+
+    def h_push_group_marker(self, no, name, a, args):
+        d = dict(args)
+        text = d.get("marker")
+        obj = None
+        if isinstance(text, str):
+            length = d.get("length", 0)
+            if isinstance(length, int) and length > 0:
+                text = text[:length]
+            m = re.fullmatch(r"rbcd-object (\d+)", text)
+            if m:
+                obj = int(m.group(1))
+        if len(self.s.groups) >= 64:
+            fail_call(no, "group markers nested more than 64 deep")
+        self.s.groups.append(obj)
+
+    def h_pop_group(self, no, name, a, args):
+        if not self.s.groups:
+            fail_call(no, f"{name} without a group to pop")
+        self.s.groups.pop()
+
+    def h_use_program(self, no, name, a, args):
+        self.s.program = int(a[0]) if isinstance(a[0], int) else 1
+
+    def h_bind_texture(self, no, name, a, args):
+        if len(a) >= 2 and a[0] == "GL_TEXTURE_2D" and isinstance(a[1], int):
+            self.s.texture = a[1]
+
+    HANDLERS = {
+        "glPushDebugGroup": h_push_debug_group,
+        "glPopDebugGroup": h_pop_group,
+        "glPushGroupMarker": h_push_group_marker,
+        "glPopGroupMarker": h_pop_group,
+        "glUseProgram": h_use_program,
+        "glUseProgramObject": h_use_program,
+        "glBindTexture": h_bind_texture,
+    }

@@ -1,0 +1,76 @@
+"""The scissor, the depth test and its writes, depth clears, and the capabilities of glEnable."""
+import re
+import struct
+
+import numpy as np
+
+from ..errors import fail_call, printable
+from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES
+from . import as_bool, number
+
+class PerFragmentCalls:
+    """Per-fragment operations that decide which fragments reach the unit."""
+
+    def h_scissor(self, no, name, a, args):
+        x, y, w, h = [int(number(v, no, "a scissor value")) for v in a[:4]]
+        if w < 0 or h < 0:
+            fail_call(no, "glScissor with a negative size")
+        self.s.scissor = (x, y, w, h)
+
+    def h_depth_func(self, no, name, a, args):
+        if a[0] not in DEPTH_FUNCS:
+            fail_call(no, f"glDepthFunc({printable(a[0])}) is not a depth function")
+        self.s.depth_func = a[0]
+
+    def h_depth_mask(self, no, name, a, args):
+        self.s.depth_mask = as_bool(a[0])
+
+    def h_clear_depth(self, no, name, a, args):
+        self.s.clear_depth = min(1.0, max(0.0, number(a[0], no, "the clear depth")))
+
+    def h_clear(self, no, name, a, args):
+        mask = a[0] if isinstance(a[0], (list, tuple)) else (a[0],)
+        if "GL_DEPTH_BUFFER_BIT" in mask and self.active and self.s.depth_mask:
+            self.open_frame(no)
+            w, h = self.screen
+            if self.s.scissor_test and self.s.scissor:
+                sx, sy, sw, sh = self.s.scissor
+                rect = (sx, h - (sy + sh), sx + sw - 1, h - sy - 1)
+            else:
+                rect = (0, 0, w - 1, h - 1)
+            self.emit(b"C" + struct.pack("<Qd4i", no, self.s.clear_depth, *rect))
+
+    def enable(self, no, cap, on):
+        s = self.s
+        simple = {"GL_DEPTH_TEST": "depth_test", "GL_CULL_FACE": "cull", "GL_SCISSOR_TEST": "scissor_test",
+                  "GL_POLYGON_OFFSET_FILL": "offset_fill"}
+        if cap in simple:
+            setattr(s, simple[cap], on)
+            return
+        m = re.fullmatch(r"GL_CLIP_(?:PLANE|DISTANCE)(\d)", str(cap))
+        if m and int(m.group(1)) < MAX_CLIP_PLANES:
+            i = int(m.group(1))
+            if on and s.clip_planes[i] is None:
+                s.clip_planes[i] = np.zeros(4)   # GL's default plane (0,0,0,0) keeps everything
+            s.clip_enabled[i] = on
+            return
+        if cap in CAPS_IGNORED or not on:
+            return
+        fail_call(no, f"glEnable({printable(cap)}) is not emulated and may change geometry or visibility")
+
+    def h_enable(self, no, name, a, args):
+        self.enable(no, a[0], True)
+
+    def h_disable(self, no, name, a, args):
+        self.enable(no, a[0], False)
+
+    HANDLERS = {
+        "glScissor": h_scissor,
+        "glDepthFunc": h_depth_func,
+        "glDepthMask": h_depth_mask,
+        "glClearDepth": h_clear_depth,
+        "glClearDepthf": h_clear_depth,
+        "glClear": h_clear,
+        "glEnable": h_enable,
+        "glDisable": h_disable,
+    }

@@ -1,0 +1,128 @@
+"""Matrix stacks, the viewport, the depth range and user clip planes."""
+import re
+
+import numpy as np
+
+from ..errors import fail_call, printable
+from ..gl_tables import CALL_FLAG_FAKE, MAX_CLIP_PLANES
+from ..glmath import mat_frustum, mat_mul, mat_ortho, mat_rotate, mat_scale, mat_translate
+from . import number
+
+class TransformCalls:
+    """The model-view and projection stacks and the viewport transform."""
+
+    def cur(self):
+        return self.s.stacks[self.s.mode][-1]
+
+    def set_cur(self, m, no):
+        if not np.all(np.isfinite(m)):
+            fail_call(no, "the matrix becomes non-finite (NaN or infinity)")
+        self.s.stacks[self.s.mode][-1] = m
+
+    def matrix_arg(self, call, no, transpose=False):
+        vals = call[2][0][1]
+        if not isinstance(vals, (list, tuple)) or len(vals) != 16:
+            fail_call(no, f"{call[1]}: the matrix does not have 16 numbers")
+        m = np.array([number(v, no, "a matrix element") for v in vals], dtype=np.float64).reshape(4, 4)
+        return m if transpose else m.T   # GL matrices are column-major
+
+    def h_matrix_mode(self, no, name, a, args):
+        if a[0] not in self.s.stacks:
+            fail_call(no, f"glMatrixMode({printable(a[0])}) is not emulated")
+        self.s.mode = a[0]
+
+    def h_load_identity(self, no, name, a, args):
+        self.set_cur(np.identity(4), no)
+
+    def h_load_matrix(self, no, name, a, args):
+        self.set_cur(self.matrix_arg((no, name, args), no, transpose="Transpose" in name), no)
+
+    def h_mult_matrix(self, no, name, a, args):
+        self.set_cur(mat_mul(self.cur(), self.matrix_arg((no, name, args), no, transpose="Transpose" in name)), no)
+
+    def h_translate(self, no, name, a, args):
+        self.set_cur(mat_mul(self.cur(), mat_translate(*[number(x, no, "an offset") for x in a[:3]])), no)
+
+    def h_scale(self, no, name, a, args):
+        self.set_cur(mat_mul(self.cur(), mat_scale(*[number(x, no, "a scale") for x in a[:3]])), no)
+
+    def h_rotate(self, no, name, a, args):
+        self.set_cur(mat_mul(self.cur(), mat_rotate(*[number(x, no, "a rotation") for x in a[:4]])), no)
+
+    def h_ortho(self, no, name, a, args):
+        l, r, b, t, n, f = [number(x, no, "a bound") for x in a[:6]]
+        if l == r or b == t or n == f:
+            fail_call(no, "glOrtho with an empty volume (GL_INVALID_VALUE)")
+        self.set_cur(mat_mul(self.cur(), mat_ortho(l, r, b, t, n, f)), no)
+
+    def h_frustum(self, no, name, a, args):
+        l, r, b, t, n, f = [number(x, no, "a bound") for x in a[:6]]
+        if n <= 0 or f <= 0 or l == r or b == t or n == f:
+            fail_call(no, "glFrustum with impossible bounds (GL_INVALID_VALUE)")
+        self.set_cur(mat_mul(self.cur(), mat_frustum(l, r, b, t, n, f)), no)
+
+    def h_push_matrix(self, no, name, a, args):
+        st = self.s.stacks[self.s.mode]
+        if len(st) >= 64:
+            fail_call(no, "glPushMatrix overflows the matrix stack")
+        st.append(st[-1].copy())
+
+    def h_pop_matrix(self, no, name, a, args):
+        st = self.s.stacks[self.s.mode]
+        if len(st) <= 1:
+            fail_call(no, "glPopMatrix underflows the matrix stack")
+        st.pop()
+
+    def h_viewport(self, no, name, a, args):
+        x, y, w, h = [int(number(v, no, "a viewport value")) for v in a[:4]]
+        if w < 0 or h < 0 or w > 16384 or h > 16384 or abs(x) > 16384 or abs(y) > 16384:
+            fail_call(no, "glViewport with an impossible size")
+        self.s.viewport = (x, y, w, h)
+        if self.flags & CALL_FLAG_FAKE and w > 0 and h > 0:
+            self.drawable = (w, h)   # apitrace's record of the window size at MakeCurrent
+
+    def h_depth_range(self, no, name, a, args):
+        n, f = [min(1.0, max(0.0, number(v, no, "a depth range bound"))) for v in a[:2]]
+        self.s.depth_range = (n, f)
+
+    def h_clip_plane(self, no, name, a, args):
+        plane = a[0]
+        m = re.fullmatch(r"GL_CLIP_(?:PLANE|DISTANCE)(\d)", str(plane))
+        if not m or int(m.group(1)) >= MAX_CLIP_PLANES:
+            fail_call(no, f"glClipPlane({printable(plane)}) is not a clip plane")
+        eq = a[1]
+        if not isinstance(eq, (list, tuple)) or len(eq) != 4:
+            fail_call(no, "glClipPlane without four coefficients")
+        p = np.array([number(x, no, "a plane coefficient") for x in eq])
+        # Stored in eye coordinates: multiplied by the inverse model-view in force.
+        try:
+            self.s.clip_planes[int(m.group(1))] = p @ np.linalg.inv(self.s.stacks["GL_MODELVIEW"][-1])
+        except np.linalg.LinAlgError:
+            fail_call(no, "glClipPlane with a singular model-view matrix")
+
+    HANDLERS = {
+        "glMatrixMode": h_matrix_mode,
+        "glLoadIdentity": h_load_identity,
+        "glLoadMatrixf": h_load_matrix,
+        "glLoadMatrixd": h_load_matrix,
+        "glLoadTransposeMatrixf": h_load_matrix,
+        "glLoadTransposeMatrixd": h_load_matrix,
+        "glMultMatrixf": h_mult_matrix,
+        "glMultMatrixd": h_mult_matrix,
+        "glMultTransposeMatrixf": h_mult_matrix,
+        "glMultTransposeMatrixd": h_mult_matrix,
+        "glTranslatef": h_translate,
+        "glTranslated": h_translate,
+        "glScalef": h_scale,
+        "glScaled": h_scale,
+        "glRotatef": h_rotate,
+        "glRotated": h_rotate,
+        "glOrtho": h_ortho,
+        "glFrustum": h_frustum,
+        "glPushMatrix": h_push_matrix,
+        "glPopMatrix": h_pop_matrix,
+        "glViewport": h_viewport,
+        "glDepthRange": h_depth_range,
+        "glDepthRangef": h_depth_range,
+        "glClipPlane": h_clip_plane,
+    }

@@ -1,0 +1,155 @@
+"""The vertex array and buffer objects: where a draw's positions come from."""
+import numpy as np
+
+from ..errors import fail_call, printable
+from ..gl_tables import ARRAY_TYPES, INDEX_TYPES
+
+class VertexArrayCalls:
+    """Client vertex arrays, buffer objects and their contents."""
+
+    # ---- vertex data
+    def array_values(self, arr, first, count, no):
+        """(count, 4) float64 positions of vertices first .. first+count-1."""
+        if arr.type not in ARRAY_TYPES or arr.size not in (2, 3, 4):
+            fail_call(no, f"vertex array of {arr.size} x {printable(arr.type)} is not emulated")
+        dt = np.dtype(ARRAY_TYPES[arr.type])
+        elem = dt.itemsize * arr.size
+        stride = arr.stride or elem
+        if arr.buffer:
+            buf = self.s.buffers.get(arr.buffer)
+            if buf is None:
+                fail_call(no, f"the vertex array names buffer {arr.buffer}, which holds no data")
+            data, base = buf, arr.offset
+        else:
+            data, base = arr.data, 0
+            if data is None:
+                fail_call(no, "the vertex array has no data in the capture")
+        if count == 0:
+            return np.zeros((0, 4))
+        start = base + first * stride
+        end = start + (count - 1) * stride + elem
+        if first < 0 or start < 0 or end > len(data):
+            fail_call(no, f"vertices {first}..{first + count - 1} reach past the vertex array's "
+                      f"{len(data)} bytes")
+        raw = np.frombuffer(data, dtype=np.uint8, count=end - start, offset=start)
+        if stride == elem:
+            v = raw.view(dt).reshape(count, arr.size)
+        else:
+            v = np.lib.stride_tricks.as_strided(raw, shape=(count, elem), strides=(stride, 1)).copy().view(dt) \
+                .reshape(count, arr.size)
+        out = np.zeros((count, 4))
+        out[:, 3] = 1.0
+        out[:, :arr.size] = v
+        return out
+
+    def index_values(self, type_, indices, count, no):
+        if type_ not in INDEX_TYPES:
+            fail_call(no, f"index type {printable(type_)} is not allowed")
+        dt = np.dtype(INDEX_TYPES[type_])
+        eb = self.s.bound["GL_ELEMENT_ARRAY_BUFFER"]
+        if eb:
+            buf = self.s.buffers.get(eb)
+            if buf is None:
+                fail_call(no, f"the element array buffer {eb} holds no data")
+            off = int(indices) if isinstance(indices, int) else 0
+            data = buf
+        else:
+            if not isinstance(indices, (bytes, bytearray)):
+                fail_call(no, "the indices are not in the capture")
+            data, off = indices, 0
+        need = off + count * dt.itemsize
+        if off < 0 or need > len(data):
+            fail_call(no, f"{count} indices reach past the index data's {len(data)} bytes")
+        return np.frombuffer(data, dtype=dt, count=count, offset=off).astype(np.int64)
+
+    def h_client_state(self, no, name, a, args):
+        if a[0] == "GL_VERTEX_ARRAY":
+            self.s.vertex_array_enabled = name.startswith("glEnable")
+
+    def h_vertex_pointer(self, no, name, a, args):
+        d = dict(args)
+        arr = self.s.vertex_array
+        arr.size = d.get("size", 4)
+        arr.type = d.get("type", "GL_FLOAT")
+        arr.stride = d.get("stride", 0)
+        if not isinstance(arr.size, int) or not isinstance(arr.stride, int) or arr.stride < 0:
+            fail_call(no, "glVertexPointer with an impossible size or stride")
+        p = d.get("pointer")
+        arr.buffer = self.s.bound["GL_ARRAY_BUFFER"]
+        if arr.buffer:
+            arr.offset, arr.data = int(p or 0), None
+        else:
+            arr.offset = 0
+            arr.data = p if isinstance(p, (bytes, bytearray)) else None
+
+    def h_interleaved(self, no, name, a, args):
+        fail_call(no, "glInterleavedArrays is not emulated")
+
+    def h_bind_buffer(self, no, name, a, args):
+        target, buf = a[0], a[1]
+        if target in self.s.bound:
+            self.s.bound[target] = int(buf)
+
+    def h_buffer_data(self, no, name, a, args):
+        d = dict(args)
+        target = d.get("target")
+        if target not in self.s.bound:
+            return
+        b = self.s.bound[target]
+        if not b:
+            fail_call(no, f"{name} with no buffer bound")
+        size = d.get("size", 0)
+        if not isinstance(size, int) or size < 0 or size > (1 << 30):
+            fail_call(no, f"{name}: impossible size")
+        data = d.get("data")
+        buf = bytearray(size)
+        if isinstance(data, (bytes, bytearray)):
+            if len(data) < size:
+                fail_call(no, f"{name}: the data is shorter than the size")
+            buf[:] = data[:size]
+        self.s.buffers[b] = buf
+
+    def h_buffer_sub_data(self, no, name, a, args):
+        d = dict(args)
+        target = d.get("target")
+        if target not in self.s.bound:
+            return
+        b = self.s.bound[target]
+        buf = self.s.buffers.get(b)
+        off, size, data = d.get("offset", 0), d.get("size", 0), d.get("data")
+        if buf is None or not isinstance(off, int) or not isinstance(size, int) or off < 0 or size < 0 \
+                or off + size > len(buf) or not isinstance(data, (bytes, bytearray)) or len(data) < size:
+            fail_call(no, f"{name}: the range is outside the buffer's data")
+        buf[off:off + size] = data[:size]
+
+    def h_map_buffer(self, no, name, a, args):
+        target = a[0]
+        if target in self.s.bound:
+            fail_call(no, f"{name}: writing vertex or index buffers through a mapping is not emulated")
+
+    def h_delete_buffers(self, no, name, a, args):
+        d = dict(args)
+        for b in d.get("buffers") or []:
+            if isinstance(b, int):
+                self.s.buffers.pop(b, None)
+                for t, v in self.s.bound.items():
+                    if v == b:
+                        self.s.bound[t] = 0
+
+    def vertex_source(self, no, name):
+        if not self.s.vertex_array_enabled:
+            fail_call(no, f"{name} with the vertex array disabled (generic attributes are not emulated)")
+        return self.s.vertex_array
+
+    HANDLERS = {
+        "glEnableClientState": h_client_state,
+        "glDisableClientState": h_client_state,
+        "glVertexPointer": h_vertex_pointer,
+        "glInterleavedArrays": h_interleaved,
+        "glBindBuffer": h_bind_buffer,
+        "glBufferData": h_buffer_data,
+        "glBufferSubData": h_buffer_sub_data,
+        "glMapBuffer": h_map_buffer,
+        "glMapBufferRange": h_map_buffer,
+        "glDeleteBuffers": h_delete_buffers,
+    }

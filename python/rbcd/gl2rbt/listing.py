@@ -1,0 +1,84 @@
+"""--list-draws: every draw of one frame and what it became, and its picture."""
+import io
+import os
+import shutil
+import tempfile
+
+import numpy as np
+
+from ..cli import write_output
+from .errors import ToolError, printable
+from .raster import convert
+
+def list_draws(args):
+    """Every draw of one frame: call, function, vertices, texture, projection,
+    whether it has a model-view of its own (not the frame's view), depth
+    writes, screen box, the object it became and the rule that decided; with
+    --image, a picture of the frame with each visible draw in its own colour
+    and labelled with its index."""
+    frame = args.list_draws
+    args.frame_range = (frame, frame)
+    tmp = tempfile.mkdtemp(prefix="rbcd-gl2rbt-list.")
+    try:
+        args.output = os.path.join(tmp, "list.rbt")
+        args.geometry = args.summary = args.depth_out = None
+        args.snapshots = set()
+        ids_path = os.path.join(tmp, "ids")
+        frames, conv = convert(args, listing=True, ids=(ids_path, 0))
+        rows = conv.listing
+        print(f"frame {frame}: {len(rows)} draws, {len(frames[0]['objects'])} collisionable objects")
+        print("  #   call  function              verts  tex  proj  own-mv depth  func       box (x0 y0 x1 y1)     object  rule")
+        for r in rows:
+            x0, y0, x1, y1 = r["box"]
+            obj = "-" if r["object"] is None else str(r["object"])
+            print(f"{r['index']:3d} {r['call']:6d}  {printable(r['function'], 20):20s} {r['vertices']:6d} {r['texture']:4d}  "
+                  f"{r['projection'][:5]:5s} {'yes' if r['own_modelview'] else 'no':6s} "
+                  f"{'write' if r['depth_write'] else '-':5s}  {r['depth_func'][3:]:9s}  "
+                  f"{x0:4d} {y0:4d} {x1:4d} {y1:4d}     {obj:6s}  {printable(r['rule'], 40)}")
+        if args.image:
+            write_draw_image(args.image, ids_path, rows)
+        return 0
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def write_draw_image(path, ids_path, rows):
+    try:
+        from PIL import Image, ImageDraw
+    except ImportError:
+        raise ToolError("--image needs python3-pil (installed with apitrace)")
+    with open(ids_path, "rb") as f:
+        head = f.readline().split()
+        w, h = int(head[2]), int(head[3])
+        ids = np.frombuffer(f.read(), dtype="<u2", count=w * h).reshape(h, w)
+    # Collisionable draws in saturated colours, the rest in greys; the
+    # background black.
+    n = len(rows)
+    pal = np.zeros((max(n, 1) + 1, 3), np.uint8)
+    for r in rows:
+        k = r["index"]
+        if r["object"] is not None:
+            hue = (r["object"] * 0.618034) % 1.0
+            pal[k] = [int(255 * max(0.0, min(1.0, abs(hue * 6 - 3) - 1))),
+                      int(255 * max(0.0, min(1.0, 2 - abs(hue * 6 - 2)))),
+                      int(255 * max(0.0, min(1.0, 2 - abs(hue * 6 - 4))))]
+            pal[k] = np.maximum(pal[k], 60)
+        else:
+            g = 50 + (k * 37) % 90
+            pal[k] = [g, g, g]
+    idx = np.where(ids == 0xFFFF, n, np.minimum(ids, n))
+    img = Image.fromarray(pal[idx], "RGB")
+    draw = ImageDraw.Draw(img)
+    for r in rows:
+        ys, xs = np.nonzero(ids == r["index"])
+        if len(xs) < 20:
+            continue
+        label = f"{r['index']}" + (f" ={r['object']}" if r["object"] is not None else "")
+        x, y = int(np.median(xs)), int(np.median(ys))
+        draw.text((x - 6, y - 5), label, fill=(255, 255, 255) if r["object"] is None else (0, 0, 0))
+    buf = io.BytesIO()
+    img.save(buf, format="PNG")
+    write_output(path, buf.getvalue(), "image")
+
+
+# ---------------------------------------------------------------- the check against Mesa

@@ -1,0 +1,59 @@
+"""Streamed outputs by the project's rules (docs/limits.md)."""
+import os
+import stat
+import tempfile
+
+from .errors import ConvertError, printable
+
+class SafeText:
+    """A streamed text output, by rbcd-sim's rules (rbcd_cli.write_output for
+    whole outputs): a path that is absent or a regular file through an
+    unpredictable temporary renamed into place on success and removed
+    otherwise; anything else (a FIFO, a device, a symlink) written in place and
+    never unlinked."""
+
+    def __init__(self, path, binary=False):
+        self.path, self.tmp = path, None
+        try:
+            in_place = not stat.S_ISREG(os.lstat(path).st_mode)
+        except FileNotFoundError:
+            in_place = False
+        try:
+            if os.path.isdir(path):
+                raise IsADirectoryError(21, "is a directory")
+            if in_place:
+                fd = os.open(path, os.O_WRONLY | os.O_NOCTTY | os.O_CLOEXEC)
+            else:
+                d = os.path.dirname(os.path.abspath(path))
+                fd, self.tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", dir=d)
+        except OSError as e:
+            raise ConvertError(f"{printable(path)}: cannot create: {printable(e.strerror)}")
+        self.f = os.fdopen(fd, "wb" if binary else "w", buffering=1 << 20)
+
+    def write(self, s):
+        self.f.write(s)
+
+    def commit(self):
+        self.f.close()
+        if self.tmp:
+            os.chmod(self.tmp, 0o666 & ~current_umask())
+            os.replace(self.tmp, self.path)
+            self.tmp = None
+
+    def abandon(self):
+        try:
+            self.f.close()
+        except OSError:
+            pass
+        if self.tmp:
+            try:
+                os.unlink(self.tmp)
+            except OSError:
+                pass
+            self.tmp = None
+
+
+def current_umask():
+    m = os.umask(0)
+    os.umask(m)
+    return m

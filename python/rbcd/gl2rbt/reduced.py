@@ -1,0 +1,112 @@
+"""The reduced capture (--reduced-out): the calls of a capture that the
+emulation reads, in order, as apitrace's reader yields them, pickled
+(pointers as plain integers) into an xz stream after a header record.
+Texture images, colours, texture coordinates, lighting and the like are left
+out: they cannot change the unit's input (IGNORED_PREFIXES), so converting
+the reduced capture gives the same outputs as converting the capture itself,
+at a few per cent of its size: the game suite's committed form
+(docs/games.md)."""
+import io
+import lzma
+import pickle
+
+from .apitrace import CallReader, PointerType
+from .errors import ConvertError, printable
+from .gl_tables import IGNORED_PREFIXES
+from .outputs import SafeText
+
+REDUCED_HEADER = ("rbcd-reduced-capture", 1)
+REDUCED_END = "end"   # the last record, ("end", calls): a file cut anywhere lacks it
+XZ_MAGIC = b"\xfd7zXZ\x00"
+# Kept although ignored by the emulation's prefix list: the texture binding
+# (selection rules may name textures) and the window system (frame ends, the
+# window's size).
+REDUCED_KEEP = ("glBindTexture", "glX", "egl", "wgl")
+
+
+def reduced_keeps(name):
+    return not name.startswith(IGNORED_PREFIXES) or name.startswith(REDUCED_KEEP)
+
+
+def plain_value(v):
+    """A decoded argument without apitrace's pointer class (an int subclass)."""
+    if isinstance(v, PointerType):
+        return int(v)
+    if isinstance(v, list):
+        return [plain_value(x) for x in v]
+    if isinstance(v, tuple):
+        return tuple(plain_value(x) for x in v)
+    if isinstance(v, dict):
+        return {k: plain_value(x) for k, x in v.items()}
+    return v
+
+
+def is_reduced_capture(path):
+    try:
+        with open(path, "rb") as f:
+            return f.read(len(XZ_MAGIC)) == XZ_MAGIC
+    except OSError:
+        return False
+
+
+def read_reduced_calls(path):
+    last = None
+    try:
+        with lzma.open(path, "rb") as f:
+            reader = CallReader(f)
+            try:
+                head = reader.load()
+            except EOFError:
+                head = None
+            if head != REDUCED_HEADER:
+                raise ConvertError("an xz file that is not a reduced capture (rbcd-gl2rbt --reduced-out)")
+            count = 0
+            while True:
+                try:
+                    c = reader.load()
+                except EOFError:
+                    raise ConvertError(f"after call {last}: the reduced capture is cut short (no end record)")
+                if isinstance(c, tuple) and len(c) == 2 and c[0] == REDUCED_END:
+                    if c[1] != count or f.read(1):
+                        raise ConvertError(f"after call {last}: the reduced capture does not decode (bad end record)")
+                    break
+                count += 1
+                if not (isinstance(c, tuple) and len(c) == 5 and isinstance(c[0], int) and isinstance(c[1], str)
+                        and isinstance(c[2], list) and isinstance(c[4], int)
+                        and (last is None or c[0] > last)):
+                    raise ConvertError(f"after call {last}: the reduced capture does not decode (unexpected record)")
+                last = c[0]
+                yield c
+    except (lzma.LZMAError, EOFError, OSError, pickle.UnpicklingError, ValueError, TypeError, AttributeError,
+            IndexError, MemoryError, RecursionError) as e:
+        where = f"after call {last}" if last is not None else "before its first call"
+        raise ConvertError(f"{where}: the reduced capture does not decode ({printable(e, 80)})")
+
+class ReducedWriter:
+    """--reduced-out: the calls the emulation reads, as it reads them."""
+
+    def __init__(self, path):
+        self.out = SafeText(path, binary=True)
+        self.z = lzma.LZMACompressor(preset=6)
+        self.pickler_buf = io.BytesIO()
+        self.count = 0
+        self.put(REDUCED_HEADER)
+
+    def put(self, rec):
+        self.pickler_buf.seek(0)
+        self.pickler_buf.truncate()
+        pickle.dump(rec, self.pickler_buf, protocol=4)
+        self.out.write(self.z.compress(self.pickler_buf.getvalue()))
+
+    def call(self, c):
+        if reduced_keeps(c[1]):
+            self.put((c[0], c[1], plain_value(c[2]), plain_value(c[3]), c[4]))
+            self.count += 1
+
+    def commit(self):
+        self.put((REDUCED_END, self.count))
+        self.out.write(self.z.flush())
+        self.out.commit()
+
+    def abandon(self):
+        self.out.abandon()

@@ -1,0 +1,82 @@
+"""What the GL tests share: the captures of testbench/gl/gl_boxes.c that
+test_gl_capture.py makes (RBCD_GL_CAPTURES, set by CTest; by hand
+build/testbench/gl/captures), the converter run as users run it, and a
+reader of the traces it writes.
+
+What gl_boxes draws, 128 x 96, glOrtho(0, 128, 0, 96, -100, 100) in frames 0
+and 1 (window y up, screen rows down: row = 95 - y):
+  frame 0: box 1 [8,28]x[8,28]x[-20,-10] (client arrays), box 2
+           [20,40]x[16,36]x[-15,-5] (a buffer object), box 3 [60,70]x[8,18]
+           (immediate mode, an EXT_debug_marker group); a 40 x 40 floor and an
+           8 x 4 overlay that are not collisionable.
+  frame 1: box 2 [20,30]^2 inside box 1 [8,48]^2; box 3 drawn twice, the
+           second time as a GL_EQUAL pass.
+  frame 2: glFrustum, a sphere (id 4) overlapping box 1, box 2 apart.
+Face-on boxes under an orthographic projection give width x height front
+fragments and as many back ones (tagged c: culling is on); side faces are
+edge-on and cover nothing.
+"""
+import gzip
+import os
+import subprocess
+
+import pytest
+
+from conftest import ROOT, program
+
+GL2RBT = os.path.join(ROOT, "scripts", "rbcd-gl2rbt")
+CAPTURES = os.environ.get("RBCD_GL_CAPTURES") or os.path.join(ROOT, "build", "testbench", "gl", "captures")
+FAULTS = ["nan", "index", "ortho", "list", "shader", "line", "underflow"]
+DEPTH_MAX = (1 << 24) - 1
+
+
+def run(cmd, **kw):
+    return subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
+
+
+def capture_path(name="boxes"):
+    p = os.path.join(CAPTURES, name + ".trace")
+    if not os.path.exists(p):
+        pytest.skip("no captures (gl_capture was skipped: scripts/setup.sh --gl installs Xvfb and apitrace)")
+    return p
+
+
+def read_trace(path):
+    """{frame: {(x, y): [(depth, id, facing, culled)]}} and the tile records."""
+    opener = gzip.open if path.endswith(".gz") else open
+    frames, tiles, frame = {}, [], None
+    with opener(path, "rt") as f:
+        for line in f:
+            t = line.split()
+            if not t:
+                continue
+            if t[0] == "frame":
+                frame = int(t[1])
+                frames[frame] = {}
+            elif t[0] == "tile":
+                tiles.append((frame, line.strip()))
+            elif t[0] == "f":
+                x, y, depth, obj = (int(v) for v in t[1:5])
+                frames[frame].setdefault((x, y), []).append((depth, obj, t[5], len(t) > 6 and t[6] == "c"))
+    return frames, tiles
+
+
+class Converter:
+    """rbcd-gl2rbt through its launcher, its temporaries in the test's own
+    directory (where what is left behind can be seen)."""
+
+    def __init__(self, tmp):
+        self.tmp = str(tmp)
+        self.env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=self.tmp)
+
+    def __call__(self, *args):
+        return run(["/usr/bin/python3", GL2RBT] + [str(a) for a in args], env=self.env)
+
+    def convert(self, *extra, name="boxes", out="boxes.rbt"):
+        path = os.path.join(self.tmp, out)
+        r = self(capture_path(name), "-o", path, *extra)
+        assert r.returncode == 0, f"conversion failed ({r.returncode}): {r.stderr.strip()}"
+        return path, r
+
+    def path(self, *names):
+        return os.path.join(self.tmp, *names)

@@ -1,0 +1,291 @@
+"""rbcd.gl2rbt's GL state, call by call, without Xvfb or apitrace: calls as
+apitrace's reader yields them, (no, name, [(arg, value)], ret, flags), into
+the converter, and its draw stream decoded here from the format of
+docs/gl-capture.md ("The draw stream")."""
+import argparse
+import io
+import struct
+
+import pytest
+
+np = pytest.importorskip("numpy", reason="python3-numpy is missing (scripts/setup.sh --gl installs it)")
+from rbcd.gl2rbt.converter import Converter  # noqa: E402
+from rbcd.gl2rbt.errors import ConvertError  # noqa: E402
+from rbcd.gl2rbt.gl_tables import CALL_FLAG_END_FRAME  # noqa: E402
+
+W, H = 128, 96
+
+
+def decode(stream):
+    """The draw stream's records: ("header", fields), ("F", call), ("E", call),
+    ("C", call, depth, rect), ("D", dict)."""
+    b, out = stream, []
+    assert b[:8] == b"RBCDGLD1"
+    out.append(("header", struct.unpack_from("<5I", b, 8)))
+    p = 28
+    while p < len(b):
+        kind = b[p:p + 1]
+        p += 1
+        if kind in (b"F", b"E", b"S"):
+            out.append((kind.decode(), struct.unpack_from("<Q", b, p)[0]))
+            p += 8
+        elif kind == b"C":
+            no, depth, *rect = struct.unpack_from("<Qd4i", b, p)
+            out.append(("C", no, depth, tuple(rect)))
+            p += struct.calcsize("<Qd4i")
+        elif kind == b"D":
+            f = struct.unpack_from("<QIBBBBBBB", b, p)
+            p += struct.calcsize("<QIBBBBBBB")
+            d = dict(zip(("call", "object", "collisionable", "cull", "front_ccw", "depth_test", "depth_func",
+                          "depth_mask", "planes"), f))
+            d["viewport"] = struct.unpack_from("<4d", b, p)
+            d["depth_range"] = struct.unpack_from("<2d", b, p + 32)
+            d["offset"] = struct.unpack_from("<2d", b, p + 48)
+            p += 64
+            d["scissor"] = struct.unpack_from("<4i", b, p)
+            p += 16
+            d["clip_planes"] = [struct.unpack_from("<4d", b, p + 32 * i) for i in range(d["planes"])]
+            p += 32 * d["planes"]
+            nv, nt = struct.unpack_from("<II", b, p)
+            p += 8
+            d["clip"] = np.frombuffer(b, "<f8", nv * 4, p).reshape(nv, 4)
+            p += nv * 32
+            d["tris"] = np.frombuffer(b, "<u4", nt * 3, p).reshape(nt, 3).tolist()
+            p += nt * 12
+            out.append(("D", d))
+        else:
+            raise AssertionError(f"unknown record {kind!r} at byte {p - 1}")
+    return out
+
+
+class GL:
+    """A converter fed one call at a time, numbered from 1."""
+
+    def __init__(self, screen=(W, H)):
+        args = argparse.Namespace(screen=screen, tile=[16, 16], depth_bits=24, select=None, frame_range=(0, None))
+        self.stream = io.BytesIO()
+        self.conv = Converter(args, self.stream, None)
+        self.no = 0
+
+    def __getattr__(self, name):
+        def call(*values, flags=0, **named):
+            self.no += 1
+            args = [(f"a{i}", v) for i, v in enumerate(values)] + list(named.items())
+            self.conv.handle((self.no, name, args, None, flags))
+            return self.no
+        return call
+
+    def records(self, kind=None):
+        recs = decode(self.stream.getvalue())
+        return [r for r in recs if kind is None or r[0] == kind]
+
+    def draws(self):
+        return [r[1] for r in self.records("D")]
+
+
+def square(gl, z=0.0):
+    """A unit square at depth z from client memory, drawn as two triangles."""
+    v = np.array([[0, 0, z], [1, 0, z], [1, 1, z], [0, 0, z], [1, 1, z], [0, 1, z]], "<f4")
+    gl.glEnableClientState("GL_VERTEX_ARRAY")
+    gl.glVertexPointer(size=3, type="GL_FLOAT", stride=0, pointer=v.tobytes())
+    return gl.glDrawArrays(mode="GL_TRIANGLES", first=0, count=6)
+
+
+def test_fixed_function_transform_and_viewport():
+    gl = GL()
+    gl.glViewport(8, 4, 64, 32)
+    gl.glMatrixMode("GL_PROJECTION")
+    gl.glOrtho(0, 4, 0, 2, -10, 10)
+    gl.glMatrixMode("GL_MODELVIEW")
+    gl.glTranslatef(1, 0.5, -5)
+    gl.glScalef(2, 1, 1)
+    call = square(gl)
+    (d,) = gl.draws()
+    assert d["call"] == call
+    # Corner (1, 1, 0): eye (3, 1.5, -5); x 3 / 4 * 2 - 1, y 1.5 / 2 * 2 - 1, z -2 / 20 * -5.
+    assert d["clip"][2].tolist() == [0.5, 0.5, 0.5, 1.0], "the far corner in clip space"
+    assert d["tris"] == [[0, 1, 2], [3, 4, 5]]
+    # The viewport's origin is GL's bottom-left; the record's top-left, rows down.
+    assert d["viewport"] == (8.0, H - (4 + 32), 64.0, 32.0)
+    assert d["scissor"] == (0, 0, W - 1, H - 1), "no scissor test: the whole screen"
+    assert (d["collisionable"], d["object"]) == (0, 0), "an untagged draw is other work"
+
+
+def test_matrix_stack_limits_and_errors_name_the_call():
+    gl = GL()
+    for _ in range(63):
+        gl.glPushMatrix()
+    with pytest.raises(ConvertError, match=r"^call 64: glPushMatrix overflows"):
+        gl.glPushMatrix()
+    gl = GL()
+    with pytest.raises(ConvertError, match=r"^call 1: glPopMatrix underflows"):
+        gl.glPopMatrix()
+    with pytest.raises(ConvertError, match="is not emulated"):
+        gl.glMatrixMode("GL_NOT_A_STACK")
+    with pytest.raises(ConvertError, match="non-finite"):
+        gl.glScalef(float("inf"), 1, 1)
+    with pytest.raises(ConvertError, match="GL_INVALID_VALUE"):
+        gl.glOrtho(0, 0, 0, 1, 0, 1)
+    with pytest.raises(ConvertError, match="GL_INVALID_VALUE"):
+        gl.glFrustum(-1, 1, -1, 1, 0, 10)
+
+
+def test_push_and_pop_restore_the_matrix():
+    gl = GL()
+    gl.glTranslatef(1, 2, 3)
+    gl.glPushMatrix()
+    gl.glRotatef(90, 0, 0, 1)
+    gl.glPopMatrix()
+    assert gl.conv.s.stacks["GL_MODELVIEW"][-1].tolist() == np.array(
+        [[1, 0, 0, 1], [0, 1, 0, 2], [0, 0, 1, 3], [0, 0, 0, 1]], float).tolist()
+
+
+def test_depth_state_is_clamped_and_clears_follow_the_scissor():
+    gl = GL()
+    gl.glDepthRange(-1.0, 2.0)
+    gl.glClearDepth(5.0)
+    gl.glEnable("GL_SCISSOR_TEST")
+    gl.glScissor(10, 20, 30, 40)
+    clear = gl.glClear(["GL_COLOR_BUFFER_BIT", "GL_DEPTH_BUFFER_BIT"])
+    gl.glDepthMask("GL_FALSE")
+    gl.glClear("GL_DEPTH_BUFFER_BIT")   # no depth writes: no clear of the depth buffer
+    gl.glEnable("GL_DEPTH_TEST")
+    gl.glDepthFunc("GL_LEQUAL")
+    square(gl)
+    (c,) = gl.records("C")
+    assert c == ("C", clear, 1.0, (10, H - 60, 39, H - 21)), "the clear depth clamped, the scissor rows down"
+    (d,) = gl.draws()
+    assert d["depth_range"] == (0.0, 1.0)
+    assert (d["depth_test"], d["depth_func"], d["depth_mask"]) == (1, 3, 0), "GL_LEQUAL is the fourth function"
+    assert d["scissor"] == (10, H - 60, 39, H - 21)
+    with pytest.raises(ConvertError, match="is not a depth function"):
+        gl.glDepthFunc("GL_SOMETIMES")
+
+
+def test_culling_front_faces_becomes_the_opposite_winding():
+    # The unit's front faces are the ones culling keeps: GL_FRONT culled with
+    # GL_CCW is said as GL_BACK culled with GL_CW.
+    gl = GL()
+    gl.glEnable("GL_CULL_FACE")
+    gl.glCullFace("GL_FRONT")
+    square(gl)
+    gl.glCullFace("GL_BACK")
+    gl.glFrontFace("GL_CW")
+    square(gl)
+    gl.glDisable("GL_CULL_FACE")
+    square(gl)
+    got = [(d["cull"], d["front_ccw"]) for d in gl.draws()]
+    assert got == [(1, 0), (1, 0), (0, 0)]
+
+
+def test_polygon_offset_and_mode():
+    gl = GL()
+    gl.glPolygonOffset(1.5, 2.0)
+    square(gl)
+    gl.glEnable("GL_POLYGON_OFFSET_FILL")
+    square(gl)
+    assert [d["offset"] for d in gl.draws()] == [(0.0, 0.0), (1.5, 2.0)], "the offset applies only when enabled"
+    with pytest.raises(ConvertError, match="only GL_FILL"):
+        gl.glPolygonMode("GL_FRONT_AND_BACK", "GL_LINE")
+
+
+def test_clip_planes_are_kept_in_eye_space():
+    gl = GL()
+    gl.glTranslatef(0, 0, -3)
+    gl.glClipPlane("GL_CLIP_PLANE2", [0, 0, 1, 0])   # z >= 0 in object space: z >= -3 in eye space
+    gl.glLoadIdentity()
+    assert gl.conv.s.clip_planes[2].tolist() == [0, 0, 1, 3]
+    gl.glEnable("GL_CLIP_PLANE2")
+    gl.glEnable("GL_CLIP_PLANE5")   # GL's default plane (0, 0, 0, 0) keeps everything
+    square(gl)
+    (d,) = gl.draws()
+    # Identity projection: clip space is eye space.
+    assert d["clip_planes"] == [(0.0, 0.0, 1.0, 3.0), (0.0, 0.0, 0.0, 0.0)]
+    with pytest.raises(ConvertError, match="not a clip plane"):
+        gl.glClipPlane("GL_CLIP_PLANE9", [0, 0, 1, 0])
+
+
+def test_capabilities_that_may_change_visibility_are_refused():
+    gl = GL()
+    gl.glEnable("GL_BLEND")
+    gl.glDisable("GL_SOME_NEW_CAP")   # disabling what was never on changes nothing
+    with pytest.raises(ConvertError, match=r"^call 3: glEnable\(GL_SOME_NEW_CAP\) is not emulated"):
+        gl.glEnable("GL_SOME_NEW_CAP")
+
+
+def test_immediate_mode():
+    gl = GL()
+    gl.glBegin("GL_QUADS")
+    gl.glVertex2f(0, 0)
+    gl.glColor3f(1, 0, 0)   # colours between glBegin and glEnd change nothing here
+    gl.glVertex3f(1, 0, 0)
+    gl.glVertex3fv([1, 1, 0])
+    gl.glVertex4f(0, 2, 0, 2)
+    gl.glEnd()
+    (d,) = gl.draws()
+    assert d["clip"].tolist() == [[0, 0, 0, 1], [1, 0, 0, 1], [1, 1, 0, 1], [0, 2, 0, 2]]
+    assert d["tris"] == [[0, 1, 2], [0, 2, 3]]
+    with pytest.raises(ConvertError, match="outside glBegin/glEnd"):
+        gl.glVertex3f(0, 0, 0)
+    gl.glBegin("GL_TRIANGLES")
+    with pytest.raises(ConvertError, match="between glBegin and glEnd is not emulated"):
+        gl.glTranslatef(1, 0, 0)
+
+
+def test_buffer_objects_and_indexed_draws():
+    gl = GL()
+    verts = np.array([[0, 0, 0, 9], [1, 0, 0, 9], [1, 1, 0, 9], [0, 1, 0, 9]], "<f4")   # 16-byte stride, 12 used
+    gl.glBindBuffer("GL_ARRAY_BUFFER", 3)
+    gl.glBufferData(target="GL_ARRAY_BUFFER", size=8 + verts.nbytes, data=b"\0" * 8 + verts.tobytes())
+    gl.glEnableClientState("GL_VERTEX_ARRAY")
+    gl.glVertexPointer(size=3, type="GL_FLOAT", stride=16, pointer=8)
+    gl.glBindBuffer("GL_ELEMENT_ARRAY_BUFFER", 4)
+    idx = np.array([0, 1, 2, 0, 2, 3], "<u2")
+    gl.glBufferData(target="GL_ELEMENT_ARRAY_BUFFER", size=idx.nbytes, data=idx.tobytes())
+    gl.glDrawElements(mode="GL_TRIANGLES", count=6, type="GL_UNSIGNED_SHORT", indices=0)
+    # glBufferSubData replaces vertex 3; indices past the data are refused.
+    gl.glBufferSubData(target="GL_ARRAY_BUFFER", offset=8 + 48, size=12, data=np.array([0, 5, 0], "<f4").tobytes())
+    gl.glDrawElements(mode="GL_TRIANGLES", count=3, type="GL_UNSIGNED_SHORT", indices=6)
+    a, b = gl.draws()
+    assert a["clip"].tolist() == [[0, 0, 0, 1], [1, 0, 0, 1], [1, 1, 0, 1], [0, 0, 0, 1], [1, 1, 0, 1],
+                                  [0, 1, 0, 1]], "the vertices in index order, w = 1"
+    assert b["clip"][2].tolist() == [0, 5, 0, 1]
+    with pytest.raises(ConvertError, match="reach past the index data"):
+        gl.glDrawElements(mode="GL_TRIANGLES", count=7, type="GL_UNSIGNED_SHORT", indices=0)
+    gl.glDeleteBuffers(buffers=[3])
+    with pytest.raises(ConvertError, match="the vertex array names buffer"):
+        gl.glDrawArrays(mode="GL_TRIANGLES", first=0, count=3)
+
+
+def test_debug_groups_tag_objects_and_a_second_pass_is_other_work():
+    gl = GL()
+    gl.glPushDebugGroup(source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    square(gl)
+    gl.glPushGroupMarkerEXT(length=0, marker="rbcd-object 7")
+    square(gl, z=0.5)
+    square(gl, z=0.5)   # the same surface again: its second pass
+    gl.glPopGroupMarkerEXT()
+    gl.glPopDebugGroup()
+    square(gl)
+    got = [(d["object"], d["collisionable"]) for d in gl.draws()]
+    assert got == [(5, 1), (7, 1), (0, 0), (0, 0)], "the innermost group decides; a repeated surface is other work"
+    with pytest.raises(ConvertError, match="without a group to pop"):
+        gl.glPopDebugGroup()
+
+
+def test_frames_end_at_swaps_and_unmodelled_calls_are_refused():
+    gl = GL()
+    square(gl)
+    swap = gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
+    gl.glBindTexture("GL_TEXTURE_2D", 9)   # passed over: cannot move a fragment
+    square(gl)
+    kinds = [r[0] for r in gl.records()]
+    assert kinds == ["header", "F", "D", "E", "F", "D"]
+    assert gl.records("E") == [("E", swap)]
+    assert gl.records("header")[0][1] == (W, H, 16, 16, 24)
+    for name in ("glCallList", "glBindVertexArray", "glDrawElementsInstanced", "glSomethingNew"):
+        with pytest.raises(ConvertError, match=rf"^call \d+: {name}"):
+            getattr(gl, name)(1)
+    gl.glUseProgram(3)
+    with pytest.raises(ConvertError, match="with program 3 bound: shaders are not emulated"):
+        square(gl)

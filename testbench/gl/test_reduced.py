@@ -1,0 +1,71 @@
+"""The reduced capture's format (rbcd.gl2rbt.reduced; docs/gl-capture.md):
+written and read back without apitrace."""
+import lzma
+import os
+
+import pytest
+
+from rbcd.gl2rbt.apitrace import PointerType
+from rbcd.gl2rbt.errors import ConvertError
+from rbcd.gl2rbt.reduced import ReducedWriter, is_reduced_capture, read_reduced_calls
+
+CALLS = [
+    (1, "glViewport", [("x", 0), ("y", 0), ("width", 128), ("height", 96)], None, 1),
+    (2, "glTexImage2D", [("pixels", b"\xff" * 4096)], None, 0),           # cannot move a fragment: left out
+    (3, "glBindTexture", [("target", "GL_TEXTURE_2D"), ("texture", 7)], None, 0),   # kept: rules name textures
+    (4, "glVertexPointer", [("size", 3), ("pointer", PointerType(0x7F00))], None, 0),
+    (5, "glXSwapBuffers", [("dpy", PointerType(1)), ("drawable", 2)], None, 32),
+]
+
+
+def write(path, calls=CALLS):
+    w = ReducedWriter(str(path))
+    for c in calls:
+        w.call(c)
+    w.commit()
+
+
+def test_round_trip_keeps_what_the_emulation_reads(tmp_path):
+    p = tmp_path / "c.calls.xz"
+    write(p)
+    assert is_reduced_capture(str(p))
+    got = list(read_reduced_calls(str(p)))
+    assert [c[0] for c in got] == [1, 3, 4, 5], "the texture image is left out, its binding kept"
+    assert got[2][2] == [("size", 3), ("pointer", 0x7F00)] and type(got[2][2][1][1]) is int, \
+        "pointers become plain integers"
+    assert got[0] == CALLS[0] and got[3][4] == 32, "arguments and call flags as read"
+    assert not [f for f in os.listdir(tmp_path) if f.startswith(".")], "no temporary left"
+
+
+def test_damaged_files_are_refused_naming_where(tmp_path):
+    p = tmp_path / "c.calls.xz"
+    write(p)
+    data = p.read_bytes()
+    bad = tmp_path / "bad.calls.xz"
+
+    def refused(body, words):
+        bad.write_bytes(body)
+        with pytest.raises(ConvertError, match=words):
+            list(read_reduced_calls(str(bad)))
+
+    refused(data[:len(data) // 2], "does not decode|cut short")
+    refused(lzma.compress(b"not a pickle"), "before its first call: the reduced capture does not decode")
+    # A header and calls but no end record: a file cut between records.
+    w = ReducedWriter(str(bad))
+    w.call(CALLS[0])
+    w.out.write(w.z.flush())
+    w.out.commit()
+    with pytest.raises(ConvertError, match=r"after call 1: the reduced capture is cut short"):
+        list(read_reduced_calls(str(bad)))
+    # Calls out of order.
+    write(bad, [CALLS[3], CALLS[0]])
+    with pytest.raises(ConvertError, match=r"after call 4: .*unexpected record"):
+        list(read_reduced_calls(str(bad)))
+
+
+def test_an_xz_file_of_something_else(tmp_path):
+    p = tmp_path / "other.xz"
+    p.write_bytes(lzma.compress(b""))
+    with pytest.raises(ConvertError, match="not a reduced capture"):
+        list(read_reduced_calls(str(p)))
+    assert not is_reduced_capture(str(tmp_path / "missing.xz"))

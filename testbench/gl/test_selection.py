@@ -1,0 +1,134 @@
+"""Selection files and the entity tracker of rbcd.gl2rbt (docs/gl-capture.md,
+"Identified off line"), without Xvfb or apitrace."""
+import pytest
+
+np = pytest.importorskip("numpy", reason="python3-numpy is missing (scripts/setup.sh --gl installs it)")
+from rbcd.gl2rbt.entities import EntityTracker  # noqa: E402
+from rbcd.gl2rbt.errors import ConvertError  # noqa: E402
+from rbcd.gl2rbt.selection import Selection  # noqa: E402
+
+
+def rules(tmp_path, text):
+    p = tmp_path / "rules.toml"
+    p.write_text(text)
+    return Selection(str(p))
+
+
+def draw(**kw):
+    d = {"call": 10, "frame": 0, "vertices": 36, "texture": 0, "depth_write": True, "projection": "perspective",
+         "own_modelview": True, "screen_area": 500.0}
+    d.update(kw)
+    return d
+
+
+def test_exclusions_first_then_the_first_matching_object(tmp_path):
+    s = rules(tmp_path, """
+[[object]]
+name = "crate"
+id = 3
+vertex_count = [24, 36]
+texture = [7, 8]
+[[object]]
+name = "anything textured 9"
+id = 4
+texture = [9]
+[[object]]
+name = "players"
+group_by = "modelview"
+calls = [100, 200]
+[[exclude]]
+name = "hud"
+projection = "orthographic"
+""")
+    assert s.classify(draw(texture=7)) == (3, "crate")
+    assert s.classify(draw(texture=7, projection="orthographic")) == (None, "hud"), "[[exclude]] comes first"
+    assert s.classify(draw(texture=7, vertices=37)) == (None, "no rule")
+    assert s.classify(draw(texture=9, vertices=37)) == (4, "anything textured 9")
+    assert s.classify(draw(call=150)) == ("entity", "players")
+    assert s.classify(draw(call=201)) == (None, "no rule")
+
+
+@pytest.mark.parametrize("field, value, inside, outside", [
+    ("frames", [2, 4], {"frame": 4}, {"frame": 5}),
+    ("depth_write", False, {"depth_write": False}, {}),
+    ("modelview_differs_from_view", False, {"own_modelview": False}, {}),
+    ("min_screen_area", 100, {"screen_area": 100.0}, {"screen_area": 99.5}),
+    ("max_screen_area", 100, {"screen_area": 99.5}, {"screen_area": 100.5}),
+], ids=lambda v: v if isinstance(v, str) else "")
+def test_each_condition(tmp_path, field, value, inside, outside):
+    s = rules(tmp_path, f"[[object]]\nid = 1\n{field} = {str(value).lower()}\n")
+    assert s.classify(draw(**inside)) == (1, "id 1")
+    assert s.classify(draw(**outside)) == (None, "no rule")
+
+
+@pytest.mark.parametrize("text, words", [
+    ("[[object]]\nid = 1\nvertex_count = [5, 2]\n", "object[0].vertex_count: must be [MIN, MAX]"),
+    ("[[object]]\nid = 1\nbogus = 1\n", "object[0].bogus: unknown key"),
+    ("[[object]]\nname = \"x\"\n", "object[0]: needs id"),
+    ("[[object]]\nid = -1\n", "object[0].id: must be a non-negative integer"),
+    ("[[object]]\nid = true\n", "object[0].id: must be a non-negative integer"),
+    ("[[exclude]]\nprojection = \"fisheye\"\n", "exclude[0].projection"),
+    ("[[object]]\nid = 1\ntexture = [\"a\"]\n", "object[0].texture"),
+    ("[[object]]\nid = 1\ngroup_by = \"colour\"\n", "object[0].group_by"),
+    ("[[object]]\nid = 1\nmin_screen_area = \"big\"\n", "object[0].min_screen_area"),
+    ("[settings]\nspeed = 1\n", "settings.speed: unknown key"),
+    ("settings = 1\n", "settings must be a table"),
+    ("object = 1\n", "object must be an array of tables"),
+    ("[camera]\n", "unknown table or key 'camera'"),
+    ("[[object]\n", "rules.toml"),
+], ids=["vertex_count", "unknown_key", "no_id", "negative_id", "bool_id", "projection", "texture", "group_by",
+        "screen_area", "settings_key", "settings_type", "object_type", "unknown_table", "toml_syntax"])
+def test_bad_rules_are_named(tmp_path, text, words):
+    with pytest.raises(ConvertError) as e:
+        rules(tmp_path, text)
+    assert words in str(e.value) and "rules.toml" in str(e.value)
+
+
+def test_unreadable_and_oversized_rules(tmp_path):
+    with pytest.raises(ConvertError, match="cannot read"):
+        Selection(str(tmp_path / "none.toml"))
+    big = tmp_path / "big.toml"
+    big.write_text("#" * (1 << 20) + "\n")
+    with pytest.raises(ConvertError, match="larger than 1 MiB"):
+        Selection(str(big))
+
+
+def at(x, y, z):
+    m = np.identity(4)
+    m[0:3, 3] = (x, y, z)
+    return m
+
+
+def test_entities_join_parts_and_keep_their_ids_across_frames():
+    t = EntityTracker({"up_axis": "z", "part_horizontal": 16, "part_vertical": 64, "track_radius": 48})
+    t.begin_frame()
+    legs = t.id_for(at(0, 0, 0), None, 1)
+    torso = t.id_for(at(5, 0, 40), None, 2)            # 5 across, 40 up: the same entity
+    other = t.id_for(at(200, 0, 0), None, 3)
+    assert (legs, torso, other) == (1, 1, 2), "parts within reach join; a far one is the next free id"
+    assert t.id_for(at(0, 0, 0), None, 4) == 1, "one model-view, one part"
+    t.begin_frame()
+    # Both moved by less than track_radius; listed in the other order.
+    assert t.id_for(at(230, 0, 0), None, 5) == 2
+    assert t.id_for(at(20, 0, 0), None, 6) == 1
+    assert t.id_for(at(-500, 0, 0), None, 7) == 3, "a newcomer takes an id no entity of either frame holds"
+
+
+def test_the_view_is_undone_without_its_scale():
+    t = EntityTracker({"up_axis": "y"})
+    view = np.diag([10.0, 10.0, 10.0, 1.0])   # a sky box's scaled view (Neverball)
+    view[0:3, 3] = (0, 0, -100)
+    t.begin_frame()
+    a = t.id_for(at(0, 0, -100), view, 1)
+    b = t.id_for(at(30, 0, -100), view, 2)     # 30 eye units across: apart
+    assert a != b, "distances stay in eye units"
+
+
+def test_too_many_entities_and_bad_settings():
+    t = EntityTracker({"first_entity_id": 5, "max_entity_id": 6})
+    t.begin_frame()
+    assert [t.id_for(at(1000 * i, 0, 0), None, i) for i in range(2)] == [5, 6]
+    with pytest.raises(ConvertError, match=r"call 9: more than 2 entities in one frame"):
+        t.id_for(at(5000, 0, 0), None, 9)
+    with pytest.raises(ConvertError, match="up_axis"):
+        EntityTracker({"up_axis": "w"})
