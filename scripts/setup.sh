@@ -15,8 +15,9 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #   --fuzz   clang-14, libclang-rt-14-dev (libFuzzer) and assimp-testmodels (mesh
 #            seeds), for scripts/fuzz.sh
 #   --gl     apitrace, Xvfb and Mesa (llvmpipe) to capture OpenGL programs, numpy for
-#            scripts/rbcd-gl2rbt, and the GL and X11 headers for the test program
-#            (docs/gl-capture.md)
+#            scripts/rbcd-gl2rbt, PyOpenGL and Mesa's EGL for its shader path (Mesa
+#            runs the captures' vertex shaders headless), and the GL and X11
+#            headers for the test programs (docs/gl-capture.md)
 #   --waves  verilator (its copy of GTKWave's fstapi sources: rbcd-sim --fst),
 #            gtkwave (fst2vcd for the FST test; the viewer) and libsqlite3-dev
 #            (rbcd-sim --db), docs/waveforms.md and docs/tile-database.md
@@ -34,7 +35,8 @@ for opt in "$@"; do
     --plots) pkgs+=(python3-matplotlib) ;;
     --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib valgrind) ;;
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
-    --gl) pkgs+=(apitrace xvfb xauth libgl1-mesa-dri libglx-mesa0 libgl-dev libx11-dev python3-numpy) ;;
+    --gl) pkgs+=(apitrace xvfb xauth libgl1-mesa-dri libglx-mesa0 libgl-dev libx11-dev python3-numpy
+               python3-opengl libegl1 libegl-mesa0 libopengl0) ;;
     --waves) pkgs+=(verilator gtkwave libsqlite3-dev) ;;
     --games) pkgs+=(openarena neverball) ;;
     *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl --waves --games --list)" >&2; exit 2 ;;

@@ -1,7 +1,8 @@
-"""What the GL tests share: the captures of testbench/gl/gl_boxes.c that
-test_gl_capture.py makes (RBCD_GL_CAPTURES, set by CTest; by hand
-build/testbench/gl/captures), the converter run as users run it, and a
-reader of the traces it writes.
+"""What the GL tests share: the captures of testbench/gl/gl_boxes.c and
+gl_shaders.c that test_gl_capture.py makes (RBCD_GL_CAPTURES, set by CTest;
+by hand build/testbench/gl/captures), the converter run as users run it, and
+a reader of the traces it writes. What gl_shaders draws is in
+test_gl2rbt_shaders.py.
 
 What gl_boxes draws, 128 x 96, glOrtho(0, 128, 0, 96, -100, 100) in frames 0
 and 1 (window y up, screen rows down: row = 95 - y):
@@ -27,6 +28,7 @@ from conftest import ROOT, program
 GL2RBT = os.path.join(ROOT, "scripts", "rbcd-gl2rbt")
 CAPTURES = os.environ.get("RBCD_GL_CAPTURES") or os.path.join(ROOT, "build", "testbench", "gl", "captures")
 FAULTS = ["nan", "index", "ortho", "list", "shader", "line", "underflow"]
+SHADER_FAULTS = ["geometry", "texture", "compile", "separable"]
 DEPTH_MAX = (1 << 24) - 1
 
 

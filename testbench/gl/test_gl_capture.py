@@ -1,24 +1,26 @@
-"""The captures the GL tests read (CTest fixture gl_captures): gl_boxes under
-Xvfb with apitrace, once as it is and once per FAULT mode (gl_captures.py
-says what it draws)."""
+"""The captures the GL tests read (CTest fixture gl_captures): gl_boxes (GL
+1.x) and gl_shaders (GL 3.3 core) under Xvfb with apitrace, once as they are
+and once per FAULT mode."""
 import os
 import shutil
 
 import pytest
 
-from gl_captures import CAPTURES, FAULTS, run
+from gl_captures import CAPTURES, FAULTS, SHADER_FAULTS, run
 
 
 def test_capture():
     missing = [t for t in ("xvfb-run", "apitrace", "glretrace") if not shutil.which(t)]
     if missing:
         pytest.skip(f"{', '.join(missing)} not installed (scripts/setup.sh --gl installs them)")
-    program = os.environ.get("RBCD_GL_BOXES")
-    if not program:
-        pytest.skip("RBCD_GL_BOXES names no gl_boxes program (CTest sets it; the GL headers: scripts/setup.sh --gl)")
+    boxes, shaders = os.environ.get("RBCD_GL_BOXES"), os.environ.get("RBCD_GL_SHADERS")
+    if not boxes or not shaders:
+        pytest.skip("RBCD_GL_BOXES or RBCD_GL_SHADERS names no program (CTest sets them; the GL headers: "
+                    "scripts/setup.sh --gl)")
     os.makedirs(CAPTURES, exist_ok=True)
-    for name, extra in [("boxes", []), ("point", ["128", "96", "point"])] + \
-            [(f"fault-{f}", ["128", "96", f]) for f in FAULTS]:
+    for name, program, extra in [("boxes", boxes, []), ("point", boxes, ["128", "96", "point"])] + \
+            [(f"fault-{f}", boxes, ["128", "96", f]) for f in FAULTS] + [("shaders", shaders, [])] + \
+            [(f"shader-fault-{f}", shaders, ["128", "96", f]) for f in SHADER_FAULTS]:
         out = os.path.join(CAPTURES, name + ".trace")
         if os.path.exists(out):
             os.unlink(out)

@@ -68,10 +68,10 @@ class GL:
         self.no = 0
 
     def __getattr__(self, name):
-        def call(*values, flags=0, **named):
+        def call(*values, flags=0, ret=None, **named):
             self.no += 1
             args = [(f"a{i}", v) for i, v in enumerate(values)] + list(named.items())
-            self.conv.handle((self.no, name, args, None, flags))
+            self.conv.handle((self.no, name, args, ret, flags))
             return self.no
         return call
 
@@ -235,11 +235,11 @@ def test_immediate_mode():
 def test_buffer_objects_and_indexed_draws():
     gl = GL()
     verts = np.array([[0, 0, 0, 9], [1, 0, 0, 9], [1, 1, 0, 9], [0, 1, 0, 9]], "<f4")   # 16-byte stride, 12 used
-    gl.glBindBuffer("GL_ARRAY_BUFFER", 3)
+    gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=3)
     gl.glBufferData(target="GL_ARRAY_BUFFER", size=8 + verts.nbytes, data=b"\0" * 8 + verts.tobytes())
     gl.glEnableClientState("GL_VERTEX_ARRAY")
     gl.glVertexPointer(size=3, type="GL_FLOAT", stride=16, pointer=8)
-    gl.glBindBuffer("GL_ELEMENT_ARRAY_BUFFER", 4)
+    gl.glBindBuffer(target="GL_ELEMENT_ARRAY_BUFFER", buffer=4)
     idx = np.array([0, 1, 2, 0, 2, 3], "<u2")
     gl.glBufferData(target="GL_ELEMENT_ARRAY_BUFFER", size=idx.nbytes, data=idx.tobytes())
     gl.glDrawElements(mode="GL_TRIANGLES", count=6, type="GL_UNSIGNED_SHORT", indices=0)
@@ -277,7 +277,7 @@ def test_frames_end_at_swaps_and_unmodelled_calls_are_refused():
     gl = GL()
     square(gl)
     swap = gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
-    gl.glBindTexture("GL_TEXTURE_2D", 9)   # passed over: cannot move a fragment
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=9)   # passed over: cannot move a fragment
     square(gl)
     kinds = [r[0] for r in gl.records()]
     assert kinds == ["header", "F", "D", "E", "F", "D"]
@@ -286,6 +286,16 @@ def test_frames_end_at_swaps_and_unmodelled_calls_are_refused():
     for name in ("glCallList", "glBindVertexArray", "glDrawElementsInstanced", "glSomethingNew"):
         with pytest.raises(ConvertError, match=rf"^call \d+: {name}"):
             getattr(gl, name)(1)
+    gl.glUseProgram(3)   # never created: GL_INVALID_VALUE, nothing changes
+    square(gl)
+    gl.glCreateProgram(ret=3)
+    gl.glLinkProgram(3)
     gl.glUseProgram(3)
-    with pytest.raises(ConvertError, match="with program 3 bound: shaders are not emulated"):
-        square(gl)
+    square(gl)   # a program without a vertex shader: the fixed-function transform
+    gl.glCreateShader("GL_VERTEX_SHADER", ret=4)
+    gl.glShaderSource(shader=4, count=1, string=["void main() { gl_Position = ftransform(); }"], length=None)
+    gl.glCompileShader(4)
+    gl.glAttachShader(program=3, shader=4)
+    gl.glLinkProgram(3)
+    with pytest.raises(ConvertError, match="with program 3 bound: immediate-mode and glRect draws"):
+        gl.glRectf(0, 0, 1, 1)

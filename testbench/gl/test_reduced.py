@@ -11,10 +11,11 @@ from rbcd.gl2rbt.reduced import ReducedWriter, is_reduced_capture, read_reduced_
 
 CALLS = [
     (1, "glViewport", [("x", 0), ("y", 0), ("width", 128), ("height", 96)], None, 1),
-    (2, "glTexImage2D", [("pixels", b"\xff" * 4096)], None, 0),           # cannot move a fragment: left out
-    (3, "glBindTexture", [("target", "GL_TEXTURE_2D"), ("texture", 7)], None, 0),   # kept: rules name textures
-    (4, "glVertexPointer", [("size", 3), ("pointer", PointerType(0x7F00))], None, 0),
-    (5, "glXSwapBuffers", [("dpy", PointerType(1)), ("drawable", 2)], None, 32),
+    (2, "glTexParameteri", [("pname", "GL_TEXTURE_MIN_FILTER")], None, 0),   # cannot move a fragment: left out
+    (3, "glTexImage2D", [("width", 64), ("height", 32), ("pixels", b"\xff" * 4096)], None, 0),   # its size kept
+    (4, "glBindTexture", [("target", "GL_TEXTURE_2D"), ("texture", 7)], None, 0),   # kept: rules name textures
+    (5, "glVertexPointer", [("size", 3), ("pointer", PointerType(0x7F00))], None, 0),
+    (6, "glXSwapBuffers", [("dpy", PointerType(1)), ("drawable", 2)], None, 32),
 ]
 
 
@@ -30,10 +31,11 @@ def test_round_trip_keeps_what_the_emulation_reads(tmp_path):
     write(p)
     assert is_reduced_capture(str(p))
     got = list(read_reduced_calls(str(p)))
-    assert [c[0] for c in got] == [1, 3, 4, 5], "the texture image is left out, its binding kept"
-    assert got[2][2] == [("size", 3), ("pointer", 0x7F00)] and type(got[2][2][1][1]) is int, \
+    assert [c[0] for c in got] == [1, 3, 4, 5, 6], "a texture parameter is left out, the binding kept"
+    assert got[1][2] == [("width", 64), ("height", 32), ("pixels", None)], "a texture's size kept, not its image"
+    assert got[3][2] == [("size", 3), ("pointer", 0x7F00)] and type(got[3][2][1][1]) is int, \
         "pointers become plain integers"
-    assert got[0] == CALLS[0] and got[3][4] == 32, "arguments and call flags as read"
+    assert got[0] == CALLS[0] and got[4][4] == 32, "arguments and call flags as read"
     assert not [f for f in os.listdir(tmp_path) if f.startswith(".")], "no temporary left"
 
 
@@ -58,8 +60,8 @@ def test_damaged_files_are_refused_naming_where(tmp_path):
     with pytest.raises(ConvertError, match=r"after call 1: the reduced capture is cut short"):
         list(read_reduced_calls(str(bad)))
     # Calls out of order.
-    write(bad, [CALLS[3], CALLS[0]])
-    with pytest.raises(ConvertError, match=r"after call 4: .*unexpected record"):
+    write(bad, [CALLS[4], CALLS[0]])
+    with pytest.raises(ConvertError, match=r"after call 5: .*unexpected record"):
         list(read_reduced_calls(str(bad)))
 
 

@@ -100,6 +100,9 @@ def run(args):
         return 1
     except KeyboardInterrupt:
         return 130
+    except Exception as e:   # noqa: BLE001: the promise is one line, whatever failed
+        sys.stderr.write(f"{PROG}: internal error: {type(e).__name__}: {printable(e, 300)}\n")
+        return 1
 
 
 def require_numpy():

@@ -7,17 +7,22 @@ import numpy as np
 from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
-from .gl_tables import CALL_FLAG_END_FRAME, IGNORED_PREFIXES
+from .gl_tables import CALL_FLAG_END_FRAME, IGNORED_PREFIXES, base_name
 from .glstate import GLState
+from .glstate.attributes import AttributeCalls
+from .glstate.buffers import BufferCalls
 from .glstate.draws import DrawCalls
+from .glstate.framebuffers import FramebufferCalls
 from .glstate.objects import ObjectCalls
 from .glstate.per_fragment import PerFragmentCalls
 from .glstate.polygon import PolygonCalls
+from .glstate.programs import ProgramCalls
 from .glstate.transform import TransformCalls
 from .glstate.vertex_arrays import VertexArrayCalls
 from .selection import Selection
 
-STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, DrawCalls, ObjectCalls)
+STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
+                ProgramCalls, FramebufferCalls, DrawCalls, ObjectCalls)
 
 
 class Converter(*STATE_GROUPS, GeometryOutput):
@@ -34,12 +39,18 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.screen = tuple(args.screen) if args.screen else None
         self.drawable = None             # the window's size, as apitrace records it at each MakeCurrent
         self.flags = 0                   # of the call being handled
+        self.ret = None                  # its return value, as apitrace recorded it
         self.select = Selection(args.select) if args.select else None
         self.tracker = EntityTracker(self.select.settings) if self.select else None
         self.drawn_surfaces = set()
         self.frame_draws = []            # (call, description) for --list-draws
         self.geo_objects = {}            # object id -> list of (eye verts, tris)
         self.geo_view = None             # the projection of the frame's collisionable draws
+        self.geo_space = None            # "eye" or "ndc": the space of the frame's geometry
+        self.offscreen_draws = 0         # draws left out: not the camera pass
+        self.vertex_stage_ = None        # Mesa, started at the first draw under a program
+        self.es = False                  # an OpenGL ES capture (EGL with the ES API)
+        self.egl_api = "EGL_OPENGL_ES_API"
         self.last_depth_draw = None
         self.ignored_prims = 0
         self.partial_frame_dropped = False
@@ -98,6 +109,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.drawn_surfaces = set()
         self.geo_objects = {}
         self.geo_view = None
+        self.geo_space = None
         self.last_depth_draw = None
         self.frame_view = None
         if self.tracker:
@@ -106,13 +118,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
     # ---- the call handlers
     def handle(self, call):
         no, name, args, ret, flags = call
-        self.flags = flags
+        self.flags, self.ret = flags, ret
         s = self.s
         a = [v for _, v in args]
-        if name.endswith("ARB") or name.endswith("EXT"):
-            base = name[:-3]
-        else:
-            base = name
+        base = base_name(name)
         if s.begin_mode is not None:
             if base.startswith("glVertex"):
                 self.immediate_vertex(no, base, a)
@@ -130,7 +139,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         h = self.HANDLERS.get(base)
         if h is not None:
             h(self, no, name, a, args)
-        elif base.startswith("glVertex"):
+        elif base.startswith("glVertex") and not base.startswith("glVertexAttrib"):
             fail_call(no, f"{printable(name)} outside glBegin/glEnd")
         elif base.startswith(IGNORED_PREFIXES):
             pass
@@ -142,21 +151,24 @@ class Converter(*STATE_GROUPS, GeometryOutput):
     def h_refuse(self, no, name, a, args):
         fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
 
+    def h_egl_bind_api(self, no, name, a, args):
+        self.egl_api = a[0] if a else None
+
+    def h_egl_create_context(self, no, name, a, args):
+        # EGL's default API is OpenGL ES (eglBindAPI changes it).
+        self.es = self.egl_api != "EGL_OPENGL_API"
+
     def h_ignore(self, no, name, a, args):
         pass
 
-    # Calls that can change geometry or visibility in ways not emulated.
+    # Calls that can change geometry or visibility in ways not emulated; the
+    # window system's calls that say which API the capture drew with.
     REFUSED = {
+        "eglBindAPI": h_egl_bind_api,
+        "eglCreateContext": h_egl_create_context,
         "glCallList": h_refuse,
         "glCallLists": h_refuse,
         "glNewList": h_refuse,
-        "glMultiDrawArrays": h_refuse,
-        "glMultiDrawElements": h_refuse,
-        "glDrawArraysInstanced": h_refuse,
-        "glDrawElementsInstanced": h_refuse,
-        "glDrawElementsBaseVertex": h_refuse,
-        "glVertexAttribPointer": h_ignore,
-        "glEnableVertexAttribArray": h_refuse,
         "glArrayElement": h_refuse,
         "glEvalMesh1": h_refuse,
         "glEvalMesh2": h_refuse,
@@ -166,9 +178,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         "glEvalPoint2": h_refuse,
         "glPushAttrib": h_refuse,
         "glPopAttrib": h_refuse,
-        "glBindFramebuffer": h_refuse,
-        "glBindVertexArray": h_refuse,
         "glPushClientAttrib": h_refuse,
         "glPopClientAttrib": h_refuse,
     }
-    HANDLERS = {k: v for group in STATE_GROUPS for k, v in group.HANDLERS.items()} | REFUSED
+    HANDLERS = REFUSED | {k: v for group in STATE_GROUPS for k, v in group.HANDLERS.items()}

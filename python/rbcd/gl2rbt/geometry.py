@@ -1,10 +1,66 @@
 """Each frame's collisionable geometry for rbcd-cpucd --geometry
-(docs/gl-capture.md): the objects' eye-space meshes and the frame's projection."""
+(docs/gl-capture.md): the objects' eye-space meshes and the frame's
+projection, or, for draws under a program (whose projection the capture
+never states), their normalized device coordinates with an identity
+projection. The map from eye space to clip space is projective, and for
+geometry in front of the camera (w > 0) it keeps the contact relation (two
+surfaces intersecting, one closed surface inside another), so the ground
+truth computed there is the eye space's; what crosses w = 0 is clipped at
+w = W_MIN first."""
 import numpy as np
+
+from .errors import fail_call
+
+W_MIN = 1e-5
+
+
+def clip_near(clip, tris):
+    """Triangles (indices into clip, (n, 4)) cut to w >= W_MIN: (vertices
+    (m, 4), triangles (k, 3)). A triangle wholly in front is kept as it is,
+    one wholly behind dropped, one across the plane cut to its front part."""
+    w = clip[tris, 3]
+    front = (w >= W_MIN).all(axis=1)
+    keep = tris[front]
+    crossing = tris[~front & (w >= W_MIN).any(axis=1)]
+    if len(crossing) == 0:
+        return clip, keep
+    verts, extra = [clip], []
+    n = len(clip)
+    for tri in crossing:
+        poly = []
+        for i in range(3):
+            a, b = clip[tri[i]], clip[tri[(i + 1) % 3]]
+            if a[3] >= W_MIN:
+                poly.append(a)
+            if (a[3] >= W_MIN) != (b[3] >= W_MIN):
+                t = (W_MIN - a[3]) / (b[3] - a[3])
+                poly.append(a + t * (b - a))
+        for j in range(1, len(poly) - 1):
+            extra.append([n, n + j, n + j + 1])
+        verts.append(np.array(poly))
+        n += len(poly)
+    return np.concatenate(verts), np.concatenate([keep, np.array(extra, dtype=keep.dtype).reshape(-1, 3)])
 
 
 class GeometryOutput:
     """The mixin of Converter that writes the geometry file."""
+
+    def add_geometry(self, no, obj_id, clip, tris, eye, proj):
+        """A collisionable draw's surface: eye() its eye-space vertices under
+        the fixed-function transform, or None under a program."""
+        space = "eye" if eye is not None else "ndc"
+        if self.geo_space not in (None, space):
+            fail_call(no, "--geometry: a frame's collisionable objects are drawn both with and without "
+                      "shaders (their spaces differ)")
+        self.geo_space = space
+        if eye is not None:
+            e = eye()
+            self.geo_objects.setdefault(obj_id, []).append((e[:, 0:3] / e[:, 3:4], tris.copy()))
+            self.geo_view = proj.copy()   # the objects' projection, not a later overlay's
+            return
+        verts, kept = clip_near(clip, tris)
+        self.geo_objects.setdefault(obj_id, []).append((verts[:, 0:3] / verts[:, 3:4], kept.copy()))
+        self.geo_view = np.identity(4)
 
     def write_geometry_frame(self):
         g = self.geo

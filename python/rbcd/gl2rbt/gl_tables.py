@@ -52,3 +52,12 @@ CAPS_IGNORED = {
     "GL_DEBUG_OUTPUT", "GL_DEBUG_OUTPUT_SYNCHRONOUS", "GL_VERTEX_PROGRAM_POINT_SIZE", "GL_POINT_SPRITE",
     "GL_COLOR_SUM", "GL_AUTO_NORMAL", "GL_INDEX_LOGIC_OP", "GL_PROGRAM_POINT_SIZE", "GL_TEXTURE_CUBE_MAP_SEAMLESS",
 } | {f"GL_LIGHT{i}" for i in range(8)}
+
+# The largest buffer object a capture may declare (bytes).
+MAX_BUFFER_BYTES = 1 << 30
+
+
+def base_name(name):
+    """A GL function's name without its extension suffix: the ARB, EXT, KHR
+    and OES forms behave as the core function."""
+    return name[:-3] if name.endswith(("ARB", "EXT", "KHR", "OES")) else name

@@ -183,6 +183,8 @@ def report(frames, conv):
         print("the capture stops before its last buffer swap: that frame is not converted")
     if conv.ignored_prims:
         print(f"{conv.ignored_prims} point and line draws not rasterized (no area)")
+    if conv.offscreen_draws:
+        print(f"{conv.offscreen_draws} draws into other targets than the camera pass left out (docs/gl-capture.md)")
 
 
 # ---------------------------------------------------------------- listing a frame's draws

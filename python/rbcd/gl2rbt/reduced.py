@@ -12,20 +12,31 @@ import pickle
 
 from .apitrace import CallReader, PointerType
 from .errors import ConvertError, printable
-from .gl_tables import IGNORED_PREFIXES
+from .converter import Converter
+from .gl_tables import IGNORED_PREFIXES, base_name
 from .outputs import SafeText
 
 REDUCED_HEADER = ("rbcd-reduced-capture", 1)
 REDUCED_END = "end"   # the last record, ("end", calls): a file cut anywhere lacks it
 XZ_MAGIC = b"\xfd7zXZ\x00"
-# Kept although ignored by the emulation's prefix list: the texture binding
-# (selection rules may name textures) and the window system (frame ends, the
-# window's size).
-REDUCED_KEEP = ("glBindTexture", "glX", "egl", "wgl")
+# Kept although the emulation passes over them: the window system (frame
+# ends, the window's size).
+REDUCED_KEEP = ("glX", "egl", "wgl")
+# Arguments a handled call carries that the emulation never reads: texture
+# images (only a texture's size is read).
+REDUCED_DROP = {"glTexImage2D": "pixels", "glTexImage2DMultisample": None}
 
 
 def reduced_keeps(name):
-    return not name.startswith(IGNORED_PREFIXES) or name.startswith(REDUCED_KEEP)
+    """Whether the emulation reads the call: it has a handler, or it is not
+    passed over (and is refused), or it is the window system's."""
+    return base_name(name) in Converter.HANDLERS or not name.startswith(IGNORED_PREFIXES) \
+        or name.startswith(REDUCED_KEEP)
+
+
+def reduced_args(name, args):
+    drop = REDUCED_DROP.get(base_name(name))
+    return [(k, None if k == drop else plain_value(v)) for k, v in args]
 
 
 def plain_value(v):
@@ -100,7 +111,7 @@ class ReducedWriter:
 
     def call(self, c):
         if reduced_keeps(c[1]):
-            self.put((c[0], c[1], plain_value(c[2]), plain_value(c[3]), c[4]))
+            self.put((c[0], c[1], reduced_args(c[1], c[2]), plain_value(c[3]), c[4]))
             self.count += 1
 
     def commit(self):

@@ -7,6 +7,10 @@ unit, and the handlers of the calls that change it, one module a state group:
     vertex_arrays   the vertex array and buffer objects
     draws           draw calls and immediate mode, into draw records
     objects         which object a draw is: debug groups, selection rules
+    buffers         buffer objects: contents, bindings, mapped writes
+    attributes      generic attributes and vertex array objects
+    programs        shaders, programs, uniforms and uniform blocks
+    framebuffers    which pass a draw writes; textures a vertex shader reads
 
 Each module holds a mixin of rbcd.gl2rbt.converter.Converter whose HANDLERS
 map GL function names (without ARB/EXT) to its handlers, called as
@@ -15,6 +19,7 @@ import numpy as np
 
 from ..errors import fail_call
 from ..gl_tables import MAX_CLIP_PLANES
+from .attributes import VertexArrayObject
 
 # ---------------------------------------------------------------- the GL state
 
@@ -48,10 +53,34 @@ class GLState:
         self.clip_enabled = [False] * MAX_CLIP_PLANES
         self.vertex_array_enabled = False
         self.vertex_array = Array()
+        # Buffer objects (buffers.py): contents, versions, bindings, mappings.
         self.buffers = {}
+        self.buffer_versions = {}
+        self.next_version = 0
         self.bound = {"GL_ARRAY_BUFFER": 0, "GL_ELEMENT_ARRAY_BUFFER": 0}
-        self.texture = 0
+        self.indexed = {}
+        self.mappings = {}
+        # Generic attributes and vertex array objects (attributes.py).
+        self.vaos = {0: VertexArrayObject()}
+        self.vao = 0
+        self.attrib_values = {}
+        self.restart = False
+        self.restart_fixed = False
+        self.restart_index = 0
+        self.rasterizer_discard = False
+        # Shaders and programs (programs.py).
+        self.shaders = {}
+        self.programs = {}
         self.program = 0
+        # Framebuffers and textures (framebuffers.py).
+        self.draw_fbo = 0
+        self.fbo_depth = {}
+        self.sizes = {}
+        self.renderbuffer = 0
+        self.active_unit = 0
+        self.units = {}
+        self.texture_buffers = {}
+        self.texture = 0
         self.groups = []   # innermost last: object id or None
         self.begin_mode = None
         self.begin_verts = []

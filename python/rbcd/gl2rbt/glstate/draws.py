@@ -5,20 +5,29 @@ import struct
 import numpy as np
 
 from ..errors import fail_call, printable
-from ..gl_tables import CULL, DEPTH_FUNCS, PRIM_NO_AREA, PRIM_TRIANGLES
+from ..gl_tables import CULL, DEPTH_FUNCS, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
 from ..glmath import mat_mul, triangle_indices
 from . import number
+
+MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
+MAX_DRAW_VERTICES = 1 << 24    # vertices, indices and offsets of one draw
+
 
 class DrawCalls:
     """Draws: positions through the fixed-function transform into draw records."""
 
     # ---- draws
     def draw(self, no, mode, positions, name):
-        """positions: (n, 4) object-space vertices in GL order for `mode`."""
+        """positions: (n, 4) object-space vertices in GL order for `mode`,
+        through the fixed-function transform."""
         if not self.active:
             return
-        if self.s.program:
-            fail_call(no, f"{name} with program {self.s.program} bound: shaders are not emulated")
+        if self.vertex_program():
+            fail_call(no, f"{name} with program {self.s.program} bound: immediate-mode and glRect draws "
+                      "under a vertex shader are not emulated")
+        if not self.camera_pass():
+            self.offscreen_draws += 1
+            return
         if mode in PRIM_NO_AREA:
             self.ignored_prims += 1
             return
@@ -39,6 +48,14 @@ class DrawCalls:
         if self.frame_view is None and abs(proj[3, 3]) < 1e-12:
             self.frame_view = mv.copy()
         obj_id = self.object_of(no, mv, proj, len(positions), clip)
+        eye = (lambda: mat_mul(positions, mv.T)) if self.geo is not None else None
+        self.draw_record(no, name, clip, tris, obj_id, len(positions), mv, proj, eye)
+
+    def draw_record(self, no, name, clip, tris, obj_id, nverts, mv, proj, eye):
+        """The draw record of clip-space vertices and their triangles, for
+        object obj_id (None: other work); eye() gives the eye-space vertices
+        for the geometry output (None: a draw under a program, whose geometry
+        is written in normalized device coordinates)."""
         collisionable = obj_id is not None
         if collisionable:
             # A surface drawn in several passes is collisionable once: its first
@@ -49,9 +66,7 @@ class DrawCalls:
             else:
                 self.drawn_surfaces.add(key)
         if collisionable and self.geo is not None:
-            eye = mat_mul(positions, mv.T)   # only the geometry output needs eye space
-            self.geo_objects.setdefault(obj_id, []).append((eye[:, 0:3] / eye[:, 3:4], tris.copy()))
-            self.geo_view = proj.copy()   # the objects' projection, not a later overlay's
+            self.add_geometry(no, obj_id, clip, tris, eye, proj)
         st = self.s
         w, h = self.screen
         vx, vy, vw, vh = st.viewport if st.viewport else (0, 0, w, h)
@@ -64,6 +79,8 @@ class DrawCalls:
             scissor = (0, 0, w - 1, h - 1)
         planes = []
         if any(st.clip_enabled):
+            if proj is None:
+                fail_call(no, f"{name}: user clip planes (glClipPlane) under a program are not emulated")
             try:
                 pinv = np.linalg.inv(proj)
             except np.linalg.LinAlgError:
@@ -96,7 +113,7 @@ class DrawCalls:
         self.emit(bytes(rec))
         if st.depth_test:
             self.last_depth_draw = no
-        self.note_draw(no, name, obj_id if collisionable else None, len(positions), mv, proj, clip)
+        self.note_draw(no, name, obj_id if collisionable else None, nverts, mv, proj, clip)
 
     def immediate_vertex(self, no, base, a):
         vals = a[0] if len(a) == 1 and isinstance(a[0], (list, tuple)) else a
@@ -109,12 +126,90 @@ class DrawCalls:
             fail_call(no, "more than 4194304 vertices between glBegin and glEnd")
         self.s.begin_verts.append(v)
 
+    # ---- draws under a program: the vertex stage run by Mesa
+    def vertex_stage(self):
+        if self.vertex_stage_ is None:
+            from ..vertex_stage import VertexStage   # PyOpenGL and EGL: only for captures that need them
+            self.vertex_stage_ = VertexStage(self.es)
+        return self.vertex_stage_
+
+    def shader_draw(self, no, name, d):
+        """A draw under a program: its triangles as Mesa assembles them from
+        the capture's own vertex shader, one draw record per instance (an
+        instanced draw's instance i of object N is object N + i)."""
+        instances = d.get("instancecount", d.get("primcount", 1))
+        count = d.get("count")
+        if not isinstance(instances, int) or not 0 <= instances <= MAX_INSTANCES:
+            fail_call(no, f"{name}: impossible instance count")
+        if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard:
+            return
+        mode = d.get("mode")
+        if mode in PRIM_NO_AREA:
+            self.ignored_prims += 1
+            return
+        if mode not in ("GL_TRIANGLES", "GL_TRIANGLE_STRIP", "GL_TRIANGLE_FAN"):
+            fail_call(no, f"{name}: primitive mode {printable(mode)} under a program is not emulated")
+        if not self.camera_pass():
+            self.offscreen_draws += 1
+            return
+        self.open_frame(no)
+        for i, clip in enumerate(self.vertex_stage().run(self, no, base_name(name), d, instances)):
+            # A primitive with a vertex at NaN or infinity is not drawn (GL
+            # leaves its rasterization undefined; Mesa's clipper drops it).
+            good = np.isfinite(clip).all(axis=1).reshape(-1, 3).all(axis=1)
+            tris = np.arange(len(clip), dtype=np.uint32).reshape(-1, 3)[good]
+            if len(tris) == 0:
+                continue
+            obj = self.object_of(no, None, None, len(clip), clip)
+            self.draw_record(no, name, clip, tris, None if obj is None else obj + i, len(clip), None, None, None)
+
+    def draw_args(self, no, name, a, args):
+        """The arguments of a draw call, checked: counts, offsets and instances."""
+        d = dict(args)
+        for k in ("first", "count", "instancecount", "primcount", "baseinstance", "start", "end"):
+            v = d.get(k, 0)
+            if not isinstance(v, int) or isinstance(v, bool) or v < 0 or v > MAX_DRAW_VERTICES:
+                fail_call(no, f"{name}: impossible {k}")
+        bv = d.get("basevertex", 0)
+        if not isinstance(bv, int) or isinstance(bv, bool) or abs(bv) > MAX_DRAW_VERTICES:
+            fail_call(no, f"{name}: impossible basevertex")
+        return d
+
+    def h_draw_under_program(self, no, name, a, args):
+        """Draw calls that exist only for programs: instanced, base vertex, base instance."""
+        d = self.draw_args(no, name, a, args)
+        if not self.vertex_program():
+            fail_call(no, f"{name} without a vertex shader is not emulated")
+        self.shader_draw(no, name, d)
+
+    def h_multi_draw(self, no, name, a, args):
+        """glMultiDraw*: the draws it stands for, one after another."""
+        d = dict(args)
+        n = d.get("drawcount", d.get("primcount"))
+        lists = {k: d.get(k) for k in ("first", "count", "indices", "basevertex") if k in d}
+        if not isinstance(n, int) or not 0 <= n <= 1 << 16 or \
+                not all(isinstance(v, list) and len(v) >= n for v in lists.values()):
+            fail_call(no, f"{name}: impossible draw count or lists")
+        single = "glDrawArrays" if "Arrays" in name else \
+            "glDrawElementsBaseVertex" if "BaseVertex" in name else "glDrawElements"
+        for i in range(n):
+            one = [("mode", d.get("mode"))] + [(k, v[i]) for k, v in lists.items()]
+            if "type" in d:
+                one.append(("type", d["type"]))
+            if single == "glDrawArrays":
+                self.h_draw_arrays(no, single, None, one)
+            elif self.vertex_program():
+                self.shader_draw(no, single, self.draw_args(no, single, None, one))
+            else:
+                self.h_draw_elements(no, single, None, one)
 
     def h_draw_arrays(self, no, name, a, args):
         d = dict(args)
         mode, first, count = d.get("mode"), d.get("first", 0), d.get("count", 0)
         if not isinstance(first, int) or not isinstance(count, int) or first < 0 or count < 0:
             fail_call(no, f"{name}: impossible first or count")
+        if self.vertex_program():
+            return self.shader_draw(no, name, self.draw_args(no, name, a, args))
         if not self.active or count == 0:
             return
         arr = self.vertex_source(no, name)
@@ -125,6 +220,8 @@ class DrawCalls:
         mode, count, type_, indices = d.get("mode"), d.get("count", 0), d.get("type"), d.get("indices")
         if not isinstance(count, int) or count < 0 or count > (1 << 24):
             fail_call(no, f"{name}: impossible count")
+        if self.vertex_program():
+            return self.shader_draw(no, name, self.draw_args(no, name, a, args))
         if not self.active or count == 0:
             return
         arr = self.vertex_source(no, name)
@@ -153,6 +250,17 @@ class DrawCalls:
         fail_call(no, "glEnd without glBegin")
 
     HANDLERS = {
+        "glDrawArraysInstanced": h_draw_under_program,
+        "glDrawElementsInstanced": h_draw_under_program,
+        "glDrawElementsBaseVertex": h_draw_under_program,
+        "glDrawRangeElementsBaseVertex": h_draw_under_program,
+        "glDrawElementsInstancedBaseVertex": h_draw_under_program,
+        "glDrawArraysInstancedBaseInstance": h_draw_under_program,
+        "glDrawElementsInstancedBaseInstance": h_draw_under_program,
+        "glDrawElementsInstancedBaseVertexBaseInstance": h_draw_under_program,
+        "glMultiDrawArrays": h_multi_draw,
+        "glMultiDrawElements": h_multi_draw,
+        "glMultiDrawElementsBaseVertex": h_multi_draw,
         "glDrawArrays": h_draw_arrays,
         "glDrawElements": h_draw_elements,
         "glDrawRangeElements": h_draw_elements,

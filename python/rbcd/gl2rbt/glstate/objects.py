@@ -5,8 +5,15 @@ import numpy as np
 
 from ..errors import fail_call
 
+
+def projection_of(proj, clip):
+    if proj is None:
+        return "orthographic" if len(clip) and np.all(clip[:, 3] == 1.0) else "perspective"
+    return "perspective" if abs(proj[3, 3]) < 1e-12 else "orthographic"
+
+
 class ObjectCalls:
-    """Debug groups and markers, the program and texture bindings, and a draw's description for the rules."""
+    """Debug groups and markers, and a draw's description for the rules."""
 
     def note_draw(self, no, name, obj_id, nverts, mv, proj, clip):
         if self.listing is None:
@@ -19,7 +26,8 @@ class ObjectCalls:
                              "texture": d["texture"], "projection": d["projection"],
                              "own_modelview": d["own_modelview"], "depth_write": d["depth_write"],
                              "depth_func": self.s.depth_func, "box": box, "object": obj_id,
-                             "rule": self.last_rule, "translation": [round(float(v), 2) for v in mv[0:3, 3]]})
+                             "rule": self.last_rule,
+                             "translation": [0.0] * 3 if mv is None else [round(float(v), 2) for v in mv[0:3, 3]]})
 
     def object_of(self, no, mv, proj, nverts, clip):
         for g in reversed(self.s.groups):
@@ -32,10 +40,16 @@ class ObjectCalls:
         d = self.describe(no, mv, proj, nverts, clip)
         obj, self.last_rule = self.select.classify(d)
         if obj == "entity":
+            if mv is None:
+                fail_call(no, f"rule '{self.last_rule}': group_by = \"modelview\" needs the fixed-function "
+                          "model-view; this draw is under a program")
             obj = self.tracker.id_for(mv, self.frame_view, no)
         return obj
 
     def describe(self, no, mv, proj, nverts, clip):
+        """What selection rules and --list-draws see of a draw; mv and proj
+        are None for a draw under a program, whose projection is told from
+        its clip-space w (all 1: orthographic)."""
         view = getattr(self, "frame_view", None)
         w, h = self.screen
         ndc = clip[:, 0:2] / np.maximum(np.abs(clip[:, 3:4]), 1e-30)
@@ -43,8 +57,8 @@ class ObjectCalls:
         area = float(max(0.0, hi[0] - lo[0]) * max(0.0, hi[1] - lo[1]) * w * h / 4.0)
         return {"call": no, "frame": self.frame, "vertices": nverts, "texture": self.s.texture,
                 "depth_write": self.s.depth_test and self.s.depth_mask,
-                "projection": "perspective" if abs(proj[3, 3]) < 1e-12 else "orthographic",
-                "own_modelview": view is not None and not np.allclose(mv, view, atol=1e-6),
+                "projection": projection_of(proj, clip),
+                "own_modelview": mv is not None and view is not None and not np.allclose(mv, view, atol=1e-6),
                 "screen_area": area, "box": (lo, hi)}
 
     def h_push_debug_group(self, no, name, a, args):
@@ -79,19 +93,9 @@ class ObjectCalls:
             fail_call(no, f"{name} without a group to pop")
         self.s.groups.pop()
 
-    def h_use_program(self, no, name, a, args):
-        self.s.program = int(a[0]) if isinstance(a[0], int) else 1
-
-    def h_bind_texture(self, no, name, a, args):
-        if len(a) >= 2 and a[0] == "GL_TEXTURE_2D" and isinstance(a[1], int):
-            self.s.texture = a[1]
-
     HANDLERS = {
         "glPushDebugGroup": h_push_debug_group,
         "glPopDebugGroup": h_pop_group,
         "glPushGroupMarker": h_push_group_marker,
         "glPopGroupMarker": h_pop_group,
-        "glUseProgram": h_use_program,
-        "glUseProgramObject": h_use_program,
-        "glBindTexture": h_bind_texture,
     }

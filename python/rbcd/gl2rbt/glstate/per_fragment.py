@@ -43,7 +43,8 @@ class PerFragmentCalls:
     def enable(self, no, cap, on):
         s = self.s
         simple = {"GL_DEPTH_TEST": "depth_test", "GL_CULL_FACE": "cull", "GL_SCISSOR_TEST": "scissor_test",
-                  "GL_POLYGON_OFFSET_FILL": "offset_fill"}
+                  "GL_POLYGON_OFFSET_FILL": "offset_fill", "GL_RASTERIZER_DISCARD": "rasterizer_discard",
+                  "GL_PRIMITIVE_RESTART": "restart", "GL_PRIMITIVE_RESTART_FIXED_INDEX": "restart_fixed"}
         if cap in simple:
             setattr(s, simple[cap], on)
             return

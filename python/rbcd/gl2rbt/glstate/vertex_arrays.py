@@ -1,11 +1,12 @@
-"""The vertex array and buffer objects: where a draw's positions come from."""
+"""The fixed-function vertex array: where a GL 1.x draw's positions come from."""
 import numpy as np
 
 from ..errors import fail_call, printable
 from ..gl_tables import ARRAY_TYPES, INDEX_TYPES
 
+
 class VertexArrayCalls:
-    """Client vertex arrays, buffer objects and their contents."""
+    """The client vertex array (glVertexPointer), from client memory or a buffer object."""
 
     # ---- vertex data
     def array_values(self, arr, first, count, no):
@@ -85,57 +86,6 @@ class VertexArrayCalls:
     def h_interleaved(self, no, name, a, args):
         fail_call(no, "glInterleavedArrays is not emulated")
 
-    def h_bind_buffer(self, no, name, a, args):
-        target, buf = a[0], a[1]
-        if target in self.s.bound:
-            self.s.bound[target] = int(buf)
-
-    def h_buffer_data(self, no, name, a, args):
-        d = dict(args)
-        target = d.get("target")
-        if target not in self.s.bound:
-            return
-        b = self.s.bound[target]
-        if not b:
-            fail_call(no, f"{name} with no buffer bound")
-        size = d.get("size", 0)
-        if not isinstance(size, int) or size < 0 or size > (1 << 30):
-            fail_call(no, f"{name}: impossible size")
-        data = d.get("data")
-        buf = bytearray(size)
-        if isinstance(data, (bytes, bytearray)):
-            if len(data) < size:
-                fail_call(no, f"{name}: the data is shorter than the size")
-            buf[:] = data[:size]
-        self.s.buffers[b] = buf
-
-    def h_buffer_sub_data(self, no, name, a, args):
-        d = dict(args)
-        target = d.get("target")
-        if target not in self.s.bound:
-            return
-        b = self.s.bound[target]
-        buf = self.s.buffers.get(b)
-        off, size, data = d.get("offset", 0), d.get("size", 0), d.get("data")
-        if buf is None or not isinstance(off, int) or not isinstance(size, int) or off < 0 or size < 0 \
-                or off + size > len(buf) or not isinstance(data, (bytes, bytearray)) or len(data) < size:
-            fail_call(no, f"{name}: the range is outside the buffer's data")
-        buf[off:off + size] = data[:size]
-
-    def h_map_buffer(self, no, name, a, args):
-        target = a[0]
-        if target in self.s.bound:
-            fail_call(no, f"{name}: writing vertex or index buffers through a mapping is not emulated")
-
-    def h_delete_buffers(self, no, name, a, args):
-        d = dict(args)
-        for b in d.get("buffers") or []:
-            if isinstance(b, int):
-                self.s.buffers.pop(b, None)
-                for t, v in self.s.bound.items():
-                    if v == b:
-                        self.s.bound[t] = 0
-
     def vertex_source(self, no, name):
         if not self.s.vertex_array_enabled:
             fail_call(no, f"{name} with the vertex array disabled (generic attributes are not emulated)")
@@ -146,10 +96,4 @@ class VertexArrayCalls:
         "glDisableClientState": h_client_state,
         "glVertexPointer": h_vertex_pointer,
         "glInterleavedArrays": h_interleaved,
-        "glBindBuffer": h_bind_buffer,
-        "glBufferData": h_buffer_data,
-        "glBufferSubData": h_buffer_sub_data,
-        "glMapBuffer": h_map_buffer,
-        "glMapBufferRange": h_map_buffer,
-        "glDeleteBuffers": h_delete_buffers,
     }

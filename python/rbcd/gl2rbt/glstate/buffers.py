@@ -1,0 +1,146 @@
+"""Buffer objects: their contents as the capture wrote them (glBufferData,
+glBufferSubData, glCopyBufferSubData, and writes through a mapping, which
+apitrace records as memcpy calls into the mapped range), their bindings to
+targets and to indexed binding points. Each change gives the buffer a new
+version, by which the shader path's vertex stage knows what Mesa's copy
+lacks."""
+from ..errors import fail_call, printable
+from ..gl_tables import MAX_BUFFER_BYTES
+
+
+def is_buffer_target(target):
+    return isinstance(target, str) and target.startswith("GL_") and target.endswith("_BUFFER")
+
+
+class BufferCalls:
+    """Buffer objects, bound by target (self.s.bound; the element array
+    buffer is the bound vertex array object's) and by index
+    (self.s.indexed[(target, index)] = (buffer, offset, size or None))."""
+
+    def bound_buffer(self, no, name, target):
+        if not is_buffer_target(target):
+            fail_call(no, f"{name}: {printable(target)} is not a buffer target")
+        return self.s.bound.get(target, 0)
+
+    def changed(self, b):
+        self.s.next_version += 1
+        self.s.buffer_versions[b] = self.s.next_version
+
+    def h_bind_buffer(self, no, name, a, args):
+        d = dict(args)
+        target, buf = d.get("target"), d.get("buffer")
+        if not is_buffer_target(target) or not isinstance(buf, int) or buf < 0:
+            fail_call(no, f"{name}: impossible target or buffer")
+        self.s.bound[target] = buf
+
+    def h_bind_buffer_base(self, no, name, a, args):
+        d = dict(args)
+        target, index, buf = d.get("target"), d.get("index"), d.get("buffer")
+        offset, size = d.get("offset", 0), d.get("size")
+        if not is_buffer_target(target) or not isinstance(index, int) or index < 0 or index >= 1024 \
+                or not isinstance(buf, int) or buf < 0 or not isinstance(offset, int) or offset < 0 \
+                or not (size is None or isinstance(size, int) and size > 0):
+            fail_call(no, f"{name}: impossible target, index, buffer or range")
+        self.s.bound[target] = buf   # glBindBufferBase and Range also bind the generic target
+        self.s.indexed[(target, index)] = (buf, offset, size)
+
+    def h_buffer_data(self, no, name, a, args):
+        d = dict(args)
+        b = self.bound_buffer(no, name, d.get("target"))
+        if not b:
+            fail_call(no, f"{name} with no buffer bound")
+        size = d.get("size", 0)
+        if not isinstance(size, int) or size < 0 or size > MAX_BUFFER_BYTES:
+            fail_call(no, f"{name}: impossible size")
+        data = d.get("data")
+        buf = bytearray(size)
+        if isinstance(data, (bytes, bytearray)):
+            if len(data) < size:
+                fail_call(no, f"{name}: the data is shorter than the size")
+            buf[:] = data[:size]
+        self.s.buffers[b] = buf
+        self.changed(b)
+
+    def h_buffer_sub_data(self, no, name, a, args):
+        d = dict(args)
+        b = self.bound_buffer(no, name, d.get("target"))
+        buf = self.s.buffers.get(b)
+        off, size, data = d.get("offset", 0), d.get("size", 0), d.get("data")
+        if buf is None or not isinstance(off, int) or not isinstance(size, int) or off < 0 or size < 0 \
+                or off + size > len(buf) or not isinstance(data, (bytes, bytearray)) or len(data) < size:
+            fail_call(no, f"{name}: the range is outside the buffer's data")
+        buf[off:off + size] = data[:size]
+        self.changed(b)
+
+    def h_copy_buffer_sub_data(self, no, name, a, args):
+        d = dict(args)
+        src = self.s.buffers.get(self.bound_buffer(no, name, d.get("readTarget")))
+        wb = self.bound_buffer(no, name, d.get("writeTarget"))
+        dst = self.s.buffers.get(wb)
+        ro, wo, size = d.get("readOffset"), d.get("writeOffset"), d.get("size")
+        if src is None or dst is None or not all(isinstance(v, int) and v >= 0 for v in (ro, wo, size)) \
+                or ro + size > len(src) or wo + size > len(dst):
+            fail_call(no, f"{name}: a range outside a buffer's data")
+        dst[wo:wo + size] = src[ro:ro + size]
+        self.changed(wb)
+
+    def h_map_buffer(self, no, name, a, args):
+        d = dict(args)
+        b = self.bound_buffer(no, name, d.get("target"))
+        buf = self.s.buffers.get(b)
+        ptr = self.ret
+        offset, length = d.get("offset", 0), d.get("length")
+        if buf is None:
+            fail_call(no, f"{name} of a buffer that holds no data")
+        if length is None:
+            length = len(buf) - offset
+        if not isinstance(offset, int) or not isinstance(length, int) or offset < 0 or length < 0 \
+                or offset + length > len(buf):
+            fail_call(no, f"{name}: the range is outside the buffer's data")
+        if isinstance(ptr, int) and ptr:
+            self.s.mappings[b] = (ptr, offset, length)
+
+    def h_unmap_buffer(self, no, name, a, args):
+        self.s.mappings.pop(self.bound_buffer(no, name, dict(args).get("target")), None)
+
+    def h_memcpy(self, no, name, a, args):
+        """apitrace's record of what the application wrote into a mapping."""
+        d = dict(args)
+        dest, src = d.get("dest"), d.get("src")
+        if not isinstance(dest, int) or not isinstance(src, (bytes, bytearray)):
+            fail_call(no, "memcpy: not a write into a mapping apitrace recorded")
+        for b, (ptr, offset, length) in self.s.mappings.items():
+            if ptr <= dest and dest + len(src) <= ptr + length:
+                at = offset + dest - ptr
+                self.s.buffers[b][at:at + len(src)] = src
+                self.changed(b)
+                return
+        fail_call(no, "memcpy into memory that is not a mapped buffer's")
+
+    def h_delete_buffers(self, no, name, a, args):
+        d = dict(args)
+        for b in d.get("buffers") or []:
+            if isinstance(b, int):
+                self.s.buffers.pop(b, None)
+                self.s.buffer_versions.pop(b, None)
+                self.s.mappings.pop(b, None)
+                for t, v in self.s.bound.items():
+                    if v == b:
+                        self.s.bound[t] = 0
+                for k, (v, _, _) in list(self.s.indexed.items()):
+                    if v == b:
+                        del self.s.indexed[k]
+
+    HANDLERS = {
+        "glBindBuffer": h_bind_buffer,
+        "glBindBufferBase": h_bind_buffer_base,
+        "glBindBufferRange": h_bind_buffer_base,
+        "glBufferData": h_buffer_data,
+        "glBufferSubData": h_buffer_sub_data,
+        "glCopyBufferSubData": h_copy_buffer_sub_data,
+        "glMapBuffer": h_map_buffer,
+        "glMapBufferRange": h_map_buffer,
+        "glUnmapBuffer": h_unmap_buffer,
+        "memcpy": h_memcpy,
+        "glDeleteBuffers": h_delete_buffers,
+    }

@@ -1,0 +1,102 @@
+"""Framebuffer objects and textures: which pass a draw belongs to, and the
+texture buffers a vertex shader reads.
+
+The unit sees the frame's camera pass, where a tile-based GPU would run it:
+draws into the window's framebuffer, or into a framebuffer object whose depth
+attachment has the screen's size (a deferred renderer's geometry pass).
+Draws into other targets (shadow maps, reflections, cube maps, post
+processing at other sizes) are GPU work of their own, left out of the trace
+and counted (docs/gl-capture.md, "Which pass")."""
+from ..errors import fail_call, printable
+
+DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
+
+
+class FramebufferCalls:
+    """self.s.draw_fbo: the bound draw framebuffer; self.s.fbo_depth[fbo] =
+    ("texture" | "renderbuffer", name) of its depth attachment; the sizes of
+    textures' level 0 and renderbuffers; texture units' bindings, and the
+    buffers of texture buffer objects."""
+
+    def h_bind_framebuffer(self, no, name, a, args):
+        d = dict(args)
+        target, fb = d.get("target"), d.get("framebuffer")
+        if not isinstance(fb, int) or fb < 0:
+            fail_call(no, f"{name}: impossible framebuffer")
+        if target in ("GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER"):
+            self.s.draw_fbo = fb
+
+    def h_framebuffer_texture(self, no, name, a, args):
+        d = dict(args)
+        if d.get("attachment") in DEPTH_ATTACHMENTS and self.s.draw_fbo:
+            kind = "renderbuffer" if "Renderbuffer" in name else "texture"
+            obj = d.get("renderbuffer" if kind == "renderbuffer" else "texture")
+            self.s.fbo_depth[self.s.draw_fbo] = (kind, obj) if obj else None
+
+    def h_renderbuffer_storage(self, no, name, a, args):
+        d = dict(args)
+        w, h = d.get("width"), d.get("height")
+        if not isinstance(w, int) or not isinstance(h, int):
+            fail_call(no, f"{name}: impossible size")
+        self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
+
+    def h_bind_renderbuffer(self, no, name, a, args):
+        self.s.renderbuffer = dict(args).get("renderbuffer")
+
+    def h_tex_image(self, no, name, a, args):
+        """The size of a texture's level 0: only that is read (a framebuffer
+        attachment's size); the image data goes unread."""
+        d = dict(args)
+        w, h = d.get("width"), d.get("height", 1)
+        if d.get("level", 0) == 0 and isinstance(w, int) and isinstance(h, int):
+            tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+            self.s.sizes[("texture", tex)] = (w, h)
+
+    def h_active_texture(self, no, name, a, args):
+        unit = a[0] if a else None
+        if not isinstance(unit, str) or not unit.startswith("GL_TEXTURE") or not unit[10:].isdigit():
+            fail_call(no, f"{name}: {printable(unit)} is not a texture unit")
+        self.s.active_unit = int(unit[10:])
+
+    def h_bind_texture(self, no, name, a, args):
+        d = dict(args)
+        target, tex = d.get("target"), d.get("texture")
+        if not isinstance(tex, int) or tex < 0:
+            fail_call(no, f"{name}: impossible texture")
+        self.s.units[(self.s.active_unit, target)] = tex
+        if target == "GL_TEXTURE_2D":
+            self.s.texture = tex   # what selection rules name as a draw's texture
+
+    def h_tex_buffer(self, no, name, a, args):
+        d = dict(args)
+        tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+        buf, fmt = d.get("buffer"), d.get("internalformat")
+        if not tex or not isinstance(buf, int) or buf < 0:
+            fail_call(no, f"{name}: no texture bound, or an impossible buffer")
+        self.s.texture_buffers[tex] = (fmt, buf, d.get("offset", 0), d.get("size"))
+
+    def camera_pass(self):
+        """Whether a draw now writes the frame's camera pass."""
+        fb = self.s.draw_fbo
+        if not fb:
+            return True
+        depth = self.s.fbo_depth.get(fb)
+        return depth is not None and self.s.sizes.get(depth) == tuple(self.screen)
+
+    HANDLERS = {
+        "glBindFramebuffer": h_bind_framebuffer,
+        "glFramebufferTexture2D": h_framebuffer_texture,
+        "glFramebufferTexture": h_framebuffer_texture,
+        "glFramebufferRenderbuffer": h_framebuffer_texture,
+        "glBindRenderbuffer": h_bind_renderbuffer,
+        "glRenderbufferStorage": h_renderbuffer_storage,
+        "glRenderbufferStorageMultisample": h_renderbuffer_storage,
+        "glTexImage2D": h_tex_image,
+        "glTexStorage2D": h_tex_image,
+        "glTexImage2DMultisample": h_tex_image,
+        "glTexStorage2DMultisample": h_tex_image,
+        "glActiveTexture": h_active_texture,
+        "glBindTexture": h_bind_texture,
+        "glTexBuffer": h_tex_buffer,
+        "glTexBufferRange": h_tex_buffer,
+    }

@@ -1,0 +1,205 @@
+"""Shaders, programs and their uniforms (OpenGL 2.0+ and ES): what the shader
+path's vertex stage needs to build each program in Mesa and give it the
+capture's uniform values. A program is built from what its last
+glLinkProgram saw: the sources of its shaders as last compiled and its
+attribute bindings (apitrace adds the bindings the link chose, as fake
+glBindAttribLocation calls, so that a replay's locations are the capture's).
+Uniform locations and block indices are the capture's; their names come from
+the capture's own glGetUniformLocation and glGetUniformBlockIndex calls (a
+location no call named is an explicit one, the same in Mesa)."""
+import re
+
+from ..errors import fail_call, printable
+
+STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
+          "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
+          "GL_COMPUTE_SHADER": "compute"}
+UNIFORM = re.compile(r"gl(Program)?Uniform(Matrix)?([1-4])(x[2-4])?(f|d|i|ui)(v?)$")
+
+
+class Shader:
+    __slots__ = ("stage", "sources", "compiled")
+
+    def __init__(self, stage):
+        self.stage, self.sources, self.compiled = stage, [], None
+
+
+class Program:
+    def __init__(self):
+        self.shaders = set()
+        self.bindings = {}         # attribute name -> index
+        self.linked = None         # ({stage: source}, {name: index}) at the last link
+        self.link_call = None
+        self.version = 0           # a new one at each link
+        self.uniform_names = {}    # capture location -> name
+        self.block_names = {}      # capture block index -> name
+        self.uniforms = {}         # capture location -> (function, values): the last value set
+        self.block_bindings = {}   # capture block index -> binding point
+
+
+def name_arg(no, name, v, what):
+    if not isinstance(v, int) or v < 0:
+        fail_call(no, f"{name}: impossible {what} {printable(v)}")
+    return v
+
+
+class ProgramCalls:
+    """self.s.shaders, self.s.programs: capture name -> Shader, Program."""
+
+    def program(self, no, name, v):
+        p = self.s.programs.get(name_arg(no, name, v, "program"))
+        if p is None:
+            fail_call(no, f"{name}: program {v} was never created")
+        return p
+
+    def vertex_program(self):
+        """Whether draws now run a vertex shader: a program is in use and its
+        last link had one (a program of only a fragment shader leaves the
+        vertices to the fixed-function transform, in a compatibility context)."""
+        p = self.s.programs.get(self.s.program) if self.s.program else None
+        return p is not None and "vertex" in p.linked[0]
+
+    def h_create_shader(self, no, name, a, args):
+        stage = STAGES.get(a[0] if a else None)
+        if stage is None or not isinstance(self.ret, int):
+            fail_call(no, f"{name}: not a shader type")
+        self.s.shaders[self.ret] = Shader(stage)
+
+    def h_shader_source(self, no, name, a, args):
+        d = dict(args)
+        sh = self.s.shaders.get(d.get("shader"))
+        strings, lengths = d.get("string"), d.get("length")
+        if sh is None or not isinstance(strings, list) or not all(isinstance(s, str) for s in strings):
+            fail_call(no, f"{name}: no shader, or sources that are not text")
+        if isinstance(lengths, list):
+            strings = [s if not isinstance(n, int) or n < 0 else s[:n] for s, n in zip(strings, lengths)]
+        sh.sources = strings
+
+    def h_compile_shader(self, no, name, a, args):
+        sh = self.s.shaders.get(a[0] if a else None)
+        if sh is None:
+            fail_call(no, f"{name}: no such shader")
+        sh.compiled = "".join(sh.sources)
+
+    def h_create_program(self, no, name, a, args):
+        if not isinstance(self.ret, int):
+            fail_call(no, f"{name}: no program name recorded")
+        self.s.programs[self.ret] = Program()
+
+    def h_attach_shader(self, no, name, a, args):
+        d = dict(args)
+        p = self.program(no, name, d.get("program"))
+        s = d.get("shader")
+        if s not in self.s.shaders:
+            fail_call(no, f"{name}: shader {printable(s)} was never created")
+        (p.shaders.add if name.startswith("glAttach") else p.shaders.discard)(s)
+
+    def h_bind_attrib_location(self, no, name, a, args):
+        d = dict(args)
+        p = self.program(no, name, d.get("program"))
+        index, attr = d.get("index"), d.get("name")
+        if not isinstance(index, int) or not 0 <= index < 64 or not isinstance(attr, str):
+            fail_call(no, f"{name}: impossible index or name")
+        p.bindings[attr] = index
+
+    def h_link_program(self, no, name, a, args):
+        p = self.program(no, name, a[0] if a else None)
+        sources = {}
+        for s in sorted(p.shaders):
+            sh = self.s.shaders[s]
+            if sh.compiled is None:
+                fail_call(no, f"{name}: shader {s} was never compiled")
+            if sh.stage in sources:
+                sources[sh.stage] += "\n" + sh.compiled   # several shaders of one stage: linked together
+            else:
+                sources[sh.stage] = sh.compiled
+        p.linked = (sources, dict(p.bindings))
+        p.link_call = no
+        p.version += 1
+        p.uniform_names, p.block_names, p.uniforms, p.block_bindings = {}, {}, {}, {}
+
+    def h_use_program(self, no, name, a, args):
+        v = a[0] if a else None
+        if not isinstance(v, int) or v < 0:
+            fail_call(no, f"{name}: impossible program {printable(v)}")
+        if v and (v not in self.s.programs or self.s.programs[v].linked is None):
+            return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
+        self.s.program = v
+
+    def h_get_uniform_location(self, no, name, a, args):
+        d = dict(args)
+        p = self.program(no, name, d.get("program"))
+        if isinstance(self.ret, int) and self.ret >= 0 and isinstance(d.get("name"), str):
+            p.uniform_names[self.ret] = d["name"]
+
+    def h_get_uniform_block_index(self, no, name, a, args):
+        d = dict(args)
+        p = self.program(no, name, d.get("program"))
+        if isinstance(self.ret, int) and 0 <= self.ret < 0xFFFFFFFF and isinstance(d.get("uniformBlockName"), str):
+            p.block_names[self.ret] = d["uniformBlockName"]
+
+    def h_uniform_block_binding(self, no, name, a, args):
+        d = dict(args)
+        p = self.program(no, name, d.get("program"))
+        idx, binding = d.get("uniformBlockIndex"), d.get("uniformBlockBinding")
+        if not isinstance(idx, int) or not isinstance(binding, int) or idx < 0 or not 0 <= binding < 1024:
+            fail_call(no, f"{name}: impossible block index or binding")
+        p.block_bindings[idx] = binding
+
+    def h_uniform(self, no, name, a, args):
+        """glUniform*, glUniformMatrix*, glProgramUniform*: kept per program
+        and location, to be set in Mesa's program as the capture set them."""
+        name = name[:-3] if name.endswith(("ARB", "EXT", "OES")) else name
+        m = UNIFORM.match(name)
+        if m is None:
+            fail_call(no, f"{printable(name)} is not emulated")
+        if m.group(1):
+            p, rest = self.program(no, name, a[0] if a else None), a[1:]
+        else:
+            if not self.s.program:
+                fail_call(no, f"{name} with no program in use")
+            p, rest = self.s.programs[self.s.program], a
+        if not rest or not isinstance(rest[0], int):
+            fail_call(no, f"{name}: no location")
+        loc = rest[0]
+        if loc == -1:
+            return   # GL ignores a location of -1
+        values = rest[1:]
+        if m.group(6):   # the v forms: count, [transpose,] values
+            values = [v for v in values if isinstance(v, list)]
+            if len(values) != 1 or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                           for x in values[0]):
+                fail_call(no, f"{name}: the values are not numbers")
+            values = values[0]
+        elif not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values):
+            fail_call(no, f"{name}: the values are not numbers")
+        transpose = m.group(2) is not None and dict(args).get("transpose") in ("GL_TRUE", True, 1)
+        p.uniforms[loc] = (name.replace("glProgramUniform", "glUniform"), values, transpose)
+
+    def h_refuse_stage(self, no, name, a, args):
+        fail_call(no, f"{printable(name)}: separable programs and pipelines are not emulated yet")
+
+    HANDLERS = {
+        "glCreateShader": h_create_shader,
+        "glShaderSource": h_shader_source,
+        "glCompileShader": h_compile_shader,
+        "glCreateProgram": h_create_program,
+        "glAttachShader": h_attach_shader,
+        "glDetachShader": h_attach_shader,
+        "glBindAttribLocation": h_bind_attrib_location,
+        "glLinkProgram": h_link_program,
+        "glUseProgram": h_use_program,
+        "glUseProgramObject": h_use_program,
+        "glGetUniformLocation": h_get_uniform_location,
+        "glGetUniformBlockIndex": h_get_uniform_block_index,
+        "glUniformBlockBinding": h_uniform_block_binding,
+        "glProgramParameteri": h_refuse_stage,
+        "glCreateShaderProgramv": h_refuse_stage,
+        "glUseProgramStages": h_refuse_stage,
+        "glBindProgramPipeline": h_refuse_stage,
+        "glTransformFeedbackVaryings": h_refuse_stage,
+    } | dict.fromkeys([f"gl{p}Uniform{n}{t}{v}" for p in ("", "Program") for n in "1234"
+                      for t in ("f", "i", "ui", "d") for v in ("", "v")]
+                     + [f"gl{p}UniformMatrix{s}{t}v" for p in ("", "Program")
+                        for s in ("2", "3", "4", "2x3", "3x2", "2x4", "4x2", "3x4", "4x3") for t in ("f", "d")],
+                     h_uniform)

@@ -1,0 +1,128 @@
+"""Mesa, headless, as the converter's vertex stage (docs/gl-capture.md, "The
+shader path"): an EGL context on Mesa's surfaceless platform (no X server),
+desktop OpenGL 4.5 compatibility for GL captures (every GLSL version, the
+default vertex array object and client arrays, as the capture's context had)
+or OpenGL ES 3.2 for ES captures, through PyOpenGL (Debian python3-opengl).
+
+The capture's vertex-stage calls are replayed into this context (glstate's
+shader and buffer groups translate object names and uniform locations) and
+each draw the trace needs runs once with transform feedback of gl_Position
+and the rasterizer discarded: Mesa runs the capture's own shaders on the
+captured buffers, uniforms and textures, and hands back each primitive's
+clip-space positions, assembled as GL assembles them (strips, fans,
+primitive restart, base vertex, instances in order)."""
+import ctypes
+import os
+
+from .errors import ToolError
+
+# PyOpenGL picks its platform when first imported: EGL, for a context that
+# needs no display.
+os.environ["PYOPENGL_PLATFORM"] = "egl"
+
+EGL_PLATFORM_SURFACELESS_MESA = 0x31DD
+
+
+def _load():
+    try:
+        from OpenGL import EGL, GL
+        return EGL, GL
+    except ImportError as e:
+        raise ToolError(f"the shader path needs PyOpenGL and Mesa's EGL (scripts/setup.sh --gl installs "
+                        f"python3-opengl and libegl1): {e}")
+
+
+class Mesa:
+    """One headless context; `gl` is PyOpenGL's GL module, current on it."""
+
+    def __init__(self, es=False):
+        EGL, GL = _load()
+        self.gl, self.es = GL, es
+        try:
+            dpy = EGL.eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL.EGL_DEFAULT_DISPLAY, None)
+            major, minor = EGL.EGLint(), EGL.EGLint()
+            if not dpy or not EGL.eglInitialize(dpy, ctypes.pointer(major), ctypes.pointer(minor)):
+                raise ToolError("Mesa's surfaceless EGL platform is not available (libegl-mesa0)")
+            if es:
+                EGL.eglBindAPI(EGL.EGL_OPENGL_ES_API)
+                attrs = [EGL.EGL_CONTEXT_MAJOR_VERSION, 3, EGL.EGL_CONTEXT_MINOR_VERSION, 2, EGL.EGL_NONE]
+            else:
+                EGL.eglBindAPI(EGL.EGL_OPENGL_API)
+                attrs = [EGL.EGL_CONTEXT_MAJOR_VERSION, 4, EGL.EGL_CONTEXT_MINOR_VERSION, 5,
+                         EGL.EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL.EGL_CONTEXT_OPENGL_COMPATIBILITY_PROFILE_BIT,
+                         EGL.EGL_NONE]
+            ctx = EGL.eglCreateContext(dpy, None, EGL.EGL_NO_CONTEXT, (EGL.EGLint * len(attrs))(*attrs))
+            if not ctx or not EGL.eglMakeCurrent(dpy, EGL.EGL_NO_SURFACE, EGL.EGL_NO_SURFACE, ctx):
+                raise ToolError("Mesa gives no " + ("OpenGL ES 3.2" if es else "OpenGL 4.5 compatibility")
+                                + " context on the surfaceless platform")
+        except (AttributeError, TypeError, EGL.EGLError) as e:
+            raise ToolError(f"Mesa's EGL: {e}")
+        self.version = GL.glGetString(GL.GL_VERSION).decode("ascii", "replace")
+        # The draws run into a framebuffer of our own (a surfaceless context
+        # has no default one), with the rasterizer discarded all the same.
+        self.fbo = GL.glGenFramebuffers(1)
+        rb = GL.glGenRenderbuffers(1)
+        GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
+        GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_RGBA8, 1, 1)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
+        GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_RENDERBUFFER, rb)
+        self.feedback = GL.glGenBuffers(1)
+        self.feedback_size = 0
+        self.queries = GL.glGenQueries(2)
+
+    def enum(self, value):
+        """A GL enumerant as apitrace writes it ("GL_FLOAT", a tuple of bit
+        names, or a number) as the number PyOpenGL takes."""
+        if isinstance(value, (tuple, list)):
+            bits = 0
+            for v in value:
+                bits |= self.enum(v)
+            return bits
+        if isinstance(value, int):
+            return value
+        if isinstance(value, str):
+            v = getattr(self.gl, value, None)
+            if v is None and value == "GL_ZERO":
+                return 0
+            if v is not None:
+                return int(v)
+        raise ValueError(f"{value!r} is not an enumerant of this GL")
+
+    def feedback_positions(self, draw, prims, vertices_per_prim=3):
+        """Runs `draw` (a callable issuing the draw call) with transform
+        feedback of gl_Position into a buffer of room for `prims` primitives;
+        the clip-space positions as a (vertices, 4) float32 array, in the
+        order GL wrote them."""
+        import numpy as np
+        GL = self.gl
+        size = max(16, prims * vertices_per_prim * 16)
+        GL.glBindBuffer(GL.GL_TRANSFORM_FEEDBACK_BUFFER, self.feedback)
+        if size > self.feedback_size:
+            GL.glBufferData(GL.GL_TRANSFORM_FEEDBACK_BUFFER, size, None, GL.GL_STREAM_READ)
+            self.feedback_size = size
+        GL.glBindBufferBase(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0, self.feedback)
+        GL.glEnable(GL.GL_RASTERIZER_DISCARD)
+        GL.glBeginQuery(GL.GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN, self.queries[0])
+        GL.glBeginQuery(GL.GL_PRIMITIVES_GENERATED, self.queries[1])
+        GL.glBeginTransformFeedback(GL.GL_TRIANGLES)
+        try:
+            draw()
+        finally:
+            GL.glEndTransformFeedback()
+            GL.glEndQuery(GL.GL_PRIMITIVES_GENERATED)
+            GL.glEndQuery(GL.GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN)
+            GL.glDisable(GL.GL_RASTERIZER_DISCARD)
+        written = GL.glGetQueryObjectuiv(self.queries[0], GL.GL_QUERY_RESULT)
+        generated = GL.glGetQueryObjectuiv(self.queries[1], GL.GL_QUERY_RESULT)
+        if written != generated:
+            raise ToolError(f"transform feedback kept {written} of {generated} primitives (room for {prims})")
+        n = written * vertices_per_prim * 16
+        if n == 0:
+            return np.zeros((0, 4), dtype="<f4")
+        # Read through a mapping: OpenGL ES has no glGetBufferSubData.
+        ptr = GL.glMapBufferRange(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0, n, GL.GL_MAP_READ_BIT)
+        try:
+            data = ctypes.string_at(ptr, n)
+        finally:
+            GL.glUnmapBuffer(GL.GL_TRANSFORM_FEEDBACK_BUFFER)
+        return np.frombuffer(data, dtype="<f4").reshape(-1, 4)

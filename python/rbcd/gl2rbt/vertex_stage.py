@@ -1,0 +1,290 @@
+"""The shader path's vertex stage: a draw under a program, run by Mesa.
+
+The converter keeps the capture's state in Python (glstate's buffers,
+attributes, programs and framebuffers groups); at each draw the trace needs,
+this module brings Mesa's copy up to date with what that draw reads (the
+program, built from the sources its last link saw, with gl_Position as its
+transform feedback output; its uniforms and uniform blocks; the buffers its
+attributes, indices, blocks and texture buffers name, uploaded again only
+when their version changed; the vertex array object; current attribute
+values; primitive restart) and issues the capture's own draw call with
+transform feedback on (mesa.py). Only what a draw reads reaches Mesa: frames
+outside --frames, and draws that are not the camera pass, cost nothing."""
+import ctypes
+import re
+
+import numpy as np
+
+from .errors import ConvertError, fail_call, printable
+from .mesa import Mesa
+
+# Sampler types a vertex shader may read: texture buffers, whose contents
+# are buffer objects. Other textures' images are not kept (docs/gl-capture.md).
+BUFFER_SAMPLERS = {"GL_SAMPLER_BUFFER", "GL_INT_SAMPLER_BUFFER", "GL_UNSIGNED_INT_SAMPLER_BUFFER"}
+SAMPLER = re.compile(r"GL_(INT_|UNSIGNED_INT_)?(SAMPLER|IMAGE)_")
+PRIMS_OF = {"GL_TRIANGLES": lambda n: n // 3, "GL_TRIANGLE_STRIP": lambda n: max(0, n - 2),
+            "GL_TRIANGLE_FAN": lambda n: max(0, n - 2)}
+UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
+INDEX_SIZES = {"GL_UNSIGNED_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_UNSIGNED_INT": 4}
+
+
+class MesaProgram:
+    def __init__(self, name, version):
+        self.name, self.version = name, version
+        self.locations = {}   # active uniform name (and name[i]) -> Mesa location
+        self.applied = {}     # capture location -> the value last set
+
+
+class VertexStage:
+    def __init__(self, es):
+        self.mesa = Mesa(es)
+        self.gl = self.mesa.gl
+        self.buffers = {}    # capture buffer -> [Mesa buffer, version uploaded]
+        self.programs = {}   # capture program -> MesaProgram
+        self.vaos = {}       # capture vertex array -> Mesa vertex array
+        self.textures = {}   # capture texture -> Mesa texture
+        self.scratch = None  # client memory (attributes, indices) goes through these buffers
+        GL = self.gl
+        # Mesa's values of the sampler types that are not texture buffers.
+        self.texture_samplers = {int(getattr(GL, n)): n for n in dir(GL)
+                                 if SAMPLER.match(n) and n not in BUFFER_SAMPLERS
+                                 and isinstance(getattr(GL, n), int)}
+
+    # ---- objects
+    def buffer(self, conv, b):
+        """Mesa's copy of capture buffer b, up to date."""
+        GL = self.gl
+        data = conv.s.buffers.get(b)
+        if data is None:
+            raise ConvertError(f"buffer {b} holds no data")
+        entry = self.buffers.get(b)
+        if entry is None:
+            entry = self.buffers[b] = [int(GL.glGenBuffers(1)), None]
+        version = conv.s.buffer_versions.get(b)
+        if entry[1] != version:
+            GL.glBindBuffer(GL.GL_COPY_WRITE_BUFFER, entry[0])
+            GL.glBufferData(GL.GL_COPY_WRITE_BUFFER, len(data), bytes(data) if data else None, GL.GL_STATIC_DRAW)
+            entry[1] = version
+        return entry[0]
+
+    def client(self, data):
+        """Client memory in the scratch buffer, from offset 0."""
+        GL = self.gl
+        if self.scratch is None:
+            self.scratch = []
+        buf = int(GL.glGenBuffers(1))
+        self.scratch.append(buf)
+        GL.glBindBuffer(GL.GL_COPY_WRITE_BUFFER, buf)
+        GL.glBufferData(GL.GL_COPY_WRITE_BUFFER, len(data), bytes(data), GL.GL_STREAM_DRAW)
+        return buf
+
+    def free_scratch(self):
+        if self.scratch:
+            self.gl.glDeleteBuffers(len(self.scratch), self.scratch)
+            self.scratch = None
+
+    def program(self, conv, no, pname):
+        p = conv.s.programs[pname]
+        if p.linked is None:
+            fail_call(no, f"a draw with program {pname}, which was never linked")
+        mp = self.programs.get(pname)
+        if mp is None or mp.version != p.version:
+            mp = self.programs[pname] = self.build(no, pname, p)
+        GL = self.gl
+        GL.glUseProgram(mp.name)
+        for loc, value in p.uniforms.items():
+            if mp.applied.get(loc) != value:
+                self.set_uniform(mp, p, loc, value)
+                mp.applied[loc] = value
+        for idx, binding in p.block_bindings.items():
+            block = p.block_names.get(idx)
+            if block is not None:
+                mi = GL.glGetUniformBlockIndex(mp.name, block)
+                if mi != GL.GL_INVALID_INDEX:
+                    GL.glUniformBlockBinding(mp.name, mi, binding)
+        return mp
+
+    def build(self, no, pname, p):
+        """The program as its last link saw it, vertex stage only (the
+        fragment stage cannot move a vertex), with gl_Position fed back."""
+        GL = self.gl
+        sources, bindings = p.linked
+        where = f"program {pname} (linked at call {p.link_call})"
+        for stage in ("geometry", "tess_control", "tess_evaluation"):
+            if stage in sources:
+                fail_call(no, f"{where} has a {stage.replace('_', ' ')} shader: not emulated yet")
+        if "vertex" not in sources:
+            fail_call(no, f"{where} has no vertex shader")
+        sh = GL.glCreateShader(GL.GL_VERTEX_SHADER)
+        GL.glShaderSource(sh, sources["vertex"])
+        GL.glCompileShader(sh)
+        if not GL.glGetShaderiv(sh, GL.GL_COMPILE_STATUS):
+            log = GL.glGetShaderInfoLog(sh).decode("utf-8", "replace").strip().splitlines()
+            fail_call(no, f"{where}: Mesa does not compile its vertex shader: {printable((log or ['no log'])[0])}")
+        prog = GL.glCreateProgram()
+        GL.glAttachShader(prog, sh)
+        for attr, index in bindings.items():
+            GL.glBindAttribLocation(prog, index, attr)
+        names = ctypes.cast((ctypes.c_char_p * 1)(b"gl_Position"), ctypes.POINTER(ctypes.POINTER(ctypes.c_char)))
+        GL.glTransformFeedbackVaryings(prog, 1, names, GL.GL_INTERLEAVED_ATTRIBS)
+        GL.glLinkProgram(prog)
+        GL.glDeleteShader(sh)
+        if not GL.glGetProgramiv(prog, GL.GL_LINK_STATUS):
+            log = GL.glGetProgramInfoLog(prog).decode("utf-8", "replace").strip().splitlines()
+            fail_call(no, f"{where}: Mesa does not link its vertex stage: {printable((log or ['no log'])[0])}")
+        mp = MesaProgram(prog, p.version)
+        for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORMS)):
+            uname, size, utype = GL.glGetActiveUniform(prog, i)
+            uname = uname.decode("ascii", "replace") if isinstance(uname, bytes) else str(uname)
+            if int(utype) in self.texture_samplers:
+                fail_call(no, f"{where}: its vertex shader reads texture {printable(uname)} "
+                          f"({self.texture_samplers[int(utype)]}); only texture buffers are emulated")
+            base = uname[:-3] if uname.endswith("[0]") else uname
+            loc = GL.glGetUniformLocation(prog, uname)
+            mp.locations[uname] = loc
+            mp.locations[base] = loc
+            for k in range(1, size):
+                mp.locations[f"{base}[{k}]"] = GL.glGetUniformLocation(prog, f"{base}[{k}]")
+        return mp
+
+    def set_uniform(self, mp, p, loc, value):
+        GL = self.gl
+        func, values, transpose = value
+        name = p.uniform_names.get(loc)
+        if name is not None:
+            mloc = mp.locations.get(name, mp.locations.get(name.removesuffix("[0]"), -1))
+        else:
+            mloc = loc if loc in mp.locations.values() else -1   # an explicit location
+        if mloc < 0:
+            return   # not read by the vertex stage
+        kind = "ui" if func.endswith(("uiv", "ui")) else func.rstrip("v")[-1]
+        fn = getattr(GL, func)
+        if not func.endswith("v"):
+            fn(mloc, *values)
+            return
+        arr = np.array(values, dtype=UNIFORM_DTYPES[kind])
+        if "Matrix" in func:
+            dims = func[len("glUniformMatrix"):].rstrip("fdv")
+            r, _, c = dims.partition("x")
+            n = int(r) * int(c or r)
+            fn(mloc, len(arr) // n, GL.GL_TRUE if transpose else GL.GL_FALSE, arr)
+        else:
+            n = int(func[len("glUniform")])
+            fn(mloc, len(arr) // n, arr)
+
+    # ---- state a draw reads
+    def vertex_array(self, conv, no, client_indices):
+        GL = self.gl
+        vao = conv.current_vao()
+        mv = self.vaos.get(conv.s.vao)
+        if mv is None:
+            mv = self.vaos[conv.s.vao] = int(GL.glGenVertexArrays(1))
+        GL.glBindVertexArray(mv)
+        for i, at in sorted(vao.attribs.items()):
+            if not at.enabled:
+                GL.glDisableVertexAttribArray(i)
+                continue
+            if at.buffer:
+                buf, offset = self.buffer(conv, at.buffer), at.offset
+            elif at.client is not None:
+                buf, offset = self.client(at.client), 0
+            else:
+                fail_call(no, f"attribute {i} is enabled with no buffer and no data in the capture")
+            GL.glBindBuffer(GL.GL_ARRAY_BUFFER, buf)
+            size = self.mesa.enum(at.size) if isinstance(at.size, str) else at.size
+            kind = self.mesa.enum(at.type)
+            if at.call.startswith("glVertexAttribIPointer"):
+                GL.glVertexAttribIPointer(i, size, kind, at.stride, ctypes.c_void_p(offset))
+            else:
+                GL.glVertexAttribPointer(i, size, kind, GL.GL_TRUE if at.normalized else GL.GL_FALSE, at.stride,
+                                         ctypes.c_void_p(offset))
+            GL.glVertexAttribDivisor(i, at.divisor)
+            GL.glEnableVertexAttribArray(i)
+        elem = conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
+        if client_indices is not None:
+            GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.client(client_indices))
+        else:
+            GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.buffer(conv, elem) if elem else 0)
+        for i, (func, vals) in conv.s.attrib_values.items():
+            fn = getattr(GL, func.removesuffix("ARB"))
+            if func.endswith("v"):
+                fn(i, np.array(vals[0] if len(vals) == 1 and isinstance(vals[0], list) else vals,
+                               dtype=np.int32 if "I" in func[14:] else np.float64 if func.endswith("dv")
+                               else np.float32))
+            else:
+                fn(i, *vals)
+
+    def bindings(self, conv):
+        GL = self.gl
+        for (target, index), (buf, offset, size) in conv.s.indexed.items():
+            if target not in ("GL_UNIFORM_BUFFER", "GL_SHADER_STORAGE_BUFFER") or not buf:
+                continue
+            mb = self.buffer(conv, buf)
+            if size is None:
+                GL.glBindBufferBase(self.mesa.enum(target), index, mb)
+            else:
+                GL.glBindBufferRange(self.mesa.enum(target), index, mb, offset, size)
+        for (unit, target), tex in conv.s.units.items():
+            if target != "GL_TEXTURE_BUFFER" or tex not in conv.s.texture_buffers:
+                continue
+            fmt, buf, offset, size = conv.s.texture_buffers[tex]
+            mt = self.textures.get(tex)
+            if mt is None:
+                mt = self.textures[tex] = int(GL.glGenTextures(1))
+            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+            GL.glBindTexture(GL.GL_TEXTURE_BUFFER, mt)
+            if size is None:
+                GL.glTexBuffer(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), self.buffer(conv, buf))
+            else:
+                GL.glTexBufferRange(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), self.buffer(conv, buf), offset, size)
+        GL.glActiveTexture(GL.GL_TEXTURE0)
+        if not self.mesa.es:
+            (GL.glEnable if conv.s.restart else GL.glDisable)(GL.GL_PRIMITIVE_RESTART)
+            GL.glPrimitiveRestartIndex(conv.s.restart_index)
+        (GL.glEnable if conv.s.restart_fixed else GL.glDisable)(GL.GL_PRIMITIVE_RESTART_FIXED_INDEX)
+
+    # ---- the draw
+    def run(self, conv, no, name, d, instances):
+        """The clip-space positions of one draw call (`name` without its
+        extension suffix, `d` its arguments): (vertices, 4) float64, three a
+        triangle, one array per instance."""
+        from OpenGL.error import GLError
+        GL = self.gl
+        try:
+            self.program(conv, no, conv.s.program)
+            indices = d.get("indices")
+            client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
+            self.vertex_array(conv, no, client_indices)
+            self.bindings(conv)
+            prims = PRIMS_OF[d["mode"]](d["count"]) * instances
+            clip = self.mesa.feedback_positions(lambda: self.issue(name, d, client_indices is not None), prims)
+        except GLError as e:
+            op = getattr(getattr(e, "baseOperation", None), "__name__", "a call")
+            fail_call(no, f"{printable(name)}: Mesa refuses the draw as the capture set it up "
+                      f"({printable(getattr(e, 'description', None) or e, 120)} in {op})")
+        finally:
+            self.free_scratch()
+            GL.glBindVertexArray(0)
+        # Every instance has the same primitives (primitive restart cuts them
+        # alike), written instance after instance.
+        per = len(clip) // max(instances, 1)
+        return [clip[i * per:(i + 1) * per].astype(np.float64) for i in range(instances)]
+
+    def issue(self, name, d, client_indices):
+        GL = self.gl
+        mode = self.mesa.enum(d["mode"])
+        if "Elements" in name:
+            kind = self.mesa.enum(d.get("type"))
+            offset = 0 if client_indices else d.get("indices") or 0
+            args = [mode, d["count"], kind, ctypes.c_void_p(offset)]
+            if "Range" in name:
+                args = [mode, d["start"], d["end"]] + args[1:]
+        else:
+            args = [mode, d.get("first", 0), d["count"]]
+        if "Instanced" in name:
+            args.append(d.get("instancecount", d.get("primcount", 1)))
+        if "BaseVertex" in name:
+            args.append(d.get("basevertex", 0))
+        if "BaseInstance" in name:
+            args.append(d.get("baseinstance", 0))
+        getattr(GL, name)(*args)

@@ -1,0 +1,155 @@
+"""The shader path of scripts/rbcd-gl2rbt on captures of testbench/gl/gl_shaders.c,
+a GL 3.3 core program of our own (docs/gl-capture.md, "The shader path").
+
+What gl_shaders draws, 128 x 96, a uniform block's orthographic projection
+(0, 128, 0, 96, -100, 100) (window y up, screen rows down: row = 95 - y):
+  a depth-only pass into a 64 x 64 framebuffer object first (box 1 again,
+  tagged): not the camera pass, left out;
+  frame 0: box 1 [8,28]x[8,28]x[-20,-10] (glDrawElements, a vertex array
+           object reading the cube at an offset), box 2 [20,40]x[16,36]x[-15,-5]
+           (glDrawElementsBaseVertex), boxes 3 and 4 as two instances of one
+           glDrawElementsInstancedBaseVertex, [60,70]x[8,18]x[-10,-5] and
+           [90,100]x[8,18] (per-instance offsets, divisor 1; object 3 + i);
+           a 40 x 40 floor [0,40]x[40,80] at z = -50 of GL_SHORT positions
+           written through glMapBufferRange, untagged;
+  frame 1: the view (glBufferSubData into the block) moves everything 4 up
+           and box 4's offset (glBufferSubData into the instance buffer)
+           moves it 10 more right, [100,110]x[12,22]; box 1 through
+           glDrawRangeElements, box 2 as triangle strips cut by primitive
+           restart.
+Face-on boxes give width x height front fragments and as many back ones (c:
+culling is on): 400 + 400 + 100 + 100 front fragments a frame, the floor
+1,600 other fragments; boxes 1 and 2 overlap on 8 x 12 pixels.
+"""
+import json
+import os
+import re
+
+import pytest
+
+from conftest import program
+from gl_captures import DEPTH_MAX, SHADER_FAULTS, Converter, capture_path, read_trace, run
+
+
+@pytest.fixture
+def gl(tmp_path):
+    return Converter(tmp_path)
+
+
+def convert(gl, *extra, out="shaders.rbt"):
+    return gl.convert(*extra, name="shaders", out=out)
+
+
+def test_convert(gl):
+    path, r = convert(gl, "--summary", gl.path("s.jsonl"))
+    frames, tiles = read_trace(path)
+    assert sorted(frames) == [0, 1], f"frames {sorted(frames)}"
+    with open(gl.path("s.jsonl")) as f:
+        summary = [json.loads(line) for line in f]
+    for s in summary:
+        assert (s["fragments"], s["culled"], s["other"], s["objects"]) == (2000, 1000, 1600, [1, 2, 3, 4]), \
+            f"frame {s['frame']}: the depth-only pass left in, or a draw lost: {s}"
+        assert s["draws"] == 5, f"frame {s['frame']}: five camera-pass draw records (box 3's two instances)"
+    for f in frames:
+        assert all(c == (fc == "B") for v in frames[f].values() for _, _, fc, c in v), \
+            f"frame {f}: a back face not tagged c, or a front face tagged"
+    # Pixel (10, 80), window y 15: box 1 only, faces at eye z -10 and -20, in both frames.
+    want = sorted([(round(0.55 * DEPTH_MAX), 1, "F", False), (round(0.60 * DEPTH_MAX), 1, "B", True)])
+    for f in (0, 1):
+        assert sorted(frames[f][(10, 80)]) == want, f"pixel (10, 80) of frame {f}: {frames[f].get((10, 80))}"
+    # The instances: box 4 where its offset put it in each frame.
+    assert {o for _, o, _, _ in frames[0][(95, 85)]} == {4} and (95, 85) not in frames[1], \
+        "box 4 of frame 0 (instance 1 of object 3)"
+    assert {o for _, o, _, _ in frames[1][(105, 80)]} == {4}, "box 4 moved by the instance buffer's update"
+    # Box 1's edges, frame 0: columns 8..27, window rows 8..27 (screen rows 68..87).
+    assert (27, 80) in frames[0] and (28, 80) not in frames[0] and (8, 87) in frames[0] and (8, 88) not in frames[0]
+    # The floor (z = -50: depth 0.75) is other work, in o runs: no f records of its own.
+    assert (5, 30) not in frames[0], "the floor became fragments of an object"
+    assert "2 frames" in r.stdout and "collisionable objects" in r.stdout
+
+
+def test_pairs(gl):
+    path, _ = convert(gl)
+    col = gl.path("c.txt")
+    r = run([program("rbcd-sim"), "--trace", path, "--collisions", col, "-q"])
+    assert r.returncode == 0, f"rbcd-sim failed: {r.stderr.strip()}"
+    hits, frame = {}, None
+    with open(col) as f:
+        for line in f:
+            t = line.split()
+            if t[0] == "frame":
+                frame = int(t[1])
+                hits[frame] = {}
+            elif t[0] == "hit":
+                k = (int(t[3]), int(t[4]))
+                hits[frame][k] = hits[frame].get(k, 0) + 1
+    assert hits == {0: {(1, 2): 8 * 12}, 1: {(1, 2): 8 * 12}}, f"pairs per frame {hits}"
+
+
+def test_mesa(gl):
+    r = gl(capture_path("shaders"), "--check-depth")
+    assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"
+    m = re.search(r"agreement: ([0-9.]+)% of (\d+) covered pixels in (\d+) frames", r.stdout)
+    assert m and float(m.group(1)) >= 99.0 and int(m.group(2)) > 2000, \
+        f"agreement below 99% or too little checked: {r.stdout}"
+
+
+def test_geometry(gl):
+    """--geometry of a shader capture: normalized device coordinates under an
+    identity view; rbcd-cpucd's ground truth has boxes 1 and 2 touching in
+    both frames, nothing else."""
+    cpucd = program("rbcd-cpucd")   # skipped without it: Bullet and FCL, scripts/setup.sh --eval
+    geo = gl.path("shaders.geo")
+    convert(gl, "--geometry", geo)
+    with open(geo) as f:
+        text = f.read()
+    assert "view 1.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0 0.0 0.0 0.0 0.0 1.0" in text
+    assert sorted(set(re.findall(r"^mesh (\d+) ", text, re.M))) == ["1", "2", "3", "4"]
+    pairs = gl.path("pairs.csv")
+    r = run([cpucd, "--geometry", geo, "--pairs", pairs, "-q"])
+    assert r.returncode == 0, f"rbcd-cpucd failed: {r.stderr.strip()}"
+    with open(pairs) as f:
+        rows = [line.strip().split(",") for line in f][1:]
+    exact = {(int(r[0]), int(r[1]), int(r[2])) for r in rows if r[5] == "1"}
+    assert exact == {(0, 1, 2), (1, 1, 2)}, f"ground truth pairs (frame, a, b): {exact}"
+
+
+def test_reduced(gl):
+    """The reduced capture keeps what the vertex stage needs (sources,
+    buffers, uniforms) and converts into the same trace and geometry."""
+    red = gl.path("shaders.calls.xz")
+    a, _ = convert(gl, "--reduced-out", red, "--geometry", gl.path("a.geo"))
+    r = gl(red, "-o", gl.path("b.rbt"), "--geometry", gl.path("b.geo"))
+    assert r.returncode == 0, f"the reduced capture does not convert: {r.stderr.strip()}"
+    for x, y in ((a, gl.path("b.rbt")), (gl.path("a.geo"), gl.path("b.geo"))):
+        with open(x, "rb") as f1, open(y, "rb") as f2:
+            assert f1.read() == f2.read(), f"{os.path.basename(y)} differs from the capture's"
+    assert os.path.getsize(red) < os.path.getsize(capture_path("shaders")) / 4
+
+
+def test_list_draws(gl):
+    r = gl(capture_path("shaders"), "--list-draws", "0", "--image", gl.path("f0.png"))
+    assert r.returncode == 0, r.stderr
+    rows = [line for line in r.stdout.splitlines() if re.match(r"\s*\d+ +\d+ ", line)]
+    objects = [line.split()[-3 if line.endswith("debug group") else -2] for line in rows]
+    assert objects == ["1", "2", "3", "4", "-"], f"--list-draws of frame 0: {r.stdout}"
+    assert all(" ortho " in line for line in rows), "clip-space w of 1: an orthographic projection"
+    with open(gl.path("f0.png"), "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("fault, words", [
+    ("geometry", "has a geometry shader"),
+    ("texture", "reads texture heights (GL_SAMPLER_2D)"),
+    ("compile", "Mesa does not compile its vertex shader"),
+    ("separable", "separable programs"),
+])
+def test_refusals(gl, fault, words):
+    assert fault in SHADER_FAULTS
+    out, geo = gl.path("f.rbt"), gl.path("f.geo")
+    r = gl(capture_path(f"shader-fault-{fault}"), "-o", out, "--geometry", geo)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and re.search(r": call \d+: ", lines[0]) and words in lines[0], \
+        f"{fault}: exit {r.returncode}: {lines}"
+    assert not os.path.exists(out) and not os.path.exists(geo), f"{fault}: an output was left"
+    assert not [f for f in os.listdir(gl.tmp) if f.startswith(".")], f"{fault}: a temporary was left"
