@@ -76,6 +76,9 @@ def check_depth(args):
         probe.handle(call)
         if probe.last_frame is not None and probe.frame > probe.last_frame:
             break
+    if probe.es:
+        raise ToolError("--check-depth: glretrace cannot read the depth buffer of an OpenGL ES capture "
+                        "(ES has no depth readback); the check is for desktop OpenGL captures")
     frames = [(o, c, call) for o, c, call in probe.last_3d_draws if call is not None]
     # glretrace replays a capture's first frame wrongly at times (seen: the
     # test program's first frame replays without its clear): it is checked

@@ -28,6 +28,14 @@ UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint
 INDEX_SIZES = {"GL_UNSIGNED_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_UNSIGNED_INT": 4}
 
 
+def es_fragment_shader(vertex_source):
+    m = re.search(r"^\s*#\s*version\s+(\d+)(\s+es)?", vertex_source, re.M)
+    version = m.group(1) if m else "100"
+    if version == "100":
+        return "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(0.0); }\n"
+    return f"#version {version} es\nprecision mediump float;\nout vec4 c;\nvoid main() {{ c = vec4(0.0); }}\n"
+
+
 class MesaProgram:
     def __init__(self, name, version):
         self.name, self.version = name, version
@@ -123,6 +131,14 @@ class VertexStage:
             fail_call(no, f"{where}: Mesa does not compile its vertex shader: {printable((log or ['no log'])[0])}")
         prog = GL.glCreateProgram()
         GL.glAttachShader(prog, sh)
+        if self.mesa.es:
+            # OpenGL ES links only whole programs: a fragment shader of the
+            # vertex shader's language version that reads nothing.
+            fs = GL.glCreateShader(GL.GL_FRAGMENT_SHADER)
+            GL.glShaderSource(fs, es_fragment_shader(sources["vertex"]))
+            GL.glCompileShader(fs)
+            GL.glAttachShader(prog, fs)
+            GL.glDeleteShader(fs)
         for attr, index in bindings.items():
             GL.glBindAttribLocation(prog, index, attr)
         names = ctypes.cast((ctypes.c_char_p * 1)(b"gl_Position"), ctypes.POINTER(ctypes.POINTER(ctypes.c_char)))

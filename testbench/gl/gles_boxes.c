@@ -1,0 +1,155 @@
+/* A small OpenGL ES 2.0 program of the project's own, through EGL on X11:
+ * captured under Xvfb with `apitrace trace --api egl` and converted by
+ * rbcd-gl2rbt in the tests (testbench/gl/test_gl2rbt_shaders.py, whose
+ * docstring gives what each frame must become).
+ *
+ *   gles_boxes [WIDTH HEIGHT]   (default 128 96; the window is the screen)
+ *
+ * ES 2.0 as phones ran it: a "#version 100" vertex shader with one uniform
+ * mat4, attributes from client memory (glVertexAttribPointer with a
+ * pointer, no buffer bound) and indices from client memory, a box from a
+ * buffer object, attribute locations chosen by glBindAttribLocation.
+ * Collisionable objects are tagged with KHR_debug groups "rbcd-object"
+ * (glPushDebugGroupKHR, as ES names it). */
+#include <EGL/egl.h>
+#include <GLES2/gl2.h>
+#include <GLES2/gl2ext.h>
+#include <X11/Xlib.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char* vertex_source =
+    "#version 100\n"
+    "uniform mat4 mvp;\n"
+    "attribute vec3 position;\n"
+    "void main() { gl_Position = mvp * vec4(position, 1.0); }\n";
+static const char* fragment_source =
+    "#version 100\n"
+    "precision mediump float;\n"
+    "void main() { gl_FragColor = vec4(1.0); }\n";
+
+/* The unit cube, four vertices a face, counter-clockwise seen from outside. */
+static const GLfloat cube[24][3] = {
+    {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0},
+    {1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}, {0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0},
+    {0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}, {0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1},
+};
+static GLushort triangles[36];
+static GLint mvp_at;
+static int width, height;
+static PFNGLPUSHDEBUGGROUPKHRPROC push_group;
+static PFNGLPOPDEBUGGROUPKHRPROC pop_group;
+
+/* mvp = ortho(0, w, 0, h, -100, 100) * box: window depth 0.5 - z / 200. */
+static void box_matrix(float x0, float y0, float z0, float x1, float y1, float z1) {
+    float m[16] = {0};
+    m[0] = 2.0f / width * (x1 - x0), m[5] = 2.0f / height * (y1 - y0), m[10] = -0.01f * (z1 - z0), m[15] = 1;
+    m[12] = 2.0f / width * x0 - 1, m[13] = 2.0f / height * y0 - 1, m[14] = -0.01f * z0;
+    glUniformMatrix4fv(mvp_at, 1, GL_FALSE, m);
+}
+
+static GLuint compile(GLenum kind, const char* text) {
+    GLuint s = glCreateShader(kind);
+    glShaderSource(s, 1, &text, NULL);
+    glCompileShader(s);
+    GLint ok = 0;
+    glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        fprintf(stderr, "gles_boxes: a shader does not compile\n");
+        exit(1);
+    }
+    return s;
+}
+
+int main(int argc, char** argv) {
+    width = argc > 2 ? atoi(argv[1]) : 128, height = argc > 2 ? atoi(argv[2]) : 96;
+    Display* x = XOpenDisplay(NULL);
+    if (!x) {
+        fprintf(stderr, "gles_boxes: cannot open display (run under Xvfb)\n");
+        return 1;
+    }
+    Window win = XCreateSimpleWindow(x, RootWindow(x, DefaultScreen(x)), 0, 0, width, height, 0, 0, 0);
+    XSelectInput(x, win, StructureNotifyMask);
+    XMapWindow(x, win);
+    for (XEvent ev;;) {
+        XNextEvent(x, &ev);
+        if (ev.type == MapNotify) break;
+    }
+    EGLDisplay dpy = eglGetDisplay((EGLNativeDisplayType)x);
+    EGLint major, minor, n = 0;
+    const EGLint config_attrs[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_ES2_BIT, EGL_SURFACE_TYPE, EGL_WINDOW_BIT,
+                                   EGL_DEPTH_SIZE, 24, EGL_NONE};
+    EGLConfig config;
+    if (!eglInitialize(dpy, &major, &minor) || !eglChooseConfig(dpy, config_attrs, &config, 1, &n) || n < 1) {
+        fprintf(stderr, "gles_boxes: no EGL configuration for OpenGL ES 2 with a 24-bit depth buffer\n");
+        return 1;
+    }
+    EGLSurface surface = eglCreateWindowSurface(dpy, config, (EGLNativeWindowType)win, NULL);
+    const EGLint ctx_attrs[] = {EGL_CONTEXT_CLIENT_VERSION, 2, EGL_NONE};
+    EGLContext ctx = eglCreateContext(dpy, config, EGL_NO_CONTEXT, ctx_attrs);
+    if (surface == EGL_NO_SURFACE || ctx == EGL_NO_CONTEXT || !eglMakeCurrent(dpy, surface, surface, ctx)) {
+        fprintf(stderr, "gles_boxes: no OpenGL ES 2 context\n");
+        return 1;
+    }
+    push_group = (PFNGLPUSHDEBUGGROUPKHRPROC)eglGetProcAddress("glPushDebugGroupKHR");
+    pop_group = (PFNGLPOPDEBUGGROUPKHRPROC)eglGetProcAddress("glPopDebugGroupKHR");
+    if (!push_group || !pop_group) {
+        fprintf(stderr, "gles_boxes: the GL lacks KHR_debug\n");
+        return 1;
+    }
+
+    GLuint prog = glCreateProgram();
+    glAttachShader(prog, compile(GL_VERTEX_SHADER, vertex_source));
+    glAttachShader(prog, compile(GL_FRAGMENT_SHADER, fragment_source));
+    glBindAttribLocation(prog, 1, "position");
+    glLinkProgram(prog);
+    glUseProgram(prog);
+    mvp_at = glGetUniformLocation(prog, "mvp");
+    for (int f = 0; f < 6; ++f) {
+        const GLushort b = (GLushort)(4 * f);
+        const GLushort t[6] = {b, (GLushort)(b + 1), (GLushort)(b + 2), b, (GLushort)(b + 2), (GLushort)(b + 3)};
+        memcpy(triangles + 6 * f, t, sizeof t);
+    }
+    GLuint vbo;
+    glGenBuffers(1, &vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBufferData(GL_ARRAY_BUFFER, sizeof cube, cube, GL_STATIC_DRAW);
+    glBindBuffer(GL_ARRAY_BUFFER, 0);
+    static const GLfloat floor_quad[4][3] = {{0, 40, -50}, {40, 40, -50}, {40, 80, -50}, {0, 80, -50}};
+
+    glEnable(GL_DEPTH_TEST);
+    glEnable(GL_CULL_FACE);
+    glEnableVertexAttribArray(1);
+    for (int frame = 0; frame < 2; ++frame) {
+        glViewport(0, 0, width, height);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        /* Boxes 1 and 2 from client memory, indexed from client memory. */
+        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, cube);
+        push_group(GL_DEBUG_SOURCE_APPLICATION_KHR, 1, -1, "rbcd-object");
+        box_matrix(8, 8, -20, 28, 28, -10);
+        glDrawElements(GL_TRIANGLES, 36, GL_UNSIGNED_SHORT, triangles);
+        pop_group();
+        push_group(GL_DEBUG_SOURCE_APPLICATION_KHR, 2, -1, "rbcd-object");
+        box_matrix(20, 16, -15, 40, 36, -5);
+        glDrawElements(GL_TRIANGLES, 36, GL_UNSIGNED_SHORT, triangles);
+        pop_group();
+        /* Box 3 from the buffer object; frame 1 moves it 30 right. */
+        glBindBuffer(GL_ARRAY_BUFFER, vbo);
+        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, 0);
+        glBindBuffer(GL_ARRAY_BUFFER, 0);
+        push_group(GL_DEBUG_SOURCE_APPLICATION_KHR, 3, -1, "rbcd-object");
+        box_matrix(60.0f + 30 * frame, 8, -10, 70.0f + 30 * frame, 18, -5);
+        glDrawElements(GL_TRIANGLES, 36, GL_UNSIGNED_SHORT, triangles);
+        pop_group();
+        /* The floor, untagged, as a fan from client memory. */
+        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, floor_quad);
+        box_matrix(0, 0, 0, 1, 1, 1);
+        glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
+        eglSwapBuffers(dpy, surface);
+    }
+    eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    eglTerminate(dpy);
+    XCloseDisplay(x);
+    return 0;
+}
