@@ -19,7 +19,9 @@
  * objects, a floor of GL_SHORT positions written through glMapBufferRange,
  * triangle strips cut by primitive restart, glDrawRangeElements, uniform
  * block contents changed with glBufferSubData, and a depth-only pass into a
- * framebuffer object that is not the camera pass. Collisionable objects are
+ * framebuffer object that is not the camera pass; box 1 of frame 1 is drawn
+ * by a second program whose fragment shader can discard and writes
+ * gl_FragDepth (without changing a fragment). Collisionable objects are
  * tagged with KHR_debug groups "rbcd-object" (id = object; an instanced draw's
  * instance i is object id + i). */
 #define GL_GLEXT_PROTOTYPES 1
@@ -43,6 +45,12 @@ static const char* fragment_source =
     "#version 330 core\n"
     "out vec4 colour;\n"
     "void main() { colour = vec4(gl_FragCoord.z); }\n";
+/* A fragment shader that can discard and writes gl_FragDepth, though it
+ * changes no fragment: box 1 of frame 1 is drawn with it. */
+static const char* effects_source =
+    "#version 330 core\n"
+    "out vec4 colour;\n"
+    "void main() { if (gl_FragCoord.z > 2.0) discard; gl_FragDepth = gl_FragCoord.z; colour = vec4(1.0); }\n";
 
 /* The unit cube, four vertices a face, counter-clockwise seen from outside. */
 static const float cube[24][3] = {
@@ -181,6 +189,13 @@ int main(int argc, char** argv) {
         fprintf(stderr, "gl_shaders: the program does not link\n");
         return 1;
     }
+    GLuint effects = glCreateProgram();
+    glAttachShader(effects, compile(GL_VERTEX_SHADER, vertex_source));
+    glAttachShader(effects, compile(GL_FRAGMENT_SHADER, effects_source));
+    glBindAttribLocation(effects, 0, "position");
+    glLinkProgram(effects);
+    glUniformBlockBinding(effects, glGetUniformBlockIndex(effects, "Matrices"), 2);
+    const GLint effects_model_at = glGetUniformLocation(effects, "model");
     glUseProgram(prog);
     model_at = glGetUniformLocation(prog, "model");
     glUniformBlockBinding(prog, glGetUniformBlockIndex(prog, "Matrices"), 2);
@@ -272,10 +287,16 @@ int main(int argc, char** argv) {
         glViewport(0, 0, w, h);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         begin_object(1);   /* box 1: [8,28] x [8,28] x [-20,-10] */
-        if (frame == 0)
+        if (frame == 0) {
             glDrawElements(GL_TRIANGLES, 36, GL_UNSIGNED_SHORT, 0);
-        else
+        } else {
+            glUseProgram(effects);
+            float m[16];
+            matrix_box(m, 8, 8, -20, 28, 28, -10);
+            glUniformMatrix4fv(effects_model_at, 1, GL_FALSE, m);
             glDrawRangeElements(GL_TRIANGLES, 0, 23, 36, GL_UNSIGNED_SHORT, 0);
+            glUseProgram(prog);
+        }
         end_object();
         glBindVertexArray(vao[1]);
         begin_object(2);   /* box 2: [20,40] x [16,36] x [-15,-5] */

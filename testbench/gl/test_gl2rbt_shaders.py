@@ -16,7 +16,8 @@ What gl_shaders draws, 128 x 96, a uniform block's orthographic projection
            and box 4's offset (glBufferSubData into the instance buffer)
            moves it 10 more right, [100,110]x[12,22]; box 1 through
            glDrawRangeElements, box 2 as triangle strips cut by primitive
-           restart.
+           restart; box 1 drawn by a second program whose fragment shader
+           can discard and writes gl_FragDepth (changing no fragment).
 Face-on boxes give width x height front fragments and as many back ones (c:
 culling is on): 400 + 400 + 100 + 100 front fragments a frame, the floor
 1,600 other fragments; boxes 1 and 2 overlap on 8 x 12 pixels.
@@ -50,6 +51,10 @@ def test_convert(gl):
         assert (s["fragments"], s["culled"], s["other"], s["objects"]) == (2000, 1000, 1600, [1, 2, 3, 4]), \
             f"frame {s['frame']}: the depth-only pass left in, or a draw lost: {s}"
         assert s["draws"] == 5, f"frame {s['frame']}: five camera-pass draw records (box 3's two instances)"
+    effects = [tuple(s[k] for k in ("discard_draws", "discard_collisionable", "frag_depth_draws",
+                                    "frag_depth_collisionable")) for s in summary]
+    assert effects == [(0, 0, 0, 0), (1, 1, 1, 1)], f"draws under discard and gl_FragDepth per frame: {effects}"
+    assert "can discard: 1 (1 collisionable); writing gl_FragDepth: 1 (1 collisionable)" in r.stdout
     for f in frames:
         assert all(c == (fc == "B") for v in frames[f].values() for _, _, fc, c in v), \
             f"frame {f}: a back face not tagged c, or a front face tagged"

@@ -12,6 +12,7 @@ from ..cli import write_output
 from .capture import check_input_file, read_calls
 from .converter import Converter
 from .errors import ConvertError, RasterStopped, ToolError, printable
+from .glstate.draws import FRAGMENT_EFFECT_KEYS
 from .outputs import SafeText
 from .reduced import ReducedWriter, is_reduced_capture
 
@@ -116,10 +117,11 @@ def convert_in(args, tmpdir, listing, ids):
             raise RasterStopped()
         raster_result(proc, args.trace)
         with open(summary_path) as f:
-            frames = [json.loads(l) for l in f]
+            lines = f.read().splitlines()
+        lines = [with_fragment_effects(line, conv.fragment_effects.get(i)) for i, line in enumerate(lines)]
+        frames = [json.loads(l) for l in lines]
         if args.summary:
-            with open(summary_path) as f:
-                write_output(args.summary, f.read(), "summary")
+            write_output(args.summary, "".join(line + "\n" for line in lines), "summary")
         if geo:
             geo.commit()
             geo = None
@@ -156,6 +158,17 @@ def convert_in(args, tmpdir, listing, ids):
                 reduced.abandon()
 
 
+def with_fragment_effects(line, effects):
+    """A frame's summary line with the counts of its draws under fragment
+    shaders that can discard or write gl_FragDepth (docs/gl-capture.md),
+    added at its end; a frame without draws under a program is left as
+    rbcd-gl-raster wrote it."""
+    if not effects or not line.endswith("}"):
+        return line
+    extra = ",".join(f'"{k}":{effects[k]}' for k in FRAGMENT_EFFECT_KEYS)
+    return line[:-1] + "," + extra + "}"
+
+
 def raster_result(proc, trace):
     """Raises rbcd-gl-raster's own message once it has exited non-zero: bad
     input (exit 2) as ConvertError, anything else as ToolError."""
@@ -183,6 +196,12 @@ def report(frames, conv):
         print("the capture stops before its last buffer swap: that frame is not converted")
     if conv.ignored_prims:
         print(f"{conv.ignored_prims} point and line draws not rasterized (no area)")
+    fx = conv.fragment_effects.values()
+    if any(e["discard_draws"] or e["frag_depth_draws"] for e in fx):
+        print(f"draws whose fragment shader can discard: {sum(e['discard_draws'] for e in fx)} "
+              f"({sum(e['discard_collisionable'] for e in fx)} collisionable); writing gl_FragDepth: "
+              f"{sum(e['frag_depth_draws'] for e in fx)} ({sum(e['frag_depth_collisionable'] for e in fx)} "
+              "collisionable); all their fragments are kept")
     if conv.offscreen_draws:
         print(f"{conv.offscreen_draws} draws into other targets than the camera pass left out (docs/gl-capture.md)")
 

@@ -11,6 +11,11 @@ from . import number
 
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
 MAX_DRAW_VERTICES = 1 << 24    # vertices, indices and offsets of one draw
+MAX_DRAW_PRIMITIVES = 1 << 24  # triangles of one draw, all its instances (Mesa feeds back 48 bytes each)
+# Per frame, draws under a fragment shader that can remove fragments
+# (discard) or move them in depth (gl_FragDepth): the converter keeps all
+# their fragments, at the depth the rasterizer computes (docs/gl-capture.md).
+FRAGMENT_EFFECT_KEYS = ("discard_draws", "discard_collisionable", "frag_depth_draws", "frag_depth_collisionable")
 
 
 class DrawCalls:
@@ -152,7 +157,12 @@ class DrawCalls:
         if not self.camera_pass():
             self.offscreen_draws += 1
             return
+        prims = {"GL_TRIANGLES": count // 3}.get(mode, max(0, count - 2)) * instances
+        if prims > MAX_DRAW_PRIMITIVES:
+            fail_call(no, f"{name}: {prims} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "
+                      "(docs/gl-capture.md)")
         self.open_frame(no)
+        tagged = False
         for i, clip in enumerate(self.vertex_stage().run(self, no, base_name(name), d, instances)):
             # A primitive with a vertex at NaN or infinity is not drawn (GL
             # leaves its rasterization undefined; Mesa's clipper drops it).
@@ -161,7 +171,17 @@ class DrawCalls:
             if len(tris) == 0:
                 continue
             obj = self.object_of(no, None, None, len(clip), clip)
+            tagged = tagged or obj is not None
             self.draw_record(no, name, clip, tris, None if obj is None else obj + i, len(clip), None, None, None)
+        self.note_fragment_effects(tagged)
+
+    def note_fragment_effects(self, tagged):
+        p = self.s.programs[self.s.program]
+        fx = self.fragment_effects.setdefault(self.out_frame, dict.fromkeys(FRAGMENT_EFFECT_KEYS, 0))
+        for flag, key in ((p.discards, "discard"), (p.frag_depth, "frag_depth")):
+            if flag:
+                fx[key + "_draws"] += 1
+                fx[key + "_collisionable"] += tagged
 
     def draw_args(self, no, name, a, args):
         """The arguments of a draw call, checked: counts, offsets and instances."""

@@ -14,6 +14,7 @@ from ..errors import fail_call, printable
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
           "GL_COMPUTE_SHADER": "compute"}
+COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
 UNIFORM = re.compile(r"gl(Program)?Uniform(Matrix)?([1-4])(x[2-4])?(f|d|i|ui)(v?)$")
 
 
@@ -35,6 +36,8 @@ class Program:
         self.block_names = {}      # capture block index -> name
         self.uniforms = {}         # capture location -> (function, values): the last value set
         self.block_bindings = {}   # capture block index -> binding point
+        self.discards = False      # its fragment shader has a discard statement
+        self.frag_depth = False    # its fragment shader writes gl_FragDepth
 
 
 def name_arg(no, name, v, what):
@@ -114,6 +117,9 @@ class ProgramCalls:
             else:
                 sources[sh.stage] = sh.compiled
         p.linked = (sources, dict(p.bindings))
+        fragment = COMMENTS.sub(" ", sources.get("fragment", ""))
+        p.discards = re.search(r"\bdiscard\b", fragment) is not None
+        p.frag_depth = re.search(r"\bgl_FragDepth(EXT)?\b", fragment) is not None
         p.link_call = no
         p.version += 1
         p.uniform_names, p.block_names, p.uniforms, p.block_bindings = {}, {}, {}, {}
