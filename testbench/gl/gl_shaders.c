@@ -319,6 +319,8 @@ int main(int argc, char** argv) {
             glBindVertexArray(vao[1]);
             inject_fault(prog);
         }
+        glDebugMessageInsert(GL_DEBUG_SOURCE_APPLICATION, GL_DEBUG_TYPE_MARKER, 0, GL_DEBUG_SEVERITY_NOTIFICATION, -1,
+                             "Floor pass");   /* a pass's name, as games mark theirs */
         glBindVertexArray(vao[3]);   /* the floor: other work */
         model(0, 0, 0, 1, 1, 1);
         glDrawArrays(GL_TRIANGLE_FAN, 0, 4);

@@ -143,6 +143,33 @@ def test_list_draws(gl):
         assert f.read(8) == b"\x89PNG\r\n\x1a\n"
 
 
+def test_select_by_shader_state(gl):
+    """Selection rules on shader state: the floor (untagged) chosen by its
+    program's digest, its vertex count and its pass name (the application's
+    glDebugMessageInsert) becomes object 20; --list-draws shows the digest
+    and the passes."""
+    cap = capture_path("shaders")
+    listing = gl(cap, "--list-draws", "0")
+    assert listing.returncode == 0, listing.stderr
+    floor = [line for line in listing.stdout.splitlines() if "glDrawArrays" in line]
+    assert len(floor) == 1 and floor[0].split()[-1] == "untagged", floor
+    digest = floor[0].split()[5]
+    assert re.fullmatch(r"[0-9a-f]{8}", digest), floor
+    assert "passes: from call" in listing.stdout and "'Floor pass'" in listing.stdout, listing.stdout
+    rules = gl.path("rules.toml")
+    with open(rules, "w") as f:
+        f.write(f'[[object]]\nname = "floor"\nid = 20\nprogram = ["{digest}"]\nvertex_count = [4, 4]\n'
+                f'pass = ["Floor pass"]\ninstances = [1, 1]\n')
+    _, r = convert(gl, "--select", rules, "--summary", gl.path("s.jsonl"))
+    with open(gl.path("s.jsonl")) as f:
+        s0 = json.loads(f.readline())
+    assert (s0["fragments"], s0["culled"], s0["other"], s0["objects"]) == (3600, 1000, 0, [1, 2, 3, 4, 20]), s0
+    with open(rules, "w") as f:
+        f.write('[[object]]\nid = 20\nprogram = ["XYZ"]\n')
+    r = gl(cap, "-o", gl.path("x.rbt"), "--select", rules)
+    assert r.returncode == 2 and "object[0].program" in r.stderr, r.stderr
+
+
 @pytest.mark.parametrize("fault, words", [
     ("geometry", "has a geometry shader"),
     ("texture", "reads texture heights (GL_SAMPLER_2D)"),

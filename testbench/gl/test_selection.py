@@ -16,7 +16,7 @@ def rules(tmp_path, text):
 
 def draw(**kw):
     d = {"call": 10, "frame": 0, "vertices": 36, "texture": 0, "depth_write": True, "projection": "perspective",
-         "own_modelview": True, "screen_area": 500.0}
+         "own_modelview": True, "screen_area": 500.0, "program": "", "pass": "", "instances": 1}
     d.update(kw)
     return d
 
@@ -54,9 +54,13 @@ projection = "orthographic"
     ("modelview_differs_from_view", False, {"own_modelview": False}, {}),
     ("min_screen_area", 100, {"screen_area": 100.0}, {"screen_area": 99.5}),
     ("max_screen_area", 100, {"screen_area": 99.5}, {"screen_area": 100.5}),
+    ("program", ["0123abcd"], {"program": "0123abcd" + "9" * 56}, {"program": "0123abce" + "9" * 56}),
+    ("pass", ["Solid Pass"], {"pass": "Solid Pass"}, {"pass": "Transparent"}),
+    ("instances", [2, 15], {"instances": 15}, {"instances": 1}),
 ], ids=lambda v: v if isinstance(v, str) else "")
 def test_each_condition(tmp_path, field, value, inside, outside):
-    s = rules(tmp_path, f"[[object]]\nid = 1\n{field} = {str(value).lower()}\n")
+    toml = str(value).lower() if isinstance(value, (bool, int)) else str(value).replace("'", '"')
+    s = rules(tmp_path, f"[[object]]\nid = 1\n{field} = {toml}\n")
     assert s.classify(draw(**inside)) == (1, "id 1")
     assert s.classify(draw(**outside)) == (None, "no rule")
 
@@ -76,8 +80,14 @@ def test_each_condition(tmp_path, field, value, inside, outside):
     ("object = 1\n", "object must be an array of tables"),
     ("[camera]\n", "unknown table or key 'camera'"),
     ("[[object]\n", "rules.toml"),
+    ("[[object]]\nid = 1\nprogram = [\"abc\"]\n", "object[0].program: must be a list of program digests"),
+    ("[[object]]\nid = 1\nprogram = []\n", "object[0].program"),
+    ("[[object]]\nid = 1\npass = [3]\n", "object[0].pass: must be a list of pass names"),
+    ("[[object]]\nid = 1\ninstances = [3, 1]\n", "object[0].instances: must be [MIN, MAX]"),
+    ("[[object]]\nid = 1\ngroup_instances = 1\n", "object[0].group_instances: must be true or false"),
 ], ids=["vertex_count", "unknown_key", "no_id", "negative_id", "bool_id", "projection", "texture", "group_by",
-        "screen_area", "settings_key", "settings_type", "object_type", "unknown_table", "toml_syntax"])
+        "screen_area", "settings_key", "settings_type", "object_type", "unknown_table", "toml_syntax",
+        "program_short", "program_empty", "pass_type", "instances_order", "group_instances_type"])
 def test_bad_rules_are_named(tmp_path, text, words):
     with pytest.raises(ConvertError) as e:
         rules(tmp_path, text)

@@ -49,6 +49,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.geo_space = None            # "eye" or "ndc": the space of the frame's geometry
         self.offscreen_draws = 0         # draws left out: not the camera pass
         self.fragment_effects = {}       # output frame -> {FRAGMENT_EFFECT_KEYS: count}, frames with programs
+        self.draw_instances = 1          # instances of the draw being classified
         self.vertex_stage_ = None        # Mesa, started at the first draw under a program
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)
         self.egl_api = "EGL_OPENGL_ES_API"
@@ -57,6 +58,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.partial_frame_dropped = False
         self.listing = None              # --list-draws: one dict per draw of the frame
         self.last_rule = "untagged"
+        self.last_rule_table = {}        # the selection rule that decided the last draw, {} if none
         self.last_3d_draws = []          # (output frame, capture frame, call of its last draw with depth test)
         self.last_call = None
         self.header_written = False
@@ -113,6 +115,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.geo_space = None
         self.last_depth_draw = None
         self.frame_view = None
+        self.s.marker = ""
         if self.tracker:
             self.tracker.begin_frame()
 

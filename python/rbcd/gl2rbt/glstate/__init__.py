@@ -82,6 +82,8 @@ class GLState:
         self.texture_buffers = {}
         self.texture = 0
         self.groups = []   # innermost last: object id or None
+        self.group_names = []   # the same groups: (object id or None, message)
+        self.marker = ""        # the last message the application inserted in the frame
         self.begin_mode = None
         self.begin_verts = []
         self.list_compiling = False

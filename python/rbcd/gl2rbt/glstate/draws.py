@@ -163,6 +163,7 @@ class DrawCalls:
                       "(docs/gl-capture.md)")
         self.open_frame(no)
         tagged = False
+        self.draw_instances = instances
         for i, clip in enumerate(self.vertex_stage().run(self, no, base_name(name), d, instances)):
             # A primitive with a vertex at NaN or infinity is not drawn (GL
             # leaves its rasterization undefined; Mesa's clipper drops it).
@@ -170,9 +171,12 @@ class DrawCalls:
             tris = np.arange(len(clip), dtype=np.uint32).reshape(-1, 3)[good]
             if len(tris) == 0:
                 continue
-            obj = self.object_of(no, None, None, len(clip), clip)
+            obj = self.object_of(no, None, None, d["count"], clip)
             tagged = tagged or obj is not None
-            self.draw_record(no, name, clip, tris, None if obj is None else obj + i, len(clip), None, None, None)
+            if obj is not None and not self.last_rule_table.get("group_instances"):
+                obj += i   # one object per instance, unless the rule that chose it groups them
+            self.draw_record(no, name, clip, tris, obj, d["count"], None, None, None)
+        self.draw_instances = 1
         self.note_fragment_effects(tagged)
 
     def note_fragment_effects(self, tagged):

@@ -26,10 +26,12 @@ class ObjectCalls:
                              "texture": d["texture"], "projection": d["projection"],
                              "own_modelview": d["own_modelview"], "depth_write": d["depth_write"],
                              "depth_func": self.s.depth_func, "box": box, "object": obj_id,
+                             "program": d["program"], "pass": d["pass"],
                              "rule": self.last_rule,
                              "translation": [0.0] * 3 if mv is None else [round(float(v), 2) for v in mv[0:3, 3]]})
 
     def object_of(self, no, mv, proj, nverts, clip):
+        self.last_rule_table = {}
         for g in reversed(self.s.groups):
             if g is not None:
                 self.last_rule = "debug group"
@@ -39,6 +41,7 @@ class ObjectCalls:
             return None
         d = self.describe(no, mv, proj, nverts, clip)
         obj, self.last_rule = self.select.classify(d)
+        self.last_rule_table = self.select.last_rule
         if obj == "entity":
             if mv is None:
                 fail_call(no, f"rule '{self.last_rule}': group_by = \"modelview\" needs the fixed-function "
@@ -59,7 +62,21 @@ class ObjectCalls:
                 "depth_write": self.s.depth_test and self.s.depth_mask,
                 "projection": projection_of(proj, clip),
                 "own_modelview": mv is not None and view is not None and not np.allclose(mv, view, atol=1e-6),
-                "screen_area": area, "box": (lo, hi)}
+                "screen_area": area, "box": (lo, hi), "program": self.program_digest(),
+                "pass": self.pass_name(), "instances": self.draw_instances}
+
+    def program_digest(self):
+        """The digest of the sources of the program a draw runs ("" without a vertex shader)."""
+        return self.s.programs[self.s.program].digest if self.vertex_program() else ""
+
+    def pass_name(self):
+        """The innermost debug group or marker that is not an object's, else the
+        last message the application inserted in the frame (a game's names for
+        its passes), else ""."""
+        for obj, text in reversed(self.s.group_names):
+            if obj is None and text:
+                return text
+        return self.s.marker
 
     def h_push_debug_group(self, no, name, a, args):
         d = dict(args)
@@ -72,6 +89,7 @@ class ObjectCalls:
         if len(self.s.groups) >= 64:
             fail_call(no, "debug groups nested more than 64 deep")
         self.s.groups.append(obj)
+        self.s.group_names.append((obj, d.get("message") if isinstance(d.get("message"), str) else ""))
 
     def h_push_group_marker(self, no, name, a, args):
         d = dict(args)
@@ -87,13 +105,25 @@ class ObjectCalls:
         if len(self.s.groups) >= 64:
             fail_call(no, "group markers nested more than 64 deep")
         self.s.groups.append(obj)
+        self.s.group_names.append((obj, text if isinstance(text, str) else ""))
 
     def h_pop_group(self, no, name, a, args):
         if not self.s.groups:
             fail_call(no, f"{name} without a group to pop")
         self.s.groups.pop()
+        self.s.group_names.pop()
+
+    def h_marker(self, no, name, a, args):
+        """glDebugMessageInsert, glInsertEventMarkerEXT: a name for what follows."""
+        d = dict(args)
+        text = d.get("buf", d.get("marker"))
+        if isinstance(text, str):
+            length = d.get("length", -1)
+            self.s.marker = text[:length] if isinstance(length, int) and length > 0 else text
 
     HANDLERS = {
+        "glDebugMessageInsert": h_marker,
+        "glInsertEventMarker": h_marker,
         "glPushDebugGroup": h_push_debug_group,
         "glPopDebugGroup": h_pop_group,
         "glPushGroupMarker": h_push_group_marker,

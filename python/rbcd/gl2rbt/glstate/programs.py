@@ -7,6 +7,7 @@ glBindAttribLocation calls, so that a replay's locations are the capture's).
 Uniform locations and block indices are the capture's; their names come from
 the capture's own glGetUniformLocation and glGetUniformBlockIndex calls (a
 location no call named is an explicit one, the same in Mesa)."""
+import hashlib
 import re
 
 from ..errors import fail_call, printable
@@ -38,6 +39,7 @@ class Program:
         self.block_bindings = {}   # capture block index -> binding point
         self.discards = False      # its fragment shader has a discard statement
         self.frag_depth = False    # its fragment shader writes gl_FragDepth
+        self.digest = ""           # SHA-256 of its stages' sources at the last link (selection rules)
 
 
 def name_arg(no, name, v, what):
@@ -117,6 +119,8 @@ class ProgramCalls:
             else:
                 sources[sh.stage] = sh.compiled
         p.linked = (sources, dict(p.bindings))
+        p.digest = hashlib.sha256("".join(f"{stage}\0{sources[stage]}\0" for stage in sorted(sources))
+                                  .encode("utf-8", "surrogateescape")).hexdigest()
         fragment = COMMENTS.sub(" ", sources.get("fragment", ""))
         p.discards = re.search(r"\bdiscard\b", fragment) is not None
         p.frag_depth = re.search(r"\bgl_FragDepth(EXT)?\b", fragment) is not None
