@@ -12,8 +12,11 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
   REASON".
 - Outputs are written as rbcd-sim writes them: a path that is absent or a
   regular file through an unpredictable temporary beside it (mkstemp, never a
-  planted symlink followed), renamed over it when complete; anything else (a
-  device, a FIFO, a symlink) written in place and never unlinked. A temporary
+  planted symlink followed), renamed over it when complete, also through a
+  symlink to one (the temporary beside the link's target, which a failed run
+  leaves as it was); anything else (a device, a FIFO) written in place and
+  never unlinked. check_outputs refuses, before anything is opened, an output
+  that names an input or another output. A temporary
   is removed on failure and on SIGINT/SIGTERM/SIGHUP (main_wrapper turns them
   into KeyboardInterrupt, so that cleanup code runs).
 """
@@ -29,6 +32,38 @@ MAX_TOKEN = 1024
 
 class UsageError(Exception):
     """Bad input or command line: one line, exit 2."""
+
+
+# ---- the input rule: every value read from an input file, checked before use
+# for its type, finiteness and range (the C structs it is packed into, or
+# what the format allows), and named in the message when it fails.
+
+I32 = (-(1 << 31), (1 << 31) - 1)
+U32 = (0, (1 << 32) - 1)
+U63 = (0, (1 << 63) - 1)
+
+
+def integer(v, what, lo, hi):
+    """v, an integer in [lo, hi] (a bool is not one); UsageError naming `what`."""
+    if isinstance(v, bool) or not isinstance(v, int):
+        raise UsageError(f"{what}: {escape(repr(v))[:60]} is not an integer")
+    if not lo <= v <= hi:
+        raise UsageError(f"{what}: {v} is outside [{lo}, {hi}]")
+    return v
+
+
+def real(v, what, lo=None, hi=None):
+    """v, a finite number in [lo, hi] (either bound may be None), as a float."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise UsageError(f"{what}: {escape(repr(v))[:60]} is not a number")
+    if isinstance(v, float) and v != v or v in (float("inf"), float("-inf")):
+        raise UsageError(f"{what}: {v} is not finite")
+    if (lo is not None and v < lo) or (hi is not None and v > hi):
+        raise UsageError(f"{what}: {v} is outside [{lo}, {hi}]")
+    try:
+        return float(v)
+    except OverflowError:
+        raise UsageError(f"{what}: {v} is too large")
 
 
 def _escape_char(ch):
@@ -104,11 +139,71 @@ def read_input_text(path, what, max_bytes, limit_key=""):
         raise UsageError(f"{path}: {what}: not UTF-8 text (byte {e.start})")
 
 
-def _in_place(path):
+def output_target(path):
+    """Where an output at `path` is written, and how: ("replace", P) for a
+    path that is absent or a regular file (a temporary beside P renamed
+    over it), also when `path` is a symlink to one (P is then the link's
+    target: the link stays, and a failed run leaves the target as it was);
+    ("in place", path) for anything else (a device, a FIFO, a symlink to
+    one), written and never unlinked."""
     try:
-        return not stat.S_ISREG(os.lstat(path).st_mode)
+        st = os.stat(path)
     except FileNotFoundError:
+        return ("replace", os.path.realpath(path) if os.path.islink(path) else path)
+    except OSError:
+        return ("in place", path)
+    if stat.S_ISREG(st.st_mode):
+        return ("replace", os.path.realpath(path) if os.path.islink(path) else path)
+    return ("in place", path)
+
+
+def check_outputs(inputs, outputs):
+    """Before anything is opened: no output (option, path) names an input
+    (what, path) or another output, as the same file (device and inode) or,
+    for files that do not exist yet, the same path; none is a directory.
+    Standard output ("-") may be one output only."""
+    def ident(path):
+        if path == "-":
+            path = "/dev/stdout"
+        try:
+            st = os.stat(path)
+            return ("file", st.st_dev, st.st_ino), st
+        except OSError:
+            return ("path", os.path.realpath(path)), None
+    taken = {}
+    for what, path in inputs:
+        if path:
+            taken[ident(path)[0]] = what
+    for option, path in outputs:
+        if not path:
+            continue
+        key, st = ident(path)
+        if st is not None and stat.S_ISDIR(st.st_mode):
+            raise UsageError(f"{path}: cannot create: is a directory")
+        if key in taken:
+            raise UsageError(f"{option} {path}: is also {taken[key]}")
+        taken[key] = f"{option}'s output"
+
+
+def to_standard_output(paths):
+    """Whether one of `paths` is this process's standard output."""
+    try:
+        out = os.fstat(1)
+    except OSError:
         return False
+    for p in paths:
+        if not p:
+            continue
+        if p == "-":
+            return True
+        try:
+            st = os.stat(p)
+        except OSError:
+            continue
+        if (st.st_dev, st.st_ino) == (out.st_dev, out.st_ino) and not stat.S_ISREG(st.st_mode) or \
+                p in ("/dev/stdout", "/proc/self/fd/1"):
+            return True
+    return False
 
 
 _temporaries = set()
@@ -120,19 +215,18 @@ def write_output(path, data, what="output"):
         data = data.encode("utf-8")
     if os.path.isdir(path):
         raise UsageError(f"{path}: cannot create: is a directory")
-    if _in_place(path):
+    how, target = output_target(path)
+    if how == "in place":
         try:
             fd = os.open(path, os.O_WRONLY | os.O_NOCTTY | os.O_CLOEXEC)
         except OSError as e:
             raise UsageError(f"{path}: cannot create: {e.strerror}")
         try:
-            if stat.S_ISREG(os.fstat(fd).st_mode):
-                os.ftruncate(fd, 0)   # a symlink to a regular file: written through
             _write_all(fd, data)
         finally:
             os.close(fd)
         return
-    d, base = os.path.split(path)
+    d, base = os.path.split(target)
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{base}.", dir=d or ".")
     except OSError as e:
@@ -145,7 +239,7 @@ def write_output(path, data, what="output"):
         _write_all(fd, data)
         os.close(fd)
         fd = -1
-        os.replace(tmp, path)
+        os.replace(tmp, target)
     except BaseException:
         if fd >= 0:
             os.close(fd)

@@ -111,23 +111,70 @@ def test_fixed_function_transform_and_viewport():
     assert (d["collisionable"], d["object"]) == (0, 0), "an untagged draw is other work"
 
 
-def test_matrix_stack_limits_and_errors_name_the_call():
+def stack_top(gl):
+    return gl.conv.s.stacks[gl.conv.s.mode][-1].tolist()
+
+
+def test_matrix_stacks_do_what_mesa_does_with_errors():
     gl = GL()
-    for _ in range(63):
+    # Mesa's model-view stack holds 32 matrices: the 32nd push overflows
+    # (GL_STACK_OVERFLOW) and does nothing; so does a pop of the last one.
+    for i in range(31):
         gl.glPushMatrix()
-    with pytest.raises(ConvertError, match=r"^call 64: glPushMatrix overflows"):
-        gl.glPushMatrix()
-    gl = GL()
-    with pytest.raises(ConvertError, match=r"^call 1: glPopMatrix underflows"):
+        gl.glTranslatef(1, 0, 0)
+    gl.glPushMatrix()
+    gl.glTranslatef(1, 0, 0)
+    assert len(gl.conv.s.stacks["GL_MODELVIEW"]) == 32
+    for _ in range(31):
         gl.glPopMatrix()
+    assert stack_top(gl) == np.identity(4).tolist(), "the overflowing push changed nothing"
+    gl.glPopMatrix()
+    assert len(gl.conv.s.stacks["GL_MODELVIEW"]) == 1
+    gl.glMatrixMode("GL_TEXTURE")
+    for _ in range(12):
+        gl.glPushMatrix()
+    assert len(gl.conv.s.stacks["GL_TEXTURE"]) == 10, "the texture stack is 10 deep"
+    # GL_INVALID_VALUE: nothing changes.
+    gl.glMatrixMode("GL_PROJECTION")
+    gl.glOrtho(0, 0, 0, 1, 0, 1)
+    gl.glFrustum(-1, 1, -1, 1, 0, 10)
+    assert stack_top(gl) == np.identity(4).tolist()
+
+
+def test_values_glsl_leaves_unspecified_are_refused_naming_the_call():
+    gl = GL()
     with pytest.raises(ConvertError, match="is not emulated"):
         gl.glMatrixMode("GL_NOT_A_STACK")
-    with pytest.raises(ConvertError, match="non-finite"):
-        gl.glScalef(float("inf"), 1, 1)
-    with pytest.raises(ConvertError, match="GL_INVALID_VALUE"):
-        gl.glOrtho(0, 0, 0, 1, 0, 1)
-    with pytest.raises(ConvertError, match="GL_INVALID_VALUE"):
-        gl.glFrustum(-1, 1, -1, 1, 0, 10)
+    with pytest.raises(ConvertError, match=r"^call 2: an offset: inf is not finite"):
+        gl.glTranslatef(float("inf"), 1, 1)
+    with pytest.raises(ConvertError, match=r"a rotation: nan is not finite"):
+        gl.glRotatef(float("nan"), 0, 0, 1)
+    with pytest.raises(ConvertError, match=r"the clear depth: nan is not finite"):
+        gl.glClearDepth(float("nan"))
+    with pytest.raises(ConvertError, match=r"malformed arguments"):
+        gl.glTranslatef(1, 2)
+    with pytest.raises(ConvertError, match=r"a scale: \[1\] is not a number"):
+        gl.glScalef([1], 1, 1)
+    with pytest.raises(ConvertError, match=r"glPushDebugGroup: an rbcd-object group's id: 4294967296 is outside"):
+        gl.glPushDebugGroup(source="GL_DEBUG_SOURCE_APPLICATION", id=1 << 32, length=-1, message="rbcd-object")
+    with pytest.raises(ConvertError, match=r"glViewport: a viewport value: 1e\+20 is not an integer"):
+        gl.glViewport(0, 0, 1e20, 4)
+
+
+def test_viewport_and_scissor_as_mesa_takes_them():
+    gl = GL()
+    gl.glViewport(0, 0, -5, 10)   # GL_INVALID_VALUE: nothing changes
+    assert gl.conv.s.viewport is None
+    gl.glViewport(-10 ** 6, 40000, 10 ** 6, 2 * 10 ** 9)
+    assert gl.conv.s.viewport == (-32768, 32767, 16384, 16384), "corner and size clamped as Mesa clamps them"
+    gl.glViewport(0, 0, W, H)
+    gl.glEnable("GL_SCISSOR_TEST")
+    gl.glScissor(10, 10, -1, 5)   # GL_INVALID_VALUE
+    assert gl.conv.s.scissor is None
+    gl.glScissor(-5, 20, 2 * 10 ** 9, 2 * 10 ** 9)   # legal GL: the box reaches past the screen
+    square(gl)
+    (d,) = gl.draws()
+    assert d["scissor"] == (-1, -1, W, H - 21), "cut to the screen, rows down"
 
 
 def test_push_and_pop_restore_the_matrix():

@@ -69,8 +69,11 @@ def test_each_condition(tmp_path, field, value, inside, outside):
     ("[[object]]\nid = 1\nvertex_count = [5, 2]\n", "object[0].vertex_count: must be [MIN, MAX]"),
     ("[[object]]\nid = 1\nbogus = 1\n", "object[0].bogus: unknown key"),
     ("[[object]]\nname = \"x\"\n", "object[0]: needs id"),
-    ("[[object]]\nid = -1\n", "object[0].id: must be a non-negative integer"),
-    ("[[object]]\nid = true\n", "object[0].id: must be a non-negative integer"),
+    ("[[object]]\nid = -1\n", "object[0].id: must be an integer in [0, 4294967295]"),
+    ("[[object]]\nid = true\n", "object[0].id: must be an integer in"),
+    ("[[object]]\nid = 4294967296\n", "object[0].id: must be an integer in"),
+    ("[settings]\nup_axis = \"w\"\n", "settings.up_axis"),
+    ("a = " + "[" * 3000 + "]" * 3000 + "\n", "nested too deep"),
     ("[[exclude]]\nprojection = \"fisheye\"\n", "exclude[0].projection"),
     ("[[object]]\nid = 1\ntexture = [\"a\"]\n", "object[0].texture"),
     ("[[object]]\nid = 1\ngroup_by = \"colour\"\n", "object[0].group_by"),
@@ -85,7 +88,7 @@ def test_each_condition(tmp_path, field, value, inside, outside):
     ("[[object]]\nid = 1\npass = [3]\n", "object[0].pass: must be a list of pass names"),
     ("[[object]]\nid = 1\ninstances = [3, 1]\n", "object[0].instances: must be [MIN, MAX]"),
     ("[[object]]\nid = 1\ngroup_instances = 1\n", "object[0].group_instances: must be true or false"),
-], ids=["vertex_count", "unknown_key", "no_id", "negative_id", "bool_id", "projection", "texture", "group_by",
+], ids=["vertex_count", "unknown_key", "no_id", "negative_id", "bool_id", "id_past_u32", "up_axis", "deep", "projection", "texture", "group_by",
         "screen_area", "settings_key", "settings_type", "object_type", "unknown_table", "toml_syntax",
         "program_short", "program_empty", "pass_type", "instances_order", "group_instances_type"])
 def test_bad_rules_are_named(tmp_path, text, words):
@@ -140,5 +143,11 @@ def test_too_many_entities_and_bad_settings():
     assert [t.id_for(at(1000 * i, 0, 0), None, i) for i in range(2)] == [5, 6]
     with pytest.raises(ConvertError, match=r"call 9: more than 2 entities in one frame"):
         t.id_for(at(5000, 0, 0), None, 9)
-    with pytest.raises(ConvertError, match="up_axis"):
-        EntityTracker({"up_axis": "w"})
+    for settings, words in (({"up_axis": "w"}, "settings.up_axis: must be"),
+                            ({"first_entity_id": "a"}, "settings.first_entity_id: 'a' is not an integer"),
+                            ({"first_entity_id": -1}, "settings.first_entity_id: -1 is outside"),
+                            ({"max_entity_id": 1 << 32}, "settings.max_entity_id: 4294967296 is outside"),
+                            ({"track_radius": float("nan")}, "settings.track_radius: nan is not finite"),
+                            ({"first_entity_id": 9, "max_entity_id": 3}, "first_entity_id is above")):
+        with pytest.raises(ConvertError, match=words):
+            Selection.check_settings("r.toml", settings)

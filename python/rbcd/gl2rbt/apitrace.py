@@ -8,6 +8,10 @@ import tempfile
 from .errors import ConvertError, printable
 
 
+def where(last):
+    return f"after call {last}" if last is not None else "before its first call"
+
+
 def apitrace_tool():
     exe = shutil.which("apitrace")
     if not exe:
@@ -45,10 +49,10 @@ def read_apitrace_calls(trace, calls=None):
             except EOFError:
                 break
             except (pickle.UnpicklingError, ValueError, TypeError, AttributeError, IndexError, MemoryError) as e:
-                raise ConvertError(f"after call {last}: the capture does not decode ({printable(e, 80)})")
+                raise ConvertError(f"{where(last)}: the capture does not decode ({printable(e, 80)})")
             if not (isinstance(c, tuple) and len(c) == 5 and isinstance(c[0], int) and isinstance(c[1], str)
-                    and isinstance(c[2], list)):
-                raise ConvertError(f"after call {last}: the capture does not decode (unexpected record)")
+                    and isinstance(c[2], list) and 0 <= c[0] <= (1 << 63) - 1):
+                raise ConvertError(f"{where(last)}: the capture does not decode (unexpected record)")
             last = c[0]
             yield c
     finally:
@@ -61,8 +65,7 @@ def read_apitrace_calls(trace, calls=None):
     bad = [l for l in msg.splitlines() if "error" in l.lower() or "warning: unexpected end" in l.lower()
            or "truncated" in l.lower() or "unsupported" in l.lower() or "failed" in l.lower()]
     if rc != 0 and rc != -signal.SIGKILL:
-        where = f"after call {last}" if last is not None else "before its first call"
-        raise ConvertError(f"{where}: apitrace cannot read the capture: "
+        raise ConvertError(f"{where(last)}: apitrace cannot read the capture: "
                            f"{printable((bad or msg.splitlines() or ['exit %d' % rc])[0])}")
     if bad:
-        raise ConvertError(f"after call {last}: {printable(bad[0])}")
+        raise ConvertError(f"{where(last)}: {printable(bad[0])}")

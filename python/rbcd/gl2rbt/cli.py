@@ -4,7 +4,7 @@ import re
 import signal
 import sys
 
-from ..cli import UsageError
+from ..cli import UsageError, to_standard_output
 from .errors import ConvertError, ToolError, printable
 
 PROG = "rbcd-gl2rbt"
@@ -61,7 +61,10 @@ def parse_args(argv):
 def run(args):
     """The command, with the exit status of the module's docstring."""
     try:
-        require_numpy()
+        np = require_numpy()
+        # Non-finite values are checked where they matter and refused naming
+        # the call: numpy's warnings would only repeat them, before the line.
+        np.seterr(all="ignore")
         from . import depth_check, listing, raster   # they compute with numpy
         if args.list_draws is not None:
             if args.list_draws < 0:
@@ -74,6 +77,10 @@ def run(args):
             args.snapshots = set()
             if args.check_frames < 1:
                 raise ConvertError("--check-frames must be at least 1")
+            if args.check_timeout < 1:
+                raise ConvertError("--check-timeout must be at least 1 (seconds)")
+            if not 0.0 <= args.min_agreement <= 100.0:   # NaN fails both
+                raise ConvertError("--min-agreement must be a percentage, 0 to 100")
             return depth_check.check_depth(args)
         if not args.output:
             raise ConvertError("-o OUT is required")
@@ -87,7 +94,8 @@ def run(args):
         args.snapshots = set(int(x) for x in args.snapshot_calls.split(",")) if args.snapshot_calls else set()
         frames, conv = raster.convert(args)
         if not args.quiet:
-            raster.report(frames, conv)
+            outputs = [args.output, args.geometry, args.summary, args.reduced_out]
+            raster.report(frames, conv, sys.stderr if to_standard_output(outputs) else sys.stdout)
         return 0
     except ConvertError as e:
         sys.stderr.write(f"{PROG}: {printable(args.trace)}: {printable(e, 400)}\n")
@@ -108,9 +116,10 @@ def run(args):
 def require_numpy():
     """The converter's stages compute with numpy: its absence is one line."""
     try:
-        import numpy  # noqa: F401
+        import numpy
     except ImportError:
         raise ToolError("numpy is not installed (Debian: python3-numpy)")
+    return numpy
 
 
 def on_signal(signum, frame):

@@ -142,7 +142,12 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             fail_call(no, f"{printable(name)} between glBegin and glEnd is not emulated")
         h = self.HANDLERS.get(base)
         if h is not None:
-            h(self, no, name, a, args)
+            try:
+                h(self, no, name, a, args)
+            except (TypeError, ValueError, OverflowError, IndexError, struct.error) as e:
+                # An argument of a type or size no GL call takes: the
+                # capture's error, whichever check it slipped past.
+                fail_call(no, f"{printable(name)}: malformed arguments ({type(e).__name__}: {printable(e, 80)})")
         elif base.startswith("glVertex") and not base.startswith("glVertexAttrib"):
             fail_call(no, f"{printable(name)} outside glBegin/glEnd")
         elif base.startswith(IGNORED_PREFIXES):

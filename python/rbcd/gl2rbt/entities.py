@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 
-from .errors import ConvertError, fail_call
+from .errors import fail_call
 
 
 
@@ -24,15 +24,13 @@ class EntityTracker:
     vanishes and another appears where it was in the next frame."""
 
     def __init__(self, settings):
-        self.first = int(settings.get("first_entity_id", 1))
-        self.max_id = int(settings.get("max_entity_id", 127))
-        self.radius = float(settings.get("track_radius", 48.0))
-        self.horizontal = float(settings.get("part_horizontal", 16.0))
-        self.vertical = float(settings.get("part_vertical", 64.0))
-        axis = settings.get("up_axis", "z")
-        if axis not in ("x", "y", "z"):
-            raise ConvertError("settings.up_axis: must be \"x\", \"y\" or \"z\"")
-        self.up = "xyz".index(axis)
+        # Checked by Selection.check_settings (the defaults there too).
+        self.first = settings.get("first_entity_id", 1)
+        self.max_id = settings.get("max_entity_id", 127)
+        self.radius = settings.get("track_radius", 48.0)
+        self.horizontal = settings.get("part_horizontal", 16.0)
+        self.vertical = settings.get("part_vertical", 64.0)
+        self.up = "xyz".index(settings.get("up_axis", "z"))
         self.prev = []   # [(id, [world origins])] of the previous frame
         self.cur = []    # the same, this frame
         self.parts = {}  # model-view key -> id, this frame

@@ -1,9 +1,10 @@
 """The converter's errors and how it names what it read."""
-from ..cli import escape
+from ..cli import UsageError, escape
 
 
-class ConvertError(Exception):
-    """Bad input: one line, exit 2."""
+class ConvertError(UsageError):
+    """Bad input (a capture, a reduced capture, a selection file, the command
+    line): one line, exit 2."""
 
 
 class ToolError(Exception):
@@ -22,3 +23,12 @@ def printable(s, limit=200):
 
 def fail_call(no, what):
     raise ConvertError(f"call {no}: {what}")
+
+
+def checked(no, check, *args):
+    """check(*args) of rbcd.cli's input rule (integer, real), its failure as
+    the capture's error at call `no`."""
+    try:
+        return check(*args)
+    except UsageError as e:
+        raise ConvertError(f"call {no}: {e}") from None

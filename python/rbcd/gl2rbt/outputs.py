@@ -1,31 +1,29 @@
 """Streamed outputs by the project's rules (docs/limits.md)."""
 import os
-import stat
 import tempfile
 
+from ..cli import output_target
 from .errors import ConvertError, printable
 
 class SafeText:
-    """A streamed text output, by rbcd-sim's rules (rbcd_cli.write_output for
-    whole outputs): a path that is absent or a regular file through an
-    unpredictable temporary renamed into place on success and removed
-    otherwise; anything else (a FIFO, a device, a symlink) written in place and
+    """A streamed output by the project's rules (rbcd.cli.output_target;
+    rbcd.cli.write_output for whole outputs): a path that is absent or a
+    regular file, also through a symlink to one, is written to an
+    unpredictable temporary renamed over it on success and removed
+    otherwise; anything else (a FIFO, a device) is written in place and
     never unlinked."""
 
     def __init__(self, path, binary=False):
         self.path, self.tmp = path, None
-        try:
-            in_place = not stat.S_ISREG(os.lstat(path).st_mode)
-        except FileNotFoundError:
-            in_place = False
+        how, self.target = output_target(path)
         try:
             if os.path.isdir(path):
                 raise IsADirectoryError(21, "is a directory")
-            if in_place:
+            if how == "in place":
                 fd = os.open(path, os.O_WRONLY | os.O_NOCTTY | os.O_CLOEXEC)
             else:
-                d = os.path.dirname(os.path.abspath(path))
-                fd, self.tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", dir=d)
+                d = os.path.dirname(os.path.abspath(self.target))
+                fd, self.tmp = tempfile.mkstemp(prefix="." + os.path.basename(self.target) + ".", dir=d)
         except OSError as e:
             raise ConvertError(f"{printable(path)}: cannot create: {printable(e.strerror)}")
         self.f = os.fdopen(fd, "wb" if binary else "w", buffering=1 << 20)
@@ -37,7 +35,7 @@ class SafeText:
         self.f.close()
         if self.tmp:
             os.chmod(self.tmp, 0o666 & ~current_umask())
-            os.replace(self.tmp, self.path)
+            os.replace(self.tmp, self.target)
             self.tmp = None
 
     def abandon(self):

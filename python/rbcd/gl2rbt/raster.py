@@ -8,7 +8,7 @@ import struct
 import subprocess
 import tempfile
 
-from ..cli import write_output
+from ..cli import check_outputs, write_output
 from .capture import check_input_file, read_calls
 from .converter import Converter
 from .errors import ConvertError, RasterStopped, ToolError, printable
@@ -50,85 +50,46 @@ def convert(args, listing=False, ids=None):
         shutil.rmtree(tmpdir, ignore_errors=True)
 
 
+def check_paths(args):
+    """The outputs against the inputs and each other, before anything is
+    opened (rbcd.cli.check_outputs)."""
+    check_outputs([("the capture", args.trace), ("the selection file", args.select)],
+                  [("-o", args.output), ("--geometry", args.geometry), ("--summary", args.summary),
+                   ("--reduced-out", getattr(args, "reduced_out", None)), ("--image", getattr(args, "image", None))])
+
+
 def convert_in(args, tmpdir, listing, ids):
     check_input_file(args.trace)
-    out_paths = [p for p in (args.output, args.geometry, args.summary, getattr(args, "reduced_out", None)) if p]
-    real_in = os.path.realpath(args.trace)
-    for p in out_paths:
-        if os.path.realpath(p) == real_in:
-            raise ConvertError(f"the output {printable(p)} is the capture itself")
-    if len(set(os.path.realpath(p) for p in out_paths)) != len(out_paths):
-        raise ConvertError("two outputs name the same file")
+    check_paths(args)
+    if getattr(args, "reduced_out", None) and is_reduced_capture(args.trace):
+        raise ConvertError("--reduced-out: the capture is already a reduced capture")
+    conv = Converter(args, None, None)   # reads the selection file: refused before any output exists
+    if listing:
+        conv.listing = []
     summary_path = os.path.join(tmpdir, "summary.jsonl")
     cmd = [raster_program(), "--trace", args.output, "--summary", summary_path, "--name", args.trace]
     if args.depth_out:
         cmd += ["--depth-out", args.depth_out]
     if ids:
         cmd += ["--ids-out", ids[0], "--ids-frame", str(ids[1])]
-    geo = SafeText(args.geometry) if args.geometry else None
-    if geo:
-        geo.write("rbcd-geometry 2\n")
-    reduced = None
-    if getattr(args, "reduced_out", None):
-        if is_reduced_capture(args.trace):
-            raise ConvertError("--reduced-out: the capture is already a reduced capture")
-        try:
+    outputs = []   # streamed outputs: committed at the end, abandoned on any failure
+    proc = None
+    try:
+        if args.geometry:
+            conv.geo = SafeText(args.geometry)
+            outputs.append(conv.geo)
+            conv.geo.write("rbcd-geometry 2\n")
+        reduced = None
+        if getattr(args, "reduced_out", None):
             reduced = ReducedWriter(args.reduced_out)
-        except BaseException:
-            if geo:
-                geo.abandon()
-            raise
-    try:
+            outputs.append(reduced)
         proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
-    except BaseException:
-        for o in (geo, reduced):
-            if o:
-                o.abandon()
-        raise
-    conv = Converter(args, proc.stdin, geo)
-    if listing:
-        conv.listing = []
-    ok = False
-    try:
-        for call in read_calls(args.trace):
-            conv.last_call = call[0]
-            if reduced:
-                reduced.call(call)
-            conv.handle(call)
-            if conv.last_frame is not None and conv.frame > conv.last_frame:
-                break
-            if args.snapshots and conv.active and call[0] in args.snapshots:
-                conv.open_frame(call[0])
-                conv.emit(b"S" + struct.pack("<Q", call[0]))
-        if conv.s.begin_mode is not None:
-            raise ConvertError("the capture ends between glBegin and glEnd")
-        if conv.out_frame < 0:
-            raise ConvertError(f"the capture has {conv.frame} frames: --frames selects none" if conv.frame
-                               else "the capture has no frame (no buffer swap)")
-        if conv.frame_open:
-            # A last frame without its swap is not converted (rbcd-gl-raster
-            # drops a frame the stream leaves open): the trace ends at the
-            # last whole frame.
-            conv.partial_frame_dropped = True
-        conv.emit(b"Z")
-        try:
-            proc.stdin.close()
-        except BrokenPipeError:
-            raise RasterStopped()
-        raster_result(proc, args.trace)
-        with open(summary_path) as f:
-            lines = f.read().splitlines()
-        lines = [with_fragment_effects(line, conv.fragment_effects.get(i)) for i, line in enumerate(lines)]
-        frames = [json.loads(l) for l in lines]
-        if args.summary:
-            write_output(args.summary, "".join(line + "\n" for line in lines), "summary")
-        if geo:
-            geo.commit()
-            geo = None
-        if reduced:
-            reduced.commit()
-            reduced = None
-        ok = True
+        conv.raster = proc.stdin
+        run_calls(args, conv, reduced)
+        frames = finish(args, conv, proc, summary_path)
+        for o in outputs:
+            o.commit()
+        outputs = []
         return frames, conv
     except RasterStopped:
         proc.stdin = None
@@ -137,25 +98,73 @@ def convert_in(args, tmpdir, listing, ids):
     finally:
         if conv.stream_copy is not None:
             conv.stream_copy.close()
-        if not ok:
-            # SIGTERM: rbcd-gl-raster removes its temporaries on it (SIGKILL would leave them).
-            if proc.poll() is None:
-                proc.terminate()
-            try:
-                proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-            # What is still buffered for the stopped rasterizer is dropped.
-            try:
-                if proc.stdin:
-                    proc.stdin.close()
-            except OSError:
-                pass
-            if geo:
-                geo.abandon()
-            if reduced:
-                reduced.abandon()
+        if outputs:
+            stop(proc)
+            for o in outputs:
+                o.abandon()
+
+
+def run_calls(args, conv, reduced):
+    """Every call of the capture into the converter, to the last frame asked for."""
+    for call in read_calls(args.trace):
+        conv.last_call = call[0]
+        if reduced:
+            reduced.call(call)
+        conv.handle(call)
+        if conv.last_frame is not None and conv.frame > conv.last_frame:
+            break
+        if args.snapshots and conv.active and call[0] in args.snapshots:
+            conv.open_frame(call[0])
+            conv.emit(b"S" + struct.pack("<Q", call[0]))
+    if conv.s.begin_mode is not None:
+        raise ConvertError("the capture ends between glBegin and glEnd")
+    if conv.out_frame < 0:
+        raise ConvertError(f"the capture has {conv.frame} frames: --frames selects none" if conv.frame
+                           else "the capture has no frame (no buffer swap)")
+    if conv.frame_open:
+        # A last frame without its swap is not converted (rbcd-gl-raster
+        # drops a frame the stream leaves open): the trace ends at the last
+        # whole frame.
+        conv.partial_frame_dropped = True
+        if conv.out_frame == 0:
+            raise ConvertError("the capture draws but never swaps buffers: no whole frame to convert")
+
+
+def finish(args, conv, proc, summary_path):
+    """The rasterizer's end and its summary (with the converter's counts),
+    written to --summary."""
+    conv.emit(b"Z")
+    try:
+        proc.stdin.close()
+    except BrokenPipeError:
+        raise RasterStopped()
+    raster_result(proc, args.trace)
+    with open(summary_path) as f:
+        lines = f.read().splitlines()
+    lines = [with_fragment_effects(line, conv.fragment_effects.get(i)) for i, line in enumerate(lines)]
+    frames = [json.loads(line) for line in lines]
+    if args.summary:
+        write_output(args.summary, "".join(line + "\n" for line in lines), "summary")
+    return frames
+
+
+def stop(proc):
+    """A failed run's rasterizer: SIGTERM (it removes its temporaries on it;
+    SIGKILL would leave them), then what is still buffered for it dropped."""
+    if proc is None:
+        return
+    if proc.poll() is None:
+        proc.terminate()
+    try:
+        proc.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+    try:
+        if proc.stdin:
+            proc.stdin.close()
+    except OSError:
+        pass
 
 
 def with_fragment_effects(line, effects):
@@ -183,7 +192,8 @@ def raster_result(proc, trace):
     raise ToolError(line)
 
 
-def report(frames, conv):
+def report(frames, conv, out):
+    """The run's figures, on `out`: standard error when an output is standard output."""
     n = len(frames)
     frags = sum(f["fragments"] for f in frames)
     culled = sum(f["culled"] for f in frames)
@@ -191,19 +201,19 @@ def report(frames, conv):
     objs = sum(len(f["objects"]) for f in frames)
     print(f"{n} frames: {objs / max(n, 1):.1f} collisionable objects, {frags / max(n, 1):.0f} collisionable "
           f"fragments ({100.0 * culled / max(frags, 1):.1f}% tagged c) and {other / max(n, 1):.0f} other "
-          f"fragments a frame")
+          f"fragments a frame", file=out)
     if conv.partial_frame_dropped:
-        print("the capture stops before its last buffer swap: that frame is not converted")
+        print("the capture stops before its last buffer swap: that frame is not converted", file=out)
     if conv.ignored_prims:
-        print(f"{conv.ignored_prims} point and line draws not rasterized (no area)")
+        print(f"{conv.ignored_prims} point and line draws not rasterized (no area)", file=out)
     fx = conv.fragment_effects.values()
     if any(e["discard_draws"] or e["frag_depth_draws"] for e in fx):
         print(f"draws whose fragment shader can discard: {sum(e['discard_draws'] for e in fx)} "
               f"({sum(e['discard_collisionable'] for e in fx)} collisionable); writing gl_FragDepth: "
               f"{sum(e['frag_depth_draws'] for e in fx)} ({sum(e['frag_depth_collisionable'] for e in fx)} "
-              "collisionable); all their fragments are kept")
+              "collisionable); all their fragments are kept", file=out)
     if conv.offscreen_draws:
-        print(f"{conv.offscreen_draws} draws into other targets than the camera pass left out (docs/gl-capture.md)")
+        print(f"{conv.offscreen_draws} draws into other targets than the camera pass left out (docs/gl-capture.md)", file=out)
 
 
 # ---------------------------------------------------------------- listing a frame's draws

@@ -8,15 +8,21 @@ at a few per cent of its size: the game suite's committed form
 (docs/games.md)."""
 import io
 import lzma
+import os
 import pickle
 
-from .apitrace import CallReader, PointerType
+from .apitrace import CallReader, PointerType, where
+from ..cli import U63
 from .errors import ConvertError, printable
 from .converter import Converter
 from .gl_tables import IGNORED_PREFIXES, base_name
 from .outputs import SafeText
 
 REDUCED_HEADER = ("rbcd-reduced-capture", 1)
+# A reduced capture expands to at most this many times its size (the game
+# suite's expand 10 to 20 times; a file that expands more is refused before
+# its memory is spent).
+REDUCED_EXPANSION = 1000
 REDUCED_END = "end"   # the last record, ("end", calls): a file cut anywhere lacks it
 XZ_MAGIC = b"\xfd7zXZ\x00"
 # Kept although the emulation passes over them: the window system (frame
@@ -60,10 +66,45 @@ def is_reduced_capture(path):
         return False
 
 
+class BoundedXz(io.RawIOBase):
+    """An xz file read as a stream of at most `limit` decompressed bytes,
+    one xz stream with nothing after it: a small file that expands without
+    end, or bytes appended to a reduced capture, are the file's error."""
+
+    def __init__(self, f, limit):
+        self.f, self.limit, self.total = f, limit, 0
+        self.z = lzma.LZMADecompressor(format=lzma.FORMAT_XZ)
+        self.pending = b""
+
+    def readable(self):
+        return True
+
+    def readinto(self, buf):
+        while not self.pending:
+            if self.z.eof:
+                if self.z.unused_data or self.f.read(1):
+                    raise ConvertError("bytes after the xz stream: not a reduced capture as written")
+                return 0
+            data = self.f.read(1 << 16) if self.z.needs_input else b""
+            if self.z.needs_input and not data:
+                raise EOFError("the xz stream is cut short")
+            self.pending = self.z.decompress(data, max_length=1 << 20)
+            self.total += len(self.pending)
+            if self.total > self.limit:
+                raise ConvertError(f"expands past {self.limit} bytes ({REDUCED_EXPANSION} times its size, the "
+                                   "limit; docs/gl-capture.md)")
+        n = min(len(buf), len(self.pending))
+        buf[:n] = self.pending[:n]
+        self.pending = self.pending[n:]
+        return n
+
+
 def read_reduced_calls(path):
     last = None
     try:
-        with lzma.open(path, "rb") as f:
+        with open(path, "rb") as raw:
+            size = os.fstat(raw.fileno()).st_size
+            f = io.BufferedReader(BoundedXz(raw, REDUCED_EXPANSION * max(size, 1 << 16)))
             reader = CallReader(f)
             try:
                 head = reader.load()
@@ -76,22 +117,23 @@ def read_reduced_calls(path):
                 try:
                     c = reader.load()
                 except EOFError:
-                    raise ConvertError(f"after call {last}: the reduced capture is cut short (no end record)")
+                    raise ConvertError(f"{where(last)}: the reduced capture is cut short (no end record)")
                 if isinstance(c, tuple) and len(c) == 2 and c[0] == REDUCED_END:
                     if c[1] != count or f.read(1):
-                        raise ConvertError(f"after call {last}: the reduced capture does not decode (bad end record)")
+                        raise ConvertError(f"{where(last)}: the reduced capture does not decode (bad end record)")
                     break
                 count += 1
                 if not (isinstance(c, tuple) and len(c) == 5 and isinstance(c[0], int) and isinstance(c[1], str)
                         and isinstance(c[2], list) and isinstance(c[4], int)
-                        and (last is None or c[0] > last)):
-                    raise ConvertError(f"after call {last}: the reduced capture does not decode (unexpected record)")
+                        and 0 <= c[0] <= U63[1] and (last is None or c[0] > last)
+                        and all(isinstance(x, tuple) and len(x) == 2 and isinstance(x[0], str) for x in c[2])):
+                    raise ConvertError(f"{where(last)}: the reduced capture does not decode (unexpected record)")
                 last = c[0]
                 yield c
     except (lzma.LZMAError, EOFError, OSError, pickle.UnpicklingError, ValueError, TypeError, AttributeError,
             IndexError, MemoryError, RecursionError) as e:
-        where = f"after call {last}" if last is not None else "before its first call"
-        raise ConvertError(f"{where}: the reduced capture does not decode ({printable(e, 80)})")
+        raise ConvertError(f"{where(last)}: the reduced capture does not decode ({printable(e, 80)})")
+
 
 class ReducedWriter:
     """--reduced-out: the calls the emulation reads, as it reads them."""

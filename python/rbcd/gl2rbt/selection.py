@@ -3,6 +3,7 @@ objects (docs/gl-capture.md, "Identified off line")."""
 import re
 import tomllib
 
+from ..cli import U32, UsageError, integer, real
 from .errors import ConvertError, printable
 
 # ---------------------------------------------------------------- the selection file
@@ -32,16 +33,15 @@ class Selection:
             raise ConvertError(f"{path}: cannot read: {printable(e)}")
         except tomllib.TOMLDecodeError as e:
             raise ConvertError(f"{path}: {printable(e)}")
+        except RecursionError:
+            raise ConvertError(f"{path}: nested too deep to read")
         unknown = set(doc) - {"object", "exclude", "settings"}
         if unknown:
             raise ConvertError(f"{path}: unknown table or key '{printable(sorted(unknown)[0])}'")
         self.settings = doc.get("settings", {})
         if not isinstance(self.settings, dict):
             raise ConvertError(f"{path}: settings must be a table")
-        for k in self.settings:
-            if k not in ("first_entity_id", "max_entity_id", "track_radius", "part_horizontal", "part_vertical",
-                         "up_axis"):
-                raise ConvertError(f"{path}: settings.{printable(k)}: unknown key")
+        self.settings = self.check_settings(path, self.settings)
         self.rules = []
         for kind in ("exclude", "object"):
             entries = doc.get(kind, [])
@@ -55,6 +55,30 @@ class Selection:
                 self.rules.append((kind, r))
         self.last_rule = {}
 
+    @staticmethod
+    def check_settings(path, settings):
+        """The entity tracker's settings, checked and with their defaults."""
+        out = {"first_entity_id": 1, "max_entity_id": 127, "track_radius": 48.0, "part_horizontal": 16.0,
+               "part_vertical": 64.0, "up_axis": "z"}
+        for k, v in settings.items():
+            where = f"{path}: settings.{printable(k)}"
+            if k not in out:
+                raise ConvertError(f"{where}: unknown key")
+            try:
+                if k == "up_axis":
+                    if v not in ("x", "y", "z"):
+                        raise ConvertError(f"{where}: must be \"x\", \"y\" or \"z\"")
+                elif k.endswith("_id"):
+                    v = integer(v, where, *U32)
+                else:
+                    v = real(v, where, 0.0, 1e30)
+            except UsageError as e:
+                raise ConvertError(str(e)) from None
+            out[k] = v
+        if out["first_entity_id"] > out["max_entity_id"]:
+            raise ConvertError(f"{path}: settings.first_entity_id is above settings.max_entity_id")
+        return out
+
     def check_rule(self, where, kind, r):
         for k in r:
             if k not in self.KEYS:
@@ -62,8 +86,9 @@ class Selection:
         if kind == "object":
             if "id" not in r and r.get("group_by") != "modelview":
                 raise ConvertError(f"{where}: needs id (or group_by = \"modelview\")")
-            if "id" in r and (not isinstance(r["id"], int) or isinstance(r["id"], bool) or r["id"] < 0):
-                raise ConvertError(f"{where}.id: must be a non-negative integer")
+            if "id" in r and (not isinstance(r["id"], int) or isinstance(r["id"], bool)
+                              or not U32[0] <= r["id"] <= U32[1]):
+                raise ConvertError(f"{where}.id: must be an integer in [0, {U32[1]}]")
         for k in ("calls", "frames", "vertex_count", "instances"):
             if k in r:
                 v = r[k]
@@ -89,8 +114,11 @@ class Selection:
         if "group_by" in r and r["group_by"] != "modelview":
             raise ConvertError(f"{where}.group_by: must be \"modelview\"")
         for k in ("min_screen_area", "max_screen_area"):
-            if k in r and not isinstance(r[k], (int, float)):
-                raise ConvertError(f"{where}.{k}: must be a number")
+            if k in r:
+                try:
+                    real(r[k], f"{where}.{k}")
+                except UsageError as e:
+                    raise ConvertError(str(e)) from None
 
     @staticmethod
     def matches(r, d):

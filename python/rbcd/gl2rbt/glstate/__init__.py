@@ -17,7 +17,8 @@ map GL function names (without ARB/EXT) to its handlers, called as
 h(self, call_no, name, argument values, (name, value) arguments)."""
 import numpy as np
 
-from ..errors import fail_call
+from ...cli import real
+from ..errors import checked
 from ..gl_tables import MAX_CLIP_PLANES
 from .attributes import VertexArrayObject
 
@@ -96,6 +97,6 @@ def as_bool(v):
 
 
 def number(v, no, what):
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        fail_call(no, f"{what} is not a number")
-    return float(v)
+    """A finite number from the capture (GL leaves infinities and NaN in
+    most calls' results unspecified: refused, naming the call)."""
+    return checked(no, real, v, what)

@@ -77,11 +77,7 @@ class DrawCalls:
         vx, vy, vw, vh = st.viewport if st.viewport else (0, 0, w, h)
         if vw <= 0 or vh <= 0:
             return
-        if st.scissor_test and st.scissor:
-            sx, sy, sw, sh = st.scissor
-            scissor = (sx, h - (sy + sh), sx + sw - 1, h - sy - 1)
-        else:
-            scissor = (0, 0, w - 1, h - 1)
+        scissor = self.scissor_rect()
         planes = []
         if any(st.clip_enabled):
             if proj is None:

@@ -3,7 +3,8 @@ import re
 
 import numpy as np
 
-from ..errors import fail_call
+from ...cli import U32, integer
+from ..errors import checked, fail_call
 
 
 def projection_of(proj, clip):
@@ -82,10 +83,7 @@ class ObjectCalls:
         d = dict(args)
         obj = None
         if d.get("source") == "GL_DEBUG_SOURCE_APPLICATION" and d.get("message") == "rbcd-object":
-            i = d.get("id")
-            if not isinstance(i, int) or i < 0:
-                fail_call(no, "rbcd-object group with an impossible id")
-            obj = i
+            obj = checked(no, integer, d.get("id"), f"{name}: an rbcd-object group's id", *U32)
         if len(self.s.groups) >= 64:
             fail_call(no, "debug groups nested more than 64 deep")
         self.s.groups.append(obj)
@@ -101,7 +99,7 @@ class ObjectCalls:
                 text = text[:length]
             m = re.fullmatch(r"rbcd-object (\d+)", text)
             if m:
-                obj = int(m.group(1))
+                obj = checked(no, integer, int(m.group(1)), f"{name}: an rbcd-object marker's id", *U32)
         if len(self.s.groups) >= 64:
             fail_call(no, "group markers nested more than 64 deep")
         self.s.groups.append(obj)

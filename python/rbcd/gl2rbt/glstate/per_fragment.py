@@ -4,7 +4,8 @@ import struct
 
 import numpy as np
 
-from ..errors import fail_call, printable
+from ...cli import I32, integer
+from ..errors import checked, fail_call, printable
 from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES
 from . import as_bool, number
 
@@ -12,10 +13,20 @@ class PerFragmentCalls:
     """Per-fragment operations that decide which fragments reach the unit."""
 
     def h_scissor(self, no, name, a, args):
-        x, y, w, h = [int(number(v, no, "a scissor value")) for v in a[:4]]
+        x, y, w, h = [checked(no, integer, v, f"{name}: a scissor value", *I32) for v in a[:4]]
         if w < 0 or h < 0:
-            fail_call(no, "glScissor with a negative size")
+            return   # GL_INVALID_VALUE: the call does nothing
         self.s.scissor = (x, y, w, h)
+
+    def scissor_rect(self):
+        """The scissor box in screen rows down, inclusive, cut to the screen
+        (a box reaching past it, as GL allows, clips nothing more)."""
+        w, h = self.screen
+        if not (self.s.scissor_test and self.s.scissor):
+            return (0, 0, w - 1, h - 1)
+        sx, sy, sw, sh = self.s.scissor
+        x0, y0, x1, y1 = sx, h - (sy + sh), sx + sw - 1, h - sy - 1
+        return (min(max(x0, -1), w), min(max(y0, -1), h), min(max(x1, -1), w), min(max(y1, -1), h))
 
     def h_depth_func(self, no, name, a, args):
         if a[0] not in DEPTH_FUNCS:
@@ -32,12 +43,7 @@ class PerFragmentCalls:
         mask = a[0] if isinstance(a[0], (list, tuple)) else (a[0],)
         if "GL_DEPTH_BUFFER_BIT" in mask and self.active and self.s.depth_mask:
             self.open_frame(no)
-            w, h = self.screen
-            if self.s.scissor_test and self.s.scissor:
-                sx, sy, sw, sh = self.s.scissor
-                rect = (sx, h - (sy + sh), sx + sw - 1, h - sy - 1)
-            else:
-                rect = (0, 0, w - 1, h - 1)
+            rect = self.scissor_rect()
             self.emit(b"C" + struct.pack("<Qd4i", no, self.s.clear_depth, *rect))
 
     def enable(self, no, cap, on):

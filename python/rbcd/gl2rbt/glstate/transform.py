@@ -3,10 +3,18 @@ import re
 
 import numpy as np
 
-from ..errors import fail_call, printable
+from ...cli import I32, integer
+from ..errors import checked, fail_call, printable
 from ..gl_tables import CALL_FLAG_FAKE, MAX_CLIP_PLANES
 from ..glmath import mat_frustum, mat_mul, mat_ortho, mat_rotate, mat_scale, mat_translate
 from . import number
+
+# Mesa's limits (llvmpipe, Mesa 22.3): matrix stack depths, the largest
+# viewport, and the range a viewport's corner is clamped to.
+STACK_DEPTHS = {"GL_MODELVIEW": 32, "GL_PROJECTION": 32, "GL_TEXTURE": 10, "GL_COLOR": 10}
+MAX_VIEWPORT = 16384
+VIEWPORT_BOUNDS = (-32768, 32767)
+
 
 class TransformCalls:
     """The model-view and projection stacks and the viewport transform."""
@@ -52,31 +60,35 @@ class TransformCalls:
     def h_ortho(self, no, name, a, args):
         l, r, b, t, n, f = [number(x, no, "a bound") for x in a[:6]]
         if l == r or b == t or n == f:
-            fail_call(no, "glOrtho with an empty volume (GL_INVALID_VALUE)")
+            return   # GL_INVALID_VALUE: the call does nothing
         self.set_cur(mat_mul(self.cur(), mat_ortho(l, r, b, t, n, f)), no)
 
     def h_frustum(self, no, name, a, args):
         l, r, b, t, n, f = [number(x, no, "a bound") for x in a[:6]]
         if n <= 0 or f <= 0 or l == r or b == t or n == f:
-            fail_call(no, "glFrustum with impossible bounds (GL_INVALID_VALUE)")
+            return   # GL_INVALID_VALUE: the call does nothing
         self.set_cur(mat_mul(self.cur(), mat_frustum(l, r, b, t, n, f)), no)
 
     def h_push_matrix(self, no, name, a, args):
         st = self.s.stacks[self.s.mode]
-        if len(st) >= 64:
-            fail_call(no, "glPushMatrix overflows the matrix stack")
+        if len(st) >= STACK_DEPTHS[self.s.mode]:
+            return   # GL_STACK_OVERFLOW: the call does nothing
         st.append(st[-1].copy())
 
     def h_pop_matrix(self, no, name, a, args):
         st = self.s.stacks[self.s.mode]
         if len(st) <= 1:
-            fail_call(no, "glPopMatrix underflows the matrix stack")
+            return   # GL_STACK_UNDERFLOW: the call does nothing
         st.pop()
 
     def h_viewport(self, no, name, a, args):
-        x, y, w, h = [int(number(v, no, "a viewport value")) for v in a[:4]]
-        if w < 0 or h < 0 or w > 16384 or h > 16384 or abs(x) > 16384 or abs(y) > 16384:
-            fail_call(no, "glViewport with an impossible size")
+        x, y, w, h = [checked(no, integer, v, f"{name}: a viewport value", *I32) for v in a[:4]]
+        if w < 0 or h < 0:
+            return   # GL_INVALID_VALUE: the call does nothing
+        # Clamped as Mesa clamps them: the size to the largest viewport,
+        # the corner to the viewport bounds.
+        w, h = min(w, MAX_VIEWPORT), min(h, MAX_VIEWPORT)
+        x, y = (min(max(v, VIEWPORT_BOUNDS[0]), VIEWPORT_BOUNDS[1]) for v in (x, y))
         self.s.viewport = (x, y, w, h)
         if self.flags & CALL_FLAG_FAKE and w > 0 and h > 0:
             self.drawable = (w, h)   # apitrace's record of the window size at MakeCurrent
