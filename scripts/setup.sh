@@ -26,7 +26,7 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #   --list   print the packages (with the options given) one a line, install nothing
 # Besides the build: what the test suite runs that a minimal Debian lacks
 # (testbench/scripts/check_test_programs.sh checks the list against the suite).
-pkgs+=(time python3 python3-pytest)
+pkgs+=(time python3 python3-pytest python3-hypothesis)
 list=no
 for opt in "$@"; do
   case "$opt" in

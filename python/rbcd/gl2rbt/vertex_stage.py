@@ -71,7 +71,8 @@ class VertexStage:
         version = conv.s.buffer_versions.get(b)
         if entry[1] != version:
             GL.glBindBuffer(GL.GL_COPY_WRITE_BUFFER, entry[0])
-            GL.glBufferData(GL.GL_COPY_WRITE_BUFFER, len(data), bytes(data) if data else None, GL.GL_STATIC_DRAW)
+            GL.glBufferData(GL.GL_COPY_WRITE_BUFFER, len(data), np.frombuffer(data, np.uint8) if len(data) else None,
+                            GL.GL_STATIC_DRAW)
             entry[1] = version
         return entry[0]
 

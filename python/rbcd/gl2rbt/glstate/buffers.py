@@ -4,8 +4,17 @@ apitrace records as memcpy calls into the mapped range), their bindings to
 targets and to indexed binding points. Each change gives the buffer a new
 version, by which the shader path's vertex stage knows what Mesa's copy
 lacks."""
+import mmap
+
 from ..errors import fail_call, printable
 from ..gl_tables import MAX_BUFFER_BYTES
+
+
+def storage(size):
+    """Zeroed storage for a buffer: a large one as anonymous memory, whose
+    pages cost nothing until written (a capture may declare a buffer of
+    1 GiB with no data and fill a few kilobytes of it)."""
+    return mmap.mmap(-1, size) if size >= 1 << 20 else bytearray(size)
 
 
 def is_buffer_target(target):
@@ -53,7 +62,7 @@ class BufferCalls:
         if not isinstance(size, int) or size < 0 or size > MAX_BUFFER_BYTES:
             fail_call(no, f"{name}: impossible size")
         data = d.get("data")
-        buf = bytearray(size)
+        buf = storage(size)
         if isinstance(data, (bytes, bytearray)):
             if len(data) < size:
                 fail_call(no, f"{name}: the data is shorter than the size")

@@ -1,0 +1,203 @@
+"""rbcd-gl2rbt against hostile input (issue 39's classes), without Xvfb or
+apitrace: captures are written here as reduced captures (the converter's own
+format, rbcd.gl2rbt.reduced), so every call, value and file is the test's.
+Each refusal is one line naming the call or the file, exit 2, nothing left
+and nothing destroyed; memory stays bounded by what the input can need."""
+import lzma
+import os
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, program
+from rbcd.gl2rbt.reduced import REDUCED_EXPANSION, ReducedWriter
+
+GL2RBT = os.path.join(ROOT, "scripts", "rbcd-gl2rbt")
+END_FRAME = 32   # apitrace's flag on a call that ends a frame
+TRIANGLE = np.array([[4, 4, -10], [40, 4, -10], [4, 40, -10]], "<f4").tobytes()
+
+
+class Calls:
+    """A capture's calls, numbered from 1, as apitrace's reader yields them."""
+
+    def __init__(self, w=64, h=48):
+        self.calls = []
+        self.add("glViewport", x=0, y=0, width=w, height=h, flags=1)   # apitrace's record of the window
+        self.add("glMatrixMode", mode="GL_PROJECTION")
+        self.add("glOrtho", left=0, right=w, bottom=0, top=h, zNear=-100, zFar=100)
+        self.add("glMatrixMode", mode="GL_MODELVIEW")
+        self.add("glEnableClientState", array="GL_VERTEX_ARRAY")
+
+    def add(self, name, ret=None, flags=0, **args):
+        self.calls.append((len(self.calls) + 1, name, list(args.items()), ret, flags))
+        return self
+
+    def triangle(self, obj=None):
+        if obj is not None:
+            self.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=obj, length=-1,
+                     message="rbcd-object")
+        self.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
+        self.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        if obj is not None:
+            self.add("glPopDebugGroup")
+        return self
+
+    def swap(self):
+        return self.add("glXSwapBuffers", dpy=1, drawable=2, flags=END_FRAME)
+
+    def write(self, path):
+        w = ReducedWriter(str(path))
+        for c in self.calls:
+            w.call(c)
+        w.commit()
+        return str(path)
+
+
+def gl2rbt(tmp_path, *args, stdout=subprocess.PIPE):
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    return subprocess.run(["/usr/bin/time", "-f", "maxrss %M", "/usr/bin/python3", GL2RBT] + [str(a) for a in args],
+                          stdout=stdout, stderr=subprocess.PIPE, text=True, env=env)
+
+
+def refused(r, *words):
+    lines = [line for line in r.stderr.strip().splitlines()
+             if not line.startswith(("maxrss ", "Command exited with non-zero status"))]   # /usr/bin/time's
+    assert r.returncode == 2 and len(lines) == 1 and all(w in lines[0] for w in words), \
+        f"exit {r.returncode}, {lines} (wanted {words})"
+    return lines[0]
+
+
+def peak_mb(r):
+    return int(re.search(r"maxrss (\d+)", r.stderr).group(1)) / 1024
+
+
+def left_behind(tmp_path, keep):
+    return sorted(set(os.listdir(tmp_path)) - set(keep))
+
+
+def test_a_good_capture_converts(tmp_path):
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt")
+    assert r.returncode == 0, r.stderr
+    assert "1 frames: 1.0 collisionable objects" in r.stdout
+
+
+@pytest.mark.parametrize("build, words", [
+    (lambda c: c.add("glTranslatef", x=float("nan"), y=0, z=0), "an offset: nan is not finite"),
+    (lambda c: c.add("glViewport", x=[1], y=0, width=4, height=4), "a viewport value: [1] is not an integer"),
+    (lambda c: c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=1 << 40, length=-1,
+                     message="rbcd-object"), "1099511627776 is outside"),
+    (lambda c: c.add("glRotatef", angle=float("inf"), x=0, y=0, z=1), "a rotation: inf is not finite"),
+    (lambda c: c.add("glScalef", x=1, y=2), "malformed arguments"),
+    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 30), "reach past"),
+], ids=["nan", "list", "group_id", "inf_angle", "missing_argument", "huge_count"])
+def test_bad_calls_are_named(tmp_path, build, words):
+    c = Calls().triangle(obj=1)
+    build(c)
+    bad_call = len(c.calls)
+    c.triangle().swap()
+    cap = c.write(tmp_path / "c.xz")
+    out, geo = tmp_path / "c.rbt", tmp_path / "c.geo"
+    line = refused(gl2rbt(tmp_path, cap, "-o", out, "--geometry", geo), words)
+    assert f": call {bad_call}: " in line, line
+    assert left_behind(tmp_path, ["c.xz"]) == [], "an output or a temporary was left"
+
+
+def test_draws_without_a_swap(tmp_path):
+    cap = Calls().triangle(obj=1).write(tmp_path / "c.xz")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt"), "never swaps buffers")
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+def test_declared_buffers_cost_nothing_until_written(tmp_path):
+    c = Calls()
+    for b in range(1, 5):
+        c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=b)
+        c.add("glBufferData", target="GL_ARRAY_BUFFER", size=1 << 30, data=None, usage="GL_STATIC_DRAW")
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=0)
+    cap = c.triangle(obj=1).swap().write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt")
+    assert r.returncode == 0, r.stderr
+    assert peak_mb(r) < 400, f"4 GiB declared without data: {peak_mb(r):.0f} MB peak"
+
+
+def test_reduced_capture_bombs_and_garbage(tmp_path):
+    c = Calls().add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=300 << 20, data=bytes(300 << 20), usage="GL_STATIC_DRAW")
+    bomb = c.triangle().swap().write(tmp_path / "bomb.xz")
+    size = os.path.getsize(bomb)
+    assert size * REDUCED_EXPANSION < 300 << 20, f"the test's bomb is {size} bytes: not a bomb"
+    r = gl2rbt(tmp_path, bomb, "-o", tmp_path / "b.rbt")
+    refused(r, "bomb.xz", "expands past")
+    assert peak_mb(r) < 400, f"refusing a bomb peaked at {peak_mb(r):.0f} MB"
+    good = Calls().triangle(obj=1).swap().write(tmp_path / "good.xz")
+    with open(good, "ab") as f:
+        f.write(b"trailing garbage")
+    refused(gl2rbt(tmp_path, good, "-o", tmp_path / "g.rbt"), "good.xz", "bytes after the xz stream")
+    one = Calls().triangle(obj=1).swap().write(tmp_path / "one.xz")
+    with open(tmp_path / "two.xz", "wb") as f:   # a second xz stream after the first
+        f.write(open(one, "rb").read() + lzma.compress(b"more"))
+    refused(gl2rbt(tmp_path, tmp_path / "two.xz", "-o", tmp_path / "t.rbt"), "bytes after the xz stream")
+    assert left_behind(tmp_path, ["bomb.xz", "good.xz", "one.xz", "two.xz"]) == []
+
+
+def test_outputs_never_destroy_inputs(tmp_path):
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    rules = tmp_path / "rules.toml"
+    rules.write_text('[[object]]\nid = 3\nvertex_count = [3, 3]\n')
+    before = {p: open(p, "rb").read() for p in (cap, rules)}
+    for opt in ("-o", "--geometry", "--summary", "--reduced-out"):
+        extra = [] if opt == "-o" else ["-o", tmp_path / "c.rbt"]
+        refused(gl2rbt(tmp_path, cap, *extra, opt, rules, "--select", rules), "is also the selection file")
+        refused(gl2rbt(tmp_path, cap, *extra, opt, cap), "is also the capture")
+    os.symlink(cap, tmp_path / "link-to-capture")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "link-to-capture"), "is also the capture")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--geometry", tmp_path / "c.rbt"),
+            "is also -o's output")
+    refused(gl2rbt(tmp_path, cap, "--list-draws", "0", "--image", cap), "is also the capture")
+    for p, data in before.items():
+        assert open(p, "rb").read() == data, f"{p} was changed"
+    os.mkdir(tmp_path / "dir")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--summary", tmp_path / "dir"), "is a directory")
+    assert left_behind(tmp_path, ["c.xz", "rules.toml", "link-to-capture", "dir"]) == []
+
+
+def test_a_failed_run_leaves_a_symlinked_output_as_it_was(tmp_path):
+    c = Calls().triangle(obj=1).swap().triangle(obj=1)
+    c.add("glTranslatef", x=float("nan"), y=0, z=0)
+    cap = c.swap().write(tmp_path / "c.xz")
+    target = tmp_path / "old.geo"
+    target.write_text("an older geometry file\n")
+    os.symlink(target, tmp_path / "link.geo")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--geometry", tmp_path / "link.geo"), "not finite")
+    assert target.read_text() == "an older geometry file\n", "the failed run wrote through the link"
+    assert os.path.islink(tmp_path / "link.geo")
+    good = Calls().triangle(obj=1).swap().write(tmp_path / "good.xz")
+    r = gl2rbt(tmp_path, good, "-o", tmp_path / "c.rbt", "--geometry", tmp_path / "link.geo")
+    assert r.returncode == 0, r.stderr
+    assert target.read_text().startswith("rbcd-geometry 2\n") and os.path.islink(tmp_path / "link.geo"), \
+        "a good run replaces the link's target and keeps the link"
+
+
+def test_standard_output_holds_only_the_trace(tmp_path):
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    with open(tmp_path / "out.rbt", "w") as out:
+        r = gl2rbt(tmp_path, cap, "-o", "/dev/stdout", stdout=out)
+    assert r.returncode == 0, r.stderr
+    assert "1 frames:" in r.stderr, "the report goes to standard error"
+    sim = subprocess.run([program("rbcd-sim"), "--trace", tmp_path / "out.rbt", "-q"], capture_output=True,
+                         text=True)
+    assert sim.returncode == 0, f"rbcd-sim refuses what went to standard output: {sim.stderr}"
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--check-depth", "--check-timeout", "-1"], "--check-timeout"),
+    (["--check-depth", "--min-agreement", "nan"], "--min-agreement"),
+    (["--check-depth", "--min-agreement", "101"], "--min-agreement"),
+    (["--check-depth", "--check-frames", "0"], "--check-frames"),
+])
+def test_bad_check_options(tmp_path, args, words):
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    refused(gl2rbt(tmp_path, cap, *args), words)
