@@ -58,8 +58,17 @@ raster=${RBCD_GL_RASTER:-}
 [ -n "$raster" ] || [ ! -x "$root/build/bin/rbcd-gl-raster" ] || raster=$root/build/bin/rbcd-gl-raster
 [ -n "$raster" ] || { echo "capture-game.sh: rbcd-gl-raster not found (build the project, or set RBCD_GL_RASTER)" >&2; exit 1; }
 
-work=$(mktemp -d "${TMPDIR:-/tmp}/capture-game.XXXXXXXX")
-trap 'rm -rf "$work"' EXIT
+# The entry is staged beside OUT_DIR under an unpredictable name (no planted
+# link to follow) and renamed into place complete: made first, so that an
+# output folder that cannot take it is said before the game runs.
+parent=$(dirname "$out")
+[ -d "$parent" ] || usage "$out: its folder $parent does not exist"
+staged=$(mktemp -d "$parent/.$(basename "$out").XXXXXXXX" 2>/dev/null) ||
+  usage "$out: cannot create the entry in $parent (not writable?)"
+trap 'rm -rf "$staged"' EXIT
+work=$(mktemp -d "${TMPDIR:-/tmp}/capture-game.XXXXXXXX" 2>/dev/null) ||
+  { echo "capture-game.sh: cannot create a work directory in ${TMPDIR:-/tmp}" >&2; exit 1; }
+trap 'rm -rf "$work" "$staged"' EXIT
 mkdir -p "$work/home" "$work/entry"
 width=800 height=480
 version=$(dpkg-query -W -f='${Version}' "$game" 2>/dev/null || echo unknown)
@@ -179,10 +188,6 @@ if [ "$keep" = yes ]; then
   cp "$work/capture.trace" "$work/entry/capture.trace"
   mv "$work/trace.rbt.gz" "$work/geometry.geo" "$work/entry/"
 fi
-# Beside OUT_DIR under an unpredictable name (no planted link to follow),
-# then renamed into place complete.
-staged=$(mktemp -d "$(dirname "$out")/.$(basename "$out").XXXXXXXX")
-trap 'rm -rf "$work" "$staged"' EXIT
 chmod "$(printf '%o' $((0777 & ~0$(umask))))" "$staged"   # mktemp's 0700, made what mkdir would
 mv "$work/entry"/* "$staged"/
 mv -T "$staged" "$out"

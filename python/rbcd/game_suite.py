@@ -115,13 +115,27 @@ class Entry:
         with open(self.toml, "rb") as src:
             write_output(os.path.join(out, self.name + ".capture"), src.read(), "capture description")
 
+    def committed_summary(self, frames=None):
+        """The entry's summary.jsonl as committed, its first `frames` lines."""
+        path = os.path.join(self.dir, "summary.jsonl")
+        text = read_input_text(path, "the entry's summary", 64 << 20)
+        lines = text.splitlines(keepends=True)
+        return "".join(lines[:frames] if frames else lines)
+
+    def summary_matches(self, summary, frames=None):
+        try:
+            with open(summary, encoding="utf-8") as f:
+                return f.read() == self.committed_summary(frames)
+        except (OSError, UnicodeDecodeError):
+            return False
+
     def up_to_date(self, out):
         trace, geo, summary = self.outputs(out)
         if not all(os.path.isfile(p) for p in (trace, geo, summary)):
             return False
         try:
             return (sha256_file(trace, gunzip=True) == self.sha["trace"]
-                    and sha256_file(geo) == self.sha["geometry"])
+                    and sha256_file(geo) == self.sha["geometry"] and self.summary_matches(summary))
         except (OSError, EOFError, gzip.BadGzipFile):
             return False
 
@@ -142,17 +156,22 @@ class Entry:
         if r.returncode != 0:
             msg = (r.stderr.strip().splitlines() or [f"exit {r.returncode}"])[0]
             raise (UsageError if r.returncode == 2 else Mismatch)(f"{self.name}: conversion failed: {msg}")
+        problem = None
         if frames is None:
             for path, k, gz in ((trace, "trace", True), (geo, "geometry", False)):
                 got = sha256_file(path, gunzip=gz)
-                if got != self.sha[k]:
-                    for p in (trace, geo, summary):
-                        try:
-                            os.unlink(p)
-                        except OSError:
-                            pass
-                    raise Mismatch(f"{self.name}: the regenerated {k} differs from capture.toml's checksum "
-                                   f"({got[:16]}... against {self.sha[k][:16]}...)")
+                if got != self.sha[k] and problem is None:
+                    problem = (f"the regenerated {k} differs from capture.toml's checksum "
+                               f"({got[:16]}... against {self.sha[k][:16]}...)")
+        if problem is None and not self.summary_matches(summary, frames):
+            problem = "the regenerated summary differs from the entry's summary.jsonl"
+        if problem:
+            for p in (trace, geo, summary):
+                try:
+                    os.unlink(p)
+                except OSError:
+                    pass
+            raise Mismatch(f"{self.name}: {problem}")
         self.describe(out)
         return f"{self.name}: {frames or self.frames} frames"
 
@@ -203,7 +222,12 @@ def run(argv):
             raise UsageError("--jobs must be at least 1")
         if args.frames is not None and args.frames < 1:
             raise UsageError("--frames must be at least 1")
-        os.makedirs(args.out, exist_ok=True)
+        if os.path.exists(args.out) and not os.path.isdir(args.out):
+            raise UsageError(f"-o {args.out}: not a directory")
+        try:
+            os.makedirs(args.out, exist_ok=True)
+        except OSError as e:
+            raise UsageError(f"-o {args.out}: cannot create: {e.strerror}")
         with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
             futs = [pool.submit(e.expand, args.out, args.frames) for e in entries]
             for f in futs:

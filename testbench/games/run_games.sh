@@ -60,7 +60,14 @@ case $what in
     if [ -d /usr/share/games/openarena/baseoa ]; then
       expect2 "not one of OpenArena's maps" "$cg" openarena nosuchmap 3 "$tmp/n10"
     fi
+    # An output folder that cannot take the entry is said before any game runs.
+    expect2 "does not exist" "$cg" openarena oa_dm1 3 "$tmp/no/such/n11"
+    chmod 555 "$tmp/exists"
+    if [ "$(id -u)" != 0 ]; then expect2 "cannot create the entry" "$cg" openarena oa_dm1 3 "$tmp/exists/n12"; fi
+    chmod 755 "$tmp/exists"
     for n in n1 n2 n3 n4 n5 n6 n7 n8 n9 n10; do [ ! -e "$tmp/$n" ] || fail "$n was created"; done
+    touch "$tmp/a-file"
+    expect2 "not a directory" /usr/bin/python3 "$gs" expand -o "$tmp/a-file" "$entry"
     expect2 "not a game-suite entry" /usr/bin/python3 "$gs" check "$tmp/nonexistent"
     expect2 "capture.toml" /usr/bin/python3 "$gs" check "$tmp/exists"
     expect2 "jobs" /usr/bin/python3 "$gs" expand -o "$tmp/x1" -j 0 "$entry"
