@@ -91,8 +91,9 @@ def test_a_good_capture_converts(tmp_path):
                      message="rbcd-object"), "1099511627776 is outside"),
     (lambda c: c.add("glRotatef", angle=float("inf"), x=0, y=0, z=1), "a rotation: inf is not finite"),
     (lambda c: c.add("glScalef", x=1, y=2), "malformed arguments"),
-    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 30), "reach past"),
-], ids=["nan", "list", "group_id", "inf_angle", "missing_argument", "huge_count"])
+    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 30), "more than a draw record's"),
+    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 20), "reach past"),
+], ids=["nan", "list", "group_id", "inf_angle", "missing_argument", "huge_count", "past_the_array"])
 def test_bad_calls_are_named(tmp_path, build, words):
     c = Calls().triangle(obj=1)
     build(c)
@@ -103,6 +104,20 @@ def test_bad_calls_are_named(tmp_path, build, words):
     line = refused(gl2rbt(tmp_path, cap, "-o", out, "--geometry", geo), words)
     assert f": call {bad_call}: " in line, line
     assert left_behind(tmp_path, ["c.xz"]) == [], "an output or a temporary was left"
+
+
+def test_a_draw_of_many_indices_is_refused_before_it_costs(tmp_path):
+    """2^24 indices from a declared index buffer: refused before a vertex is
+    fetched (it peaked at 2.5 GB, then rbcd-gl-raster refused it)."""
+    n = 1 << 24
+    c = Calls().add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
+    c.add("glBindBuffer", target="GL_ELEMENT_ARRAY_BUFFER", buffer=1)
+    c.add("glBufferData", target="GL_ELEMENT_ARRAY_BUFFER", size=4 * n, data=None, usage="GL_STATIC_DRAW")
+    c.add("glDrawElements", mode="GL_TRIANGLES", count=n, type="GL_UNSIGNED_INT", indices=0)
+    cap = c.swap().write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt")
+    refused(r, "call 9: glDrawElements: 16777216 indices, more than a draw record's 4194304 vertices")
+    assert peak_mb(r) < 300, f"{peak_mb(r):.0f} MB to refuse it"
 
 
 def test_draws_without_a_swap(tmp_path):

@@ -10,8 +10,11 @@ from ..glmath import mat_mul, triangle_indices
 from . import number
 
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
-MAX_DRAW_VERTICES = 1 << 24    # vertices, indices and offsets of one draw
-MAX_DRAW_PRIMITIVES = 1 << 24  # triangles of one draw, all its instances (Mesa feeds back 48 bytes each)
+# A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
+# that could need more is refused before anything is computed for it.
+MAX_RECORD_VERTICES = 1 << 22
+MAX_DRAW_VERTICES = 1 << 24     # first, offsets and base vertex of one draw
+MAX_DRAW_PRIMITIVES = 1 << 22   # triangles of one draw under a program, all its instances
 # Per frame, draws under a fragment shader that can remove fragments
 # (discard) or move them in depth (gl_FragDepth): the converter keeps all
 # their fragments, at the depth the rasterizer computes (docs/gl-capture.md).
@@ -123,7 +126,7 @@ class DrawCalls:
         v = [number(x, no, "a coordinate") for x in vals] + [0.0, 1.0][len(vals) - 2:]
         if len(v) == 3:
             v.append(1.0)
-        if len(self.s.begin_verts) >= (1 << 22):
+        if len(self.s.begin_verts) >= MAX_RECORD_VERTICES:
             fail_call(no, "more than 4194304 vertices between glBegin and glEnd")
         self.s.begin_verts.append(v)
 
@@ -153,10 +156,10 @@ class DrawCalls:
         if not self.camera_pass():
             self.offscreen_draws += 1
             return
-        prims = {"GL_TRIANGLES": count // 3}.get(mode, max(0, count - 2)) * instances
-        if prims > MAX_DRAW_PRIMITIVES:
-            fail_call(no, f"{name}: {prims} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "
-                      "(docs/gl-capture.md)")
+        per = {"GL_TRIANGLES": count // 3}.get(mode, max(0, count - 2))
+        if per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES:
+            fail_call(no, f"{name}: {per * instances} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "
+                      f"(or {MAX_RECORD_VERTICES // 3} an instance; docs/gl-capture.md)")
         self.open_frame(no)
         tagged = False
         self.draw_instances = instances
@@ -228,6 +231,8 @@ class DrawCalls:
         mode, first, count = d.get("mode"), d.get("first", 0), d.get("count", 0)
         if not isinstance(first, int) or not isinstance(count, int) or first < 0 or count < 0:
             fail_call(no, f"{name}: impossible first or count")
+        if count > MAX_RECORD_VERTICES and not self.vertex_program():
+            fail_call(no, f"{name}: {count} vertices, more than a draw record's {MAX_RECORD_VERTICES}")
         if self.vertex_program():
             return self.shader_draw(no, name, self.draw_args(no, name, a, args))
         if not self.active or count == 0:
@@ -238,8 +243,10 @@ class DrawCalls:
     def h_draw_elements(self, no, name, a, args):
         d = dict(args)
         mode, count, type_, indices = d.get("mode"), d.get("count", 0), d.get("type"), d.get("indices")
-        if not isinstance(count, int) or count < 0 or count > (1 << 24):
+        if not isinstance(count, int) or count < 0:
             fail_call(no, f"{name}: impossible count")
+        if count > MAX_RECORD_VERTICES and not self.vertex_program():
+            fail_call(no, f"{name}: {count} indices, more than a draw record's {MAX_RECORD_VERTICES} vertices")
         if self.vertex_program():
             return self.shader_draw(no, name, self.draw_args(no, name, a, args))
         if not self.active or count == 0:
@@ -250,7 +257,7 @@ class DrawCalls:
             if len(idx) and (idx.min() < d["start"] or idx.max() > d["end"]):
                 fail_call(no, f"{name}: an index lies outside [start, end]")
         hi = int(idx.max()) + 1 if len(idx) else 0
-        if hi > (1 << 24):
+        if hi > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: index {hi - 1} is past any vertex array this converter takes")
         verts = self.array_values(arr, 0, hi, no)
         self.draw(no, mode, verts[idx], name)
