@@ -13,6 +13,9 @@ constexpr char kMagic[8] = {'R', 'B', 'C', 'D', 'G', 'L', 'D', '1'};
 // Viewports and scissors may reach past the screen, within the guard band's
 // reach: four screens either way.
 constexpr double kMaxViewport = 4.0 * scene::kMaxScreenSide;
+// The tile rasterizer keeps a bin per tile: a screen of at most 2^20 tiles
+// (8192 x 8192 in 8 x 8 tiles) keeps that memory in proportion to a frame.
+constexpr std::uint64_t kMaxTiles = std::uint64_t(1) << 20;
 
 } // namespace
 
@@ -30,6 +33,11 @@ DrawStreamReader::DrawStreamReader(std::istream& in, std::string name, DrawStrea
     const auto side_ok = [](std::uint32_t v) { return v >= 1 && v <= scene::kMaxScreenSide; };
     if (!side_ok(header_.width) || !side_ok(header_.height) || !side_ok(header_.tile_w) || !side_ok(header_.tile_h))
         throw InputError(name_ + ": screen and tile sides must be 1.." + std::to_string(scene::kMaxScreenSide));
+    const std::uint64_t tiles = std::uint64_t((header_.width + header_.tile_w - 1) / header_.tile_w) *
+                                ((header_.height + header_.tile_h - 1) / header_.tile_h);
+    if (tiles > kMaxTiles)
+        throw InputError(name_ + ": a screen of " + std::to_string(tiles) + " tiles, more than " +
+                         std::to_string(kMaxTiles) + " (larger tiles, or a smaller screen)");
     if (header_.depth_bits < 1 || header_.depth_bits > 32) throw InputError(name_ + ": depth_bits must be 1..32");
 }
 

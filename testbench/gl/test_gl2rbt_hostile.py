@@ -216,3 +216,20 @@ def test_standard_output_holds_only_the_trace(tmp_path):
 def test_bad_check_options(tmp_path, args, words):
     cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
     refused(gl2rbt(tmp_path, cap, *args), words)
+
+
+def test_a_screen_of_too_many_tiles(tmp_path):
+    """8192 x 8192 in 1 x 1 tiles: one line from the converter before the
+    rasterizer starts, and from rbcd-gl-raster for a draw stream of its own
+    (it took 3.7 GB for a 300-byte stream)."""
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--screen", 8192, 8192, "--tile", 1, 1)
+    refused(r, "67108864 tiles, more than 1048576")
+    stream = b"RBCDGLD1" + np.array([8192, 8192, 1, 1, 24], "<u4").tobytes() + b"Z"
+    r = subprocess.run(["/usr/bin/time", "-f", "maxrss %M", program("rbcd-gl-raster"), "--trace", tmp_path / "r.rbt"],
+                       input=stream, capture_output=True)
+    r.stderr = r.stderr.decode()
+    refused(r, "67108864 tiles, more than 1048576")
+    assert peak_mb(r) < 100 and not os.path.exists(tmp_path / "r.rbt")
+    ok = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--screen", 8192, 8192, "--tile", 8, 8)
+    assert ok.returncode == 0, ok.stderr

@@ -21,6 +21,8 @@ from .glstate.transform import TransformCalls
 from .glstate.vertex_arrays import VertexArrayCalls
 from .selection import Selection
 
+MAX_TILES = 1 << 20   # rbcd-gl-raster's bound: a bin per tile (8192 x 8192 in 8 x 8 tiles)
+
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
                 ProgramCalls, FramebufferCalls, DrawCalls, ObjectCalls)
 
@@ -83,6 +85,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if self.screen is None or min(self.screen) < 1:
             raise ConvertError("the capture sets no viewport before its first draw: give --screen W H")
         w, h = self.screen
+        tw, th = self.args.tile
+        tiles = -(-w // tw) * -(-h // th)
+        if tiles > MAX_TILES:
+            raise ConvertError(f"a screen of {w} x {h} in {tw} x {th} tiles is {tiles} tiles, more than {MAX_TILES}")
         self.emit(b"RBCDGLD1" + struct.pack("<5I", w, h, self.args.tile[0], self.args.tile[1], self.args.depth_bits))
         self.header_written = True
 
