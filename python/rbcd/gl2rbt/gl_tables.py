@@ -39,6 +39,11 @@ IGNORED_PREFIXES = (
     "glBindAttribLocation", "glUniform", "glValidateProgram", "glBindFragDataLocation", "glTexEnv", "glTexGen",
     "glColorTable", "glConvolution", "glHistogram", "glMinmax", "glResetHistogram", "glResetMinmax",
     "glSeparableFilter", "glMap1", "glMap2", "glMapGrid", "memcpy", "glMemcpy", "glBlendEquation",
+    # Sampler objects (filtering and wrapping: a vertex shader reads only
+    # texture buffers, which samplers do not touch), fences, the provoking
+    # vertex (which vertex gives flat-shaded values).
+    "glGenSamplers", "glBindSampler", "glSamplerParameter", "glDeleteSamplers", "glFenceSync",
+    "glClientWaitSync", "glWaitSync", "glDeleteSync", "glProvokingVertex",
 )
 # Capabilities of glEnable/glDisable whose effect on the unit's input is nil or
 # emulated; others are refused when enabled.

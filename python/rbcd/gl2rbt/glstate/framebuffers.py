@@ -75,6 +75,13 @@ class FramebufferCalls:
             fail_call(no, f"{name}: no texture bound, or an impossible buffer")
         self.s.texture_buffers[tex] = (fmt, buf, d.get("offset", 0), d.get("size"))
 
+    def h_delete_framebuffers(self, no, name, a, args):
+        for fb in dict(args).get("framebuffers") or []:
+            if isinstance(fb, int) and fb > 0:
+                self.s.fbo_depth.pop(fb, None)
+                if self.s.draw_fbo == fb:
+                    self.s.draw_fbo = 0   # GL binds the window's framebuffer again
+
     def camera_pass(self):
         """Whether a draw now writes the frame's camera pass."""
         fb = self.s.draw_fbo
@@ -85,6 +92,7 @@ class FramebufferCalls:
 
     HANDLERS = {
         "glBindFramebuffer": h_bind_framebuffer,
+        "glDeleteFramebuffers": h_delete_framebuffers,
         "glFramebufferTexture2D": h_framebuffer_texture,
         "glFramebufferTexture": h_framebuffer_texture,
         "glFramebufferRenderbuffer": h_framebuffer_texture,
