@@ -173,13 +173,17 @@ int run(const Options& o) {
                 }
             }
             if (snapshot && !o.depth_out.empty()) {
-                // rbcd-depth 1 W H BITS, then W*H u32 little endian, rows from the top.
+                // rbcd-depth 2 W H BITS, then W*H u32 little endian, rows from
+                // the top, then W*H u8: 1 where a draw whose fragment stage can
+                // discard or write depth wrote the pixel's depth last.
                 depth_files.emplace_back(o.depth_out + "." + std::to_string(in.frame()) + ".depth");
                 rbcd::OutputFile& df = depth_files.back();
-                df.write("rbcd-depth 1 " + std::to_string(h.width) + " " + std::to_string(h.height) + " " +
+                df.write("rbcd-depth 2 " + std::to_string(h.width) + " " + std::to_string(h.height) + " " +
                          std::to_string(h.depth_bits) + "\n");
                 const auto& buf = raster.depth_buffer();
                 df.write(reinterpret_cast<const char*>(buf.data()), buf.size() * sizeof buf[0]);
+                const auto& marks = raster.depth_marks();
+                df.write(reinterpret_cast<const char*>(marks.data()), marks.size());
             }
             break;
         }

@@ -68,7 +68,10 @@ void TileRasterizer::begin_frame(std::uint64_t f) {
     depth_limit_ = SIZE_MAX;
     // As in GL, the depth buffer lasts from frame to frame until a clear; its
     // first content (undefined in GL) is zero, as Mesa allocates it.
-    if (keep_depth_ && depth_.empty()) depth_.assign(std::size_t(width_) * height_, 0);
+    if (keep_depth_ && depth_.empty()) {
+        depth_.assign(std::size_t(width_) * height_, 0);
+        marks_.assign(depth_.size(), 0);
+    }
 }
 
 std::uint32_t TileRasterizer::add_draw(DrawState s) {
@@ -347,8 +350,10 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
         if (t.clear) {
             if (ti >= depth_limit_) continue;
             const auto v = static_cast<std::uint32_t>(t.z0 + 0.5);
-            for (std::int32_t y = y0; y <= y1; ++y)
+            for (std::int32_t y = y0; y <= y1; ++y) {
                 std::fill_n(&depth_[std::size_t(y) * width_ + std::size_t(x0)], std::size_t(x1 - x0 + 1), v);
+                std::fill_n(&marks_[std::size_t(y) * width_ + std::size_t(x0)], std::size_t(x1 - x0 + 1), 0);
+            }
             continue;
         }
         const DrawState& s = draws_[t.draw];
@@ -415,8 +420,12 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
                         }
                     }
                     if (depth_buffer) {
-                        std::uint32_t& stored = depth_[std::size_t(y) * width_ + std::size_t(x)];
-                        if (s.depth_write && depth_passes(s.depth_func, depth, stored)) stored = depth;
+                        const std::size_t at = std::size_t(y) * width_ + std::size_t(x);
+                        std::uint32_t& stored = depth_[at];
+                        if (s.depth_write && depth_passes(s.depth_func, depth, stored)) {
+                            stored = depth;
+                            marks_[at] = s.fragment_effects;
+                        }
                     }
                 }
                 e0 += ax0;

@@ -68,6 +68,10 @@ struct DrawState {
     // sub-pixel snapping (as Mesa's llvmpipe interpolates), rather than
     // through the snapped corners (the scene front end's rule).
     bool depth_from_unsnapped = false;
+    // Its fragment stage can discard fragments or write their depth (a
+    // captured draw under such a fragment shader): the depth it writes to
+    // the kept buffer is an upper bound, marked in depth_marks().
+    bool fragment_effects = false;
 
     static DrawState full_screen(unsigned width, unsigned height);
 };
@@ -109,6 +113,9 @@ public:
     void snapshot_depth_here() { depth_limit_ = tris_.size(); }
     // Row-major, y down, in depth units; valid once next_tile returned false.
     const std::vector<std::uint32_t>& depth_buffer() const { return depth_; }
+    // Per pixel of the kept depth buffer: 1 where its depth was last written
+    // by a draw with fragment_effects, 0 elsewhere.
+    const std::vector<std::uint8_t>& depth_marks() const { return marks_; }
 
     // Of the current frame: triangles set up and binned.
     std::size_t triangles_set_up() const { return tris_.size(); }
@@ -151,6 +158,7 @@ private:
     bool keep_depth_ = false;
     std::size_t depth_limit_ = SIZE_MAX;   // entries of tris_ from here on leave the depth buffer alone
     std::vector<std::uint32_t> depth_;
+    std::vector<std::uint8_t> marks_;
     // Per-vertex scratch of the mesh being set up.
     std::vector<std::uint16_t> outcode_;
     std::vector<ScreenVert> screen_;

@@ -52,6 +52,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.offscreen_draws = 0         # draws left out: not the camera pass
         self.fragment_effects = {}       # output frame -> {FRAGMENT_EFFECT_KEYS: count}, frames with programs
         self.draw_instances = 1          # instances of the draw being classified
+        self.draw_effects = False        # its fragment shader can discard or write gl_FragDepth
         self.vertex_stage_ = None        # Mesa, started at the first draw under a program
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)
         self.egl_api = "EGL_OPENGL_ES_API"

@@ -103,7 +103,10 @@ class DrawCalls:
         depth_func = DEPTH_FUNCS.index(st.depth_func)
         of, ou = st.offset if st.offset_fill else (0.0, 0.0)
         rec = bytearray(b"D")
-        rec += struct.pack("<QIBBBBBBB", no, obj_id if collisionable else 0, 1 if collisionable else 0, cull,
+        # Flags: bit 0 collisionable; bit 1 its fragment shader can discard or
+        # write gl_FragDepth (the depth it writes is an upper bound).
+        flags = (1 if collisionable else 0) | (2 if self.draw_effects else 0)
+        rec += struct.pack("<QIBBBBBBB", no, obj_id if collisionable else 0, flags, cull,
                            1 if front_ccw else 0, 1 if st.depth_test else 0, depth_func,
                            1 if st.depth_mask else 0, len(planes))
         # GL's window y grows upwards; the screen's rows downwards.
@@ -163,6 +166,8 @@ class DrawCalls:
         self.open_frame(no)
         tagged = False
         self.draw_instances = instances
+        p = self.s.programs[self.s.program]
+        self.draw_effects = p.discards or p.frag_depth
         for i, clip in enumerate(self.vertex_stage().run(self, no, base_name(name), d, instances)):
             # A primitive with a vertex at NaN or infinity is not drawn (GL
             # leaves its rasterization undefined; Mesa's clipper drops it).
@@ -176,6 +181,7 @@ class DrawCalls:
                 obj += i   # one object per instance, unless the rule that chose it groups them
             self.draw_record(no, name, clip, tris, obj, d["count"], None, None, None)
         self.draw_instances = 1
+        self.draw_effects = False
         self.note_fragment_effects(tagged)
 
     def note_fragment_effects(self, tagged):
