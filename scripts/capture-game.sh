@@ -23,7 +23,9 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
-usage() { echo "capture-game.sh: $1 (usage: capture-game.sh openarena|neverball MAP FRAMES OUT_DIR [--bots N] [--skip K] [--keep-trace])" >&2; exit 2; }
+# One line, whatever the arguments hold: control characters as \xNN.
+oneline() { LC_ALL=C sed 's/[^[:print:]]/?/g' <<<"$1" | tr '\n' '?' | sed 's/?$//'; }
+usage() { echo "capture-game.sh: $(oneline "$1") (usage: capture-game.sh openarena|neverball MAP FRAMES OUT_DIR [--bots N] [--skip K] [--keep-trace])" >&2; exit 2; }
 
 [ $# -ge 4 ] || usage "four arguments needed"
 game=$1 map=$2 frames=$3 out=$4
@@ -116,6 +118,9 @@ print(" ".join(sorted(names)))') || maps=
   limit=$(( 120 + 2 * (skip + frames) ))
 else
   [ -f "$map" ] || usage "$map is not a file"
+  # Its name goes into capture.toml as a TOML string: printable, no quote or backslash.
+  [[ "$(basename "$map")" =~ ^[][A-Za-z0-9\ _.,+=@%:~()-]{1,128}$ ]] ||
+    usage "MAP '$map': a file name of letters, digits, spaces and .,_+=@%:~()[]- only"
   case "$map" in
     *.nbr) mode=(-r "$(realpath "$map")") ;;
     *.sol) mode=(-l "$map") ;;
@@ -132,11 +137,12 @@ else
   limit=$(( 60 + (skip + frames) / 5 ))
 fi
 
+capture=$work/capture.trace
 if [ -n "$from" ]; then
-  cp "$from" "$work/capture.trace"
+  capture=$from   # read where it is: the converter's messages name the user's file
   rc=0
 else
-echo "capture-game.sh: capturing $game $map under Xvfb (at most ${limit} s)" >&2
+echo "capture-game.sh: capturing $game $map under Xvfb (at most ${limit} s)"
 set +e
 SDL_AUDIODRIVER=dummy timeout --signal=TERM --kill-after=30 "$limit" \
   xvfb-run -a -s "-screen 0 1024x768x24" apitrace trace -o "$work/capture.trace" "${cmd[@]}" \
@@ -146,15 +152,15 @@ set -e
 fi
 # OpenArena quits by itself (0); a replay is stopped by the time limit (124),
 # after apitrace has flushed the capture on SIGTERM.
-if [ ! -s "$work/capture.trace" ] || { [ $rc -ne 0 ] && [ $rc -ne 124 ]; }; then
+if [ ! -s "$capture" ] || { [ $rc -ne 0 ] && [ $rc -ne 124 ]; }; then
   echo "capture-game.sh: the game or its capture failed (exit $rc); its log:" >&2
   tail -n 20 "$work/game.log" >&2
   exit 1
 fi
 
 last=$(( skip + frames - 1 ))
-echo "capture-game.sh: converting frames $skip to $last" >&2
-RBCD_GL_RASTER=$raster "$here/rbcd-gl2rbt" "$work/capture.trace" -o "$work/trace.rbt.gz" --frames "$skip:$last" \
+echo "capture-game.sh: converting frames $skip to $last"
+RBCD_GL_RASTER=$raster "$here/rbcd-gl2rbt" "$capture" -o "$work/trace.rbt.gz" --frames "$skip:$last" \
   --screen $width $height --select "$rules" --geometry "$work/geometry.geo" \
   --summary "$work/entry/summary.jsonl" --reduced-out "$work/entry/calls.xz" -q
 got=$(wc -l <"$work/entry/summary.jsonl")
@@ -185,11 +191,11 @@ sum() { sha256sum | cut -d' ' -f1; }
   echo "geometry = \"$(sum <"$work/geometry.geo")\""
 } >"$work/entry/capture.toml"
 if [ "$keep" = yes ]; then
-  cp "$work/capture.trace" "$work/entry/capture.trace"
+  cp "$capture" "$work/entry/capture.trace"
   mv "$work/trace.rbt.gz" "$work/geometry.geo" "$work/entry/"
 fi
 chmod "$(printf '%o' $((0777 & ~0$(umask))))" "$staged"   # mktemp's 0700, made what mkdir would
 mv "$work/entry"/* "$staged"/
 mv -T "$staged" "$out"
 staged=
-echo "capture-game.sh: wrote $out ($(du -sh "$out" | cut -f1))" >&2
+echo "capture-game.sh: wrote $out ($(du -sh "$out" | cut -f1))"

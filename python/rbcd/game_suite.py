@@ -100,9 +100,9 @@ class Entry:
         if not os.path.isfile(self.calls):
             raise UsageError(f"{self.calls}: cannot read the reduced capture: missing")
         got = sha256_file(self.calls)
-        if got != self.sha["calls"]:
-            raise Mismatch(f"{self.calls}: checksum {got[:16]}... is not capture.toml's "
-                           f"{self.sha['calls'][:16]}...: the file changed since it was captured")
+        if got != self.sha["calls"]:   # the input changed: bad input, exit 2
+            raise UsageError(f"{self.calls}: checksum {got[:16]}... is not capture.toml's "
+                             f"{self.sha['calls'][:16]}...: the file changed since it was captured")
 
     def outputs(self, out):
         base = os.path.join(out, self.name)
@@ -141,6 +141,7 @@ class Entry:
 
     def expand(self, out, frames=None):
         self.check()
+        self.committed_summary(frames)   # read before anything is written: a bad one leaves nothing
         if frames is None and self.up_to_date(out):
             self.describe(out)
             return f"{self.name}: up to date"

@@ -26,7 +26,8 @@ case $what in
     # A changed byte is caught, naming the file.
     cp -r "$entry" "$tmp/e"
     printf 'x' | dd of="$tmp/e/calls.xz" bs=1 seek=1000 conv=notrunc 2>/dev/null
-    if /usr/bin/python3 "$src/scripts/game-suite" check "$tmp/e" 2>"$tmp/err"; then fail "a changed capture passed"; fi
+    set +e; /usr/bin/python3 "$src/scripts/game-suite" check "$tmp/e" 2>"$tmp/err"; rc=$?; set -e
+    [ $rc = 2 ] || fail "a changed capture: exit $rc, not 2 (bad input)"
     grep -q "calls.xz: checksum" "$tmp/err" || fail "message: $(cat "$tmp/err")"
     # A malformed description: one line naming the file and the key, exit 2.
     sed -i 's/^frames = .*/frames = "many"/' "$tmp/e/capture.toml"

@@ -3,8 +3,11 @@ apitrace: captures are written here as reduced captures (the converter's own
 format, rbcd.gl2rbt.reduced), so every call, value and file is the test's.
 Each refusal is one line naming the call or the file, exit 2, nothing left
 and nothing destroyed; memory stays bounded by what the input can need."""
+import io
+import json
 import lzma
 import os
+import pickle
 import re
 import subprocess
 
@@ -12,7 +15,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT, program
-from rbcd.gl2rbt.reduced import REDUCED_EXPANSION, ReducedWriter
+from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_EXPANSION, REDUCED_HEADER, ReducedWriter
 
 GL2RBT = os.path.join(ROOT, "scripts", "rbcd-gl2rbt")
 END_FRAME = 32   # apitrace's flag on a call that ends a frame
@@ -30,8 +33,8 @@ class Calls:
         self.add("glMatrixMode", mode="GL_MODELVIEW")
         self.add("glEnableClientState", array="GL_VERTEX_ARRAY")
 
-    def add(self, name, ret=None, flags=0, **args):
-        self.calls.append((len(self.calls) + 1, name, list(args.items()), ret, flags))
+    def add(self, fn, ret=None, flags=0, **args):
+        self.calls.append((len(self.calls) + 1, fn, list(args.items()), ret, flags))
         return self
 
     def triangle(self, obj=None):
@@ -91,7 +94,7 @@ def test_a_good_capture_converts(tmp_path):
                      message="rbcd-object"), "1099511627776 is outside"),
     (lambda c: c.add("glRotatef", angle=float("inf"), x=0, y=0, z=1), "a rotation: inf is not finite"),
     (lambda c: c.add("glScalef", x=1, y=2), "malformed arguments"),
-    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 30), "more than a draw record's"),
+    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 30), "count: 1073741824 is outside"),
     (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 20), "reach past"),
 ], ids=["nan", "list", "group_id", "inf_angle", "missing_argument", "huge_count", "past_the_array"])
 def test_bad_calls_are_named(tmp_path, build, words):
@@ -233,3 +236,109 @@ def test_a_screen_of_too_many_tiles(tmp_path):
     assert peak_mb(r) < 100 and not os.path.exists(tmp_path / "r.rbt")
     ok = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--screen", 8192, 8192, "--tile", 8, 8)
     assert ok.returncode == 0, ok.stderr
+
+
+def test_a_record_cannot_name_an_earlier_records_blob(tmp_path):
+    """Records pickled with one shared memo (a later one naming an earlier
+    one's 1 MB blob a thousand times) are refused: each record is read on
+    its own (this 2 KB file made a gigabyte of copies)."""
+    blob = bytes(1 << 20)
+    raw = io.BytesIO()
+    p = pickle.Pickler(raw, protocol=4)
+    p.dump(REDUCED_HEADER)
+    p.dump((1, "glBindBuffer", [("target", "GL_ARRAY_BUFFER"), ("buffer", 1)], None, 0))
+    p.dump((2, "glBufferData", [("target", "GL_ARRAY_BUFFER"), ("size", 1 << 20), ("data", blob)], None, 0))
+    for n in range(3, 1003):
+        p.dump((n, "glBufferData", [("target", "GL_ARRAY_BUFFER"), ("size", 1 << 20), ("data", blob)], None, 0))
+    p.dump((REDUCED_END, 1002))
+    (tmp_path / "memo.xz").write_bytes(lzma.compress(raw.getvalue()))
+    r = gl2rbt(tmp_path, tmp_path / "memo.xz", "-o", tmp_path / "m.rbt")
+    refused(r, "memo.xz", "after call 1: the reduced capture does not decode (Memo value not found")
+    assert peak_mb(r) < 300, f"{peak_mb(r):.0f} MB"
+
+
+def shader_calls(vertex_source, core=True):
+    """A capture drawing one triangle from a buffer under a program (GL 3.3)."""
+    c = Calls()
+    c.add("glXCreateContextAttribsARB", attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3,
+          "GLX_CONTEXT_MINOR_VERSION_ARB", 3, "GLX_CONTEXT_PROFILE_MASK_ARB",
+          "GLX_CONTEXT_CORE_PROFILE_BIT_ARB" if core else "GLX_CONTEXT_COMPATIBILITY_PROFILE_BIT_ARB", 0], ret=1)
+    c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
+    c.add("glShaderSource", shader=1, count=1, string=[vertex_source], length=None)
+    c.add("glCompileShader", shader=1)
+    c.add("glCreateProgram", ret=2)
+    c.add("glAttachShader", program=2, shader=1)
+    c.add("glBindAttribLocation", program=2, index=0, name="p")
+    c.add("glLinkProgram", program=2)
+    c.add("glUseProgram", program=2)
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE, usage="GL_STATIC_DRAW")
+    return c
+
+
+VS = "#version 330 core\nin vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n"
+
+
+def shader_draw(c, vao):
+    if vao:
+        c.add("glGenVertexArrays", n=1, arrays=[vao])
+        c.add("glBindVertexArray", array=vao)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    c.add("glPopDebugGroup")
+    return c.swap()
+
+
+def fragments(tmp_path, cap):
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "s.rbt", "--summary", tmp_path / "s.jsonl")
+    assert r.returncode == 0, r.stderr
+    with open(tmp_path / "s.jsonl") as f:
+        return [json.loads(line)["fragments"] for line in f]
+
+
+def test_what_gl_draws_under_a_program(tmp_path):
+    """As GL: a draw with no vertex array object in a core context draws
+    nothing (it drew, 67.8% against Mesa); the same in a compatibility
+    context draws; gl_Position = vec4(0.0) draws nothing (the capture was
+    refused); a negative count is ignored."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    assert fragments(tmp_path, shader_draw(shader_calls(VS), vao=7).write(tmp_path / "a.xz"))[0] > 100
+    assert fragments(tmp_path, shader_draw(shader_calls(VS), vao=0).write(tmp_path / "b.xz")) == [0]
+    assert fragments(tmp_path, shader_draw(shader_calls(VS, core=False), vao=0).write(tmp_path / "c.xz"))[0] > 100
+    zero = VS.replace("vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0)", "vec4(0.0)")
+    assert fragments(tmp_path, shader_draw(shader_calls(zero), vao=7).write(tmp_path / "d.xz")) == [0]
+    c = shader_calls(VS)
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=-6)
+    assert fragments(tmp_path, shader_draw(c, vao=7).write(tmp_path / "e.xz"))[0] > 100
+
+
+@pytest.mark.parametrize("build, words", [
+    (lambda c: c.add("glUniformMatrix4fv", location=0, count=1, transpose="GL_FALSE", value=[1.0] * 15),
+     "15 values, not its count (1) of 16"),
+    (lambda c: c.add("memcpy", dest=4096, src=b"abcd", n=8), "its n is not its data's length"),
+    (lambda c: c.add("glShaderSource", shader=1, count=5, string=["x"], length=None), "as many as its count"),
+    (lambda c: c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=1 << 32), "4294967296 is outside"),
+    (lambda c: c.add("glUniform1i", location=1 << 40, v0=1), "the location: 1099511627776 is outside"),
+    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0), "glDrawArrays: no count"),
+], ids=["uniform_count", "memcpy_length", "source_count", "framebuffer_name", "location", "no_count"])
+def test_records_that_no_gl_call_makes(tmp_path, build, words):
+    c = shader_calls(VS)
+    build(c)
+    refused(gl2rbt(tmp_path, c.swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), words)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+def test_late_output_failures_leave_no_trace(tmp_path):
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--summary", tmp_path / "no" / "s.jsonl"),
+            "cannot create")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--geometry", "/dev/full")
+    lines = [line for line in r.stderr.splitlines() if line.startswith("rbcd-gl2rbt")]
+    assert r.returncode == 1 and lines == ["rbcd-gl2rbt: /dev/full: write failed: No space left on device"], r.stderr
+    assert left_behind(tmp_path, ["c.xz"]) == [], "a complete-looking trace was left"
+    os.mkfifo(tmp_path / "rules.toml")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--select", tmp_path / "rules.toml"),
+            "not a regular file")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--snapshot-calls", "abc"), "--snapshot-calls")

@@ -143,9 +143,11 @@ def test_matrix_stacks_do_what_mesa_does_with_errors():
 
 def test_values_glsl_leaves_unspecified_are_refused_naming_the_call():
     gl = GL()
+    gl.glMatrixMode("GL_NOT_A_STACK")   # GL_INVALID_ENUM: nothing changes
+    assert gl.conv.s.mode == "GL_MODELVIEW"
     with pytest.raises(ConvertError, match="is not emulated"):
-        gl.glMatrixMode("GL_NOT_A_STACK")
-    with pytest.raises(ConvertError, match=r"^call 2: an offset: inf is not finite"):
+        gl.glMatrixMode("GL_MATRIX0_ARB")
+    with pytest.raises(ConvertError, match=r"^call 3: an offset: inf is not finite"):
         gl.glTranslatef(float("inf"), 1, 1)
     with pytest.raises(ConvertError, match=r"a rotation: nan is not finite"):
         gl.glRotatef(float("nan"), 0, 0, 1)
@@ -205,8 +207,9 @@ def test_depth_state_is_clamped_and_clears_follow_the_scissor():
     assert d["depth_range"] == (0.0, 1.0)
     assert (d["depth_test"], d["depth_func"], d["depth_mask"]) == (1, 3, 0), "GL_LEQUAL is the fourth function"
     assert d["scissor"] == (10, H - 60, 39, H - 21)
-    with pytest.raises(ConvertError, match="is not a depth function"):
-        gl.glDepthFunc("GL_SOMETIMES")
+    gl.glDepthFunc("GL_SOMETIMES")   # GL_INVALID_ENUM: nothing changes
+    gl.glCullFace("GL_SIDEWAYS")
+    assert (gl.conv.s.depth_func, gl.conv.s.cull_face) == ("GL_LEQUAL", "GL_BACK")
 
 
 def test_culling_front_faces_becomes_the_opposite_winding():
@@ -275,8 +278,11 @@ def test_immediate_mode():
     with pytest.raises(ConvertError, match="outside glBegin/glEnd"):
         gl.glVertex3f(0, 0, 0)
     gl.glBegin("GL_TRIANGLES")
+    gl.glTranslatef(1, 0, 0)   # GL_INVALID_OPERATION between glBegin and glEnd: nothing changes
+    gl.glBegin("GL_QUADS")     # the same
+    assert gl.conv.s.stacks["GL_MODELVIEW"][-1].tolist() == np.identity(4).tolist()
     with pytest.raises(ConvertError, match="between glBegin and glEnd is not emulated"):
-        gl.glTranslatef(1, 0, 0)
+        gl.glCallList(1)
 
 
 def test_buffer_objects_and_indexed_draws():

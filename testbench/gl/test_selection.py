@@ -102,7 +102,7 @@ def test_unreadable_and_oversized_rules(tmp_path):
         Selection(str(tmp_path / "none.toml"))
     big = tmp_path / "big.toml"
     big.write_text("#" * (1 << 20) + "\n")
-    with pytest.raises(ConvertError, match="larger than 1 MiB"):
+    with pytest.raises(ConvertError, match="larger than 1048576 bytes"):
         Selection(str(big))
 
 

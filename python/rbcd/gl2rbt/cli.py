@@ -91,7 +91,10 @@ def run(args):
             raise ConvertError("--screen: sides must be 1..8192")
         if not all(1 <= v <= 8192 for v in args.tile):
             raise ConvertError("--tile: sides must be 1..8192")
-        args.snapshots = set(int(x) for x in args.snapshot_calls.split(",")) if args.snapshot_calls else set()
+        try:
+            args.snapshots = set(int(x) for x in args.snapshot_calls.split(",")) if args.snapshot_calls else set()
+        except ValueError:
+            raise ConvertError("--snapshot-calls: not a list of call numbers")
         frames, conv = raster.convert(args)
         if not args.quiet:
             outputs = [args.output, args.geometry, args.summary, args.reduced_out]

@@ -23,6 +23,20 @@ from .selection import Selection
 
 MAX_TILES = 1 << 20   # rbcd-gl-raster's bound: a bin per tile (8192 x 8192 in 8 x 8 tiles)
 
+def context_is_core(attrs, major_key, minor_key, mask_key, core_bit):
+    """Whether a context created with these attributes (a flat list of
+    names and values, as apitrace records them) is a core profile: 3.2 or
+    later, with the core bit in its profile mask (the default)."""
+    if not isinstance(attrs, list):
+        return False
+    pairs = dict(zip(attrs[0::2], attrs[1::2]))
+    version = (pairs.get(major_key, 1), pairs.get(minor_key, 0))
+    if not all(isinstance(v, int) for v in version) or version < (3, 2):
+        return False
+    mask = pairs.get(mask_key, core_bit)
+    return mask == core_bit or (isinstance(mask, tuple) and core_bit in mask)
+
+
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
                 ProgramCalls, FramebufferCalls, DrawCalls, ObjectCalls)
 
@@ -50,12 +64,14 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.geo_view = None             # the projection of the frame's collisionable draws
         self.geo_space = None            # "eye" or "ndc": the space of the frame's geometry
         self.offscreen_draws = 0         # draws left out: not the camera pass
+        self.rejected_draws = []         # (call, GL error): draws under a program Mesa refused, as GL does
         self.fragment_effects = {}       # output frame -> {FRAGMENT_EFFECT_KEYS: count}, frames with programs
         self.draw_instances = 1          # instances of the draw being classified
         self.draw_effects = False        # its fragment shader can discard or write gl_FragDepth
         self.vertex_stage_ = None        # Mesa, started at the first draw under a program
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)
         self.egl_api = "EGL_OPENGL_ES_API"
+        self.core = False                # a core-profile context: no default vertex array object
         self.last_depth_draw = None
         self.ignored_prims = 0
         self.partial_frame_dropped = False
@@ -146,12 +162,14 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             if base.startswith(("glColor", "glNormal", "glTexCoord", "glMultiTexCoord", "glMaterial",
                                 "glSecondaryColor", "glFogCoord", "glEdgeFlag", "glIndex")):
                 return
-            fail_call(no, f"{printable(name)} between glBegin and glEnd is not emulated")
+            if base.startswith(("glCallList", "glArrayElement", "glEvalCoord", "glEvalPoint", "glVertexAttrib")):
+                fail_call(no, f"{printable(name)} between glBegin and glEnd is not emulated")
+            return   # any other call there is GL_INVALID_OPERATION: it does nothing
         h = self.HANDLERS.get(base)
         if h is not None:
             try:
                 h(self, no, name, a, args)
-            except (TypeError, ValueError, OverflowError, IndexError, struct.error) as e:
+            except (TypeError, ValueError, OverflowError, IndexError, KeyError, struct.error) as e:
                 # An argument of a type or size no GL call takes: the
                 # capture's error, whichever check it slipped past.
                 fail_call(no, f"{printable(name)}: malformed arguments ({type(e).__name__}: {printable(e, 80)})")
@@ -173,6 +191,15 @@ class Converter(*STATE_GROUPS, GeometryOutput):
     def h_egl_create_context(self, no, name, a, args):
         # EGL's default API is OpenGL ES (eglBindAPI changes it).
         self.es = self.egl_api != "EGL_OPENGL_API"
+        attrs = dict(args).get("attrib_list")
+        self.core = not self.es and context_is_core(attrs, "EGL_CONTEXT_MAJOR_VERSION", "EGL_CONTEXT_MINOR_VERSION",
+                                                    "EGL_CONTEXT_OPENGL_PROFILE_MASK",
+                                                    "EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT")
+
+    def h_glx_create_context(self, no, name, a, args):
+        self.core = context_is_core(dict(args).get("attrib_list"), "GLX_CONTEXT_MAJOR_VERSION_ARB",
+                                    "GLX_CONTEXT_MINOR_VERSION_ARB", "GLX_CONTEXT_PROFILE_MASK_ARB",
+                                    "GLX_CONTEXT_CORE_PROFILE_BIT_ARB")
 
     def h_ignore(self, no, name, a, args):
         pass
@@ -182,6 +209,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
     REFUSED = {
         "eglBindAPI": h_egl_bind_api,
         "eglCreateContext": h_egl_create_context,
+        "glXCreateContextAttribs": h_glx_create_context,
         "glCallList": h_refuse,
         "glCallLists": h_refuse,
         "glNewList": h_refuse,

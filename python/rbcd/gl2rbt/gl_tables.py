@@ -44,6 +44,8 @@ IGNORED_PREFIXES = (
     # vertex (which vertex gives flat-shaded values).
     "glGenSamplers", "glBindSampler", "glSamplerParameter", "glDeleteSamplers", "glFenceSync",
     "glClientWaitSync", "glWaitSync", "glDeleteSync", "glProvokingVertex",
+    # Renderbuffer names (their storage's size is read: glRenderbufferStorage).
+    "glGenRenderbuffers", "glDeleteRenderbuffers",
 )
 # Capabilities of glEnable/glDisable whose effect on the unit's input is nil or
 # emulated; others are refused when enabled.

@@ -3,7 +3,7 @@ import os
 import tempfile
 
 from ..cli import output_target
-from .errors import ConvertError, printable
+from .errors import ConvertError, ToolError, printable
 
 class SafeText:
     """A streamed output by the project's rules (rbcd.cli.output_target;
@@ -29,10 +29,16 @@ class SafeText:
         self.f = os.fdopen(fd, "wb" if binary else "w", buffering=1 << 20)
 
     def write(self, s):
-        self.f.write(s)
+        try:
+            self.f.write(s)
+        except OSError as e:
+            raise ToolError(f"{printable(self.path)}: write failed: {printable(e.strerror)}")
 
     def commit(self):
-        self.f.close()
+        try:
+            self.f.close()
+        except OSError as e:
+            raise ToolError(f"{printable(self.path)}: write failed: {printable(e.strerror)}")
         if self.tmp:
             os.chmod(self.tmp, 0o666 & ~current_umask())
             os.replace(self.tmp, self.target)

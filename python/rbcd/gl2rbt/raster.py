@@ -86,9 +86,13 @@ def convert_in(args, tmpdir, listing, ids):
         proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
         conv.raster = proc.stdin
         run_calls(args, conv, reduced)
-        frames = finish(args, conv, proc, summary_path)
-        for o in outputs:
-            o.commit()
+        frames = finish(args, conv, proc, summary_path)   # -o is in place from here
+        try:
+            for o in outputs:
+                o.commit()
+        except BaseException:
+            remove_trace(args.output)
+            raise
         outputs = []
         return frames, conv
     except RasterStopped:
@@ -144,8 +148,22 @@ def finish(args, conv, proc, summary_path):
     lines = [with_fragment_effects(line, conv.fragment_effects.get(i)) for i, line in enumerate(lines)]
     frames = [json.loads(line) for line in lines]
     if args.summary:
-        write_output(args.summary, "".join(line + "\n" for line in lines), "summary")
+        try:
+            write_output(args.summary, "".join(line + "\n" for line in lines), "summary")
+        except BaseException:
+            remove_trace(args.output)   # nothing left that looks complete
+            raise
     return frames
+
+
+def remove_trace(path):
+    """The trace rbcd-gl-raster committed, when a later output fails: a
+    regular file only (a device or FIFO is never unlinked)."""
+    try:
+        if os.path.isfile(path) and not os.path.islink(path):
+            os.unlink(path)
+    except OSError:
+        pass
 
 
 def stop(proc):
@@ -212,6 +230,10 @@ def report(frames, conv, out):
               f"({sum(e['discard_collisionable'] for e in fx)} collisionable); writing gl_FragDepth: "
               f"{sum(e['frag_depth_draws'] for e in fx)} ({sum(e['frag_depth_collisionable'] for e in fx)} "
               "collisionable); all their fragments are kept", file=out)
+    if conv.rejected_draws:
+        no, why = conv.rejected_draws[0]
+        print(f"{len(conv.rejected_draws)} draws are GL errors as the capture set them up and draw nothing "
+              f"(the first: call {no}, {why})", file=out)
     if conv.offscreen_draws:
         print(f"{conv.offscreen_draws} draws into other targets than the camera pass left out (docs/gl-capture.md)", file=out)
 

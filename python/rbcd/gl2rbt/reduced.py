@@ -105,9 +105,11 @@ def read_reduced_calls(path):
         with open(path, "rb") as raw:
             size = os.fstat(raw.fileno()).st_size
             f = io.BufferedReader(BoundedXz(raw, REDUCED_EXPANSION * max(size, 1 << 16)))
-            reader = CallReader(f)
+            # A new unpickler for every record, as the writer pickles each on
+            # its own: a record cannot name an earlier record's objects (one
+            # 5.9 KB file made a gigabyte of copies of one blob through the memo).
             try:
-                head = reader.load()
+                head = CallReader(f).load()
             except EOFError:
                 head = None
             if head != REDUCED_HEADER:
@@ -115,7 +117,7 @@ def read_reduced_calls(path):
             count = 0
             while True:
                 try:
-                    c = reader.load()
+                    c = CallReader(f).load()
                 except EOFError:
                     raise ConvertError(f"{where(last)}: the reduced capture is cut short (no end record)")
                 if isinstance(c, tuple) and len(c) == 2 and c[0] == REDUCED_END:

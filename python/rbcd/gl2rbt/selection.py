@@ -3,7 +3,7 @@ objects (docs/gl-capture.md, "Identified off line")."""
 import re
 import tomllib
 
-from ..cli import U32, UsageError, integer, real
+from ..cli import U32, UsageError, integer, read_input, real
 from .errors import ConvertError, printable
 
 # ---------------------------------------------------------------- the selection file
@@ -22,14 +22,12 @@ class Selection:
     def __init__(self, path):
         self.path = path
         try:
-            with open(path, "rb") as f:
-                data = f.read(1 << 20)
-                if f.read(1):
-                    raise ConvertError(f"{path}: larger than 1 MiB")
+            # A regular file of at most 1 MiB, opened without waiting on a FIFO.
+            data = read_input(path, "the selection file", 1 << 20)
             doc = tomllib.loads(data.decode("utf-8"))
-        except ConvertError:
-            raise
-        except (OSError, UnicodeDecodeError) as e:
+        except UsageError as e:
+            raise ConvertError(str(e)) from None
+        except UnicodeDecodeError as e:
             raise ConvertError(f"{path}: cannot read: {printable(e)}")
         except tomllib.TOMLDecodeError as e:
             raise ConvertError(f"{path}: {printable(e)}")

@@ -24,6 +24,8 @@ BUFFER_SAMPLERS = {"GL_SAMPLER_BUFFER", "GL_INT_SAMPLER_BUFFER", "GL_UNSIGNED_IN
 SAMPLER = re.compile(r"GL_(INT_|UNSIGNED_INT_)?(SAMPLER|IMAGE)_")
 PRIMS_OF = {"GL_TRIANGLES": lambda n: n // 3, "GL_TRIANGLE_STRIP": lambda n: max(0, n - 2),
             "GL_TRIANGLE_FAN": lambda n: max(0, n - 2)}
+GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INVALID_OPERATION",
+             0x505: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
 UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
 INDEX_SIZES = {"GL_UNSIGNED_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_UNSIGNED_INT": 4}
 
@@ -34,6 +36,10 @@ def es_fragment_shader(vertex_source):
     if version == "100":
         return "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(0.0); }\n"
     return f"#version {version} es\nprecision mediump float;\nout vec4 c;\nvoid main() {{ c = vec4(0.0); }}\n"
+
+
+class DrawRejected(Exception):
+    """Mesa answered the draw with a GL error: in GL the draw does nothing."""
 
 
 class MesaProgram:
@@ -101,9 +107,13 @@ class VertexStage:
             mp = self.programs[pname] = self.build(no, pname, p)
         GL = self.gl
         GL.glUseProgram(mp.name)
+        from OpenGL.error import GLError
         for loc, value in p.uniforms.items():
             if mp.applied.get(loc) != value:
-                self.set_uniform(mp, p, loc, value)
+                try:
+                    self.set_uniform(mp, p, loc, value)
+                except GLError:
+                    pass   # GL_INVALID_OPERATION (a type or count its uniform lacks): the capture's call did nothing
                 mp.applied[loc] = value
         for idx, binding in p.block_bindings.items():
             block = p.block_names.get(idx)
@@ -232,15 +242,19 @@ class VertexStage:
                 fn(i, *vals)
 
     def bindings(self, conv):
+        from OpenGL.error import GLError
         GL = self.gl
         for (target, index), (buf, offset, size) in conv.s.indexed.items():
             if target not in ("GL_UNIFORM_BUFFER", "GL_SHADER_STORAGE_BUFFER") or not buf:
                 continue
             mb = self.buffer(conv, buf)
-            if size is None:
-                GL.glBindBufferBase(self.mesa.enum(target), index, mb)
-            else:
-                GL.glBindBufferRange(self.mesa.enum(target), index, mb, offset, size)
+            try:
+                if size is None:
+                    GL.glBindBufferBase(self.mesa.enum(target), index, mb)
+                else:
+                    GL.glBindBufferRange(self.mesa.enum(target), index, mb, offset, size)
+            except GLError:
+                pass   # past Mesa's binding points, or a range it refuses: GL ignores the capture's call
         for (unit, target), tex in conv.s.units.items():
             if target != "GL_TEXTURE_BUFFER" or tex not in conv.s.texture_buffers:
                 continue
@@ -277,8 +291,8 @@ class VertexStage:
             clip = self.mesa.feedback_positions(lambda: self.issue(name, d, client_indices is not None), prims)
         except GLError as e:
             op = getattr(getattr(e, "baseOperation", None), "__name__", "a call")
-            fail_call(no, f"{printable(name)}: Mesa refuses the draw as the capture set it up "
-                      f"({printable(getattr(e, 'description', None) or e, 120)} in {op})")
+            code = GL_ERRORS.get(getattr(e, "err", None), f"GL error {getattr(e, 'err', '?')}")
+            raise DrawRejected(f"{code} in {op}")
         finally:
             self.free_scratch()
             GL.glBindVertexArray(0)

@@ -2,9 +2,10 @@
 each attribute's array (format, buffer and offset or client memory, divisor)
 and its current value when the array is disabled, the element array buffer
 of each vertex array object, and primitive restart."""
-from ..errors import fail_call, printable
+from ...cli import I32, U32, integer
+from ..errors import checked, fail_call
 
-MAX_ATTRIBS = 64
+MAX_ATTRIBS = 32   # GL_MAX_VERTEX_ATTRIBS as Mesa (llvmpipe) answers it
 
 
 class Attrib:
@@ -29,9 +30,10 @@ class VertexArrayObject:
 
 
 def attrib_index(no, name, v):
-    if not isinstance(v, int) or not 0 <= v < MAX_ATTRIBS:
-        fail_call(no, f"{name}: attribute index {printable(v)} out of range")
-    return v
+    """The attribute index, or None when GL ignores the call for it
+    (GL_INVALID_VALUE: past GL_MAX_VERTEX_ATTRIBS)."""
+    v = checked(no, integer, v, f"{name}: the attribute index", *U32)
+    return v if v < MAX_ATTRIBS else None
 
 
 class AttributeCalls:
@@ -48,9 +50,9 @@ class AttributeCalls:
                 self.s.vaos.setdefault(v, VertexArrayObject())
 
     def h_bind_vertex_array(self, no, name, a, args):
-        v = dict(args).get("array")
-        if not isinstance(v, int) or v < 0:
-            fail_call(no, f"{name}: impossible name")
+        v = checked(no, integer, dict(args)["array"], f"{name}: the vertex array", *U32)
+        if v and v not in self.s.vaos and self.core:
+            return   # not a name glGenVertexArrays gave: GL_INVALID_OPERATION in a core context
         self.current_vao().element = self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
         self.s.vao = v
         vao = self.s.vaos.setdefault(v, VertexArrayObject())
@@ -64,15 +66,17 @@ class AttributeCalls:
                 del self.s.vaos[v]
 
     def h_enable_attrib(self, no, name, a, args):
-        i = attrib_index(no, name, dict(args).get("index"))
-        self.current_vao().attrib(i).enabled = name.startswith("glEnable")
+        i = attrib_index(no, name, dict(args)["index"])
+        if i is not None:
+            self.current_vao().attrib(i).enabled = name.startswith("glEnable")
 
     def h_attrib_pointer(self, no, name, a, args):
         d = dict(args)
-        i = attrib_index(no, name, d.get("index"))
-        size, stride = d.get("size"), d.get("stride", 0)
-        if not (size in (1, 2, 3, 4) or size == "GL_BGRA") or not isinstance(stride, int) or stride < 0:
-            fail_call(no, f"{name}: impossible size or stride")
+        i = attrib_index(no, name, d["index"])
+        size = d["size"]
+        stride = checked(no, integer, d.get("stride", 0), f"{name}: the stride", *I32)
+        if i is None or not (size in (1, 2, 3, 4) or size == "GL_BGRA") or stride < 0:
+            return   # GL_INVALID_VALUE: the call does nothing
         at = self.current_vao().attrib(i)
         at.call, at.size, at.type, at.stride = name, size, d.get("type"), stride
         at.normalized = d.get("normalized", "GL_FALSE") in ("GL_TRUE", True, 1)
@@ -86,22 +90,23 @@ class AttributeCalls:
 
     def h_attrib_divisor(self, no, name, a, args):
         d = dict(args)
-        i = attrib_index(no, name, d.get("index"))
-        div = d.get("divisor")
-        if not isinstance(div, int) or div < 0:
-            fail_call(no, f"{name}: impossible divisor")
-        self.current_vao().attrib(i).divisor = div
+        i = attrib_index(no, name, d["index"])
+        div = checked(no, integer, d["divisor"], f"{name}: the divisor", *U32)
+        if i is not None:
+            self.current_vao().attrib(i).divisor = div
 
     def h_attrib_value(self, no, name, a, args):
         """glVertexAttrib*: the value of a disabled attribute, replayed as called."""
-        i = attrib_index(no, name, a[0] if a else None)
-        self.s.attrib_values[i] = (name, list(a[1:]))
+        i = attrib_index(no, name, a[0])
+        for v in a[1:]:
+            for x in v if isinstance(v, list) else [v]:
+                if isinstance(x, bool) or not isinstance(x, (int, float)):
+                    fail_call(no, f"{name}: a value that is not a number")
+        if i is not None:
+            self.s.attrib_values[i] = (name, list(a[1:]))
 
     def h_primitive_restart_index(self, no, name, a, args):
-        v = a[0] if a else None
-        if not isinstance(v, int) or v < 0:
-            fail_call(no, f"{name}: impossible index")
-        self.s.restart_index = v
+        self.s.restart_index = checked(no, integer, a[0], f"{name}: the index", *U32)
 
     HANDLERS = {
         "glGenVertexArrays": h_gen_vertex_arrays,

@@ -6,7 +6,11 @@ version, by which the shader path's vertex stage knows what Mesa's copy
 lacks."""
 import mmap
 
-from ..errors import fail_call, printable
+from ...cli import U32, integer
+from ..errors import checked, fail_call, printable
+
+I64 = (-(1 << 63), (1 << 63) - 1)
+MAX_BINDINGS = 1024   # indexed binding points kept (llvmpipe has fewer: Mesa refuses the rest at a draw)
 from ..gl_tables import MAX_BUFFER_BYTES
 
 
@@ -37,19 +41,23 @@ class BufferCalls:
 
     def h_bind_buffer(self, no, name, a, args):
         d = dict(args)
-        target, buf = d.get("target"), d.get("buffer")
-        if not is_buffer_target(target) or not isinstance(buf, int) or buf < 0:
-            fail_call(no, f"{name}: impossible target or buffer")
+        target = d["target"]
+        buf = checked(no, integer, d["buffer"], f"{name}: the buffer", *U32)
+        if not is_buffer_target(target):
+            return   # GL_INVALID_ENUM: the call does nothing
         self.s.bound[target] = buf
 
     def h_bind_buffer_base(self, no, name, a, args):
         d = dict(args)
-        target, index, buf = d.get("target"), d.get("index"), d.get("buffer")
-        offset, size = d.get("offset", 0), d.get("size")
-        if not is_buffer_target(target) or not isinstance(index, int) or index < 0 or index >= 1024 \
-                or not isinstance(buf, int) or buf < 0 or not isinstance(offset, int) or offset < 0 \
-                or not (size is None or isinstance(size, int) and size > 0):
-            fail_call(no, f"{name}: impossible target, index, buffer or range")
+        target = d["target"]
+        index = checked(no, integer, d["index"], f"{name}: the index", *U32)
+        buf = checked(no, integer, d["buffer"], f"{name}: the buffer", *U32)
+        offset = checked(no, integer, d.get("offset", 0), f"{name}: the offset", *I64)
+        size = d.get("size")
+        if size is not None:
+            size = checked(no, integer, size, f"{name}: the size", *I64)
+        if not is_buffer_target(target) or index >= MAX_BINDINGS or offset < 0 or (size is not None and size <= 0):
+            return   # GL_INVALID_ENUM or GL_INVALID_VALUE: the call does nothing
         self.s.bound[target] = buf   # glBindBufferBase and Range also bind the generic target
         self.s.indexed[(target, index)] = (buf, offset, size)
 
@@ -75,9 +83,11 @@ class BufferCalls:
         b = self.bound_buffer(no, name, d.get("target"))
         buf = self.s.buffers.get(b)
         off, size, data = d.get("offset", 0), d.get("size", 0), d.get("data")
-        if buf is None or not isinstance(off, int) or not isinstance(size, int) or off < 0 or size < 0 \
-                or off + size > len(buf) or not isinstance(data, (bytes, bytearray)) or len(data) < size:
-            fail_call(no, f"{name}: the range is outside the buffer's data")
+        if not isinstance(off, int) or not isinstance(size, int) or not isinstance(data, (bytes, bytearray)) \
+                or len(data) < size:
+            fail_call(no, f"{name}: malformed arguments (offset, size or data)")
+        if buf is None or off < 0 or size < 0 or off + size > len(buf):
+            return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
         buf[off:off + size] = data[:size]
         self.changed(b)
 
@@ -115,9 +125,9 @@ class BufferCalls:
     def h_memcpy(self, no, name, a, args):
         """apitrace's record of what the application wrote into a mapping."""
         d = dict(args)
-        dest, src = d.get("dest"), d.get("src")
-        if not isinstance(dest, int) or not isinstance(src, (bytes, bytearray)):
-            fail_call(no, "memcpy: not a write into a mapping apitrace recorded")
+        dest, src, n = d.get("dest"), d.get("src"), d.get("n")
+        if not isinstance(dest, int) or not isinstance(src, (bytes, bytearray)) or n != len(src):
+            fail_call(no, "memcpy: not a write into a mapping apitrace recorded (its n is not its data's length)")
         for b, (ptr, offset, length) in self.s.mappings.items():
             if ptr <= dest and dest + len(src) <= ptr + length:
                 at = offset + dest - ptr

@@ -4,11 +4,14 @@ import struct
 
 import numpy as np
 
-from ..errors import fail_call, printable
-from ..gl_tables import CULL, DEPTH_FUNCS, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
+from ...cli import integer
+from ..errors import checked, fail_call, printable
+from ..gl_tables import CULL, DEPTH_FUNCS, INDEX_TYPES, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
 from ..glmath import mat_mul, triangle_indices
 from . import number
 
+PRIM_MODES = PRIM_TRIANGLES | PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY", "GL_TRIANGLES_ADJACENCY",
+                                              "GL_TRIANGLE_STRIP_ADJACENCY", "GL_PATCHES"}
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
 # A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
 # that could need more is refused before anything is computed for it.
@@ -39,6 +42,8 @@ class DrawCalls:
         if mode in PRIM_NO_AREA:
             self.ignored_prims += 1
             return
+        if mode not in PRIM_MODES:
+            return   # GL_INVALID_ENUM: nothing is drawn
         if mode not in PRIM_TRIANGLES:
             fail_call(no, f"{name}: primitive mode {printable(mode)} is not emulated")
         self.open_frame(no)
@@ -144,13 +149,18 @@ class DrawCalls:
         """A draw under a program: its triangles as Mesa assembles them from
         the capture's own vertex shader, one draw record per instance (an
         instanced draw's instance i of object N is object N + i)."""
+        if d is None:
+            return   # GL_INVALID_VALUE: a negative count, first or instance count
         instances = d.get("instancecount", d.get("primcount", 1))
-        count = d.get("count")
-        if not isinstance(instances, int) or not 0 <= instances <= MAX_INSTANCES:
-            fail_call(no, f"{name}: impossible instance count")
+        count = d["count"]
+        if instances > MAX_INSTANCES:
+            fail_call(no, f"{name}: {instances} instances, more than {MAX_INSTANCES}")
+        mode = d["mode"]
+        if mode not in PRIM_MODES or (self.core and self.s.vao == 0) or \
+                (d.get("type", "GL_UNSIGNED_INT") not in INDEX_TYPES and "Elements" in name):
+            return   # GL_INVALID_ENUM, or no vertex array object in a core context: nothing is drawn
         if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard:
             return
-        mode = d.get("mode")
         if mode in PRIM_NO_AREA:
             self.ignored_prims += 1
             return
@@ -168,10 +178,22 @@ class DrawCalls:
         self.draw_instances = instances
         p = self.s.programs[self.s.program]
         self.draw_effects = p.discards or p.frag_depth
-        for i, clip in enumerate(self.vertex_stage().run(self, no, base_name(name), d, instances)):
+        from ..vertex_stage import DrawRejected
+        try:
+            clips = self.vertex_stage().run(self, no, base_name(name), d, instances)
+        except DrawRejected as e:
+            # The draw as the capture set it up is a GL error: GL draws
+            # nothing, and neither does the converter; the report counts it.
+            self.rejected_draws.append((no, str(e)))
+            clips = []
+        for i, clip in enumerate(clips):
             # A primitive with a vertex at NaN or infinity is not drawn (GL
             # leaves its rasterization undefined; Mesa's clipper drops it).
-            good = np.isfinite(clip).all(axis=1).reshape(-1, 3).all(axis=1)
+            # Nor is one whose three vertices have w = 0: the clip volume
+            # meets the plane w = 0 only at its origin (gl_Position =
+            # vec4(0.0), a common way to cull a vertex, draws nothing).
+            good = np.isfinite(clip).all(axis=1).reshape(-1, 3).all(axis=1) & \
+                (clip[:, 3] != 0).reshape(-1, 3).any(axis=1)
             tris = np.arange(len(clip), dtype=np.uint32).reshape(-1, 3)[good]
             if len(tris) == 0:
                 continue
@@ -193,20 +215,28 @@ class DrawCalls:
                 fx[key + "_collisionable"] += tagged
 
     def draw_args(self, no, name, a, args):
-        """The arguments of a draw call, checked: counts, offsets and instances."""
+        """The arguments of a draw call, checked: counts, offsets and
+        instances; None when GL ignores the call (GL_INVALID_VALUE: a
+        negative count, first or instance count, or glDrawRangeElements'
+        end before its start)."""
         d = dict(args)
-        for k in ("first", "count", "instancecount", "primcount", "baseinstance", "start", "end"):
-            v = d.get(k, 0)
-            if not isinstance(v, int) or isinstance(v, bool) or v < 0 or v > MAX_DRAW_VERTICES:
-                fail_call(no, f"{name}: impossible {k}")
-        bv = d.get("basevertex", 0)
-        if not isinstance(bv, int) or isinstance(bv, bool) or abs(bv) > MAX_DRAW_VERTICES:
-            fail_call(no, f"{name}: impossible basevertex")
+        for k in ("mode", "count"):
+            if k not in d:
+                fail_call(no, f"{name}: no {k}")
+        for k in ("first", "count", "instancecount", "primcount", "baseinstance", "start", "end", "basevertex"):
+            if k in d:
+                v = checked(no, integer, d[k], f"{name}: {k}", -MAX_DRAW_VERTICES, MAX_DRAW_VERTICES)
+                if v < 0 and k != "basevertex":
+                    return None
+        if d.get("end", 0) < d.get("start", 0):
+            return None
         return d
 
     def h_draw_under_program(self, no, name, a, args):
         """Draw calls that exist only for programs: instanced, base vertex, base instance."""
         d = self.draw_args(no, name, a, args)
+        if d is None:
+            return   # GL_INVALID_VALUE
         if not self.vertex_program():
             fail_call(no, f"{name} without a vertex shader is not emulated")
         self.shader_draw(no, name, d)
@@ -233,35 +263,30 @@ class DrawCalls:
                 self.h_draw_elements(no, single, None, one)
 
     def h_draw_arrays(self, no, name, a, args):
-        d = dict(args)
-        mode, first, count = d.get("mode"), d.get("first", 0), d.get("count", 0)
-        if not isinstance(first, int) or not isinstance(count, int) or first < 0 or count < 0:
-            fail_call(no, f"{name}: impossible first or count")
-        if count > MAX_RECORD_VERTICES and not self.vertex_program():
+        d = self.draw_args(no, name, a, args)
+        if self.vertex_program() or d is None:
+            return self.shader_draw(no, name, d)
+        mode, first, count = d["mode"], d.get("first", 0), d["count"]
+        if count > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {count} vertices, more than a draw record's {MAX_RECORD_VERTICES}")
-        if self.vertex_program():
-            return self.shader_draw(no, name, self.draw_args(no, name, a, args))
         if not self.active or count == 0:
             return
         arr = self.vertex_source(no, name)
         self.draw(no, mode, self.array_values(arr, first, count, no), name)
 
     def h_draw_elements(self, no, name, a, args):
-        d = dict(args)
-        mode, count, type_, indices = d.get("mode"), d.get("count", 0), d.get("type"), d.get("indices")
-        if not isinstance(count, int) or count < 0:
-            fail_call(no, f"{name}: impossible count")
-        if count > MAX_RECORD_VERTICES and not self.vertex_program():
+        d = self.draw_args(no, name, a, args)
+        if self.vertex_program() or d is None:
+            return self.shader_draw(no, name, d)
+        mode, count, type_, indices = d["mode"], d["count"], d.get("type"), d.get("indices")
+        if count > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {count} indices, more than a draw record's {MAX_RECORD_VERTICES} vertices")
-        if self.vertex_program():
-            return self.shader_draw(no, name, self.draw_args(no, name, a, args))
-        if not self.active or count == 0:
-            return
+        if not self.active or count == 0 or type_ not in INDEX_TYPES:
+            return   # nothing to draw, or GL_INVALID_ENUM
         arr = self.vertex_source(no, name)
+        # Indices outside glDrawRangeElements' [start, end] are drawn (GL
+        # leaves them undefined; Mesa draws them).
         idx = self.index_values(type_, indices, count, no)
-        if "start" in d and isinstance(d["start"], int) and isinstance(d.get("end"), int):
-            if len(idx) and (idx.min() < d["start"] or idx.max() > d["end"]):
-                fail_call(no, f"{name}: an index lies outside [start, end]")
         hi = int(idx.max()) + 1 if len(idx) else 0
         if hi > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: index {hi - 1} is past any vertex array this converter takes")

@@ -7,7 +7,8 @@ attachment has the screen's size (a deferred renderer's geometry pass).
 Draws into other targets (shadow maps, reflections, cube maps, post
 processing at other sizes) are GPU work of their own, left out of the trace
 and counted (docs/gl-capture.md, "Which pass")."""
-from ..errors import fail_call, printable
+from ...cli import U32, integer
+from ..errors import checked, fail_call, printable
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
 
@@ -20,9 +21,8 @@ class FramebufferCalls:
 
     def h_bind_framebuffer(self, no, name, a, args):
         d = dict(args)
-        target, fb = d.get("target"), d.get("framebuffer")
-        if not isinstance(fb, int) or fb < 0:
-            fail_call(no, f"{name}: impossible framebuffer")
+        target = d["target"]
+        fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
         if target in ("GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER"):
             self.s.draw_fbo = fb
 
@@ -60,9 +60,8 @@ class FramebufferCalls:
 
     def h_bind_texture(self, no, name, a, args):
         d = dict(args)
-        target, tex = d.get("target"), d.get("texture")
-        if not isinstance(tex, int) or tex < 0:
-            fail_call(no, f"{name}: impossible texture")
+        target = d["target"]
+        tex = checked(no, integer, d["texture"], f"{name}: the texture", *U32)
         self.s.units[(self.s.active_unit, target)] = tex
         if target == "GL_TEXTURE_2D":
             self.s.texture = tex   # what selection rules name as a draw's texture

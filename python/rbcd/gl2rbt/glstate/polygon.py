@@ -8,20 +8,21 @@ class PolygonCalls:
 
     def h_cull_face(self, no, name, a, args):
         if a[0] not in CULL:
-            fail_call(no, f"glCullFace({printable(a[0])}) is not a face")
+            return   # GL_INVALID_ENUM: the call does nothing
         self.s.cull_face = a[0]
 
     def h_front_face(self, no, name, a, args):
         if a[0] not in ("GL_CW", "GL_CCW"):
-            fail_call(no, f"glFrontFace({printable(a[0])}) is not a winding")
+            return   # GL_INVALID_ENUM: the call does nothing
         self.s.front_face = a[0]
 
     def h_polygon_offset(self, no, name, a, args):
         self.s.offset = (number(a[0], no, "the offset factor"), number(a[1], no, "the offset units"))
 
     def h_polygon_mode(self, no, name, a, args):
-        if a[1] != "GL_FILL":
+        if a[1] in ("GL_LINE", "GL_POINT"):
             fail_call(no, f"glPolygonMode({printable(a[1])}): only GL_FILL is emulated")
+        # GL_FILL, or GL_INVALID_ENUM: nothing changes.
 
     HANDLERS = {
         "glCullFace": h_cull_face,

@@ -10,7 +10,8 @@ location no call named is an explicit one, the same in Mesa)."""
 import hashlib
 import re
 
-from ..errors import fail_call, printable
+from ...cli import I32, integer
+from ..errors import checked, fail_call, printable
 
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
@@ -74,8 +75,9 @@ class ProgramCalls:
         d = dict(args)
         sh = self.s.shaders.get(d.get("shader"))
         strings, lengths = d.get("string"), d.get("length")
-        if sh is None or not isinstance(strings, list) or not all(isinstance(s, str) for s in strings):
-            fail_call(no, f"{name}: no shader, or sources that are not text")
+        if sh is None or not isinstance(strings, list) or not all(isinstance(s, str) for s in strings) \
+                or d.get("count", len(strings)) != len(strings):
+            fail_call(no, f"{name}: no shader, or sources that are not text or not as many as its count")
         if isinstance(lengths, list):
             strings = [s if not isinstance(n, int) or n < 0 else s[:n] for s, n in zip(strings, lengths)]
         sh.sources = strings
@@ -169,9 +171,7 @@ class ProgramCalls:
             if not self.s.program:
                 fail_call(no, f"{name} with no program in use")
             p, rest = self.s.programs[self.s.program], a
-        if not rest or not isinstance(rest[0], int):
-            fail_call(no, f"{name}: no location")
-        loc = rest[0]
+        loc = checked(no, integer, rest[0], f"{name}: the location", *I32)
         if loc == -1:
             return   # GL ignores a location of -1
         values = rest[1:]
@@ -181,6 +181,11 @@ class ProgramCalls:
                                            for x in values[0]):
                 fail_call(no, f"{name}: the values are not numbers")
             values = values[0]
+            count = dict(args).get("count")
+            rows, _, cols = (m.group(4) or "x").partition("x")
+            width = int(m.group(3)) * (int(cols) if cols else int(m.group(3)) if m.group(2) else 1)
+            if not isinstance(count, int) or count < 0 or len(values) != count * width:
+                fail_call(no, f"{name}: {len(values)} values, not its count ({count}) of {width}")
         elif not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values):
             fail_call(no, f"{name}: the values are not numbers")
         transpose = m.group(2) is not None and dict(args).get("transpose") in ("GL_TRUE", True, 1)

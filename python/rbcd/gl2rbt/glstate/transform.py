@@ -36,7 +36,9 @@ class TransformCalls:
 
     def h_matrix_mode(self, no, name, a, args):
         if a[0] not in self.s.stacks:
-            fail_call(no, f"glMatrixMode({printable(a[0])}) is not emulated")
+            if isinstance(a[0], str) and a[0].startswith("GL_MATRIX"):
+                fail_call(no, f"glMatrixMode({printable(a[0])}) is not emulated")
+            return   # GL_INVALID_ENUM: the call does nothing
         self.s.mode = a[0]
 
     def h_load_identity(self, no, name, a, args):
