@@ -82,3 +82,20 @@ class Converter:
 
     def path(self, *names):
         return os.path.join(self.tmp, *names)
+
+
+def pairs_per_frame(trace, collisions):
+    """rbcd-sim on a converted trace: {frame: {(a, b): hits}}."""
+    r = run([program("rbcd-sim"), "--trace", trace, "--collisions", collisions, "-q"])
+    assert r.returncode == 0, f"rbcd-sim failed: {r.stderr.strip()}"
+    hits, frame = {}, None
+    with open(collisions) as f:
+        for line in f:
+            t = line.split()
+            if t[0] == "frame":
+                frame = int(t[1])
+                hits[frame] = {}
+            elif t[0] == "hit":
+                k = (int(t[3]), int(t[4]))
+                hits[frame][k] = hits[frame].get(k, 0) + 1
+    return hits

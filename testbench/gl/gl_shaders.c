@@ -34,6 +34,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "unit_cube.h"
+
 static const char* vertex_source =
     "#version 330 core\n"
     "layout(std140) uniform Matrices { mat4 proj; mat4 view; };\n"
@@ -52,15 +54,6 @@ static const char* effects_source =
     "out vec4 colour;\n"
     "void main() { if (gl_FragCoord.z > 2.0) discard; gl_FragDepth = gl_FragCoord.z; colour = vec4(1.0); }\n";
 
-/* The unit cube, four vertices a face, counter-clockwise seen from outside. */
-static const float cube[24][3] = {
-    {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1},   /* +z */
-    {0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0},   /* -z */
-    {1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1},   /* +x */
-    {0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0},   /* -x */
-    {0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0},   /* +y */
-    {0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1},   /* -y */
-};
 static GLushort triangles[36], strips[29];
 static GLint model_at;
 static const char* fault = "";

@@ -19,6 +19,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "unit_cube.h"
+
 static const char* vertex_source =
     "#version 100\n"
     "uniform mat4 mvp;\n"
@@ -29,12 +31,6 @@ static const char* fragment_source =
     "precision mediump float;\n"
     "void main() { gl_FragColor = vec4(1.0); }\n";
 
-/* The unit cube, four vertices a face, counter-clockwise seen from outside. */
-static const GLfloat cube[24][3] = {
-    {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0, 0, 0}, {0, 1, 0}, {1, 1, 0}, {1, 0, 0},
-    {1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}, {0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0},
-    {0, 1, 0}, {0, 1, 1}, {1, 1, 1}, {1, 1, 0}, {0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1},
-};
 static GLushort triangles[36];
 static GLint mvp_at;
 static int width, height;

@@ -8,7 +8,7 @@ import re
 import pytest
 
 from conftest import program
-from gl_captures import DEPTH_MAX, Converter, capture_path, read_trace, run
+from gl_captures import DEPTH_MAX, Converter, capture_path, pairs_per_frame, read_trace, run
 
 
 @pytest.fixture
@@ -55,19 +55,7 @@ def test_convert(gl):
 
 def test_pairs(gl):
     path, _ = gl.convert()
-    col = gl.path("c.txt")
-    r = run([program("rbcd-sim"), "--trace", path, "--collisions", col, "-q"])
-    assert r.returncode == 0, f"rbcd-sim failed: {r.stderr.strip()}"
-    hits, frame = {}, None
-    with open(col) as f:
-        for line in f:
-            t = line.split()
-            if t[0] == "frame":
-                frame = int(t[1])
-                hits[frame] = {}
-            elif t[0] == "hit":
-                k = (int(t[3]), int(t[4]))
-                hits[frame][k] = hits[frame].get(k, 0) + 1
+    hits = pairs_per_frame(path, gl.path("c.txt"))
     # Overlap, one inside another, and a sphere against a box; box 3 and
     # frame 2's box 2 are apart from everything.
     assert hits[0] == {(1, 2): 8 * 12}, f"frame 0 pairs {hits[0]}"

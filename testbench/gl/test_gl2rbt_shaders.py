@@ -29,7 +29,7 @@ import re
 import pytest
 
 from conftest import program
-from gl_captures import DEPTH_MAX, SHADER_FAULTS, Converter, capture_path, read_trace, run
+from gl_captures import DEPTH_MAX, SHADER_FAULTS, Converter, capture_path, pairs_per_frame, read_trace, run
 
 
 @pytest.fixture
@@ -75,19 +75,7 @@ def test_convert(gl):
 
 def test_pairs(gl):
     path, _ = convert(gl)
-    col = gl.path("c.txt")
-    r = run([program("rbcd-sim"), "--trace", path, "--collisions", col, "-q"])
-    assert r.returncode == 0, f"rbcd-sim failed: {r.stderr.strip()}"
-    hits, frame = {}, None
-    with open(col) as f:
-        for line in f:
-            t = line.split()
-            if t[0] == "frame":
-                frame = int(t[1])
-                hits[frame] = {}
-            elif t[0] == "hit":
-                k = (int(t[3]), int(t[4]))
-                hits[frame][k] = hits[frame].get(k, 0) + 1
+    hits = pairs_per_frame(path, gl.path("c.txt"))
     assert hits == {0: {(1, 2): 8 * 12}, 1: {(1, 2): 8 * 12}}, f"pairs per frame {hits}"
 
 
