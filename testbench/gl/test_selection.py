@@ -151,3 +151,14 @@ def test_too_many_entities_and_bad_settings():
                             ({"first_entity_id": 9, "max_entity_id": 3}, "first_entity_id is above")):
         with pytest.raises(ConvertError, match=words):
             Selection.check_settings("r.toml", settings)
+
+
+def test_the_shipped_rules_read():
+    """Every selection file in workloads/games/ reads (the games' rules)."""
+    import glob
+    from conftest import ROOT
+    files = sorted(glob.glob(f"{ROOT}/workloads/games/*-select.toml"))
+    assert {"openarena-select.toml", "neverball-select.toml", "supertuxkart-select.toml"} <= \
+        {f.rsplit("/", 1)[1] for f in files}
+    for f in files:
+        assert Selection(f).rules, f"{f}: no rule"
