@@ -343,3 +343,51 @@ def test_late_output_failures_leave_no_trace(tmp_path):
     refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--select", tmp_path / "rules.toml"),
             "not a regular file")
     refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--snapshot-calls", "abc"), "--snapshot-calls")
+
+
+def test_instances_keep_ids_by_their_origin(tmp_path):
+    """group_by = "instance_origin": an untagged instanced draw whose
+    instances are three items at per-instance origins (attribute 3); in
+    frame 1 the game lists them in another order, one moved a little and one
+    gone (picked up): each keeps its id from its position, where instance
+    order would have renumbered them."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    vs = ("#version 330 core\nin vec3 p;\nlayout(location = 3) in vec3 o;\n"
+          "void main() { gl_Position = vec4((p.x / 4.0 + o.x) / 32.0 - 1.0, (p.y / 4.0 + o.y) / 24.0 - 1.0, "
+          "0.0, 1.0); }\n")
+    c = shader_calls(vs)
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=2)
+    for frame, origins in enumerate(([[4, 4, 0], [30, 10, 0], [50, 30, 0]], [[50, 31, 0], [4, 5, 0]])):
+        data = np.array(origins, "<f4").tobytes()
+        c.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(data), data=data, usage="GL_STREAM_DRAW")
+        if frame == 0:
+            c.add("glEnableVertexAttribArray", index=3)
+            c.add("glVertexAttribPointer", index=3, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0,
+                  pointer=0)
+            c.add("glVertexAttribDivisor", index=3, divisor=1)
+        c.add("glDrawArraysInstanced", mode="GL_TRIANGLES", first=0, count=3, instancecount=len(origins))
+        c.swap()
+    cap = c.write(tmp_path / "items.xz")
+    rules = tmp_path / "items.toml"
+    rules.write_text('[settings]\norigin_attribute = 3\ntrack_radius = 5\npart_horizontal = 0.5\n'
+                     'part_vertical = 0.5\nfirst_entity_id = 20\n\n'
+                     '[[object]]\nname = "items"\ngroup_by = "instance_origin"\ninstances = [1, 16]\n')
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "i.rbt", "--select", rules, "--summary", tmp_path / "i.jsonl")
+    assert r.returncode == 0, r.stderr
+    from gl_captures import read_trace
+    frames, _ = read_trace(str(tmp_path / "i.rbt"))
+
+    def id_at(frame, x, y):   # the object at window position (x, y): screen row 47 - y
+        objs = {o for (px, py), frags in frames[frame].items() for _, o, _, _ in frags
+                if abs(px - x) <= 1 and abs((47 - py) - y) <= 1}
+        assert len(objs) == 1, f"frame {frame} at ({x}, {y}): {objs}"
+        return objs.pop()
+    first = [id_at(0, 4.1, 4.1), id_at(0, 30.1, 10.1), id_at(0, 50.1, 30.1)]
+    assert first == [20, 21, 22], first
+    assert [id_at(1, 4.1, 5.1), id_at(1, 50.1, 31.1)] == [20, 22], "ids followed the instance order"
+    rules.write_text('[settings]\norigin_attribute = 5\n[[object]]\ngroup_by = "instance_origin"\n')
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "j.rbt", "--select", rules),
+            "attribute 5 is not a per-instance float array")

@@ -67,6 +67,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.rejected_draws = []         # (call, GL error): draws under a program Mesa refused, as GL does
         self.fragment_effects = {}       # output frame -> {FRAGMENT_EFFECT_KEYS: count}, frames with programs
         self.draw_instances = 1          # instances of the draw being classified
+        self.draw_instance = None        # the instance (baseinstance + i) of the draw under a program
         self.draw_effects = False        # its fragment shader can discard or write gl_FragDepth
         self.vertex_stage_ = None        # Mesa, started at the first draw under a program
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)

@@ -61,6 +61,21 @@ class EntityTracker:
             scale = abs(float(np.linalg.det(rot))) ** (1.0 / 3.0)
             if scale > 1e-12 and np.all(np.isfinite(rot)):
                 world = (rot / scale).T @ (mv[0:3, 3] - view[0:3, 3])
+        return self.assign(key, world, no)
+
+    def id_for_origin(self, origin, no):
+        """The entity of a part at `origin`, a position in the world (a
+        draw's per-instance origin, group_by = "instance_origin")."""
+        world = np.asarray(origin, dtype=np.float64)
+        key = ("origin",) + tuple(np.round(world, 4))
+        if key in self.parts:
+            return self.parts[key]
+        return self.assign(key, world, no)
+
+    def assign(self, key, world, no):
+        """A part at `world` joins an entity of this frame near it, or takes
+        the id of the previous frame's nearest within track_radius, or the
+        lowest free one."""
         for ent_id, origins in self.cur:
             if any(self.near_part(world, o) for o in origins):
                 origins.append(world)

@@ -57,7 +57,7 @@ class Selection:
     def check_settings(path, settings):
         """The entity tracker's settings, checked and with their defaults."""
         out = {"first_entity_id": 1, "max_entity_id": 127, "track_radius": 48.0, "part_horizontal": 16.0,
-               "part_vertical": 64.0, "up_axis": "z"}
+               "part_vertical": 64.0, "up_axis": "z", "origin_attribute": 8}
         for k, v in settings.items():
             where = f"{path}: settings.{printable(k)}"
             if k not in out:
@@ -68,6 +68,8 @@ class Selection:
                         raise ConvertError(f"{where}: must be \"x\", \"y\" or \"z\"")
                 elif k.endswith("_id"):
                     v = integer(v, where, *U32)
+                elif k == "origin_attribute":
+                    v = integer(v, where, 0, 31)
                 else:
                     v = real(v, where, 0.0, 1e30)
             except UsageError as e:
@@ -82,8 +84,8 @@ class Selection:
             if k not in self.KEYS:
                 raise ConvertError(f"{where}.{printable(k)}: unknown key")
         if kind == "object":
-            if "id" not in r and r.get("group_by") != "modelview":
-                raise ConvertError(f"{where}: needs id (or group_by = \"modelview\")")
+            if "id" not in r and r.get("group_by") not in ("modelview", "instance_origin"):
+                raise ConvertError(f"{where}: needs id (or group_by)")
             if "id" in r and (not isinstance(r["id"], int) or isinstance(r["id"], bool)
                               or not U32[0] <= r["id"] <= U32[1]):
                 raise ConvertError(f"{where}.id: must be an integer in [0, {U32[1]}]")
@@ -109,8 +111,8 @@ class Selection:
         for k in ("depth_write", "modelview_differs_from_view", "group_instances"):
             if k in r and not isinstance(r[k], bool):
                 raise ConvertError(f"{where}.{k}: must be true or false")
-        if "group_by" in r and r["group_by"] != "modelview":
-            raise ConvertError(f"{where}.group_by: must be \"modelview\"")
+        if "group_by" in r and r["group_by"] not in ("modelview", "instance_origin"):
+            raise ConvertError(f"{where}.group_by: must be \"modelview\" or \"instance_origin\"")
         for k in ("min_screen_area", "max_screen_area"):
             if k in r:
                 try:
@@ -153,7 +155,7 @@ class Selection:
                 self.last_rule = r
                 if kind == "exclude":
                     return None, r.get("name", "exclude")
-                if r.get("group_by") == "modelview":
+                if r.get("group_by") in ("modelview", "instance_origin"):
                     return "entity", r.get("name", "entity")
                 return r["id"], r.get("name", f"id {r['id']}")
         self.last_rule = {}

@@ -2,6 +2,8 @@
 each attribute's array (format, buffer and offset or client memory, divisor)
 and its current value when the array is disabled, the element array buffer
 of each vertex array object, and primitive restart."""
+import numpy as np
+
 from ...cli import I32, U32, integer
 from ..errors import checked, fail_call
 
@@ -43,6 +45,25 @@ class AttributeCalls:
 
     def current_vao(self):
         return self.s.vaos[self.s.vao]
+
+    def instance_origin(self, no, index, instance):
+        """The first three components of attribute `index` of the bound
+        vertex array object for one instance (a per-instance float array,
+        divisor >= 1, from a buffer object): an object's position in its
+        world, for group_by = "instance_origin"."""
+        at = self.current_vao().attribs.get(index)
+        if at is None or not at.enabled or at.divisor == 0 or not at.buffer or at.type != "GL_FLOAT" \
+                or not isinstance(at.size, int):
+            fail_call(no, f"group_by = \"instance_origin\": attribute {index} is not a per-instance float "
+                      "array in a buffer object (settings.origin_attribute)")
+        data = self.s.buffers.get(at.buffer)
+        at_byte = at.offset + (instance // at.divisor) * (at.stride or 4 * at.size)
+        n = min(at.size, 3)
+        if data is None or at_byte < 0 or at_byte + 4 * n > len(data):
+            fail_call(no, f"attribute {index}'s instance {instance} reaches past its buffer's data")
+        origin = np.zeros(3)
+        origin[:n] = np.frombuffer(data, dtype="<f4", count=n, offset=at_byte)
+        return origin
 
     def h_gen_vertex_arrays(self, no, name, a, args):
         for v in dict(args).get("arrays") or []:

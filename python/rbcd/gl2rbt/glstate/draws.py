@@ -197,9 +197,12 @@ class DrawCalls:
             tris = np.arange(len(clip), dtype=np.uint32).reshape(-1, 3)[good]
             if len(tris) == 0:
                 continue
+            self.draw_instance = d.get("baseinstance", 0) + i
             obj = self.object_of(no, None, None, d["count"], clip)
+            self.draw_instance = None
             tagged = tagged or obj is not None
-            if obj is not None and not self.last_rule_table.get("group_instances"):
+            if obj is not None and not self.last_rule_table.get("group_instances") \
+                    and not self.last_rule_table.get("group_by"):
                 obj += i   # one object per instance, unless the rule that chose it groups them
             self.draw_record(no, name, clip, tris, obj, d["count"], None, None, None)
         self.draw_instances = 1

@@ -43,7 +43,13 @@ class ObjectCalls:
         d = self.describe(no, mv, proj, nverts, clip)
         obj, self.last_rule = self.select.classify(d)
         self.last_rule_table = self.select.last_rule
-        if obj == "entity":
+        if obj == "entity" and self.last_rule_table["group_by"] == "instance_origin":
+            if self.draw_instance is None:
+                fail_call(no, f"rule '{self.last_rule}': group_by = \"instance_origin\" needs a draw under a "
+                          "program")
+            origin = self.instance_origin(no, self.select.settings["origin_attribute"], self.draw_instance)
+            obj = self.tracker.id_for_origin(origin, no)
+        elif obj == "entity":
             if mv is None:
                 fail_call(no, f"rule '{self.last_rule}': group_by = \"modelview\" needs the fixed-function "
                           "model-view; this draw is under a program")
