@@ -12,6 +12,7 @@ from . import number
 
 PRIM_MODES = PRIM_TRIANGLES | PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY", "GL_TRIANGLES_ADJACENCY",
                                               "GL_TRIANGLE_STRIP_ADJACENCY", "GL_PATCHES"}
+MESA_STEPS_PER_UNIT = 2.0
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
 # A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
 # that could need more is refused before anything is computed for it.
@@ -107,6 +108,11 @@ class DrawCalls:
             cull, front_ccw = CULL["GL_BACK"], not front_ccw
         depth_func = DEPTH_FUNCS.index(st.depth_func)
         of, ou = st.offset if st.offset_fill else (0.0, 0.0)
+        # The draw stream counts units in steps of the depth buffer; Mesa's
+        # llvmpipe takes one glPolygonOffset unit as two (measured: units 1,
+        # 100, 20000 move a 24-bit depth 1, 199, 39999 steps; a 16-bit one
+        # 2, 200, and to its clamp).
+        ou *= MESA_STEPS_PER_UNIT
         rec = bytearray(b"D")
         # Flags: bit 0 collisionable; bit 1 its fragment shader can discard or
         # write gl_FragDepth (the depth it writes is an upper bound).
