@@ -16,6 +16,7 @@ import re
 import numpy as np
 
 from .errors import ConvertError, fail_call, printable
+from .glstate.buffers import merge_extents
 from .mesa import Mesa
 
 # Sampler types a vertex shader may read: texture buffers, whose contents
@@ -77,8 +78,18 @@ class VertexStage:
         version = conv.s.buffer_versions.get(b)
         if entry[1] != version:
             GL.glBindBuffer(GL.GL_COPY_WRITE_BUFFER, entry[0])
-            GL.glBufferData(GL.GL_COPY_WRITE_BUFFER, len(data), np.frombuffer(data, np.uint8) if len(data) else None,
-                            GL.GL_STATIC_DRAW)
+            written = conv.s.buffer_written.get(b)
+            if written is None:
+                GL.glBufferData(GL.GL_COPY_WRITE_BUFFER, len(data), np.frombuffer(data, np.uint8) if len(data)
+                                else None, GL.GL_STATIC_DRAW)
+            else:
+                # A large buffer: only what the capture wrote is given to
+                # Mesa, so a buffer declared without data costs no memory
+                # there either (its other bytes read as Mesa's fresh storage).
+                GL.glBufferData(GL.GL_COPY_WRITE_BUFFER, len(data), None, GL.GL_STATIC_DRAW)
+                view = np.frombuffer(data, np.uint8)
+                for s, e in merge_extents(written):
+                    GL.glBufferSubData(GL.GL_COPY_WRITE_BUFFER, s, e - s, view[s:e])
             entry[1] = version
         return entry[0]
 

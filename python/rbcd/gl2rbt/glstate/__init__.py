@@ -57,6 +57,7 @@ class GLState:
         # Buffer objects (buffers.py): contents, versions, bindings, mappings.
         self.buffers = {}
         self.buffer_versions = {}
+        self.buffer_written = {}   # large buffers: the [start, end) extents ever written
         self.next_version = 0
         self.bound = {"GL_ARRAY_BUFFER": 0, "GL_ELEMENT_ARRAY_BUFFER": 0}
         self.indexed = {}

@@ -21,6 +21,17 @@ def storage(size):
     return mmap.mmap(-1, size) if size >= 1 << 20 else bytearray(size)
 
 
+def merge_extents(extents):
+    """[start, end) extents, sorted and joined where they touch."""
+    out = []
+    for s, e in sorted(extents):
+        if out and s <= out[-1][1]:
+            out[-1] = (out[-1][0], max(out[-1][1], e))
+        else:
+            out.append((s, e))
+    return out
+
+
 def is_buffer_target(target):
     return isinstance(target, str) and target.startswith("GL_") and target.endswith("_BUFFER")
 
@@ -35,9 +46,19 @@ class BufferCalls:
             fail_call(no, f"{name}: {printable(target)} is not a buffer target")
         return self.s.bound.get(target, 0)
 
-    def changed(self, b):
+    def changed(self, b, start=0, end=None):
+        """Buffer b changed in bytes [start, end) (all of it by default): a
+        new version, and the extent added to those ever written (for a
+        large buffer: what Mesa's copy is given; the rest stays zero)."""
         self.s.next_version += 1
         self.s.buffer_versions[b] = self.s.next_version
+        buf = self.s.buffers[b]
+        end = len(buf) if end is None else end
+        if isinstance(buf, mmap.mmap) and end > start:
+            ext = self.s.buffer_written.setdefault(b, [])
+            ext.append((start, end))
+            if len(ext) > 64:
+                self.s.buffer_written[b] = merge_extents(ext)
 
     def h_bind_buffer(self, no, name, a, args):
         d = dict(args)
@@ -71,12 +92,18 @@ class BufferCalls:
             fail_call(no, f"{name}: impossible size")
         data = d.get("data")
         buf = storage(size)
+        written = 0
         if isinstance(data, (bytes, bytearray)):
             if len(data) < size:
                 fail_call(no, f"{name}: the data is shorter than the size")
             buf[:] = data[:size]
+            written = size
         self.s.buffers[b] = buf
-        self.changed(b)
+        if isinstance(buf, mmap.mmap):
+            self.s.buffer_written[b] = []
+        else:
+            self.s.buffer_written.pop(b, None)
+        self.changed(b, 0, written)
 
     def h_buffer_sub_data(self, no, name, a, args):
         d = dict(args)
@@ -89,7 +116,7 @@ class BufferCalls:
         if buf is None or off < 0 or size < 0 or off + size > len(buf):
             return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
         buf[off:off + size] = data[:size]
-        self.changed(b)
+        self.changed(b, off, off + size)
 
     def h_copy_buffer_sub_data(self, no, name, a, args):
         d = dict(args)
@@ -101,7 +128,7 @@ class BufferCalls:
                 or ro + size > len(src) or wo + size > len(dst):
             fail_call(no, f"{name}: a range outside a buffer's data")
         dst[wo:wo + size] = src[ro:ro + size]
-        self.changed(wb)
+        self.changed(wb, wo, wo + size)
 
     def h_map_buffer(self, no, name, a, args):
         d = dict(args)
@@ -132,7 +159,7 @@ class BufferCalls:
             if ptr <= dest and dest + len(src) <= ptr + length:
                 at = offset + dest - ptr
                 self.s.buffers[b][at:at + len(src)] = src
-                self.changed(b)
+                self.changed(b, at, at + len(src))
                 return
         fail_call(no, "memcpy into memory that is not a mapped buffer's")
 
@@ -142,6 +169,7 @@ class BufferCalls:
             if isinstance(b, int):
                 self.s.buffers.pop(b, None)
                 self.s.buffer_versions.pop(b, None)
+                self.s.buffer_written.pop(b, None)
                 self.s.mappings.pop(b, None)
                 for t, v in self.s.bound.items():
                     if v == b:
