@@ -300,7 +300,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     const auto join_part = [&](std::size_t k) {
         if (collisions_out.active() && !(k == 0 && first_direct))
             append_own_part_collisions(files[k], k == 0, collisions_out);
-        if (frame_stats_out.active()) append_own_part_frame_stats(files[k], cycles_before, frame_stats_out);
+        if (frame_stats_out.active()) append_part_frame_stats(files[k], cycles_before, frame_stats_out);
         cycles_before += files[k].cycles;
     };
     if (trace) {
