@@ -142,7 +142,7 @@ std::string range_text(const rbcd::FrameRange& r) {
 bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
               const std::vector<rbcd::ProvenanceInput>& prov_inputs, const rbcd::SimConfig& cfg,
               rbcd::OutputFile& collisions_out, rbcd::OutputFile& stats_out, rbcd::OutputFile& frame_stats_out,
-              std::vector<rbcd::OlderOutput>& older, nlohmann::json& provenance) {
+              nlohmann::json& provenance) {
     using namespace rbcd;
     const auto t0 = std::chrono::steady_clock::now();
     // A worker reads its trace on one thread unless there are cores to spare.
@@ -247,25 +247,9 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
         const InterruptsHeld held;
         provenance_job = std::async(std::launch::async, [&] { return make_provenance(opt.argv, cfg, inputs); });
     };
-    if (stats_out.active() && !trace) start_hash();
-    // The older outputs' pages freed on the core the first worker to end
-    // leaves, beside the others and the join (OlderOutput), and (without the
-    // workers' digest) the trace hashed there. (Waited for without reaping:
-    // the joins below reap the workers in order.) A worker that failed fails
-    // the run: nothing to hash for.
-    const bool first_ok = workers.first_end_ok();
-    std::future<void> older_gone;
-    if (std::any_of(older.begin(), older.end(), [](const OlderOutput& o) { return o.held(); })) {
-        const InterruptsHeld held;
-        try {
-            older_gone = std::async(std::launch::async, [&older] {
-                for (OlderOutput& o : older) o.release();
-            });
-        } catch (const std::system_error&) {
-            for (OlderOutput& o : older) o.release();   // no thread to be had: here
-        }
-    }
-    if (stats_out.active() && trace && !split && first_ok) start_hash();
+    // (Waited for without reaping: the joins below reap the workers in
+    // order.) A worker that failed fails the run: nothing to hash for.
+    if (stats_out.active() && !split && (!trace || workers.first_end_ok())) start_hash();
 
     RunSnapshot all;
     std::vector<PartFiles> files;
@@ -316,7 +300,7 @@ bool run_jobs(const Options& opt, const std::vector<rbcd::JobPart>& parts,
     const auto join_part = [&](std::size_t k) {
         if (collisions_out.active() && !(k == 0 && first_direct))
             append_own_part_collisions(files[k], k == 0, collisions_out);
-        if (frame_stats_out.active()) append_own_part_frame_stats(files[k], cycles_before, frame_stats_out);
+        if (frame_stats_out.active()) append_part_frame_stats(files[k], cycles_before, frame_stats_out);
         cycles_before += files[k].cycles;
     };
     if (trace) {
@@ -460,11 +444,6 @@ int run(Options opt) {
                         {"--write-trace", opt.write_trace}},
                        inputs);
 
-    // --jobs: older results at the outputs go as their OutputFiles are
-    // opened, but are freed later, on a core a finished worker leaves.
-    std::vector<OlderOutput> older;
-    if (opt.jobs > 1 && !worker)
-        for (const std::string* p : {&opt.collisions, &opt.stats, &opt.frame_stats}) older.emplace_back(*p);
     // Outputs are created before the run so an uncreatable path fails fast.
     OutputFile collisions_out, stats_out, frame_stats_out, vcd_out, fst_out;
     if (!opt.collisions.empty()) collisions_out = OutputFile(opt.collisions);
@@ -569,11 +548,9 @@ int run(Options opt) {
         return inputs;
     };
     nlohmann::json provenance;   // for stats_out (computed by run_jobs, or below)
-    // One process after all: the older outputs go now, as they would have.
-    if (parts.size() < 2) older.clear();
     if (parts.size() >= 2) {
         const auto prov_inputs = provenance_inputs(src ? src->name() : opt.trace);
-        if (run_jobs(opt, parts, prov_inputs, cfg, collisions_out, stats_out, frame_stats_out, older, provenance))
+        if (run_jobs(opt, parts, prov_inputs, cfg, collisions_out, stats_out, frame_stats_out, provenance))
             return 0;
         // No fragment in any of the parts' frames: whether the scene has none
         // at all is one process's to say (it looks at every frame).

@@ -202,7 +202,7 @@ int run(const Options& opt) {
     // One program, one configuration, the same inputs: else not one run.
     const nlohmann::json& pv0 = provenance_of(parts.front());
     for (const auto& p : parts)
-        for (const char* key : {"build", "config_sha256", "inputs"})
+        for (const char* key : {"build", "config_xxh128", "inputs"})
             if (provenance_of(p).value(key, nlohmann::json()) != pv0.value(key, nlohmann::json()))
                 throw InputError(p.path + ": stats: provenance." + key + ": differs from " + parts.front().path + "'s");
 

@@ -3,7 +3,6 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <linux/magic.h>
-#include <sys/statvfs.h>
 #include <sys/vfs.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -226,49 +225,6 @@ bool copies_on_server(int fd) {
     }
 }
 } // namespace
-
-bool older_worth_holding(std::uint64_t size, std::uint64_t free_bytes) {
-    return size >= (std::uint64_t(1) << 20) && static_cast<unsigned __int128>(size) * 4 < free_bytes;
-}
-
-OlderOutput::OlderOutput(const std::string& path) {
-    if (path.empty() || needs_in_place(path)) return;
-    int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_NOFOLLOW | O_CLOEXEC);
-    if (fd < 0) return;
-    // Never as 0, 1 or 2: a process started with those closed would find its
-    // standard streams (--collisions -) to be this file.
-    if (fd <= 2) {
-        const int moved = ::fcntl(fd, F_DUPFD_CLOEXEC, 3);
-        ::close(fd);
-        if (moved < 0) return;
-        fd = moved;
-    }
-    struct stat st {};
-    struct statvfs vs {};
-    // Held only when it is worth it and the space it keeps cannot matter
-    // (the space it takes, not its length: a sparse file keeps less); not on
-    // a network file system, whose client keeps an open file's name, renamed
-    // (.nfsXXXX), beside the output until it is closed.
-    const bool hold = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && ::fstatvfs(fd, &vs) == 0 &&
-                      older_worth_holding(static_cast<std::uint64_t>(st.st_blocks) * 512,
-                                          static_cast<std::uint64_t>(vs.f_bavail) *
-                                              static_cast<std::uint64_t>(vs.f_frsize ? vs.f_frsize : vs.f_bsize)) &&
-                      !copies_on_server(fd);
-    if (hold) fd_ = fd;
-    else ::close(fd);
-}
-
-OlderOutput& OlderOutput::operator=(OlderOutput&& o) noexcept {
-    if (this != &o) {
-        release();
-        fd_ = std::exchange(o.fd_, -1);
-    }
-    return *this;
-}
-
-void OlderOutput::release() {
-    if (fd_ >= 0) ::close(std::exchange(fd_, -1));
-}
 
 OutputFile::OutputFile(std::string path) : path_(std::move(path)) {
     struct stat st {};

@@ -80,34 +80,6 @@ struct NamedPath {
 };
 void check_output_paths(const std::vector<NamedPath>& outputs, const std::vector<NamedPath>& inputs);
 
-// The older regular file at an output path, held open from before the
-// OutputFile that replaces it unlinks it: the name goes then, as formats.md
-// requires, but the file's pages are freed only when its last descriptor
-// closes, here at release() (or when the process ends, however it ends).
-// Freeing a large file's pages costs about 0.25 ms for each 2 MB (ext4);
-// rbcd-sim --jobs releases on a core a finished worker left. Not held, and
-// freed at the unlink as before, when it is under 1 MiB, on a network file
-// system, or when its file system has less than four times the space it
-// takes free (older_worth_holding): a new result must not run out of space
-// because the old one is still held. (A disk quota is not looked at: the
-// held file counts against it until released.)
-bool older_worth_holding(std::uint64_t size, std::uint64_t free_bytes);
-class OlderOutput {
-public:
-    OlderOutput() = default;
-    explicit OlderOutput(const std::string& path);
-    ~OlderOutput() { release(); }
-    OlderOutput(OlderOutput&& o) noexcept : fd_(std::exchange(o.fd_, -1)) {}
-    OlderOutput& operator=(OlderOutput&& o) noexcept;
-    OlderOutput(const OlderOutput&) = delete;
-    OlderOutput& operator=(const OlderOutput&) = delete;
-    bool held() const { return fd_ >= 0; }
-    void release();
-
-private:
-    int fd_ = -1;
-};
-
 class OutputFile {
 public:
     OutputFile() = default;

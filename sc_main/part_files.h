@@ -6,7 +6,6 @@
 #pragma once
 #include <cstdint>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "rbcd/sc_main/output_file.h"
@@ -30,18 +29,5 @@ void append_own_part_collisions(const PartFiles& part, bool first, OutputFile& o
 void copy_part_frame_stats(const std::vector<PartFiles>& parts, OutputFile& out);
 // One part's lines, counted from `offset` (the cycles of the parts before it).
 void append_part_frame_stats(const PartFiles& part, std::uint64_t offset, OutputFile& out);
-// The same for a file this process's own worker wrote (rbcd-sim --jobs),
-// whose lines are JSON as the library writes it, which the path above would
-// write back unchanged but for the two numbers. A line of that shape (no
-// space outside strings, every object's keys in order and none twice, the
-// top level's "end_cycle", "frame" and "start_cycle" plain unsigned numbers,
-// brackets that close at its end) has them moved on in place, a tenth of the
-// time of parsing and writing it again; any other line takes the path
-// above, with its checks and errors. That the line's other numbers and
-// strings are the library's own spelling is not checked: the file is trusted
-// as the worker's, as its collisions are.
-void append_own_part_frame_stats(const PartFiles& part, std::uint64_t offset, OutputFile& out);
-// Whether a line has that shape (for the tests: the quick path is taken).
-bool frame_line_is_library_shaped(std::string_view line);
 
 } // namespace rbcd

@@ -17,7 +17,6 @@
 #include <memory>
 #include <systemc>
 
-#include "rbcd/common/sha256.h"
 #include "rbcd/sc_main/part_digest.h"
 #include "rbcd/sc_main/build_info.h"    // generated at configure time (sc_main/CMakeLists.txt)
 #include "rbcd/sc_main/git_describe.h"  // generated at build time
@@ -278,7 +277,8 @@ nlohmann::json make_provenance(const std::vector<std::string>& argv, const SimCo
     std::error_code ec;
     const auto cwd = std::filesystem::current_path(ec);
     j["working_directory"] = ec ? nlohmann::json(nullptr) : nlohmann::json(cwd.string());
-    j["config_sha256"] = sha256_hex(dump_config_toml(cfg));
+    const std::string config = dump_config_toml(cfg);
+    j["config_xxh128"] = xxh128_hex(config.data(), config.size());
     j["inputs"] = nlohmann::json::array();
     for (const auto& in : inputs) j["inputs"].push_back(input_info(in));
     return j;

@@ -102,14 +102,14 @@ struct ProvenanceInput {
 std::optional<FileId> file_id_at(const std::string& path);
 nlohmann::json input_info(const ProvenanceInput& in);
 
-// An input's digest: XXH3-128 (libxxhash), 32 lower-case hex digits, as
-// `xxhsum -H2` prints it. Not SHA-256: a trace of gigabytes is hashed on every
-// run, and SHA-256 (1.7 GB/s with the x86 SHA extensions) cost as much CPU as
-// parsing the trace (docs/provenance.md).
+// An input's or the configuration's digest: XXH3-128 (libxxhash), 32
+// lower-case hex digits, as `xxhsum -H2` prints it. Not SHA-256: a trace of
+// gigabytes is hashed on every run, and SHA-256 (1.7 GB/s with the x86 SHA
+// extensions) cost as much CPU as parsing the trace (docs/provenance.md).
 std::string xxh128_hex(const void* data, std::size_t len);
 
 // The "provenance" object of stats.json: {"build": build_info(), "command_line",
-// "argv", "working_directory", "config_sha256" (of dump_config_toml(cfg)),
+// "argv", "working_directory", "config_xxh128" (of dump_config_toml(cfg)),
 // "inputs": [input_info...]}.
 nlohmann::json make_provenance(const std::vector<std::string>& argv, const SimConfig& cfg,
                                const std::vector<ProvenanceInput>& inputs);

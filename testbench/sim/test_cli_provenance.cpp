@@ -6,8 +6,6 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "rbcd/common/sha256.h"
-
 using namespace rbcd::cli_test;
 
 TEST_CASE("cli: --version prints the version, git revision, SystemC, compiler and build type") {
@@ -45,7 +43,7 @@ TEST_CASE("cli: stats carry the provenance: build, command line, configuration h
     // The hash of exactly what --dump-config prints for the same settings.
     const Result d = run_sim(td, {"--config", config, "--set", "energy.memory_pj_per_byte=41", "--dump-config"});
     REQUIRE(d.status == 0);
-    CHECK(p["config_sha256"] == rbcd::sha256_hex(d.out));
+    CHECK(p["config_xxh128"] == xxh128_of(d.out));
 
     REQUIRE(p["inputs"].size() == 2);
     std::map<std::string, nlohmann::json> by_role;
