@@ -23,6 +23,7 @@ from .selection import Selection
 
 MAX_TILES = 1 << 20   # rbcd-gl-raster's bound: a bin per tile (8192 x 8192 in 8 x 8 tiles)
 
+
 def context_is_core(attrs, major_key, minor_key, mask_key, core_bit):
     """Whether a context created with these attributes (a flat list of
     names and values, as apitrace records them) is a core profile: 3.2 or
@@ -59,7 +60,6 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.select = Selection(args.select) if args.select else None
         self.tracker = EntityTracker(self.select.settings) if self.select else None
         self.drawn_surfaces = set()
-        self.frame_draws = []            # (call, description) for --list-draws
         self.geo_objects = {}            # object id -> list of (eye verts, tris)
         self.geo_view = None             # the projection of the frame's collisionable draws
         self.geo_space = None            # "eye" or "ndc": the space of the frame's geometry
@@ -202,15 +202,15 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                                     "GLX_CONTEXT_MINOR_VERSION_ARB", "GLX_CONTEXT_PROFILE_MASK_ARB",
                                     "GLX_CONTEXT_CORE_PROFILE_BIT_ARB")
 
-    def h_ignore(self, no, name, a, args):
-        pass
-
-    # Calls that can change geometry or visibility in ways not emulated; the
-    # window system's calls that say which API the capture drew with.
-    REFUSED = {
+    # The window system's calls that say which API and profile the capture
+    # drew with (the rest of them are passed over).
+    WINDOW_SYSTEM = {
         "eglBindAPI": h_egl_bind_api,
         "eglCreateContext": h_egl_create_context,
         "glXCreateContextAttribs": h_glx_create_context,
+    }
+    # Calls that can change geometry or visibility in ways not emulated.
+    REFUSED = {
         "glCallList": h_refuse,
         "glCallLists": h_refuse,
         "glNewList": h_refuse,
@@ -226,4 +226,4 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         "glPushClientAttrib": h_refuse,
         "glPopClientAttrib": h_refuse,
     }
-    HANDLERS = REFUSED | {k: v for group in STATE_GROUPS for k, v in group.HANDLERS.items()}
+    HANDLERS = WINDOW_SYSTEM | REFUSED | {k: v for group in STATE_GROUPS for k, v in group.HANDLERS.items()}

@@ -88,14 +88,14 @@ class Mesa:
                 return int(v)
         raise ValueError(f"{value!r} is not an enumerant of this GL")
 
-    def feedback_positions(self, draw, prims, vertices_per_prim=3):
+    def feedback_positions(self, draw, prims):
         """Runs `draw` (a callable issuing the draw call) with transform
         feedback of gl_Position into a buffer of room for `prims` primitives;
         the clip-space positions as a (vertices, 4) float32 array, in the
         order GL wrote them."""
         import numpy as np
         GL = self.gl
-        size = max(16, prims * vertices_per_prim * 16)
+        size = max(16, prims * 3 * 16)
         GL.glBindBuffer(GL.GL_TRANSFORM_FEEDBACK_BUFFER, self.feedback)
         if size > self.feedback_size:
             GL.glBufferData(GL.GL_TRANSFORM_FEEDBACK_BUFFER, size, None, GL.GL_STREAM_READ)
@@ -116,7 +116,7 @@ class Mesa:
         generated = GL.glGetQueryObjectuiv(self.queries[1], GL.GL_QUERY_RESULT)
         if written != generated:
             raise ToolError(f"transform feedback kept {written} of {generated} primitives (room for {prims})")
-        n = written * vertices_per_prim * 16
+        n = written * 3 * 16
         if n == 0:
             return np.zeros((0, 4), dtype="<f4")
         # Read through a mapping: OpenGL ES has no glGetBufferSubData.

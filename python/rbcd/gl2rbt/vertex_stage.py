@@ -23,12 +23,9 @@ from .mesa import Mesa
 # are buffer objects. Other textures' images are not kept (docs/gl-capture.md).
 BUFFER_SAMPLERS = {"GL_SAMPLER_BUFFER", "GL_INT_SAMPLER_BUFFER", "GL_UNSIGNED_INT_SAMPLER_BUFFER"}
 SAMPLER = re.compile(r"GL_(INT_|UNSIGNED_INT_)?(SAMPLER|IMAGE)_")
-PRIMS_OF = {"GL_TRIANGLES": lambda n: n // 3, "GL_TRIANGLE_STRIP": lambda n: max(0, n - 2),
-            "GL_TRIANGLE_FAN": lambda n: max(0, n - 2)}
 GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INVALID_OPERATION",
              0x505: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
 UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
-INDEX_SIZES = {"GL_UNSIGNED_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_UNSIGNED_INT": 4}
 
 
 def es_fragment_shader(vertex_source):
@@ -58,7 +55,7 @@ class VertexStage:
         self.programs = {}   # capture program -> MesaProgram
         self.vaos = {}       # capture vertex array -> Mesa vertex array
         self.textures = {}   # capture texture -> Mesa texture
-        self.scratch = None  # client memory (attributes, indices) goes through these buffers
+        self.scratch = []    # client memory (attributes, indices) goes through these buffers
         GL = self.gl
         # Mesa's values of the sampler types that are not texture buffers.
         self.texture_samplers = {int(getattr(GL, n)): n for n in dir(GL)
@@ -94,10 +91,8 @@ class VertexStage:
         return entry[0]
 
     def client(self, data):
-        """Client memory in the scratch buffer, from offset 0."""
+        """Client memory in a scratch buffer of its own, from offset 0."""
         GL = self.gl
-        if self.scratch is None:
-            self.scratch = []
         buf = int(GL.glGenBuffers(1))
         self.scratch.append(buf)
         GL.glBindBuffer(GL.GL_COPY_WRITE_BUFFER, buf)
@@ -107,7 +102,7 @@ class VertexStage:
     def free_scratch(self):
         if self.scratch:
             self.gl.glDeleteBuffers(len(self.scratch), self.scratch)
-            self.scratch = None
+            self.scratch = []
 
     def program(self, conv, no, pname):
         p = conv.s.programs[pname]
@@ -187,7 +182,7 @@ class VertexStage:
 
     def set_uniform(self, mp, p, loc, value):
         GL = self.gl
-        func, values, transpose = value
+        func, values, transpose, kind, count = value
         name = p.uniform_names.get(loc)
         if name is not None:
             mloc = mp.locations.get(name, mp.locations.get(name.removesuffix("[0]"), -1))
@@ -195,20 +190,15 @@ class VertexStage:
             mloc = loc if loc in mp.locations.values() else -1   # an explicit location
         if mloc < 0:
             return   # not read by the vertex stage
-        kind = "ui" if func.endswith(("uiv", "ui")) else func.rstrip("v")[-1]
         fn = getattr(GL, func)
-        if not func.endswith("v"):
+        if count is None:
             fn(mloc, *values)
             return
         arr = np.array(values, dtype=UNIFORM_DTYPES[kind])
         if "Matrix" in func:
-            dims = func[len("glUniformMatrix"):].rstrip("fdv")
-            r, _, c = dims.partition("x")
-            n = int(r) * int(c or r)
-            fn(mloc, len(arr) // n, GL.GL_TRUE if transpose else GL.GL_FALSE, arr)
+            fn(mloc, count, GL.GL_TRUE if transpose else GL.GL_FALSE, arr)
         else:
-            n = int(func[len("glUniform")])
-            fn(mloc, len(arr) // n, arr)
+            fn(mloc, count, arr)
 
     # ---- state a draw reads
     def vertex_array(self, conv, no, client_indices):
@@ -286,10 +276,10 @@ class VertexStage:
         (GL.glEnable if conv.s.restart_fixed else GL.glDisable)(GL.GL_PRIMITIVE_RESTART_FIXED_INDEX)
 
     # ---- the draw
-    def run(self, conv, no, name, d, instances):
+    def run(self, conv, no, name, d, instances, prims):
         """The clip-space positions of one draw call (`name` without its
-        extension suffix, `d` its arguments): (vertices, 4) float64, three a
-        triangle, one array per instance."""
+        extension suffix, `d` its arguments, room for `prims` triangles):
+        (vertices, 4) float64, three a triangle, one array per instance."""
         from OpenGL.error import GLError
         GL = self.gl
         try:
@@ -298,7 +288,6 @@ class VertexStage:
             client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
             self.vertex_array(conv, no, client_indices)
             self.bindings(conv)
-            prims = PRIMS_OF[d["mode"]](d["count"]) * instances
             clip = self.mesa.feedback_positions(lambda: self.issue(name, d, client_indices is not None), prims)
         except GLError as e:
             op = getattr(getattr(e, "baseOperation", None), "__name__", "a call")

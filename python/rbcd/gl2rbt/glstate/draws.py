@@ -155,8 +155,6 @@ class DrawCalls:
         """A draw under a program: its triangles as Mesa assembles them from
         the capture's own vertex shader, one draw record per instance (an
         instanced draw's instance i of object N is object N + i)."""
-        if d is None:
-            return   # GL_INVALID_VALUE: a negative count, first or instance count
         instances = d.get("instancecount", d.get("primcount", 1))
         count = d["count"]
         if instances > MAX_INSTANCES:
@@ -175,7 +173,7 @@ class DrawCalls:
         if not self.camera_pass():
             self.offscreen_draws += 1
             return
-        per = {"GL_TRIANGLES": count // 3}.get(mode, max(0, count - 2))
+        per = count // 3 if mode == "GL_TRIANGLES" else max(0, count - 2)   # at most, with no restart
         if per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {per * instances} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "
                       f"(or {MAX_RECORD_VERTICES // 3} an instance; docs/gl-capture.md)")
@@ -186,7 +184,7 @@ class DrawCalls:
         self.draw_effects = p.discards or p.frag_depth
         from ..vertex_stage import DrawRejected
         try:
-            clips = self.vertex_stage().run(self, no, base_name(name), d, instances)
+            clips = self.vertex_stage().run(self, no, base_name(name), d, instances, per * instances)
         except DrawRejected as e:
             # The draw as the capture set it up is a GL error: GL draws
             # nothing, and neither does the converter; the report counts it.
@@ -213,10 +211,9 @@ class DrawCalls:
             self.draw_record(no, name, clip, tris, obj, d["count"], None, None, None)
         self.draw_instances = 1
         self.draw_effects = False
-        self.note_fragment_effects(tagged)
+        self.note_fragment_effects(p, tagged)
 
-    def note_fragment_effects(self, tagged):
-        p = self.s.programs[self.s.program]
+    def note_fragment_effects(self, p, tagged):
         fx = self.fragment_effects.setdefault(self.out_frame, dict.fromkeys(FRAGMENT_EFFECT_KEYS, 0))
         for flag, key in ((p.discards, "discard"), (p.frag_depth, "frag_depth")):
             if flag:
@@ -264,16 +261,13 @@ class DrawCalls:
             one = [("mode", d.get("mode"))] + [(k, v[i]) for k, v in lists.items()]
             if "type" in d:
                 one.append(("type", d["type"]))
-            if single == "glDrawArrays":
-                self.h_draw_arrays(no, single, None, one)
-            elif self.vertex_program():
-                self.shader_draw(no, single, self.draw_args(no, single, None, one))
-            else:
-                self.h_draw_elements(no, single, None, one)
+            (self.h_draw_arrays if single == "glDrawArrays" else self.h_draw_elements)(no, single, None, one)
 
     def h_draw_arrays(self, no, name, a, args):
         d = self.draw_args(no, name, a, args)
-        if self.vertex_program() or d is None:
+        if d is None:
+            return   # GL_INVALID_VALUE
+        if self.vertex_program():
             return self.shader_draw(no, name, d)
         mode, first, count = d["mode"], d.get("first", 0), d["count"]
         if count > MAX_RECORD_VERTICES:
@@ -285,7 +279,9 @@ class DrawCalls:
 
     def h_draw_elements(self, no, name, a, args):
         d = self.draw_args(no, name, a, args)
-        if self.vertex_program() or d is None:
+        if d is None:
+            return   # GL_INVALID_VALUE
+        if self.vertex_program():
             return self.shader_draw(no, name, d)
         mode, count, type_, indices = d["mode"], d["count"], d.get("type"), d.get("indices")
         if count > MAX_RECORD_VERTICES:

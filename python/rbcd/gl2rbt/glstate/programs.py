@@ -12,6 +12,7 @@ import re
 
 from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
+from ..gl_tables import base_name
 
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
@@ -161,7 +162,7 @@ class ProgramCalls:
     def h_uniform(self, no, name, a, args):
         """glUniform*, glUniformMatrix*, glProgramUniform*: kept per program
         and location, to be set in Mesa's program as the capture set them."""
-        name = name[:-3] if name.endswith(("ARB", "EXT", "OES")) else name
+        name = base_name(name)
         m = UNIFORM.match(name)
         if m is None:
             fail_call(no, f"{printable(name)} is not emulated")
@@ -174,7 +175,7 @@ class ProgramCalls:
         loc = checked(no, integer, rest[0], f"{name}: the location", *I32)
         if loc == -1:
             return   # GL ignores a location of -1
-        values = rest[1:]
+        values, count = rest[1:], None
         if m.group(6):   # the v forms: count, [transpose,] values
             values = [v for v in values if isinstance(v, list)]
             if len(values) != 1 or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
@@ -189,7 +190,9 @@ class ProgramCalls:
         elif not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values):
             fail_call(no, f"{name}: the values are not numbers")
         transpose = m.group(2) is not None and dict(args).get("transpose") in ("GL_TRUE", True, 1)
-        p.uniforms[loc] = (name.replace("glProgramUniform", "glUniform"), values, transpose)
+        # As Mesa's program is given it: the glUniform function, the values,
+        # their component type and, for the v forms, their count.
+        p.uniforms[loc] = (name.replace("glProgramUniform", "glUniform"), values, transpose, m.group(5), count)
 
     def h_refuse_stage(self, no, name, a, args):
         fail_call(no, f"{printable(name)}: separable programs and pipelines are not emulated yet")
