@@ -135,6 +135,10 @@ void TraceWriter::tile(const Tile& t) {
         p = put(p, " cprims=");
         p = put(p, t.cprims);
     }
+    if (t.has_shade) {
+        p = put(p, " shade=");
+        p = put(p, std::uint64_t(t.shade));
+    }
     *p++ = '\n';
     buf_.resize(static_cast<std::size_t>(p - buf_.data()));
 

@@ -328,6 +328,15 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
     tile.ordered_other = true;
     tile.other_runs.clear();
     tile.frags.clear();
+    // The shading cost of the tile's shaded fragments (other, and
+    // collisionable ones not tagged c), when a draw gives one.
+    std::uint64_t shaded = 0, shade_sum = 0;
+    bool shade_given = false;
+    const auto add_shaded = [&](const DrawState& s, std::uint64_t n) {
+        shaded += n;
+        shade_sum += n * (s.shade ? s.shade : 100u);
+        shade_given |= s.shade != 0 && n != 0;
+    };
     // Non-collisionable fragments are emitted in primitive order between the
     // collisionable ones: adjacent runs merge.
     const auto add_other = [&tile](std::uint64_t n) {
@@ -387,9 +396,11 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
                 r2 += by2;
             }
             add_other(n);
+            add_shaded(s, n);
             continue;
         }
         std::uint64_t other_here = 0;
+        const std::size_t frags_before = tile.frags.size();
 
         const bool displayed = !t.culled;
         for (std::int32_t y = y0; y <= y1; ++y) {
@@ -439,7 +450,12 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
             zr += t.zy;
         }
         add_other(other_here);
+        add_shaded(s, other_here + (t.culled ? 0 : tile.frags.size() - frags_before));
     }
+    tile.has_shade = shade_given;
+    tile.shade = shade_given ? static_cast<std::uint32_t>(std::clamp<std::uint64_t>(
+                                   (shade_sum + shaded / 2) / shaded, 1, 10000))
+                             : 100;
 }
 
 } // namespace rbcd::scene

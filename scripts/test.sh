@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # The whole suite: also the optional packages whose tests are otherwise skipped.
-./scripts/setup.sh --slurm --plots --eval --fuzz --gl --waves --games
+./scripts/setup.sh --slurm --plots --eval --fuzz --gl --waves --games --supertuxkart
 dir=build
 args=(-DCMAKE_BUILD_TYPE=Release)
 if [ "${1:-}" = "--sanitize" ]; then

@@ -297,6 +297,24 @@ TEST_CASE("io: tile fields other= and base=, and the tile is fully overwritten",
     CHECK(r.next(t) == Event::End);
 }
 
+TEST_CASE("io: tile key shade= is read, and the tile after it is back to 100", "[io][reader]") {
+    TempDir d;
+    auto p = d.write("t.rbt", M + "frame 0\ntile 0 0 shade=250 other=3\ntile 1 0\ntile 2 0 shade=1\n");
+    TraceReader r(p, {});
+    Tile t;
+    REQUIRE(r.next(t) == Event::Frame);
+    REQUIRE(r.next(t) == Event::Tile);
+    CHECK(t.has_shade);
+    CHECK(t.shade == 250);
+    CHECK(fragment_cycles(8, t) == 20);
+    REQUIRE(r.next(t) == Event::Tile);
+    CHECK_FALSE(t.has_shade);
+    CHECK(t.shade == 100);
+    CHECK(fragment_cycles(8, t) == 8);
+    REQUIRE(r.next(t) == Event::Tile);
+    CHECK(fragment_cycles(8, t) == 1);   // 0.08 cycles: at least one
+}
+
 TEST_CASE("io: tile keys prims= and cprims= and o records give the rasterization order", "[io][reader]") {
     TempDir d;
     auto p = d.write("t.rbt", M + "frame 0\ntile 0 0 prims=7 cprims=3\no 4\nf 1 1 10 1 F\no 2\no 1\n"
@@ -937,7 +955,10 @@ TEST_CASE("io: error: tile records", "[io][reader][error]") {
     const std::string F0 = M + "frame 0\n";
     CHECK_ERR(F0 + "tile\n", 3, "tile has too few fields: missing column");
     CHECK_ERR(F0 + "tile 0\n", 3, "tile has too few fields: missing row");
-    CHECK_ERR(F0 + "tile 0 0 foo=1\n", 3, "tile has unknown key 'foo' (known keys: other, base, prims, cprims)");
+    CHECK_ERR(F0 + "tile 0 0 foo=1\n", 3, "tile has unknown key 'foo' (known keys: other, base, prims, cprims, shade)");
+    CHECK_ERR(F0 + "tile 0 0 shade=0\n", 3, "tile shade=0 outside 1..10000 (percent of gpu.cycles_per_fragment)");
+    CHECK_ERR(F0 + "tile 0 0 shade=10001\n", 3, "tile shade=10001 outside 1..10000");
+    CHECK_ERR(F0 + "tile 0 0 shade=50 shade=60\n", 3, "tile key 'shade' given twice");
     CHECK_ERR(F0 + "tile 0 0 Other=1\n", 3, "tile has unknown key 'Other'");
     CHECK_ERR(F0 + "tile 0 0 other=1 other=2\n", 3, "tile key 'other' given twice");
     CHECK_ERR(F0 + "tile 0 0 base=1 other=2 base=3\n", 3, "tile key 'base' given twice");
