@@ -198,7 +198,7 @@ struct rasterizer::Unit {
         R.unit_.busy(k * setup_cycles);
         (extra ? R.cur_.extra_setup_cycles : R.cur_.setup_cycles) += k * setup_cycles;
     }
-    // Inlined into the walks: a call per fragment was a tenth of their cost.
+    // Inlined into the walks: a call per fragment costs a tenth of their time.
     [[gnu::always_inline]] void others(std::uint64_t m) {
         std::uint64_t wait = 0;
         if (R.vcd_) {

@@ -11,7 +11,7 @@ args=(-DCMAKE_BUILD_TYPE=Release)
 if [ "${1:-}" = "--sanitize" ]; then
   dir=build-asan
   # -O1 with line tables only: what ASan's reports need (file and line of each
-  # frame), at about half the compile time of -O2 -g, which was most of CI's.
+  # frame), at about half the compile time of -O2 -g, which would be most of CI's.
   args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DRBCD_SANITIZE=ON
         "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG")
   # Leak detection stays on. ASan notes once per process that SystemC switched

@@ -660,7 +660,7 @@ TEST_CASE("io: error: file cannot be opened", "[io][reader][error]") {
 // ---------------------------------------------------------------- hostile input (issue 12)
 
 TEST_CASE("io: hostile: devices and FIFOs are refused, not read", "[io][reader][error][hostile]") {
-    // /dev/zero used to grow the line buffer until std::bad_alloc.
+    // /dev/zero must not be read: the line buffer would grow until std::bad_alloc.
     CHECK_THROWS_WITH(TraceReader("/dev/zero", {}), Equals("/dev/zero: cannot read trace: is a character device, not "
                                                           "a regular file (use - for standard input)"));
     TempDir d;
@@ -701,7 +701,7 @@ TEST_CASE("io: hostile: a tile with more than input.max_tile_fragments fragments
 
 TEST_CASE("io: hostile: declared work that would overflow simulated time is refused naming clock.mhz",
           "[io][reader][error][hostile]") {
-    // other=2^40 on enough tiles used to wrap totals.cycles around 2^64 ps.
+    // other=2^40 on enough tiles would wrap totals.cycles around 2^64 ps.
     SimConfig cfg;
     const TraceLimits lim = trace_limits(cfg);
     REQUIRE(lim.max_work_cycles == (std::uint64_t(1) << 62) / 2500 / 4);
