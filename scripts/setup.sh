@@ -5,7 +5,7 @@
 set -euo pipefail
 pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
       nlohmann-json3-dev libcli11-dev zlib1g-dev libeigen3-dev libassimp-dev libpng-dev
-      libxxhash-dev)
+      libxxhash-dev libzstd-dev)
 # Optional, only when asked for (their tests are skipped with a message without them):
 #   --slurm  slurm-wlm and munge, for the SLURM sweep backend's test (docs/sweeps.md)
 #   --plots  python3-matplotlib for scripts/rbcd-plot (gnuplot-nox also does)

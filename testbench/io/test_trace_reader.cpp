@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <sys/stat.h>
 #include <zlib.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -20,6 +21,7 @@
 #include "rbcd/common/config.h"
 #include "rbcd/common/errors.h"
 #include "rbcd/common/fragment.h"
+#include "rbcd/io/frame_scan.h"
 #include "rbcd/io/memory_source.h"
 #include "rbcd/io/trace_reader.h"
 #include "rbcd/io/trace_writer.h"
@@ -440,6 +442,44 @@ TEST_CASE("io: a line longer than the read buffer is handled", "[io][reader]") {
 
 // ---------------------------------------------------------------- gzip
 
+namespace {
+// One zstd frame of `content` (level 3).
+std::string zstd_frame(const std::string& content) {
+    std::string out(ZSTD_compressBound(content.size()), '\0');
+    const std::size_t n = ZSTD_compress(out.data(), out.size(), content.data(), content.size(), 3);
+    REQUIRE_FALSE(ZSTD_isError(n));
+    out.resize(n);
+    return out;
+}
+} // namespace
+
+TEST_CASE("io: zstd input is recognised by its bytes; frames are one stream", "[io][reader][zstd]") {
+    TempDir d;
+    const std::string head = M + "screen 32 32\nframe 0\ntile 1 1 other=3 base=44\nf 16 17 100 9 F\n";
+    const std::string rest = "f 16 17 200 9 B c\nframe 1\n";
+    const auto plain = read_path(d.write("plain.rbt", head + rest));
+    for (const char* name : {"t.rbt.zst", "misleading.rbt.gz", "noext"}) {
+        INFO(name);
+        // Two frames, the text cut between them anywhere: one stream.
+        auto p = d.write(name, zstd_frame(head) + zstd_frame(rest));
+        REQUIRE(slurp(p).substr(0, 4) == "\x28\xb5\x2f\xfd");
+        auto items = read_path(p);
+        REQUIRE(items.size() == plain.size());
+        REQUIRE(items[1].tile.frags.size() == 2);
+        CHECK(items[1].tile.base == 44);
+        check_frag(items[1].tile.frags[1], frag(16, 17, 200, 9, Facing::Back, true));
+        CHECK(plain_trace_bytes(p) == 0);   // no byte offsets for --jobs to jump to
+    }
+}
+
+TEST_CASE("io: error: a zstd trace cut short, or with bytes after its last frame", "[io][reader][zstd][error]") {
+    const std::string z = zstd_frame(M + "frame 0\ntile 0 0\nf 1 1 5 1 F\n");
+    CHECK_THAT(error_of(z.substr(0, z.size() - 3)), StartsWith("t.rbt:") &&
+                                                      Contains(": corrupt or truncated zstd stream: unexpected end of file"));
+    CHECK_THAT(error_of(z + "garbage\n"),
+               StartsWith("t.rbt:") && Contains(": corrupt or truncated zstd stream: Unknown frame descriptor"));
+}
+
 TEST_CASE("io: gzip input is recognised by its bytes, not its name", "[io][reader][gzip]") {
     TempDir d;
     std::string text = M + "screen 32 32\nframe 0\ntile 1 1 other=3 base=44\nf 16 17 100 9 F\nf 16 17 200 9 B c\nframe 1\n";
@@ -733,11 +773,12 @@ TEST_CASE("io: hostile: every read chunk size gives the same stream (refill boun
                            "tile 0 0\nf 0 0 5 1 F # tail\nframe 1\ntile 2 2\nf 33 34 7 2 B";
     const auto want = read_path(d.write("ref.rbt", text));
     const std::string plain = d.write("p.rbt", text), gz = d.write_gz("g.rbt", text);
+    const std::string zst = d.write("z.rbt", zstd_frame(text.substr(0, 40)) + zstd_frame(text.substr(40)));
     for (std::size_t chunk : {1u, 2u, 3u, 7u, 64u}) {
         INFO("chunk " << chunk);
         TraceLimits lim;
         lim.read_chunk = chunk;
-        for (const auto& p : {plain, gz}) {
+        for (const auto& p : {plain, gz, zst}) {
             const auto got = read_path(p, lim);
             REQUIRE(got.size() == want.size());
             for (std::size_t i = 0; i < got.size(); ++i) CHECK(got[i].tile.frags.size() == want[i].tile.frags.size());
