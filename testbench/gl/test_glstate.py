@@ -379,3 +379,16 @@ def test_frames_end_at_swaps_and_unmodelled_calls_are_refused():
     gl.glLinkProgram(3)
     with pytest.raises(ConvertError, match="with program 3 bound: immediate-mode and glRect draws"):
         gl.glRectf(0, 0, 1, 1)
+
+
+def test_geometry_leaves_out_vertices_at_infinity():
+    """A vertex at w = 0 that no kept triangle uses (a vertex shader's cull)
+    divides to infinity: the geometry file, which rbcd-cpucd reads as finite
+    numbers only, leaves it out, and the triangles keep their corners."""
+    from rbcd.gl2rbt.geometry import GeometryOutput
+    g = GeometryOutput()
+    g.geo, g.out_frame, g.screen, g.geo_view = io.StringIO(), 0, (W, H), None
+    verts = np.array([[0, 0, -1], [np.inf, -np.inf, -np.inf], [1, 0, -1], [0, 1, -1]], float)
+    g.geo_objects = {5: [(verts, np.array([[0, 2, 3]]))]}
+    g.write_geometry_frame()
+    assert g.geo.getvalue().splitlines()[2:] == ["mesh 5 3 1", "v 0 0 -1", "v 1 0 -1", "v 0 1 -1", "t 0 1 2"]

@@ -92,6 +92,13 @@ class GeometryOutput:
             verts = np.concatenate([v for v, _ in parts])
             offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
             tris = np.concatenate([t + o for (_, t), o in zip(parts, offsets)])
+            # A vertex no triangle keeps may lie at w = 0 (a vertex shader's
+            # way to cull it): at infinity once divided. It is not written,
+            # nor any triangle that would reach it.
+            finite = np.isfinite(verts).all(axis=1)
+            if not finite.all():
+                tris = tris[finite[tris].all(axis=1)]
+                verts, tris = verts[finite], (np.cumsum(finite) - 1)[tris]
             # GL hands the vertices over once per index (a mesh's corners
             # repeat); written once each, the file is a third of the size. Nine
             # significant digits hold a single-precision vertex exactly and the
