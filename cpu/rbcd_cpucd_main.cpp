@@ -15,7 +15,7 @@
 #include "rbcd/cpu/instruction_count.h"
 #include "rbcd/cpu/pixel_overlap.h"
 #include "rbcd/io/trace_reader.h"
-#include "rbcd/sc_main/output_file.h"
+#include "rbcd/common/output_file.h"
 #include "rbcd/scene/scene_source.h"
 
 namespace {

@@ -81,7 +81,7 @@ private:
     std::optional<FileId> id_;
 };
 
-struct SplitDigest;   // sc_main/part_digest.h
+struct SplitDigest;   // run/part_digest.h
 
 // An input as it was read: role ("trace", "scene", "mesh", "config"), path and,
 // for a file, its size in bytes and XXH3-128 digest. `text` set: an embedded
