@@ -41,6 +41,32 @@ inline bool depth_passes(DepthFunc f, std::uint32_t z, std::uint32_t stored) {
     }
 }
 
+// A tile's header and empty lists, before its triangles are walked.
+void begin_tile(Tile& tile, std::uint64_t frame, unsigned col, unsigned row) {
+    tile.frame = frame;
+    tile.col = col;
+    tile.row = row;
+    tile.other = 0;
+    tile.has_base = false;
+    tile.base = 0;
+    // Every binned triangle is set up, covered pixels or not; the culled ones
+    // are binned only because collision detection defers their culling.
+    tile.has_prims = tile.has_cprims = true;
+    tile.prims = tile.cprims = 0;
+    tile.ordered_other = true;
+    tile.other_runs.clear();
+    tile.frags.clear();
+}
+
+// A depth clear's rectangle [x0, x1] x [y0, y1]: depth v, no marks.
+void clear_depth(std::vector<std::uint32_t>& depth, std::vector<std::uint8_t>& marks, std::size_t width, std::int32_t x0,
+                 std::int32_t x1, std::int32_t y0, std::int32_t y1, std::uint32_t v) {
+    for (std::int32_t y = y0; y <= y1; ++y) {
+        std::fill_n(&depth[std::size_t(y) * width + std::size_t(x0)], std::size_t(x1 - x0 + 1), v);
+        std::fill_n(&marks[std::size_t(y) * width + std::size_t(x0)], std::size_t(x1 - x0 + 1), 0);
+    }
+}
+
 } // namespace
 
 DrawState DrawState::full_screen(unsigned width, unsigned height) {
@@ -315,19 +341,7 @@ bool TileRasterizer::next_tile(Tile& tile, SceneSource::FrameImage* image) {
 }
 
 void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSource::FrameImage* image) {
-    tile.frame = frame_;
-    tile.col = col;
-    tile.row = row;
-    tile.other = 0;
-    tile.has_base = false;
-    tile.base = 0;
-    // Every binned triangle is set up, covered pixels or not; the culled ones
-    // are binned only because collision detection defers their culling.
-    tile.has_prims = tile.has_cprims = true;
-    tile.prims = tile.cprims = 0;
-    tile.ordered_other = true;
-    tile.other_runs.clear();
-    tile.frags.clear();
+    begin_tile(tile, frame_, col, row);
     // Non-collisionable fragments are emitted in primitive order between the
     // collisionable ones: adjacent runs merge.
     const auto add_other = [&tile](std::uint64_t n) {
@@ -348,12 +362,8 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
         const std::int32_t x0 = std::max(tx0, t.px0), x1 = std::min(tx1, t.px1);
         const std::int32_t y0 = std::max(ty0, t.py0), y1 = std::min(ty1, t.py1);
         if (t.clear) {
-            if (ti >= depth_limit_) continue;
-            const auto v = static_cast<std::uint32_t>(t.z0 + 0.5);
-            for (std::int32_t y = y0; y <= y1; ++y) {
-                std::fill_n(&depth_[std::size_t(y) * width_ + std::size_t(x0)], std::size_t(x1 - x0 + 1), v);
-                std::fill_n(&marks_[std::size_t(y) * width_ + std::size_t(x0)], std::size_t(x1 - x0 + 1), 0);
-            }
+            if (ti < depth_limit_)
+                clear_depth(depth_, marks_, width_, x0, x1, y0, y1, static_cast<std::uint32_t>(t.z0 + 0.5));
             continue;
         }
         const DrawState& s = draws_[t.draw];
