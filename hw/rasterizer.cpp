@@ -334,8 +334,11 @@ void rasterizer::end_frame() {
 }
 
 // The tile's counts, run and frame, and the tile observers' look at it;
-// returns its culled fragments.
-std::uint64_t rasterizer::count_tile(const Tile& tile) {
+// returns its culled fragments. This and walk_gpu_only are inlined into
+// feed_tile: the per-tile code keeps the layout GCC gives it in one piece
+// (the same instructions executed; left to GCC, the split cost 0.9% more on
+// the default scene).
+[[gnu::always_inline]] inline std::uint64_t rasterizer::count_tile(const Tile& tile) {
     ++stats_.tiles;
     ++cur_.tiles;
     std::uint64_t culled = 0;
@@ -359,7 +362,7 @@ std::uint64_t rasterizer::count_tile(const Tile& tile) {
 
 // The GPU-only timelines: no bank, no unit. A timeline starts to differ from
 // the one before it at its first cprims (c fragment).
-void rasterizer::walk_gpu_only(const Tile& tile, std::uint64_t culled, bool no_setups) {
+[[gnu::always_inline]] inline void rasterizer::walk_gpu_only(const Tile& tile, std::uint64_t culled, bool no_setups) {
     const auto go_live = [&](std::size_t i) {
         if (pure_live_[i]) return;
         const std::size_t from = pure_live_[i - 1] ? i - 1 : i - 2;
