@@ -34,12 +34,26 @@ struct Tile {
     // (prims=), and only because face culling is deferred (cprims=).
     bool has_prims = false, has_cprims = false;
     std::uint64_t prims = 0, cprims = 0;
+    // What shading one of the tile's fragments costs the fragment processors,
+    // in percent of gpu.cycles_per_fragment (shade=; docs/gpu-model.md):
+    // 100 when the trace does not say.
+    bool has_shade = false;
+    std::uint32_t shade = 100;
     // Rasterization order of the non-collisionable fragments, from `o N`
     // records. Empty: the trace did not say (docs/timing.md: spread evenly).
     bool ordered_other = false;
     std::vector<OtherRun> other_runs;
     std::vector<Fragment> frags;   // in rasterization order
 };
+
+// The fragment processors' cycles for one of tile t's shaded fragments, given
+// gpu.cycles_per_fragment c: c x shade= / 100, rounded to the nearest cycle,
+// at least 1 (docs/gpu-model.md).
+inline std::uint64_t fragment_cycles(std::uint64_t c, const Tile& t) {
+    if (!t.has_shade) return c;
+    const std::uint64_t scaled = (c * t.shade + 50) / 100;
+    return scaled ? scaled : 1;
+}
 
 struct StreamHeader {
     std::uint32_t screen_w = 800, screen_h = 480;

@@ -262,7 +262,7 @@ int run(const Options& opt) {
 
 // One line whatever the input held; on a non-zero exit nothing this run
 // created is left at an output path (the outputs' temporaries are removed by
-// their destructors, an older file was removed when the output was opened).
+// their destructors; an older file is removed when its output is opened).
 int fail(int status, const std::string& msg, const Options& opt) {
     std::fprintf(stderr, "rbcd-cpucd: %s\n", rbcd::escape_for_message(rbcd::cut_long_tokens(msg)).c_str());
     rbcd::discard_outputs({opt.pairs, opt.frames, opt.write_geometry, opt.depth_hist},

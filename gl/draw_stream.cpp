@@ -9,7 +9,7 @@
 namespace rbcd::gl {
 namespace {
 
-constexpr char kMagic[8] = {'R', 'B', 'C', 'D', 'G', 'L', 'D', '1'};
+constexpr char kMagic[8] = {'R', 'B', 'C', 'D', 'G', 'L', 'D', '2'};
 // Viewports and scissors may reach past the screen, within the guard band's
 // reach: four screens either way.
 constexpr double kMaxViewport = 4.0 * scene::kMaxScreenSide;
@@ -24,7 +24,7 @@ DrawStreamReader::DrawStreamReader(std::istream& in, std::string name, DrawStrea
     char magic[8];
     in_.read(magic, sizeof magic);
     if (in_.gcount() != sizeof magic || std::memcmp(magic, kMagic, sizeof magic) != 0)
-        throw InputError(name_ + ": not a draw stream (no RBCDGLD1 header)");
+        throw InputError(name_ + ": not a draw stream (no RBCDGLD2 header)");
     header_.width = get<std::uint32_t>();
     header_.height = get<std::uint32_t>();
     header_.tile_w = get<std::uint32_t>();
@@ -132,6 +132,8 @@ void DrawStreamReader::read_draw() {
     s.depth_write = depth_write;
     s.depth_from_unsnapped = true;   // as the GL implementation the captures are checked against
     const auto planes = get<std::uint8_t>();
+    s.shade = get<std::uint16_t>();
+    if (s.shade > 10000) fail("a draw's shading cost is above 10000% of a reference fragment");
     if (planes > scene::kMaxUserClipPlanes)
         fail("more than " + std::to_string(scene::kMaxUserClipPlanes) + " user clip planes");
     s.vx = get_finite("the viewport");

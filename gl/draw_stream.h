@@ -2,7 +2,7 @@
 // hands the rasterizer (rbcd-gl-raster), one frame at a time. Binary, little
 // endian, on a pipe; docs/gl-capture.md defines it:
 //
-//   header  "RBCDGLD1" u32 width, height, tile_w, tile_h, depth_bits
+//   header  "RBCDGLD2" u32 width, height, tile_w, tile_h, depth_bits
 //   'F' u64 call                    a frame starts (frames count up from 0)
 //   'D' u64 call, draw state, mesh  a draw (DrawRecord below)
 //   'C' u64 call, f64 value, i32 x0 y0 x1 y1   a depth clear (scissor, y down)

@@ -6,9 +6,9 @@
 namespace rbcd {
 
 // Out of line, in its own translation unit, on purpose: inlined into the
-// rasterizer's feed_tile (as the same loop once was), it changed gcc's
-// inlining of the GPU-only timelines on the path scenes take, which cost the
-// default scene 3 to 5% (docs/performance.md, fourth pass).
+// rasterizer's feed_tile, it changes gcc's inlining of the GPU-only timelines
+// on the path scenes take, which costs the default scene 3 to 5%
+// (docs/performance.md, "The model").
 std::uint64_t FragmentPipe::walk_tile_cut_at_c(const Tile& tile, std::uint64_t& t_io, unsigned& used_io,
                                                unsigned rate, std::uint64_t run) {
     Regs r = load(t_io, used_io);

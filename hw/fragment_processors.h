@@ -104,6 +104,9 @@ public:
     std::uint64_t done() const { return done_; }
     unsigned processors() const { return p_; }
     unsigned cycles_per_fragment() const { return c_; }
+    // The service time of the fragments pushed from now on (a tile's shade=);
+    // those in flight keep theirs.
+    void set_cycles_per_fragment(unsigned c) { c_ = c; }
 
     // Long runs (rasterizer.cpp, shade_run): a run of identical fragments is
     // eventually periodic, its state shifting by a fixed number of cycles
@@ -223,11 +226,11 @@ class fragment_processors : public sc_core::sc_module {
 public:
     struct stats_t {
         std::uint64_t fragments = 0;            // fragments shaded
-        std::uint64_t busy_cycles = 0;          // processor-cycles shading (fragments x C)
+        std::uint64_t busy_cycles = 0;          // processor-cycles shading (each fragment x its C)
         std::uint64_t idle_cycles = 0;          // processor-cycles idle inside frames
         RBCD_STATS_VISITOR {
             RBCD_STAT(f, s, fragments, "fragments shaded");
-            RBCD_STAT(f, s, busy_cycles, "processor-cycles shading (fragments x cycles_per_fragment)");
+            RBCD_STAT(f, s, busy_cycles, "processor-cycles shading (fragments x cycles_per_fragment x shade= / 100)");
             RBCD_STAT(f, s, idle_cycles, "processor-cycles idle between a frame's start and end");
         }
     };
@@ -251,9 +254,9 @@ public:
     // For runs computed on the pipe directly (no waveforms): count them.
     FragmentPipe& pipe() { return pipe_; }
     void count(std::uint64_t fragments) { stats_.fragments += fragments; }
-    // Frame accounting: a frame of `cycles` in which `fragments` were shaded.
-    void close_frame(std::uint64_t cycles, std::uint64_t fragments) {
-        const std::uint64_t busy = fragments * pipe_.cycles_per_fragment();
+    // Frame accounting: a frame of `cycles` in which shading took `busy`
+    // processor-cycles.
+    void close_frame(std::uint64_t cycles, std::uint64_t busy) {
         const std::uint64_t all = cycles * pipe_.processors();
         stats_.busy_cycles += busy;
         stats_.idle_cycles += all > busy ? all - busy : 0;

@@ -242,7 +242,7 @@ private:
 };
 
 // Per fragment: in the header, so that accept() and the rasterizer's walk
-// inline it (a call a fragment was a tenth of its cost).
+// inline it (a call a fragment costs a tenth of its time).
 template <insertion_sorter::Path P>
 [[gnu::always_inline]] inline void insertion_sorter::insert(zeb_bank& bank, unsigned li, std::uint64_t word, std::uint64_t key) {
     std::uint64_t* row = bank.list(li);

@@ -198,7 +198,7 @@ struct rasterizer::Unit {
         R.unit_.busy(k * setup_cycles);
         (extra ? R.cur_.extra_setup_cycles : R.cur_.setup_cycles) += k * setup_cycles;
     }
-    // Inlined into the walks: a call per fragment was a tenth of their cost.
+    // Inlined into the walks: a call per fragment costs a tenth of their time.
     [[gnu::always_inline]] void others(std::uint64_t m) {
         std::uint64_t wait = 0;
         if (R.vcd_) {
@@ -324,7 +324,7 @@ void rasterizer::end_frame() {
     cur_.baseline = pure_end(0);
     cur_.prims_only = pure_end(1);
     cur_.work = pure_end(2);
-    fp_.close_frame(cur_.with_unit, cur_.shaded);
+    fp_.close_frame(cur_.with_unit, cur_.shading_cycles);
     stats_.stall_no_bank_cycles += cur_.stall_no_bank;
     stats_.stall_queue_full_cycles += cur_.stall_queue_full;
     stats_.stall_fragment_queue_cycles += cur_.stall_fragment_queue;
@@ -333,8 +333,8 @@ void rasterizer::end_frame() {
     for (auto* o : observers_) o->frame_end(cur_);
 }
 
-// The tile's counts, run and frame, and the tile observers' look at it;
-// returns its culled fragments. This and walk_gpu_only are inlined into
+// The tile's counts, run and frame, its shading cost set on every pipe, and
+// the tile observers' look at it; returns its culled fragments. This and walk_gpu_only are inlined into
 // feed_tile: the per-tile code keeps the layout GCC gives it in one piece
 // (the same instructions executed; left to GCC, the split cost 0.9% more on
 // the default scene).
@@ -353,6 +353,14 @@ void rasterizer::end_frame() {
     cur_.culled += culled;
     cur_.other += tile.other;
     cur_.shaded += tile.other + (n - culled);
+    // The tile's shading cost (shade=): every pipe takes it for the tile's
+    // fragments; a GPU-only timeline's pending runs end with each tile.
+    const auto per_fragment = static_cast<unsigned>(fragment_cycles(cfg_.gpu.cycles_per_fragment, tile));
+    cur_.shading_cycles += (tile.other + (n - culled)) * per_fragment;
+    if (per_fragment != fp_.pipe().cycles_per_fragment()) {
+        fp_.pipe().set_cycles_per_fragment(per_fragment);
+        for (auto& p : pure_fp_) p.set_cycles_per_fragment(per_fragment);
+    }
     cur_.prims += tile.prims;
     cur_.cprims += tile.cprims;
     cur_.tiles_with_base += tile.has_base;

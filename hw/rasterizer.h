@@ -63,6 +63,7 @@ struct FrameTimes {
     std::uint64_t tiles = 0, tiles_with_fragments = 0, tiles_with_base = 0;
     std::uint64_t fragments = 0, culled = 0, other = 0;
     std::uint64_t shaded = 0;           // fragments to the fragment processors (other + not c)
+    std::uint64_t shading_cycles = 0;   // ... times each one's cycles (gpu.cycles_per_fragment, shade=)
     std::uint64_t prims = 0, cprims = 0;
     // Rasterizer cycles lost, with the unit.
     std::uint64_t stall_no_bank = 0, stall_queue_full = 0, stall_fragment_queue = 0;

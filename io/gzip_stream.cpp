@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -10,13 +11,16 @@
 
 namespace rbcd {
 
-// The magic is read with a small buffer: a plain file is then read straight
-// into the caller's buffer, and only a gzip one needs a raw buffer of its own.
+// The magic is read with a small buffer (at least the 4 bytes of zstd's): a
+// plain file is then read straight into the caller's buffer, and only a
+// compressed one needs a raw buffer of its own.
 GzipStream::GzipStream(int fd, std::size_t chunk_bytes)
-    : fd_(fd), chunk_(std::max<std::size_t>(chunk_bytes, 2)), in_(std::min<std::size_t>(chunk_, 4096)) {}
+    : fd_(fd), chunk_(std::max<std::size_t>(chunk_bytes, 2)),
+      in_(std::max<std::size_t>(std::min<std::size_t>(chunk_, 4096), 4)) {}
 
 GzipStream::~GzipStream() {
     if (z_init_) inflateEnd(&zs_);
+    if (zd_) ZSTD_freeDStream(zd_);
     if (fd_ > 0) ::close(fd_);
 }
 
@@ -57,7 +61,7 @@ long GzipStream::read_raw(void* dst, std::size_t n) {
 
 long long GzipStream::skip(unsigned long long n) {
     unsigned long long done = 0;
-    if (started_ && !gz_) {
+    if (started_ && !gz_ && !zstd_) {
         const std::size_t k = static_cast<std::size_t>(std::min<unsigned long long>(n, in_end_ - in_pos_));
         in_pos_ += k;
         done += k;
@@ -92,18 +96,31 @@ long GzipStream::read(char* dst, std::size_t n) {
     if (!error_.empty()) return -1;
     if (n > INT_MAX) n = INT_MAX;
     if (!started_) {
-        // The magic needs two bytes; a chunk of one byte reads twice.
-        while (in_end_ - in_pos_ < 2 && refill()) {}
+        // The magics need two (gzip) and four (zstd) bytes; a chunk of one
+        // byte reads four times.
+        while (in_end_ - in_pos_ < 4 && refill()) {}
         if (!error_.empty()) return -1;
         started_ = true;
-        gz_ = in_end_ - in_pos_ >= 2 && in_[in_pos_] == 0x1f && in_[in_pos_ + 1] == 0x8b;
+        const std::size_t have = in_end_ - in_pos_;
+        const unsigned char* m = in_.data() + in_pos_;
+        gz_ = have >= 2 && m[0] == 0x1f && m[1] == 0x8b;
+        zstd_ = have >= 4 && m[0] == 0x28 && m[1] == 0xb5 && m[2] == 0x2f && m[3] == 0xfd;
         if (gz_) {
             in_.resize(chunk_);
             if (inflateInit2(&zs_, 15 + 16) != Z_OK) return fail("cannot start zlib: out of memory");
             z_init_ = true;
+        } else if (zstd_) {
+            in_.resize(std::max(chunk_, ZSTD_DStreamInSize()));
+            zd_ = ZSTD_createDStream();
+            if (!zd_ || ZSTD_isError(ZSTD_initDStream(zd_))) return fail("cannot start zstd: out of memory");
+            // A frame may ask for a window of up to 2^27 bytes (zstd's default
+            // limit): memory stays bounded whatever the file says.
+            ZSTD_DCtx_setParameter(zd_, ZSTD_d_windowLogMax, 27);
         }
     }
-    if (!gz_) {
+    if (gz_) return read_gzip(dst, n);
+    if (zstd_) return read_zstd(dst, n);
+    {
         if (in_pos_ == in_end_) {
             // Straight into the caller's buffer: the bytes would only be copied
             // out of ours (a trace's every byte, once more).
@@ -114,6 +131,31 @@ long GzipStream::read(char* dst, std::size_t n) {
         in_pos_ += k;
         return static_cast<long>(k);
     }
+}
+
+long GzipStream::read_zstd(char* dst, std::size_t n) {
+    for (;;) {
+        if (in_pos_ == in_end_ && !refill()) {
+            if (!error_.empty()) return -1;
+            if (zstd_frame_open_) return fail("corrupt or truncated zstd stream: unexpected end of file");
+            return 0;   // the end of the file, between frames
+        }
+        ZSTD_inBuffer in{in_.data() + in_pos_, in_end_ - in_pos_, 0};
+        ZSTD_outBuffer out{dst, n, 0};
+        // Past a frame's end the next bytes must start another frame: the
+        // decoder refuses anything else ("unknown frame descriptor").
+        const std::size_t rc = ZSTD_decompressStream(zd_, &out, &in);
+        in_pos_ += in.pos;
+        if (ZSTD_isError(rc))
+            return fail(std::string("corrupt or truncated zstd stream: ") + ZSTD_getErrorName(rc));
+        zstd_frame_open_ = rc != 0;
+        if (out.pos) return static_cast<long>(out.pos);
+        if (in.pos == 0 && in_pos_ < in_end_ && in_end_ < in_.size())
+            return fail("corrupt or truncated zstd stream: no progress");
+    }
+}
+
+long GzipStream::read_gzip(char* dst, std::size_t n) {
     for (;;) {
         if (member_done_) {
             // Another member, or the end of the file; anything else is an error.

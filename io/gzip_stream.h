@@ -1,8 +1,9 @@
-// The bytes of a trace: a file descriptor read as it is, or inflated when it
-// starts with the gzip magic (1f 8b), whatever the file's name. Unlike zlib's
-// gzread, it reads every gzip member of a multi-member file and calls anything
-// after the last member that is not another member an error, instead of
-// silently ignoring it (formats.md: the file is gzip or it is text).
+// The bytes of a trace: a file descriptor read as it is, inflated when it
+// starts with the gzip magic (1f 8b), or decompressed when it starts with the
+// zstd magic (28 b5 2f fd), whatever the file's name. Unlike zlib's gzread, it
+// reads every member (gzip) or frame (zstd) of a file that holds several and
+// calls anything after the last one that is not another an error, instead of
+// silently ignoring it (formats.md: the file is compressed or it is text).
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -10,6 +11,8 @@
 #include <vector>
 
 #include <zlib.h>
+
+struct ZSTD_DCtx_s;   // zstd.h's decompression context: only gzip_stream.cpp includes zstd.h
 
 namespace rbcd {
 
@@ -38,8 +41,8 @@ public:
     GzipStream& operator=(const GzipStream&) = delete;
 
     // Up to n bytes into dst; 0 at the end of the data; -1 on an error, which
-    // error() then describes ("corrupt or truncated gzip stream: ...", "read
-    // error: ...").
+    // error() then describes ("corrupt or truncated gzip stream: ...",
+    // "corrupt or truncated zstd stream: ...", "read error: ...").
     long read(char* dst, std::size_t n);
     // Drops the next n bytes of the data: inflated and thrown away from a gzip
     // file, passed over with lseek(2) in a plain one (so that a worker of
@@ -47,7 +50,7 @@ public:
     // Returns the bytes dropped, fewer at the end of the data; -1 on an error.
     long long skip(unsigned long long n);
     const std::string& error() const { return error_; }
-    bool compressed() const { return gz_; }
+    bool compressed() const { return gz_ || zstd_; }
     // Every byte read from the file from now on is shown to `o` (null: none).
     void observe(RawObserver* o) {
         observer_ = o;
@@ -59,16 +62,20 @@ private:
     // One read(2) of the file; -1 with error() set on a failure, 0 at its end.
     long read_raw(void* dst, std::size_t n);
     long fail(const std::string& what);
+    long read_gzip(char* dst, std::size_t n);
+    long read_zstd(char* dst, std::size_t n);
 
     int fd_;
     std::size_t chunk_;               // the raw reads' size, once the stream is known to be gzip
     std::vector<unsigned char> in_;   // raw input: the first bytes, then (gzip) what inflate has not taken
     std::size_t in_pos_ = 0, in_end_ = 0;
     bool raw_eof_ = false;
-    bool started_ = false, gz_ = false;
+    bool started_ = false, gz_ = false, zstd_ = false;
     bool member_done_ = false;    // between members: the next bytes must start another or end the file
     bool z_init_ = false;
     z_stream zs_{};
+    ZSTD_DCtx_s* zd_ = nullptr;
+    bool zstd_frame_open_ = false;   // inside a zstd frame: the file may not end here
     std::string error_;
     RawObserver* observer_ = nullptr;
 };

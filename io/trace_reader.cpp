@@ -34,6 +34,8 @@ namespace rbcd {
 
 namespace {
 constexpr std::uint64_t kTileWorkLimit = std::uint64_t(1) << 40;
+// shade= (percent of gpu.cycles_per_fragment): from 1 to 100 times a reference fragment.
+constexpr std::uint64_t kShadeMin = 1, kShadeMax = 10000;
 }
 
 namespace {
@@ -131,7 +133,7 @@ struct Fields {
 };
 
 const char* const kFragmentShape = "expected 'f x y depth id F|B [c]'";
-const char* const kTileShape = "expected 'tile C R [other=N] [base=N] [prims=N] [cprims=N]'";
+const char* const kTileShape = "expected 'tile C R [other=N] [base=N] [prims=N] [cprims=N] [shade=N]'";
 
 } // namespace
 
@@ -222,7 +224,8 @@ struct TraceReader::Impl {
 FragmentSource::Event TraceReader::Impl::end_tile(const Tile& t) {
     if (lim.max_work_cycles == 0) return Event::Tile;
     std::uint64_t w = 0, setup = 0;
-    const bool over = __builtin_mul_overflow(std::uint64_t(t.frags.size()) + t.other, lim.cycles_per_fragment, &w) ||
+    const std::uint64_t per_fragment = fragment_cycles(lim.cycles_per_fragment, t);
+    const bool over = __builtin_mul_overflow(std::uint64_t(t.frags.size()) + t.other, per_fragment, &w) ||
                       __builtin_mul_overflow(t.prims + t.cprims, lim.cycles_per_primitive, &setup) ||
                       __builtin_add_overflow(w, setup, &w) || __builtin_add_overflow(w, lim.tile_overhead, &w) ||
                       __builtin_add_overflow(w, t.base, &w) || __builtin_add_overflow(work, w, &work) ||
@@ -234,7 +237,7 @@ FragmentSource::Event TraceReader::Impl::end_tile(const Tile& t) {
         throw input_error_at(path, line_in_file(line > 1 ? line - 1 : line),
                              "the run is too long to simulate: the work declared up to tile " + num_str(tcol) + " " +
                                  num_str(trow) + " of frame " + num_str(frame) +
-                                 " ((fragments + other=) x gpu.cycles_per_fragment + (prims= + cprims=) x gpu.setup_cycles_per_primitive + base=) exceeds " +
+                                 " ((fragments + other=) x gpu.cycles_per_fragment (x shade= / 100) + (prims= + cprims=) x gpu.setup_cycles_per_primitive + base=) exceeds " +
                                  num_str(lim.max_work_cycles) + " cycles, the limit for clock.mhz = " + mhz.str() +
                                  " (2^60 ps of simulated time; docs/limits.md)");
     }
@@ -745,8 +748,8 @@ void TraceReader::Impl::start_tile(const Fields& fl, Tile& t) {
                        kTileShape + ")");
     const std::uint64_t c = num(fl.f[1], "tile column");
     const std::uint64_t r = num(fl.f[2], "tile row");
-    bool have_other = false, have_base = false, have_prims = false, have_cprims = false;
-    std::uint64_t other = 0, base = 0, prims = 0, cprims = 0;
+    bool have_other = false, have_base = false, have_prims = false, have_cprims = false, have_shade = false;
+    std::uint64_t other = 0, base = 0, prims = 0, cprims = 0, shade = 100;
     for (int i = 3; i < fl.n; ++i) {
         const std::string_view kv = fl.f[i];
         const std::size_t eq = kv.find('=');
@@ -759,7 +762,8 @@ void TraceReader::Impl::start_tile(const Fields& fl, Tile& t) {
         else if (key == "base") { have = &have_base; dst = &base; }
         else if (key == "prims") { have = &have_prims; dst = &prims; }
         else if (key == "cprims") { have = &have_cprims; dst = &cprims; }
-        else fail("tile has unknown key " + show(key) + " (known keys: other, base, prims, cprims)");
+        else if (key == "shade") { have = &have_shade; dst = &shade; }
+        else fail("tile has unknown key " + show(key) + " (known keys: other, base, prims, cprims, shade)");
         const std::string k(key);
         if (*have) fail("tile key '" + k + "' given twice");
         if (val.empty()) fail("tile field '" + k + "=' has no value");
@@ -770,6 +774,9 @@ void TraceReader::Impl::start_tile(const Fields& fl, Tile& t) {
             fail("tile " + k + "=" + num_str(*dst) + " too large (at most " + num_str(kTileWorkLimit) + ")");
         *have = true;
     }
+    if (have_shade && (shade < kShadeMin || shade > kShadeMax))
+        fail("tile shade=" + num_str(shade) + " outside " + num_str(kShadeMin) + ".." + num_str(kShadeMax) +
+             " (percent of gpu.cycles_per_fragment)");
     if (c >= cols)
         fail("tile column " + num_str(c) + " outside the screen (" + num_str(hdr.screen_w) + " px wide = " +
              num_str(cols) + " tile columns, 0.." + num_str(cols - 1) + ")");
@@ -796,6 +803,8 @@ void TraceReader::Impl::start_tile(const Fields& fl, Tile& t) {
     t.prims = prims;
     t.has_cprims = have_cprims;
     t.cprims = cprims;
+    t.has_shade = have_shade;
+    t.shade = static_cast<std::uint32_t>(shade);
     t.ordered_other = false;
     t.other_runs.clear();
     other_given = have_other;

@@ -58,7 +58,7 @@ void TraceWriter::start(const StreamHeader& header, bool gzip) {
     if (gzip) {
         z_ = std::make_unique<Deflater>();
         // windowBits 15 + 16: a gzip wrapper rather than zlib's. Level 1: a
-        // trace is text of small numbers, and level 6 took three times the
+        // trace is text of small numbers, and level 6 costs three times the
         // CPU of the rest of a game capture's conversion for 20% less size.
         if (deflateInit2(&z_->z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
             throw std::runtime_error(path_ + ": cannot start gzip compression");
@@ -134,6 +134,10 @@ void TraceWriter::tile(const Tile& t) {
     if (t.has_cprims) {
         p = put(p, " cprims=");
         p = put(p, t.cprims);
+    }
+    if (t.has_shade) {
+        p = put(p, " shade=");
+        p = put(p, std::uint64_t(t.shade));
     }
     *p++ = '\n';
     buf_.resize(static_cast<std::size_t>(p - buf_.data()));

@@ -67,6 +67,33 @@ void clear_depth(std::vector<std::uint32_t>& depth, std::vector<std::uint8_t>& m
     }
 }
 
+// Non-collisionable fragments are emitted in primitive order between the
+// collisionable ones: adjacent runs merge.
+[[gnu::always_inline]] inline void add_other(Tile& tile, std::uint64_t n) {
+    if (n == 0) return;
+    tile.other += n;
+    const auto before = static_cast<std::uint32_t>(tile.frags.size());
+    if (!tile.other_runs.empty() && tile.other_runs.back().before == before) tile.other_runs.back().count += n;
+    else tile.other_runs.push_back({before, n});
+}
+
+// The shading cost of a tile's shaded fragments (other, and collisionable
+// ones not tagged c): their mean, when a draw gives one.
+struct ShadeSum {
+    std::uint64_t shaded = 0, sum = 0;
+    bool given = false;
+    [[gnu::always_inline]] void add(std::uint32_t shade, std::uint64_t n) {
+        shaded += n;
+        sum += n * (shade ? shade : 100u);
+        given |= shade != 0 && n != 0;
+    }
+    void set(Tile& tile) const {
+        tile.has_shade = given;
+        tile.shade = given ? static_cast<std::uint32_t>(std::clamp<std::uint64_t>((sum + shaded / 2) / shaded, 1, 10000))
+                           : 100;
+    }
+};
+
 } // namespace
 
 DrawState DrawState::full_screen(unsigned width, unsigned height) {
@@ -342,15 +369,7 @@ bool TileRasterizer::next_tile(Tile& tile, SceneSource::FrameImage* image) {
 
 void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSource::FrameImage* image) {
     begin_tile(tile, frame_, col, row);
-    // Non-collisionable fragments are emitted in primitive order between the
-    // collisionable ones: adjacent runs merge.
-    const auto add_other = [&tile](std::uint64_t n) {
-        if (n == 0) return;
-        tile.other += n;
-        const auto before = static_cast<std::uint32_t>(tile.frags.size());
-        if (!tile.other_runs.empty() && tile.other_runs.back().before == before) tile.other_runs.back().count += n;
-        else tile.other_runs.push_back({before, n});
-    };
+    ShadeSum shade;
 
     const std::int32_t tx0 = std::int32_t(col * tile_w_), ty0 = std::int32_t(row * tile_h_);
     const std::int32_t tx1 = std::min<std::int32_t>(tx0 + std::int32_t(tile_w_), std::int32_t(width_)) - 1;
@@ -396,10 +415,12 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
                 r1 += by1;
                 r2 += by2;
             }
-            add_other(n);
+            add_other(tile, n);
+            shade.add(s.shade, n);
             continue;
         }
         std::uint64_t other_here = 0;
+        const std::size_t frags_before = tile.frags.size();
 
         const bool displayed = !t.culled;
         for (std::int32_t y = y0; y <= y1; ++y) {
@@ -448,8 +469,10 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
             r2 += by2;
             zr += t.zy;
         }
-        add_other(other_here);
+        add_other(tile, other_here);
+        shade.add(s.shade, other_here + (t.culled ? 0 : tile.frags.size() - frags_before));
     }
+    shade.set(tile);
 }
 
 } // namespace rbcd::scene

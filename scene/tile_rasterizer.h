@@ -72,6 +72,11 @@ struct DrawState {
     // captured draw under such a fragment shader): the depth it writes to
     // the kept buffer is an upper bound, marked in depth_marks().
     bool fragment_effects = false;
+    // What shading one of its fragments costs, in percent of
+    // gpu.cycles_per_fragment (a captured draw's fragment shader; 0: not
+    // given, counted as 100). A tile any such draw reaches carries the mean
+    // over its shaded fragments as shade= (docs/gpu-model.md).
+    std::uint16_t shade = 0;
 
     static DrawState full_screen(unsigned width, unsigned height);
 };

@@ -3,12 +3,16 @@
 #
 #   scripts/capture-game.sh openarena MAP FRAMES OUT_DIR [--bots N] [--skip K] [--keep-trace] [--from-trace T]
 #   scripts/capture-game.sh neverball REPLAY.nbr|LEVEL.sol FRAMES OUT_DIR [--skip K] [--keep-trace] [--from-trace T]
+#   scripts/capture-game.sh supertuxkart TRACK FRAMES OUT_DIR [--karts N] [--skip K] [--keep-trace] [--from-trace T]
 #
 # The game runs under Xvfb at 800x480 with Mesa (llvmpipe) and apitrace, from
 # a fresh home directory (no user configuration can leak in). The capture is
 # converted by scripts/rbcd-gl2rbt with the game's selection rules
 # (workloads/games/GAME-select.toml): FRAMES frames after the first K, which
 # the warm-up takes (loading, bots joining, the camera reaching its player).
+# SuperTuxKart's race starts at once (--race-now): its warm-up is counted in
+# the capture, as the frames before the first that draws the race (its
+# "Solid Pass" marker), and K more are skipped after it.
 # OUT_DIR receives the entry in its committed form: the reduced capture
 # (calls.xz: the calls that can change the unit's input, a few per cent of the
 # capture), the settings used and the checksums of the converted trace and
@@ -25,24 +29,27 @@ here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
 # One line, whatever the arguments hold: control characters as \xNN.
 oneline() { LC_ALL=C sed 's/[^[:print:]]/?/g' <<<"$1" | tr '\n' '?' | sed 's/?$//'; }
-usage() { echo "capture-game.sh: $(oneline "$1") (usage: capture-game.sh openarena|neverball MAP FRAMES OUT_DIR [--bots N] [--skip K] [--keep-trace])" >&2; exit 2; }
+usage() { echo "capture-game.sh: $(oneline "$1") (usage: capture-game.sh openarena|neverball|supertuxkart MAP FRAMES OUT_DIR [--bots N] [--karts N] [--skip K] [--keep-trace] [--from-trace T])" >&2; exit 2; }
 
 [ $# -ge 4 ] || usage "four arguments needed"
 game=$1 map=$2 frames=$3 out=$4
 shift 4
-bots=4 skip= keep=no from=
+bots=4 karts=4 skip= keep=no from=
 while [ $# -gt 0 ]; do
   case "$1" in
     --bots) [ $# -ge 2 ] || usage "--bots needs a number"; bots=$2; shift 2 ;;
+    --karts) [ $# -ge 2 ] || usage "--karts needs a number"; karts=$2; shift 2 ;;
     --skip) [ $# -ge 2 ] || usage "--skip needs a number"; skip=$2; shift 2 ;;
     --keep-trace) keep=yes; shift ;;
     --from-trace) [ $# -ge 2 ] || usage "--from-trace needs a capture"; from=$2; shift 2 ;;
     *) usage "unknown option '$1'" ;;
   esac
 done
-case "$game" in openarena|neverball) ;; *) usage "unknown game '$game'" ;; esac
+case "$game" in openarena|neverball|supertuxkart) ;; *) usage "unknown game '$game'" ;; esac
 [[ "$frames" =~ ^[1-9][0-9]{0,4}$ ]] || usage "FRAMES '$frames' is not a number from 1 to 99999"
 [[ "$bots" =~ ^[1-9]$ ]] || usage "--bots '$bots' is not a number from 1 to 9"
+# The shipped SuperTuxKart rules know four kart models (below).
+[[ "$karts" =~ ^[1-4]$ ]] || usage "--karts '$karts' is not a number from 1 to 4"
 [ -z "$skip" ] || [[ "$skip" =~ ^[0-9]{1,4}$ ]] || usage "--skip '$skip' is not a number below 10000"
 [ ! -e "$out" ] || usage "$out exists: the entry is written only into a new directory"
 [ -z "$from" ] || [ -f "$from" ] || usage "--from-trace $from: not a file"
@@ -50,10 +57,12 @@ case "$game" in openarena|neverball) ;; *) usage "unknown game '$game'" ;; esac
 need=(apitrace gzip sha256sum)
 if [ -z "$from" ]; then
   need+=(xvfb-run)
-  [ "$game" = openarena ] && need+=(/usr/games/openarena) || need+=(/usr/games/neverball)
+  need+=("/usr/games/$game")
 fi
 for t in "${need[@]}"; do
-  command -v "$t" >/dev/null || { echo "capture-game.sh: $t is missing (scripts/setup.sh --gl --games installs it)" >&2; exit 1; }
+  option=--games
+  [ "$t" = /usr/games/supertuxkart ] && option=--supertuxkart
+  command -v "$t" >/dev/null || { echo "capture-game.sh: $t is missing (scripts/setup.sh --gl $option installs it)" >&2; exit 1; }
 done
 raster=${RBCD_GL_RASTER:-}
 [ -n "$raster" ] || raster=$(command -v rbcd-gl-raster || true)
@@ -116,6 +125,43 @@ print(" ".join(sorted(names)))') || maps=
        +set con_notifytime -1 +set com_introplayed 1 +devmap "$map" +exec rbcdcap.cfg)
   rules=$root/workloads/games/openarena-select.toml
   limit=$(( 120 + 2 * (skip + frames) ))
+elif [ "$game" = supertuxkart ]; then
+  [[ "$map" =~ ^[a-z0-9_]{1,64}$ ]] || usage "TRACK '$map' is not a track name"
+  # Race tracks only: arenas, soccer fields and cutscenes have no race.
+  tracks=/usr/share/games/supertuxkart/data/tracks
+  if [ -z "$from" ] && [ -d "$tracks" ]; then
+    races=$(/usr/bin/python3 -c '
+import glob, os, sys, xml.etree.ElementTree as ET
+out = []
+for p in sorted(glob.glob(os.path.join(sys.argv[1], "*", "track.xml"))):
+    try:
+        a = {k.lower(): v.upper() for k, v in ET.parse(p).getroot().attrib.items()}
+    except (OSError, ET.ParseError):
+        continue
+    if not any(a.get(k) == "Y" for k in ("arena", "soccer", "cutscene", "internal")):
+        out.append(os.path.basename(os.path.dirname(p)))
+print(" ".join(out))' "$tracks") || races=
+    if [ -n "$races" ] && [[ " $races " != *" $map "* ]]; then
+      usage "TRACK '$map' is not one of SuperTuxKart's race tracks ($races)"
+    fi
+  fi
+  : "${skip:=0}"
+  # Four kart models the shipped rules name by their textures' images
+  # (workloads/games/supertuxkart-select.toml): the player's first, which
+  # the camera follows; in profile mode every kart is driven by the AI.
+  ai=(kiki puffy xue)
+  kart_args=(--kart=tux --numkarts=$karts)
+  [ "$karts" -lt 2 ] || kart_args+=("--ai=$(IFS=,; echo "${ai[*]:0:karts-1}")")
+  # Under llvmpipe a frame takes longer than the game's longest step (3/60 s),
+  # so each frame advances 0.05 s of the race: the race lasts long enough for
+  # the frames asked for, with 2 s to spare (a faster machine gives more
+  # frames, of which the first are taken).
+  race_s=$(( (skip + frames + 19) / 20 + 2 ))
+  cmd=(env HOME="$work/home" /usr/games/supertuxkart --no-start-screen --race-now "--track=$map"
+       "${kart_args[@]}" --profile-time=$race_s --seed=1 --screensize=${width}x$height --windowed
+       --apitrace --disable-dynamic-lights --disable-ibl --disable-hd-textures --disable-texture-compression)
+  rules=$root/workloads/games/supertuxkart-select.toml
+  limit=$(( 300 + 2 * (skip + frames) ))
 else
   [ -f "$map" ] || usage "$map is not a file"
   # Its name goes into capture.toml as a TOML string: printable, no quote or backslash.
@@ -150,15 +196,29 @@ SDL_AUDIODRIVER=dummy timeout --signal=TERM --kill-after=30 "$limit" \
 rc=$?
 set -e
 fi
-# OpenArena quits by itself (0); a replay is stopped by the time limit (124),
-# after apitrace has flushed the capture on SIGTERM.
+# OpenArena and SuperTuxKart quit by themselves (0); a replay is stopped by
+# the time limit (124), after apitrace has flushed the capture on SIGTERM.
 if [ ! -s "$capture" ] || { [ $rc -ne 0 ] && [ $rc -ne 124 ]; }; then
   echo "capture-game.sh: the game or its capture failed (exit $rc); its log:" >&2
   tail -n 20 "$work/game.log" >&2
   exit 1
 fi
+race_start=
+if [ "$game" = supertuxkart ]; then
+  # The race's first frame: the first that draws the 3D scene (the frames
+  # before it are the loading screens).
+  race_start=$(apitrace dump --color=never "$capture" 2>/dev/null |
+    awk '/ glXSwapBuffers\(| eglSwapBuffers\(/ {f++} /buf = "Solid Pass begin"/ {print f + 0; exit}') || true
+  [ -n "$race_start" ] || { echo "capture-game.sh: $capture: no frame draws the race (no \"Solid Pass begin\" marker)" >&2; exit 1; }
+  echo "capture-game.sh: the race starts at frame $race_start of the capture"
+  skip=$(( race_start + skip ))
+fi
 
 last=$(( skip + frames - 1 ))
+# The game's own configuration (the settings its options gave), kept beside
+# the entry's other settings.
+stk_config=$work/home/.config/supertuxkart/config-0.10/config.xml
+[ "$game" != supertuxkart ] || [ ! -f "$stk_config" ] || cp "$stk_config" "$work/entry/game-config.xml"
 echo "capture-game.sh: converting frames $skip to $last"
 RBCD_GL_RASTER=$raster "$here/rbcd-gl2rbt" "$capture" -o "$work/trace.rbt.gz" --frames "$skip:$last" \
   --screen $width $height --select "$rules" --geometry "$work/geometry.geo" \
@@ -179,11 +239,19 @@ sum() { sha256sum | cut -d' ' -f1; }
     echo "bot_skill = 3"
     echo "fixed_time_ms = 33"
   fi
+  if [ "$game" = supertuxkart ]; then
+    echo "race_start = $race_start      # the first frame that draws the race; first_frame counts --skip after it"
+    echo "karts = $karts"
+    echo "race_seconds = $race_s"
+  fi
   echo "apitrace_version = \"$(dpkg-query -W -f='${Version}' apitrace 2>/dev/null || echo unknown)\""
   echo "mesa_version = \"$(dpkg-query -W -f='${Version}' libgl1-mesa-dri 2>/dev/null || echo unknown)\""
   echo "selection = \"workloads/games/$(basename "$rules")\""
   printf 'command = ['; printf '"%s", ' "${cmd[@]}" | sed "s|$work|TMP|g; s/, \$//"; echo ']'
   if [ "$game" = openarena ]; then echo "config = '''"; cat "$work/rbcdcap.cfg"; echo "'''"; fi
+  if [ -f "$work/entry/game-config.xml" ]; then
+    echo "game_config = \"game-config.xml\"      # the game's configuration as it wrote it at the end of the run"
+  fi
   echo ""
   echo "[sha256]   # scripts/game-suite checks the regenerated files against these"
   echo "calls = \"$(sum <"$work/entry/calls.xz")\""

@@ -63,6 +63,11 @@ if ((games)); then
   # The game suite's traces and geometry, regenerated from the committed
   # reduced captures and checked against their recorded checksums.
   mkdir -p "$out"
+  # An entry named by itself is the suite's (workloads/games/NAME).
+  for i in "${!game_entries[@]}"; do
+    e=${game_entries[$i]}
+    [ -d "$e" ] || [ ! -d "$root/workloads/games/$e" ] || game_entries[$i]=$root/workloads/games/$e
+  done
   echo "reproduce.sh: scripts/game-suite expand -o $out/inputs ${game_entries[*]}" >&2
   /usr/bin/python3 "$root/scripts/game-suite" expand -o "$out/inputs" -j "$jobs" "${game_entries[@]}" >&2 ||
     { echo "reproduce.sh: the game suite could not be expanded" >&2; exit 1; }
@@ -216,6 +221,15 @@ if ((need_images)); then
   echo >&2
 fi
 
+# A game capture's geometry (skinned karts: a few hundred MB for 300 frames)
+# may pass rbcd-cpucd's default bound on a file's size, which is there for
+# files of unknown origin; these were regenerated and checked here.
+geometry_limit() {
+  local g=${1%.rbt.gz}.geo size
+  size=$(stat -c %s "$g" 2>/dev/null || echo 0)
+  ((size < 268435456)) || echo "--max-geometry-bytes $((size + 1))"
+}
+
 # ---- rbcd-cpucd, one scene at a time and nothing else running: it is timed.
 if ((need_cpucd)); then
   k=0
@@ -223,7 +237,7 @@ if ((need_cpucd)); then
     name=$(input_name "$s") k=$((k + 1))
     progress "rbcd-cpucd" "$k" "${#scenes[@]}" "$name"
     input=(--scene "$s")
-    is_trace "$s" && input=(--geometry "${s%.rbt.gz}.geo" --trace "$s")
+    is_trace "$s" && input=(--geometry "${s%.rbt.gz}.geo" --trace "$s" $(geometry_limit "$s"))
     "$cpucd" "${input[@]}" --pixels --repeat "$repeat" -q --pairs "$out/runs/$name/cpucd_pairs.csv" \
       --frames "$out/runs/$name/cpucd_frames.csv" --depth-histogram "$out/runs/$name/depth_hist.csv"
   done
@@ -247,7 +261,7 @@ if ((need_count)); then
     name=$(input_name "$s")
     progress "rbcd-cpucd --count-instructions" "$k" "${#scenes[@]}" "$name"
     if is_trace "$s"; then
-      cpucd_count "$name" --geometry "${s%.rbt.gz}.geo" &
+      cpucd_count "$name" --geometry "${s%.rbt.gz}.geo" $(geometry_limit "$s") &
     else
       cpucd_count "$name" --scene "$s" &
     fi

@@ -5,7 +5,7 @@
 set -euo pipefail
 pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
       nlohmann-json3-dev libcli11-dev zlib1g-dev libeigen3-dev libassimp-dev libpng-dev
-      libxxhash-dev)
+      libxxhash-dev libzstd-dev)
 # Optional, only when asked for (their tests are skipped with a message without them):
 #   --slurm  slurm-wlm and munge, for the SLURM sweep backend's test (docs/sweeps.md)
 #   --plots  python3-matplotlib for scripts/rbcd-plot (gnuplot-nox also does)
@@ -23,6 +23,8 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #            (rbcd-sim --db), docs/waveforms.md and docs/tile-database.md
 #   --games  openarena and neverball, the games scripts/capture-game.sh captures for
 #            the game-frame suite (docs/games.md; with --gl for the capture tools)
+#   --supertuxkart  supertuxkart (a 659 MB download), only to capture new SuperTuxKart
+#            entries: the committed entries expand without it
 #   --list   print the packages (with the options given) one a line, install nothing
 # Besides the build: what the test suite runs that a minimal Debian lacks
 # (testbench/scripts/check_test_programs.sh checks the list against the suite).
@@ -39,7 +41,8 @@ for opt in "$@"; do
                python3-opengl libegl1 libegl-mesa0 libopengl0 libegl-dev libgles-dev) ;;
     --waves) pkgs+=(verilator gtkwave libsqlite3-dev) ;;
     --games) pkgs+=(openarena neverball) ;;
-    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl --waves --games --list)" >&2; exit 2 ;;
+    --supertuxkart) pkgs+=(supertuxkart) ;;
+    *) echo "setup: unknown option $opt (known: --slurm --plots --eval --fuzz --gl --waves --games --supertuxkart --list)" >&2; exit 2 ;;
   esac
 done
 if [ "$list" = yes ]; then

@@ -5,13 +5,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # The whole suite: also the optional packages whose tests are otherwise skipped.
-./scripts/setup.sh --slurm --plots --eval --fuzz --gl --waves --games
+./scripts/setup.sh --slurm --plots --eval --fuzz --gl --waves --games --supertuxkart
 dir=build
 args=(-DCMAKE_BUILD_TYPE=Release)
 if [ "${1:-}" = "--sanitize" ]; then
   dir=build-asan
   # -O1 with line tables only: what ASan's reports need (file and line of each
-  # frame), at about half the compile time of -O2 -g, which was most of CI's.
+  # frame), at about half the compile time of -O2 -g, which would be most of CI's.
   args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DRBCD_SANITIZE=ON
         "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG")
   # Leak detection stays on. ASan notes once per process that SystemC switched

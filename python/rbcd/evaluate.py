@@ -367,6 +367,9 @@ GAME_CLASSES = {
     # switches' bodies larger.
     "neverball": [(lambda nv, d: d <= 0.5, "coin"), (lambda nv, d: d <= 1.5, "ball"),
                   (lambda nv, d: True, "moving body")],
+    # SuperTuxKart (metres): a kart with its driver and wheels is thousands of
+    # vertices; a gift box, nitro can or banana is tens to a few hundred.
+    "supertuxkart": [(lambda nv, d: nv >= 1000, "kart"), (lambda nv, d: True, "item")],
 }
 
 

@@ -72,8 +72,8 @@ TEST_CASE("rbcd-cpucd: a failed run leaves a FIFO at an output path in place", "
     const int reader = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
     REQUIRE(reader >= 0);
     const std::string bad = td.write("bad.geo", "rbcd-geometry 1\nbogus\n");
-    // Written in place, never unlinked, also when the run fails (the old code
-    // removed whatever stood at an output path first).
+    // Written in place, never unlinked, also when the run fails: whatever
+    // stands at an output path is not removed first.
     expect_refused(cpucd(td, {"--geometry", bad, "--frames", fifo}), {"bad.geo:2"});
     ::close(reader);
     struct stat st {};
@@ -84,8 +84,8 @@ TEST_CASE("rbcd-cpucd: a failed run leaves a FIFO at an output path in place", "
 TEST_CASE("rbcd-cpucd: outputs go through unpredictable temporaries", "[cpucd_cli]") {
     TempDir td;
     const std::string geo = td.write("in.geo", two_cubes(kIdentity));
-    // A symlink planted where the old code put its temporary (PATH.tmp.PID
-    // for any PID): never followed, so its target is untouched.
+    // A symlink planted at a predictable temporary name (PATH.tmp.PID for
+    // any PID): never followed, so its target is untouched.
     const std::string target = td.write("target.txt", "not to be overwritten\n");
     const std::string out = td.out_dir() + "/pairs.csv";
     for (int pid = 1; pid < 4; ++pid) fs::create_symlink(target, out + ".tmp." + std::to_string(pid));
@@ -97,7 +97,7 @@ TEST_CASE("rbcd-cpucd: outputs go through unpredictable temporaries", "[cpucd_cl
     for (const auto& e : td.out_entries()) CHECK((e == "pairs.csv" || e.rfind("pairs.csv.tmp.", 0) == 0));
 
     // While a run writes, its temporary is mkstemp's hidden .pairs.csv.XXXXXX,
-    // not the old PATH.tmp.PID anyone could plant a symlink at.
+    // not a predictable PATH.tmp.PID anyone could plant a symlink at.
     std::string s2 = "rbcd-geometry 1\n" + cube_part(1) + cube_part(2);
     for (int f = 0; f < 2000; ++f) s2 += "frame " + std::to_string(f) + "\nm 0 " + kIdentity + "\nm 1 " + kIdentity + "\n";
     const std::string long_geo = td.write("long.geo", s2);

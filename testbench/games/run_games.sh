@@ -3,6 +3,7 @@
 #   run_games.sh SOURCE_DIR BUILD_DIR check          the committed entries match their checksums
 #   run_games.sh SOURCE_DIR BUILD_DIR capture        scripts/capture-game.sh on a few frames of
 #                                                    OpenArena (skipped without the game)
+#   run_games.sh SOURCE_DIR BUILD_DIR capture_stk    the same on SuperTuxKart
 #   run_games.sh SOURCE_DIR BUILD_DIR TARGET         scripts/reproduce.sh TARGET on one entry cut
 #                                                    to a few frames (workloads table3 fig9 fig8 accuracy)
 # Exit 77 (skipped, saying why) when what the case needs is missing.
@@ -58,6 +59,11 @@ case $what in
     expect2 "not a map name" "$cg" openarena "../x" 3 "$tmp/n7"
     expect2 "not a file" "$cg" neverball /nonexistent.nbr 3 "$tmp/n8"
     expect2 "not a file" "$cg" openarena oa_dm1 3 "$tmp/n9" --from-trace /nonexistent.trace
+    expect2 "karts" "$cg" supertuxkart lighthouse 3 "$tmp/n9" --karts 5
+    expect2 "not a track name" "$cg" supertuxkart "Light House" 3 "$tmp/n9"
+    if [ -d /usr/share/games/supertuxkart/data/tracks ]; then
+      expect2 "race tracks" "$cg" supertuxkart soccer_field 3 "$tmp/n9"
+    fi
     if [ -d /usr/share/games/openarena/baseoa ]; then
       expect2 "not one of OpenArena's maps" "$cg" openarena nosuchmap 3 "$tmp/n10"
     fi
@@ -90,6 +96,32 @@ case $what in
     done
     [ "$(wc -l <"$tmp/e/summary.jsonl")" = 3 ] || fail "not 3 frames"
     # The entry regenerates into the recorded checksums.
+    /usr/bin/python3 "$src/scripts/game-suite" expand -o "$tmp/x" "$tmp/e" >/dev/null || fail "expand failed"
+    [ -s "$tmp/x/e.rbt.gz" ] && [ -s "$tmp/x/e.geo" ] || fail "no trace or geometry"
+    ;;
+  capture_stk)
+    for t in /usr/games/supertuxkart xvfb-run apitrace; do
+      command -v "$t" >/dev/null || skip "$t is missing (scripts/setup.sh --gl --supertuxkart installs the capture tools and the game)"
+    done
+    "$src/scripts/capture-game.sh" supertuxkart lighthouse 3 "$tmp/e" --karts 2 --skip 1 >"$tmp/log" 2>&1 ||
+      fail "capture failed: $(tail -5 "$tmp/log")"
+    t=$tmp/e/capture.toml
+    start=$(sed -n 's/^race_start = \([0-9]*\).*/\1/p' "$t")
+    [ -n "$start" ] && [ "$start" -gt 0 ] || fail "capture.toml has no race_start"
+    grep -q "^first_frame = $((start + 1)) " "$t" || fail "first_frame is not race_start + --skip"
+    for k in 'game = "supertuxkart"' 'map = "lighthouse"' 'frames = 3' 'karts = 2' 'screen = \[800, 480\]' \
+             '"--race-now"' '"--kart=tux"' '"--ai=kiki"' '"--disable-dynamic-lights"' 'game_config = "game-config.xml"'; do
+      grep -q -- "$k" "$t" || fail "capture.toml lacks $k"
+    done
+    grep -q '<stkconfig' "$tmp/e/game-config.xml" || fail "the game's configuration is not kept"
+    [ "$(wc -l <"$tmp/e/summary.jsonl")" = 3 ] || fail "not 3 frames"
+    # The two karts are found by the shipped rules in every frame.
+    /usr/bin/python3 - "$tmp/e/summary.jsonl" <<'EOF' || fail "the karts are not all found"
+import json, sys
+for line in open(sys.argv[1]):
+    ids = set(json.loads(line)["objects"])
+    assert {1, 2} <= ids, ids
+EOF
     /usr/bin/python3 "$src/scripts/game-suite" expand -o "$tmp/x" "$tmp/e" >/dev/null || fail "expand failed"
     [ -s "$tmp/x/e.rbt.gz" ] && [ -s "$tmp/x/e.geo" ] || fail "no trace or geometry"
     ;;

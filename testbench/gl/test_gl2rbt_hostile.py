@@ -228,7 +228,7 @@ def test_a_screen_of_too_many_tiles(tmp_path):
     cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
     r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--screen", 8192, 8192, "--tile", 1, 1)
     refused(r, "67108864 tiles, more than 1048576")
-    stream = b"RBCDGLD1" + np.array([8192, 8192, 1, 1, 24], "<u4").tobytes() + b"Z"
+    stream = b"RBCDGLD2" + np.array([8192, 8192, 1, 1, 24], "<u4").tobytes() + b"Z"
     r = subprocess.run(["/usr/bin/time", "-f", "maxrss %M", program("rbcd-gl-raster"), "--trace", tmp_path / "r.rbt"],
                        input=stream, capture_output=True)
     r.stderr = r.stderr.decode()

@@ -20,7 +20,7 @@ def decode(stream):
     """The draw stream's records: ("header", fields), ("F", call), ("E", call),
     ("C", call, depth, rect), ("D", dict)."""
     b, out = stream, []
-    assert b[:8] == b"RBCDGLD1"
+    assert b[:8] == b"RBCDGLD2"
     out.append(("header", struct.unpack_from("<5I", b, 8)))
     p = 28
     while p < len(b):
@@ -34,10 +34,10 @@ def decode(stream):
             out.append(("C", no, depth, tuple(rect)))
             p += struct.calcsize("<Qd4i")
         elif kind == b"D":
-            f = struct.unpack_from("<QIBBBBBBB", b, p)
-            p += struct.calcsize("<QIBBBBBBB")
+            f = struct.unpack_from("<QIBBBBBBBH", b, p)
+            p += struct.calcsize("<QIBBBBBBBH")
             d = dict(zip(("call", "object", "collisionable", "cull", "front_ccw", "depth_test", "depth_func",
-                          "depth_mask", "planes"), f))
+                          "depth_mask", "planes", "shade"), f))
             d["viewport"] = struct.unpack_from("<4d", b, p)
             d["depth_range"] = struct.unpack_from("<2d", b, p + 32)
             d["offset"] = struct.unpack_from("<2d", b, p + 48)
@@ -325,6 +325,32 @@ def test_debug_groups_tag_objects_and_a_second_pass_is_other_work():
     assert got == [(5, 1), (7, 1), (0, 0), (0, 0)], "the innermost group decides; a repeated surface is other work"
     with pytest.raises(ConvertError, match="without a group to pop"):
         gl.glPopDebugGroup()
+
+
+def test_rules_name_a_texture_by_its_image_whatever_its_name(tmp_path):
+    """Two captures that load the same image under other GL names: a rule by
+    `texture_image` matches both; the reduced capture's digest (in place of
+    the pixels) matches as the pixels do; a texture without pixels has none."""
+    from rbcd.gl2rbt.glstate.framebuffers import DIGEST_TAG, texture_image_digest
+    rules = tmp_path / "rules.toml"
+    image = bytes(range(256)) * 16
+    args = dict(target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA8", width=32, height=32, border=0,
+                format="GL_BGRA", type="GL_UNSIGNED_BYTE")
+    digest = texture_image_digest(dict(args, pixels=image))
+    assert len(digest) == 16 and digest != texture_image_digest(dict(args, pixels=image[::-1]))
+    assert texture_image_digest(dict(args, width=16, height=64, pixels=image)) != digest, "the size counts"
+    rules.write_text(f'[[object]]\nid = 9\ntexture_image = ["{digest[:8]}"]\n')
+    for name, pixels in ((3, image), (40, image), (41, (DIGEST_TAG, digest)), (42, None)):
+        gl = GL()
+        gl.conv.select = __import__("rbcd.gl2rbt.selection", fromlist=["Selection"]).Selection(str(rules))
+        gl.glBindTexture(target="GL_TEXTURE_2D", texture=name)
+        gl.glTexImage2D(pixels=pixels, **args)
+        square(gl)
+        assert [d["object"] for d in gl.draws()] == [0 if pixels is None else 9], name
+    gl = GL()
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=1)
+    with pytest.raises(ConvertError, match="malformed arguments"):
+        gl.glTexImage2D(pixels=(DIGEST_TAG, "xyz"), **args)
 
 
 def test_frames_end_at_swaps_and_unmodelled_calls_are_refused():

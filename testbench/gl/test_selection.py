@@ -16,7 +16,8 @@ def rules(tmp_path, text):
 
 def draw(**kw):
     d = {"call": 10, "frame": 0, "vertices": 36, "texture": 0, "depth_write": True, "projection": "perspective",
-         "own_modelview": True, "screen_area": 500.0, "program": "", "pass": "", "instances": 1}
+         "own_modelview": True, "screen_area": 500.0, "program": "", "pass": "", "instances": 1,
+         "texture_image": ""}
     d.update(kw)
     return d
 
@@ -57,6 +58,7 @@ projection = "orthographic"
     ("program", ["0123abcd"], {"program": "0123abcd" + "9" * 56}, {"program": "0123abce" + "9" * 56}),
     ("pass", ["Solid Pass"], {"pass": "Solid Pass"}, {"pass": "Transparent"}),
     ("instances", [2, 15], {"instances": 15}, {"instances": 1}),
+    ("texture_image", ["89abcdef"], {"texture_image": "89abcdef01234567"}, {"texture_image": ""}),
 ], ids=lambda v: v if isinstance(v, str) else "")
 def test_each_condition(tmp_path, field, value, inside, outside):
     toml = str(value).lower() if isinstance(value, (bool, int)) else str(value).replace("'", '"')
@@ -88,9 +90,11 @@ def test_each_condition(tmp_path, field, value, inside, outside):
     ("[[object]]\nid = 1\npass = [3]\n", "object[0].pass: must be a list of pass names"),
     ("[[object]]\nid = 1\ninstances = [3, 1]\n", "object[0].instances: must be [MIN, MAX]"),
     ("[[object]]\nid = 1\ngroup_instances = 1\n", "object[0].group_instances: must be true or false"),
+    ("[[object]]\nid = 1\ntexture_image = [\"89ABCDEF\"]\n", "object[0].texture_image: must be a list"),
 ], ids=["vertex_count", "unknown_key", "no_id", "negative_id", "bool_id", "id_past_u32", "up_axis", "deep", "projection", "texture", "group_by",
         "screen_area", "settings_key", "settings_type", "object_type", "unknown_table", "toml_syntax",
-        "program_short", "program_empty", "pass_type", "instances_order", "group_instances_type"])
+        "program_short", "program_empty", "pass_type", "instances_order", "group_instances_type",
+        "texture_image_case"])
 def test_bad_rules_are_named(tmp_path, text, words):
     with pytest.raises(ConvertError) as e:
         rules(tmp_path, text)

@@ -227,6 +227,47 @@ TEST_CASE("gpu: base= holds the tile for at least its measured cycles", "[gpu]")
     CHECK(run.totals().t.tiles_with_base == 1);
 }
 
+// 8 other fragments at 4 a cycle on 4 processors of C cycles: the first four
+// start at 1 (early-Z), the next four when the first finish, at 1 + C; done
+// at 1 + 2C, with C = 8 x shade / 100 (at least 1). One simulation a process:
+// a test case a value.
+static void check_shaded_tile(std::uint32_t shade, std::uint64_t c) {
+    Tile t = tb::tile(0, 0, 0, {}, 8);
+    t.has_shade = true;
+    t.shade = shade;
+    MemorySource src(StreamHeader{});
+    src.add_frame(0);
+    src.add_tile(t);
+    tb::ReportedRun run(tb::fixed_latency_config(), src);
+    CHECK(run.totals().t.baseline == 1 + 2 * c);
+    CHECK(run.totals().t.with_unit == 1 + 2 * c);
+    CHECK(run.sys->fragments.stats().busy_cycles == 8 * c);
+}
+
+TEST_CASE("gpu: shade=200 doubles what a tile's fragments cost the processors", "[gpu]") {
+    check_shaded_tile(200, 16);
+}
+
+TEST_CASE("gpu: shade=1 costs at least one cycle a fragment", "[gpu]") {
+    check_shaded_tile(1, 1);
+}
+
+TEST_CASE("gpu: fragments in flight keep the cost of their tile", "[gpu]") {
+    // A tile at shade=400 (C = 32), then one fragment of a tile without
+    // shade= (C = 8), emitted at cycle 2: it waits for the first processor
+    // free (33) and is done at 41.
+    Tile a = tb::tile(0, 0, 0, {}, 8), b = tb::tile(0, 1, 0, {}, 1);
+    a.has_shade = true;
+    a.shade = 400;
+    MemorySource src(StreamHeader{});
+    src.add_frame(0);
+    src.add_tile(a);
+    src.add_tile(b);
+    tb::ReportedRun run(tb::fixed_latency_config(), src);
+    CHECK(run.totals().t.baseline == 1 + 2 * 32 + 8);
+    CHECK(run.sys->fragments.stats().busy_cycles == 8 * 32 + 8);
+}
+
 TEST_CASE("gpu: a long run of fragments is computed in bulk exactly", "[gpu]") {
     // FragmentPipe::shade_run jumps over the periodic part of a long run; it must give
     // the same state as going fragment by fragment, for rasterizer- and shader-bound

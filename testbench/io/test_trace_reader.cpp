@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <sys/stat.h>
 #include <zlib.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -20,6 +21,7 @@
 #include "rbcd/common/config.h"
 #include "rbcd/common/errors.h"
 #include "rbcd/common/fragment.h"
+#include "rbcd/io/frame_scan.h"
 #include "rbcd/io/memory_source.h"
 #include "rbcd/io/trace_reader.h"
 #include "rbcd/io/trace_writer.h"
@@ -297,6 +299,24 @@ TEST_CASE("io: tile fields other= and base=, and the tile is fully overwritten",
     CHECK(r.next(t) == Event::End);
 }
 
+TEST_CASE("io: tile key shade= is read, and the tile after it is back to 100", "[io][reader]") {
+    TempDir d;
+    auto p = d.write("t.rbt", M + "frame 0\ntile 0 0 shade=250 other=3\ntile 1 0\ntile 2 0 shade=1\n");
+    TraceReader r(p, {});
+    Tile t;
+    REQUIRE(r.next(t) == Event::Frame);
+    REQUIRE(r.next(t) == Event::Tile);
+    CHECK(t.has_shade);
+    CHECK(t.shade == 250);
+    CHECK(fragment_cycles(8, t) == 20);
+    REQUIRE(r.next(t) == Event::Tile);
+    CHECK_FALSE(t.has_shade);
+    CHECK(t.shade == 100);
+    CHECK(fragment_cycles(8, t) == 8);
+    REQUIRE(r.next(t) == Event::Tile);
+    CHECK(fragment_cycles(8, t) == 1);   // 0.08 cycles: at least one
+}
+
 TEST_CASE("io: tile keys prims= and cprims= and o records give the rasterization order", "[io][reader]") {
     TempDir d;
     auto p = d.write("t.rbt", M + "frame 0\ntile 0 0 prims=7 cprims=3\no 4\nf 1 1 10 1 F\no 2\no 1\n"
@@ -421,6 +441,44 @@ TEST_CASE("io: a line longer than the read buffer is handled", "[io][reader]") {
 }
 
 // ---------------------------------------------------------------- gzip
+
+namespace {
+// One zstd frame of `content` (level 3).
+std::string zstd_frame(const std::string& content) {
+    std::string out(ZSTD_compressBound(content.size()), '\0');
+    const std::size_t n = ZSTD_compress(out.data(), out.size(), content.data(), content.size(), 3);
+    REQUIRE_FALSE(ZSTD_isError(n));
+    out.resize(n);
+    return out;
+}
+} // namespace
+
+TEST_CASE("io: zstd input is recognised by its bytes; frames are one stream", "[io][reader][zstd]") {
+    TempDir d;
+    const std::string head = M + "screen 32 32\nframe 0\ntile 1 1 other=3 base=44\nf 16 17 100 9 F\n";
+    const std::string rest = "f 16 17 200 9 B c\nframe 1\n";
+    const auto plain = read_path(d.write("plain.rbt", head + rest));
+    for (const char* name : {"t.rbt.zst", "misleading.rbt.gz", "noext"}) {
+        INFO(name);
+        // Two frames, the text cut between them anywhere: one stream.
+        auto p = d.write(name, zstd_frame(head) + zstd_frame(rest));
+        REQUIRE(slurp(p).substr(0, 4) == "\x28\xb5\x2f\xfd");
+        auto items = read_path(p);
+        REQUIRE(items.size() == plain.size());
+        REQUIRE(items[1].tile.frags.size() == 2);
+        CHECK(items[1].tile.base == 44);
+        check_frag(items[1].tile.frags[1], frag(16, 17, 200, 9, Facing::Back, true));
+        CHECK(plain_trace_bytes(p) == 0);   // no byte offsets for --jobs to jump to
+    }
+}
+
+TEST_CASE("io: error: a zstd trace cut short, or with bytes after its last frame", "[io][reader][zstd][error]") {
+    const std::string z = zstd_frame(M + "frame 0\ntile 0 0\nf 1 1 5 1 F\n");
+    CHECK_THAT(error_of(z.substr(0, z.size() - 3)), StartsWith("t.rbt:") &&
+                                                      Contains(": corrupt or truncated zstd stream: unexpected end of file"));
+    CHECK_THAT(error_of(z + "garbage\n"),
+               StartsWith("t.rbt:") && Contains(": corrupt or truncated zstd stream: Unknown frame descriptor"));
+}
 
 TEST_CASE("io: gzip input is recognised by its bytes, not its name", "[io][reader][gzip]") {
     TempDir d;
@@ -642,7 +700,7 @@ TEST_CASE("io: error: file cannot be opened", "[io][reader][error]") {
 // ---------------------------------------------------------------- hostile input (issue 12)
 
 TEST_CASE("io: hostile: devices and FIFOs are refused, not read", "[io][reader][error][hostile]") {
-    // /dev/zero used to grow the line buffer until std::bad_alloc.
+    // /dev/zero must not be read: the line buffer would grow until std::bad_alloc.
     CHECK_THROWS_WITH(TraceReader("/dev/zero", {}), Equals("/dev/zero: cannot read trace: is a character device, not "
                                                           "a regular file (use - for standard input)"));
     TempDir d;
@@ -683,7 +741,7 @@ TEST_CASE("io: hostile: a tile with more than input.max_tile_fragments fragments
 
 TEST_CASE("io: hostile: declared work that would overflow simulated time is refused naming clock.mhz",
           "[io][reader][error][hostile]") {
-    // other=2^40 on enough tiles used to wrap totals.cycles around 2^64 ps.
+    // other=2^40 on enough tiles would wrap totals.cycles around 2^64 ps.
     SimConfig cfg;
     const TraceLimits lim = trace_limits(cfg);
     REQUIRE(lim.max_work_cycles == (std::uint64_t(1) << 62) / 2500 / 4);
@@ -715,11 +773,12 @@ TEST_CASE("io: hostile: every read chunk size gives the same stream (refill boun
                            "tile 0 0\nf 0 0 5 1 F # tail\nframe 1\ntile 2 2\nf 33 34 7 2 B";
     const auto want = read_path(d.write("ref.rbt", text));
     const std::string plain = d.write("p.rbt", text), gz = d.write_gz("g.rbt", text);
+    const std::string zst = d.write("z.rbt", zstd_frame(text.substr(0, 40)) + zstd_frame(text.substr(40)));
     for (std::size_t chunk : {1u, 2u, 3u, 7u, 64u}) {
         INFO("chunk " << chunk);
         TraceLimits lim;
         lim.read_chunk = chunk;
-        for (const auto& p : {plain, gz}) {
+        for (const auto& p : {plain, gz, zst}) {
             const auto got = read_path(p, lim);
             REQUIRE(got.size() == want.size());
             for (std::size_t i = 0; i < got.size(); ++i) CHECK(got[i].tile.frags.size() == want[i].tile.frags.size());
@@ -937,7 +996,10 @@ TEST_CASE("io: error: tile records", "[io][reader][error]") {
     const std::string F0 = M + "frame 0\n";
     CHECK_ERR(F0 + "tile\n", 3, "tile has too few fields: missing column");
     CHECK_ERR(F0 + "tile 0\n", 3, "tile has too few fields: missing row");
-    CHECK_ERR(F0 + "tile 0 0 foo=1\n", 3, "tile has unknown key 'foo' (known keys: other, base, prims, cprims)");
+    CHECK_ERR(F0 + "tile 0 0 foo=1\n", 3, "tile has unknown key 'foo' (known keys: other, base, prims, cprims, shade)");
+    CHECK_ERR(F0 + "tile 0 0 shade=0\n", 3, "tile shade=0 outside 1..10000 (percent of gpu.cycles_per_fragment)");
+    CHECK_ERR(F0 + "tile 0 0 shade=10001\n", 3, "tile shade=10001 outside 1..10000");
+    CHECK_ERR(F0 + "tile 0 0 shade=50 shade=60\n", 3, "tile key 'shade' given twice");
     CHECK_ERR(F0 + "tile 0 0 Other=1\n", 3, "tile has unknown key 'Other'");
     CHECK_ERR(F0 + "tile 0 0 other=1 other=2\n", 3, "tile key 'other' given twice");
     CHECK_ERR(F0 + "tile 0 0 base=1 other=2 base=3\n", 3, "tile key 'base' given twice");

@@ -1,6 +1,6 @@
-// Hostile scenes (issue 12): each case used to crash, hang, allocate without
-// bound or give a silent wrong answer; now each is refused naming the key and
-// the limit, or runs in bounded memory and time.
+// Hostile scenes (issue 12): cases that, unchecked, crash, hang, allocate
+// without bound or give a silent wrong answer. Each must be refused naming the
+// key and the limit, or run in bounded memory and time.
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -29,8 +29,8 @@ std::string obj(const std::string& body) { return "[[object]]\nid = 1\nmesh = \"
 
 TEST_CASE("hostile scene: the singular-scale check is linear in keys, not frames", "[scene][hostile]") {
     // 800 objects animated over 10^8 frames, the last singular near the end.
-    // The old check evaluated every frame of every object (about 0.5 s each):
-    // this case then outlives CTest's 300 s timeout; now it is immediate.
+    // A check that evaluated every frame of every object (about 0.5 s each)
+    // would outlive CTest's 300 s timeout: the check must take only the keys.
     std::string t = "format = \"rbcd-scene 1\"\nframes = 100000000\n[camera]\neye = [0, 0, 0]\ntarget = [0, 0, -1]\n"
                     "fov_y = 60\nnear = 0.1\nfar = 100\n";
     for (int i = 0; i < 799; ++i) t += obj("[[object.key]]\nframe = 100000000\nscale = [2.0, 2.0, 2.0]\n");
@@ -69,7 +69,7 @@ TEST_CASE("hostile scene: a field of view below the documented minimum is refuse
 
 TEST_CASE("hostile scene: the triangle total is bounded by input.max_scene_triangles before meshes are built",
           "[scene][hostile]") {
-    // 2,000 spheres at 1024 segments used to take over 9 GB.
+    // 2,000 spheres at 1024 segments, built, would take over 9 GB.
     std::string t = kHdr;
     for (int i = 0; i < 2000; ++i) t += obj("segments = 1024\n");
     const std::string msg = error_of(t);
@@ -147,7 +147,7 @@ TEST_CASE("hostile scene: a scene file above input.max_scene_bytes is refused", 
 }
 
 TEST_CASE("hostile scene: the mesh reader crashing is an error, not the end of the program", "[scene][hostile][mesh]") {
-    // assimp calls abort() on some files; the PLY check now refuses the ones
+    // assimp calls abort() on some files; the PLY check refuses the ones
     // fuzzing found before assimp reads them, so the child aborts on request.
     auto dir = std::filesystem::temp_directory_path() / ("rbcd_hostile_mesh_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);

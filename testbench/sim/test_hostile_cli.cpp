@@ -1,7 +1,7 @@
-// rbcd-sim against hostile inputs (issue 12): each case used to exit 0 with a
-// wrong answer, exit 1 after std::bad_alloc, hang, or print raw control bytes.
-// Now: exit 2, one line naming the limit and the key that raises it, nothing
-// left at the output paths.
+// rbcd-sim against hostile inputs (issue 12): cases that, unchecked, exit 0
+// with a wrong answer, exit 1 after std::bad_alloc, hang, or print raw control
+// bytes. Each must exit 2 with one line naming the limit and the key that
+// raises it, and leave nothing at the output paths.
 #include "rbcd/testbench/sim/cli_util.h"
 
 using namespace rbcd::cli_test;
@@ -47,7 +47,7 @@ TEST_CASE("cli hostile: a missing input has the same wording whatever its kind")
 }
 
 TEST_CASE("cli hostile: a trace whose simulated time would overflow 64-bit picoseconds is refused") {
-    // totals.cycles used to come out below the sum of the tiles' own cycles.
+    // Wrapped, totals.cycles would come out below the sum of the tiles' own cycles.
     TempDir td;
     std::string t = "rbcd-trace 1\nscreen 2048 2048\nframe 0\n";
     for (int i = 0; i < 4000; ++i)

@@ -145,7 +145,7 @@ TEST_CASE("rbcd-merge refuses parts that are not one run", "[merge]") {
     }
 }
 
-// ---- Hostile parts (issue 22): each case failed on the code before.
+// ---- Hostile parts (issue 22): each case a way a merge can go wrong unchecked.
 namespace {
 
 // Parts 0:29 and 30:59 of the default scene, made once per process.
@@ -185,7 +185,7 @@ TEST_CASE("rbcd-merge: an output naming a part's own file is refused and the fil
                            {"--stats", s.td.stats(), "--collisions", s.part(0, ".txt"), s.part(0, ".json"), s.part(1, ".json")});
     expect_input_error(s.td, r, {"--collisions", "is the input file"});
     CHECK(slurp(s.part(0, ".txt")) == own);
-    // Two outputs into one file: the old code exited 0 with one lost.
+    // Two outputs into one file: refused, not exit 0 with one lost.
     r = run_program(s.td, RBCD_MERGE,
                     {"--stats", s.td.stats(), "--collisions", s.td.stats(), s.part(0, ".json"), s.part(1, ".json")});
     expect_input_error(s.td, r, {"--collisions", "is also --stats's output"});
@@ -249,7 +249,7 @@ TEST_CASE("rbcd-merge: collision files are read and checked against their part's
     const Result g = s.merge({s.part(0, ".json"), garbage});
     expect_input_error(s.td, g, {"junk.txt:1", "not a collisions file"});
     CHECK(g.err.find('\x1b') == std::string::npos);
-    // Cut short: no final LF (the old code wrote "frame 29frame 30").
+    // Cut short: no final LF (a plain join would write "frame 29frame 30").
     std::string text = slurp(s.part(0, ".txt"));
     text.pop_back();
     const std::string cut = s.td.write("cut.txt", text);

@@ -193,7 +193,7 @@ TEST_CASE("cli outputs: a failed run removes only the temporaries it created") {
     CHECK(td.out_entries() == std::vector<std::string>{"unrelated.txt"});
 }
 
-// ---------------------------------------------------------------- a large older collisions file (session 12)
+// ---------------------------------------------------------------- a large older collisions file at the output path
 
 namespace {
 // Two frames, so that --jobs 2 splits them.

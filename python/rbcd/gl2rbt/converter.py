@@ -69,6 +69,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.draw_instances = 1          # instances of the draw being classified
         self.draw_instance = None        # the instance (baseinstance + i) of the draw under a program
         self.draw_effects = False        # its fragment shader can discard or write gl_FragDepth
+        self.draw_shade = 0              # its fragment shader's cost, percent of a reference fragment (0: none)
+        self.shading_costs = None        # ShadingCosts, at the first draw under a program
         self.vertex_stage_ = None        # Mesa, started at the first draw under a program
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)
         self.egl_api = "EGL_OPENGL_ES_API"
@@ -107,7 +109,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         tiles = -(-w // tw) * -(-h // th)
         if tiles > MAX_TILES:
             raise ConvertError(f"a screen of {w} x {h} in {tw} x {th} tiles is {tiles} tiles, more than {MAX_TILES}")
-        self.emit(b"RBCDGLD1" + struct.pack("<5I", w, h, self.args.tile[0], self.args.tile[1], self.args.depth_bits))
+        self.emit(b"RBCDGLD2" + struct.pack("<5I", w, h, self.args.tile[0], self.args.tile[1], self.args.depth_bits))
         self.header_written = True
 
     # ---- frames

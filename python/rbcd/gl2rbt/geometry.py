@@ -42,6 +42,24 @@ def clip_near(clip, tris):
     return np.concatenate(verts), np.concatenate([keep, np.array(extra, dtype=keep.dtype).reshape(-1, 3)])
 
 
+def weld(verts):
+    """The vertices as written ("%.9g" each) and, for each vertex, the index
+    of its text among them in order of first appearance: vertices whose
+    texts are equal are one. Each distinct value (bit for bit) is formatted
+    once: GL hands a mesh's corners over once per index."""
+    rows = np.ascontiguousarray(verts, dtype=np.float64)
+    _, first, inverse = np.unique(rows.view(np.dtype((np.void, rows.dtype.itemsize * 3))).ravel(),
+                                  return_index=True, return_inverse=True)
+    texts = ["%.9g %.9g %.9g" % (x, y, z) for x, y, z in rows[first].tolist()]
+    # Distinct values may print alike: the text decides, at its first appearance.
+    by_text = {}
+    for u in np.argsort(first, kind="stable").tolist():
+        by_text.setdefault(texts[u], len(by_text))
+    order = list(by_text)
+    text_of_unique = np.fromiter((by_text[t] for t in texts), dtype=np.int64, count=len(texts))
+    return order, text_of_unique[inverse.ravel()]
+
+
 class GeometryOutput:
     """The mixin of Converter that writes the geometry file."""
 
@@ -78,16 +96,7 @@ class GeometryOutput:
             # repeat); written once each, the file is a third of the size. Nine
             # significant digits hold a single-precision vertex exactly and the
             # eye-space position to 1e-9 of its size, far below a pixel.
-            text = np.char.mod("%.9g", verts)
-            keys = [f"{x} {y} {z}" for x, y, z in text]
-            index, order = {}, []
-            remap = np.empty(len(keys), dtype=np.int64)
-            for i, k in enumerate(keys):
-                j = index.get(k)
-                if j is None:
-                    j = index[k] = len(order)
-                    order.append(k)
-                remap[i] = j
+            order, remap = weld(verts)
             tris = remap[tris]
             # A triangle whose corners weld together covers no area: no
             # fragment of it reaches the unit and it cannot touch anything.

@@ -16,6 +16,7 @@ from ..cli import U63
 from .errors import ConvertError, printable
 from .converter import Converter
 from .gl_tables import IGNORED_PREFIXES, base_name
+from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
 from .outputs import SafeText
 
 REDUCED_HEADER = ("rbcd-reduced-capture", 1)
@@ -28,8 +29,9 @@ XZ_MAGIC = b"\xfd7zXZ\x00"
 # Kept although the emulation passes over them: the window system (frame
 # ends, the window's size).
 REDUCED_KEEP = ("glX", "egl", "wgl")
-# Arguments a handled call carries that the emulation never reads: texture
-# images (only a texture's size is read).
+# Arguments a handled call carries that the emulation never reads whole:
+# texture images (a texture's size is read, and its image's digest, which
+# takes the pixels' place).
 REDUCED_DROP = {"glTexImage2D": "pixels", "glTexImage2DMultisample": None}
 
 
@@ -42,7 +44,11 @@ def reduced_keeps(name):
 
 def reduced_args(name, args):
     drop = REDUCED_DROP.get(base_name(name))
-    return [(k, None if k == drop else plain_value(v)) for k, v in args]
+    if drop is None:
+        return [(k, plain_value(v)) for k, v in args]
+    digest = texture_image_digest(dict(args))
+    return [(k, (DIGEST_TAG, digest) if k == drop and digest else None if k == drop else plain_value(v))
+            for k, v in args]
 
 
 def plain_value(v):

@@ -83,6 +83,7 @@ class GLState:
         self.units = {}
         self.texture_buffers = {}
         self.texture = 0
+        self.texture_images = {}   # texture name: digest of its level-0 image, or None
         self.groups = []   # innermost last: object id or None
         self.group_names = []   # the same groups: (object id or None, message)
         self.marker = ""        # the last message the application inserted in the frame

@@ -117,9 +117,9 @@ class DrawCalls:
         # Flags: bit 0 collisionable; bit 1 its fragment shader can discard or
         # write gl_FragDepth (the depth it writes is an upper bound).
         flags = (1 if collisionable else 0) | (2 if self.draw_effects else 0)
-        rec += struct.pack("<QIBBBBBBB", no, obj_id if collisionable else 0, flags, cull,
+        rec += struct.pack("<QIBBBBBBBH", no, obj_id if collisionable else 0, flags, cull,
                            1 if front_ccw else 0, 1 if st.depth_test else 0, depth_func,
-                           1 if st.depth_mask else 0, len(planes))
+                           1 if st.depth_mask else 0, len(planes), self.draw_shade)
         # GL's window y grows upwards; the screen's rows downwards.
         rec += struct.pack("<8d", vx, h - (vy + vh), vw, vh, st.depth_range[0], st.depth_range[1], of, ou)
         rec += struct.pack("<4i", *scissor)
@@ -150,6 +150,14 @@ class DrawCalls:
             from ..vertex_stage import VertexStage   # PyOpenGL and EGL: only for captures that need them
             self.vertex_stage_ = VertexStage(self.es)
         return self.vertex_stage_
+
+    def program_shade(self, p):
+        """The cost of the program's fragment shader (rbcd.gl2rbt.shading), in
+        percent of a reference fragment; 0 when Mesa gives none."""
+        if self.shading_costs is None:
+            from ..shading import ShadingCosts
+            self.shading_costs = ShadingCosts(self.es)
+        return self.shading_costs.shade_of(p.digest, p.linked[0] if p.linked else {}) or 0
 
     def shader_draw(self, no, name, d):
         """A draw under a program: its triangles as Mesa assembles them from
@@ -182,6 +190,7 @@ class DrawCalls:
         self.draw_instances = instances
         p = self.s.programs[self.s.program]
         self.draw_effects = p.discards or p.frag_depth
+        self.draw_shade = self.program_shade(p)
         from ..vertex_stage import DrawRejected
         try:
             clips = self.vertex_stage().run(self, no, base_name(name), d, instances, per * instances)
@@ -211,6 +220,7 @@ class DrawCalls:
             self.draw_record(no, name, clip, tris, obj, d["count"], None, None, None)
         self.draw_instances = 1
         self.draw_effects = False
+        self.draw_shade = 0
         self.note_fragment_effects(p, tagged)
 
     def note_fragment_effects(self, p, tagged):

@@ -7,17 +7,43 @@ attachment has the screen's size (a deferred renderer's geometry pass).
 Draws into other targets (shadow maps, reflections, cube maps, post
 processing at other sizes) are GPU work of their own, left out of the trace
 and counted (docs/gl-capture.md, "Which pass")."""
+import hashlib
+import re
+
 from ...cli import U32, integer
 from ..errors import checked, fail_call, printable
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
+# A texture image's digest as a reduced capture carries it in place of the
+# pixels: ("rbcd-digest", 16 lower-case hex digits).
+DIGEST_TAG = "rbcd-digest"
+
+
+def texture_image_digest(d):
+    """The digest of a glTexImage2D's level-0 image (its size, formats and
+    pixels; 16 hex digits), or None when the call carries no pixels (NULL,
+    a pixel unpack buffer's offset, or a reduced capture written without
+    them). Selection rules name textures by it (`texture_image`): unlike the
+    GL name, it does not depend on the order the game loads its textures,
+    so one rule names a kart's texture on every track."""
+    pixels = d.get("pixels")
+    if isinstance(pixels, tuple) and len(pixels) == 2 and pixels[0] == DIGEST_TAG:
+        return pixels[1]
+    if d.get("level", 0) != 0 or not isinstance(pixels, (bytes, bytearray)):
+        return None
+    h = hashlib.blake2b(digest_size=8)
+    h.update(repr((d.get("internalformat"), d.get("width"), d.get("height"), d.get("format"),
+                   d.get("type"))).encode())
+    h.update(pixels)
+    return h.hexdigest()
 
 
 class FramebufferCalls:
     """self.s.draw_fbo: the bound draw framebuffer; self.s.fbo_depth[fbo] =
     ("texture" | "renderbuffer", name) of its depth attachment; the sizes of
-    textures' level 0 and renderbuffers; texture units' bindings, and the
-    buffers of texture buffer objects."""
+    textures' level 0 and renderbuffers; the digests of textures' level-0
+    images; texture units' bindings, and the buffers of texture buffer
+    objects."""
 
     def h_bind_framebuffer(self, no, name, a, args):
         d = dict(args)
@@ -44,13 +70,19 @@ class FramebufferCalls:
         self.s.renderbuffer = dict(args).get("renderbuffer")
 
     def h_tex_image(self, no, name, a, args):
-        """The size of a texture's level 0: only that is read (a framebuffer
-        attachment's size); the image data goes unread."""
+        """The size of a texture's level 0 (a framebuffer attachment's size)
+        and the digest of its image (what rules name it by)."""
         d = dict(args)
         w, h = d.get("width"), d.get("height", 1)
         if d.get("level", 0) == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
             self.s.sizes[("texture", tex)] = (w, h)
+            pixels = d.get("pixels")
+            if isinstance(pixels, tuple) and not (
+                    len(pixels) == 2 and pixels[0] == DIGEST_TAG and isinstance(pixels[1], str)
+                    and re.fullmatch(r"[0-9a-f]{16}", pixels[1])):
+                fail_call(no, f"{name}: malformed arguments (pixels)")
+            self.s.texture_images[tex] = texture_image_digest(d)
 
     def h_active_texture(self, no, name, a, args):
         unit = a[0] if a else None

@@ -24,7 +24,8 @@ class ObjectCalls:
         (x0, y0), (x1, y1) = d["box"]
         box = (int((x0 + 1) * w / 2), int((1 - y1) * h / 2), int((x1 + 1) * w / 2), int((1 - y0) * h / 2))
         self.listing.append({"index": len(self.listing), "call": no, "function": name, "vertices": nverts,
-                             "texture": d["texture"], "projection": d["projection"],
+                             "texture": d["texture"], "texture_image": d["texture_image"],
+                             "projection": d["projection"],
                              "own_modelview": d["own_modelview"], "depth_write": d["depth_write"],
                              "depth_func": self.s.depth_func, "box": box, "object": obj_id,
                              "program": d["program"], "pass": d["pass"],
@@ -66,6 +67,7 @@ class ObjectCalls:
         lo, hi = np.clip(ndc.min(axis=0), -1, 1), np.clip(ndc.max(axis=0), -1, 1)
         area = float(max(0.0, hi[0] - lo[0]) * max(0.0, hi[1] - lo[1]) * w * h / 4.0)
         return {"call": no, "frame": self.frame, "vertices": nverts, "texture": self.s.texture,
+                "texture_image": self.s.texture_images.get(self.s.texture) or "",
                 "depth_write": self.s.depth_test and self.s.depth_mask,
                 "projection": projection_of(proj, clip),
                 "own_modelview": mv is not None and view is not None and not np.allclose(mv, view, atol=1e-6),
