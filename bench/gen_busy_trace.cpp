@@ -47,6 +47,66 @@ constexpr double kCoverage = 0.7;
 // Mean objects (3) x mean fragments per covered pixel (F+B or 2x F+B: 3) x pixels.
 constexpr double kMeanFragsPerPixelFull = 3.0 * 3.0 * kTile * kTile;
 
+// One object's fragments in tile (x0, y0) of size tw x th: a rectangle of
+// about kCoverage x scale of the tile, one or two depth intervals, each its
+// front faces then its back faces.
+void add_object(Rng& rng, rbcd::Tile& t, std::uint32_t id, unsigned x0, unsigned y0, unsigned tw, unsigned th,
+                double scale, std::uint64_t cluster) {
+    double cov = kCoverage * scale * (0.85 + 0.3 * rng.unit());
+    cov = std::clamp(cov, 1.0 / (tw * th), 1.0);
+    const unsigned area = std::max(1u, static_cast<unsigned>(std::lround(cov * tw * th)));
+    const unsigned wmin = std::max(1u, (area + th - 1) / th), wmax = std::min(tw, area);
+    const unsigned rw = static_cast<unsigned>(rng.range(wmin, std::max(wmin, wmax)));
+    const unsigned rh = std::min(th, (area + rw - 1) / rw);
+    const unsigned rx = x0 + static_cast<unsigned>(rng.range(0, tw - rw));
+    const unsigned ry = y0 + static_cast<unsigned>(rng.range(0, th - rh));
+    const unsigned intervals = static_cast<unsigned>(rng.range(1, 2));
+    // Depth = plane over the rectangle; slopes stay small enough
+    // that every depth fits 24 bits (cluster leaves 2^21 headroom).
+    const std::int64_t gx = static_cast<std::int64_t>(rng.range(0, 128)) - 64;
+    const std::int64_t gy = static_cast<std::int64_t>(rng.range(0, 128)) - 64;
+    std::int64_t near = static_cast<std::int64_t>(cluster + rng.range(0, 1u << 19)) + 2048;
+    for (unsigned iv = 0; iv < intervals; ++iv) {
+        const std::int64_t thick = static_cast<std::int64_t>(rng.range(1u << 12, 1u << 18));
+        // Front faces are rasterized first, the back faces of
+        // the same interval later: one burst per object.
+        for (int pass = 0; pass < 2; ++pass) {
+            for (unsigned y = ry; y < ry + rh; ++y) {
+                for (unsigned x = rx; x < rx + rw; ++x) {
+                    const std::int64_t d = near + gx * (x - x0) + gy * (y - y0) + (pass ? thick : 0);
+                    rbcd::Fragment f;
+                    f.x = x;
+                    f.y = y;
+                    f.depth = static_cast<std::uint32_t>(d);
+                    f.id = id;
+                    f.facing = pass ? rbcd::Facing::Back : rbcd::Facing::Front;
+                    // Back faces of closed objects are what
+                    // back-face culling removes: deferred culling.
+                    f.culled = pass == 1;
+                    t.frags.push_back(f);
+                }
+            }
+        }
+        near += thick + static_cast<std::int64_t>(rng.range(1u << 12, 1u << 18));
+    }
+}
+
+// Runs of 2..8 fragments, in a random order of the tile's runs; a run keeps
+// its fragments' order.
+void interleave(Rng& mix, rbcd::Tile& t) {
+    std::vector<std::pair<std::size_t, std::size_t>> runs;   // [begin, end)
+    for (std::size_t b = 0; b < t.frags.size();) {
+        const std::size_t e = std::min(t.frags.size(), b + static_cast<std::size_t>(mix.range(2, 8)));
+        runs.emplace_back(b, e);
+        b = e;
+    }
+    for (std::size_t i = runs.size(); i > 1; --i) std::swap(runs[i - 1], runs[mix.range(0, i - 1)]);
+    std::vector<rbcd::Fragment> mixed;
+    mixed.reserve(t.frags.size());
+    for (const auto& [b, e] : runs) mixed.insert(mixed.end(), t.frags.begin() + b, t.frags.begin() + e);
+    t.frags.swap(mixed);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -126,60 +186,8 @@ int main(int argc, char** argv) {
                         dup = std::find(ids, ids + o, ids[o]) != ids + o;
                     } while (dup);
                 }
-                for (unsigned o = 0; o < objects; ++o) {
-                    double cov = kCoverage * scale * (0.85 + 0.3 * rng.unit());
-                    cov = std::clamp(cov, 1.0 / (tw * th), 1.0);
-                    const unsigned area = std::max(1u, static_cast<unsigned>(std::lround(cov * tw * th)));
-                    const unsigned wmin = std::max(1u, (area + th - 1) / th), wmax = std::min(tw, area);
-                    const unsigned rw = static_cast<unsigned>(rng.range(wmin, std::max(wmin, wmax)));
-                    const unsigned rh = std::min(th, (area + rw - 1) / rw);
-                    const unsigned rx = x0 + static_cast<unsigned>(rng.range(0, tw - rw));
-                    const unsigned ry = y0 + static_cast<unsigned>(rng.range(0, th - rh));
-                    const unsigned intervals = static_cast<unsigned>(rng.range(1, 2));
-                    // Depth = plane over the rectangle; slopes stay small enough
-                    // that every depth fits 24 bits (cluster leaves 2^21 headroom).
-                    const std::int64_t gx = static_cast<std::int64_t>(rng.range(0, 128)) - 64;
-                    const std::int64_t gy = static_cast<std::int64_t>(rng.range(0, 128)) - 64;
-                    std::int64_t near = static_cast<std::int64_t>(cluster + rng.range(0, 1u << 19)) + 2048;
-                    for (unsigned iv = 0; iv < intervals; ++iv) {
-                        const std::int64_t thick = static_cast<std::int64_t>(rng.range(1u << 12, 1u << 18));
-                        // Front faces are rasterized first, the back faces of
-                        // the same interval later: one burst per object.
-                        for (int pass = 0; pass < 2; ++pass) {
-                            for (unsigned y = ry; y < ry + rh; ++y) {
-                                for (unsigned x = rx; x < rx + rw; ++x) {
-                                    const std::int64_t d = near + gx * (x - x0) + gy * (y - y0) + (pass ? thick : 0);
-                                    rbcd::Fragment f;
-                                    f.x = x;
-                                    f.y = y;
-                                    f.depth = static_cast<std::uint32_t>(d);
-                                    f.id = ids[o];
-                                    f.facing = pass ? rbcd::Facing::Back : rbcd::Facing::Front;
-                                    // Back faces of closed objects are what
-                                    // back-face culling removes: deferred culling.
-                                    f.culled = pass == 1;
-                                    t.frags.push_back(f);
-                                }
-                            }
-                        }
-                        near += thick + static_cast<std::int64_t>(rng.range(1u << 12, 1u << 18));
-                    }
-                }
-                if (interleaved) {
-                    // Runs of 2..8 fragments, in a random order of the tile's
-                    // runs; a run keeps its fragments' order.
-                    std::vector<std::pair<std::size_t, std::size_t>> runs;   // [begin, end)
-                    for (std::size_t b = 0; b < t.frags.size();) {
-                        const std::size_t e = std::min(t.frags.size(), b + static_cast<std::size_t>(mix.range(2, 8)));
-                        runs.emplace_back(b, e);
-                        b = e;
-                    }
-                    for (std::size_t i = runs.size(); i > 1; --i) std::swap(runs[i - 1], runs[mix.range(0, i - 1)]);
-                    std::vector<rbcd::Fragment> mixed;
-                    mixed.reserve(t.frags.size());
-                    for (const auto& [b, e] : runs) mixed.insert(mixed.end(), t.frags.begin() + b, t.frags.begin() + e);
-                    t.frags.swap(mixed);
-                }
+                for (unsigned o = 0; o < objects; ++o) add_object(rng, t, ids[o], x0, y0, tw, th, scale, cluster);
+                if (interleaved) interleave(mix, t);
                 w.tile(t);
                 written += t.frags.size();
                 ++tiles_written;

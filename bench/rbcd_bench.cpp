@@ -66,43 +66,16 @@ std::string sibling(const char* argv0, const std::string& name) {
     return (slash == std::string::npos ? std::string(".") : self.substr(0, slash)) + "/" + name;
 }
 
-} // namespace
-
-int sc_main(int argc, char* argv[]) {
-    std::string dir = "/tmp";
+// The benchmark's programs, inputs and outputs.
+struct Bench {
+    std::string gen, sim, dir;
     std::uint64_t fragments = 5000000;
     unsigned jobs = 2;
-    CLI::App app{"rbcd-bench: end-to-end and model-only speed, peak memory"};
-    app.add_option("--dir", dir, "where the generated traces go");
-    app.add_option("--fragments", fragments, "fragments of the base trace");
-    app.add_option("--jobs", jobs, "rbcd-sim --jobs for the parallel rows (default 2)")->check(CLI::Range(2u, 1024u));
-    CLI11_PARSE(app, argc, argv);
-    sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
+    std::string col, st;   // the end-to-end runs' collisions and stats
 
-    const std::string gen = sibling(argv[0], "gen_busy_trace"), sim = sibling(argv[0], "rbcd-sim");
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec) {
-        std::fprintf(stderr, "rbcd-bench: %s: cannot create: %s\n", dir.c_str(), ec.message().c_str());
-        return 2;
-    }
-    const std::string t1 = dir + "/rbcd-bench-1x.rbt", t2 = dir + "/rbcd-bench-2x.rbt";
-    const std::string i1 = dir + "/rbcd-bench-1x-interleaved.rbt", i2 = dir + "/rbcd-bench-2x-interleaved.rbt";
-    std::printf("generating %llu and %llu fragment traces in %s, bursty and interleaved ...\n",
-                (unsigned long long)fragments, (unsigned long long)(2 * fragments), dir.c_str());
-    if (run_child({gen, t1, std::to_string(fragments), "8"}).status != 0 ||
-        run_child({gen, t2, std::to_string(2 * fragments), "16"}).status != 0 ||
-        run_child({gen, i1, std::to_string(fragments), "8", "--interleaved"}).status != 0 ||
-        run_child({gen, i2, std::to_string(2 * fragments), "16", "--interleaved"}).status != 0) {
-        std::fprintf(stderr, "rbcd-bench: trace generation failed\n");
-        return 1;
-    }
-
-    // End to end as a user runs it: the collisions and the stats written.
-    const std::string col = dir + "/rbcd-bench.collisions", st = dir + "/rbcd-bench.json";
     // Best of three; the --jobs 1 and --jobs J runs of one input alternate, so
     // that a machine busy with other work weighs on both alike.
-    const auto best_pair = [&](std::vector<std::string> args) {
+    std::pair<ChildRun, ChildRun> best_pair(std::vector<std::string> args) const {
         args.insert(args.begin(), sim);
         args.insert(args.end(), {"-q", "--collisions", col, "--stats", st});
         std::vector<std::string> par = args;
@@ -116,31 +89,38 @@ int sc_main(int argc, char* argv[]) {
             }
         }
         return std::pair{b1, bj};
-    };
-    const std::string jn = "--jobs " + std::to_string(jobs);
-    std::printf("\n%-34s %12s %10s %14s %12s %10s %14s %12s %8s\n", "run (collisions, stats written)", "fragments",
-                "seconds", "fragments/s", "peak MiB", jn.c_str(), "fragments/s", "peak MiB", "speedup");
-    const auto row = [&](const std::string& label, std::uint64_t n, const std::pair<ChildRun, ChildRun>& r) {
+    }
+
+    void row(const std::string& label, std::uint64_t n, const std::pair<ChildRun, ChildRun>& r) const {
         std::printf("%-34s %12llu %10.3f %14.0f %12.1f %10.3f %14.0f %12.1f %7.2fx\n", label.c_str(),
                     (unsigned long long)n, r.first.seconds, double(n) / r.first.seconds, r.first.max_rss_kb / 1024.0,
                     r.second.seconds, double(n) / r.second.seconds, r.second.max_rss_kb / 1024.0,
                     r.first.seconds / r.second.seconds);
-    };
-    for (const auto& [trace, n, kind] : {std::tuple{t1, fragments, ""}, std::tuple{t2, 2 * fragments, ""},
-                                         std::tuple{i1, fragments, " interleaved"},
-                                         std::tuple{i2, 2 * fragments, " interleaved"}}) {
-        const auto r = best_pair({"--trace", trace});
-        if (r.first.status != 0 || r.second.status != 0) {
-            std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on %s\n", trace.c_str());
-            return 1;
-        }
-        row("rbcd-sim end to end, " + std::to_string(n / 1000000) + "M" + kind, n, r);
     }
-    for (const auto& t : {t2, i1, i2}) std::remove(t.c_str());
+
+    // End to end as a user runs it: the collisions and the stats written.
+    // Every trace but t1 (the model-only run's) is removed after.
+    int end_to_end(const std::string& t1, const std::string& t2, const std::string& i1, const std::string& i2) const {
+        const std::string jn = "--jobs " + std::to_string(jobs);
+        std::printf("\n%-34s %12s %10s %14s %12s %10s %14s %12s %8s\n", "run (collisions, stats written)", "fragments",
+                    "seconds", "fragments/s", "peak MiB", jn.c_str(), "fragments/s", "peak MiB", "speedup");
+        for (const auto& [trace, n, kind] : {std::tuple{t1, fragments, ""}, std::tuple{t2, 2 * fragments, ""},
+                                             std::tuple{i1, fragments, " interleaved"},
+                                             std::tuple{i2, 2 * fragments, " interleaved"}}) {
+            const auto r = best_pair({"--trace", trace});
+            if (r.first.status != 0 || r.second.status != 0) {
+                std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on %s\n", trace.c_str());
+                return 1;
+            }
+            row("rbcd-sim end to end, " + std::to_string(n / 1000000) + "M" + kind, n, r);
+        }
+        for (const auto& t : {t2, i1, i2}) std::remove(t.c_str());
+        return 0;
+    }
 
     // One long input over the cores: the default scene (60 frames; its
     // fragments, collisionable and other, from the stats) and 600 frames.
-    {
+    int scaling() const {
         const std::string t600 = dir + "/rbcd-bench-600.rbt";
         // The busy trace's density (about ten occupied tiles a frame), over 600 frames.
         if (run_child({gen, t600, std::to_string(2 * fragments), "600", "--tiles", "10"}).status != 0) {
@@ -171,41 +151,45 @@ int sc_main(int argc, char* argv[]) {
         row("default scene (60 frames)", scene_n, scene);
         row("600-frame trace", 2 * fragments, frames600);
         std::remove(t600.c_str());
+        return 0;
     }
-    std::remove(col.c_str());
-    std::remove(st.c_str());
 
     // Long runs: peak memory must not grow with the number of frames (per-frame
     // figures stream to --frame-stats). Frames of one small tile each. Before the
     // model-only run: a child's ru_maxrss counts the parent's pages until exec.
-    std::printf("\n%-34s %12s %10s %12s\n", "long run, frames of one tile", "frames", "seconds", "peak MiB");
-    for (const std::uint64_t frames : {std::uint64_t(1000), std::uint64_t(100000), std::uint64_t(1000000)}) {
-        const std::string t = dir + "/rbcd-bench-frames.rbt", fs = dir + "/rbcd-bench-frames.jsonl",
-                          st = dir + "/rbcd-bench-frames.json";
-        std::FILE* f = std::fopen(t.c_str(), "w");
-        if (!f) return 1;
-        std::fputs("rbcd-trace 1\n", f);
-        for (std::uint64_t i = 0; i < frames; ++i)
-            std::fprintf(f, "frame %llu\ntile %llu 0 other=20\nf %llu 1 100 1 F\nf %llu 1 200 1 B\n",
-                         (unsigned long long)i, (unsigned long long)(i % 50), (unsigned long long)(i % 50 * 16),
-                         (unsigned long long)(i % 50 * 16));
-        std::fclose(f);
-        const ChildRun r = run_child({sim, "--trace", t, "-q", "--stats", st, "--frame-stats", fs});
-        if (r.status != 0) {
-            std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on the %llu-frame trace\n", (unsigned long long)frames);
-            return 1;
+    int long_runs() const {
+        std::printf("\n%-34s %12s %10s %12s\n", "long run, frames of one tile", "frames", "seconds", "peak MiB");
+        for (const std::uint64_t frames : {std::uint64_t(1000), std::uint64_t(100000), std::uint64_t(1000000)}) {
+            const std::string t = dir + "/rbcd-bench-frames.rbt", fs = dir + "/rbcd-bench-frames.jsonl",
+                              st = dir + "/rbcd-bench-frames.json";
+            std::FILE* f = std::fopen(t.c_str(), "w");
+            if (!f) return 1;
+            std::fputs("rbcd-trace 1\n", f);
+            for (std::uint64_t i = 0; i < frames; ++i)
+                std::fprintf(f, "frame %llu\ntile %llu 0 other=20\nf %llu 1 100 1 F\nf %llu 1 200 1 B\n",
+                             (unsigned long long)i, (unsigned long long)(i % 50), (unsigned long long)(i % 50 * 16),
+                             (unsigned long long)(i % 50 * 16));
+            std::fclose(f);
+            const ChildRun r = run_child({sim, "--trace", t, "-q", "--stats", st, "--frame-stats", fs});
+            if (r.status != 0) {
+                std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on the %llu-frame trace\n", (unsigned long long)frames);
+                return 1;
+            }
+            std::printf("%-34s %12llu %10.3f %12.1f\n", "rbcd-sim with --stats --frame-stats", (unsigned long long)frames,
+                        r.seconds, r.max_rss_kb / 1024.0);
+            std::remove(t.c_str());
+            std::remove(fs.c_str());
+            std::remove(st.c_str());
         }
-        std::printf("%-34s %12llu %10.3f %12.1f\n", "rbcd-sim with --stats --frame-stats", (unsigned long long)frames,
-                    r.seconds, r.max_rss_kb / 1024.0);
-        std::remove(t.c_str());
-        std::remove(fs.c_str());
-        std::remove(st.c_str());
+        return 0;
     }
+};
 
-    // Model alone: the trace is parsed into memory first, then only the SystemC run is timed.
+// Model alone: the trace is parsed into memory first, then only the SystemC run is timed.
+void model_only(const std::string& trace) {
     rbcd::SimConfig cfg;
-    rbcd::TraceReader reader(t1, {cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits});
-    rbcd::MemorySource mem(reader.header(), t1);
+    rbcd::TraceReader reader(trace, {cfg.tile.width, cfg.tile.height, cfg.zeb.id_bits});
+    rbcd::MemorySource mem(reader.header(), trace);
     mem.read_all(reader);
     rbcd::RecordingSink sink;
     rbcd::rbcd_system sys("rbcd", cfg, mem, sink);
@@ -217,6 +201,47 @@ int sc_main(int argc, char* argv[]) {
                 double(n) / secs, "-");
     std::printf("\nsimulated: %llu cycles, %llu hits, %llu overflows\n", (unsigned long long)sys.total_cycles(),
                 (unsigned long long)sys.tester.stats().hits, (unsigned long long)sys.sorter.stats().overflows);
+}
+
+} // namespace
+
+int sc_main(int argc, char* argv[]) {
+    Bench b;
+    b.dir = "/tmp";
+    CLI::App app{"rbcd-bench: end-to-end and model-only speed, peak memory"};
+    app.add_option("--dir", b.dir, "where the generated traces go");
+    app.add_option("--fragments", b.fragments, "fragments of the base trace");
+    app.add_option("--jobs", b.jobs, "rbcd-sim --jobs for the parallel rows (default 2)")->check(CLI::Range(2u, 1024u));
+    CLI11_PARSE(app, argc, argv);
+    sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
+
+    b.gen = sibling(argv[0], "gen_busy_trace");
+    b.sim = sibling(argv[0], "rbcd-sim");
+    std::error_code ec;
+    std::filesystem::create_directories(b.dir, ec);
+    if (ec) {
+        std::fprintf(stderr, "rbcd-bench: %s: cannot create: %s\n", b.dir.c_str(), ec.message().c_str());
+        return 2;
+    }
+    const std::string& dir = b.dir;
+    const std::string t1 = dir + "/rbcd-bench-1x.rbt", t2 = dir + "/rbcd-bench-2x.rbt";
+    const std::string i1 = dir + "/rbcd-bench-1x-interleaved.rbt", i2 = dir + "/rbcd-bench-2x-interleaved.rbt";
+    std::printf("generating %llu and %llu fragment traces in %s, bursty and interleaved ...\n",
+                (unsigned long long)b.fragments, (unsigned long long)(2 * b.fragments), dir.c_str());
+    const std::string n1 = std::to_string(b.fragments), n2 = std::to_string(2 * b.fragments);
+    if (run_child({b.gen, t1, n1, "8"}).status != 0 || run_child({b.gen, t2, n2, "16"}).status != 0 ||
+        run_child({b.gen, i1, n1, "8", "--interleaved"}).status != 0 ||
+        run_child({b.gen, i2, n2, "16", "--interleaved"}).status != 0) {
+        std::fprintf(stderr, "rbcd-bench: trace generation failed\n");
+        return 1;
+    }
+    b.col = dir + "/rbcd-bench.collisions";
+    b.st = dir + "/rbcd-bench.json";
+    if (b.end_to_end(t1, t2, i1, i2) != 0 || b.scaling() != 0) return 1;
+    std::remove(b.col.c_str());
+    std::remove(b.st.c_str());
+    if (b.long_runs() != 0) return 1;
+    model_only(t1);
     std::remove(t1.c_str());
     return 0;
 }

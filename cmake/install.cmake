@@ -84,9 +84,9 @@ install(FILES ${PROJECT_BINARY_DIR}/rbcdConfig.cmake ${PROJECT_BINARY_DIR}/rbcdC
 file(RELATIVE_PATH RBCD_PC_PREFIX /p/${CMAKE_INSTALL_LIBDIR}/pkgconfig /p)
 string(REGEX REPLACE "/$" "" RBCD_PC_PREFIX "${RBCD_PC_PREFIX}")
 if(RBCD_SYSTEMC_TARGET STREQUAL "PkgConfig::SYSTEMC")
-  set(RBCD_PC_REQUIRES "systemc zlib")
+  set(RBCD_PC_REQUIRES "systemc zlib libzstd")
 else()
-  set(RBCD_PC_REQUIRES "zlib")   # SystemC from its CMake package: give its flags yourself
+  set(RBCD_PC_REQUIRES "zlib libzstd")   # SystemC from its CMake package: give its flags yourself
 endif()
 configure_file(${PROJECT_SOURCE_DIR}/cmake/rbcd.pc.in ${PROJECT_BINARY_DIR}/rbcd.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/rbcd.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

@@ -16,7 +16,7 @@
 // opens with a $dumpvars of every signal's value.
 //
 // The same settled changes can go to another encoding instead of VCD text: a
-// WaveEncoder (sc_main/fst_writer.h writes FST) sees the same scopes, signals,
+// WaveEncoder (outputs/fst_writer.h writes FST) sees the same scopes, signals,
 // times and values, so the two formats cannot drift apart.
 #pragma once
 #include <cstdint>

@@ -313,6 +313,23 @@ struct CpuDetector::Impl {
         }
         return *p.bvh;
     }
+
+    using Pairs = std::map<std::pair<std::uint32_t, std::uint32_t>, PairResult>;
+    using Candidates = std::vector<std::pair<std::size_t, std::size_t>>;
+    // The entry of parts i and j's objects, made on first use.
+    PairResult& pair_of(Pairs& pairs, std::size_t i, std::size_t j) const {
+        std::uint32_t a = in.parts[i].id, b = in.parts[j].id;
+        if (a > b) std::swap(a, b);
+        PairResult& p = pairs[{a, b}];
+        p.a = a;
+        p.b = b;
+        p.open = p.open || !ps[i].closed || !ps[j].closed;
+        return p;
+    }
+    void timed_phases(std::uint64_t f, unsigned repeats, SectionCounter* counter, FrameResult& fr, Candidates& cand,
+                      std::vector<int>& gres);
+    void note_phase_pairs(Pairs& pairs, FrameResult& fr, const Candidates& cand, const std::vector<int>& gres);
+    void exact_phase(std::uint64_t f, Pairs& pairs);
 };
 
 CpuDetector::CpuDetector(const CdInput& in, DetectorOptions opt) : impl_(std::make_unique<Impl>(in, opt)) {}
@@ -324,27 +341,11 @@ std::size_t CpuDetector::concave_parts() const {
 }
 CpuDetector::~CpuDetector() = default;
 
-FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats, SectionCounter* counter) {
-    Impl& s = *impl_;
-    const CdInput& in = s.in;
-    FrameResult fr;
-    fr.frame = f;
-    std::map<std::pair<std::uint32_t, std::uint32_t>, PairResult> pairs;
-    auto pair_of = [&](std::size_t i, std::size_t j) -> PairResult& {
-        std::uint32_t a = in.parts[i].id, b = in.parts[j].id;
-        if (a > b) std::swap(a, b);
-        PairResult& p = pairs[{a, b}];
-        p.a = a;
-        p.b = b;
-        p.open = p.open || !s.ps[i].closed || !s.ps[j].closed;
-        return p;
-    };
-
-    // ---- (a), (b), (d), (e), timed, each repeat starting from frame f-1's
-    // state; the first repeat also counted when a counter is given.
-    std::vector<std::pair<std::size_t, std::size_t>> cand;
+// ---- (a), (b), (d), (e), timed, each repeat starting from frame f-1's
+// state; the first repeat also counted when a counter is given.
+void CpuDetector::Impl::timed_phases(std::uint64_t f, unsigned repeats, SectionCounter* counter, FrameResult& fr,
+                                     Candidates& cand, std::vector<int>& gres) {
     std::vector<double> tb, tg, twb, tw;
-    std::vector<int> gres;
     const std::uint64_t prev = f ? f - 1 : 0;
     for (unsigned r = 0; r < std::max(1u, repeats); ++r) {
         SectionCounter* c = r == 0 ? counter : nullptr;
@@ -357,34 +358,39 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats, SectionCou
         };
         // Unmeasured: back to the previous frame, or (fresh) to nothing.
         const auto reset_broad = [&] {
-            if (s.opt.fresh) s.clear_broad();
-            else s.broad(prev, cand);
+            if (opt.fresh) clear_broad();
+            else broad(prev, cand);
         };
         const auto reset_world = [&](World& w, bool narrow) {
-            if (s.opt.fresh) Impl::clear_world(w);
-            else s.world_step(w, prev, narrow);
+            if (opt.fresh) clear_world(w);
+            else world_step(w, prev, narrow);
         };
         reset_broad();
-        measure(Section::broad, tb, [&] { s.broad(f, cand); });
+        measure(Section::broad, tb, [&] { broad(f, cand); });
 
         reset_broad();
         measure(Section::gjk, tg, [&] {
-            s.broad(f, cand);
+            broad(f, cand);
             gres.assign(cand.size(), 0);
-            for (std::size_t k = 0; k < cand.size(); ++k) gres[k] = s.gjk(cand[k].first, cand[k].second);
+            for (std::size_t k = 0; k < cand.size(); ++k) gres[k] = gjk(cand[k].first, cand[k].second);
         });
 
-        reset_world(s.wbroad, false);
-        measure(Section::world_broad, twb, [&] { s.world_step(s.wbroad, f, false); });
-        reset_world(s.wfull, true);
-        measure(Section::world, tw, [&] { s.world_step(s.wfull, f, true); });
+        reset_world(wbroad, false);
+        measure(Section::world_broad, twb, [&] { world_step(wbroad, f, false); });
+        reset_world(wfull, true);
+        measure(Section::world, tw, [&] { world_step(wfull, f, true); });
     }
     fr.t.broad_us = median(tb);
     fr.t.gjk_us = median(tg);
     fr.t.world_broad_us = median(twb);
     fr.t.world_us = median(tw);
+}
+
+// The pairs of the broad phase and GJK, and of the two worlds.
+void CpuDetector::Impl::note_phase_pairs(Pairs& pairs, FrameResult& fr, const Candidates& cand,
+                                         const std::vector<int>& gres) {
     for (std::size_t k = 0; k < cand.size(); ++k) {
-        PairResult& p = pair_of(cand[k].first, cand[k].second);
+        PairResult& p = pair_of(pairs, cand[k].first, cand[k].second);
         p.aabb = true;
         if (gres[k]) p.gjk = true;
         if (gres[k] == 2) ++fr.t.gjk_no_result;
@@ -393,7 +399,7 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats, SectionCou
     // overlap (the world's proxies are enlarged by the contact-breaking
     // threshold, the tree's leaves further).
     {
-        const btBroadphasePairArray& arr = s.wbroad.world.getPairCache()->getOverlappingPairArray();
+        const btBroadphasePairArray& arr = wbroad.world.getPairCache()->getOverlappingPairArray();
         for (int k = 0; k < arr.size(); ++k) {
             const auto* o0 = static_cast<const btCollisionObject*>(arr[k].m_pProxy0->m_clientObject);
             const auto* o1 = static_cast<const btCollisionObject*>(arr[k].m_pProxy1->m_clientObject);
@@ -401,24 +407,23 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats, SectionCou
             o0->getCollisionShape()->getAabb(o0->getWorldTransform(), lo0, hi0);
             o1->getCollisionShape()->getAabb(o1->getWorldTransform(), lo1, hi1);
             if (!TestAabbAgainstAabb2(lo0, hi0, lo1, hi1)) continue;
-            pair_of(std::size_t(o0->getUserIndex()), std::size_t(o1->getUserIndex())).world_aabb = true;
+            pair_of(pairs, std::size_t(o0->getUserIndex()), std::size_t(o1->getUserIndex())).world_aabb = true;
         }
     }
     // (e)'s: a manifold holding a point at distance <= 0 (the manifolds also
     // keep points within the contact-breaking threshold, not touching).
-    for (int k = 0; k < s.wfull.dispatcher.getNumManifolds(); ++k) {
-        const btPersistentManifold* m = s.wfull.dispatcher.getManifoldByIndexInternal(k);
+    for (int k = 0; k < wfull.dispatcher.getNumManifolds(); ++k) {
+        const btPersistentManifold* m = wfull.dispatcher.getManifoldByIndexInternal(k);
         bool touching = false;
         for (int q = 0; q < m->getNumContacts(); ++q) touching = touching || m->getContactPoint(q).getDistance() <= 0;
-        if (touching) pair_of(std::size_t(m->getBody0()->getUserIndex()), std::size_t(m->getBody1()->getUserIndex())).world = true;
+        if (touching)
+            pair_of(pairs, std::size_t(m->getBody0()->getUserIndex()), std::size_t(m->getBody1()->getUserIndex())).world =
+                true;
     }
+}
 
-    // ---- (c) exact, over the pairs whose exact (double) world AABBs overlap.
-    const auto t0 = Clock::now();
-    if (!s.opt.exact) {
-        for (auto& [k, p] : pairs) fr.pairs.push_back(p);
-        return fr;
-    }
+// ---- (c) exact, over the pairs whose exact (double) world AABBs overlap.
+void CpuDetector::Impl::exact_phase(std::uint64_t f, Pairs& pairs) {
     const std::size_t n = in.parts.size();
     std::vector<Decomposed> dec(n);
     for (std::size_t i = 0; i < n; ++i) dec[i] = decompose(in.model[f][i]);
@@ -432,54 +437,65 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats, SectionCou
         return false;
     };
     for (const auto& [i, j] : overlapping_aabb_pairs(in, f, UINT64_MAX).pairs) {
-        {
-            const Bvh& bi = s.bvh(i, dec[i].scale);
-            const Bvh& bj = s.bvh(j, dec[j].scale);
-            fcl::Transform3d ti = fcl::Transform3d::Identity(), tj = fcl::Transform3d::Identity();
-            ti.linear() = dec[i].rot;
-            ti.translation() = dec[i].trans;
-            tj.linear() = dec[j].rot;
-            tj.translation() = dec[j].trans;
-            fcl::CollisionRequestd req(1, false);
-            fcl::CollisionResultd res;
-            fcl::collide(&bi, ti, &bj, tj, req, res);
-            if (res.isCollision()) {
-                PairResult& p = pair_of(i, j);
-                p.exact = true;
-                if (in.has_view) {
-                    fcl::CollisionRequestd creq(64, true);
-                    fcl::CollisionResultd cres;
-                    fcl::collide(&bi, ti, &bj, tj, creq, cres);
-                    std::vector<fcl::Contactd> cs;
-                    cres.getContacts(cs);
-                    p.contacts += unsigned(cs.size());
-                    for (const auto& c : cs)
-                        if (in_view(in.view_proj, c.pos)) p.on_screen = true;
-                }
-                continue;
+        const Bvh& bi = bvh(i, dec[i].scale);
+        const Bvh& bj = bvh(j, dec[j].scale);
+        fcl::Transform3d ti = fcl::Transform3d::Identity(), tj = fcl::Transform3d::Identity();
+        ti.linear() = dec[i].rot;
+        ti.translation() = dec[i].trans;
+        tj.linear() = dec[j].rot;
+        tj.translation() = dec[j].trans;
+        fcl::CollisionRequestd req(1, false);
+        fcl::CollisionResultd res;
+        fcl::collide(&bi, ti, &bj, tj, req, res);
+        if (res.isCollision()) {
+            PairResult& p = pair_of(pairs, i, j);
+            p.exact = true;
+            if (in.has_view) {
+                fcl::CollisionRequestd creq(64, true);
+                fcl::CollisionResultd cres;
+                fcl::collide(&bi, ti, &bj, tj, creq, cres);
+                std::vector<fcl::Contactd> cs;
+                cres.getContacts(cs);
+                p.contacts += unsigned(cs.size());
+                for (const auto& c : cs)
+                    if (in_view(in.view_proj, c.pos)) p.on_screen = true;
             }
-            // Containment: FCL misses a surface wholly inside another.
-            for (int side = 0; side < 2; ++side) {
-                const std::size_t inner = side ? j : i, outer = side ? i : j;
-                if (!s.ps[outer].closed) continue;   // parity means nothing for an open mesh
-                const Eigen::Matrix4d inv = in.model[f][outer].inverse();
-                const Eigen::Vector3d pw = world_vert(inner, 0);
-                const Eigen::Vector3d pl = (inv * pw.homogeneous()).head<3>();
-                if (point_in_mesh(*in.parts[outer].mesh, pl)) {
-                    PairResult& p = pair_of(i, j);
-                    p.exact = true;
-                    p.contained = true;
-                    if (in.has_view && inner_on_screen(inner)) p.on_screen = true;
-                    break;
-                }
+            continue;
+        }
+        // Containment: FCL misses a surface wholly inside another.
+        for (int side = 0; side < 2; ++side) {
+            const std::size_t inner = side ? j : i, outer = side ? i : j;
+            if (!ps[outer].closed) continue;   // parity means nothing for an open mesh
+            const Eigen::Matrix4d inv = in.model[f][outer].inverse();
+            const Eigen::Vector3d pw = world_vert(inner, 0);
+            const Eigen::Vector3d pl = (inv * pw.homogeneous()).head<3>();
+            if (point_in_mesh(*in.parts[outer].mesh, pl)) {
+                PairResult& p = pair_of(pairs, i, j);
+                p.exact = true;
+                p.contained = true;
+                if (in.has_view && inner_on_screen(inner)) p.on_screen = true;
+                break;
             }
         }
     }
-    fr.t.exact_us = us_since(t0);
-    for (auto& [k, p] : pairs) {
-        // A pair exact for one part pair and merely contained for another is an intersection.
-        fr.pairs.push_back(p);
+}
+
+FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats, SectionCounter* counter) {
+    Impl& s = *impl_;
+    FrameResult fr;
+    fr.frame = f;
+    Impl::Pairs pairs;
+    Impl::Candidates cand;
+    std::vector<int> gres;
+    s.timed_phases(f, repeats, counter, fr, cand, gres);
+    s.note_phase_pairs(pairs, fr, cand, gres);
+    if (s.opt.exact) {
+        const auto t0 = Clock::now();
+        s.exact_phase(f, pairs);
+        fr.t.exact_us = us_since(t0);
     }
+    // A pair exact for one part pair and merely contained for another is an intersection.
+    for (auto& [k, p] : pairs) fr.pairs.push_back(p);
     return fr;
 }
 

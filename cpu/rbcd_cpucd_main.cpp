@@ -15,7 +15,7 @@
 #include "rbcd/cpu/instruction_count.h"
 #include "rbcd/cpu/pixel_overlap.h"
 #include "rbcd/io/trace_reader.h"
-#include "rbcd/sc_main/output_file.h"
+#include "rbcd/common/output_file.h"
 #include "rbcd/scene/scene_source.h"
 
 namespace {
@@ -41,9 +41,8 @@ std::string fmt(const char* f, double v) {
     return b;
 }
 
-int run(const Options& opt) {
-    using namespace rbcd;
-    using namespace rbcd::cpucd;
+void check_options(const Options& opt) {
+    using rbcd::InputError;
     if (opt.scene.empty() == opt.geometry.empty()) throw InputError("command line: give exactly one of --scene, --geometry");
     if (!opt.trace.empty() && !opt.scene.empty())
         throw InputError("command line: --trace goes with --geometry (a scene is rasterized itself)");
@@ -60,6 +59,150 @@ int run(const Options& opt) {
                          "--write-geometry)");
 
     if (!opt.depth_hist.empty() && !opt.pixels) throw InputError("command line: --depth-histogram needs --pixels");
+}
+
+// Work bounded in the input: every frame's candidate pairs counted before
+// Bullet or FCL sees any (docs/limits.md). A format-2 file's frames each
+// carry meshes of their own (game models change shape every frame): each
+// frame is then its own input, and the broad phase starts afresh every frame
+// (docs/cpucd.md).
+void check_pair_limits(const rbcd::cpucd::CdInput& in, const Options& opt) {
+    using namespace rbcd::cpucd;
+    for (std::uint64_t f = 0; f < in.frames(); ++f)
+        if (in.per_frame() ? overlapping_aabb_pairs(in.frame_input(f), 0, opt.max_pairs).over_limit
+                           : overlapping_aabb_pairs(in, f, opt.max_pairs).over_limit)
+            throw rbcd::InputError((opt.scene.empty() ? opt.geometry : opt.scene) + ": frame " + std::to_string(f) +
+                                   ": more than " + std::to_string(opt.max_pairs) +
+                                   " pairs of parts with overlapping bounding boxes (the limit, raised by --max-pairs; "
+                                   "docs/limits.md)");
+}
+
+// --pixels: every frame's pixel overlaps from the scene or trace, and the
+// depth histogram into `hist_out`.
+std::vector<rbcd::cpucd::FramePixels> pixel_overlaps(const Options& opt, const rbcd::cpucd::CdInput& in,
+                                                     rbcd::OutputFile& hist_out) {
+    using namespace rbcd;
+    using namespace rbcd::cpucd;
+    std::unique_ptr<FragmentSource> src;
+    if (!opt.scene.empty()) src = std::make_unique<scene::SceneSource>(opt.scene, scene::SceneLimits{16, 16, 16});
+    else src = std::make_unique<TraceReader>(opt.trace, TraceLimits{16, 16, 16});
+    // Tiles of any size work: intervals are per pixel. The trace's own tile size is accepted.
+    DepthHistogram hist(kDepthBins, 0);
+    std::vector<FramePixels> px = pixel_overlap(*src, opt.tolerance, &hist);
+    hist_out.write("fragments_per_pixel,pixels\n");
+    for (std::size_t n = 1; n < hist.size(); ++n)
+        if (hist[n]) hist_out.write(std::to_string(n) + (n + 1 == kDepthBins ? "+" : "") + "," + std::to_string(hist[n]) + "\n");
+    if (px.size() != in.frames())
+        throw InputError((opt.trace.empty() ? opt.scene : opt.trace) + ": " + std::to_string(px.size()) +
+                         " frames of fragments for " + std::to_string(in.frames()) + " frames of geometry");
+    return px;
+}
+
+// The input's parts, how many are closed meshes, and the objects with a part
+// that is not.
+struct MeshCounts {
+    std::size_t parts = 0, closed = 0;
+    std::set<std::uint32_t> open_ids;
+};
+
+MeshCounts count_meshes(const rbcd::cpucd::CdInput& in) {
+    MeshCounts m;
+    m.parts = in.parts.size();
+    const auto note_closed = [&](const rbcd::cpucd::Part& p) {
+        const bool c = rbcd::cpucd::is_closed(*p.mesh);
+        m.closed += c;
+        if (!c) m.open_ids.insert(p.id);
+    };
+    for (const auto& p : in.parts) note_closed(p);
+    for (const auto& fx : in.extra) {
+        m.parts += fx.meshes.size();
+        for (const auto& p : fx.meshes) note_closed(p);
+    }
+    return m;
+}
+
+// Sums over the frames, for the summary.
+struct RunTotals {
+    double broad = 0, gjk = 0, exact = 0, world_broad = 0, world = 0;   // us
+    std::uint64_t aabb_pairs = 0, gjk_pairs = 0, exact_pairs = 0, world_aabb_pairs = 0, world_pairs = 0;
+    std::uint64_t instr[std::size_t(rbcd::cpucd::Section::count)] = {};
+};
+
+// One frame's rows of --pairs and --frames, added to `t`.
+void write_frame(const Options& opt, std::uint64_t f, const rbcd::cpucd::FrameResult& r, std::size_t frame_parts,
+                 std::size_t frame_concave, const rbcd::cpucd::FramePixels* px, const std::set<std::uint32_t>& open_ids,
+                 rbcd::OutputFile& pairs_out, rbcd::OutputFile& frames_out, RunTotals& t) {
+    using namespace rbcd::cpucd;
+    std::map<PairKey, PairResult> all;
+    for (const auto& p : r.pairs) all[{p.a, p.b}] = p;
+    if (px)
+        for (const auto& [k, c] : *px)
+            if (!all.count(k)) all[k] = PairResult{k.first, k.second};
+    unsigned na = 0, ng = 0, ne = 0, nwa = 0, nw = 0;
+    for (const auto& [k, p] : all) {
+        na += p.aabb;
+        ng += p.gjk;
+        ne += p.exact;
+        nwa += p.world_aabb;
+        nw += p.world;
+        PixelCounts c;
+        if (px)
+            if (auto it = px->find(k); it != px->end()) c = it->second;
+        pairs_out.write(std::to_string(f) + "," + std::to_string(p.a) + "," + std::to_string(p.b) + "," +
+                        std::to_string(p.aabb) + "," + std::to_string(p.gjk) + "," + std::to_string(p.exact) + "," +
+                        std::to_string(p.contained) + "," + std::to_string(p.on_screen) + "," +
+                        std::to_string(p.contacts) + "," + std::to_string(c.overlap) + "," +
+                        std::to_string(c.near) + "," + std::to_string(open_ids.count(p.a) || open_ids.count(p.b)) +
+                        "," + std::to_string(p.world_aabb) + "," + std::to_string(p.world) + "\n");
+    }
+    // A counted run leaves empty what it did not measure: its times are
+    // valgrind's, and it runs no exact phase.
+    const auto us = [&](double v) { return opt.count ? std::string() : fmt("%.3f", v); };
+    std::string counts;
+    for (std::size_t k = 0; k < std::size_t(Section::count); ++k) {
+        counts += "," + (opt.count ? std::to_string(r.instr[k]) : std::string());
+        t.instr[k] += r.instr[k];
+    }
+    frames_out.write(std::to_string(f) + "," + std::to_string(frame_parts) + "," + std::to_string(na) + "," +
+                     std::to_string(ng) + "," + (opt.count ? std::string() : std::to_string(ne)) + "," +
+                     us(r.t.broad_us) + "," + us(r.t.gjk_us) + "," + us(r.t.exact_us) + "," +
+                     std::to_string(r.t.gjk_no_result) + "," + std::to_string(nwa) + "," + std::to_string(nw) +
+                     "," + us(r.t.world_broad_us) + "," + us(r.t.world_us) + "," + std::to_string(frame_concave) +
+                     counts + "\n");
+    t.broad += r.t.broad_us;
+    t.gjk += r.t.gjk_us;
+    t.exact += r.t.exact_us;
+    t.world_broad += r.t.world_broad_us;
+    t.world += r.t.world_us;
+    t.aabb_pairs += na;
+    t.gjk_pairs += ng;
+    t.exact_pairs += ne;
+    t.world_aabb_pairs += nwa;
+    t.world_pairs += nw;
+}
+
+void print_summary(const Options& opt, const rbcd::cpucd::CdInput& in, const MeshCounts& m, std::size_t concave,
+                   const RunTotals& t) {
+    const double nf = double(std::max<std::uint64_t>(in.frames(), 1));
+    std::printf("rbcd-cpucd: %s\n  frames %llu  parts %zu (%zu closed meshes, %zu concave in the world)\n",
+                rbcd::escape_for_message(in.name).c_str(), (unsigned long long)in.frames(), m.parts, m.closed, concave);
+    std::printf("  pair-frames: aabb %llu  gjk %llu  exact %llu  world aabb %llu  world contact %llu\n",
+                (unsigned long long)t.aabb_pairs, (unsigned long long)t.gjk_pairs, (unsigned long long)t.exact_pairs,
+                (unsigned long long)t.world_aabb_pairs, (unsigned long long)t.world_pairs);
+    if (opt.count)
+        std::printf("  mean instructions per frame: broad phase %.0f, broad + GJK %.0f, world broad phase %.0f, "
+                    "world %.0f\n",
+                    double(t.instr[0]) / nf, double(t.instr[1]) / nf, double(t.instr[2]) / nf, double(t.instr[3]) / nf);
+    else
+        std::printf("  mean time per frame: broad phase %.1f us, broad + GJK %.1f us, exact %.1f us, world broad "
+                    "phase %.1f us, world %.1f us (median of %u repeats)\n",
+                    t.broad / nf, t.gjk / nf, t.exact / nf, t.world_broad / nf, t.world / nf, opt.repeat);
+}
+
+int run(const Options& opt) {
+    using namespace rbcd;
+    using namespace rbcd::cpucd;
+    check_options(opt);
     // Before any output is opened: opening one removes an older file there.
     check_output_paths({{"--pairs", opt.pairs}, {"--frames", opt.frames}, {"--write-geometry", opt.write_geometry},
                         {"--depth-histogram", opt.depth_hist}},
@@ -71,49 +214,11 @@ int run(const Options& opt) {
     if (!opt.depth_hist.empty()) hist_out = OutputFile(opt.depth_hist);
     const CdInput in = opt.scene.empty() ? load_geometry_file(opt.geometry, GeometryLimits{opt.max_geometry_bytes})
                                          : load_scene_input(opt.scene);
-    // Work bounded in the input: every frame's candidate pairs counted before
-    // Bullet or FCL sees any (docs/limits.md).
-    // A format-2 file's frames each carry meshes of their own (game models
-    // change shape every frame): each frame is then its own input, and the
-    // broad phase starts afresh every frame (docs/cpucd.md).
-    for (std::uint64_t f = 0; f < in.frames(); ++f)
-        if (in.per_frame() ? overlapping_aabb_pairs(in.frame_input(f), 0, opt.max_pairs).over_limit
-                           : overlapping_aabb_pairs(in, f, opt.max_pairs).over_limit)
-            throw InputError((opt.scene.empty() ? opt.geometry : opt.scene) + ": frame " + std::to_string(f) +
-                             ": more than " + std::to_string(opt.max_pairs) +
-                             " pairs of parts with overlapping bounding boxes (the limit, raised by --max-pairs; "
-                             "docs/limits.md)");
-
+    check_pair_limits(in, opt);
     std::vector<FramePixels> px;
-    if (opt.pixels) {
-        std::unique_ptr<FragmentSource> src;
-        if (!opt.scene.empty()) src = std::make_unique<scene::SceneSource>(opt.scene, scene::SceneLimits{16, 16, 16});
-        else src = std::make_unique<TraceReader>(opt.trace, TraceLimits{16, 16, 16});
-        // Tiles of any size work: intervals are per pixel. The trace's own tile size is accepted.
-        DepthHistogram hist(kDepthBins, 0);
-        px = pixel_overlap(*src, opt.tolerance, &hist);
-        hist_out.write("fragments_per_pixel,pixels\n");
-        for (std::size_t n = 1; n < hist.size(); ++n)
-            if (hist[n]) hist_out.write(std::to_string(n) + (n + 1 == kDepthBins ? "+" : "") + "," + std::to_string(hist[n]) + "\n");
-        if (px.size() != in.frames())
-            throw InputError((opt.trace.empty() ? opt.scene : opt.trace) + ": " + std::to_string(px.size()) +
-                             " frames of fragments for " + std::to_string(in.frames()) + " frames of geometry");
-    }
+    if (opt.pixels) px = pixel_overlaps(opt, in, hist_out);
     if (geo_out.active()) geo_out.write(geometry_file_text(in));
-
-    std::size_t closed = 0;
-    std::set<std::uint32_t> open_ids;   // objects with a part that is not a closed mesh
-    std::size_t parts = in.parts.size();
-    const auto note_closed = [&](const Part& p) {
-        const bool c = is_closed(*p.mesh);
-        closed += c;
-        if (!c) open_ids.insert(p.id);
-    };
-    for (const auto& p : in.parts) note_closed(p);
-    for (const auto& fx : in.extra) {
-        parts += fx.meshes.size();
-        for (const auto& p : fx.meshes) note_closed(p);
-    }
+    const MeshCounts meshes = count_meshes(in);
 
     DetectorOptions dopt;
     dopt.exact = !opt.count;
@@ -126,9 +231,7 @@ int run(const Options& opt) {
     frames_out.write("frame,parts,aabb_pairs,gjk_pairs,exact_pairs,broad_us,gjk_us,exact_us,gjk_no_result,"
                      "world_aabb_pairs,world_pairs,world_broad_us,world_us,concave_parts,broad_instr,gjk_instr,"
                      "world_broad_instr,world_instr\n");
-    double sum_broad = 0, sum_gjk = 0, sum_exact = 0, sum_wb = 0, sum_w = 0;
-    std::uint64_t n_aabb = 0, n_gjk = 0, n_exact = 0, n_wa = 0, n_w = 0;
-    std::uint64_t instr[std::size_t(Section::count)] = {};
+    RunTotals totals;
     std::size_t concave = whole ? whole->concave_parts() : 0;
     for (std::uint64_t f = 0; f < in.frames(); ++f) {
         std::size_t frame_parts = in.parts.size(), frame_concave = concave;
@@ -145,74 +248,15 @@ int run(const Options& opt) {
             concave = std::max(concave, frame_concave);
             r = det.run_frame(0, opt.repeat, counter.get());
         }
-        std::map<PairKey, PairResult> all;
-        for (const auto& p : r.pairs) all[{p.a, p.b}] = p;
-        if (opt.pixels)
-            for (const auto& [k, c] : px[f])
-                if (!all.count(k)) all[k] = PairResult{k.first, k.second};
-        unsigned na = 0, ng = 0, ne = 0, nwa = 0, nw = 0;
-        for (const auto& [k, p] : all) {
-            na += p.aabb;
-            ng += p.gjk;
-            ne += p.exact;
-            nwa += p.world_aabb;
-            nw += p.world;
-            PixelCounts c;
-            if (opt.pixels)
-                if (auto it = px[f].find(k); it != px[f].end()) c = it->second;
-            pairs_out.write(std::to_string(f) + "," + std::to_string(p.a) + "," + std::to_string(p.b) + "," +
-                            std::to_string(p.aabb) + "," + std::to_string(p.gjk) + "," + std::to_string(p.exact) + "," +
-                            std::to_string(p.contained) + "," + std::to_string(p.on_screen) + "," +
-                            std::to_string(p.contacts) + "," + std::to_string(c.overlap) + "," +
-                            std::to_string(c.near) + "," + std::to_string(open_ids.count(p.a) || open_ids.count(p.b)) +
-                            "," + std::to_string(p.world_aabb) + "," + std::to_string(p.world) + "\n");
-        }
-        // A counted run leaves empty what it did not measure: its times are
-        // valgrind's, and it runs no exact phase.
-        const auto us = [&](double v) { return opt.count ? std::string() : fmt("%.3f", v); };
-        std::string counts;
-        for (std::size_t k = 0; k < std::size_t(Section::count); ++k) {
-            counts += "," + (opt.count ? std::to_string(r.instr[k]) : std::string());
-            instr[k] += r.instr[k];
-        }
-        frames_out.write(std::to_string(f) + "," + std::to_string(frame_parts) + "," + std::to_string(na) + "," +
-                         std::to_string(ng) + "," + (opt.count ? std::string() : std::to_string(ne)) + "," +
-                         us(r.t.broad_us) + "," + us(r.t.gjk_us) + "," + us(r.t.exact_us) + "," +
-                         std::to_string(r.t.gjk_no_result) + "," + std::to_string(nwa) + "," + std::to_string(nw) +
-                         "," + us(r.t.world_broad_us) + "," + us(r.t.world_us) + "," + std::to_string(frame_concave) +
-                         counts + "\n");
-        sum_broad += r.t.broad_us;
-        sum_gjk += r.t.gjk_us;
-        sum_exact += r.t.exact_us;
-        sum_wb += r.t.world_broad_us;
-        sum_w += r.t.world_us;
-        n_aabb += na;
-        n_gjk += ng;
-        n_exact += ne;
-        n_wa += nwa;
-        n_w += nw;
+        write_frame(opt, f, r, frame_parts, frame_concave, opt.pixels ? &px[f] : nullptr, meshes.open_ids, pairs_out,
+                    frames_out, totals);
     }
     pairs_out.commit();
     frames_out.commit();
     geo_out.commit();
     hist_out.commit();
     rbcd::outputs_complete();   // a summary on a closed pipe leaves them standing
-    if (!opt.quiet) {
-        const double nf = double(std::max<std::uint64_t>(in.frames(), 1));
-        std::printf("rbcd-cpucd: %s\n  frames %llu  parts %zu (%zu closed meshes, %zu concave in the world)\n",
-                    escape_for_message(in.name).c_str(), (unsigned long long)in.frames(), parts, closed, concave);
-        std::printf("  pair-frames: aabb %llu  gjk %llu  exact %llu  world aabb %llu  world contact %llu\n",
-                    (unsigned long long)n_aabb, (unsigned long long)n_gjk, (unsigned long long)n_exact,
-                    (unsigned long long)n_wa, (unsigned long long)n_w);
-        if (opt.count)
-            std::printf("  mean instructions per frame: broad phase %.0f, broad + GJK %.0f, world broad phase %.0f, "
-                        "world %.0f\n",
-                        double(instr[0]) / nf, double(instr[1]) / nf, double(instr[2]) / nf, double(instr[3]) / nf);
-        else
-            std::printf("  mean time per frame: broad phase %.1f us, broad + GJK %.1f us, exact %.1f us, world broad "
-                        "phase %.1f us, world %.1f us (median of %u repeats)\n",
-                        sum_broad / nf, sum_gjk / nf, sum_exact / nf, sum_wb / nf, sum_w / nf, opt.repeat);
-    }
+    if (!opt.quiet) print_summary(opt, in, meshes, concave, totals);
     return 0;
 }
 

@@ -25,7 +25,7 @@
 #include "rbcd/common/errors.h"
 #include "rbcd/gl/draw_stream.h"
 #include "rbcd/io/trace_writer.h"
-#include "rbcd/sc_main/output_file.h"
+#include "rbcd/common/output_file.h"
 #include "rbcd/scene/tile_rasterizer.h"
 
 namespace {

@@ -333,7 +333,12 @@ void rasterizer::end_frame() {
     for (auto* o : observers_) o->frame_end(cur_);
 }
 
-void rasterizer::feed_tile(const Tile& tile) {
+// The tile's counts, run and frame, its shading cost set on every pipe, and
+// the tile observers' look at it; returns its culled fragments. This and walk_gpu_only are inlined into
+// feed_tile: the per-tile code keeps the layout GCC gives it in one piece
+// (the same instructions executed; left to GCC, the split cost 0.9% more on
+// the default scene).
+[[gnu::always_inline]] inline std::uint64_t rasterizer::count_tile(const Tile& tile) {
     ++stats_.tiles;
     ++cur_.tiles;
     std::uint64_t culled = 0;
@@ -360,12 +365,12 @@ void rasterizer::feed_tile(const Tile& tile) {
     cur_.cprims += tile.cprims;
     cur_.tiles_with_base += tile.has_base;
     for (auto* o : observers_) o->tile(tile);
+    return culled;
+}
 
-    const std::uint64_t overhead = cfg_.gpu.tile_overhead_cycles;
-    const std::uint64_t setup = cfg_.gpu.setup_cycles_per_primitive;
-
-    // The GPU-only timelines: no bank, no unit. A timeline starts to differ
-    // from the one before it at its first cprims (c fragment).
+// The GPU-only timelines: no bank, no unit. A timeline starts to differ from
+// the one before it at its first cprims (c fragment).
+[[gnu::always_inline]] inline void rasterizer::walk_gpu_only(const Tile& tile, std::uint64_t culled, bool no_setups) {
     const auto go_live = [&](std::size_t i) {
         if (pure_live_[i]) return;
         const std::size_t from = pure_live_[i - 1] ? i - 1 : i - 2;
@@ -379,16 +384,24 @@ void rasterizer::feed_tile(const Tile& tile) {
     for (std::size_t i = 0; i < 3; ++i) {
         if (!pure_live_[i]) continue;
         pure_start[i] = pure_r_[i].next_free();
-        pure_r_[i].busy(overhead);
+        pure_r_[i].busy(cfg_.gpu.tile_overhead_cycles);
     }
-    Pure pure{pure_r_, pure_fp_, setup, pure_live_};
-    const bool no_setups = tile.prims == 0 && tile.cprims == 0;
+    Pure pure{pure_r_, pure_fp_, cfg_.gpu.setup_cycles_per_primitive, pure_live_};
     if (no_setups) pure.walk_without_setups(tile, culled);
     else walk_tile(tile, culled, pure);
     pure.finish();
     if (tile.has_base)
         for (std::size_t i = 0; i < 3; ++i)
             if (pure_live_[i]) pure_r_[i].restart(std::max(pure_r_[i].next_free(), pure_start[i] + tile.base));
+}
+
+void rasterizer::feed_tile(const Tile& tile) {
+    const std::uint64_t culled = count_tile(tile);
+    const std::uint64_t n = tile.frags.size();
+    const std::uint64_t overhead = cfg_.gpu.tile_overhead_cycles;
+    const std::uint64_t setup = cfg_.gpu.setup_cycles_per_primitive;
+    const bool no_setups = tile.prims == 0 && tile.cprims == 0;
+    walk_gpu_only(tile, culled, no_setups);
 
     // With the unit.
     const std::uint64_t t0 = unit_.next_free();

@@ -194,6 +194,8 @@ private:
     void begin_frame(std::uint64_t frame);
     void end_frame();
     void feed_tile(const Tile& tile);
+    std::uint64_t count_tile(const Tile& tile);
+    void walk_gpu_only(const Tile& tile, std::uint64_t culled, bool no_setups);
 
     const SimConfig& cfg_;
     const Clocking& clk_;

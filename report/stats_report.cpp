@@ -46,6 +46,87 @@ nlohmann::json energy_blocks_json(const EnergyReport& r) {
     return j;
 }
 
+// ---- GPU time (docs/gpu-model.md)
+nlohmann::json gpu_json(const RunSnapshot& s, const FrameFigures& t) {
+    const FrameReduction& r = s.frames;
+    return {
+        {"model", "paced raster pipeline, docs/gpu-model.md"},
+        {"bank_wait", to_string(s.cfg.gpu.bank_wait)},
+        {"baseline_cycles", t.t.baseline},
+        {"cycles_with_unit", t.t.with_unit},
+        {"overhead_pct", num_or_null(t.overhead_pct())},
+        {"overhead_cycles",
+         {{"extra_primitives", t.extra_prims},
+          {"extra_fragments", t.extra_fragments},
+          {"unit_no_bank", t.unit_no_bank},
+          {"unit_queue", t.unit_queue},
+          {"tail", t.tail}}},
+        {"stalls",
+         {{"no_bank_cycles", t.t.stall_no_bank},
+          {"queue_full_cycles", t.t.stall_queue_full},
+          {"fragment_queue_cycles", t.t.stall_fragment_queue}}},
+        {"primitives", t.t.prims},
+        {"culled_primitives", t.t.cprims},
+        {"tiles", t.t.tiles},
+        {"tiles_with_base", t.t.tiles_with_base},
+        {"shaded_fragments", t.t.shaded},
+        {"culled_fragments", t.t.culled},
+        {"per_frame_overhead_pct",
+         {{"mean", num_or_null(r.mean_overhead_pct())},
+          {"max", r.has_worst ? num_or_null(r.worst_pct) : nlohmann::json(nullptr)},
+          {"max_frame", r.has_worst ? nlohmann::json(r.worst_frame) : nlohmann::json(nullptr)},
+          {"frames_without_baseline", r.frames - r.frames_with_baseline},
+          {"sum_e6", r.overhead_sum_overflow ? nlohmann::json(nullptr) : nlohmann::json(r.overhead_sum_e6)}}},
+    };
+}
+
+// ---- Energy (docs/energy.md)
+nlohmann::json energy_json(const RunSnapshot& s, const EnergyCosts& k, const FrameFigures& t, double simulated_ns) {
+    const FrameReduction& r = s.frames;
+    const EnergyReport et = energy_of(k, activity_of(s.counters), s.cycles);
+    return {
+        {"model", "docs/energy.md"},
+        {"zeb_device", to_string(s.cfg.energy.zeb_device)},
+        {"bank_bits", k.bank_bits},
+        {"row_bits", k.row_bits},
+        {"sram_scale", k.sram_scale},
+        {"per_event_pj",
+         {{"zeb_row_read", k.row_read_pj},
+          {"zeb_row_write", k.row_write_pj},
+          {"queue_write", k.queue_write_pj},
+          {"comparator", k.comparator_pj},
+          {"mux_element", k.mux_element_pj},
+          {"stack_push", k.stack_push_pj},
+          {"stack_match", k.stack_match_pj},
+          {"id_compare", k.id_compare_pj},
+          {"buffer_record", k.buffer_record_pj},
+          {"memory_byte", k.memory_byte_pj}}},
+        {"leakage_mw",
+         {{"zeb_bank_each", k.bank_leakage_mw},
+          {"input_queue", k.queue_leakage_mw},
+          {"insertion_sorter", k.sorter_leakage_mw},
+          {"zoverlap_tester", k.tester_leakage_mw},
+          {"output_buffer", k.buffer_leakage_mw}}},
+        {"blocks", energy_blocks_json(et)},
+        {"dynamic_pj", et.dynamic_pj},
+        {"leakage_pj", et.leakage_pj},
+        {"total_pj", et.total_pj()},
+        {"total_nj", et.total_pj() * 1e-3},
+        {"average_power_mw", simulated_ns > 0 ? et.total_pj() / simulated_ns : 0.0},
+        {"gpu",
+         {{"baseline_pj", t.gpu_baseline_pj},
+          {"with_unit_pj", t.with_unit_pj()},
+          {"gpu_with_unit_pj", t.gpu_with_unit_pj},
+          {"unit_pj", t.unit_pj()},
+          {"overhead_pct", num_or_null(t.energy_overhead_pct())}}},
+        {"per_frame",
+         {{"basis", "the unit's counters at each frame barrier; leakage over the frame's time with the unit"},
+          {"mean_nj", r.mean_frame_nj(t.unit_pj())},
+          {"max_nj", r.has_max_energy ? r.max_energy_nj : 0.0},
+          {"max_frame", r.has_max_energy ? nlohmann::json(r.max_energy_frame) : nlohmann::json(nullptr)}}},
+    };
+}
+
 } // namespace
 
 nlohmann::json make_stats(const rbcd_system& sys, const RunInfo& info, const RunReport& report) {
@@ -104,80 +185,8 @@ nlohmann::json make_stats(const RunSnapshot& s, double wall_seconds) {
         {"zeb_bank_bits", k.bank_bits},
     };
 
-    // ---- GPU time (docs/gpu-model.md)
-    j["gpu"] = {
-        {"model", "paced raster pipeline, docs/gpu-model.md"},
-        {"bank_wait", to_string(s.cfg.gpu.bank_wait)},
-        {"baseline_cycles", t.t.baseline},
-        {"cycles_with_unit", t.t.with_unit},
-        {"overhead_pct", num_or_null(t.overhead_pct())},
-        {"overhead_cycles",
-         {{"extra_primitives", t.extra_prims},
-          {"extra_fragments", t.extra_fragments},
-          {"unit_no_bank", t.unit_no_bank},
-          {"unit_queue", t.unit_queue},
-          {"tail", t.tail}}},
-        {"stalls",
-         {{"no_bank_cycles", t.t.stall_no_bank},
-          {"queue_full_cycles", t.t.stall_queue_full},
-          {"fragment_queue_cycles", t.t.stall_fragment_queue}}},
-        {"primitives", t.t.prims},
-        {"culled_primitives", t.t.cprims},
-        {"tiles", t.t.tiles},
-        {"tiles_with_base", t.t.tiles_with_base},
-        {"shaded_fragments", t.t.shaded},
-        {"culled_fragments", t.t.culled},
-        {"per_frame_overhead_pct",
-         {{"mean", num_or_null(r.mean_overhead_pct())},
-          {"max", r.has_worst ? num_or_null(r.worst_pct) : nlohmann::json(nullptr)},
-          {"max_frame", r.has_worst ? nlohmann::json(r.worst_frame) : nlohmann::json(nullptr)},
-          {"frames_without_baseline", r.frames - r.frames_with_baseline},
-          {"sum_e6", r.overhead_sum_overflow ? nlohmann::json(nullptr) : nlohmann::json(r.overhead_sum_e6)}}},
-    };
-
-    // ---- Energy (docs/energy.md)
-    const EnergyReport et = energy_of(k, activity_of(c), cycles);
-    j["energy"] = {
-        {"model", "docs/energy.md"},
-        {"zeb_device", to_string(s.cfg.energy.zeb_device)},
-        {"bank_bits", k.bank_bits},
-        {"row_bits", k.row_bits},
-        {"sram_scale", k.sram_scale},
-        {"per_event_pj",
-         {{"zeb_row_read", k.row_read_pj},
-          {"zeb_row_write", k.row_write_pj},
-          {"queue_write", k.queue_write_pj},
-          {"comparator", k.comparator_pj},
-          {"mux_element", k.mux_element_pj},
-          {"stack_push", k.stack_push_pj},
-          {"stack_match", k.stack_match_pj},
-          {"id_compare", k.id_compare_pj},
-          {"buffer_record", k.buffer_record_pj},
-          {"memory_byte", k.memory_byte_pj}}},
-        {"leakage_mw",
-         {{"zeb_bank_each", k.bank_leakage_mw},
-          {"input_queue", k.queue_leakage_mw},
-          {"insertion_sorter", k.sorter_leakage_mw},
-          {"zoverlap_tester", k.tester_leakage_mw},
-          {"output_buffer", k.buffer_leakage_mw}}},
-        {"blocks", energy_blocks_json(et)},
-        {"dynamic_pj", et.dynamic_pj},
-        {"leakage_pj", et.leakage_pj},
-        {"total_pj", et.total_pj()},
-        {"total_nj", et.total_pj() * 1e-3},
-        {"average_power_mw", simulated_ns > 0 ? et.total_pj() / simulated_ns : 0.0},
-        {"gpu",
-         {{"baseline_pj", t.gpu_baseline_pj},
-          {"with_unit_pj", t.with_unit_pj()},
-          {"gpu_with_unit_pj", t.gpu_with_unit_pj},
-          {"unit_pj", t.unit_pj()},
-          {"overhead_pct", num_or_null(t.energy_overhead_pct())}}},
-        {"per_frame",
-         {{"basis", "the unit's counters at each frame barrier; leakage over the frame's time with the unit"},
-          {"mean_nj", r.mean_frame_nj(t.unit_pj())},
-          {"max_nj", r.has_max_energy ? r.max_energy_nj : 0.0},
-          {"max_frame", r.has_max_energy ? nlohmann::json(r.max_energy_frame) : nlohmann::json(nullptr)}}},
-    };
+    j["gpu"] = gpu_json(s, t);
+    j["energy"] = energy_json(s, k, t, simulated_ns);
     j["config"] = config_json(s.cfg);
     return j;
 }

@@ -478,7 +478,7 @@ bool load_mesh_file(const std::string& path, Mesh& out, std::string& error, unsi
     if (pid == 0) {
         ::close(p[0]);
         // The parent's interrupt handlers remove its temporary outputs
-        // (sc_main/output_file.h); a signal meant for the reader must only end it.
+        // (common/output_file.h); a signal meant for the reader must only end it.
         for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::signal(sig, SIG_DFL);
         if (abort_reader) ::abort();
         ::alarm(timeout_s);

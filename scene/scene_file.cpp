@@ -256,6 +256,28 @@ ObjectDesc read_object(const Reader& rd, const toml::table& t, std::size_t index
 
 } // namespace
 
+std::vector<std::string> mesh_files_named(const std::string& toml_text, const std::string& base_dir) {
+    toml::table doc;
+    try {
+        doc = toml::parse(toml_text);
+    } catch (const toml::parse_error&) {
+        return {};
+    }
+    std::vector<std::string> meshes;
+    const toml::array* objects = doc["object"].as_array();
+    if (!objects) return meshes;
+    for (const toml::node& o : *objects) {
+        const toml::table* t = o.as_table();
+        const toml::value<std::string>* mesh = t ? t->get_as<std::string>("mesh") : nullptr;
+        if (!mesh || std::any_of(std::begin(kBuiltins), std::end(kBuiltins), [&](const char* b) { return mesh->get() == b; }))
+            continue;
+        std::filesystem::path mp(mesh->get());
+        if (mp.is_relative() && !base_dir.empty()) mp = std::filesystem::path(base_dir) / mp;
+        meshes.push_back(mp.string());
+    }
+    return meshes;
+}
+
 Transform transform_at(const ObjectDesc& obj, std::uint64_t frame) {
     const auto& keys = obj.keys;
     if (frame >= keys.back().frame) return keys.back().t;

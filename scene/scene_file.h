@@ -66,6 +66,11 @@ constexpr double kMinFovY = 0.01;
 SceneDesc parse_scene(const std::string& toml_text, const std::string& display_name,
                       const std::string& base_dir, const SceneLimits& limits);
 
+// The mesh files named by the `mesh` keys of the text's [[object]] tables,
+// relative paths taken from base_dir, built-in shapes left out; no other key
+// checked. Empty when the text is not TOML.
+std::vector<std::string> mesh_files_named(const std::string& toml_text, const std::string& base_dir);
+
 Transform transform_at(const ObjectDesc& obj, std::uint64_t frame);
 // scale, then rotate X, Y, Z, then translate.
 Eigen::Matrix4d model_matrix(const Transform& t);

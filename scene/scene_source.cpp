@@ -1,5 +1,7 @@
 #include "rbcd/scene/scene_source.h"
 
+#include <sys/stat.h>
+
 #include <stdexcept>
 
 #include <algorithm>
@@ -70,6 +72,21 @@ std::vector<std::string> mesh_files_in(const SceneDesc& d) {
 
 std::vector<std::string> SceneSource::mesh_files_of(const std::string& path, const SceneLimits& limits) {
     return mesh_files_in(parse_scene_file(path, limits));
+}
+
+std::vector<std::string> SceneSource::mesh_files_named(const std::string& path) {
+    struct stat st {};
+    if (path.empty() || ::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return {};
+    const SceneLimits defaults{};
+    try {
+        return mesh_files_of(path, defaults);
+    } catch (const std::exception&) {
+    }
+    try {
+        return scene::mesh_files_named(read_text_file(path, defaults), std::filesystem::path(path).parent_path().string());
+    } catch (const std::exception&) {
+        return {};
+    }
 }
 
 std::vector<std::string> SceneSource::mesh_files() const { return mesh_files_in(r_->desc()); }

@@ -82,6 +82,12 @@ public:
     // The same from the scene file alone, read and parsed but no mesh loaded:
     // what no output may overwrite, known before the outputs are opened.
     static std::vector<std::string> mesh_files_of(const std::string& path, const SceneLimits& limits);
+    // Every mesh file the scene file's objects name, read leniently and never
+    // failing: a scene that does not pass its checks (or not under the
+    // default limits) still names its meshes as long as its TOML parses.
+    // Nothing unless `path` is a regular file (a FIFO would block). What a
+    // failed run must not remove as an older output.
+    static std::vector<std::string> mesh_files_named(const std::string& path);
 
     // ---- Pictures (--images) ----
     static constexpr std::uint32_t kNoDepth = 0xFFFFFFFFu;

@@ -41,6 +41,59 @@ inline bool depth_passes(DepthFunc f, std::uint32_t z, std::uint32_t stored) {
     }
 }
 
+// A tile's header and empty lists, before its triangles are walked.
+void begin_tile(Tile& tile, std::uint64_t frame, unsigned col, unsigned row) {
+    tile.frame = frame;
+    tile.col = col;
+    tile.row = row;
+    tile.other = 0;
+    tile.has_base = false;
+    tile.base = 0;
+    // Every binned triangle is set up, covered pixels or not; the culled ones
+    // are binned only because collision detection defers their culling.
+    tile.has_prims = tile.has_cprims = true;
+    tile.prims = tile.cprims = 0;
+    tile.ordered_other = true;
+    tile.other_runs.clear();
+    tile.frags.clear();
+}
+
+// A depth clear's rectangle [x0, x1] x [y0, y1]: depth v, no marks.
+void clear_depth(std::vector<std::uint32_t>& depth, std::vector<std::uint8_t>& marks, std::size_t width, std::int32_t x0,
+                 std::int32_t x1, std::int32_t y0, std::int32_t y1, std::uint32_t v) {
+    for (std::int32_t y = y0; y <= y1; ++y) {
+        std::fill_n(&depth[std::size_t(y) * width + std::size_t(x0)], std::size_t(x1 - x0 + 1), v);
+        std::fill_n(&marks[std::size_t(y) * width + std::size_t(x0)], std::size_t(x1 - x0 + 1), 0);
+    }
+}
+
+// Non-collisionable fragments are emitted in primitive order between the
+// collisionable ones: adjacent runs merge.
+[[gnu::always_inline]] inline void add_other(Tile& tile, std::uint64_t n) {
+    if (n == 0) return;
+    tile.other += n;
+    const auto before = static_cast<std::uint32_t>(tile.frags.size());
+    if (!tile.other_runs.empty() && tile.other_runs.back().before == before) tile.other_runs.back().count += n;
+    else tile.other_runs.push_back({before, n});
+}
+
+// The shading cost of a tile's shaded fragments (other, and collisionable
+// ones not tagged c): their mean, when a draw gives one.
+struct ShadeSum {
+    std::uint64_t shaded = 0, sum = 0;
+    bool given = false;
+    [[gnu::always_inline]] void add(std::uint32_t shade, std::uint64_t n) {
+        shaded += n;
+        sum += n * (shade ? shade : 100u);
+        given |= shade != 0 && n != 0;
+    }
+    void set(Tile& tile) const {
+        tile.has_shade = given;
+        tile.shade = given ? static_cast<std::uint32_t>(std::clamp<std::uint64_t>((sum + shaded / 2) / shaded, 1, 10000))
+                           : 100;
+    }
+};
+
 } // namespace
 
 DrawState DrawState::full_screen(unsigned width, unsigned height) {
@@ -315,37 +368,8 @@ bool TileRasterizer::next_tile(Tile& tile, SceneSource::FrameImage* image) {
 }
 
 void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSource::FrameImage* image) {
-    tile.frame = frame_;
-    tile.col = col;
-    tile.row = row;
-    tile.other = 0;
-    tile.has_base = false;
-    tile.base = 0;
-    // Every binned triangle is set up, covered pixels or not; the culled ones
-    // are binned only because collision detection defers their culling.
-    tile.has_prims = tile.has_cprims = true;
-    tile.prims = tile.cprims = 0;
-    tile.ordered_other = true;
-    tile.other_runs.clear();
-    tile.frags.clear();
-    // The shading cost of the tile's shaded fragments (other, and
-    // collisionable ones not tagged c), when a draw gives one.
-    std::uint64_t shaded = 0, shade_sum = 0;
-    bool shade_given = false;
-    const auto add_shaded = [&](const DrawState& s, std::uint64_t n) {
-        shaded += n;
-        shade_sum += n * (s.shade ? s.shade : 100u);
-        shade_given |= s.shade != 0 && n != 0;
-    };
-    // Non-collisionable fragments are emitted in primitive order between the
-    // collisionable ones: adjacent runs merge.
-    const auto add_other = [&tile](std::uint64_t n) {
-        if (n == 0) return;
-        tile.other += n;
-        const auto before = static_cast<std::uint32_t>(tile.frags.size());
-        if (!tile.other_runs.empty() && tile.other_runs.back().before == before) tile.other_runs.back().count += n;
-        else tile.other_runs.push_back({before, n});
-    };
+    begin_tile(tile, frame_, col, row);
+    ShadeSum shade;
 
     const std::int32_t tx0 = std::int32_t(col * tile_w_), ty0 = std::int32_t(row * tile_h_);
     const std::int32_t tx1 = std::min<std::int32_t>(tx0 + std::int32_t(tile_w_), std::int32_t(width_)) - 1;
@@ -357,12 +381,8 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
         const std::int32_t x0 = std::max(tx0, t.px0), x1 = std::min(tx1, t.px1);
         const std::int32_t y0 = std::max(ty0, t.py0), y1 = std::min(ty1, t.py1);
         if (t.clear) {
-            if (ti >= depth_limit_) continue;
-            const auto v = static_cast<std::uint32_t>(t.z0 + 0.5);
-            for (std::int32_t y = y0; y <= y1; ++y) {
-                std::fill_n(&depth_[std::size_t(y) * width_ + std::size_t(x0)], std::size_t(x1 - x0 + 1), v);
-                std::fill_n(&marks_[std::size_t(y) * width_ + std::size_t(x0)], std::size_t(x1 - x0 + 1), 0);
-            }
+            if (ti < depth_limit_)
+                clear_depth(depth_, marks_, width_, x0, x1, y0, y1, static_cast<std::uint32_t>(t.z0 + 0.5));
             continue;
         }
         const DrawState& s = draws_[t.draw];
@@ -395,8 +415,8 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
                 r1 += by1;
                 r2 += by2;
             }
-            add_other(n);
-            add_shaded(s, n);
+            add_other(tile, n);
+            shade.add(s.shade, n);
             continue;
         }
         std::uint64_t other_here = 0;
@@ -449,13 +469,10 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
             r2 += by2;
             zr += t.zy;
         }
-        add_other(other_here);
-        add_shaded(s, other_here + (t.culled ? 0 : tile.frags.size() - frags_before));
+        add_other(tile, other_here);
+        shade.add(s.shade, other_here + (t.culled ? 0 : tile.frags.size() - frags_before));
     }
-    tile.has_shade = shade_given;
-    tile.shade = shade_given ? static_cast<std::uint32_t>(std::clamp<std::uint64_t>(
-                                   (shade_sum + shaded / 2) / shaded, 1, 10000))
-                             : 100;
+    shade.set(tile);
 }
 
 } // namespace rbcd::scene

@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <systemc>
 
-#include "rbcd/sc_main/sanitizer_stack.h"
+#include "rbcd/run/sanitizer_stack.h"
 
 namespace {
 // The kernel prints its banner before sc_main runs, once per test process:

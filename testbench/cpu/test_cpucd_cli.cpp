@@ -1,5 +1,5 @@
-// rbcd-cpucd under hostile input (issue 22): outputs written as rbcd-sim
-// writes them (sc_main/output_file.h), geometry files read as rbcd-sim reads
+// rbcd-cpucd under hostile input: outputs written as rbcd-sim
+// writes them (common/output_file.h), geometry files read as rbcd-sim reads
 // its inputs (regular files, line and size limits, magnitudes bounded as in
 // scenes, rigid-plus-scale matrices), work bounded in the input, one-line
 // escaped messages. Each case failed on the code before.

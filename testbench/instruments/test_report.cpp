@@ -1,7 +1,7 @@
 // The --stats document, the stdout summary and the progress line.
 #include <catch2/catch.hpp>
 
-#include "rbcd/sc_main/progress.h"
+#include "rbcd/run/progress.h"
 #include "rbcd/testbench/instruments/instruments_util.h"
 
 using namespace rbcd;

@@ -1,4 +1,4 @@
-// rbcd-sim --jobs N (sc_main/jobs.h): the frames run by N workers give the
+// rbcd-sim --jobs N (run/jobs.h): the frames run by N workers give the
 // bytes one process writes (collisions, --frame-stats, the stats document
 // apart from the wall time and the command line that ran), for traces plain
 // and gzip and for scenes, with and without --frames; bad values and what
@@ -158,7 +158,7 @@ TEST_CASE("rbcd-sim --jobs: a worker's command line run alone", "[jobs]") {
     const std::size_t at = text.find("frame 30\n");
     REQUIRE(at != std::string::npos);
     const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
-    // Their blocks of the trace's digest (sc_main/part_digest.h): the first's
+    // Their blocks of the trace's digest (run/part_digest.h): the first's
     // chained, the second's sums in a file of 64 bytes a block.
     const std::uint64_t cut = at / 1024 * 1024, end = (text.size() - 1) / 1024 * 1024;
     const std::vector<std::string> parts[] = {

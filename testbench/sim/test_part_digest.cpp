@@ -1,5 +1,5 @@
 // A trace's XXH3-128 digest taken in parts by rbcd-sim --jobs's workers and
-// joined by the parent (sc_main/part_digest.h): libxxhash's digest of the
+// joined by the parent (run/part_digest.h): libxxhash's digest of the
 // whole file, for every kind of length and cut, every vector unit, parts fed
 // as a trace reader feeds them (a header chunk, a skip to the part's first
 // frame, uneven reads past its end), parts that stop early or are missing;
@@ -19,8 +19,8 @@
 #include <random>
 
 #include "rbcd/common/errors.h"
-#include "rbcd/sc_main/part_digest.h"
-#include "rbcd/sc_main/provenance.h"
+#include "rbcd/run/part_digest.h"
+#include "rbcd/run/provenance.h"
 #include "rbcd/testbench/common/temp_dir.h"
 
 using namespace rbcd;

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "rbcd/common/config.h"
-#include "rbcd/sc_main/provenance.h"
+#include "rbcd/run/provenance.h"
 
 using namespace rbcd;
 using Catch::Matchers::Contains;

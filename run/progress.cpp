@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/progress.h"
+#include "rbcd/run/progress.h"
 
 #include <chrono>
 #include <cstdio>

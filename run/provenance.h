@@ -30,8 +30,8 @@ std::string shell_quote(const std::string& word);
 std::string command_line(const std::vector<std::string>& argv);
 
 // The values OPTION takes on a command line ("--x V" or "--x=V"), for any of
-// `options`, in order; found without CLI11, so that they are known even when
-// the command line itself is what failed, or when it was only recorded.
+// `options`, in order; found without CLI11, on a command line that was only
+// recorded (a part's provenance, which rbcd-merge reads).
 std::vector<std::string> option_values(const std::vector<std::string>& argv,
                                        std::initializer_list<const char*> options);
 
@@ -81,7 +81,7 @@ private:
     std::optional<FileId> id_;
 };
 
-struct SplitDigest;   // sc_main/part_digest.h
+struct SplitDigest;   // run/part_digest.h
 
 // An input as it was read: role ("trace", "scene", "mesh", "config"), path and,
 // for a file, its size in bytes and XXH3-128 digest. `text` set: an embedded

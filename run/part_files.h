@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "rbcd/sc_main/output_file.h"
+#include "rbcd/common/output_file.h"
 
 namespace rbcd {
 

@@ -4,7 +4,7 @@
 
 #include "rbcd/hw/collision_sink.h"
 #include "rbcd/io/collision_format.h"
-#include "rbcd/sc_main/output_file.h"
+#include "rbcd/common/output_file.h"
 
 namespace rbcd {
 

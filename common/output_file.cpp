@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/output_file.h"
+#include "rbcd/common/output_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>

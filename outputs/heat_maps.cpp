@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/heat_maps.h"
+#include "rbcd/outputs/heat_maps.h"
 
 #include <fcntl.h>
 #include <png.h>

@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/part_files.h"
+#include "rbcd/run/part_files.h"
 
 #include <unistd.h>
 

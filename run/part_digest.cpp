@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/part_digest.h"
+#include "rbcd/run/part_digest.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -17,7 +17,7 @@
 
 #include "rbcd/common/errors.h"
 #include "rbcd/common/write_all.h"
-#include "rbcd/sc_main/provenance.h"
+#include "rbcd/run/provenance.h"
 
 namespace rbcd {
 

@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/gtkwave_layout.h"
+#include "rbcd/outputs/gtkwave_layout.h"
 
 #include <cstdio>
 #include <map>

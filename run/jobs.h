@@ -43,7 +43,7 @@ std::string worker_part_text(const JobPart& p, bool trace);
 // Its parse; throws InputError naming --worker-part.
 JobPart parse_worker_part(const std::string& text, FrameRange range);
 
-// A worker's blocks of the trace's digest (sc_main/part_digest.h): bytes
+// A worker's blocks of the trace's digest (run/part_digest.h): bytes
 // [from, to), multiples of 1,024; a part not from 0 writes its block sums to
 // a file. The hidden option's text, "FROM:TO", and its parse, which throws
 // InputError naming --worker-digest (or --worker-digest-sums, missing for a

@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/provenance.h"
+#include "rbcd/run/provenance.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -17,9 +17,9 @@
 #include <memory>
 #include <systemc>
 
-#include "rbcd/sc_main/part_digest.h"
-#include "rbcd/sc_main/build_info.h"    // generated at configure time (sc_main/CMakeLists.txt)
-#include "rbcd/sc_main/git_describe.h"  // generated at build time
+#include "rbcd/run/part_digest.h"
+#include "rbcd/run/build_info.h"    // generated at configure time (run/CMakeLists.txt)
+#include "rbcd/run/git_describe.h"  // generated at build time
 
 namespace rbcd {
 

@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/jobs.h"
+#include "rbcd/run/jobs.h"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -17,7 +17,7 @@
 #include <stdexcept>
 
 #include "rbcd/common/errors.h"
-#include "rbcd/sc_main/output_file.h"
+#include "rbcd/common/output_file.h"
 
 namespace rbcd {
 
@@ -205,8 +205,8 @@ Workers::Workers(WorkerMain main, const std::vector<std::vector<std::string>>& a
     std::fflush(nullptr);
     // Each worker's error file is made here with room reserved for its
     // message (without growing its size): a worker that fails because its
-    // file system filled up can still say so, where its one line used to be
-    // lost with the space ("worker 0 failed"). Best effort: a file system
+    // file system filled up can still say so, rather than lose its one line
+    // with the space ("worker 0 failed"). Best effort: a file system
     // without fallocate, or already full, reserves nothing.
     for (const std::string& err : err_paths) {
         const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);

@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/fst_writer.h"
+#include "rbcd/outputs/fst_writer.h"
 
 #include <cstdio>
 #include <stdexcept>

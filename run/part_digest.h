@@ -30,7 +30,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rbcd/io/gzip_stream.h"
-#include "rbcd/sc_main/provenance.h"   // FileId
+#include "rbcd/run/provenance.h"   // FileId
 
 namespace rbcd {
 

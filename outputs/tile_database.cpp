@@ -1,4 +1,4 @@
-#include "rbcd/sc_main/tile_database.h"
+#include "rbcd/outputs/tile_database.h"
 
 #include <functional>
 #include <stdexcept>
