@@ -1,5 +1,5 @@
 // The speed and memory benchmark (never a timed test: CI machines are noisy).
-//   rbcd-bench [--dir DIR] [--fragments N]
+//   rbcd-bench [--dir DIR] [--fragments N] [--jobs J] [--games DIR [--games-only]]
 // 1. generates the busy-frame trace (gen_busy_trace) of N fragments and one of
 //    2N, each with per-object bursts and interleaved (--interleaved);
 // 2. runs rbcd-sim end to end on each as a child process, writing collisions
@@ -9,13 +9,18 @@
 //    project's machine), and the default scene and a 600-frame trace at
 //    --jobs 1 and J: the scaling of one long run over the cores;
 // 4. loads the N-fragment trace into memory and runs the model alone in this
-//    process: the model's own fragments/s, parsing excluded.
+//    process: the model's own fragments/s, parsing excluded;
+// 5. with --games DIR, first runs every expanded entry of the game suite in DIR
+//    (scripts/game-suite expand -o DIR) end to end, one process and --jobs J:
+//    frames/s, collisionable and other fragments/s (--games-only: only these).
 // Peak memory of a --jobs run is the largest of its processes' (ru_maxrss
 // of the child counts the descendants it waited for as a maximum, not a sum).
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <spawn.h>
 #include <string>
@@ -73,15 +78,15 @@ struct Bench {
     unsigned jobs = 2;
     std::string col, st;   // the end-to-end runs' collisions and stats
 
-    // Best of three; the --jobs 1 and --jobs J runs of one input alternate, so
-    // that a machine busy with other work weighs on both alike.
-    std::pair<ChildRun, ChildRun> best_pair(std::vector<std::string> args) const {
+    // Best of three (or `reps`); the --jobs 1 and --jobs J runs of one input
+    // alternate, so that a machine busy with other work weighs on both alike.
+    std::pair<ChildRun, ChildRun> best_pair(std::vector<std::string> args, int reps = 3) const {
         args.insert(args.begin(), sim);
         args.insert(args.end(), {"-q", "--collisions", col, "--stats", st});
         std::vector<std::string> par = args;
         par.insert(par.end(), {"--jobs", std::to_string(jobs)});
         ChildRun b1, bj;
-        for (int rep = 0; rep < 3; ++rep) {
+        for (int rep = 0; rep < reps; ++rep) {
             for (auto [a, b] : {std::pair{&args, &b1}, std::pair{&par, &bj}}) {
                 ChildRun r = run_child(*a);
                 if (r.status != 0) return std::pair{r, r};
@@ -154,6 +159,64 @@ struct Bench {
         return 0;
     }
 
+    // A number of the rasterizer's block of the last run's stats (the stats
+    // are pretty-printed, a key a line): 0 when absent.
+    std::uint64_t stat(const char* key) const {
+        std::uint64_t out = 0;
+        if (std::FILE* f = std::fopen(st.c_str(), "r")) {
+            char line[512];
+            const std::string pattern = std::string(" \"") + key + "\": %llu";
+            unsigned long long v = 0;
+            bool in_block = false;
+            while (std::fgets(line, sizeof line, f))
+                if (!in_block) in_block = std::strstr(line, "\"rasterizer\": {") != nullptr;
+                else if (std::sscanf(line, pattern.c_str(), &v) == 1) {
+                    out = v;
+                    break;
+                }
+            std::fclose(f);
+        }
+        return out;
+    }
+
+    // Game frames as users run them: every expanded entry of the game suite
+    // in `games` (scripts/game-suite expand -o DIR: NAME.rbt.gz), end to end
+    // with collisions and stats, one process and --jobs J, one run each (a
+    // game entry takes seconds, not milliseconds).
+    int game_rows(const std::string& games) const {
+        std::vector<std::string> traces;
+        std::error_code ec;
+        for (const auto& e : std::filesystem::directory_iterator(games, ec)) {
+            const std::string p = e.path().string();
+            if (p.size() > 7 && p.compare(p.size() - 7, 7, ".rbt.gz") == 0) traces.push_back(p);
+        }
+        if (ec || traces.empty()) {
+            std::fprintf(stderr, "rbcd-bench: --games %s: no expanded entries (NAME.rbt.gz; scripts/game-suite expand -o DIR)\n",
+                         games.c_str());
+            return 2;
+        }
+        std::sort(traces.begin(), traces.end());
+        const std::string jn = "--jobs " + std::to_string(jobs);
+        std::printf("\n%-28s %6s %11s %12s %9s %9s %13s %13s %9s %9s %8s\n", "game entry (end to end)", "frames",
+                    "fragments", "other", "seconds", "frames/s", "fragments/s", "other/s", jn.c_str(), "frames/s",
+                    "speedup");
+        for (const auto& t : traces) {
+            const auto r = best_pair({"--trace", t}, 1);
+            if (r.first.status != 0 || r.second.status != 0) {
+                std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on %s\n", t.c_str());
+                return 1;
+            }
+            const std::uint64_t frames = stat("frames"), frags = stat("fragments"), other = stat("other_fragments");
+            std::string name = std::filesystem::path(t).filename().string();
+            name.resize(name.size() - 7);
+            const double s1 = r.first.seconds, sj = r.second.seconds;
+            std::printf("%-28s %6llu %11llu %12llu %9.2f %9.1f %13.0f %13.0f %9.2f %9.1f %7.2fx\n", name.c_str(),
+                        (unsigned long long)frames, (unsigned long long)frags, (unsigned long long)other, s1,
+                        double(frames) / s1, double(frags) / s1, double(other) / s1, sj, double(frames) / sj, s1 / sj);
+        }
+        return 0;
+    }
+
     // Long runs: peak memory must not grow with the number of frames (per-frame
     // figures stream to --frame-stats). Frames of one small tile each. Before the
     // model-only run: a child's ru_maxrss counts the parent's pages until exec.
@@ -212,6 +275,11 @@ int sc_main(int argc, char* argv[]) {
     app.add_option("--dir", b.dir, "where the generated traces go");
     app.add_option("--fragments", b.fragments, "fragments of the base trace");
     app.add_option("--jobs", b.jobs, "rbcd-sim --jobs for the parallel rows (default 2)")->check(CLI::Range(2u, 1024u));
+    std::string games;
+    app.add_option("--games", games,
+                   "also run the game suite's expanded entries in DIR (scripts/game-suite expand -o DIR)");
+    bool games_only = false;
+    app.add_flag("--games-only", games_only, "only the game rows (with --games)");
     CLI11_PARSE(app, argc, argv);
     sc_core::sc_report_handler::set_actions(sc_core::SC_INFO, sc_core::SC_DO_NOTHING);
 
@@ -221,6 +289,17 @@ int sc_main(int argc, char* argv[]) {
     std::filesystem::create_directories(b.dir, ec);
     if (ec) {
         std::fprintf(stderr, "rbcd-bench: %s: cannot create: %s\n", b.dir.c_str(), ec.message().c_str());
+        return 2;
+    }
+    if (!games.empty()) {
+        b.col = b.dir + "/rbcd-bench.collisions";
+        b.st = b.dir + "/rbcd-bench.json";
+        const int rc = b.game_rows(games);
+        std::remove(b.col.c_str());
+        std::remove(b.st.c_str());
+        if (rc != 0 || games_only) return rc;
+    } else if (games_only) {
+        std::fprintf(stderr, "rbcd-bench: --games-only needs --games DIR\n");
         return 2;
     }
     const std::string& dir = b.dir;
