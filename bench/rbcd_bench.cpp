@@ -139,29 +139,19 @@ struct Bench {
             std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on the scaling runs\n");
             return 1;
         }
-        // The scene's fragment count is that of the last run's stats.
-        std::uint64_t scene_n = 0;
-        if (run_child({sim, "-q", "--stats", st}).status == 0) {
-            if (std::FILE* f = std::fopen(st.c_str(), "r")) {
-                char line[512];
-                unsigned long long v = 0;
-                while (std::fgets(line, sizeof line, f))
-                    if (std::sscanf(line, " \"fragments\": %llu", &v) == 1) {
-                        scene_n = v;
-                        break;
-                    }
-                std::fclose(f);
-            }
-        }
+        // The scene's fragments, collisionable and other: those its fragment
+        // processors shade, from the last run's stats.
+        const std::uint64_t scene_n =
+            run_child({sim, "-q", "--stats", st}).status == 0 ? stat("fragment_processors", "fragments") : 0;
         row("default scene (60 frames)", scene_n, scene);
         row("600-frame trace", 2 * fragments, frames600);
         std::remove(t600.c_str());
         return 0;
     }
 
-    // A number of the rasterizer's block of the last run's stats (the stats
-    // are pretty-printed, a key a line): 0 when absent.
-    std::uint64_t stat(const char* key) const {
+    // A number of a block of the last run's stats (the stats are
+    // pretty-printed, a key a line): 0 when absent.
+    std::uint64_t stat(const char* block, const char* key) const {
         std::uint64_t out = 0;
         if (std::FILE* f = std::fopen(st.c_str(), "r")) {
             char line[512];
@@ -169,7 +159,7 @@ struct Bench {
             unsigned long long v = 0;
             bool in_block = false;
             while (std::fgets(line, sizeof line, f))
-                if (!in_block) in_block = std::strstr(line, "\"rasterizer\": {") != nullptr;
+                if (!in_block) in_block = std::strstr(line, (std::string("\"") + block + "\": {").c_str()) != nullptr;
                 else if (std::sscanf(line, pattern.c_str(), &v) == 1) {
                     out = v;
                     break;
@@ -206,7 +196,8 @@ struct Bench {
                 std::fprintf(stderr, "rbcd-bench: rbcd-sim failed on %s\n", t.c_str());
                 return 1;
             }
-            const std::uint64_t frames = stat("frames"), frags = stat("fragments"), other = stat("other_fragments");
+            const std::uint64_t frames = stat("rasterizer", "frames"), frags = stat("rasterizer", "fragments"),
+                                other = stat("rasterizer", "other_fragments");
             std::string name = std::filesystem::path(t).filename().string();
             name.resize(name.size() - 7);
             const double s1 = r.first.seconds, sj = r.second.seconds;

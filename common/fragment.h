@@ -46,6 +46,10 @@ struct Tile {
     std::vector<Fragment> frags;   // in rasterization order
 };
 
+// shade= (percent of gpu.cycles_per_fragment): from 1% to 100 times a
+// reference fragment, wherever a cost is read or written.
+constexpr std::uint32_t kShadeMin = 1, kShadeMax = 10000;
+
 // The fragment processors' cycles for one of tile t's shaded fragments, given
 // gpu.cycles_per_fragment c: c x shade= / 100, rounded to the nearest cycle,
 // at least 1 (docs/gpu-model.md).

@@ -133,7 +133,8 @@ void DrawStreamReader::read_draw() {
     s.depth_from_unsnapped = true;   // as the GL implementation the captures are checked against
     const auto planes = get<std::uint8_t>();
     s.shade = get<std::uint16_t>();
-    if (s.shade > 10000) fail("a draw's shading cost is above 10000% of a reference fragment");
+    if (s.shade > kShadeMax)
+        fail("a draw's shading cost is above " + std::to_string(kShadeMax) + "% of a reference fragment");
     if (planes > scene::kMaxUserClipPlanes)
         fail("more than " + std::to_string(scene::kMaxUserClipPlanes) + " user clip planes");
     s.vx = get_finite("the viewport");

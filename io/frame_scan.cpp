@@ -12,6 +12,7 @@
 #include "rbcd/common/errors.h"
 #include "rbcd/common/input_file.h"
 #include "rbcd/io/gzip_stream.h"
+#include "rbcd/io/gzip_stream.h"
 
 namespace rbcd {
 
@@ -120,11 +121,10 @@ std::uint64_t plain_trace_bytes(const std::string& path) {
     Fd f{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
     struct stat st {};
     if (f.fd < 0 || ::fstat(f.fd, &st) != 0 || !S_ISREG(st.st_mode)) return 0;
-    // Compressed (gzip 1f 8b, zstd 28 b5 2f fd): no byte offsets to jump to.
+    // A compressed trace has no byte offsets to jump to.
     unsigned char magic[4] = {0, 0, 0, 0};
     const long got = read_at(f.fd, reinterpret_cast<char*>(magic), 4, 0);
-    if (got >= 2 && magic[0] == 0x1f && magic[1] == 0x8b) return 0;
-    if (got == 4 && magic[0] == 0x28 && magic[1] == 0xb5 && magic[2] == 0x2f && magic[3] == 0xfd) return 0;
+    if (compression_of(magic, got > 0 ? static_cast<std::size_t>(got) : 0) != Compression::None) return 0;
     return static_cast<std::uint64_t>(st.st_size);
 }
 

@@ -11,6 +11,12 @@
 
 namespace rbcd {
 
+Compression compression_of(const unsigned char* m, std::size_t n) {
+    if (n >= 2 && m[0] == 0x1f && m[1] == 0x8b) return Compression::Gzip;
+    if (n >= 4 && m[0] == 0x28 && m[1] == 0xb5 && m[2] == 0x2f && m[3] == 0xfd) return Compression::Zstd;
+    return Compression::None;
+}
+
 // The magic is read with a small buffer (at least the 4 bytes of zstd's): a
 // plain file is then read straight into the caller's buffer, and only a
 // compressed one needs a raw buffer of its own.
@@ -101,10 +107,9 @@ long GzipStream::read(char* dst, std::size_t n) {
         while (in_end_ - in_pos_ < 4 && refill()) {}
         if (!error_.empty()) return -1;
         started_ = true;
-        const std::size_t have = in_end_ - in_pos_;
-        const unsigned char* m = in_.data() + in_pos_;
-        gz_ = have >= 2 && m[0] == 0x1f && m[1] == 0x8b;
-        zstd_ = have >= 4 && m[0] == 0x28 && m[1] == 0xb5 && m[2] == 0x2f && m[3] == 0xfd;
+        const Compression c = compression_of(in_.data() + in_pos_, in_end_ - in_pos_);
+        gz_ = c == Compression::Gzip;
+        zstd_ = c == Compression::Zstd;
         if (gz_) {
             in_.resize(chunk_);
             if (inflateInit2(&zs_, 15 + 16) != Z_OK) return fail("cannot start zlib: out of memory");
@@ -120,17 +125,15 @@ long GzipStream::read(char* dst, std::size_t n) {
     }
     if (gz_) return read_gzip(dst, n);
     if (zstd_) return read_zstd(dst, n);
-    {
-        if (in_pos_ == in_end_) {
-            // Straight into the caller's buffer: the bytes would only be copied
-            // out of ours (a trace's every byte, once more).
-            return raw_eof_ ? 0 : read_raw(dst, std::min(n, chunk_));
-        }
-        const std::size_t k = std::min(n, in_end_ - in_pos_);
-        std::memcpy(dst, in_.data() + in_pos_, k);
-        in_pos_ += k;
-        return static_cast<long>(k);
+    if (in_pos_ == in_end_) {
+        // Straight into the caller's buffer: the bytes would only be copied
+        // out of ours (a trace's every byte, once more).
+        return raw_eof_ ? 0 : read_raw(dst, std::min(n, chunk_));
     }
+    const std::size_t k = std::min(n, in_end_ - in_pos_);
+    std::memcpy(dst, in_.data() + in_pos_, k);
+    in_pos_ += k;
+    return static_cast<long>(k);
 }
 
 long GzipStream::read_zstd(char* dst, std::size_t n) {

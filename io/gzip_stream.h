@@ -31,6 +31,11 @@ public:
     virtual void gap(std::uint64_t resume_at) = 0;
 };
 
+// How a trace's first bytes say it is stored: gzip (1f 8b), zstd (28 b5 2f
+// fd) or plain text; n is how many of them the file has (up to 4 are read).
+enum class Compression { None, Gzip, Zstd };
+Compression compression_of(const unsigned char* magic, std::size_t n);
+
 class GzipStream {
 public:
     // Takes ownership of fd (closed by the destructor unless it is 0).

@@ -34,8 +34,6 @@ namespace rbcd {
 
 namespace {
 constexpr std::uint64_t kTileWorkLimit = std::uint64_t(1) << 40;
-// shade= (percent of gpu.cycles_per_fragment): from 1 to 100 times a reference fragment.
-constexpr std::uint64_t kShadeMin = 1, kShadeMax = 10000;
 }
 
 namespace {

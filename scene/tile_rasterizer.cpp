@@ -89,7 +89,7 @@ struct ShadeSum {
     }
     void set(Tile& tile) const {
         tile.has_shade = given;
-        tile.shade = given ? static_cast<std::uint32_t>(std::clamp<std::uint64_t>((sum + shaded / 2) / shaded, 1, 10000))
+        tile.shade = given ? static_cast<std::uint32_t>(std::clamp<std::uint64_t>((sum + shaded / 2) / shaded, kShadeMin, kShadeMax))
                            : 100;
     }
 };

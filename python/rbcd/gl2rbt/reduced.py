@@ -47,8 +47,8 @@ def reduced_args(name, args):
     if drop is None:
         return [(k, plain_value(v)) for k, v in args]
     digest = texture_image_digest(dict(args))
-    return [(k, (DIGEST_TAG, digest) if k == drop and digest else None if k == drop else plain_value(v))
-            for k, v in args]
+    kept = (DIGEST_TAG, digest) if digest else None
+    return [(k, kept if k == drop else plain_value(v)) for k, v in args]
 
 
 def plain_value(v):

@@ -121,24 +121,24 @@ class ShadingCosts:
             self.child = None
 
 
-STAGES = {"vertex": "GL_VERTEX_SHADER", "fragment": "GL_FRAGMENT_SHADER", "geometry": "GL_GEOMETRY_SHADER",
-          "tess_control": "GL_TESS_CONTROL_SHADER", "tess_evaluation": "GL_TESS_EVALUATION_SHADER"}
 END_MARK = b"@@rbcd-shading-end\n"
 
 
 def _serve(es):
     """The child: links each program whose stages' sources come as a JSON
-    line on standard input, in a context like the converter's, and answers
-    `linked` or `failed`, Mesa's print and END_MARK following on standard
-    error."""
+    line on standard input, in a context like the converter's; Mesa prints
+    it on standard error, END_MARK follows there, and then `linked` or
+    `failed` on standard output."""
+    from .glstate.programs import STAGES
     from .mesa import Mesa
+    gl_stage = {stage: gl_name for gl_name, stage in STAGES.items()}
     gl = Mesa(es=es).gl
     for line in sys.stdin.buffer:
         ok = False
         try:
             prog = gl.glCreateProgram()
             for stage, src in json.loads(line).items():
-                sh = gl.glCreateShader(getattr(gl, STAGES[stage]))
+                sh = gl.glCreateShader(getattr(gl, gl_stage[stage]))
                 gl.glShaderSource(sh, src)
                 gl.glCompileShader(sh)
                 gl.glAttachShader(prog, sh)

@@ -27,7 +27,12 @@ def texture_image_digest(d):
     GL name, it does not depend on the order the game loads its textures,
     so one rule names a kart's texture on every track."""
     pixels = d.get("pixels")
-    if isinstance(pixels, tuple) and len(pixels) == 2 and pixels[0] == DIGEST_TAG:
+    if isinstance(pixels, tuple):
+        # A reduced capture's digest; anything else in its place is the
+        # file's error (the handler's net names the call).
+        if not (len(pixels) == 2 and pixels[0] == DIGEST_TAG and isinstance(pixels[1], str)
+                and re.fullmatch(r"[0-9a-f]{16}", pixels[1])):
+            raise ValueError("pixels: neither an image nor its digest")
         return pixels[1]
     if d.get("level", 0) != 0 or not isinstance(pixels, (bytes, bytearray)):
         return None
@@ -77,11 +82,6 @@ class FramebufferCalls:
         if d.get("level", 0) == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
             self.s.sizes[("texture", tex)] = (w, h)
-            pixels = d.get("pixels")
-            if isinstance(pixels, tuple) and not (
-                    len(pixels) == 2 and pixels[0] == DIGEST_TAG and isinstance(pixels[1], str)
-                    and re.fullmatch(r"[0-9a-f]{16}", pixels[1])):
-                fail_call(no, f"{name}: malformed arguments (pixels)")
             self.s.texture_images[tex] = texture_image_digest(d)
 
     def h_active_texture(self, no, name, a, args):
