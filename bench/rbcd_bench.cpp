@@ -170,18 +170,25 @@ struct Bench {
     }
 
     // Game frames as users run them: every expanded entry of the game suite
-    // in `games` (scripts/game-suite expand -o DIR: NAME.rbt.gz), end to end
+    // in `games` (scripts/game-suite expand -o DIR: NAME.rbt.zst; NAME.rbt.gz too), end to end
     // with collisions and stats, one process and --jobs J, one run each (a
     // game entry takes seconds, not milliseconds).
+    // A suite trace's entry name (its file name without .rbt.zst or .rbt.gz); empty for another file.
+    static std::string trace_name(const std::string& path) {
+        const std::string f = std::filesystem::path(path).filename().string();
+        for (const std::string suffix : {".rbt.zst", ".rbt.gz"})
+            if (f.size() > suffix.size() && f.compare(f.size() - suffix.size(), suffix.size(), suffix) == 0)
+                return f.substr(0, f.size() - suffix.size());
+        return {};
+    }
+
     int game_rows(const std::string& games) const {
         std::vector<std::string> traces;
         std::error_code ec;
-        for (const auto& e : std::filesystem::directory_iterator(games, ec)) {
-            const std::string p = e.path().string();
-            if (p.size() > 7 && p.compare(p.size() - 7, 7, ".rbt.gz") == 0) traces.push_back(p);
-        }
+        for (const auto& e : std::filesystem::directory_iterator(games, ec))
+            if (!trace_name(e.path().string()).empty()) traces.push_back(e.path().string());
         if (ec || traces.empty()) {
-            std::fprintf(stderr, "rbcd-bench: --games %s: no expanded entries (NAME.rbt.gz; scripts/game-suite expand -o DIR)\n",
+            std::fprintf(stderr, "rbcd-bench: --games %s: no expanded entries (NAME.rbt.zst; scripts/game-suite expand -o DIR)\n",
                          games.c_str());
             return 2;
         }
@@ -198,8 +205,7 @@ struct Bench {
             }
             const std::uint64_t frames = stat("rasterizer", "frames"), frags = stat("rasterizer", "fragments"),
                                 other = stat("rasterizer", "other_fragments");
-            std::string name = std::filesystem::path(t).filename().string();
-            name.resize(name.size() - 7);
+            const std::string name = trace_name(t);
             const double s1 = r.first.seconds, sj = r.second.seconds;
             std::printf("%-28s %6llu %11llu %12llu %9.2f %9.1f %13.0f %13.0f %9.2f %9.1f %7.2fx\n", name.c_str(),
                         (unsigned long long)frames, (unsigned long long)frags, (unsigned long long)other, s1,

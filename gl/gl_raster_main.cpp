@@ -60,11 +60,6 @@ Options parse(int argc, char** argv) {
     return o;
 }
 
-bool ends_with(const std::string& s, const char* suffix) {
-    const std::size_t n = std::strlen(suffix);
-    return s.size() >= n && s.compare(s.size() - n, n, suffix) == 0;
-}
-
 // One frame's figures, for rbcd-gl2rbt's report.
 struct FrameFigures {
     std::uint64_t tiles = 0, fragments = 0, culled = 0, other = 0, prims = 0, cprims = 0, draws = 0;
@@ -100,7 +95,7 @@ int run(const Options& o) {
     sh.tile_w = h.tile_w;
     sh.tile_h = h.tile_h;
     sh.depth_bits = h.depth_bits;
-    rbcd::TraceWriter trace(trace_file.shared_fd(), sh, ends_with(o.trace, ".gz"), o.trace);
+    rbcd::TraceWriter trace(trace_file.shared_fd(), sh, rbcd::trace_compression_for(o.trace), o.trace);
     rbcd::OutputFile summary;
     if (!o.summary.empty()) {
         summary = rbcd::OutputFile(o.summary);

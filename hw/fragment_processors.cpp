@@ -15,7 +15,7 @@ std::uint64_t FragmentPipe::walk_tile_cut_at_c(const Tile& tile, std::uint64_t& 
     // A long run goes through shade_long, which takes the state from the
     // members: stored for it, and loaded back.
     const auto shade_run_here = [&](std::uint64_t m) {
-        if (m <= kLongRun) {
+        if (m < kLongRun || stepwise) {
             shade_in(r, rate, m);
             return;
         }

@@ -12,7 +12,8 @@
 #include "rbcd/common/errors.h"
 #include "rbcd/common/input_file.h"
 #include "rbcd/io/gzip_stream.h"
-#include "rbcd/io/gzip_stream.h"
+
+#include <zstd.h>
 
 namespace rbcd {
 
@@ -32,11 +33,119 @@ bool frame_number(const char* p, const char* end, std::uint64_t& n) {
     return true;
 }
 
+struct Fd {
+    int fd = -1;
+    ~Fd() {
+        if (fd >= 0) ::close(fd);
+    }
+};
+
+long read_at(int fd, char* p, std::size_t n, std::uint64_t at) {
+    for (;;) {
+        const ssize_t got = ::pread(fd, p, n, static_cast<off_t>(at));
+        if (got < 0 && errno == EINTR) continue;
+        return static_cast<long>(got);
+    }
+}
+
+// A zstd trace whose frames declare their decompressed sizes (TraceWriter's:
+// a frame record starts each): the marks from the frames' headers and the
+// first bytes of each, without decompressing the rest. ok = false when a
+// frame does not declare its size, or the file ends inside one, and no marks
+// when no record starts a frame: the caller then scans the data.
+// A record found here starts a frame, not necessarily a line; the worker
+// before it checks that it stopped there (TraceReader::expect_stop_at).
+FrameScan scan_zstd_headers(int fd, std::uint64_t file_size, std::size_t max_marks) {
+    FrameScan out;
+    ZSTD_DCtx* dctx = ZSTD_createDCtx();
+    if (!dctx) return out;
+    struct Free {
+        ZSTD_DCtx* d;
+        ~Free() { ZSTD_freeDCtx(d); }
+    } free_ctx{dctx};
+    ZSTD_DCtx_setParameter(dctx, ZSTD_d_windowLogMax, 27);
+    std::vector<char> head(18), start(std::size_t(1) << 17);
+    std::uint64_t at = 0, data = 0;
+    while (at < file_size) {
+        const long got = read_at(fd, head.data(), head.size(), at);
+        if (got < 8) return out;
+        const auto* h = reinterpret_cast<const unsigned char*>(head.data());
+        const std::uint32_t magic = h[0] | (std::uint32_t(h[1]) << 8) | (std::uint32_t(h[2]) << 16) | (std::uint32_t(h[3]) << 24);
+        if ((magic & 0xfffffff0u) == 0x184d2a50u) {   // a skippable frame: 4-byte size, no data
+            at += 8 + (h[4] | (std::uint32_t(h[5]) << 8) | (std::uint32_t(h[6]) << 16) | (std::uint64_t(h[7]) << 24));
+            continue;
+        }
+        const unsigned long long size = ZSTD_getFrameContentSize(head.data(), static_cast<std::size_t>(got));
+        if (size == ZSTD_CONTENTSIZE_UNKNOWN || size == ZSTD_CONTENTSIZE_ERROR) return out;
+        const unsigned d = h[4];
+        const bool single = d & 0x20, checksum = d & 0x04;
+        static const unsigned kDictBytes[4] = {0, 1, 2, 4};
+        static const unsigned kSizeBytes[4] = {0, 2, 4, 8};
+        const unsigned fcs = (d >> 6) == 0 ? (single ? 1 : 0) : kSizeBytes[d >> 6];
+        std::uint64_t end = at + 4 + 1 + (single ? 0 : 1) + kDictBytes[d & 3] + fcs;
+        for (bool last = false; !last;) {
+            unsigned char b[3];
+            if (read_at(fd, reinterpret_cast<char*>(b), 3, end) != 3) return out;
+            const std::uint32_t bh = b[0] | (std::uint32_t(b[1]) << 8) | (std::uint32_t(b[2]) << 16);
+            last = bh & 1;
+            if (((bh >> 1) & 3) == 3) return out;
+            end += 3 + (((bh >> 1) & 3) == 1 ? 1 : (bh >> 3));
+        }
+        if (checksum) end += 4;
+        if (end > file_size) return out;
+        // The frame's first bytes: is it a frame record?
+        const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(end - at, start.size()));
+        if (read_at(fd, start.data(), want, at) != static_cast<long>(want)) return out;
+        char text[32];
+        ZSTD_DCtx_reset(dctx, ZSTD_reset_session_only);
+        ZSTD_inBuffer in{start.data(), want, 0};
+        ZSTD_outBuffer o{text, sizeof text, 0};
+        while (o.pos < o.size && in.pos < in.size) {
+            const std::size_t rc = ZSTD_decompressStream(dctx, &o, &in);
+            if (ZSTD_isError(rc) || rc == 0) break;
+        }
+        const char* eol = static_cast<const char*>(std::memchr(text, '\n', o.pos));
+        std::uint64_t f = 0;
+        if (eol && frame_number(text, eol, f)) {
+            ++out.frame_lines;
+            out.marks.push_back({f, data, 0});
+        }
+        data += size;
+        at = end;
+    }
+    // A sample, as scan_frames keeps: every 2^k-th.
+    std::size_t stride = 1;
+    while (out.marks.size() / stride > max_marks) stride *= 2;
+    if (stride > 1) {
+        std::size_t k = 0;
+        for (std::size_t i = 0; i < out.marks.size(); i += stride) out.marks[k++] = out.marks[i];
+        out.marks.resize(k);
+    }
+    out.bytes = data;
+    out.ok = true;
+    return out;
+}
+
 } // namespace
 
 FrameScan scan_frames(const std::string& path, std::size_t max_marks, std::size_t chunk) {
     FrameScan out;
     max_marks = std::max<std::size_t>(max_marks, 2);
+    {
+        const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        struct stat st {};
+        unsigned char magic[4] = {0, 0, 0, 0};
+        if (fd >= 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
+            read_at(fd, reinterpret_cast<char*>(magic), 4, 0) == 4 && compression_of(magic, 4) == Compression::Zstd) {
+            FrameScan z = scan_zstd_headers(fd, static_cast<std::uint64_t>(st.st_size), max_marks);
+            ::close(fd);
+            // No frame record starts a frame (one frame, as the zstd tool
+            // writes a file): the data is scanned.
+            if (z.ok && !z.marks.empty()) return z;
+        } else if (fd >= 0) {
+            ::close(fd);
+        }
+    }
     try {
         const std::size_t step = std::max<std::size_t>(chunk, 16);
         GzipStream in(open_input(path, "trace", true), step);
@@ -98,24 +207,6 @@ FrameScan scan_frames(const std::string& path, std::size_t max_marks, std::size_
     return out;
 }
 
-namespace {
-
-struct Fd {
-    int fd = -1;
-    ~Fd() {
-        if (fd >= 0) ::close(fd);
-    }
-};
-
-long read_at(int fd, char* p, std::size_t n, std::uint64_t at) {
-    for (;;) {
-        const ssize_t got = ::pread(fd, p, n, static_cast<off_t>(at));
-        if (got < 0 && errno == EINTR) continue;
-        return static_cast<long>(got);
-    }
-}
-
-} // namespace
 
 std::uint64_t plain_trace_bytes(const std::string& path) {
     Fd f{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
@@ -183,12 +274,14 @@ FrameScan find_frames_near(const std::string& path, const std::vector<std::uint6
 }
 
 std::uint64_t count_lines_before(const std::string& path, std::uint64_t offset) {
-    Fd f{open_input(path, "trace")};
+    // Through the stream, which decompresses a compressed trace: offsets are
+    // in its data.
+    GzipStream in(open_input(path, "trace"), std::size_t(1) << 20);
     std::vector<char> buf(std::size_t(1) << 20);
     std::uint64_t lines = 1, at = 0;
     while (at < offset) {
-        const long got = read_at(f.fd, buf.data(), static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), offset - at)), at);
-        if (got < 0) throw InputError(cannot_read_message(path, "trace", std::strerror(errno)));
+        const long got = in.read(buf.data(), static_cast<std::size_t>(std::min<std::uint64_t>(buf.size(), offset - at)));
+        if (got < 0) throw InputError(cannot_read_message(path, "trace", in.error()));
         if (got == 0) break;
         lines += static_cast<std::uint64_t>(std::count(buf.data(), buf.data() + got, '\n'));
         at += static_cast<std::uint64_t>(got);

@@ -8,7 +8,9 @@
 //
 // Nothing is checked: a malformed trace gives marks where its lines look like
 // frame records, and the worker whose frames hold the fault reports it, as a
-// whole run would. The marks are a sample once there are more than
+// whole run would. A zstd trace whose frames declare their sizes (as
+// TraceWriter writes it) is scanned by its frames' headers and first bytes
+// only: its marks are the frame records that start a zstd frame. The marks are a sample once there are more than
 // max_marks frames (every 2^k-th), so memory does not grow with the trace.
 #pragma once
 #include <cstddef>
@@ -43,8 +45,8 @@ FrameScan scan_frames(const std::string& path, std::size_t max_marks = 4096, std
 FrameScan find_frames_near(const std::string& path, const std::vector<std::uint64_t>& targets);
 // The size of the file, 0 when it is gzip or not a regular file.
 std::uint64_t plain_trace_bytes(const std::string& path);
-// The number of the line that starts at byte `offset` of a plain file.
-// Throws InputError when the file cannot be read.
+// The number of the line that starts at byte `offset` of a trace's data
+// (decompressed when the file is). Throws InputError when it cannot be read.
 std::uint64_t count_lines_before(const std::string& path, std::uint64_t offset);
 
 } // namespace rbcd

@@ -67,6 +67,12 @@ long GzipStream::read_raw(void* dst, std::size_t n) {
 
 long long GzipStream::skip(unsigned long long n) {
     unsigned long long done = 0;
+    if (!started_ && !start()) return -1;
+    if (zstd_) {
+        const long long k = skip_zstd_frames(n);
+        if (k < 0) return -1;
+        done += static_cast<unsigned long long>(k);
+    }
     if (started_ && !gz_ && !zstd_) {
         const std::size_t k = static_cast<std::size_t>(std::min<unsigned long long>(n, in_end_ - in_pos_));
         in_pos_ += k;
@@ -98,31 +104,41 @@ long long GzipStream::skip(unsigned long long n) {
     return static_cast<long long>(done);
 }
 
+// Reads the magic and sets up the decompressor it asks for; false on an error.
+bool GzipStream::start() {
+    // The magics need two (gzip) and four (zstd) bytes; a chunk of one byte
+    // reads four times.
+    while (in_end_ - in_pos_ < 4 && refill()) {}
+    if (!error_.empty()) return false;
+    started_ = true;
+    const Compression c = compression_of(in_.data() + in_pos_, in_end_ - in_pos_);
+    gz_ = c == Compression::Gzip;
+    zstd_ = c == Compression::Zstd;
+    if (gz_) {
+        in_.resize(chunk_);
+        if (inflateInit2(&zs_, 15 + 16) != Z_OK) {
+            fail("cannot start zlib: out of memory");
+            return false;
+        }
+        z_init_ = true;
+    } else if (zstd_) {
+        in_.resize(std::max(chunk_, ZSTD_DStreamInSize()));
+        zd_ = ZSTD_createDStream();
+        if (!zd_ || ZSTD_isError(ZSTD_initDStream(zd_))) {
+            fail("cannot start zstd: out of memory");
+            return false;
+        }
+        // A frame may ask for a window of up to 2^27 bytes (zstd's default
+        // limit): memory stays bounded whatever the file says.
+        ZSTD_DCtx_setParameter(zd_, ZSTD_d_windowLogMax, 27);
+    }
+    return true;
+}
+
 long GzipStream::read(char* dst, std::size_t n) {
     if (!error_.empty()) return -1;
     if (n > INT_MAX) n = INT_MAX;
-    if (!started_) {
-        // The magics need two (gzip) and four (zstd) bytes; a chunk of one
-        // byte reads four times.
-        while (in_end_ - in_pos_ < 4 && refill()) {}
-        if (!error_.empty()) return -1;
-        started_ = true;
-        const Compression c = compression_of(in_.data() + in_pos_, in_end_ - in_pos_);
-        gz_ = c == Compression::Gzip;
-        zstd_ = c == Compression::Zstd;
-        if (gz_) {
-            in_.resize(chunk_);
-            if (inflateInit2(&zs_, 15 + 16) != Z_OK) return fail("cannot start zlib: out of memory");
-            z_init_ = true;
-        } else if (zstd_) {
-            in_.resize(std::max(chunk_, ZSTD_DStreamInSize()));
-            zd_ = ZSTD_createDStream();
-            if (!zd_ || ZSTD_isError(ZSTD_initDStream(zd_))) return fail("cannot start zstd: out of memory");
-            // A frame may ask for a window of up to 2^27 bytes (zstd's default
-            // limit): memory stays bounded whatever the file says.
-            ZSTD_DCtx_setParameter(zd_, ZSTD_d_windowLogMax, 27);
-        }
-    }
+    if (!started_ && !start()) return -1;
     if (gz_) return read_gzip(dst, n);
     if (zstd_) return read_zstd(dst, n);
     if (in_pos_ == in_end_) {
@@ -134,6 +150,64 @@ long GzipStream::read(char* dst, std::size_t n) {
     std::memcpy(dst, in_.data() + in_pos_, k);
     in_pos_ += k;
     return static_cast<long>(k);
+}
+
+// Whole zstd frames that declare their decompressed size, from a frame
+// boundary, while they fit in n: their blocks are passed over by their
+// headers (RFC 8878, 3.1.1), not decompressed. What they hold is not
+// checked: the worker whose frames they are decompresses them. Returns the
+// data bytes passed over; -1 when the file ends inside a frame or a block
+// header is impossible.
+long long GzipStream::skip_zstd_frames(unsigned long long n) {
+    unsigned long long done = 0;
+    // Makes k raw bytes available at in_pos_; false at the end of the file.
+    const auto have = [&](std::size_t k) {
+        while (in_end_ - in_pos_ < k && refill()) {}
+        return in_end_ - in_pos_ >= k;
+    };
+    const auto drop = [&](unsigned long long k) {
+        while (k) {
+            if (in_pos_ == in_end_ && !refill()) return false;
+            const std::size_t d = static_cast<std::size_t>(std::min<unsigned long long>(k, in_end_ - in_pos_));
+            in_pos_ += d;
+            k -= d;
+        }
+        return true;
+    };
+    const auto truncated = [&] {
+        if (error_.empty()) fail("corrupt or truncated zstd stream: unexpected end of file");
+        return -1LL;
+    };
+    while (!zstd_frame_open_ && done < n) {
+        if (!have(4)) break;   // the end of the data, or an error read() reports
+        const unsigned char* p = in_.data() + in_pos_;
+        if (compression_of(p, 4) != Compression::Zstd) break;   // a skippable frame or garbage: read() decides
+        // A header is 6 to 18 bytes; the last frame may be shorter than 18.
+        if (!have(18) && in_end_ - in_pos_ < 6) break;
+        p = in_.data() + in_pos_;
+        const unsigned long long size = ZSTD_getFrameContentSize(p, in_end_ - in_pos_);
+        if (size == ZSTD_CONTENTSIZE_UNKNOWN || size == ZSTD_CONTENTSIZE_ERROR || size > n - done) break;
+        // The header: magic, descriptor, window byte unless single-segment,
+        // dictionary id and content size fields by the descriptor's flags.
+        const unsigned d = p[4];
+        const bool single = d & 0x20, checksum = d & 0x04;
+        static const unsigned kDictBytes[4] = {0, 1, 2, 4};
+        static const unsigned kSizeBytes[4] = {0, 2, 4, 8};
+        const unsigned fcs = (d >> 6) == 0 ? (single ? 1 : 0) : kSizeBytes[d >> 6];
+        if (!drop(4 + 1 + (single ? 0 : 1) + kDictBytes[d & 3] + fcs)) return truncated();
+        for (bool last = false; !last;) {
+            if (!have(3)) return truncated();
+            const unsigned char* b = in_.data() + in_pos_;
+            const std::uint32_t h = b[0] | (std::uint32_t(b[1]) << 8) | (std::uint32_t(b[2]) << 16);
+            last = h & 1;
+            const unsigned type = (h >> 1) & 3;
+            if (type == 3) return fail("corrupt or truncated zstd stream: reserved block type");
+            if (!drop(3 + (type == 1 ? 1 : (h >> 3)))) return truncated();
+        }
+        if (checksum && !drop(4)) return truncated();
+        done += size;
+    }
+    return static_cast<long long>(done);
 }
 
 long GzipStream::read_zstd(char* dst, std::size_t n) {

@@ -50,8 +50,10 @@ public:
     // "corrupt or truncated zstd stream: ...", "read error: ...").
     long read(char* dst, std::size_t n);
     // Drops the next n bytes of the data: inflated and thrown away from a gzip
-    // file, passed over with lseek(2) in a plain one (so that a worker of
-    // rbcd-sim --jobs starts at its frames without reading those before).
+    // file, passed over with lseek(2) in a plain one, and in a zstd one whole
+    // frames that declare their size passed over by their block headers, the
+    // rest decompressed (so that a worker of rbcd-sim --jobs starts at its
+    // frames without decompressing those before).
     // Returns the bytes dropped, fewer at the end of the data; -1 on an error.
     long long skip(unsigned long long n);
     const std::string& error() const { return error_; }
@@ -63,12 +65,14 @@ public:
     }
 
 private:
+    bool start();    // reads the magic, sets up the decompressor; false on an error
     bool refill();   // more raw input; false at end of file or on error
     // One read(2) of the file; -1 with error() set on a failure, 0 at its end.
     long read_raw(void* dst, std::size_t n);
     long fail(const std::string& what);
     long read_gzip(char* dst, std::size_t n);
     long read_zstd(char* dst, std::size_t n);
+    long long skip_zstd_frames(unsigned long long n);
 
     int fd_;
     std::size_t chunk_;               // the raw reads' size, once the stream is known to be gzip

@@ -29,6 +29,7 @@
 #include "rbcd/common/errors.h"
 #include "rbcd/common/input_file.h"
 #include "rbcd/io/gzip_stream.h"
+#include "rbcd/io/read_ahead.h"
 
 namespace rbcd {
 
@@ -140,6 +141,7 @@ struct TraceReader::Impl {
     TraceLimits lim;
     StreamHeader hdr;
     std::unique_ptr<GzipStream> in;
+    std::unique_ptr<ReadAhead> ahead;   // set from the first next() of a compressed trace with lim.read_ahead
     std::uint64_t work = 0;   // declared work so far, cycles (see TraceLimits)
 
     // Buffer invariants: [cur, data_end) is unread data; [cur, lines_end) holds
@@ -169,6 +171,7 @@ struct TraceReader::Impl {
     std::uint64_t frame = 0;
     bool ended = false;
     std::uint64_t stop_after = UINT64_MAX;   // the last frame read (stop_after_frame)
+    std::uint64_t stop_at = UINT64_MAX;      // ... whose next record starts here (expect_stop_at)
 
     // Current tile's pixel window, clipped to the screen.
     std::uint64_t x0 = 0, xw = 0, y0 = 0, yh = 0;
@@ -180,6 +183,12 @@ struct TraceReader::Impl {
     std::unordered_set<std::uint64_t> tile_set;
 
     [[noreturn]] void fail(const std::string& what) const { throw input_error_at(path, line_in_file(line), what); }
+    // A --jobs worker's data did not end at the next worker's start (expect_stop_at).
+    std::string split_elsewhere() const {
+        return "frame " + num_str(stop_after + 1) + "'s record is not at byte " + num_str(stop_at) +
+               " of the data, where a zstd frame of the file starts with it: the file's zstd frames do not start at "
+               "its frame records, so --jobs cannot split it there; run it without --jobs";
+    }
 
     void open();
     bool fill();
@@ -275,8 +284,8 @@ bool TraceReader::Impl::fill() {
         // within the limit; one that spans reads is measured below.
         const std::size_t room = std::min({buf.size() - 1 - rem, lim.read_chunk,
                                            static_cast<std::size_t>(std::min<std::uint64_t>(lim.max_line_bytes + 1, SIZE_MAX))});
-        const long n = in->read(data_end, room);
-        if (n < 0) fail(in->error());
+        const long n = ahead ? ahead->read(data_end, room) : in->read(data_end, room);
+        if (n < 0) fail(ahead ? ahead->error() : in->error());
         if (n == 0) {
             eof = true;
             continue;
@@ -896,6 +905,8 @@ void TraceReader::count_work_from(std::uint64_t work_before) { impl_->work = wor
 
 void TraceReader::stop_after_frame(std::uint64_t last) { impl_->stop_after = last; }
 
+void TraceReader::expect_stop_at(std::uint64_t offset) { impl_->stop_at = offset; }
+
 std::uint64_t TraceReader::lines_taken_whole() const { return impl_->taken_whole; }
 
 bool TraceReader::parses_wide() const { return impl_->avx512; }
@@ -907,11 +918,15 @@ std::string TraceReader::name() const { return impl_->path; }
 FragmentSource::Event TraceReader::next(Tile& t) {
     Impl& m = *impl_;
     if (m.ended) return Event::End;
+    // Not before: a --jobs worker's start_at_frame() passes over data first.
+    if (m.lim.read_ahead && !m.ahead && m.in->compressed())
+        m.ahead = std::make_unique<ReadAhead>(*m.in, std::max<std::size_t>(m.lim.read_chunk, 16));
     bool in_tile = false;
     Fields fl;
     for (;;) {
         if (m.cur == m.lines_end && !m.fill()) {
             if (in_tile) return m.end_tile(t);
+            if (m.stop_at != UINT64_MAX) m.fail(m.split_elsewhere());
             m.ended = true;
             return Event::End;
         }
@@ -953,6 +968,8 @@ FragmentSource::Event TraceReader::next(Tile& t) {
             if (in_tile) return m.end_tile(t);
             t.frame = m.start_frame(fl);
             if (t.frame > m.stop_after) {
+                const std::uint64_t here = m.pulled - static_cast<std::uint64_t>(m.data_end - m.cur);
+                if (m.stop_at != UINT64_MAX && here != m.stop_at) m.fail(m.split_elsewhere());
                 m.ended = true;
                 return Event::End;
             }

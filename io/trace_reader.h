@@ -30,6 +30,9 @@ struct TraceLimits {
     double clock_mhz = 0;                // for the message only
     // Bytes per read(2) of the file; small values exercise buffer refills (tests, fuzzing).
     std::size_t read_chunk = std::size_t(1) << 20;
+    // A compressed trace decompressed on a thread of its own, from the first
+    // next() on (io/read_ahead.h): rbcd-sim's --threads 2.
+    bool read_ahead = false;
     // The usual fragment line parsed with AVX-512 where the CPU has it; false:
     // the portable parse everywhere. Both take the same lines to the same
     // fragments (tests and the trace fuzz target compare them).
@@ -72,6 +75,11 @@ public:
     // The data ends at the record of frame last + 1 (checked, not passed on):
     // a --jobs worker reads nothing of the next worker's frames.
     void stop_after_frame(std::uint64_t last);
+    // ... and that record must start at byte `offset` of the data, where the
+    // next worker starts (a zstd trace's marks start zstd frames, which a
+    // hostile file may cut inside a line): an InputError otherwise, as the
+    // run would take some lines twice or miss them.
+    void expect_stop_at(std::uint64_t offset);
     // Fragment lines taken by the whole-line parse (AVX-512 or portable) so
     // far, the rest having gone byte by byte: both parses must take the same
     // lines, or one would be slower without any output showing it (tests).

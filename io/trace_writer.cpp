@@ -11,6 +11,7 @@
 #include <cstring>
 
 #include <zlib.h>
+#include <zstd.h>
 
 #include "rbcd/common/errors.h"
 
@@ -30,20 +31,38 @@ inline char* put(char* p, const char* s) {
 
 } // namespace
 
+TraceCompression trace_compression_for(const std::string& name) {
+    const auto ends = [&](const char* suffix) {
+        const std::size_t n = std::strlen(suffix);
+        return name.size() >= n && name.compare(name.size() - n, n, suffix) == 0;
+    };
+    if (ends(".gz")) return TraceCompression::Gzip;
+    if (ends(".zst")) return TraceCompression::Zstd;
+    return TraceCompression::None;
+}
+
 struct TraceWriter::Deflater {
     z_stream z{};
     std::string out = std::string(std::size_t(1) << 18, '\0');
     ~Deflater() { deflateEnd(&z); }
 };
 
-TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header, bool gzip, const std::string& shown_as)
+struct TraceWriter::ZstdFrames {
+    ZSTD_CCtx* cctx = ZSTD_createCCtx();
+    std::string out;
+    ~ZstdFrames() { ZSTD_freeCCtx(cctx); }
+};
+
+TraceWriter::TraceWriter(const std::string& path, const StreamHeader& header, TraceCompression c,
+                         const std::string& shown_as)
     : path_(shown_as.empty() ? path : shown_as) {
     f_ = std::fopen(path.c_str(), "wb");
     if (!f_) throw InputError(path_ + ": cannot create: " + std::strerror(errno));
-    start(header, gzip);
+    start(header, c);
 }
 
-TraceWriter::TraceWriter(int fd, const StreamHeader& header, bool gzip, const std::string& name) : path_(name) {
+TraceWriter::TraceWriter(int fd, const StreamHeader& header, TraceCompression c, const std::string& name)
+    : path_(name) {
     const int own = fd >= 0 ? ::fcntl(fd, F_DUPFD_CLOEXEC, 3) : -1;
     f_ = own >= 0 ? ::fdopen(own, "wb") : nullptr;
     if (!f_) {
@@ -51,11 +70,22 @@ TraceWriter::TraceWriter(int fd, const StreamHeader& header, bool gzip, const st
         if (own >= 0) ::close(own);
         throw InputError(path_ + ": cannot create: " + std::strerror(err));
     }
-    start(header, gzip);
+    start(header, c);
 }
 
-void TraceWriter::start(const StreamHeader& header, bool gzip) {
-    if (gzip) {
+void TraceWriter::start(const StreamHeader& header, TraceCompression c) {
+    flush_at_ = kFlushAt;
+    if (c == TraceCompression::Zstd) {
+        zs_ = std::make_unique<ZstdFrames>();
+        // Level 1: as fast to decompress as any level, twice as fast to
+        // write as level 3 and, on game traces, no larger. The checksum
+        // catches a corrupt frame that still decodes.
+        if (!zs_->cctx || ZSTD_isError(ZSTD_CCtx_setParameter(zs_->cctx, ZSTD_c_compressionLevel, 1)) ||
+            ZSTD_isError(ZSTD_CCtx_setParameter(zs_->cctx, ZSTD_c_checksumFlag, 1)))
+            throw std::runtime_error(path_ + ": cannot start zstd compression");
+        flush_at_ = kZstdFrameBytes;
+    }
+    if (c == TraceCompression::Gzip) {
         z_ = std::make_unique<Deflater>();
         // windowBits 15 + 16: a gzip wrapper rather than zlib's. Level 1: a
         // trace is text of small numbers, and level 6 costs three times the
@@ -63,17 +93,29 @@ void TraceWriter::start(const StreamHeader& header, bool gzip) {
         if (deflateInit2(&z_->z, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
             throw std::runtime_error(path_ + ": cannot start gzip compression");
     }
-    buf_.reserve(kFlushAt + kMaxTileLine);
+    buf_.reserve(flush_at_ + kMaxTileLine);
     buf_ += "rbcd-trace 1\nscreen " + std::to_string(header.screen_w) + " " + std::to_string(header.screen_h) +
             "\ntile_size " + std::to_string(header.tile_w) + " " + std::to_string(header.tile_h) + "\ndepth_bits " +
             std::to_string(header.depth_bits) + "\n";
 }
 
-// Writes n bytes, through the compressor when there is one; `finish` ends the
-// gzip member. Throws RunError on a write error.
+void TraceWriter::write_raw(const char* p, std::size_t n) {
+    if (n && std::fwrite(p, 1, n, f_) != n) throw RunError(path_ + ": write failed: " + std::strerror(errno));
+}
+
+// Writes n bytes, through the compressor when there is one: for zstd, one
+// whole frame; `finish` ends the gzip member. Throws RunError on a write error.
 void TraceWriter::emit(const char* p, std::size_t n, bool finish) {
+    if (zs_) {
+        if (!n) return;
+        if (zs_->out.size() < ZSTD_compressBound(n)) zs_->out.resize(ZSTD_compressBound(n));
+        const std::size_t got = ZSTD_compress2(zs_->cctx, zs_->out.data(), zs_->out.size(), p, n);
+        if (ZSTD_isError(got)) throw std::runtime_error(path_ + ": zstd compression failed");
+        write_raw(zs_->out.data(), got);
+        return;
+    }
     if (!z_) {
-        if (n && std::fwrite(p, 1, n, f_) != n) throw RunError(path_ + ": write failed: " + std::strerror(errno));
+        write_raw(p, n);
         return;
     }
     z_stream& z = z_->z;
@@ -86,8 +128,7 @@ void TraceWriter::emit(const char* p, std::size_t n, bool finish) {
         rc = deflate(&z, finish ? Z_FINISH : Z_NO_FLUSH);
         if (rc == Z_STREAM_ERROR) throw std::runtime_error(path_ + ": gzip compression failed");
         const std::size_t have = z_->out.size() - z.avail_out;
-        if (have && std::fwrite(z_->out.data(), 1, have, f_) != have)
-            throw RunError(path_ + ": write failed: " + std::strerror(errno));
+        write_raw(z_->out.data(), have);
     } while (z.avail_out == 0 || (finish && rc != Z_STREAM_END));
 }
 
@@ -104,6 +145,7 @@ TraceWriter::~TraceWriter() {
 
 void TraceWriter::frame(std::uint64_t n) {
     if (!f_) throw std::logic_error(path_ + ": write after close");
+    if (zs_) flush();   // a frame record starts a zstd frame
     buf_ += "frame ";
     buf_ += std::to_string(n);
     buf_ += '\n';
@@ -112,7 +154,7 @@ void TraceWriter::frame(std::uint64_t n) {
 void TraceWriter::tile(const Tile& t) {
     if (!f_) throw std::logic_error(path_ + ": write after close");
     std::size_t at = buf_.size();
-    // Written in slices so the buffer stays near kFlushAt however big the tile.
+    // Written in slices so the buffer stays near flush_at_ however big the tile.
     buf_.resize(at + kMaxTileLine);
     char* p = &buf_[at];
     p = put(p, "tile ");
@@ -157,7 +199,7 @@ void TraceWriter::tile(const Tile& t) {
         }
     };
     while (i < n) {
-        if (buf_.size() >= kFlushAt) flush();
+        if (buf_.size() >= flush_at_) flush();
         // A slice ends at the next `o` run so runs land between the right fragments.
         std::size_t slice = std::min<std::size_t>(n - i, 4096);
         put_runs_before(i);
@@ -187,7 +229,7 @@ void TraceWriter::tile(const Tile& t) {
         buf_.resize(static_cast<std::size_t>(p - buf_.data()));
     }
     put_runs_before(n);
-    if (buf_.size() >= kFlushAt) flush();
+    if (buf_.size() >= flush_at_) flush();
 }
 
 void TraceWriter::close() {

@@ -104,6 +104,8 @@ void JobsRun::plan_workers() {
         a.insert(a.end(), {"--frames", range_text(parts_[k].range), "--threads", std::to_string(threads_), "-q",
                            "--stats", dir.path(n + ".json"), "--frame-stats", dir.path(n + ".jsonl"),
                            "--worker-part", worker_part_text(parts_[k], trace_)});
+        if (opt_.gpu_stepwise) a.push_back("--gpu-stepwise");
+        if (trace_ && k + 1 < parts_.size()) a.insert(a.end(), {"--worker-stop-at", std::to_string(parts_[k + 1].offset)});
         if (split_) {
             a.insert(a.end(), {"--worker-digest", worker_digest_text(digest_blocks_[k])});
             if (digest_blocks_[k].from > 0) {

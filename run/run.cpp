@@ -275,6 +275,7 @@ bool Run::Impl::validate() {
     if (!opt_.config_file.empty()) apply_config_file(cfg_, opt_.config_file);
     for (const auto& s : opt_.sets) apply_config_set(cfg_, s);
     cfg_.validate();
+    FragmentPipe::stepwise = opt_.gpu_stepwise;
 
     if (opt_.config_reference) {
         std::fputs(config_reference_markdown().c_str(), stdout);
@@ -308,6 +309,8 @@ void Run::Impl::validate_jobs() const {
         throw InputError("--worker-collisions-name: only for a --jobs worker (with --worker-part)");
     if ((!worker || opt_.trace.empty()) && !opt_.worker_digest.empty())
         throw InputError("--worker-digest: only for a --jobs worker of a trace (with --worker-part and --trace)");
+    if ((!worker || opt_.trace.empty()) && opt_.worker_stop_at != UINT64_MAX)
+        throw InputError("--worker-stop-at: only for a --jobs worker of a trace (with --worker-part and --trace)");
     if (opt_.worker_digest.empty() && !opt_.worker_digest_sums.empty())
         throw InputError("--worker-digest-sums: only with --worker-digest");
 }
@@ -393,11 +396,15 @@ void Run::Impl::open_trace() {
         read_digest_ ? static_cast<RawObserver*>(read_digest_.get()) : part_digest_.get();
     // Parsed a few tiles ahead on another core (io/prefetch_source.h), unless
     // the cores are the caller's to share (rbcd-sweep's workers).
-    auto reader = std::make_unique<TraceReader>(opt_.trace, trace_limits(cfg_), read_observer);
+    // A compressed one is also decompressed on a core of its own (io/read_ahead.h).
+    TraceLimits limits = trace_limits(cfg_);
+    limits.read_ahead = opt_.threads > 1;
+    auto reader = std::make_unique<TraceReader>(opt_.trace, limits, read_observer);
     // A plain trace's line number is counted only if a message needs it.
     if (part_.skip) reader->start_at_frame(range_.first, part_.offset, part_.line);
     // Not even read ahead: what follows the range is another worker's.
     if (opt_.frames_given) reader->stop_after_frame(range_.last);
+    if (opt_.worker_stop_at != UINT64_MAX) reader->expect_stop_at(opt_.worker_stop_at);
     trace_reader_ = reader.get();
     if (opt_.threads > 1) src_ = std::make_unique<PrefetchSource>(std::move(reader));
     else src_ = std::move(reader);
@@ -511,7 +518,8 @@ void Run::Impl::attach_sinks() {
     }
     if (!opt_.write_trace.empty()) {
         trace_file_ = OutputFile(opt_.write_trace);
-        trace_out_ = std::make_unique<TraceWriter>(trace_file_.shared_fd(), src_->header(), false, opt_.write_trace);
+        trace_out_ = std::make_unique<TraceWriter>(trace_file_.shared_fd(), src_->header(),
+                                                   trace_compression_for(opt_.write_trace), opt_.write_trace);
     }
     image_guard_.sink = images_.get();
 }

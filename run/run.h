@@ -31,6 +31,8 @@ struct SimOptions {
     unsigned threads = 2;  // 2: a trace is parsed on its own thread
     unsigned jobs = 1;     // worker processes, each a contiguous range of the frames (run/jobs.h)
     std::string worker_part;   // set in a worker: where its frames start (jobs.h)
+    bool gpu_stepwise = false;   // the GPU pipeline's runs fragment by fragment (tests)
+    std::uint64_t worker_stop_at = UINT64_MAX;   // a trace worker but the last: where the next one starts
     std::string worker_collisions_name;   // a worker's --collisions -: the run's output, named in errors
     std::string worker_digest;        // a worker's part of the trace's digest, FROM:TO (part_digest.h)
     std::string worker_digest_sums;   // where a later part's block sums go

@@ -114,6 +114,11 @@ int rbcd_sim_main(const std::vector<std::string>& args) {
                    "process writes (docs/performance.md); default 1")
         ->check(CLI::Range(1u, 1024u));
     app.add_option("--worker-part", opt.worker_part, "internal: a --jobs worker's start")->group("");
+    app.add_flag("--gpu-stepwise", opt.gpu_stepwise,
+                 "internal: the GPU pipeline's runs computed fragment by fragment (the bulk runs' reference in tests)")
+        ->group("");
+    app.add_option("--worker-stop-at", opt.worker_stop_at, "internal: the byte a --jobs trace worker's data ends at")
+        ->group("");
     app.add_option("--worker-collisions-name", opt.worker_collisions_name,
                    "internal: what a --jobs worker's --collisions - is, for its errors")
         ->group("");

@@ -220,7 +220,7 @@ last=$(( skip + frames - 1 ))
 stk_config=$work/home/.config/supertuxkart/config-0.10/config.xml
 [ "$game" != supertuxkart ] || [ ! -f "$stk_config" ] || cp "$stk_config" "$work/entry/game-config.xml"
 echo "capture-game.sh: converting frames $skip to $last"
-RBCD_GL_RASTER=$raster "$here/rbcd-gl2rbt" "$capture" -o "$work/trace.rbt.gz" --frames "$skip:$last" \
+RBCD_GL_RASTER=$raster "$here/rbcd-gl2rbt" "$capture" -o "$work/trace.rbt.zst" --frames "$skip:$last" \
   --screen $width $height --select "$rules" --geometry "$work/geometry.geo" \
   --summary "$work/entry/summary.jsonl" --reduced-out "$work/entry/calls.xz" -q
 got=$(wc -l <"$work/entry/summary.jsonl")
@@ -255,12 +255,15 @@ sum() { sha256sum | cut -d' ' -f1; }
   echo ""
   echo "[sha256]   # scripts/game-suite checks the regenerated files against these"
   echo "calls = \"$(sum <"$work/entry/calls.xz")\""
-  echo "trace = \"$(gzip -dc "$work/trace.rbt.gz" | sum)\"      # uncompressed"
+  echo "trace = \"$(PYTHONPATH="$here/../python" /usr/bin/python3 -c '
+import sys
+from rbcd.game_suite import sha256_file
+print(sha256_file(sys.argv[1], decompress=True))' "$work/trace.rbt.zst")\"      # uncompressed"
   echo "geometry = \"$(sum <"$work/geometry.geo")\""
 } >"$work/entry/capture.toml"
 if [ "$keep" = yes ]; then
   cp "$capture" "$work/entry/capture.trace"
-  mv "$work/trace.rbt.gz" "$work/geometry.geo" "$work/entry/"
+  mv "$work/trace.rbt.zst" "$work/geometry.geo" "$work/entry/"
 fi
 chmod "$(printf '%o' $((0777 & ~0$(umask))))" "$staged"   # mktemp's 0700, made what mkdir would
 mv "$work/entry"/* "$staged"/

@@ -5,7 +5,7 @@
 #     TARGET: workloads | table3 | fig8 | fig9 | accuracy | all
 #   --out DIR          results directory (default results/, gitignored)
 #   --workloads DIR    inputs to run (default workloads/): every scene (*.toml) in it, and
-#                      every converted game capture (NAME.rbt.gz with NAME.geo and
+#                      every converted game capture (NAME.rbt.zst or .rbt.gz with NAME.geo and
 #                      NAME.summary.jsonl beside it, as scripts/game-suite writes them)
 #   --games [ENTRY]    the captured game-frame suite instead (docs/games.md): every entry
 #                      of workloads/games/ (or the entries given, comma-separated),
@@ -59,6 +59,9 @@ done
 [[ $repeat =~ ^[1-9][0-9]*$ ]] || { echo "reproduce.sh: --repeat: '$repeat' is not a positive integer" >&2; exit 2; }
 [[ $jobs =~ ^[1-9][0-9]*$ ]] || { echo "reproduce.sh: --jobs: '$jobs' is not a positive integer" >&2; exit 2; }
 shopt -s nullglob
+# A converted capture's path without .rbt.zst or .rbt.gz: where its NAME.geo,
+# NAME.summary.jsonl and NAME.capture lie.
+trace_base() { local p=${1%.rbt.zst}; echo "${p%.rbt.gz}"; }
 if ((games)); then
   # The game suite's traces and geometry, regenerated from the committed
   # reduced captures and checked against their recorded checksums.
@@ -72,24 +75,24 @@ if ((games)); then
   /usr/bin/python3 "$root/scripts/game-suite" expand -o "$out/inputs" -j "$jobs" "${game_entries[@]}" >&2 ||
     { echo "reproduce.sh: the game suite could not be expanded" >&2; exit 1; }
   workloads=$out/inputs
-  for f in "$workloads"/*.rbt.gz; do
-    keep=0
+  for f in "$workloads"/*.rbt.zst "$workloads"/*.rbt.gz; do
+    keep=0 base=$(trace_base "$f")
     if ((${#game_entries[@]})); then
-      for e in "${game_entries[@]}"; do [ "$(basename "${e%/}")" = "$(basename "$f" .rbt.gz)" ] && keep=1; done
+      for e in "${game_entries[@]}"; do [ "$(basename "${e%/}")" = "$(basename "$base")" ] && keep=1; done
     else
-      [ -f "$root/workloads/games/$(basename "$f" .rbt.gz)/capture.toml" ] && keep=1
+      [ -f "$root/workloads/games/$(basename "$base")/capture.toml" ] && keep=1
     fi
-    ((keep)) || rm -f "$f" "${f%.rbt.gz}".{geo,summary.jsonl,capture}   # an entry not asked for this time
+    ((keep)) || rm -f "$f" "$base".{geo,summary.jsonl,capture}   # an entry not asked for this time
   done
 fi
-scenes=("$workloads"/*.toml "$workloads"/*.rbt.gz)
-((${#scenes[@]})) || { echo "reproduce.sh: $workloads: no scene (*.toml) and no converted capture (*.rbt.gz)" >&2; exit 2; }
-# A scene's name is its file name without .toml; a capture's without .rbt.gz.
-input_name() { local b; b=$(basename "$1"); b=${b%.toml}; echo "${b%.rbt.gz}"; }
-is_trace() { [[ $1 == *.rbt.gz ]]; }
+scenes=("$workloads"/*.toml "$workloads"/*.rbt.zst "$workloads"/*.rbt.gz)
+((${#scenes[@]})) || { echo "reproduce.sh: $workloads: no scene (*.toml) and no converted capture (*.rbt.zst, *.rbt.gz)" >&2; exit 2; }
+# A scene's name is its file name without .toml; a capture's without .rbt.zst or .rbt.gz.
+input_name() { local b; b=$(basename "$1"); b=${b%.toml}; basename "$(trace_base "$b")"; }
+is_trace() { [[ $1 == *.rbt.zst || $1 == *.rbt.gz ]]; }
 for s in "${scenes[@]}"; do
-  if is_trace "$s" && [ ! -f "${s%.rbt.gz}.geo" ]; then
-    echo "reproduce.sh: $s: no geometry ${s%.rbt.gz}.geo beside the trace (scripts/game-suite writes both)" >&2; exit 2
+  if is_trace "$s" && [ ! -f "$(trace_base "$s").geo" ]; then
+    echo "reproduce.sh: $s: no geometry $(trace_base "$s").geo beside the trace (scripts/game-suite writes both)" >&2; exit 2
   fi
 done
 
@@ -225,7 +228,8 @@ fi
 # may pass rbcd-cpucd's default bound on a file's size, which is there for
 # files of unknown origin; these were regenerated and checked here.
 geometry_limit() {
-  local g=${1%.rbt.gz}.geo size
+  local g size
+  g=$(trace_base "$1").geo
   size=$(stat -c %s "$g" 2>/dev/null || echo 0)
   ((size < 268435456)) || echo "--max-geometry-bytes $((size + 1))"
 }
@@ -237,7 +241,7 @@ if ((need_cpucd)); then
     name=$(input_name "$s") k=$((k + 1))
     progress "rbcd-cpucd" "$k" "${#scenes[@]}" "$name"
     input=(--scene "$s")
-    is_trace "$s" && input=(--geometry "${s%.rbt.gz}.geo" --trace "$s" $(geometry_limit "$s"))
+    is_trace "$s" && input=(--geometry "$(trace_base "$s").geo" --trace "$s" $(geometry_limit "$s"))
     "$cpucd" "${input[@]}" --pixels --repeat "$repeat" -q --pairs "$out/runs/$name/cpucd_pairs.csv" \
       --frames "$out/runs/$name/cpucd_frames.csv" --depth-histogram "$out/runs/$name/depth_hist.csv"
   done
@@ -261,7 +265,7 @@ if ((need_count)); then
     name=$(input_name "$s")
     progress "rbcd-cpucd --count-instructions" "$k" "${#scenes[@]}" "$name"
     if is_trace "$s"; then
-      cpucd_count "$name" --geometry "${s%.rbt.gz}.geo" $(geometry_limit "$s") &
+      cpucd_count "$name" --geometry "$(trace_base "$s").geo" $(geometry_limit "$s") &
     else
       cpucd_count "$name" --scene "$s" &
     fi

@@ -20,6 +20,8 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
   is removed on failure and on SIGINT/SIGTERM/SIGHUP (main_wrapper turns them
   into KeyboardInterrupt, so that cleanup code runs).
 """
+import gzip
+import io
 import os
 import re
 import signal
@@ -129,6 +131,56 @@ def read_input(path, what, max_bytes, limit_key=""):
         raise cannot_read(path, what, e.strerror)
     finally:
         os.close(fd)
+
+
+GZIP_MAGIC = b"\x1f\x8b"
+ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"
+
+
+def trace_compression(path):
+    """"gzip", "zstd" or None, by the file's first bytes (docs/formats.md: a
+    trace is recognised by its magic, whatever its name)."""
+    with open(path, "rb") as f:
+        magic = f.read(4)
+    if magic[:2] == GZIP_MAGIC:
+        return "gzip"
+    if magic == ZSTD_MAGIC:
+        return "zstd"
+    return None
+
+
+def open_trace(path):
+    """A trace's bytes as a binary file, decompressed when it is gzip or zstd.
+    Its read errors: OSError, EOFError and TRACE_ERRORS."""
+    kind = trace_compression(path)
+    if kind == "gzip":
+        return gzip.open(path, "rb")
+    if kind == "zstd":
+        try:
+            import zstandard
+        except ImportError:
+            raise UsageError(f"{path}: a zstd-compressed trace: reading it here needs python3-zstandard "
+                             "(scripts/setup.sh --gl installs it)") from None
+        raw = open(path, "rb")
+        # A window of at most 2^27 bytes, as rbcd-sim allows.
+        reader = zstandard.ZstdDecompressor(max_window_size=1 << 27).stream_reader(
+            raw, read_across_frames=True, closefd=True)
+        return io.BufferedReader(reader, 1 << 20)
+    return open(path, "rb")
+
+
+def _trace_errors():
+    errors = [gzip.BadGzipFile]
+    try:
+        import zstandard
+        errors.append(zstandard.ZstdError)
+    except ImportError:
+        pass
+    return tuple(errors)
+
+
+# What reading a compressed trace raises on a corrupt file, beside OSError and EOFError.
+TRACE_ERRORS = _trace_errors()
 
 
 def read_input_text(path, what, max_bytes, limit_key=""):

@@ -137,11 +137,17 @@ def scenes_of(out):
     return list(SCENE_PATHS)
 
 
-TRACE_SUFFIXES = (".rbt.gz", ".rbt")
+TRACE_SUFFIXES = (".rbt.zst", ".rbt.gz", ".rbt")
+
+
+def trace_base(path):
+    """A trace's path without its suffix: where its NAME.geo, NAME.summary.jsonl
+    and NAME.capture lie."""
+    return next(path[:-len(s)] for s in TRACE_SUFFIXES if path.endswith(s))
 
 
 def input_name(path):
-    """A suite input's name: its file name without .toml, .rbt or .rbt.gz."""
+    """A suite input's name: its file name without .toml, .rbt, .rbt.gz or .rbt.zst."""
     base = os.path.basename(path)
     for suf in TRACE_SUFFIXES + (".toml",):
         if base.endswith(suf):
@@ -159,7 +165,7 @@ def scene_objects(name):
     mean collisionable objects a frame and "-"."""
     path = SCENE_PATHS[name]
     if is_trace(path):
-        summary = path[:-len(".rbt.gz" if path.endswith(".gz") else ".rbt")] + ".summary.jsonl"
+        summary = trace_base(path) + ".summary.jsonl"
         with open(need(summary)) as f:
             frames = [json.loads(line) for line in f if line.strip()]
         return fmt(sum(len(fr["objects"]) for fr in frames) / max(1, len(frames)), 1), "-"
@@ -413,14 +419,14 @@ def game_pairs(out, scenes):
         # The game: from the capture's description beside the trace
         # (scripts/game-suite expand writes it), else from the entry's name.
         game = None
-        desc = path[:-len(".rbt.gz")] + ".capture"
+        desc = trace_base(path) + ".capture"
         if os.path.isfile(desc):
             with open(desc, "rb") as f:
                 game = tomllib.load(f).get("game")
         if game not in GAME_CLASSES:
             game = next((g for g in GAME_CLASSES if s.startswith(g + "-")), None)
         rules = GAME_CLASSES.get(game, [(lambda nv, d: True, "object")])
-        classes = geometry_classes(path[:-len(".rbt.gz")] + ".geo", rules)
+        classes = geometry_classes(trace_base(path) + ".geo", rules)
         frames = len(read_csv(run_file(out, s, "cpucd_frames.csv")))
         table = {}
         for r in read_csv(run_file(out, s, "cpucd_pairs.csv")):

@@ -5,7 +5,7 @@ the fragment traces and geometry the figures run on.
 
     game-suite check [ENTRY...]                 the committed files against capture.toml
     game-suite expand -o DIR [-j N] [--frames K] [ENTRY...]
-        DIR/NAME.rbt.gz, DIR/NAME.geo, DIR/NAME.summary.jsonl and
+        DIR/NAME.rbt.zst, DIR/NAME.geo, DIR/NAME.summary.jsonl and
         DIR/NAME.capture (the entry's capture.toml) for each
         entry (default: every workloads/games/*/ with a capture.toml), by
         scripts/rbcd-gl2rbt, then checked against the recorded checksums. An
@@ -19,14 +19,13 @@ fails; the outputs of a failed entry are removed.
 """
 import argparse
 import concurrent.futures
-import gzip
 import hashlib
 import os
 import subprocess
 import sys
 import tomllib
 
-from rbcd.cli import UsageError, main_wrapper, read_input_text, say, write_output
+from rbcd.cli import TRACE_ERRORS, UsageError, main_wrapper, open_trace, read_input_text, say, write_output
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter
@@ -43,10 +42,10 @@ class Mismatch(Exception):
     failed on a well-formed entry: exit 1."""
 
 
-def sha256_file(path, gunzip=False):
+def sha256_file(path, decompress=False):
+    """The file's SHA-256; with decompress, of the trace's text (gzip or zstd)."""
     h = hashlib.sha256()
-    opener = gzip.open if gunzip else open
-    with opener(path, "rb") as f:
+    with (open_trace(path) if decompress else open(path, "rb")) as f:
         while True:
             b = f.read(1 << 20)
             if not b:
@@ -106,7 +105,9 @@ class Entry:
 
     def outputs(self, out):
         base = os.path.join(out, self.name)
-        return base + ".rbt.gz", base + ".geo", base + ".summary.jsonl"
+        # zstd (docs/formats.md): rbcd-sim decompresses it at several times
+        # gzip's speed, and --jobs passes over the frames before a worker's.
+        return base + ".rbt.zst", base + ".geo", base + ".summary.jsonl"
 
     def describe(self, out):
         """OUT/NAME.capture: the entry's capture.toml beside its trace (the
@@ -134,9 +135,9 @@ class Entry:
         if not all(os.path.isfile(p) for p in (trace, geo, summary)):
             return False
         try:
-            return (sha256_file(trace, gunzip=True) == self.sha["trace"]
+            return (sha256_file(trace, decompress=True) == self.sha["trace"]
                     and sha256_file(geo) == self.sha["geometry"] and self.summary_matches(summary))
-        except (OSError, EOFError, gzip.BadGzipFile):
+        except (OSError, EOFError, UsageError) + TRACE_ERRORS:
             return False
 
     def expand(self, out, frames=None):
@@ -160,7 +161,7 @@ class Entry:
         problem = None
         if frames is None:
             for path, k, gz in ((trace, "trace", True), (geo, "geometry", False)):
-                got = sha256_file(path, gunzip=gz)
+                got = sha256_file(path, decompress=gz)
                 if got != self.sha[k] and problem is None:
                     problem = (f"the regenerated {k} differs from capture.toml's checksum "
                                f"({got[:16]}... against {self.sha[k][:16]}...)")

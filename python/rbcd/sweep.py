@@ -15,7 +15,6 @@ Standard library only (Python 3.11 for tomllib).
 import argparse
 import concurrent.futures
 import csv
-import gzip
 import hashlib
 import io
 import itertools
@@ -32,7 +31,7 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import UsageError, escape, main_wrapper, read_input_text, say, write_output
+from rbcd.cli import TRACE_ERRORS, UsageError, escape, main_wrapper, open_trace, read_input_text, say, write_output
 
 PROG = "rbcd-sweep"
 # Where the package is: REPO/python/rbcd in the source tree, P/share/rbcd/python/rbcd
@@ -168,7 +167,7 @@ def count_frames(kind, path):
         return _count_frames(kind, path)
     except tomllib.TOMLDecodeError as e:
         raise SweepError(f"{path}: {e}")
-    except (OSError, EOFError, gzip.BadGzipFile) as e:
+    except (OSError, EOFError) + TRACE_ERRORS as e:
         raise SweepError(f"{path}: cannot count its frames: {e}")
 
 
@@ -182,11 +181,8 @@ def _count_frames(kind, path):
         if not isinstance(n, int) or n < 1:
             raise SweepError(f"{path}: frames: needs a positive integer to split the scene")
         return n
-    with open(path, "rb") as raw:
-        magic = raw.read(2)
-    opener = gzip.open if magic == b"\x1f\x8b" else open
     n = 0
-    with opener(path, "rb") as f:
+    with open_trace(path) as f:
         for line in f:
             s = line.lstrip()
             if s.startswith(b"frame") and s[5:6].isspace():
@@ -430,12 +426,12 @@ class Sweep:
             members = []
             for name in sorted(os.listdir(full)):
                 kind = ("scene" if name.endswith(".toml") else
-                        "trace" if name.endswith((".rbt", ".rbt.gz")) else None)
+                        "trace" if name.endswith((".rbt", ".rbt.gz", ".rbt.zst")) else None)
                 if kind and os.path.isfile(os.path.join(full, name)):
                     members.append((os.path.join(s, name) if not s.endswith("/") else s + name,
                                     kind, os.path.join(full, name)))
             if not members:
-                raise SweepError(f"{self.path}: inputs.suites: {s}: no scenes (*.toml) or traces (*.rbt, *.rbt.gz)")
+                raise SweepError(f"{self.path}: inputs.suites: {s}: no scenes (*.toml) or traces (*.rbt, *.rbt.gz, *.rbt.zst)")
             out.extend(members)
         if not out:
             raise SweepError(f"{self.path}: inputs: no input (default = true, traces, scenes or suites)")
@@ -808,9 +804,9 @@ class Progress:
 
 
 def splits_well(args):
-    """Whether rbcd-sim --jobs speeds this run up: a scene or a plain trace file.
-    A gzip trace is inflated in one stream whatever the split (docs/performance.md,
-    "One run on N cores"), and standard input cannot be split."""
+    """Whether rbcd-sim --jobs speeds this run up: a scene, a plain or a zstd
+    trace file. A gzip trace is inflated in one stream whatever the split
+    (docs/performance.md, "One run on N cores"), and standard input cannot be split."""
     if "--trace" not in args:
         return True
     path = args[args.index("--trace") + 1]

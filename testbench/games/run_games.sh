@@ -97,7 +97,7 @@ case $what in
     [ "$(wc -l <"$tmp/e/summary.jsonl")" = 3 ] || fail "not 3 frames"
     # The entry regenerates into the recorded checksums.
     /usr/bin/python3 "$src/scripts/game-suite" expand -o "$tmp/x" "$tmp/e" >/dev/null || fail "expand failed"
-    [ -s "$tmp/x/e.rbt.gz" ] && [ -s "$tmp/x/e.geo" ] || fail "no trace or geometry"
+    [ -s "$tmp/x/e.rbt.zst" ] && [ -s "$tmp/x/e.geo" ] || fail "no trace or geometry"
     ;;
   capture_stk)
     # Under ASan the converter's rasterizer takes minutes over the loading
@@ -128,7 +128,7 @@ for line in open(sys.argv[1]):
     assert {1, 2} <= ids, ids
 EOF
     /usr/bin/python3 "$src/scripts/game-suite" expand -o "$tmp/x" "$tmp/e" >/dev/null || fail "expand failed"
-    [ -s "$tmp/x/e.rbt.gz" ] && [ -s "$tmp/x/e.geo" ] || fail "no trace or geometry"
+    [ -s "$tmp/x/e.rbt.zst" ] && [ -s "$tmp/x/e.geo" ] || fail "no trace or geometry"
     ;;
   workloads|table3|fig9|fig8|accuracy)
     case $what in

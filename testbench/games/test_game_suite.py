@@ -36,7 +36,7 @@ def test_an_expansion_with_a_changed_summary_is_not_up_to_date(tmp_path, monkeyp
     for p in (trace, geo):
         open(p, "w").close()
     recorded = {trace: e.sha["trace"], geo: e.sha["geometry"]}
-    monkeypatch.setattr(game_suite, "sha256_file", lambda path, gunzip=False: recorded[path])
+    monkeypatch.setattr(game_suite, "sha256_file", lambda path, decompress=False: recorded[path])
     with open(os.path.join(ENTRY, "summary.jsonl")) as f:
         committed = f.read()
     open(summary, "w").write(committed)

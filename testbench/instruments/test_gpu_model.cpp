@@ -291,6 +291,49 @@ TEST_CASE("gpu: a long run of fragments is computed in bulk exactly", "[gpu]") {
     }
 }
 
+// The same from states a game frame leaves: fragments of other costs still in
+// flight (shade=), the rasterizer ahead of or behind the queue, runs just
+// above the bulk threshold and long ones.
+TEST_CASE("gpu: a run from any state is computed in bulk exactly", "[gpu]") {
+    std::mt19937_64 gen(41);
+    const auto pick = [&](std::uint64_t lo, std::uint64_t hi) { return lo + gen() % (hi - lo + 1); };
+    for (const PipeCase c : kPipeCases) {
+        const GpuConfig g = c.gpu();
+        for (int trial = 0; trial < 300; ++trial) {
+            FragmentPipe bulk(g), step(g);
+            bulk.restart(0);
+            step.restart(0);
+            std::uint64_t t = pick(0, 50);
+            unsigned u = static_cast<unsigned>(pick(0, c.rate));
+            // A history: runs of fragments at random costs, gaps in the rasterizer.
+            for (int h = static_cast<int>(pick(0, 6)); h > 0; --h) {
+                const unsigned cost = static_cast<unsigned>(pick(1, 3 * c.cycles + 2));
+                bulk.set_cycles_per_fragment(cost);
+                const std::uint64_t n = pick(1, 200);
+                for (std::uint64_t k = 0; k < n; ++k) bulk.shade(t, u, c.rate, 1);
+                if (pick(0, 1)) {
+                    t += pick(1, 40);
+                    u = 0;
+                }
+            }
+            step = bulk;
+            std::uint64_t ts = t;
+            unsigned us = u;
+            const unsigned cost = static_cast<unsigned>(pick(1, 3 * c.cycles + 2));
+            bulk.set_cycles_per_fragment(cost);
+            step.set_cycles_per_fragment(cost);
+            const std::uint64_t m = pick(0, 1) ? pick(FragmentPipe::kLongRun, 200) : pick(200, 5000);
+            INFO("rate " << c.rate << " queue " << c.queue << " procs " << c.procs << " trial " << trial << " cost "
+                         << cost << " run " << m);
+            const std::uint64_t wb = bulk.shade_run(t, u, c.rate, m);
+            std::uint64_t ws = 0;
+            for (std::uint64_t k = 0; k < m; ++k) ws += step.shade(ts, us, c.rate, 1);
+            REQUIRE(wb == ws);
+            REQUIRE(same_pipe(bulk, t, u, step, ts, us));
+        }
+    }
+}
+
 // FragmentPipe::walk_tile_cut_at_c walks GPU-only timeline 2 through a tile
 // without setups (the shaded fragments pushed, each c fragment one rasterizer
 // slot) by runs between c fragments, with the state held in locals. It must

@@ -1,8 +1,9 @@
 // io/frame_scan.h and TraceReader::start_at_frame (rbcd-sim --jobs): the frame
-// records a scan finds, plain and gzip, at any chunk boundary, sampled when
-// there are many; the records found near byte offsets; the line count; and a
-// reader started at a found record giving the frames a whole read gives, with
-// the same line numbers in its messages.
+// records a scan finds, plain, gzip and zstd, at any chunk boundary, sampled
+// when there are many; the records found near byte offsets; the line count;
+// a reader started at a found record giving the frames a whole read gives,
+// with the same line numbers in its messages; TraceWriter's zstd frames, and
+// the read-ahead thread giving the data and errors a plain read gives.
 #include <catch2/catch.hpp>
 
 #include "rbcd/testbench/common/temp_dir.h"
@@ -10,9 +11,17 @@
 #include <string>
 #include <vector>
 
+#include <fcntl.h>
+#include <zstd.h>
+
+#include "rbcd/testbench/common/zstd_frames.h"
+
 #include "rbcd/common/errors.h"
 #include "rbcd/io/frame_scan.h"
+#include "rbcd/io/gzip_stream.h"
+#include "rbcd/io/read_ahead.h"
 #include "rbcd/io/trace_reader.h"
+#include "rbcd/io/trace_writer.h"
 
 using namespace rbcd;
 using Catch::Matchers::Contains;
@@ -49,6 +58,13 @@ std::vector<std::string> frames_read(TraceReader& r) {
         if (ev == FragmentSource::Event::Frame) out.push_back("F" + std::to_string(t.frame));
         else out.push_back("T" + std::to_string(t.frags.size()));
     }
+}
+
+std::string read_all(GzipStream& in) {
+    std::string out;
+    char buf[4096];
+    for (long n; (n = in.read(buf, sizeof buf)) > 0;) out.append(buf, static_cast<std::size_t>(n));
+    return out;
 }
 
 } // namespace
@@ -172,4 +188,141 @@ TEST_CASE("trace reader started at a frame's record: the frames a whole read giv
     }
     CHECK_THAT(whole_msg, Contains(":" + std::to_string(line_of(bad, at + 1)) + ":"));
     CHECK(started_msg == whole_msg);
+}
+
+TEST_CASE("trace writer: a zstd trace is a frame for the header and one from every frame record", "[frame_scan][zstd]") {
+    test::TempDir td;
+    const std::string text = trace_text(9, 700);
+    TraceLimits lim;
+    lim.tile_w = lim.tile_h = 16;
+    TraceReader plain(td.write("t.rbt", text), lim);
+    const std::string path = td.path("t.rbt.zst");
+    CHECK(trace_compression_for(path) == TraceCompression::Zstd);
+    CHECK(trace_compression_for("a.rbt.gz") == TraceCompression::Gzip);
+    CHECK(trace_compression_for("a.zst.rbt") == TraceCompression::None);
+    {
+        TraceWriter w(path, plain.header(), TraceCompression::Zstd);
+        Tile t;
+        for (auto ev = plain.next(t); ev != FragmentSource::Event::End; ev = plain.next(t))
+            ev == FragmentSource::Event::Frame ? w.frame(t.frame) : w.tile(t);
+        w.close();
+    }
+    const std::string z = test::slurp(path);
+    // Walk the frames: each states its size, and a frame record starts each but the first.
+    std::string data;
+    std::size_t at = 0, frames = 0;
+    while (at < z.size()) {
+        const std::size_t csize = ZSTD_findFrameCompressedSize(z.data() + at, z.size() - at);
+        REQUIRE_FALSE(ZSTD_isError(csize));
+        const unsigned long long size = ZSTD_getFrameContentSize(z.data() + at, csize);
+        REQUIRE(size != ZSTD_CONTENTSIZE_UNKNOWN);
+        std::string piece(size, '\0');
+        REQUIRE(ZSTD_decompress(piece.data(), piece.size(), z.data() + at, csize) == size);
+        if (frames == 0) CHECK(piece.rfind("rbcd-trace 1\n", 0) == 0);
+        else CHECK(piece.rfind("frame " + std::to_string(frames - 1) + "\n", 0) == 0);
+        data += piece;
+        at += csize;
+        ++frames;
+    }
+    CHECK(frames == 10);
+    // The same stream read back as the writer's text of the plain trace.
+    const std::string again = td.path("again.rbt");
+    {
+        TraceReader r(path, lim);
+        TraceWriter w(again, r.header());
+        Tile t;
+        for (auto ev = r.next(t); ev != FragmentSource::Event::End; ev = r.next(t))
+            ev == FragmentSource::Event::Frame ? w.frame(t.frame) : w.tile(t);
+        w.close();
+    }
+    CHECK(test::slurp(again) == data);
+}
+
+TEST_CASE("frame scan: a zstd trace's records from its frames' headers, and a reader started at one", "[frame_scan][zstd]") {
+    test::TempDir td;
+    const std::string text = trace_text(40, 300);
+    const std::string path = td.write("t.rbt.zst", test::zstd_frames(test::by_frame(text)));
+    const FrameScan s = scan_frames(path);
+    REQUIRE(s.ok);
+    CHECK(s.bytes == text.size());
+    REQUIRE(s.marks.size() == 40);
+    for (unsigned f = 0; f < 40; ++f) {
+        CHECK(s.marks[f].frame == f);
+        CHECK(text.compare(s.marks[f].offset, 6, "frame ") == 0);
+        CHECK(s.marks[f].line == 0);   // not counted: the reader counts it if a message needs it
+        if (f % 13 == 0) CHECK(count_lines_before(path, s.marks[f].offset) == line_of(text, s.marks[f].offset));
+    }
+    CHECK(scan_frames(path, 8).marks.size() <= 8);
+    // Frames that do not state their size: the data is scanned, as gzip's.
+    const std::string streamed = td.write("s.rbt.zst", test::zstd_frames(test::by_frame(text), false));
+    const FrameScan ss = scan_frames(streamed);
+    REQUIRE(ss.marks.size() == 40);
+    CHECK(ss.marks[7].line == line_of(text, ss.marks[7].offset));
+    // One frame for the whole text: the scan of the data finds every record.
+    REQUIRE(scan_frames(td.write("one.rbt.zst", test::zstd_frames({text}))).marks.size() == 40);
+    // A reader started at a mark passes over the frames before it and reads what a whole read gives.
+    TraceLimits lim;
+    TraceReader whole(path, lim);
+    const auto all = frames_read(whole);
+    for (const std::size_t chunk : {std::size_t(1) << 20, std::size_t(100)}) {
+        lim.read_chunk = chunk;
+        for (const bool ahead : {false, true}) {
+            lim.read_ahead = ahead;
+            for (unsigned f : {1u, 17u, 39u}) {
+                INFO("chunk " << chunk << " read-ahead " << ahead << " from frame " << f);
+                TraceReader r(path, lim);
+                r.start_at_frame(f, s.marks[f].offset, 0);
+                const auto from = std::find(all.begin(), all.end(), "F" + std::to_string(f));
+                CHECK(frames_read(r) == std::vector<std::string>(from, all.end()));
+            }
+        }
+    }
+}
+
+TEST_CASE("gzip stream: skipping a zstd trace passes over whole frames and decompresses the rest", "[frame_scan][zstd]") {
+    test::TempDir td;
+    const std::string text = trace_text(20, 400);
+    const auto pieces = test::by_frame(text);
+    const std::string z = test::zstd_frames(pieces);
+    const std::string path = td.write("t.rbt.zst", z);
+    for (const std::uint64_t n : {std::uint64_t(0), std::uint64_t(pieces[0].size()), std::uint64_t(pieces[0].size() + 5),
+                                  std::uint64_t(text.size() / 2), std::uint64_t(text.size()), std::uint64_t(text.size() + 9)}) {
+        INFO("skip " << n);
+        GzipStream in(::open(path.c_str(), O_RDONLY), 1000);
+        char c;
+        REQUIRE(in.read(&c, 1) == 1);   // started, as a reader that has read the header
+        const long long got = in.skip(n);
+        CHECK(got == static_cast<long long>(std::min<std::uint64_t>(n, text.size() - 1)));
+        CHECK(read_all(in) == text.substr(std::min<std::uint64_t>(1 + n, text.size())));
+    }
+    // Cut inside a frame that is passed over: the end of the file is named.
+    const std::string cut = td.write("cut.rbt.zst", z.substr(0, z.size() * 2 / 3));
+    GzipStream in(::open(cut.c_str(), O_RDONLY), 1000);
+    char c;
+    REQUIRE(in.read(&c, 1) == 1);
+    if (in.skip(text.size()) >= 0) read_all(in);
+    CHECK_THAT(in.error(), Contains("corrupt or truncated zstd stream"));
+}
+
+TEST_CASE("read-ahead: the data, then the stream's error where it was raised", "[frame_scan][zstd]") {
+    test::TempDir td;
+    const std::string text = trace_text(30, 500);
+    const std::string z = test::zstd_frames(test::by_frame(text));
+    for (const bool bad : {false, true}) {
+        const std::string path = td.write("t.rbt.zst", bad ? z.substr(0, z.size() - 7) : z);
+        GzipStream direct(::open(path.c_str(), O_RDONLY), 4096), threaded(::open(path.c_str(), O_RDONLY), 4096);
+        const std::string want = read_all(direct);
+        std::string got;
+        long n = 0;
+        {
+            ReadAhead ahead(threaded, 4096, 3);
+            char buf[1000];
+            while ((n = ahead.read(buf, sizeof buf)) > 0) got.append(buf, static_cast<std::size_t>(n));
+            CHECK(ahead.read(buf, sizeof buf) == n);   // the end, or the error, stays
+            if (bad) CHECK(ahead.error() == direct.error());
+        }
+        CHECK(got == want);
+        CHECK(n == (bad ? -1 : 0));
+        if (!bad) CHECK(got == text);
+    }
 }

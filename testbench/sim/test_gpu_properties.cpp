@@ -4,7 +4,9 @@
 //   - a deeper fragment queue or unit input queue never increases the overhead;
 //   - two ZEB banks never take longer than one;
 //   - the baseline never exceeds the time with the unit, in any frame;
-//   - without collisionable fragments the overhead is 0.
+//   - without collisionable fragments the overhead is 0;
+//   - the bulk runs (FragmentPipe::shade_run's jumps over periodic stretches)
+//     give, byte for byte, what stepping every fragment gives.
 #include "rbcd/testbench/sim/cli_util.h"
 
 #include <nlohmann/json.hpp>
@@ -19,7 +21,10 @@ namespace {
 // Random frames of random tiles: fragments on random pixels and objects, some
 // tagged c, non-collisionable runs between them (`o`) or given as other=,
 // prims= and cprims=.
-std::string random_trace(const TempDir& td, unsigned seed, bool collisionable = true) {
+// long_runs: runs of up to 3,000 non-collisionable fragments, other= up to
+// 40,000, and a shade= cost on some tiles, so that runs reach the pipeline's
+// periodic regime and leave it at setups, c fragments and cost changes.
+std::string random_trace(const TempDir& td, unsigned seed, bool collisionable = true, bool long_runs = false) {
     std::uint64_t s = seed * 0x9e3779b97f4a7c15ull + 1;
     const auto rnd = [&](std::uint64_t n) {
         s ^= s << 13;
@@ -41,7 +46,8 @@ std::string random_trace(const TempDir& td, unsigned seed, bool collisionable = 
             const unsigned n = collisionable ? static_cast<unsigned>(rnd(400)) : 0;
             for (unsigned i = 0; i < n; ++i) {
                 if (tile.ordered_other && rnd(4) == 0) {
-                    tile.other_runs.push_back({static_cast<std::uint32_t>(tile.frags.size()), rnd(30) + 1});
+                    tile.other_runs.push_back(
+                        {static_cast<std::uint32_t>(tile.frags.size()), rnd(long_runs && rnd(3) == 0 ? 3000 : 30) + 1});
                     tile.other += tile.other_runs.back().count;
                 }
                 rbcd::Fragment fr;
@@ -53,9 +59,13 @@ std::string random_trace(const TempDir& td, unsigned seed, bool collisionable = 
                 fr.culled = fr.facing == rbcd::Facing::Back && rnd(3) != 0;
                 tile.frags.push_back(fr);
             }
-            if (!tile.ordered_other) tile.other = rnd(600);
+            if (!tile.ordered_other) tile.other = rnd(long_runs && rnd(2) ? 40000 : 600);
+            if (long_runs && rnd(3) == 0) {
+                tile.has_shade = true;
+                tile.shade = static_cast<std::uint32_t>(1 + rnd(rnd(2) ? 300 : 10000));
+            }
             tile.has_prims = tile.has_cprims = true;
-            tile.prims = rnd(60);
+            tile.prims = rnd(long_runs && rnd(4) == 0 ? 2 : 60);
             tile.cprims = collisionable ? rnd(30) : 0;   // no collisionable object: nothing to defer
             w.tile(tile);
         }
@@ -166,4 +176,48 @@ TEST_CASE("gpu properties: the default scene is monotone in queue depths and ban
     const auto two = run_stats(td, {});
     CHECK(with_unit(two) < with_unit(one));
     CHECK(one["gpu"]["baseline_cycles"] == two["gpu"]["baseline_cycles"]);
+}
+
+// The bulk runs against stepping, on random tiles and pipelines: fast and
+// slow rasterizers, shallow and deep queues, few and many processors, both
+// bank waits, one and two banks. Every output byte must agree: stats (but
+// the wall time and the command line), per-frame figures, collisions.
+TEST_CASE("gpu properties: bulk runs equal stepping fragment by fragment on random tiles") {
+    TempDir td;
+    const std::vector<std::vector<std::string>> configs = {
+        {},
+        {"--set", "feed.fragments_per_cycle=1", "--set", "gpu.cycles_per_fragment=1"},
+        {"--set", "feed.fragments_per_cycle=3", "--set", "gpu.fragment_queue_depth=7", "--set",
+         "gpu.fragment_processors=5", "--set", "gpu.cycles_per_fragment=2", "--set", "gpu.early_z_cycles=0"},
+        {"--set", "feed.fragments_per_cycle=16", "--set", "gpu.fragment_queue_depth=3", "--set",
+         "gpu.fragment_processors=2", "--set", "gpu.cycles_per_fragment=9", "--set", "gpu.bank_wait=unit"},
+        {"--set", "zeb.banks=1", "--set", "gpu.tile_overhead_cycles=5", "--set", "gpu.setup_cycles_per_primitive=3"},
+    };
+    const auto strip = [](nlohmann::json j) {
+        j.erase("time");
+        j.erase("provenance");
+        return j.dump(1);
+    };
+    for (unsigned seed = 30; seed < 36; ++seed) {
+        const std::string t = random_trace(td, seed, seed % 3 != 2, true);
+        for (const auto& cfg : configs) {
+            std::string outs[2][3];
+            for (int stepwise = 0; stepwise < 2; ++stepwise) {
+                std::vector<std::string> args{"--trace", t, "--collisions", td.out_dir() + "/c.txt", "--frame-stats",
+                                              td.out_dir() + "/f.jsonl"};
+                args.insert(args.end(), cfg.begin(), cfg.end());
+                if (stepwise) args.push_back("--gpu-stepwise");
+                const auto j = run_stats(td, args);
+                outs[stepwise][0] = strip(j);
+                outs[stepwise][1] = slurp(td.out_dir() + "/f.jsonl");
+                outs[stepwise][2] = slurp(td.out_dir() + "/c.txt");
+            }
+            std::string shown;
+            for (const auto& a : cfg) shown += a + " ";
+            INFO("seed " << seed << " config " << shown);
+            CHECK(outs[0][0] == outs[1][0]);
+            CHECK(outs[0][1] == outs[1][1]);
+            CHECK(outs[0][2] == outs[1][2]);
+        }
+    }
 }

@@ -1,10 +1,12 @@
 // rbcd-sim --jobs N (run/jobs.h): the frames run by N workers give the
 // bytes one process writes (collisions, --frame-stats, the stats document
-// apart from the wall time and the command line that ran), for traces plain
-// and gzip and for scenes, with and without --frames; bad values and what
+// apart from the wall time and the command line that ran), for traces plain,
+// gzip and zstd and for scenes, with and without --frames; bad values and what
 // cannot be split are refused; an input error is the one a single process
 // reports.
 #include "rbcd/testbench/sim/cli_util.h"
+
+#include "rbcd/testbench/common/zstd_frames.h"
 
 #include <nlohmann/json.hpp>
 #include <algorithm>
@@ -103,6 +105,42 @@ TEST_CASE("rbcd-sim --jobs: a plain trace gives one process's bytes", "[jobs]") 
     std::vector<std::string> a{"-q", "--trace", t};
     if (!frames.empty()) a.insert(a.end(), {"--frames", frames});
     expect_same_as_one_process(td, a);
+}
+
+TEST_CASE("rbcd-sim --jobs: a zstd trace gives one process's bytes", "[jobs]") {
+    TempDir td;
+    // As rbcd-sim --write-trace NAME.zst (and the converter) write it: a frame record starts each zstd frame.
+    const Result w = run_sim(td, {"-q", "--scene", small_scene(td), "--write-trace", td.path("scene.rbt.zst")});
+    REQUIRE(w.status == 0);
+    const std::string t = td.path("scene.rbt.zst");
+    REQUIRE(slurp(t).compare(0, 4, "\x28\xb5\x2f\xfd") == 0);
+    const auto frames = GENERATE(as<std::string>{}, "", "3:50", "9:");
+    INFO("--frames " << frames);
+    std::vector<std::string> a{"-q", "--trace", t};
+    if (!frames.empty()) a.insert(a.end(), {"--frames", frames});
+    expect_same_as_one_process(td, a);
+}
+
+// A zstd file whose frame starts inside a line with text that reads as a
+// frame record ("# see frame 1"): split there, the first worker would run
+// the rest of frame 0 as its own and the second the same tiles as frame 1.
+// The first worker's data must end where the second starts: refused, exit 2.
+TEST_CASE("rbcd-sim --jobs: a zstd trace cut inside a line is refused, not split there", "[jobs]") {
+    TempDir td;
+    const auto tile = [](int col) {
+        std::string s = "tile " + std::to_string(col) + " 2\n";
+        for (int i = 0; i < 200; ++i)
+            s += "f " + std::to_string(col * 16 + i % 16) + " 32 " + std::to_string(100 + i) + " " +
+                 std::to_string(1 + i % 3) + (i % 2 ? " F\n" : " B\n");
+        return s;
+    };
+    const std::string head = "rbcd-trace 1\n", frame0 = "frame 0\n" + tile(3) + "# see ", rest = "frame 1\n" + tile(4);
+    const std::string t = td.write("cut.rbt.zst", rbcd::test::zstd_frames({head, frame0, rest}));
+    const Result one = run_with_outputs(td, {"-q", "--trace", t});
+    REQUIRE(one.status == 0);   // one frame: the comment runs to the end of its line
+    const Result two = run_with_outputs(td, {"-q", "--trace", t, "--jobs", "2"});
+    expect_input_error(td, two, {});
+    CHECK(two.err.find("so --jobs cannot split it there; run it without --jobs") != std::string::npos);
 }
 
 TEST_CASE("rbcd-sim --jobs: a gzip trace gives one process's bytes", "[jobs]") {
@@ -322,13 +360,15 @@ TEST_CASE("rbcd-sim --jobs: an input error is the one a single process reports",
         return s;
     };
     for (const std::string& bad : {break_in(text, 50), break_in(break_in(text, 50), 10)}) {
-        for (const bool gz : {false, true}) {
-            const std::string path = gz ? td.write_gz("bad.rbt.gz", bad) : td.write("bad.rbt", bad);
+        for (const int kind : {0, 1, 2}) {
+            const std::string path = kind == 1   ? td.write_gz("bad.rbt.gz", bad)
+                                     : kind == 2 ? td.write("bad.rbt.zst", rbcd::test::zstd_frames(rbcd::test::by_frame(bad)))
+                                                 : td.write("bad.rbt", bad);
             td.plant_old_outputs();
             const Result one = run_with_outputs(td, {"-q", "--trace", path});
             REQUIRE(one.status == 2);
             for (const char* jobs : {"2", "3"}) {
-                INFO("--jobs " << jobs << (gz ? " gzip" : ""));
+                INFO("--jobs " << jobs << (kind == 1 ? " gzip" : kind == 2 ? " zstd" : ""));
                 const Result n = run_with_outputs(td, {"-q", "--trace", path, "--jobs", jobs});
                 expect_input_error(td, n, {});
                 CHECK(n.err == one.err);

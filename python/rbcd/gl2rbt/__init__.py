@@ -1,6 +1,6 @@
 """rbcd-gl2rbt: a captured OpenGL stream (apitrace) into the unit's input.
 
-    rbcd-gl2rbt TRACE -o OUT.rbt[.gz] [--geometry OUT.geo] [--frames A:B] [--screen W H]
+    rbcd-gl2rbt TRACE -o OUT.rbt[.zst] [--geometry OUT.geo] [--frames A:B] [--screen W H]
                 [--select RULES.toml] [--depth-bits N] [--tile W H] [--summary FILE]
     rbcd-gl2rbt TRACE --list-draws FRAME [--image OUT.png] [--select RULES.toml]
     rbcd-gl2rbt TRACE --check-depth [--frames A:B]          agreement with Mesa (glretrace -D)

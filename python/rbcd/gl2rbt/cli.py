@@ -30,7 +30,7 @@ class ArgParser(argparse.ArgumentParser):
 def parse_args(argv):
     ap = ArgParser(prog=PROG, description="A captured OpenGL stream (apitrace) into the unit's input.")
     ap.add_argument("trace", help="the apitrace capture (.trace)")
-    ap.add_argument("-o", "--output", help="the fragment trace to write (.rbt, or .rbt.gz compressed)")
+    ap.add_argument("-o", "--output", help="the fragment trace to write (.rbt; .rbt.zst or .rbt.gz compressed)")
     ap.add_argument("--geometry", help="each frame's collisionable geometry for rbcd-cpucd --geometry")
     ap.add_argument("--frames", default="0:", help="A:B, the capture's frames to convert (B included; default all)")
     ap.add_argument("--screen", nargs=2, type=int, metavar=("W", "H"),
