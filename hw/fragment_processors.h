@@ -121,6 +121,22 @@ public:
         while (b < 16) b *= 2;
         return b;
     }
+    // Whether this pipe's state is `o`'s later by `shift` cycles: every queue
+    // slot and processor in age order and the last finish. Fed the same
+    // fragments from a rasterizer clock later by `shift`, it then stays so
+    // (the recurrences are shift-invariant), waits included.
+    bool follows(const FragmentPipe& o, std::uint64_t shift) const {
+        return c_ == o.c_ && done_ == o.done_ + shift && same_shifted(slot_free_, qi_, o.slot_free_, o.qi_, shift) &&
+               same_shifted(proc_free_, pi_, o.proc_free_, o.pi_, shift);
+    }
+    // Becomes `o` later by `shift` cycles.
+    void follow(const FragmentPipe& o, std::uint64_t shift) {
+        for (std::size_t i = 0; i < slot_free_.size(); ++i) slot_free_[i] = o.slot_free_[i] + shift;
+        for (std::size_t i = 0; i < proc_free_.size(); ++i) proc_free_[i] = o.proc_free_[i] + shift;
+        qi_ = o.qi_;
+        pi_ = o.pi_;
+        done_ = o.done_ + shift;
+    }
     // The state in age order (oldest first): queue slots, then processors.
     void state(std::vector<std::uint64_t>& out) const {
         out.clear();
@@ -174,7 +190,11 @@ private:
     }
 
     std::uint64_t shade_long(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
-        std::uint64_t wait = 0;
+        // A setup just before the run leaves the rasterizer's clock off the
+        // regime's cycle; the run's first fragment, waiting for the queue,
+        // puts it back, so the first block compared is usually periodic.
+        std::uint64_t wait = shade(t, used, rate, 1);
+        --m;
         const std::uint64_t block = period_hint(rate);
         // One block to compare and at least one to jump over.
         while (m >= 2 * block) {

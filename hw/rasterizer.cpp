@@ -124,6 +124,22 @@ void walk_tile_without_setups(const Tile& tile, V& v) {
 }
 
 inline std::uint64_t shade_one(rasterizer::Cursor& r, FragmentPipe& fp) { return fp.shade(r.t, r.used, r.rate, 1); }
+
+// Whether timeline (rb, pb) is timeline (ra, pa) later by some cycles, set in
+// `shift`: the rasterizer's clock and slot count, the queue, the processors.
+bool follows(const rasterizer::Cursor& rb, const FragmentPipe& pb, const rasterizer::Cursor& ra, const FragmentPipe& pa,
+             std::uint64_t& shift) {
+    if (rb.used != ra.used || rb.t < ra.t) return false;
+    shift = rb.t - ra.t;
+    return pb.follows(pa, shift);
+}
+// Timeline (rb, pb) becomes (ra, pa) later by `shift`.
+void take_shifted(rasterizer::Cursor& rb, FragmentPipe& pb, const rasterizer::Cursor& ra, const FragmentPipe& pa,
+                  std::uint64_t shift) {
+    rb.t = ra.t + shift;
+    rb.used = ra.used;
+    pb.follow(pa, shift);
+}
 [[gnu::always_inline]] inline std::uint64_t shade_run(rasterizer::Cursor& r, FragmentPipe& fp, std::uint64_t m) {
     return fp.shade_run(r.t, r.used, r.rate, m);
 }
@@ -143,8 +159,9 @@ struct rasterizer::Pure {
     // take in bulk. Timeline 0 sees only regular setups, 1 also the extra
     // ones, 2 also the c fragments.
     std::uint64_t pending[3] = {0, 0, 0};
+    std::uint64_t wait[3] = {0, 0, 0};   // the rasterizer's cycles waiting for the queue, this walk
     void flush(std::size_t i) {
-        if (pending[i]) shade_run(r[i], fp[i], pending[i]);
+        if (pending[i]) wait[i] += shade_run(r[i], fp[i], pending[i]);
         pending[i] = 0;
     }
     void setup(bool extra, std::uint64_t k) {
@@ -370,7 +387,15 @@ void rasterizer::end_frame() {
 
 // The GPU-only timelines: no bank, no unit. A timeline starts to differ from
 // the one before it at its first cprims (c fragment).
-[[gnu::always_inline]] inline void rasterizer::walk_gpu_only(const Tile& tile, std::uint64_t culled, bool no_setups) {
+//
+// A tile without collisionable fragments, cprims or base= gives every
+// timeline the same walk, so a timeline whose state is timeline 0's later by
+// some cycles (as they all become once each settles into the same periodic
+// regime) is not walked: it takes timeline 0's state after the tile, later
+// by as much (the recurrences are shift-invariant). Returns timeline 0's
+// cycles waiting for the fragment queue in the tile.
+[[gnu::always_inline]] inline std::uint64_t rasterizer::walk_gpu_only(const Tile& tile, std::uint64_t culled,
+                                                                      bool no_setups) {
     const auto go_live = [&](std::size_t i) {
         if (pure_live_[i]) return;
         const std::size_t from = pure_live_[i - 1] ? i - 1 : i - 2;
@@ -380,19 +405,27 @@ void rasterizer::end_frame() {
     };
     if (tile.cprims) go_live(1);
     if (tile.cprims || culled) go_live(2);
+    bool walk[3] = {true, pure_live_[1], pure_live_[2]};
+    std::uint64_t shift[3] = {0, 0, 0};
+    const bool same_walk = tile.frags.empty() && tile.cprims == 0 && !tile.has_base && !FragmentPipe::stepwise;
+    for (std::size_t i = 1; i < 3 && same_walk; ++i)
+        walk[i] = walk[i] && !follows(pure_r_[i], pure_fp_[i], pure_r_[0], pure_fp_[0], shift[i]);
     std::uint64_t pure_start[3];
     for (std::size_t i = 0; i < 3; ++i) {
-        if (!pure_live_[i]) continue;
+        if (!walk[i]) continue;
         pure_start[i] = pure_r_[i].next_free();
         pure_r_[i].busy(cfg_.gpu.tile_overhead_cycles);
     }
-    Pure pure{pure_r_, pure_fp_, cfg_.gpu.setup_cycles_per_primitive, pure_live_};
+    Pure pure{pure_r_, pure_fp_, cfg_.gpu.setup_cycles_per_primitive, walk};
     if (no_setups) pure.walk_without_setups(tile, culled);
     else walk_tile(tile, culled, pure);
     pure.finish();
     if (tile.has_base)
         for (std::size_t i = 0; i < 3; ++i)
             if (pure_live_[i]) pure_r_[i].restart(std::max(pure_r_[i].next_free(), pure_start[i] + tile.base));
+    for (std::size_t i = 1; i < 3; ++i)
+        if (pure_live_[i] && !walk[i]) take_shifted(pure_r_[i], pure_fp_[i], pure_r_[0], pure_fp_[0], shift[i]);
+    return pure.wait[0];
 }
 
 void rasterizer::feed_tile(const Tile& tile) {
@@ -401,7 +434,14 @@ void rasterizer::feed_tile(const Tile& tile) {
     const std::uint64_t overhead = cfg_.gpu.tile_overhead_cycles;
     const std::uint64_t setup = cfg_.gpu.setup_cycles_per_primitive;
     const bool no_setups = tile.prims == 0 && tile.cprims == 0;
-    walk_gpu_only(tile, culled, no_setups);
+    // Without collisionable fragments the with-unit timeline walks what
+    // timeline 0 walks (no bank, no unit): when its state is timeline 0's
+    // later by some cycles it takes timeline 0's after the tile (walk_gpu_only).
+    // Waveforms want each fragment's cycles: walked then.
+    std::uint64_t unit_shift = 0;
+    const bool unit_follows = n == 0 && tile.cprims == 0 && !tile.has_base && !vcd_ && !FragmentPipe::stepwise &&
+                              follows(unit_, fp_.pipe(), pure_r_[0], pure_fp_[0], unit_shift);
+    const std::uint64_t wait0 = walk_gpu_only(tile, culled, no_setups);
 
     // With the unit.
     const std::uint64_t t0 = unit_.next_free();
@@ -446,10 +486,17 @@ void rasterizer::feed_tile(const Tile& tile) {
     };
     // One walk per sorter path, each its own straight code (insertion_sorter::path()).
     using Path = insertion_sorter::Path;
-    switch (sorter_.path()) {
-    case Path::Loops: walk_with_unit(std::integral_constant<Path, Path::Loops>{}); break;
-    case Path::LoopsCounted: walk_with_unit(std::integral_constant<Path, Path::LoopsCounted>{}); break;
-    case Path::AllSlots: walk_with_unit(std::integral_constant<Path, Path::AllSlots>{}); break;
+    if (unit_follows) {
+        take_shifted(unit_, fp_.pipe(), pure_r_[0], pure_fp_[0], unit_shift);
+        fp_.count(tile.other);
+        cur_.stall_fragment_queue += wait0;
+        cur_.setup_cycles += tile.prims * setup;
+    } else {
+        switch (sorter_.path()) {
+        case Path::Loops: walk_with_unit(std::integral_constant<Path, Path::Loops>{}); break;
+        case Path::LoopsCounted: walk_with_unit(std::integral_constant<Path, Path::LoopsCounted>{}); break;
+        case Path::AllSlots: walk_with_unit(std::integral_constant<Path, Path::AllSlots>{}); break;
+        }
     }
     if (tile.has_base) unit_.restart(std::max(unit_.next_free(), start + tile.base));
     const std::uint64_t end = unit_.next_free();

@@ -23,7 +23,8 @@ namespace {
 // prims= and cprims=.
 // long_runs: runs of up to 3,000 non-collisionable fragments, other= up to
 // 40,000, and a shade= cost on some tiles, so that runs reach the pipeline's
-// periodic regime and leave it at setups, c fragments and cost changes.
+// periodic regime and leave it at setups, c fragments and cost changes, and
+// tiles without collisionable fragments let timelines follow timeline 0.
 std::string random_trace(const TempDir& td, unsigned seed, bool collisionable = true, bool long_runs = false) {
     std::uint64_t s = seed * 0x9e3779b97f4a7c15ull + 1;
     const auto rnd = [&](std::uint64_t n) {
@@ -43,7 +44,8 @@ std::string random_trace(const TempDir& td, unsigned seed, bool collisionable = 
             tile.col = t * 4 + static_cast<std::uint32_t>(rnd(4));
             tile.row = static_cast<std::uint32_t>(rnd(30));
             tile.ordered_other = rnd(2);
-            const unsigned n = collisionable ? static_cast<unsigned>(rnd(400)) : 0;
+            // Long runs: half the tiles without collisionable fragments, as in a game frame.
+            const unsigned n = collisionable && !(long_runs && rnd(2)) ? static_cast<unsigned>(rnd(400)) : 0;
             for (unsigned i = 0; i < n; ++i) {
                 if (tile.ordered_other && rnd(4) == 0) {
                     tile.other_runs.push_back(
