@@ -128,7 +128,9 @@ SCENE_PATHS = {}
 
 
 def scenes_of(out):
-    """OUT/runs/scenes.txt: one "NAME PATH" a line, as reproduce.sh ran them."""
+    """OUT/runs/scenes.txt: one "NAME PATH" a line, as reproduce.sh ran them
+    (OUT's scenes only: those of an OUT read before are forgotten)."""
+    SCENE_PATHS.clear()
     with open(need(os.path.join(out, "runs", "scenes.txt"))) as f:
         for line in f:
             if line.strip():
@@ -678,7 +680,7 @@ def target_fig8(out, scenes):
         if sampled:
             f.write("Counted on a sample of frames (the same frames on every machine): " +
                     "; ".join(f"{s}: every {ordinal(k)} frame ({n} of {nf})" for s, (k, n, nf) in sampled.items()) +
-                    ". Its instructions per frame are the sample's mean; the GPU side covers every frame.\n")
+                    ". An entry's instructions per frame are then its sample's mean; the GPU side covers every frame.\n")
         for banks in (1, 2):
             if unbounded[banks]:
                 f.write(f"With {banks} ZEB{'s' if banks > 1 else ''} the unit adds no GPU time on "
