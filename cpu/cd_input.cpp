@@ -1,5 +1,7 @@
 #include "rbcd/cpu/cd_input.h"
 
+#include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -45,8 +47,9 @@ namespace {
 
 // A token as messages show it: at most 40 bytes (a 100 MB token is not
 // printed whole); main() escapes what is not printable.
-std::string show(const std::string& t) {
-    return t.size() <= 40 ? "'" + t + "'" : "'" + t.substr(0, 40) + "...' (" + std::to_string(t.size()) + " bytes)";
+std::string show(std::string_view t) {
+    return t.size() <= 40 ? "'" + std::string(t) + "'"
+                          : "'" + std::string(t.substr(0, 40)) + "...' (" + std::to_string(t.size()) + " bytes)";
 }
 
 struct LineReader {
@@ -54,7 +57,7 @@ struct LineReader {
     std::string_view text;
     std::size_t pos = 0;
     unsigned long line = 0;
-    std::vector<std::string> tok;
+    std::vector<std::string_view> tok;   // into `text`
 
     [[noreturn]] void fail(const std::string& what) const { throw input_error_at(file, line, what); }
 
@@ -75,7 +78,7 @@ struct LineReader {
                 while (i < s.size() && (s[i] == ' ' || s[i] == '\t' || s[i] == '\r' || s[i] == '\v' || s[i] == '\f')) ++i;
                 const std::size_t b = i;
                 while (i < s.size() && !(s[i] == ' ' || s[i] == '\t' || s[i] == '\r' || s[i] == '\v' || s[i] == '\f')) ++i;
-                if (i > b) tok.emplace_back(s.substr(b, i - b));
+                if (i > b) tok.push_back(s.substr(b, i - b));
             }
             if (!tok.empty()) return true;
         }
@@ -86,21 +89,32 @@ struct LineReader {
                                   std::to_string(tok.size() - 1));
     }
     // A finite number within the scene reader's bound (docs/limits.md).
+    // A token from_chars does not read whole (a leading '+', hexadecimal,
+    // a value out of range) is read by strtod, so that the same tokens are
+    // accepted, with the same values (both round correctly), as by strtod
+    // alone; from_chars reads the usual decimal token several times faster.
     double number(std::size_t i) const {
-        const std::string& s = tok.at(i);
-        char* end = nullptr;
-        const double v = std::strtod(s.c_str(), &end);
-        if (end == s.c_str() || *end != '\0' || !std::isfinite(v)) fail(show(s) + " is not a finite number");
+        const std::string_view s = tok.at(i);
+        double v = 0;
+        const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+        if (ec != std::errc() || p != s.data() + s.size()) {
+            const std::string t(s);
+            char* end = nullptr;
+            v = std::strtod(t.c_str(), &end);
+            if (end == t.c_str() || *end != '\0') fail(show(s) + " is not a finite number");
+        }
+        if (!std::isfinite(v)) fail(show(s) + " is not a finite number");
         if (std::abs(v) > kMaxGeometryCoordinate)
             fail(show(s) + " is beyond +-1e9 (the limit of coordinates and matrix entries, as in scenes; docs/limits.md)");
         return v;
     }
     std::uint64_t count(std::size_t i, std::uint64_t max) const {
-        const std::string& s = tok.at(i);
-        if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 12)
+        const std::string_view s = tok.at(i);
+        if (s.empty() || s.find_first_not_of("0123456789") != std::string_view::npos || s.size() > 12)
             fail(show(s) + " is not an unsigned integer");
-        const std::uint64_t v = std::stoull(s);
-        if (v > max) fail(s + " is out of range 0.." + std::to_string(max));
+        std::uint64_t v = 0;
+        for (const char c : s) v = 10 * v + std::uint64_t(c - '0');   // at most 12 digits: no overflow
+        if (v > max) fail(std::string(s) + " is out of range 0.." + std::to_string(max));
         return v;
     }
 };
@@ -151,7 +165,7 @@ CdInput load_geometry_text(std::string_view text, const std::string& path) {
             if (!seen[i]) r.fail("frame " + std::to_string(g.model.size() - 1) + " gives no matrix for part " + std::to_string(i));
     };
     while (r.next()) {
-        const std::string& k = r.tok[0];
+        const std::string k(r.tok[0]);
         if (k == "screen") {
             if (in_frames || screen_seen) r.fail("screen: must come once, before the first part");
             r.expect_fields(3, "screen");
@@ -179,7 +193,7 @@ CdInput load_geometry_text(std::string_view text, const std::string& path) {
             p.id = std::uint32_t(r.count(1, 0xFFFFFFFFull));
             const std::uint64_t nv = r.count(2, kMaxCount), nt = r.count(3, kMaxCount);
             if (nv < 3 || nt < 1) r.fail(k + ": needs at least 3 vertices and 1 triangle");
-            if (r.tok.size() == 5) p.name = r.tok[4];
+            if (r.tok.size() == 5) p.name = std::string(r.tok[4]);
             auto m = std::make_shared<PartMesh>();
             for (std::uint64_t i = 0; i < nv; ++i) {
                 if (!r.next() || r.tok[0] != "v") r.fail("expected vertex " + std::to_string(i) + " ('v X Y Z')");
@@ -304,23 +318,39 @@ std::string geometry_file_text(const CdInput& in) {
 bool is_closed(const PartMesh& m) {
     // Mesh files repeat a vertex where its normal or texture coordinate
     // changes: weld by position first, so that seams do not count as borders.
-    std::map<std::array<double, 3>, std::uint32_t> weld;
-    std::vector<std::uint32_t> id(m.verts.size());
-    for (std::size_t i = 0; i < m.verts.size(); ++i)
-        id[i] = weld.emplace(std::array<double, 3>{m.verts[i].x(), m.verts[i].y(), m.verts[i].z()},
-                             std::uint32_t(weld.size()))
-                    .first->second;
-    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+    // Sorted arrays, not maps: a game's frame holds tens of thousands of
+    // vertices, every frame.
+    const std::size_t n = m.verts.size();
+    std::vector<std::uint32_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
+    const auto key = [&](std::uint32_t i) { return std::array<double, 3>{m.verts[i].x(), m.verts[i].y(), m.verts[i].z()}; };
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
+    std::vector<std::uint32_t> id(n);
+    std::uint32_t next = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+        if (k && key(order[k]) != key(order[k - 1])) ++next;
+        id[order[k]] = next;
+    }
+    // Each edge (welded ends, smaller first) once per triangle side; closed
+    // when every edge comes exactly twice.
+    std::vector<std::uint64_t> edges;
+    edges.reserve(3 * m.tris.size());
     for (const auto& t : m.tris)
         for (int e = 0; e < 3; ++e) {
             std::uint32_t a = id[t[e]], b = id[t[(e + 1) % 3]];
             if (a == b) continue;   // degenerate triangle edge
             if (a > b) std::swap(a, b);
-            ++edges[{a, b}];
+            edges.push_back(std::uint64_t(a) << 32 | b);
         }
-    for (const auto& [e, n] : edges)
-        if (n != 2) return false;
-    return !edges.empty();
+    if (edges.empty()) return false;
+    std::sort(edges.begin(), edges.end());
+    for (std::size_t k = 0; k < edges.size();) {
+        std::size_t j = k;
+        while (j < edges.size() && edges[j] == edges[k]) ++j;
+        if (j - k != 2) return false;
+        k = j;
+    }
+    return true;
 }
 
 } // namespace rbcd::cpucd

@@ -190,9 +190,6 @@ struct CpuDetector::Impl {
             world_step(wbroad, 0, false);
             world_step(wfull, 0, true);
         }
-        // FCL models at frame 0's scale: building them is loading, not detection.
-        if (opt.exact && !in.model.empty())
-            for (std::size_t i = 0; i < ps.size(); ++i) bvh(i, decompose(in.model[0][i]).scale);
     }
 
     ~Impl() {
@@ -329,7 +326,14 @@ struct CpuDetector::Impl {
     void timed_phases(std::uint64_t f, unsigned repeats, SectionCounter* counter, FrameResult& fr, Candidates& cand,
                       std::vector<int>& gres);
     void note_phase_pairs(Pairs& pairs, FrameResult& fr, const Candidates& cand, const std::vector<int>& gres);
-    void exact_phase(std::uint64_t f, Pairs& pairs);
+    // FCL models, at this frame's scale, of the parts in `cand` (the pairs
+    // the exact phase tests): building them is loading, not detection, and
+    // only the parts the exact phase meets need one.
+    void build_bvhs(std::uint64_t f, const Candidates& cand) {
+        for (const auto& [i, j] : cand)
+            for (const std::size_t k : {i, j}) bvh(k, decompose(in.model[f][k]).scale);
+    }
+    void exact_phase(std::uint64_t f, const Candidates& cand, Pairs& pairs);
 };
 
 CpuDetector::CpuDetector(const CdInput& in, DetectorOptions opt) : impl_(std::make_unique<Impl>(in, opt)) {}
@@ -422,8 +426,9 @@ void CpuDetector::Impl::note_phase_pairs(Pairs& pairs, FrameResult& fr, const Ca
     }
 }
 
-// ---- (c) exact, over the pairs whose exact (double) world AABBs overlap.
-void CpuDetector::Impl::exact_phase(std::uint64_t f, Pairs& pairs) {
+// ---- (c) exact, over `cand`: the pairs whose exact (double) world AABBs
+// overlap (overlapping_aabb_pairs), their BVHs built (build_bvhs).
+void CpuDetector::Impl::exact_phase(std::uint64_t f, const Candidates& cand, Pairs& pairs) {
     const std::size_t n = in.parts.size();
     std::vector<Decomposed> dec(n);
     for (std::size_t i = 0; i < n; ++i) dec[i] = decompose(in.model[f][i]);
@@ -436,7 +441,7 @@ void CpuDetector::Impl::exact_phase(std::uint64_t f, Pairs& pairs) {
             if (in_view(in.view_proj, world_vert(i, k))) return true;
         return false;
     };
-    for (const auto& [i, j] : overlapping_aabb_pairs(in, f, UINT64_MAX).pairs) {
+    for (const auto& [i, j] : cand) {
         const Bvh& bi = bvh(i, dec[i].scale);
         const Bvh& bj = bvh(j, dec[j].scale);
         fcl::Transform3d ti = fcl::Transform3d::Identity(), tj = fcl::Transform3d::Identity();
@@ -490,8 +495,10 @@ FrameResult CpuDetector::run_frame(std::uint64_t f, unsigned repeats, SectionCou
     s.timed_phases(f, repeats, counter, fr, cand, gres);
     s.note_phase_pairs(pairs, fr, cand, gres);
     if (s.opt.exact) {
+        const Impl::Candidates exact_cand = overlapping_aabb_pairs(s.in, f, UINT64_MAX).pairs;
+        s.build_bvhs(f, exact_cand);
         const auto t0 = Clock::now();
-        s.exact_phase(f, pairs);
+        s.exact_phase(f, exact_cand, pairs);
         fr.t.exact_us = us_since(t0);
     }
     // A pair exact for one part pair and merely contained for another is an intersection.

@@ -159,10 +159,11 @@ int run_under_callgrind(int argc, char* argv[]) {
     if (!::mkdtemp(dir.data())) throw std::runtime_error("mkdtemp " + dir + ": " + std::strerror(errno));
     const std::string prefix = dir + "/cg";
 
-    // Collection off until the first section; instrumentation on from the
-    // start, since switching it later flushes every translation.
+    // Collection off until the first section; instrumentation off until the
+    // first frame's detection (CallgrindCounter::instrument): loading runs at
+    // valgrind's uninstrumented speed.
     std::vector<std::string> args = {"valgrind", "--tool=callgrind", "-q", "--vgdb=no", "--collect-atstart=no",
-                                     "--compress-strings=no", "--compress-pos=no",
+                                     "--instr-atstart=no", "--compress-strings=no", "--compress-pos=no",
                                      "--callgrind-out-file=" + prefix, exe};
     for (int i = 1; i < argc; ++i) args.emplace_back(argv[i]);
     std::vector<char*> av;
@@ -205,6 +206,15 @@ int run_under_callgrind(int argc, char* argv[]) {
 CallgrindCounter::CallgrindCounter() {
     const char* p = std::getenv(kDumpEnv);
     prefix_ = p ? p : "";
+}
+
+void CallgrindCounter::instrument(bool on) {
+#if RBCD_HAVE_CALLGRIND
+    if (on) CALLGRIND_START_INSTRUMENTATION;
+    else CALLGRIND_STOP_INSTRUMENTATION;
+#else
+    (void)on;
+#endif
 }
 
 void CallgrindCounter::start() {

@@ -1,9 +1,11 @@
 // rbcd-cpucd --count-instructions: the detection's executed instructions per
 // section, counted by valgrind's callgrind (docs/cpucd.md, "Counted work").
-// The program re-runs itself under callgrind with collection off; around each
-// measured section it switches collection on and off and has callgrind dump
-// the section's count to a private directory, which it reads back at once
-// (a client-request dump is written before the request returns).
+// The program re-runs itself under callgrind with collection and
+// instrumentation off. Around each frame's detection it switches
+// instrumentation on and off; inside, around each measured section,
+// collection, and has callgrind dump the section's count to a private
+// directory, which it reads back at once (a client-request dump is written
+// before the request returns).
 #pragma once
 #include <cstdint>
 #include <istream>
@@ -50,6 +52,14 @@ bool is_allocator_function(const std::string& name);
 class CallgrindCounter : public SectionCounter {
 public:
     CallgrindCounter();   // under callgrind only (counting_under_callgrind())
+    // Callgrind's instrumentation on or off. It starts off: only code run
+    // with it on can be counted (start() and stop() inside), and code runs
+    // about ten times faster without it. Switching discards every
+    // translation made so far, so it is switched once around a frame's
+    // detection, not around each section. The counts do not depend on it:
+    // a section's instructions are the same whatever ran uninstrumented
+    // before it.
+    void instrument(bool on);
     void start() override;
     std::uint64_t stop(Section s) override;
 

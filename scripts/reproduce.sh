@@ -24,7 +24,8 @@
 # into OUT/sweep/, the accuracy's other rbcd-sim runs, rbcd-cpucd once per
 # input for the ground truth (timed alone, the host figures), and for fig8 once
 # more under callgrind (--count-instructions: the counted CPU side, $jobs at a
-# time); then python/rbcd/evaluate.py writes OUT/TARGET.csv, .png and .md. Targets
+# time; a game whose geometry passes 128 MiB, every 3rd frame: docs/results.md,
+# Figure 8); then python/rbcd/evaluate.py writes OUT/TARGET.csv, .png and .md. Targets
 # needing rbcd-cpucd are skipped with a message when it was not built (Bullet
 # or FCL missing); fig8 also needs valgrind.
 set -euo pipefail
@@ -33,7 +34,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 export PYTHONPATH="$root/python${PYTHONPATH:+:$PYTHONPATH}"
 out=results workloads=$root/workloads build=$root/build repeat=5 jobs=$(nproc) do_build=1 update_docs=0
 targets=()
-usage() { sed -n '2,29p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,30p' "$0" | sed 's/^# \{0,1\}//'; }
 games=0 game_entries=()
 while (($#)); do
   case $1 in
@@ -233,6 +234,17 @@ geometry_limit() {
   size=$(stat -c %s "$g" 2>/dev/null || echo 0)
   ((size < 268435456)) || echo "--max-geometry-bytes $((size + 1))"
 }
+# fig8 counts a game whose geometry passes 128 MiB (SuperTuxKart's skinned
+# karts: 263 to 357 MB for 300 frames) on frames 0, 3, 6, ... only: under
+# valgrind each frame's hulls and trees take a third of a second to build, a
+# quarter of an hour for three such entries counted whole. The same frames on
+# every machine; fig8.md names the sampled entries (docs/results.md, Figure 8).
+count_sample() {
+  local g size
+  g=$(trace_base "$1").geo
+  size=$(stat -c %s "$g" 2>/dev/null || echo 0)
+  ((size <= 134217728)) || echo "--frame-step 3"
+}
 
 # ---- rbcd-cpucd, one scene at a time and nothing else running: it is timed.
 if ((need_cpucd)); then
@@ -249,8 +261,10 @@ if ((need_cpucd)); then
 fi
 
 # ---- fig8: each scene's detection counted in instructions (rbcd-cpucd
-# --count-instructions, under callgrind, about 50 times slower than timed; a
-# count does not depend on what else runs, so $jobs at a time). cpucd_count
+# --count-instructions, under valgrind: loading about 8 times slower than
+# timed, the detection about 50 times; a count does not depend on what else
+# runs, so $jobs at a time, the largest input first: a SuperTuxKart entry's
+# count takes minutes, and started last it would run alone). cpucd_count
 # NAME INPUT-OPTIONS... writes OUT/runs/NAME/cpucd_counts.csv.
 cpucd_count() {
   local name=$1; shift
@@ -259,13 +273,18 @@ cpucd_count() {
 }
 if ((need_count)); then
   k=0 failed=0
-  for s in "${scenes[@]}"; do
+  # A trace's size is its geometry's (what the count reads and builds); a scene's, its file's.
+  mapfile -t by_size < <(for s in "${scenes[@]}"; do
+    f=$s; is_trace "$s" && f=$(trace_base "$s").geo
+    printf '%s\t%s\n' "$(stat -c %s "$f")" "$s"
+  done | sort -s -k1,1nr | cut -f2-)
+  for s in "${by_size[@]}"; do
     while (($(jobs -rp | wc -l) >= jobs)); do wait -n || failed=1; done
     k=$((k + 1))
     name=$(input_name "$s")
     progress "rbcd-cpucd --count-instructions" "$k" "${#scenes[@]}" "$name"
     if is_trace "$s"; then
-      cpucd_count "$name" --geometry "$(trace_base "$s").geo" $(geometry_limit "$s") &
+      cpucd_count "$name" --geometry "$(trace_base "$s").geo" $(geometry_limit "$s") $(count_sample "$s") &
     else
       cpucd_count "$name" --scene "$s" &
     fi

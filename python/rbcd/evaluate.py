@@ -128,7 +128,9 @@ SCENE_PATHS = {}
 
 
 def scenes_of(out):
-    """OUT/runs/scenes.txt: one "NAME PATH" a line, as reproduce.sh ran them."""
+    """OUT/runs/scenes.txt: one "NAME PATH" a line, as reproduce.sh ran them
+    (OUT's scenes only: those of an OUT read before are forgotten)."""
+    SCENE_PATHS.clear()
     with open(need(os.path.join(out, "runs", "scenes.txt"))) as f:
         for line in f:
             if line.strip():
@@ -408,6 +410,23 @@ def geometry_classes(path, rules):
     return out
 
 
+def game_of(s):
+    """The game a captured input comes from: the capture's description beside
+    the trace (scripts/game-suite expand writes it), else the entry's name
+    (GAME_CLASSES' prefixes); None for a scene or an unknown game."""
+    path = SCENE_PATHS[s]
+    if not is_trace(path):
+        return None
+    game = None
+    desc = trace_base(path) + ".capture"
+    if os.path.isfile(desc):
+        with open(desc, "rb") as f:
+            game = tomllib.load(f).get("game")
+    if game not in GAME_CLASSES:
+        game = next((g for g in GAME_CLASSES if s.startswith(g + "-")), None)
+    return game
+
+
 def game_pairs(out, scenes):
     """Per captured game, the pairs in contact (rbcd-cpucd's ground truth) by the
     classes of their two objects: pair-frames, of them on screen, distinct pairs."""
@@ -416,15 +435,7 @@ def game_pairs(out, scenes):
         path = SCENE_PATHS[s]
         if not is_trace(path):
             continue
-        # The game: from the capture's description beside the trace
-        # (scripts/game-suite expand writes it), else from the entry's name.
-        game = None
-        desc = trace_base(path) + ".capture"
-        if os.path.isfile(desc):
-            with open(desc, "rb") as f:
-                game = tomllib.load(f).get("game")
-        if game not in GAME_CLASSES:
-            game = next((g for g in GAME_CLASSES if s.startswith(g + "-")), None)
+        game = game_of(s)
         rules = GAME_CLASSES.get(game, [(lambda nv, d: True, "object")])
         classes = geometry_classes(trace_base(path) + ".geo", rules)
         frames = len(read_csv(run_file(out, s, "cpucd_frames.csv")))
@@ -557,6 +568,11 @@ FIG8_VERSIONS = [("broad", "(a) bare broad phase", "broad"), ("world_broad", "(d
                  ("gjk", "(b) bare broad + GJK", "gjk"), ("world", "(e) world, broad + narrow", "gjk")]
 
 
+def ordinal(k):
+    """3rd, 11th, 22nd."""
+    return f"{k}{'th' if 10 <= k % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(k % 10, 'th')}"
+
+
 def g3(v):
     """Three significant digits, without an exponent from 1000 up (186000, not 1.86e+05)."""
     return f"{v:.0f}" if abs(v) >= 1000 else f"{v:.3g}"
@@ -569,17 +585,25 @@ def target_fig8(out, scenes):
     ghz = host_ghz()
     rows, md_rows, ratios = [], [], {}
     fallback = False
+    sampled = {}   # scene: (frame step, frames counted, frames)
     sw, _ = sweep_rows(out, "fig9", "zeb.banks", scenes)
     for s in scenes:
         counted = read_csv(run_file(out, s, "cpucd_counts.csv"))
         timed = read_csv(run_file(out, s, "cpucd_frames.csv"))
-        nf = len(counted)
-        if nf == 0 or len(timed) != nf:
-            raise InputMissing(f"{run_file(out, s, 'cpucd_counts.csv')}: {nf} frames counted, {len(timed)} timed")
+        nf = len(timed)
+        # Every frame counted, or every K-th (rbcd-cpucd --frame-step K: frames
+        # 0, K, 2K, ...): the count per frame is then the sample's mean.
+        frames = [int(r["frame"]) for r in counted]
+        step = frames[1] - frames[0] if len(frames) > 1 else 1
+        if nf == 0 or step < 1 or frames != list(range(0, nf, step)):
+            raise InputMissing(f"{run_file(out, s, 'cpucd_counts.csv')}: {len(counted)} frames counted, not every "
+                               f"frame or every K-th of the {nf} timed")
+        if step > 1:
+            sampled[s] = (step, len(counted), nf)
         instr, host_ms = {}, {}
         for col, _, _ in FIG8_VERSIONS:
             try:
-                instr[col] = sum(int(r[f"{col}_instr"]) for r in counted) / nf
+                instr[col] = sum(int(r[f"{col}_instr"]) for r in counted) / len(counted)
                 host_ms[col] = sum(float(r[f"{col}_us"]) for r in timed) / nf * 1e-3
             except (KeyError, ValueError):
                 raise InputMissing(f"{run_file(out, s, 'cpucd_counts.csv')}: no {col}_instr counts "
@@ -615,6 +639,9 @@ def target_fig8(out, scenes):
             "CPU ms/frame the paper's speed-up implies"]
     write_csv(os.path.join(out, "fig8.csv"), head + host_cols + tail, rows)
 
+    # A scene where the unit adds no GPU time has an unbounded speed-up (and
+    # needs no CPU time for the paper's): the geometric means leave it out,
+    # and fig8.md names it.
     def gmean(v):
         v = [x for x in v if x > 0 and not math.isinf(x)]
         return math.exp(sum(math.log(x) for x in v) / len(v)) if v else math.inf
@@ -627,6 +654,24 @@ def target_fig8(out, scenes):
                             g3(cpu_model.seconds(gmean([r[3] for r in rs])) * 1e3),
                             sig(gmean([r[0] for r in rs])), paper_sp, sig(gmean([r[1] for r in rs])), paper_er,
                             g3(gmean([r[2] for r in rs]))])
+    unbounded = {banks: [s for s, r in zip(scenes, ratios[(FIG8_VERSIONS[0][0], banks)]) if math.isinf(r[0])]
+                 for banks in (1, 2)}
+    # Captures of more than one game: the geometric means of each game's entries too.
+    games = {}
+    for s in scenes:
+        games.setdefault(game_of(s), []).append(s)
+    by_game = []
+    if len(games) > 1 and None not in games:
+        for game, members in sorted(games.items()):
+            idx = [scenes.index(m) for m in members]
+            for banks in (1, 2):
+                for col, label, paper_kind in FIG8_VERSIONS:
+                    rs = [ratios[(col, banks)][k] for k in idx]
+                    n_inf = sum(math.isinf(r[0]) for r in rs)
+                    by_game.append([game, label, banks, f"{gmean([r[3] for r in rs]):.0f}",
+                                    g3(cpu_model.seconds(gmean([r[3] for r in rs])) * 1e3),
+                                    sig(gmean([r[0] for r in rs])) + (f" ({n_inf} of {len(rs)} unbounded)" if n_inf else ""),
+                                    sig(gmean([r[1] for r in rs]))])
     sh = ["CPU version", "ZEBs", "instructions/frame (geo. mean)", "modelled CPU ms/frame", "speed-up (geo. mean)",
           "paper speed-up", "energy reduction (geo. mean)", "paper energy reduction",
           "CPU ms/frame the paper's speed-up implies (geo. mean)"]
@@ -638,6 +683,20 @@ def target_fig8(out, scenes):
         if fallback:
             f.write("GPU energy: this build has no energy.gpu.with_unit_pj / baseline_pj; the unit's own energy "
                     "(energy.total_pj) stands for the extra GPU energy, so the energy ratios are upper bounds.\n")
+        if sampled:
+            f.write("Counted on a sample of frames (the same frames on every machine): " +
+                    "; ".join(f"{s}: every {ordinal(k)} frame ({n} of {nf})" for s, (k, n, nf) in sampled.items()) +
+                    ". An entry's instructions per frame are then its sample's mean; the GPU side covers every frame.\n")
+        for banks in (1, 2):
+            if unbounded[banks]:
+                f.write(f"With {banks} ZEB{'s' if banks > 1 else ''} the unit adds no GPU time on "
+                        f"{', '.join(unbounded[banks])}: their speed-up is unbounded (inf) and the speed-up's and "
+                        "the implied CPU time's geometric means are over the other "
+                        f"{len(scenes) - len(unbounded[banks])} scenes.\n")
+        if by_game:
+            f.write("\nBy game (geometric means over each game's entries):\n\n" +
+                    md_table(["game", "CPU version", "ZEBs", "instructions/frame (geo. mean)", "modelled CPU ms/frame",
+                              "speed-up (geo. mean)", "energy reduction (geo. mean)"], by_game))
         f.write("\nPer scene:\n\n" + md_table(head + tail, md_rows))
     plt = plot()
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.2))

@@ -63,6 +63,12 @@ for input in "--scene $src/testbench/eval/mini/mini.toml" "--geometry $d/game.ge
   cmp -s <(cut -d, -f1-4,10,11 "$d/1.csv") <(cut -d, -f1-4,10,11 "$d/t.csv") || fail "$name: counted and timed pairs differ"
 done
 grep -q '^1,2,1,1,,' "$d/1.csv" || fail "game.geo: the box should reach the tetrahedron in frame 1"
+# --frame-step K: frames 0, K, 2K, ... only (fig8's sample of a large game),
+# frame 0 counted as in the whole run.
+"$cpucd" --geometry "$d/game.geo" --count-instructions --frame-step 2 --frames "$d/step.csv" -q
+[ "$(cut -d, -f1 "$d/step.csv" | tr '\n' ' ')" = "frame 0 2 " ] ||
+  fail "--frame-step 2: frames $(cut -d, -f1 "$d/step.csv" | tr '\n' ' ')"
+[ "$(grep '^0,' "$d/step.csv")" = "$(grep '^0,' "$d/1.csv")" ] || fail "--frame-step 2: frame 0 counted otherwise"
 
 # A scene and its geometry file (format 1, the same numbers) are one input: one count.
 "$cpucd" --scene "$src/testbench/eval/mini/mini.toml" --repeat 1 -q --write-geometry "$d/mini.geo"
@@ -84,6 +90,7 @@ refuse() {
 }
 refuse "--pairs with counting" --scene "$src/testbench/eval/mini/mini.toml" --count-instructions --frames "$d/f.csv" --pairs "$d/out.csv"
 refuse "--repeat with counting" --scene "$src/testbench/eval/mini/mini.toml" --count-instructions --repeat 3 --frames "$d/f.csv"
+refuse "--frame-step 0" --scene "$src/testbench/eval/mini/mini.toml" --count-instructions --frame-step 0 --frames "$d/f.csv"
 printf 'rbcd-geometry 2\npart 1 3 1\nv 0 0 0\nv 1 0 0\nv 0 1 x\n' > "$d/bad.geo"
 refuse "bad geometry under counting" --geometry "$d/bad.geo" --count-instructions --frames "$d/f.csv"
 [[ $msg == "rbcd-cpucd: $d/bad.geo:5: "* ]] || fail "bad geometry: '$msg' does not name the line"

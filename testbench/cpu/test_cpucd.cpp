@@ -252,6 +252,51 @@ TEST_CASE("point in mesh by ray parity", "[cpucd]") {
     CHECK_FALSE(is_closed(open));
 }
 
+TEST_CASE("is_closed welds vertices by position: seams close, a missing or a third triangle opens", "[cpucd]") {
+    // A unit square's two triangles twice, back to back, each side with its own
+    // copies of the corners (a seam), one corner as -0.0: closed.
+    PartMesh m;
+    for (int side = 0; side < 2; ++side)
+        for (const Eigen::Vector3d& v : {Eigen::Vector3d(side ? -0.0 : 0.0, 0, 0), Eigen::Vector3d(1, 0, 0),
+                                         Eigen::Vector3d(1, 1, 0), Eigen::Vector3d(0, 1, 0)})
+            m.verts.push_back(v);
+    m.tris = {{0, 1, 2}, {0, 2, 3}, {4, 7, 5}, {5, 7, 6}};   // the back split along the other diagonal
+    CHECK(is_closed(m));
+    PartMesh three = m;
+    three.tris.push_back({0, 1, 3});   // 0-1, 1-3 and 3-0 now thrice
+    CHECK_FALSE(is_closed(three));
+    PartMesh missing = m;
+    missing.tris.pop_back();
+    CHECK_FALSE(is_closed(missing));
+    PartMesh none = m;
+    none.tris = {{0, 4, 0}};   // degenerate only: no edge
+    CHECK_FALSE(is_closed(none));
+}
+
+TEST_CASE("geometry file: numbers are read as strtod reads them, whatever their form", "[cpucd]") {
+    const auto first_vertex_x = [](const std::string& x) {
+        return load_geometry_text("rbcd-geometry 1\npart 1 3 1\nv " + x + " 0 0\nv 1 0 0\nv 0 1 0\nt 0 1 2\nframe 0\n"
+                                  "m 0 1 0 0 0 0 1 0 0 0 0 1 0\n",
+                                  "n")
+            .parts[0]
+            .mesh->verts[0]
+            .x();
+    };
+    for (const char* x : {"0.1", "-2.5e-3", "+1", "0x1p-1", ".5", "5.", "1e-320", "0.30000000000000004", "-0"}) {
+        INFO(x);
+        CHECK(first_vertex_x(x) == std::strtod(x, nullptr));
+    }
+    for (const char* x : {"1e400", "inf", "nan", "1e", "--1", "1,5", "0x"}) {
+        INFO(x);
+        try {
+            first_vertex_x(x);
+            FAIL("accepted");
+        } catch (const InputError& e) {
+            CHECK(std::string(e.what()).find("n:3: '" + std::string(x) + "' is not a finite number") == 0);
+        }
+    }
+}
+
 TEST_CASE("geometry file: written and read back the same, bad input names the line", "[cpucd]") {
     CdInput in = two(shape("sphere", 8), place({-1, 0, 0}), shape("box"), place({1, 0.5, 0}, {1, 2, 1}));
     const std::string path = "test_cpucd_geometry.txt";

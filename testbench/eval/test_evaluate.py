@@ -143,3 +143,55 @@ def test_results_values():
     with pytest.raises(evaluate.InputMissing) as e:
         evaluate.value(row, "totals.cycles")
     assert "results.fields" in str(e.value), f"names results.fields: {e.value}"
+
+
+# ---- target_fig8: a scene counted on every K-th frame, and one where the unit adds no GPU time.
+def fig8_out(tmp_path, b_frames):
+    """OUT over scenes a (4 frames, every one counted; the unit adds no time
+    with 2 ZEBs) and b (4 frames timed, counted on frames `b_frames`)."""
+    out = str(tmp_path)
+    os.makedirs(os.path.join(out, "sweep"))
+    with open(os.path.join(out, "sweep", "fig9.csv"), "w", newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(["point", "input", "repeat", "zeb.banks", "status", "error", "run", "config.clock.mhz",
+                    "gpu.baseline_cycles", "gpu.cycles_with_unit", "energy.gpu.baseline_pj", "energy.gpu.with_unit_pj"])
+        for k, (s, banks, extra) in enumerate([("a", 1, 400), ("a", 2, 0), ("b", 1, 800), ("b", 2, 400)]):
+            w.writerow([k, f"../{s}.toml", 0, banks, 0, "", f"r{k}", 400, 10**6, 10**6 + extra, 1e6, 2e6])
+    os.makedirs(os.path.join(out, "runs"))
+    with open(os.path.join(out, "runs", "scenes.txt"), "w") as f:
+        f.write("a /nonexistent/a.toml\nb /nonexistent/b.toml\n")
+    cols = ["broad", "gjk", "world_broad", "world"]
+    for s, counted in (("a", [0, 1, 2, 3]), ("b", b_frames)):
+        os.makedirs(os.path.join(out, "runs", s))
+        with open(os.path.join(out, "runs", s, "cpucd_frames.csv"), "w", newline="") as f:
+            w = csv.writer(f, lineterminator="\n")
+            w.writerow(["frame"] + [c + "_us" for c in cols])
+            w.writerows([fr, 1, 2, 3, 4] for fr in range(4))
+        with open(os.path.join(out, "runs", s, "cpucd_counts.csv"), "w", newline="") as f:
+            w = csv.writer(f, lineterminator="\n")
+            w.writerow(["frame"] + [c + "_instr" for c in cols])
+            w.writerows([fr] + [1000 * (fr + 1)] * 4 for fr in counted)
+    return out
+
+
+def test_fig8_sample_and_unbounded(tmp_path):
+    out = fig8_out(tmp_path, [0, 2])
+    evaluate.target_fig8(out, evaluate.scenes_of(out))
+    rows = {(r["scene"], r["CPU version"][:3], r["ZEBs"]): r for r in csv.DictReader(open(f"{out}/fig8.csv"))}
+    # b's count per frame is its sample's mean: frames 0 and 2, 1000 and 3000 instructions.
+    assert rows[("b", "(a)", "1")]["instructions/frame"] == "2000", rows[("b", "(a)", "1")]
+    assert rows[("a", "(a)", "1")]["instructions/frame"] == "2500"
+    assert rows[("a", "(a)", "2")]["speed-up"] == "inf"
+    md = open(f"{out}/fig8.md").read()
+    assert "b: every 2nd frame (2 of 4)" in md, md
+    assert "With 2 ZEBs the unit adds no GPU time on a:" in md and "over the other 1 scenes" in md, md
+    summary = {(r["CPU version"][:3], r["ZEBs"]): r for r in csv.DictReader(open(f"{out}/fig8_summary.csv"))}
+    # The unbounded speed-up is left out of the mean: b's alone.
+    assert summary[("(a)", "2")]["speed-up (geo. mean)"] == rows[("b", "(a)", "2")]["speed-up"]
+
+
+def test_fig8_counted_frames_not_a_sample(tmp_path):
+    out = fig8_out(tmp_path, [0, 1, 3])
+    with pytest.raises(evaluate.InputMissing) as e:
+        evaluate.target_fig8(out, evaluate.scenes_of(out))
+    assert "not every frame or every K-th of the 4 timed" in str(e.value), str(e.value)
