@@ -225,6 +225,25 @@ TEST_CASE("trace writer: a zstd trace is a frame for the header and one from eve
         ++frames;
     }
     CHECK(frames == 10);
+    // A skip passes over whole frames by their headers: frame 3's checksum
+    // broken is an error to a read, not to a skip past it.
+    {
+        std::size_t at3 = 0;
+        for (int f = 0; f < 4; ++f) at3 += ZSTD_findFrameCompressedSize(z.data() + at3, z.size() - at3);
+        std::string bad = z;
+        bad[at3 - 1] = static_cast<char>(bad[at3 - 1] ^ 0x5a);   // frame 3's last checksum byte
+        const std::string bad_path = td.write("bad.rbt.zst", bad);
+        GzipStream whole(::open(bad_path.c_str(), O_RDONLY), 4096);
+        read_all(whole);
+        CHECK_THAT(whole.error(), Contains("corrupt or truncated zstd stream"));
+        GzipStream skipping(::open(bad_path.c_str(), O_RDONLY), 4096);
+        char c;
+        REQUIRE(skipping.read(&c, 1) == 1);
+        const std::uint64_t upto = data.find("frame 4\n");
+        REQUIRE(skipping.skip(upto - 1) == static_cast<long long>(upto - 1));
+        CHECK(read_all(skipping) == data.substr(upto));
+        CHECK(skipping.error().empty());
+    }
     // The same stream read back as the writer's text of the plain trace.
     const std::string again = td.path("again.rbt");
     {
