@@ -77,21 +77,16 @@ FrameScan scan_zstd_headers(int fd, std::uint64_t file_size, std::size_t max_mar
         }
         const unsigned long long size = ZSTD_getFrameContentSize(head.data(), static_cast<std::size_t>(got));
         if (size == ZSTD_CONTENTSIZE_UNKNOWN || size == ZSTD_CONTENTSIZE_ERROR) return out;
-        const unsigned d = h[4];
-        const bool single = d & 0x20, checksum = d & 0x04;
-        static const unsigned kDictBytes[4] = {0, 1, 2, 4};
-        static const unsigned kSizeBytes[4] = {0, 2, 4, 8};
-        const unsigned fcs = (d >> 6) == 0 ? (single ? 1 : 0) : kSizeBytes[d >> 6];
-        std::uint64_t end = at + 4 + 1 + (single ? 0 : 1) + kDictBytes[d & 3] + fcs;
+        std::uint64_t end = at + zstd_frame_header_bytes(h[4]);
         for (bool last = false; !last;) {
             unsigned char b[3];
             if (read_at(fd, reinterpret_cast<char*>(b), 3, end) != 3) return out;
-            const std::uint32_t bh = b[0] | (std::uint32_t(b[1]) << 8) | (std::uint32_t(b[2]) << 16);
-            last = bh & 1;
-            if (((bh >> 1) & 3) == 3) return out;
-            end += 3 + (((bh >> 1) & 3) == 1 ? 1 : (bh >> 3));
+            const ZstdBlockHeader bh = zstd_block_header(b);
+            if (bh.reserved) return out;
+            last = bh.last;
+            end += 3 + std::uint64_t(bh.data_bytes);
         }
-        if (checksum) end += 4;
+        if (zstd_frame_has_checksum(h[4])) end += 4;
         if (end > file_size) return out;
         // The frame's first bytes: is it a frame record?
         const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(end - at, start.size()));

@@ -17,6 +17,26 @@ Compression compression_of(const unsigned char* m, std::size_t n) {
     return Compression::None;
 }
 
+std::size_t zstd_frame_header_bytes(unsigned char d) {
+    // Magic, descriptor, window byte unless single-segment, dictionary id
+    // and content size fields by the descriptor's flags.
+    static const unsigned kDictBytes[4] = {0, 1, 2, 4};
+    static const unsigned kSizeBytes[4] = {0, 2, 4, 8};
+    const bool single = d & 0x20;
+    const unsigned fcs = (d >> 6) == 0 ? (single ? 1 : 0) : kSizeBytes[d >> 6];
+    return 4 + 1 + (single ? 0 : 1) + kDictBytes[d & 3] + fcs;
+}
+
+ZstdBlockHeader zstd_block_header(const unsigned char* b) {
+    const std::uint32_t h = b[0] | (std::uint32_t(b[1]) << 8) | (std::uint32_t(b[2]) << 16);
+    const unsigned type = (h >> 1) & 3;   // raw, RLE (one byte of data), compressed, reserved
+    ZstdBlockHeader z;
+    z.last = h & 1;
+    z.reserved = type == 3;
+    z.data_bytes = type == 1 ? 1 : (h >> 3);
+    return z;
+}
+
 // The magic is read with a small buffer (at least the 4 bytes of zstd's): a
 // plain file is then read straight into the caller's buffer, and only a
 // compressed one needs a raw buffer of its own.
@@ -196,24 +216,16 @@ long long GzipStream::skip_zstd_frames(unsigned long long n) {
         p = in_.data() + in_pos_;
         const unsigned long long size = ZSTD_getFrameContentSize(p, in_end_ - in_pos_);
         if (size == ZSTD_CONTENTSIZE_UNKNOWN || size == ZSTD_CONTENTSIZE_ERROR || size > n - done) break;
-        // The header: magic, descriptor, window byte unless single-segment,
-        // dictionary id and content size fields by the descriptor's flags.
-        const unsigned d = p[4];
-        const bool single = d & 0x20, checksum = d & 0x04;
-        static const unsigned kDictBytes[4] = {0, 1, 2, 4};
-        static const unsigned kSizeBytes[4] = {0, 2, 4, 8};
-        const unsigned fcs = (d >> 6) == 0 ? (single ? 1 : 0) : kSizeBytes[d >> 6];
-        if (!drop(4 + 1 + (single ? 0 : 1) + kDictBytes[d & 3] + fcs)) return truncated();
+        const unsigned char d = p[4];
+        if (!drop(zstd_frame_header_bytes(d))) return truncated();
         for (bool last = false; !last;) {
             if (!have(3)) return truncated();
-            const unsigned char* b = in_.data() + in_pos_;
-            const std::uint32_t h = b[0] | (std::uint32_t(b[1]) << 8) | (std::uint32_t(b[2]) << 16);
-            last = h & 1;
-            const unsigned type = (h >> 1) & 3;
-            if (type == 3) return fail("corrupt or truncated zstd stream: reserved block type");
-            if (!drop(3 + (type == 1 ? 1 : (h >> 3)))) return truncated();
+            const ZstdBlockHeader b = zstd_block_header(in_.data() + in_pos_);
+            if (b.reserved) return fail("corrupt or truncated zstd stream: reserved block type");
+            last = b.last;
+            if (!drop(3 + std::uint64_t(b.data_bytes))) return truncated();
         }
-        if (checksum && !drop(4)) return truncated();
+        if (zstd_frame_has_checksum(d) && !drop(4)) return truncated();
         done += size;
     }
     return static_cast<long long>(done);

@@ -36,6 +36,19 @@ public:
 enum class Compression { None, Gzip, Zstd };
 Compression compression_of(const unsigned char* magic, std::size_t n);
 
+// The zstd format's layout (RFC 8878, 3.1.1), to pass over frames without
+// decompressing them: a frame header's length from its descriptor (the byte
+// after the magic), whether a checksum (4 bytes) ends the frame, and a block
+// header's (3 bytes) last flag and the bytes of data that follow it
+// (reserved: a block type the format does not define, a corrupt file).
+std::size_t zstd_frame_header_bytes(unsigned char descriptor);
+inline bool zstd_frame_has_checksum(unsigned char descriptor) { return descriptor & 0x04; }
+struct ZstdBlockHeader {
+    bool last = false, reserved = false;
+    std::uint32_t data_bytes = 0;
+};
+ZstdBlockHeader zstd_block_header(const unsigned char* h);
+
 class GzipStream {
 public:
     // Takes ownership of fd (closed by the destructor unless it is 0).
