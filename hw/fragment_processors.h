@@ -126,16 +126,16 @@ public:
     // fragments from a rasterizer clock later by `shift`, it then stays so
     // (the recurrences are shift-invariant), waits included.
     bool follows(const FragmentPipe& o, std::uint64_t shift) const {
-        return c_ == o.c_ && done_ == o.done_ + shift && same_shifted(slot_free_, qi_, o.slot_free_, o.qi_, shift) &&
-               same_shifted(proc_free_, pi_, o.proc_free_, o.pi_, shift);
+        return c_ == o.c_ && shifted_from(o.slot_free_, o.qi_, o.proc_free_, o.pi_, o.done_, shift);
     }
     // Becomes `o` later by `shift` cycles.
     void follow(const FragmentPipe& o, std::uint64_t shift) {
-        for (std::size_t i = 0; i < slot_free_.size(); ++i) slot_free_[i] = o.slot_free_[i] + shift;
-        for (std::size_t i = 0; i < proc_free_.size(); ++i) proc_free_[i] = o.proc_free_[i] + shift;
+        slot_free_ = o.slot_free_;
+        proc_free_ = o.proc_free_;
         qi_ = o.qi_;
         pi_ = o.pi_;
-        done_ = o.done_ + shift;
+        done_ = o.done_;
+        shift_by(shift);
     }
     // The state in age order (oldest first): queue slots, then processors.
     void state(std::vector<std::uint64_t>& out) const {
@@ -206,15 +206,9 @@ private:
             m -= block;
             wait += block_wait;
             const std::uint64_t delta = t - ref_t;
-            if (used == ref_used && delta > 0 && done_ == ref_done + delta &&
-                same_shifted(slot_free_, qi_, ref_slot_, ref_qi, delta) &&
-                same_shifted(proc_free_, pi_, ref_proc_, ref_pi, delta)) {
+            if (used == ref_used && delta > 0 && shifted_from(ref_slot_, ref_qi, ref_proc_, ref_pi, ref_done, delta)) {
                 const std::uint64_t jumps = m / block;
-                // The same state in age order, later by jumps * delta: the
-                // ring positions may stay.
-                for (auto& v : slot_free_) v += jumps * delta;
-                for (auto& v : proc_free_) v += jumps * delta;
-                done_ += jumps * delta;
+                shift_by(jumps * delta);
                 t += jumps * delta;
                 wait += jumps * block_wait;
                 m -= jumps * block;
@@ -222,6 +216,19 @@ private:
             }
         }
         return wait + shade(t, used, rate, m);
+    }
+    // The rings and last finish are those given (positions qi, pi) later by
+    // `shift`: every queue slot and processor in age order.
+    bool shifted_from(const std::vector<std::uint64_t>& slot, unsigned qi, const std::vector<std::uint64_t>& proc,
+                      unsigned pi, std::uint64_t done, std::uint64_t shift) const {
+        return done_ == done + shift && same_shifted(slot_free_, qi_, slot, qi, shift) &&
+               same_shifted(proc_free_, pi_, proc, pi, shift);
+    }
+    // The same state in age order, later by `shift`: the ring positions stay.
+    void shift_by(std::uint64_t shift) {
+        for (auto& v : slot_free_) v += shift;
+        for (auto& v : proc_free_) v += shift;
+        done_ += shift;
     }
     // Ring `now` read from position `at` equals ring `ref` read from `ref_at`,
     // entry by entry in age order, plus delta.

@@ -388,14 +388,14 @@ void rasterizer::end_frame() {
 // The GPU-only timelines: no bank, no unit. A timeline starts to differ from
 // the one before it at its first cprims (c fragment).
 //
-// A tile without collisionable fragments, cprims or base= gives every
-// timeline the same walk, so a timeline whose state is timeline 0's later by
-// some cycles (as they all become once each settles into the same periodic
-// regime) is not walked: it takes timeline 0's state after the tile, later
-// by as much (the recurrences are shift-invariant). Returns timeline 0's
-// cycles waiting for the fragment queue in the tile.
+// A tile that gives every timeline the same walk (same_walk: feed_tile), a
+// timeline whose state is timeline 0's later by some cycles (as they all
+// become once each settles into the same periodic regime) is not walked: it
+// takes timeline 0's state after the tile, later by as much (the
+// recurrences are shift-invariant). Returns timeline 0's cycles waiting for
+// the fragment queue in the tile.
 [[gnu::always_inline]] inline std::uint64_t rasterizer::walk_gpu_only(const Tile& tile, std::uint64_t culled,
-                                                                      bool no_setups) {
+                                                                      bool no_setups, bool same_walk) {
     const auto go_live = [&](std::size_t i) {
         if (pure_live_[i]) return;
         const std::size_t from = pure_live_[i - 1] ? i - 1 : i - 2;
@@ -407,7 +407,6 @@ void rasterizer::end_frame() {
     if (tile.cprims || culled) go_live(2);
     bool walk[3] = {true, pure_live_[1], pure_live_[2]};
     std::uint64_t shift[3] = {0, 0, 0};
-    const bool same_walk = tile.frags.empty() && tile.cprims == 0 && !tile.has_base && !FragmentPipe::stepwise;
     for (std::size_t i = 1; i < 3 && same_walk; ++i)
         walk[i] = walk[i] && !follows(pure_r_[i], pure_fp_[i], pure_r_[0], pure_fp_[0], shift[i]);
     std::uint64_t pure_start[3];
@@ -434,14 +433,15 @@ void rasterizer::feed_tile(const Tile& tile) {
     const std::uint64_t overhead = cfg_.gpu.tile_overhead_cycles;
     const std::uint64_t setup = cfg_.gpu.setup_cycles_per_primitive;
     const bool no_setups = tile.prims == 0 && tile.cprims == 0;
-    // Without collisionable fragments the with-unit timeline walks what
-    // timeline 0 walks (no bank, no unit): when its state is timeline 0's
-    // later by some cycles it takes timeline 0's after the tile (walk_gpu_only).
-    // Waveforms want each fragment's cycles: walked then.
+    // A tile without collisionable fragments, cprims or base= gives every
+    // timeline, the with-unit one too (no bank, no unit), the walk timeline 0
+    // takes: one whose state is timeline 0's later by some cycles takes
+    // timeline 0's after the tile (walk_gpu_only). Waveforms want each
+    // fragment's cycles: walked then.
+    const bool same_walk = n == 0 && tile.cprims == 0 && !tile.has_base && !FragmentPipe::stepwise;
     std::uint64_t unit_shift = 0;
-    const bool unit_follows = n == 0 && tile.cprims == 0 && !tile.has_base && !vcd_ && !FragmentPipe::stepwise &&
-                              follows(unit_, fp_.pipe(), pure_r_[0], pure_fp_[0], unit_shift);
-    const std::uint64_t wait0 = walk_gpu_only(tile, culled, no_setups);
+    const bool unit_follows = same_walk && !vcd_ && follows(unit_, fp_.pipe(), pure_r_[0], pure_fp_[0], unit_shift);
+    const std::uint64_t wait0 = walk_gpu_only(tile, culled, no_setups, same_walk);
 
     // With the unit.
     const std::uint64_t t0 = unit_.next_free();

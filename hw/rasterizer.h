@@ -195,7 +195,7 @@ private:
     void end_frame();
     void feed_tile(const Tile& tile);
     std::uint64_t count_tile(const Tile& tile);
-    std::uint64_t walk_gpu_only(const Tile& tile, std::uint64_t culled, bool no_setups);
+    std::uint64_t walk_gpu_only(const Tile& tile, std::uint64_t culled, bool no_setups, bool same_walk);
 
     const SimConfig& cfg_;
     const Clocking& clk_;
