@@ -33,6 +33,20 @@ bool frame_number(const char* p, const char* end, std::uint64_t& n) {
     return true;
 }
 
+// A frame record found: counted, and kept when it falls on the sample
+// (every stride-th; at max_marks held, every other kept mark goes and the
+// stride doubles), so memory does not grow with the trace.
+void keep_mark(FrameScan& out, std::uint64_t& stride, std::size_t max_marks, const FrameMark& m) {
+    if (out.frame_lines++ % stride != 0) return;
+    if (out.marks.size() == max_marks) {
+        std::size_t k = 0;
+        for (std::size_t i = 0; i < out.marks.size(); i += 2) out.marks[k++] = out.marks[i];
+        out.marks.resize(k);
+        stride *= 2;
+    }
+    if ((out.frame_lines - 1) % stride == 0) out.marks.push_back(m);
+}
+
 struct Fd {
     int fd = -1;
     ~Fd() {
@@ -65,7 +79,7 @@ FrameScan scan_zstd_headers(int fd, std::uint64_t file_size, std::size_t max_mar
     } free_ctx{dctx};
     ZSTD_DCtx_setParameter(dctx, ZSTD_d_windowLogMax, 27);
     std::vector<char> head(18), start(std::size_t(1) << 17);
-    std::uint64_t at = 0, data = 0;
+    std::uint64_t at = 0, data = 0, stride = 1;
     while (at < file_size) {
         const long got = read_at(fd, head.data(), head.size(), at);
         if (got < 8) return out;
@@ -101,20 +115,9 @@ FrameScan scan_zstd_headers(int fd, std::uint64_t file_size, std::size_t max_mar
         }
         const char* eol = static_cast<const char*>(std::memchr(text, '\n', o.pos));
         std::uint64_t f = 0;
-        if (eol && frame_number(text, eol, f)) {
-            ++out.frame_lines;
-            out.marks.push_back({f, data, 0});
-        }
+        if (eol && frame_number(text, eol, f)) keep_mark(out, stride, max_marks, {f, data, 0});
         data += size;
         at = end;
-    }
-    // A sample, as scan_frames keeps: every 2^k-th.
-    std::size_t stride = 1;
-    while (out.marks.size() / stride > max_marks) stride *= 2;
-    if (stride > 1) {
-        std::size_t k = 0;
-        for (std::size_t i = 0; i < out.marks.size(); i += stride) out.marks[k++] = out.marks[i];
-        out.marks.resize(k);
     }
     out.bytes = data;
     out.ok = true;
@@ -127,18 +130,15 @@ FrameScan scan_frames(const std::string& path, std::size_t max_marks, std::size_
     FrameScan out;
     max_marks = std::max<std::size_t>(max_marks, 2);
     {
-        const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        Fd f{::open(path.c_str(), O_RDONLY | O_CLOEXEC)};
         struct stat st {};
         unsigned char magic[4] = {0, 0, 0, 0};
-        if (fd >= 0 && ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
-            read_at(fd, reinterpret_cast<char*>(magic), 4, 0) == 4 && compression_of(magic, 4) == Compression::Zstd) {
-            FrameScan z = scan_zstd_headers(fd, static_cast<std::uint64_t>(st.st_size), max_marks);
-            ::close(fd);
+        if (f.fd >= 0 && ::fstat(f.fd, &st) == 0 && S_ISREG(st.st_mode) &&
+            read_at(f.fd, reinterpret_cast<char*>(magic), 4, 0) == 4 && compression_of(magic, 4) == Compression::Zstd) {
+            FrameScan z = scan_zstd_headers(f.fd, static_cast<std::uint64_t>(st.st_size), max_marks);
             // No frame record starts a frame (one frame, as the zstd tool
             // writes a file): the data is scanned.
             if (z.ok && !z.marks.empty()) return z;
-        } else if (fd >= 0) {
-            ::close(fd);
         }
     }
     try {
@@ -174,19 +174,8 @@ FrameScan scan_frames(const std::string& path, std::size_t max_marks, std::size_
                 counted = static_cast<std::size_t>(hit + 1 - b);
                 const char* eol = static_cast<const char*>(std::memchr(hit + 1, '\n', static_cast<std::size_t>(b + end - hit - 1)));
                 std::uint64_t f = 0;
-                if (frame_number(hit + 1, eol, f)) {
-                    if (out.frame_lines++ % stride == 0) {
-                        if (out.marks.size() == max_marks) {
-                            // Every other mark goes: the sample thins as the trace grows.
-                            std::size_t k = 0;
-                            for (std::size_t i = 0; i < out.marks.size(); i += 2) out.marks[k++] = out.marks[i];
-                            out.marks.resize(k);
-                            stride *= 2;
-                        }
-                        if ((out.frame_lines - 1) % stride == 0)
-                            out.marks.push_back({f, static_cast<std::uint64_t>(base + (hit + 1 - b)), line});
-                    }
-                }
+                if (frame_number(hit + 1, eol, f))
+                    keep_mark(out, stride, max_marks, {f, static_cast<std::uint64_t>(base + (hit + 1 - b)), line});
                 p = hit + 1;
             }
             line += static_cast<std::uint64_t>(std::count(b + counted, b + upto, '\n'));

@@ -88,17 +88,23 @@ long GzipStream::read_raw(void* dst, std::size_t n) {
 long long GzipStream::skip(unsigned long long n) {
     unsigned long long done = 0;
     if (!started_ && !start()) return -1;
-    std::vector<char> scratch(std::size_t(1) << 16);
+    // Reads and drops data while more() holds, up to n in all; false on an error.
+    std::vector<char> scratch;
+    const auto read_and_drop = [&](auto more) {
+        scratch.resize(std::size_t(1) << 16);
+        while (done < n && more()) {
+            const long got = read(scratch.data(), static_cast<std::size_t>(std::min<unsigned long long>(n - done, scratch.size())));
+            if (got < 0) return false;
+            if (got == 0) break;
+            done += static_cast<unsigned long long>(got);
+        }
+        return true;
+    };
     if (zstd_) {
         // The frame the reader is in (its first chunk read past the header's
         // frame) is decompressed to its end; the whole frames after it are
         // passed over by their headers.
-        while (done < n && zstd_frame_open_) {
-            const long got = read(scratch.data(), static_cast<std::size_t>(std::min<unsigned long long>(n - done, scratch.size())));
-            if (got < 0) return -1;
-            if (got == 0) break;
-            done += static_cast<unsigned long long>(got);
-        }
+        if (!read_and_drop([&] { return zstd_frame_open_; })) return -1;
         const long long k = skip_zstd_frames(n - done);
         if (k < 0) return -1;
         done += static_cast<unsigned long long>(k);
@@ -124,12 +130,7 @@ long long GzipStream::skip(unsigned long long n) {
             }
         }
     }
-    while (done < n) {
-        const long got = read(scratch.data(), static_cast<std::size_t>(std::min<unsigned long long>(n - done, scratch.size())));
-        if (got < 0) return -1;
-        if (got == 0) break;
-        done += static_cast<unsigned long long>(got);
-    }
+    if (!read_and_drop([] { return true; })) return -1;
     return static_cast<long long>(done);
 }
 
