@@ -151,7 +151,7 @@ def trace_compression(path):
 
 def open_trace(path):
     """A trace's bytes as a binary file, decompressed when it is gzip or zstd.
-    Its read errors: OSError, EOFError and TRACE_ERRORS."""
+    Its read errors: OSError, EOFError and trace_errors()."""
     kind = trace_compression(path)
     if kind == "gzip":
         return gzip.open(path, "rb")
@@ -169,18 +169,15 @@ def open_trace(path):
     return open(path, "rb")
 
 
-def _trace_errors():
-    errors = [gzip.BadGzipFile]
+def trace_errors():
+    """What reading a compressed trace raises on a corrupt file, beside OSError
+    and EOFError. A function, called in except clauses (evaluated only when an
+    exception gets there), so that no tool imports zstandard (10 ms) to start."""
     try:
         import zstandard
-        errors.append(zstandard.ZstdError)
     except ImportError:
-        pass
-    return tuple(errors)
-
-
-# What reading a compressed trace raises on a corrupt file, beside OSError and EOFError.
-TRACE_ERRORS = _trace_errors()
+        return (gzip.BadGzipFile,)
+    return (gzip.BadGzipFile, zstandard.ZstdError)
 
 
 def read_input_text(path, what, max_bytes, limit_key=""):

@@ -25,7 +25,7 @@ import subprocess
 import sys
 import tomllib
 
-from rbcd.cli import TRACE_ERRORS, UsageError, main_wrapper, open_trace, read_input_text, say, write_output
+from rbcd.cli import UsageError, main_wrapper, open_trace, read_input_text, say, trace_errors, write_output
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter
@@ -137,7 +137,7 @@ class Entry:
         try:
             return (sha256_file(trace, decompress=True) == self.sha["trace"]
                     and sha256_file(geo) == self.sha["geometry"] and self.summary_matches(summary))
-        except (OSError, EOFError, UsageError) + TRACE_ERRORS:
+        except (OSError, EOFError, UsageError) + trace_errors():
             return False
 
     def expand(self, out, frames=None):

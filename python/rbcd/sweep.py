@@ -31,7 +31,7 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import TRACE_ERRORS, UsageError, escape, main_wrapper, open_trace, read_input_text, say, write_output
+from rbcd.cli import UsageError, escape, main_wrapper, open_trace, read_input_text, say, trace_errors, write_output
 
 PROG = "rbcd-sweep"
 # Where the package is: REPO/python/rbcd in the source tree, P/share/rbcd/python/rbcd
@@ -167,7 +167,7 @@ def count_frames(kind, path):
         return _count_frames(kind, path)
     except tomllib.TOMLDecodeError as e:
         raise SweepError(f"{path}: {e}")
-    except (OSError, EOFError) + TRACE_ERRORS as e:
+    except (OSError, EOFError) + trace_errors() as e:
         raise SweepError(f"{path}: cannot count its frames: {e}")
 
 
