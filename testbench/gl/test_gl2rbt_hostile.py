@@ -315,6 +315,148 @@ def test_what_gl_draws_under_a_program(tmp_path):
     assert fragments(tmp_path, shader_draw(c, vao=7).write(tmp_path / "e.xz"))[0] > 100
 
 
+def trace_bytes(tmp_path, c, name):
+    r = gl2rbt(tmp_path, c.write(tmp_path / f"{name}.xz"), "-o", tmp_path / f"{name}.rbt")
+    assert r.returncode == 0, f"{name}: {r.stderr}"
+    return (tmp_path / f"{name}.rbt").read_bytes()
+
+
+def relink_with(c, stage, source, shader=3):
+    """The program of shader_calls linked again with a shader of `stage` added."""
+    c.add("glCreateShader", type=stage, ret=shader)
+    c.add("glShaderSource", shader=shader, count=1, string=[source], length=None)
+    c.add("glCompileShader", shader=shader)
+    c.add("glAttachShader", program=2, shader=shader)
+    return c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+
+
+VS_X0 = VS.replace("in vec3 p;", "in vec3 p;\nuniform float x0;").replace("p.x / 32.0 - 1.0", "p.x / 32.0 - 1.0 + x0")
+GS_POINTS = ("#version 330 core\nlayout(points) in;\nlayout(triangle_strip, max_vertices = 3) out;\n"
+             "void main() { for (int i = 0; i < 3; ++i) { gl_Position = gl_in[0].gl_Position + "
+             "vec4(0.5 * float(i == 1), 0.5 * float(i == 2), 0.0, 0.0); EmitVertex(); } }\n")
+
+
+@pytest.mark.parametrize("build, words", [
+    # Compatibility-profile state a vertex shader reads from Mesa's own
+    # context (identity matrices, no vertex array), not the capture's.
+    (lambda: shader_draw(shader_calls("#version 120\nattribute vec3 p;\nvoid main() { gl_Position = "
+                                      "gl_ModelViewProjectionMatrix * vec4(p, 1.0); }\n", core=False), vao=7),
+     "reads gl_ModelViewProjectionMatrix, fixed-function state"),
+    (lambda: shader_draw(shader_calls("#version 120\nvoid main() { gl_Position = ftransform(); }\n", core=False),
+                         vao=7), "reads gl_"),
+    # A geometry shader turning points into triangles: refused before the
+    # point draw is passed over as drawing no area.
+    (lambda: relink_with(shader_calls(VS), "GL_GEOMETRY_SHADER", GS_POINTS)
+     .add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+     .add("glEnableVertexAttribArray", index=0)
+     .add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+     .add("glDrawArrays", mode="GL_POINTS", first=0, count=3).swap(), "has a geometry shader"),
+    (lambda: shader_draw(shader_calls(VS).add("glClipControl", origin="GL_LOWER_LEFT", depth="GL_ZERO_TO_ONE"),
+                         vao=7), "glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE) is not emulated"),
+    (lambda: shader_draw(shader_calls(VS).add("glUniformSubroutinesuiv", shadertype="GL_VERTEX_SHADER", count=1,
+                                              indices=[0]), vao=7), "shader subroutines"),
+    (lambda: shader_draw(shader_calls(VS).add("glTransformFeedbackVaryings", program=2, count=1, varyings=["v"],
+                                              bufferMode="GL_INTERLEAVED_ATTRIBS"), vao=7),
+     "the capture's own transform feedback"),
+    (lambda: Calls().add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
+     .add("glMultiDrawElementsBaseVertex", mode="GL_TRIANGLES", count=[3], type="GL_UNSIGNED_INT",
+          indices=[np.array([0, 1, 2], "<u4").tobytes()], drawcount=1, basevertex=[1]).swap(),
+     "without a vertex shader is not emulated"),
+], ids=["compat_matrix", "ftransform", "geometry_on_points", "clip_control", "subroutines", "feedback",
+        "multi_base_vertex_fixed_function"])
+def test_state_not_emulated_is_refused(tmp_path, build, words):
+    """What would otherwise convert silently wrong is refused, naming the call."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    refused(gl2rbt(tmp_path, build().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), words)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+def test_modern_forms_of_emulated_state(tmp_path):
+    """GL 4.x forms of state the converter emulates give what their older
+    forms give: a uniform located by glGetProgramResourceLocation, viewport
+    and scissor 0 set by their indexed calls (other indices change nothing
+    drawn), GL's default glClipControl, a harmless glProgramParameteri and a
+    fragment-stage subroutine choice."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+
+    def located(how):
+        c = shader_calls(VS_X0)
+        if how == "uniform":
+            c.add("glGetUniformLocation", program=2, name="x0", ret=5)
+        elif how == "resource":
+            c.add("glGetProgramResourceLocation", program=2, programInterface="GL_UNIFORM", name="x0", ret=5)
+        if how:
+            c.add("glUniform1f", location=5, v0=0.5)
+        return shader_draw(c, vao=7)
+    plain, by_uniform, by_resource = (trace_bytes(tmp_path, located(h), h or "plain")
+                                      for h in ("", "uniform", "resource"))
+    assert by_resource == by_uniform and by_uniform != plain, "glGetProgramResourceLocation's uniform was not set"
+
+    def viewport(extra):
+        c = shader_calls(VS).add("glEnable", cap="GL_SCISSOR_TEST")
+        for fn, kw in extra:
+            c.add(fn, **kw)
+        return shader_draw(c, vao=7)
+    classic = trace_bytes(tmp_path, viewport([("glViewport", dict(x=0, y=0, width=32, height=24)),
+                                              ("glScissor", dict(x=0, y=0, width=20, height=20))]), "classic")
+    indexed = trace_bytes(tmp_path, viewport([("glViewportIndexedf", dict(index=0, x=0.0, y=0.0, w=32.0, h=24.0)),
+                                              ("glViewportIndexedf", dict(index=1, x=5.0, y=5.0, w=8.0, h=8.0)),
+                                              ("glScissorIndexed", dict(index=0, left=0, bottom=0, width=20,
+                                                                        height=20)),
+                                              ("glScissorIndexedv", dict(index=2, v=[1, 1, 1, 1])),
+                                              ("glClipControl", dict(origin="GL_LOWER_LEFT",
+                                                                     depth="GL_NEGATIVE_ONE_TO_ONE")),
+                                              ("glProgramParameteri", dict(program=2,
+                                                                           pname="GL_PROGRAM_BINARY_RETRIEVABLE_HINT",
+                                                                           value=1)),
+                                              ("glUniformSubroutinesuiv", dict(shadertype="GL_FRAGMENT_SHADER",
+                                                                               count=1, indices=[0]))]), "indexed")
+    assert indexed == classic and classic != plain
+
+
+def test_half_floats_of_opengl_es_2(tmp_path):
+    """OES_vertex_half_float's GL_HALF_FLOAT_OES (0x8D61, not desktop GL's
+    GL_HALF_FLOAT) in an OpenGL ES 2.0 context: the same triangle as floats."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    vs = "#version 100\nattribute vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n"
+
+    def es(kind, data):
+        c = Calls()
+        c.add("eglCreateContext", dpy=1, config=1, share_context=0,
+              attrib_list=["EGL_CONTEXT_CLIENT_VERSION", 2, "EGL_NONE"], ret=1)
+        c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
+        c.add("glShaderSource", shader=1, count=1, string=[vs], length=None).add("glCompileShader", shader=1)
+        c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
+        c.add("glBindAttribLocation", program=2, index=0, name="p")
+        c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+        c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+        c.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(data), data=data, usage="GL_STATIC_DRAW")
+        c.add("glEnableVertexAttribArray", index=0)
+        c.add("glVertexAttribPointer", index=0, size=3, type=kind, normalized="GL_FALSE", stride=0, pointer=0)
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        return c.add("eglSwapBuffers", dpy=1, surface=1, flags=END_FRAME)
+    tri = np.frombuffer(TRIANGLE, "<f4")
+    half = trace_bytes(tmp_path, es("GL_HALF_FLOAT_OES", tri.astype("<f2").tobytes()), "half")
+    assert half == trace_bytes(tmp_path, es("GL_FLOAT", TRIANGLE), "float") and b"\no " in half
+
+
+def test_a_fragment_only_program_is_counted(tmp_path):
+    """A program of only a fragment shader that can discard, drawing through
+    the fixed-function transform: its draw is counted and flagged as those
+    under a vertex shader are."""
+    fs = "#version 120\nvoid main() { if (gl_FragCoord.x > 10.0) discard; gl_FragColor = vec4(1.0); }\n"
+    c = Calls()
+    c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=1)
+    c.add("glShaderSource", shader=1, count=1, string=[fs], length=None).add("glCompileShader", shader=1)
+    c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
+    c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+    cap = c.triangle(obj=1).swap().write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--summary", tmp_path / "s.jsonl")
+    assert r.returncode == 0, r.stderr
+    s0 = json.loads((tmp_path / "s.jsonl").read_text().splitlines()[0])
+    assert (s0["discard_draws"], s0["discard_collisionable"]) == (1, 1), s0
+
+
 @pytest.mark.parametrize("build, words", [
     (lambda c: c.add("glUniformMatrix4fv", location=0, count=1, transpose="GL_FALSE", value=[1.0] * 15),
      "15 values, not its count (1) of 16"),

@@ -21,6 +21,9 @@ from .errors import ToolError
 os.environ["PYOPENGL_PLATFORM"] = "egl"
 
 EGL_PLATFORM_SURFACELESS_MESA = 0x31DD
+# OpenGL ES enumerants PyOpenGL's desktop module lacks (their values differ
+# from the desktop ones of the same meaning).
+ES_ENUMS = {"GL_HALF_FLOAT_OES": 0x8D61}
 
 
 def _load():
@@ -82,6 +85,8 @@ class Mesa:
             return value
         if isinstance(value, str):
             v = getattr(self.gl, value, None)
+            if v is None:
+                v = ES_ENUMS.get(value)
             if v is None and value == "GL_ZERO":
                 return 0
             if v is not None:

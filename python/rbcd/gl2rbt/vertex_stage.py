@@ -26,6 +26,16 @@ SAMPLER = re.compile(r"GL_(INT_|UNSIGNED_INT_)?(SAMPLER|IMAGE)_")
 GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INVALID_OPERATION",
              0x505: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
 UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
+# Built-in inputs a vertex shader may read that the draw call itself gives;
+# every other gl_ input or uniform is fixed-function state (gl_Vertex,
+# gl_ModelViewProjectionMatrix, ...), which Mesa's program would read from
+# its own context, not the capture's.
+BUILTIN_INPUTS = {"gl_VertexID", "gl_InstanceID", "gl_DrawID", "gl_BaseVertex", "gl_BaseInstance",
+                  "gl_VertexIndex", "gl_InstanceIndex"}
+
+
+def name_str(name):
+    return name.decode("ascii", "replace") if isinstance(name, bytes) else str(name)
 
 
 def es_fragment_shader(vertex_source):
@@ -135,9 +145,6 @@ class VertexStage:
         GL = self.gl
         sources, bindings = p.linked
         where = f"program {pname} (linked at call {p.link_call})"
-        for stage in ("geometry", "tess_control", "tess_evaluation"):
-            if stage in sources:
-                fail_call(no, f"{where} has a {stage.replace('_', ' ')} shader: not emulated yet")
         if "vertex" not in sources:
             fail_call(no, f"{where} has no vertex shader")
         sh = GL.glCreateShader(GL.GL_VERTEX_SHADER)
@@ -166,9 +173,17 @@ class VertexStage:
             log = GL.glGetProgramInfoLog(prog).decode("utf-8", "replace").strip().splitlines()
             fail_call(no, f"{where}: Mesa does not link its vertex stage: {printable((log or ['no log'])[0])}")
         mp = MesaProgram(prog, p.version)
+        for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_ATTRIBUTES)):
+            aname = name_str(GL.glGetActiveAttrib(prog, i)[0])
+            if aname.startswith("gl_") and aname not in BUILTIN_INPUTS:
+                fail_call(no, f"{where}: its vertex shader reads {printable(aname)}, a fixed-function vertex "
+                          "array of the compatibility profile: not emulated")
         for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORMS)):
             uname, size, utype = GL.glGetActiveUniform(prog, i)
-            uname = uname.decode("ascii", "replace") if isinstance(uname, bytes) else str(uname)
+            uname = name_str(uname)
+            if uname.startswith("gl_"):
+                fail_call(no, f"{where}: its vertex shader reads {printable(uname)}, fixed-function state of "
+                          "the compatibility profile: not emulated")
             if int(utype) in self.texture_samplers:
                 fail_call(no, f"{where}: its vertex shader reads texture {printable(uname)} "
                           f"({self.texture_samplers[int(utype)]}); only texture buffers are emulated")

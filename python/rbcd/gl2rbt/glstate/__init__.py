@@ -81,6 +81,7 @@ class GLState:
         self.renderbuffer = 0
         self.active_unit = 0
         self.units = {}
+        self.texture_targets = {}   # texture -> the target it was first bound to
         self.texture_buffers = {}
         self.texture = 0
         self.texture_images = {}   # texture name: digest of its level-0 image, or None

@@ -63,7 +63,14 @@ class DrawCalls:
             self.frame_view = mv.copy()
         obj_id = self.object_of(no, mv, proj, len(positions), clip)
         eye = (lambda: mat_mul(positions, mv.T)) if self.geo is not None else None
+        # A program of only a fragment shader: its discard or gl_FragDepth
+        # count as under a vertex shader.
+        p = self.s.programs.get(self.s.program) if self.s.program else None
+        self.draw_effects = p is not None and (p.discards or p.frag_depth)
         self.draw_record(no, name, clip, tris, obj_id, len(positions), mv, proj, eye)
+        self.draw_effects = False
+        if p is not None:
+            self.note_fragment_effects(p, obj_id is not None)
 
     def draw_record(self, no, name, clip, tris, obj_id, nverts, mv, proj, eye):
         """The draw record of clip-space vertices and their triangles, for
@@ -173,6 +180,11 @@ class DrawCalls:
             return   # GL_INVALID_ENUM, or no vertex array object in a core context: nothing is drawn
         if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard:
             return
+        p = self.s.programs[self.s.program]
+        for stage in ("geometry", "tess_control", "tess_evaluation"):
+            if stage in p.linked[0]:
+                fail_call(no, f"{name}: program {self.s.program} (linked at call {p.link_call}) has a "
+                          f"{stage.replace('_', ' ')} shader: not emulated yet")
         if mode in PRIM_NO_AREA:
             self.ignored_prims += 1
             return
@@ -188,7 +200,6 @@ class DrawCalls:
         self.open_frame(no)
         tagged = False
         self.draw_instances = instances
-        p = self.s.programs[self.s.program]
         self.draw_effects = p.discards or p.frag_depth
         self.draw_shade = self.program_shade(p)
         from ..vertex_stage import DrawRejected
@@ -265,13 +276,14 @@ class DrawCalls:
         if not isinstance(n, int) or not 0 <= n <= 1 << 16 or \
                 not all(isinstance(v, list) and len(v) >= n for v in lists.values()):
             fail_call(no, f"{name}: impossible draw count or lists")
-        single = "glDrawArrays" if "Arrays" in name else \
-            "glDrawElementsBaseVertex" if "BaseVertex" in name else "glDrawElements"
+        single, handler = ("glDrawArrays", self.h_draw_arrays) if "Arrays" in name else \
+            ("glDrawElementsBaseVertex", self.h_draw_under_program) if "BaseVertex" in name else \
+            ("glDrawElements", self.h_draw_elements)
         for i in range(n):
             one = [("mode", d.get("mode"))] + [(k, v[i]) for k, v in lists.items()]
             if "type" in d:
                 one.append(("type", d["type"]))
-            (self.h_draw_arrays if single == "glDrawArrays" else self.h_draw_elements)(no, single, None, one)
+            handler(no, single, None, one)
 
     def h_draw_arrays(self, no, name, a, args):
         d = self.draw_args(no, name, a, args)

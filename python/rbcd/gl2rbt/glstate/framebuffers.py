@@ -95,8 +95,40 @@ class FramebufferCalls:
         target = d["target"]
         tex = checked(no, integer, d["texture"], f"{name}: the texture", *U32)
         self.s.units[(self.s.active_unit, target)] = tex
+        if tex:
+            self.s.texture_targets.setdefault(tex, target)
         if target == "GL_TEXTURE_2D":
             self.s.texture = tex   # what selection rules name as a draw's texture
+
+    def h_bind_texture_unit(self, no, name, a, args):
+        """glBindTextureUnit(unit, texture) and glBindTextures(first, count,
+        textures): each texture bound to its unit at the target it was
+        first bound to (0 unbinds every target of the unit)."""
+        d = dict(args)
+        if "Unit" in name:
+            pairs = [(d.get("unit"), d.get("texture"))]
+        else:
+            first, count, texs = d.get("first"), d.get("count"), d.get("textures")
+            first = checked(no, integer, first, f"{name}: first", *U32)
+            count = checked(no, integer, count, f"{name}: count", *U32)
+            if texs is None:
+                texs = [0] * count
+            if not isinstance(texs, list) or len(texs) < count:
+                fail_call(no, f"{name}: fewer textures than its count")
+            pairs = [(first + i, t) for i, t in enumerate(texs[:count])]
+        for unit, tex in pairs:
+            unit = checked(no, integer, unit, f"{name}: the unit", *U32)
+            tex = checked(no, integer, tex, f"{name}: the texture", *U32)
+            if tex == 0:
+                for key in [k for k in self.s.units if k[0] == unit]:
+                    self.s.units[key] = 0
+                continue
+            target = self.s.texture_targets.get(tex)
+            if target is None:
+                return   # a texture never bound has no target: GL_INVALID_OPERATION
+            self.s.units[(unit, target)] = tex
+            if unit == self.s.active_unit and target == "GL_TEXTURE_2D":
+                self.s.texture = tex
 
     def h_tex_buffer(self, no, name, a, args):
         d = dict(args)
@@ -136,6 +168,8 @@ class FramebufferCalls:
         "glTexStorage2DMultisample": h_tex_image,
         "glActiveTexture": h_active_texture,
         "glBindTexture": h_bind_texture,
+        "glBindTextureUnit": h_bind_texture_unit,
+        "glBindTextures": h_bind_texture_unit,
         "glTexBuffer": h_tex_buffer,
         "glTexBufferRange": h_tex_buffer,
     }

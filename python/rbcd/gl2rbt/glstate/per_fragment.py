@@ -18,6 +18,25 @@ class PerFragmentCalls:
             return   # GL_INVALID_VALUE: the call does nothing
         self.s.scissor = (x, y, w, h)
 
+    def h_scissor_indexed(self, no, name, a, args):
+        """glScissorIndexed(v) and glScissorArrayv: scissor 0 is glScissor's;
+        the others are selected only by a geometry shader, which is refused."""
+        d = dict(args)
+        if "Array" in name:
+            first = checked(no, integer, d.get("first"), f"{name}: first", *I32)
+            count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
+            if first != 0 or count <= 0:
+                return   # another scissor, or GL_INVALID_VALUE
+            vals = d.get("v")
+        else:
+            index = checked(no, integer, d.get("index"), f"{name}: index", *I32)
+            if index != 0:
+                return
+            vals = d.get("v") if "v" in d else [d.get(k) for k in ("left", "bottom", "width", "height")]
+        if not isinstance(vals, list) or len(vals) < 4:
+            fail_call(no, f"{name}: not four scissor values")
+        self.h_scissor(no, name, vals[:4], args)
+
     def scissor_rect(self):
         """The scissor box in screen rows down, inclusive, cut to the screen
         (a box reaching past it, as GL allows, clips nothing more)."""
@@ -73,6 +92,9 @@ class PerFragmentCalls:
 
     HANDLERS = {
         "glScissor": h_scissor,
+        "glScissorIndexed": h_scissor_indexed,
+        "glScissorIndexedv": h_scissor_indexed,
+        "glScissorArrayv": h_scissor_indexed,
         "glDepthFunc": h_depth_func,
         "glDepthMask": h_depth_mask,
         "glClearDepth": h_clear_depth,

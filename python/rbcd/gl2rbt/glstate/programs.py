@@ -151,6 +151,19 @@ class ProgramCalls:
         if isinstance(self.ret, int) and 0 <= self.ret < 0xFFFFFFFF and isinstance(d.get("uniformBlockName"), str):
             p.block_names[self.ret] = d["uniformBlockName"]
 
+    def h_get_program_resource(self, no, name, a, args):
+        """glGetProgramResourceLocation and glGetProgramResourceIndex (GL 4.3,
+        ES 3.1): a uniform's location or a uniform block's index named as
+        glGetUniformLocation and glGetUniformBlockIndex name them; other
+        interfaces (inputs, outputs, storage blocks) set nothing the vertex
+        stage is given by location."""
+        d = dict(args)
+        interface, rname = d.get("programInterface"), d.get("name")
+        if "Location" in name and interface == "GL_UNIFORM":
+            self.h_get_uniform_location(no, name, a, [("program", d.get("program")), ("name", rname)])
+        elif "Index" in name and interface == "GL_UNIFORM_BLOCK":
+            self.h_get_uniform_block_index(no, name, a, [("program", d.get("program")), ("uniformBlockName", rname)])
+
     def h_uniform_block_binding(self, no, name, a, args):
         d = dict(args)
         p = self.program(no, name, d.get("program"))
@@ -197,6 +210,25 @@ class ProgramCalls:
     def h_refuse_stage(self, no, name, a, args):
         fail_call(no, f"{printable(name)}: separable programs and pipelines are not emulated yet")
 
+    def h_program_parameter(self, no, name, a, args):
+        """glProgramParameteri: a hint to keep the binary changes nothing
+        drawn, nor does a program made not separable; a separable one is refused."""
+        d = dict(args)
+        pname, value = d.get("pname"), d.get("value")
+        if pname == "GL_PROGRAM_BINARY_RETRIEVABLE_HINT" or \
+                (pname == "GL_PROGRAM_SEPARABLE" and value in (0, False, "GL_FALSE")):
+            return
+        self.h_refuse_stage(no, name, a, args)
+
+    def h_transform_feedback_varyings(self, no, name, a, args):
+        fail_call(no, f"{printable(name)}: the capture's own transform feedback is not emulated")
+
+    def h_uniform_subroutines(self, no, name, a, args):
+        """Subroutine choices of a fragment shader cannot move a vertex; of a
+        stage that can, they are not emulated."""
+        if dict(args).get("shadertype") != "GL_FRAGMENT_SHADER":
+            fail_call(no, f"{printable(name)}: shader subroutines before the fragment stage are not emulated")
+
     HANDLERS = {
         "glCreateShader": h_create_shader,
         "glShaderSource": h_shader_source,
@@ -211,11 +243,14 @@ class ProgramCalls:
         "glGetUniformLocation": h_get_uniform_location,
         "glGetUniformBlockIndex": h_get_uniform_block_index,
         "glUniformBlockBinding": h_uniform_block_binding,
-        "glProgramParameteri": h_refuse_stage,
+        "glGetProgramResourceLocation": h_get_program_resource,
+        "glGetProgramResourceIndex": h_get_program_resource,
+        "glUniformSubroutinesuiv": h_uniform_subroutines,
+        "glProgramParameteri": h_program_parameter,
         "glCreateShaderProgramv": h_refuse_stage,
         "glUseProgramStages": h_refuse_stage,
         "glBindProgramPipeline": h_refuse_stage,
-        "glTransformFeedbackVaryings": h_refuse_stage,
+        "glTransformFeedbackVaryings": h_transform_feedback_varyings,
     } | dict.fromkeys([f"gl{p}Uniform{n}{t}{v}" for p in ("", "Program") for n in "1234"
                       for t in ("f", "i", "ui", "d") for v in ("", "v")]
                      + [f"gl{p}UniformMatrix{s}{t}v" for p in ("", "Program")

@@ -95,6 +95,45 @@ class TransformCalls:
         if self.flags & CALL_FLAG_FAKE and w > 0 and h > 0:
             self.drawable = (w, h)   # apitrace's record of the window size at MakeCurrent
 
+    def h_viewport_indexed(self, no, name, a, args):
+        """glViewportIndexedf(v) and glViewportArrayv: viewport 0 is glViewport's
+        (clamped as Mesa clamps it, its corner and size kept as the floats
+        they are); the others are selected only by a geometry shader, which
+        is refused, so they change nothing drawn."""
+        d = dict(args)
+        if "Array" in name:
+            first = checked(no, integer, d.get("first"), f"{name}: first", *I32)
+            count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
+            v = d.get("v")
+            if first < 0 or count < 0:
+                return   # GL_INVALID_VALUE: the call does nothing
+            if first != 0 or count == 0:
+                return
+            vals = v[:4] if isinstance(v, list) else None
+        else:
+            index = checked(no, integer, d.get("index"), f"{name}: index", *I32)
+            if index != 0:
+                return   # another viewport, or GL_INVALID_VALUE
+            vals = d.get("v")[:4] if isinstance(d.get("v"), list) else [d.get(k) for k in ("x", "y", "w", "h")]
+        if not isinstance(vals, list) or len(vals) != 4:
+            fail_call(no, f"{name}: not four viewport values")
+        x, y, w, h = [number(v, no, f"{name}: a viewport value") for v in vals]
+        if w < 0 or h < 0:
+            return   # GL_INVALID_VALUE
+        w, h = min(w, MAX_VIEWPORT), min(h, MAX_VIEWPORT)
+        x, y = (min(max(v, VIEWPORT_BOUNDS[0]), VIEWPORT_BOUNDS[1]) for v in (x, y))
+        self.s.viewport = (x, y, w, h)
+
+    def h_clip_control(self, no, name, a, args):
+        """glClipControl: GL's default (lower-left origin, depth from -1 to 1)
+        is what the converter computes; the others are refused."""
+        d = dict(args)
+        origin, depth = d.get("origin"), d.get("depth")
+        if origin not in ("GL_LOWER_LEFT", "GL_UPPER_LEFT") or depth not in ("GL_NEGATIVE_ONE_TO_ONE", "GL_ZERO_TO_ONE"):
+            return   # GL_INVALID_ENUM: the call does nothing
+        if (origin, depth) != ("GL_LOWER_LEFT", "GL_NEGATIVE_ONE_TO_ONE"):
+            fail_call(no, f"{name}({origin}, {depth}) is not emulated")
+
     def h_depth_range(self, no, name, a, args):
         n, f = [min(1.0, max(0.0, number(v, no, "a depth range bound"))) for v in a[:2]]
         self.s.depth_range = (n, f)
@@ -136,6 +175,10 @@ class TransformCalls:
         "glPushMatrix": h_push_matrix,
         "glPopMatrix": h_pop_matrix,
         "glViewport": h_viewport,
+        "glViewportIndexedf": h_viewport_indexed,
+        "glViewportIndexedfv": h_viewport_indexed,
+        "glViewportArrayv": h_viewport_indexed,
+        "glClipControl": h_clip_control,
         "glDepthRange": h_depth_range,
         "glDepthRangef": h_depth_range,
         "glClipPlane": h_clip_plane,
