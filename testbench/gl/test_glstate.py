@@ -311,6 +311,35 @@ def test_buffer_objects_and_indexed_draws():
         gl.glDrawArrays(mode="GL_TRIANGLES", first=0, count=3)
 
 
+def test_buffer_copies_take_memory_only_for_written_data(monkeypatch):
+    """glCopyBufferSubData copies what the source holds: a copy out of
+    storage never written zeroes the destination's range and takes no
+    memory (it had taken the copy's size: 20 copies of 128 MiB peaked at
+    801 MB); written data is copied, and the data all buffers hold is
+    refused past the documented limit, naming the call."""
+    import rbcd.gl2rbt.glstate.buffers as buffers
+    gl = GL()
+    big = 128 << 20
+    for b in (1, 2):
+        gl.glBindBuffer(target="GL_COPY_READ_BUFFER" if b == 1 else "GL_COPY_WRITE_BUFFER", buffer=b)
+        gl.glBufferData(target="GL_COPY_READ_BUFFER" if b == 1 else "GL_COPY_WRITE_BUFFER", size=big, data=None)
+    gl.glBufferSubData(target="GL_COPY_WRITE_BUFFER", offset=100, size=4, data=b"abcd")
+    gl.glBufferSubData(target="GL_COPY_READ_BUFFER", offset=1 << 20, size=3, data=b"xyz")
+    for _ in range(20):
+        gl.glCopyBufferSubData(readTarget="GL_COPY_READ_BUFFER", writeTarget="GL_COPY_WRITE_BUFFER",
+                               readOffset=0, writeOffset=0, size=big)
+    s = gl.conv.s
+    assert bytes(s.buffers[2][96:108]) == bytes(12), "the copy of zeros zeroed what the destination held"
+    assert bytes(s.buffers[2][(1 << 20) - 1:(1 << 20) + 4]) == b"\0xyz\0", "the source's data was copied"
+    assert s.buffer_bytes_in_all < 1 << 10, f"{s.buffer_bytes_in_all} bytes held for 11 bytes written"
+    monkeypatch.setattr(buffers, "MAX_BUFFER_BYTES_IN_ALL", 1 << 20)
+    gl.glBufferSubData(target="GL_COPY_READ_BUFFER", offset=0, size=1 << 19, data=bytes(1 << 19))
+    with pytest.raises(ConvertError, match=r"call \d+: glCopyBufferSubData: the buffers would hold more than"):
+        for k in range(4):
+            gl.glCopyBufferSubData(readTarget="GL_COPY_READ_BUFFER", writeTarget="GL_COPY_WRITE_BUFFER",
+                                   readOffset=0, writeOffset=k << 20, size=1 << 19)
+
+
 def test_debug_groups_tag_objects_and_a_second_pass_is_other_work():
     gl = GL()
     gl.glPushDebugGroup(source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")

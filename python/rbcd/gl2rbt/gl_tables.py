@@ -60,8 +60,10 @@ CAPS_IGNORED = {
     "GL_COLOR_SUM", "GL_AUTO_NORMAL", "GL_INDEX_LOGIC_OP", "GL_PROGRAM_POINT_SIZE", "GL_TEXTURE_CUBE_MAP_SEAMLESS",
 } | {f"GL_LIGHT{i}" for i in range(8)}
 
-# The largest buffer object a capture may declare (bytes).
+# The largest buffer object a capture may declare (bytes), and the data all
+# its buffers may hold at once (written bytes: declared storage costs nothing).
 MAX_BUFFER_BYTES = 1 << 30
+MAX_BUFFER_BYTES_IN_ALL = 2 << 30
 
 
 def base_name(name):

@@ -58,6 +58,8 @@ class GLState:
         self.buffers = {}
         self.buffer_versions = {}
         self.buffer_written = {}   # large buffers: the [start, end) extents ever written
+        self.buffer_held = {}      # buffer -> bytes of memory its data holds
+        self.buffer_bytes_in_all = 0
         self.next_version = 0
         self.bound = {"GL_ARRAY_BUFFER": 0, "GL_ELEMENT_ARRAY_BUFFER": 0}
         self.indexed = {}

@@ -11,7 +11,7 @@ from ..errors import checked, fail_call, printable
 
 I64 = (-(1 << 63), (1 << 63) - 1)
 MAX_BINDINGS = 1024   # indexed binding points kept (llvmpipe has fewer: Mesa refuses the rest at a draw)
-from ..gl_tables import MAX_BUFFER_BYTES
+from ..gl_tables import MAX_BUFFER_BYTES, MAX_BUFFER_BYTES_IN_ALL
 
 
 def storage(size):
@@ -46,10 +46,11 @@ class BufferCalls:
             fail_call(no, f"{name}: {printable(target)} is not a buffer target")
         return self.s.bound.get(target, 0)
 
-    def changed(self, b, start=0, end=None):
+    def changed(self, no, name, b, start=0, end=None):
         """Buffer b changed in bytes [start, end) (all of it by default): a
         new version, and the extent added to those ever written (for a
-        large buffer: what Mesa's copy is given; the rest stays zero)."""
+        large buffer: what Mesa's copy is given; the rest stays zero). The
+        bytes held in all buffers stay within MAX_BUFFER_BYTES_IN_ALL."""
         self.s.next_version += 1
         self.s.buffer_versions[b] = self.s.next_version
         buf = self.s.buffers[b]
@@ -58,7 +59,28 @@ class BufferCalls:
             ext = self.s.buffer_written.setdefault(b, [])
             ext.append((start, end))
             if len(ext) > 64:
-                self.s.buffer_written[b] = merge_extents(ext)
+                ext = self.s.buffer_written[b] = merge_extents(ext)
+            held = min(len(buf), sum(e - s for s, e in ext))
+        else:
+            held = len(buf) if isinstance(buf, bytearray) else 0
+        self.held_bytes(no, name, b, held)
+
+    def held_bytes(self, no, name, b, held):
+        """Buffer b now holds `held` bytes of memory (written pages): refused
+        past MAX_BUFFER_BYTES_IN_ALL over all buffers, so that copies between
+        buffers cannot grow memory out of proportion to the capture."""
+        self.s.buffer_bytes_in_all += held - self.s.buffer_held.get(b, 0)
+        self.s.buffer_held[b] = held
+        if self.s.buffer_bytes_in_all > MAX_BUFFER_BYTES_IN_ALL:
+            fail_call(no, f"{name}: the buffers would hold more than {MAX_BUFFER_BYTES_IN_ALL >> 30} GiB of data "
+                      "in all (docs/gl-capture.md, limits)")
+
+    def written_extents(self, b):
+        """The [start, end) extents of buffer b that may hold non-zero bytes."""
+        buf = self.s.buffers[b]
+        if isinstance(buf, mmap.mmap):
+            return merge_extents(self.s.buffer_written.get(b, []))
+        return [(0, len(buf))]
 
     def h_bind_buffer(self, no, name, a, args):
         d = dict(args)
@@ -103,7 +125,7 @@ class BufferCalls:
             self.s.buffer_written[b] = []
         else:
             self.s.buffer_written.pop(b, None)
-        self.changed(b, 0, written)
+        self.changed(no, name, b, 0, written)
 
     def h_buffer_sub_data(self, no, name, a, args):
         d = dict(args)
@@ -116,7 +138,7 @@ class BufferCalls:
         if buf is None or off < 0 or size < 0 or off + size > len(buf):
             return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
         buf[off:off + size] = data[:size]
-        self.changed(b, off, off + size)
+        self.changed(no, name, b, off, off + size)
 
     def h_copy_buffer_sub_data(self, no, name, a, args):
         d = dict(args)
@@ -127,8 +149,25 @@ class BufferCalls:
         if src is None or dst is None or not all(isinstance(v, int) and v >= 0 for v in (ro, wo, size)) \
                 or ro + size > len(src) or wo + size > len(dst):
             fail_call(no, f"{name}: a range outside a buffer's data")
-        dst[wo:wo + size] = src[ro:ro + size]
-        self.changed(wb, wo, wo + size)
+        # Only the source's written extents are copied (the rest is zero);
+        # the destination's bytes the copy zeroes are zeroed where they may
+        # hold data, so that a copy out of storage never written takes no
+        # memory.
+        rb = self.bound_buffer(no, name, d.get("readTarget"))
+        pieces = [(max(s, ro), min(e, ro + size)) for s, e in self.written_extents(rb) if s < ro + size and e > ro]
+        pieces = [(s - ro + wo, e - ro + wo, bytes(src[s:e])) for s, e in pieces if e > s]
+        at = wo
+        for s, e, _ in pieces + [(wo + size, wo + size, b"")]:
+            for zs, ze in self.written_extents(wb):
+                lo, hi = max(zs, at), min(ze, s)
+                if lo < hi:
+                    dst[lo:hi] = bytes(hi - lo)
+            at = e
+        for s, e, data in pieces:
+            dst[s:e] = data
+            self.changed(no, name, wb, s, e)
+        self.s.next_version += 1
+        self.s.buffer_versions[wb] = self.s.next_version
 
     def h_map_buffer(self, no, name, a, args):
         d = dict(args)
@@ -159,7 +198,7 @@ class BufferCalls:
             if ptr <= dest and dest + len(src) <= ptr + length:
                 at = offset + dest - ptr
                 self.s.buffers[b][at:at + len(src)] = src
-                self.changed(b, at, at + len(src))
+                self.changed(no, name, b, at, at + len(src))
                 return
         fail_call(no, "memcpy into memory that is not a mapped buffer's")
 
@@ -170,6 +209,8 @@ class BufferCalls:
                 self.s.buffers.pop(b, None)
                 self.s.buffer_versions.pop(b, None)
                 self.s.buffer_written.pop(b, None)
+                self.held_bytes(no, name, b, 0)
+                self.s.buffer_held.pop(b, None)
                 self.s.mappings.pop(b, None)
                 for t, v in self.s.bound.items():
                     if v == b:
