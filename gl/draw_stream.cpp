@@ -150,7 +150,10 @@ void DrawStreamReader::read_draw() {
         fail("the depth range is outside [0, 1]");
     s.offset_factor = get_finite("the polygon offset");
     s.offset_units = get_finite("the polygon offset");
-    if (std::abs(s.offset_factor) > 1e6 || std::abs(s.offset_units) > 1e9) fail("the polygon offset is out of range");
+    // glPolygonOffset takes floats, and the units arrive in depth steps (up
+    // to two a unit): past that no GL call can put them. Within it the
+    // offset is computed in double and the depth clamped, as GL clamps it.
+    if (std::abs(s.offset_factor) > 3.5e38 || std::abs(s.offset_units) > 7e38) fail("the polygon offset is out of range");
     s.scissor.x0 = get<std::int32_t>();
     s.scissor.y0 = get<std::int32_t>();
     s.scissor.x1 = get<std::int32_t>();

@@ -371,6 +371,17 @@ def test_state_not_emulated_is_refused(tmp_path, build, words):
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
+def test_a_polygon_offset_past_any_depth_is_clamped(tmp_path):
+    """glPolygonOffset(0, 3e38), legal GL: the offset depth is clamped to
+    the far plane, and the triangle (collisionable, depth test on) still
+    reaches the unit, at the far depth (it was refused as out of range)."""
+    c = Calls().add("glEnable", cap="GL_POLYGON_OFFSET_FILL").add("glPolygonOffset", factor=0.0, units=3e38)
+    r = gl2rbt(tmp_path, c.triangle(obj=1).swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    assert r.returncode == 0, r.stderr
+    depths = {line.split()[3] for line in (tmp_path / "c.rbt").read_text().splitlines() if line.startswith("f ")}
+    assert depths == {str((1 << 24) - 1)}, depths
+
+
 def test_modern_forms_of_emulated_state(tmp_path):
     """GL 4.x forms of state the converter emulates give what their older
     forms give: a uniform located by glGetProgramResourceLocation, viewport

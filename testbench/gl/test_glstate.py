@@ -4,6 +4,7 @@ the converter, and its draw stream decoded here from the format of
 docs/gl-capture.md ("The draw stream")."""
 import argparse
 import io
+import re
 import struct
 
 import pytest
@@ -139,6 +140,88 @@ def test_matrix_stacks_do_what_mesa_does_with_errors():
     gl.glOrtho(0, 0, 0, 1, 0, 1)
     gl.glFrustum(-1, 1, -1, 1, 0, 10)
     assert stack_top(gl) == np.identity(4).tolist()
+
+
+def test_odd_calls_do_what_mesa_does():
+    """Calls GL answers with an error, or whose values GL clamps, change what
+    Mesa changes (each was found converting otherwise, the depth check then
+    disagreeing with Mesa): glBegin with no primitive mode is not a vertex
+    list; glDepthMask keeps the flag's low bit; glClear with a bit naming no
+    buffer clears nothing; glVertexPointer of a type it does not take, and
+    glBufferData of a bad usage or target or with no buffer bound, change
+    nothing; an axis off the coordinate axes shorter than 1e-4 leaves the
+    matrix, and one whose square overflows a float scales by cos(angle);
+    depth values clamp infinities; glEnd alone and a negative multi-draw
+    count do nothing."""
+    gl = GL()
+    gl.glBegin(0x20)
+    gl.glTranslatef(0, 0, 5)
+    gl.glEnd()
+    assert stack_top(gl)[2][3] == 5, "the translation between a bad glBegin and glEnd was applied"
+    gl.glLoadIdentity()
+    for flag, mask in ((2, 0), (3, 1), ("GL_TRUE", 1), (0, 0)):
+        gl.glDepthMask(flag)
+        square(gl)
+        assert gl.draws()[-1]["depth_mask"] == mask, flag
+    gl.glDepthMask("GL_TRUE")
+    gl.glClear(("GL_CURRENT_BIT", "GL_DEPTH_BUFFER_BIT"))
+    gl.glClear(0x100 | 0x8000)
+    assert gl.records("C") == [], "a clear with a bit naming no buffer cleared"
+    gl.glClear(0x100 | 0x200)
+    assert len(gl.records("C")) == 1, "compatibility contexts have an accumulation buffer"
+    verts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0]], "<f4")
+    gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=3)
+    gl.glBufferData(target="GL_ARRAY_BUFFER", size=verts.nbytes, data=verts.tobytes(), usage="GL_STATIC_DRAW")
+    other = (verts * 9).tobytes()
+    gl.glBufferData(target="GL_ARRAY_BUFFER", size=len(other), data=other, usage=0xBAD)
+    gl.glBufferData(target="GL_TEXTURE_2D", size=len(other), data=other, usage="GL_STATIC_DRAW")
+    gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=0)
+    gl.glBufferData(target="GL_ARRAY_BUFFER", size=len(other), data=other, usage="GL_STATIC_DRAW")
+    gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=3)
+    gl.glEnableClientState("GL_VERTEX_ARRAY")
+    gl.glVertexPointer(size=3, type="GL_FLOAT", stride=0, pointer=0)
+    gl.glVertexPointer(size=3, type="GL_UNSIGNED_BYTE", stride=0, pointer=0)
+    gl.glVertexPointer(size=5, type="GL_FLOAT", stride=0, pointer=0)
+    gl.glDrawArrays(mode="GL_TRIANGLES", first=0, count=3)
+    assert gl.draws()[-1]["clip"][:, :3].tolist() == verts.tolist(), "an ignored call changed the array"
+    with pytest.raises(ConvertError, match="a negative stride"):
+        gl.glVertexPointer(size=3, type="GL_FLOAT", stride=-4, pointer=0)
+    gl.glMultiDrawArrays(mode="GL_TRIANGLES", first=[0], count=[3], drawcount=-1)
+    gl.glEnd()
+    n = len(gl.draws())
+    assert n == 5, n
+    gl.glRotatef(60, 1e-5, 1e-5, 0)
+    assert stack_top(gl) == np.identity(4).tolist(), "Mesa leaves the matrix for an axis this short"
+    gl.glRotatef(60, 1e20, 1e20, 0)
+    c = np.cos(np.radians(60))
+    assert np.allclose(stack_top(gl), np.diag([c, c, c, 1])), "Mesa's axis became (0, 0, 0)"
+    gl.glLoadIdentity()
+    gl.glRotatef(60, 0, 0, 1e-5)
+    assert stack_top(gl)[0][1] < -0.8, "an axis along z is taken at any length, as Mesa takes it"
+    gl.glClearDepth(float("inf"))
+    gl.glDepthRange(float("-inf"), 0.75)
+    assert (gl.conv.s.clear_depth, gl.conv.s.depth_range) == (1.0, (0.0, 0.75))
+    with pytest.raises(ConvertError, match="is not finite"):
+        gl.glClearDepth(float("nan"))
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda gl: gl.glBegin(["GL_TRIANGLES"]), "glBegin: the mode: ['GL_TRIANGLES'] is not an enumerant"),
+    (lambda gl: gl.glDepthMask([1, 2]), "glDepthMask: the flag: [1, 2] is not a GLboolean"),
+    (lambda gl: gl.glDepthMask(None), "is not a GLboolean"),
+    (lambda gl: gl.glClear(None), "glClear: the mask: None is not a bitfield"),
+    (lambda gl: gl.glClear(1e308), "is not a bitfield"),
+    (lambda gl: gl.glDepthFunc(float("nan")), "glDepthFunc: the function: nan is not an enumerant"),
+    (lambda gl: gl.glMatrixMode(None), "glMatrixMode: the mode: None is not an enumerant"),
+    (lambda gl: gl.glPushDebugGroup(source="GL_DEBUG_SOURCE_APPLICATION", id=1, length=-1, message=[1]),
+     "the message is not a string"),
+    (lambda gl: gl.glFlush(flags=-1), "the call's flags -1 are not apitrace's"),
+], ids=["begin_list", "mask_list", "mask_none", "clear_none", "clear_float", "func_nan", "mode_none", "message",
+        "flags"])
+def test_values_no_gl_call_takes_are_refused_naming_the_call(call, words):
+    gl = GL()
+    with pytest.raises(ConvertError, match=r"^call 1: .*" + re.escape(words)):
+        call(gl)
 
 
 def test_values_glsl_leaves_unspecified_are_refused_naming_the_call():
@@ -352,8 +435,14 @@ def test_debug_groups_tag_objects_and_a_second_pass_is_other_work():
     square(gl)
     got = [(d["object"], d["collisionable"]) for d in gl.draws()]
     assert got == [(5, 1), (7, 1), (0, 0), (0, 0)], "the innermost group decides; a repeated surface is other work"
-    with pytest.raises(ConvertError, match="without a group to pop"):
-        gl.glPopDebugGroup()
+    # GL_STACK_UNDERFLOW and GL_STACK_OVERFLOW: the pop, and the push past
+    # Mesa's 63 groups (its stack of 64 holds the default one), do nothing.
+    gl.glPopDebugGroup()
+    for i in range(64):
+        gl.glPushDebugGroup(source="GL_DEBUG_SOURCE_APPLICATION", id=100 + i, length=-1, message="rbcd-object")
+    gl.glPopDebugGroup()
+    square(gl, z=0.25)
+    assert gl.draws()[-1]["object"] == 161, "the 64th push was ignored, so the pop left group 62 (id 161) open"
 
 
 def test_rules_name_a_texture_by_its_image_whatever_its_name(tmp_path):

@@ -148,6 +148,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
     # ---- the call handlers
     def handle(self, call):
         no, name, args, ret, flags = call
+        if isinstance(flags, bool) or not isinstance(flags, int) or not 0 <= flags < 1 << 32:
+            fail_call(no, f"{printable(name)}: the call's flags {printable(flags, 40)} are not apitrace's")
         self.flags, self.ret = flags, ret
         s = self.s
         a = [v for _, v in args]

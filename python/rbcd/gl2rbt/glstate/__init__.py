@@ -18,7 +18,7 @@ h(self, call_no, name, argument values, (name, value) arguments)."""
 import numpy as np
 
 from ...cli import real
-from ..errors import checked
+from ..errors import checked, fail_call, printable
 from ..gl_tables import MAX_CLIP_PLANES
 from .attributes import VertexArrayObject
 
@@ -95,10 +95,34 @@ class GLState:
         self.list_compiling = False
 
 
-def as_bool(v):
-    if isinstance(v, str):
-        return v in ("GL_TRUE", "True", "true", "1")
-    return bool(v)
+def enum_arg(v, no, what):
+    """An enumerant as apitrace records it: its name, or a number for a
+    value it has no name for (which GL answers with GL_INVALID_ENUM); any
+    other value is the capture's error."""
+    if isinstance(v, str) or (isinstance(v, int) and not isinstance(v, bool)):
+        return v
+    fail_call(no, f"{what}: {printable(v, 40)} is not an enumerant")
+
+
+def gl_boolean(v, no, what):
+    """A GLboolean argument as the driver keeps it: GL_TRUE/GL_FALSE, or the
+    byte the application passed, of which a one-bit state keeps the low bit
+    (Mesa: glDepthMask(2) writes no depth)."""
+    if v in ("GL_TRUE", True):
+        return True
+    if v in ("GL_FALSE", False):
+        return False
+    if isinstance(v, int) and not isinstance(v, bool):
+        return bool(v & 1)
+    fail_call(no, f"{what}: {printable(v, 40)} is not a GLboolean")
+
+
+def clamped01(v, no, what):
+    """A value GL clamps to [0, 1] (depth range, clear depth): infinities
+    clamp; NaN, whose clamp GL leaves undefined, is refused."""
+    if isinstance(v, float) and v in (float("inf"), float("-inf")):
+        return 1.0 if v > 0 else 0.0
+    return min(1.0, max(0.0, number(v, no, what)))
 
 
 def number(v, no, what):

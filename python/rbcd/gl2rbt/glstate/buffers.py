@@ -8,8 +8,10 @@ import mmap
 
 from ...cli import U32, integer
 from ..errors import checked, fail_call, printable
+from . import enum_arg
 
 I64 = (-(1 << 63), (1 << 63) - 1)
+BUFFER_USAGES = {f"GL_{f}_{a}" for f in ("STREAM", "STATIC", "DYNAMIC") for a in ("DRAW", "READ", "COPY")}
 MAX_BINDINGS = 1024   # indexed binding points kept (llvmpipe has fewer: Mesa refuses the rest at a draw)
 from ..gl_tables import MAX_BUFFER_BYTES, MAX_BUFFER_BYTES_IN_ALL
 
@@ -106,12 +108,19 @@ class BufferCalls:
 
     def h_buffer_data(self, no, name, a, args):
         d = dict(args)
-        b = self.bound_buffer(no, name, d.get("target"))
+        target = enum_arg(d.get("target"), no, f"{name}: the target")
+        size = checked(no, integer, d.get("size", 0), f"{name}: the size", *I64)
+        usage = enum_arg(d.get("usage", "GL_STATIC_DRAW"), no, f"{name}: the usage")
+        # What GL ignores, in Mesa's order of checks: the target, a negative
+        # size, the usage (GL_INVALID_ENUM, GL_INVALID_VALUE), no buffer
+        # bound (GL_INVALID_OPERATION).
+        if not is_buffer_target(target) or size < 0 or usage not in BUFFER_USAGES:
+            return
+        b = self.s.bound.get(target, 0)
         if not b:
-            fail_call(no, f"{name} with no buffer bound")
-        size = d.get("size", 0)
-        if not isinstance(size, int) or size < 0 or size > MAX_BUFFER_BYTES:
-            fail_call(no, f"{name}: impossible size")
+            return
+        if size > MAX_BUFFER_BYTES:
+            fail_call(no, f"{name}: {size} bytes, more than a buffer's {MAX_BUFFER_BYTES} (docs/gl-capture.md, limits)")
         data = d.get("data")
         buf = storage(size)
         written = 0

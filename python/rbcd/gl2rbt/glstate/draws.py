@@ -8,7 +8,7 @@ from ...cli import integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CULL, DEPTH_FUNCS, INDEX_TYPES, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
 from ..glmath import mat_mul, triangle_indices
-from . import number
+from . import enum_arg, number
 
 PRIM_MODES = PRIM_TRIANGLES | PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY", "GL_TRIANGLES_ADJACENCY",
                                               "GL_TRIANGLE_STRIP_ADJACENCY", "GL_PATCHES"}
@@ -273,6 +273,8 @@ class DrawCalls:
         d = dict(args)
         n = d.get("drawcount", d.get("primcount"))
         lists = {k: d.get(k) for k in ("first", "count", "indices", "basevertex") if k in d}
+        if isinstance(n, int) and not isinstance(n, bool) and n < 0:
+            return   # GL_INVALID_VALUE: the call does nothing
         if not isinstance(n, int) or not 0 <= n <= 1 << 16 or \
                 not all(isinstance(v, list) and len(v) >= n for v in lists.values()):
             fail_call(no, f"{name}: impossible draw count or lists")
@@ -328,11 +330,14 @@ class DrawCalls:
                                                  dtype=np.float64), name)
 
     def h_begin(self, no, name, a, args):
-        self.s.begin_mode = a[0]
+        mode = enum_arg(a[0] if a else None, no, f"{name}: the mode")
+        if mode not in PRIM_MODES:
+            return   # GL_INVALID_ENUM: not inside glBegin/glEnd, and what follows is not a vertex list
+        self.s.begin_mode = mode
         self.s.begin_verts = []
 
     def h_end(self, no, name, a, args):
-        fail_call(no, "glEnd without glBegin")
+        pass   # glEnd without glBegin: GL_INVALID_OPERATION, the call does nothing
 
     HANDLERS = {
         "glDrawArraysInstanced": h_draw_under_program,

@@ -6,6 +6,10 @@ import numpy as np
 from ...cli import U32, integer
 from ..errors import checked, fail_call
 
+# Debug groups an application can push (Mesa: a stack of 64 with the
+# default group at its bottom); a push past them is GL_STACK_OVERFLOW.
+MAX_DEBUG_GROUPS = 63
+
 
 def projection_of(proj, clip):
     if proj is None:
@@ -89,11 +93,13 @@ class ObjectCalls:
 
     def h_push_debug_group(self, no, name, a, args):
         d = dict(args)
+        if not isinstance(d.get("message"), (str, type(None))):
+            fail_call(no, f"{name}: the message is not a string")
         obj = None
         if d.get("source") == "GL_DEBUG_SOURCE_APPLICATION" and d.get("message") == "rbcd-object":
             obj = checked(no, integer, d.get("id"), f"{name}: an rbcd-object group's id", *U32)
-        if len(self.s.groups) >= 64:
-            fail_call(no, "debug groups nested more than 64 deep")
+        if len(self.s.groups) >= MAX_DEBUG_GROUPS:
+            return   # GL_STACK_OVERFLOW: the push does nothing
         self.s.groups.append(obj)
         self.s.group_names.append((obj, d.get("message") if isinstance(d.get("message"), str) else ""))
 
@@ -108,14 +114,14 @@ class ObjectCalls:
             m = re.fullmatch(r"rbcd-object (\d+)", text)
             if m:
                 obj = checked(no, integer, int(m.group(1)), f"{name}: an rbcd-object marker's id", *U32)
-        if len(self.s.groups) >= 64:
-            fail_call(no, "group markers nested more than 64 deep")
+        if len(self.s.groups) >= MAX_DEBUG_GROUPS:
+            return   # as a debug group's push past the stack's depth: nothing
         self.s.groups.append(obj)
         self.s.group_names.append((obj, text if isinstance(text, str) else ""))
 
     def h_pop_group(self, no, name, a, args):
         if not self.s.groups:
-            fail_call(no, f"{name} without a group to pop")
+            return   # GL_STACK_UNDERFLOW: the pop does nothing
         self.s.groups.pop()
         self.s.group_names.pop()
 

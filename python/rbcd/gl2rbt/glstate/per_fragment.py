@@ -7,7 +7,10 @@ import numpy as np
 from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES
-from . import as_bool, number
+from . import clamped01, enum_arg, gl_boolean, number
+
+CLEAR_BITS = {0x100: "GL_DEPTH_BUFFER_BIT", 0x200: "GL_ACCUM_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT",
+              0x4000: "GL_COLOR_BUFFER_BIT"}
 
 class PerFragmentCalls:
     """Per-fragment operations that decide which fragments reach the unit."""
@@ -48,19 +51,40 @@ class PerFragmentCalls:
         return (min(max(x0, -1), w), min(max(y0, -1), h), min(max(x1, -1), w), min(max(y1, -1), h))
 
     def h_depth_func(self, no, name, a, args):
-        if a[0] not in DEPTH_FUNCS:
+        if enum_arg(a[0], no, f"{name}: the function") not in DEPTH_FUNCS:
             return   # GL_INVALID_ENUM: the call does nothing
         self.s.depth_func = a[0]
 
     def h_depth_mask(self, no, name, a, args):
-        self.s.depth_mask = as_bool(a[0])
+        self.s.depth_mask = gl_boolean(a[0], no, f"{name}: the flag")
 
     def h_clear_depth(self, no, name, a, args):
-        self.s.clear_depth = min(1.0, max(0.0, number(a[0], no, "the clear depth")))
+        self.s.clear_depth = clamped01(a[0], no, "the clear depth")
+
+    def clear_bits(self, no, name, mask):
+        """glClear's mask as bit names, or None when GL ignores the call
+        (GL_INVALID_VALUE: a bit that names no buffer, or the accumulation
+        buffer, which core and ES contexts lack)."""
+        parts = mask if isinstance(mask, (list, tuple)) else (mask,)
+        bits = set()
+        for p in parts:
+            if isinstance(p, str):
+                bits |= {b.strip() for b in p.split("|")}
+            elif isinstance(p, int) and not isinstance(p, bool) and 0 <= p < 1 << 32:
+                bits |= {n for v, n in CLEAR_BITS.items() if p & v}
+                if p & ~sum(CLEAR_BITS):
+                    return None
+            else:
+                fail_call(no, f"{name}: the mask: {printable(mask, 40)} is not a bitfield")
+        bits.discard("0")
+        allowed = set(CLEAR_BITS.values()) - ({"GL_ACCUM_BUFFER_BIT"} if self.core or self.es else set())
+        return bits if bits <= allowed else None
 
     def h_clear(self, no, name, a, args):
-        mask = a[0] if isinstance(a[0], (list, tuple)) else (a[0],)
-        if "GL_DEPTH_BUFFER_BIT" in mask and self.active and self.s.depth_mask:
+        bits = self.clear_bits(no, name, a[0])
+        if bits is None:
+            return   # GL_INVALID_VALUE: nothing is cleared
+        if "GL_DEPTH_BUFFER_BIT" in bits and self.active and self.s.depth_mask:
             self.open_frame(no)
             rect = self.scissor_rect()
             self.emit(b"C" + struct.pack("<Qd4i", no, self.s.clear_depth, *rect))
@@ -85,10 +109,10 @@ class PerFragmentCalls:
         fail_call(no, f"glEnable({printable(cap)}) is not emulated and may change geometry or visibility")
 
     def h_enable(self, no, name, a, args):
-        self.enable(no, a[0], True)
+        self.enable(no, enum_arg(a[0], no, f"{name}: the capability"), True)
 
     def h_disable(self, no, name, a, args):
-        self.enable(no, a[0], False)
+        self.enable(no, enum_arg(a[0], no, f"{name}: the capability"), False)
 
     HANDLERS = {
         "glScissor": h_scissor,

@@ -1,18 +1,18 @@
 """Face culling, winding, polygon offset and polygon mode."""
 from ..errors import fail_call, printable
 from ..gl_tables import CULL
-from . import number
+from . import enum_arg, number
 
 class PolygonCalls:
     """Rasterization state of polygons."""
 
     def h_cull_face(self, no, name, a, args):
-        if a[0] not in CULL:
+        if enum_arg(a[0], no, f"{name}: the face") not in CULL:
             return   # GL_INVALID_ENUM: the call does nothing
         self.s.cull_face = a[0]
 
     def h_front_face(self, no, name, a, args):
-        if a[0] not in ("GL_CW", "GL_CCW"):
+        if enum_arg(a[0], no, f"{name}: the winding") not in ("GL_CW", "GL_CCW"):
             return   # GL_INVALID_ENUM: the call does nothing
         self.s.front_face = a[0]
 

@@ -1,4 +1,5 @@
 """Matrix stacks, the viewport, the depth range and user clip planes."""
+import math
 import re
 
 import numpy as np
@@ -7,7 +8,7 @@ from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CALL_FLAG_FAKE, MAX_CLIP_PLANES
 from ..glmath import mat_frustum, mat_mul, mat_ortho, mat_rotate, mat_scale, mat_translate
-from . import number
+from . import clamped01, enum_arg, number
 
 # Mesa's limits (llvmpipe, Mesa 22.3): matrix stack depths, the largest
 # viewport, and the range a viewport's corner is clamped to.
@@ -35,7 +36,7 @@ class TransformCalls:
         return m if transpose else m.T   # GL matrices are column-major
 
     def h_matrix_mode(self, no, name, a, args):
-        if a[0] not in self.s.stacks:
+        if enum_arg(a[0], no, f"{name}: the mode") not in self.s.stacks:
             if isinstance(a[0], str) and a[0].startswith("GL_MATRIX"):
                 fail_call(no, f"glMatrixMode({printable(a[0])}) is not emulated")
             return   # GL_INVALID_ENUM: the call does nothing
@@ -57,7 +58,23 @@ class TransformCalls:
         self.set_cur(mat_mul(self.cur(), mat_scale(*[number(x, no, "a scale") for x in a[:3]])), no)
 
     def h_rotate(self, no, name, a, args):
-        self.set_cur(mat_mul(self.cur(), mat_rotate(*[number(x, no, "a rotation") for x in a[:4]])), no)
+        angle, x, y, z = [number(v, no, "a rotation") for v in a[:4]]
+        if sum(v != 0.0 for v in (x, y, z)) > 1:
+            # An axis off the coordinate axes is normalised in single
+            # precision (Mesa's _math_matrix_rotate): one of length 1e-4 or
+            # less leaves the matrix as it is, and one whose squared length
+            # overflows a float becomes (0, 0, 0), a scale by cos(angle).
+            x32, y32, z32 = np.float32(x), np.float32(y), np.float32(z)
+            with np.errstate(over="ignore"):
+                mag = np.sqrt(x32 * x32 + y32 * y32 + z32 * z32)
+            if mag <= np.float32(1e-4):
+                return
+            if np.isinf(mag):
+                m = np.identity(4)
+                m[0, 0] = m[1, 1] = m[2, 2] = math.cos(math.radians(angle))
+                self.set_cur(mat_mul(self.cur(), m), no)
+                return
+        self.set_cur(mat_mul(self.cur(), mat_rotate(angle, x, y, z)), no)
 
     def h_ortho(self, no, name, a, args):
         l, r, b, t, n, f = [number(x, no, "a bound") for x in a[:6]]
@@ -135,7 +152,7 @@ class TransformCalls:
             fail_call(no, f"{name}({origin}, {depth}) is not emulated")
 
     def h_depth_range(self, no, name, a, args):
-        n, f = [min(1.0, max(0.0, number(v, no, "a depth range bound"))) for v in a[:2]]
+        n, f = [clamped01(v, no, "a depth range bound") for v in a[:2]]
         self.s.depth_range = (n, f)
 
     def h_clip_plane(self, no, name, a, args):

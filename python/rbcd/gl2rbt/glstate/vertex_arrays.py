@@ -1,8 +1,15 @@
 """The fixed-function vertex array: where a GL 1.x draw's positions come from."""
 import numpy as np
 
-from ..errors import fail_call, printable
+from ...cli import I32, integer
+from ..errors import checked, fail_call, printable
 from ..gl_tables import ARRAY_TYPES, INDEX_TYPES
+from . import enum_arg
+
+# The types glVertexPointer takes (Mesa 22.3): desktop GL's, and OpenGL ES 1's.
+VERTEX_POINTER_TYPES = {"GL_SHORT", "GL_INT", "GL_FLOAT", "GL_DOUBLE", "GL_HALF_FLOAT", "GL_INT_2_10_10_10_REV",
+                        "GL_UNSIGNED_INT_2_10_10_10_REV"}
+VERTEX_POINTER_TYPES_ES = {"GL_BYTE", "GL_SHORT", "GL_FLOAT", "GL_FIXED"}
 
 
 class VertexArrayCalls:
@@ -69,12 +76,21 @@ class VertexArrayCalls:
 
     def h_vertex_pointer(self, no, name, a, args):
         d = dict(args)
+        size = checked(no, integer, d.get("size", 4), f"{name}: the size", *I32)
+        stride = checked(no, integer, d.get("stride", 0), f"{name}: the stride", *I32)
+        kind = enum_arg(d.get("type", "GL_FLOAT"), no, f"{name}: the type")
+        # Mesa's rules for desktop GL: the call does nothing otherwise.
+        if kind not in (VERTEX_POINTER_TYPES_ES if self.es else VERTEX_POINTER_TYPES):
+            return   # GL_INVALID_ENUM
+        if not 2 <= size <= 4:
+            return   # GL_INVALID_VALUE
+        if stride < 0:
+            # GL_INVALID_VALUE, which Mesa 22.3 reports and yet keeps the
+            # stride: its draws then fetch before the array's start.
+            fail_call(no, f"{name}: a negative stride ({stride}): GL ignores the call, Mesa keeps the stride and "
+                      "reads outside the array; not emulated")
         arr = self.s.vertex_array
-        arr.size = d.get("size", 4)
-        arr.type = d.get("type", "GL_FLOAT")
-        arr.stride = d.get("stride", 0)
-        if not isinstance(arr.size, int) or not isinstance(arr.stride, int) or arr.stride < 0:
-            fail_call(no, "glVertexPointer with an impossible size or stride")
+        arr.size, arr.type, arr.stride = size, kind, stride
         p = d.get("pointer")
         arr.buffer = self.s.bound["GL_ARRAY_BUFFER"]
         if arr.buffer:
