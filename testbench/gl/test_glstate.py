@@ -510,3 +510,25 @@ def test_geometry_leaves_out_vertices_at_infinity():
     g.geo_objects = {5: [(verts, np.array([[0, 2, 3]]))]}
     g.write_geometry_frame()
     assert g.geo.getvalue().splitlines()[2:] == ["mesh 5 3 1", "v 0 0 -1", "v 1 0 -1", "v 0 1 -1", "t 0 1 2"]
+
+
+def test_geometry_is_cut_at_the_plane_in_front_of_the_camera():
+    """clip_near: a triangle wholly in front is kept as it is, one wholly
+    behind (w < W_MIN) dropped, and one across w = W_MIN cut to its front
+    part, whose new corners lie on the plane and on the triangle's edges."""
+    from rbcd.gl2rbt.geometry import W_MIN, clip_near
+    clip = np.array([[0, 0, 0, 1], [1, 0, 0, 1], [0, 1, 0, 1],          # in front
+                     [0, 0, 0, -1], [1, 0, 0, -2], [0, 1, 0, -1],       # behind
+                     [0, 0, 0, 1], [4, 0, 0, -1], [0, 4, 0, -1]], float)  # across: one corner in front
+    tris = np.arange(9).reshape(3, 3)
+    verts, kept = clip_near(clip, tris)
+    assert kept[0].tolist() == [0, 1, 2] and len(kept) == 2, kept
+    cut = verts[kept[1]]
+    assert (cut[:, 3] >= W_MIN * (1 - 1e-9)).all(), cut
+    assert np.isclose(cut[:, 3], W_MIN, rtol=1e-9, atol=0).sum() == 2, "two new corners on the plane"
+    t = (1 - W_MIN) / 2   # along both edges from the front corner
+    assert np.allclose(sorted(cut[:, :2].tolist()), sorted([[0, 0], [4 * t, 0], [0, 4 * t]])), cut
+    # Two corners in front: a quadrilateral, two triangles.
+    clip2 = np.array([[0, 0, 0, 1], [1, 0, 0, 1], [0, 1, 0, -1]], float)
+    verts2, kept2 = clip_near(clip2, np.array([[0, 1, 2]]))
+    assert len(kept2) == 2 and (verts2[kept2][:, :, 3] >= W_MIN * (1 - 1e-9)).all()
