@@ -532,3 +532,32 @@ def test_geometry_is_cut_at_the_plane_in_front_of_the_camera():
     clip2 = np.array([[0, 0, 0, 1], [1, 0, 0, 1], [0, 1, 0, -1]], float)
     verts2, kept2 = clip_near(clip2, np.array([[0, 1, 2]]))
     assert len(kept2) == 2 and (verts2[kept2][:, :, 3] >= W_MIN * (1 - 1e-9)).all()
+
+
+def test_gl4_and_es3_forms_of_clears_and_buffers():
+    """glClearBuffer of the depth clears it as glClear does (clamped, under
+    the scissor and the depth mask), its colour form changes no depth;
+    glBufferStorage is glBufferData once (a later glBufferData on it is
+    GL_INVALID_OPERATION); invalidating a framebuffer changes nothing drawn;
+    a persistent mapping, whose writes apitrace does not record as memcpy,
+    is refused."""
+    gl = GL()
+    gl.glClearBufferfv(buffer="GL_DEPTH", drawbuffer=0, value=[0.25])
+    gl.glClearBufferfi(buffer="GL_DEPTH_STENCIL", drawbuffer=0, depth=7.0, stencil=0)
+    gl.glClearBufferfv(buffer="GL_COLOR", drawbuffer=0, value=[0, 0, 0, 1])
+    gl.glClearBufferfv(buffer="GL_DEPTH", drawbuffer=1, value=[0.5])
+    gl.glDepthMask("GL_FALSE")
+    gl.glClearBufferfv(buffer="GL_DEPTH", drawbuffer=0, value=[0.5])
+    assert [r[2] for r in gl.records("C")] == [0.25, 1.0]
+    gl.glInvalidateFramebuffer(target="GL_FRAMEBUFFER", numAttachments=1, attachments=["GL_DEPTH_ATTACHMENT"])
+    verts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0]], "<f4")
+    gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=3)
+    gl.glBufferStorage(target="GL_ARRAY_BUFFER", size=verts.nbytes, data=verts.tobytes(), flags=0)
+    gl.glBufferData(target="GL_ARRAY_BUFFER", size=verts.nbytes, data=(verts * 3).tobytes(), usage="GL_STATIC_DRAW")
+    gl.glEnableClientState("GL_VERTEX_ARRAY")
+    gl.glVertexPointer(size=3, type="GL_FLOAT", stride=0, pointer=0)
+    gl.glDrawArrays(mode="GL_TRIANGLES", first=0, count=3)
+    assert gl.draws()[-1]["clip"][:, :3].tolist() == verts.tolist()
+    with pytest.raises(ConvertError, match="a persistent mapping"):
+        gl.glMapBufferRange(target="GL_ARRAY_BUFFER", offset=0, length=12,
+                            access=("GL_MAP_WRITE_BIT", "GL_MAP_PERSISTENT_BIT"), ret=1 << 20)

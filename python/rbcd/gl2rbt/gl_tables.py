@@ -46,6 +46,9 @@ IGNORED_PREFIXES = (
     "glClientWaitSync", "glWaitSync", "glDeleteSync", "glProvokingVertex",
     # Renderbuffer names (their storage's size is read: glRenderbufferStorage).
     "glGenRenderbuffers", "glDeleteRenderbuffers",
+    # Hints that a framebuffer's contents are no longer needed (ES 3 and its
+    # EXT form): they change no pixel a later draw or the unit sees.
+    "glInvalidateFramebuffer", "glInvalidateSubFramebuffer", "glDiscardFramebuffer",
 )
 # Capabilities of glEnable/glDisable whose effect on the unit's input is nil or
 # emulated; others are refused when enabled.

@@ -59,6 +59,7 @@ class GLState:
         self.buffer_versions = {}
         self.buffer_written = {}   # large buffers: the [start, end) extents ever written
         self.buffer_held = {}      # buffer -> bytes of memory its data holds
+        self.immutable_buffers = set()   # made by glBufferStorage
         self.buffer_bytes_in_all = 0
         self.next_version = 0
         self.bound = {"GL_ARRAY_BUFFER": 0, "GL_ELEMENT_ARRAY_BUFFER": 0}

@@ -117,8 +117,8 @@ class BufferCalls:
         if not is_buffer_target(target) or size < 0 or usage not in BUFFER_USAGES:
             return
         b = self.s.bound.get(target, 0)
-        if not b:
-            return
+        if not b or b in self.s.immutable_buffers:
+            return   # GL_INVALID_OPERATION: no buffer, or glBufferStorage's
         if size > MAX_BUFFER_BYTES:
             fail_call(no, f"{name}: {size} bytes, more than a buffer's {MAX_BUFFER_BYTES} (docs/gl-capture.md, limits)")
         data = d.get("data")
@@ -135,6 +135,19 @@ class BufferCalls:
         else:
             self.s.buffer_written.pop(b, None)
         self.changed(no, name, b, 0, written)
+
+    def h_buffer_storage(self, no, name, a, args):
+        """glBufferStorage (GL 4.4, EXT in ES): immutable storage, otherwise
+        as glBufferData; of size 0 or less, GL_INVALID_VALUE."""
+        d = dict(args)
+        size = checked(no, integer, d.get("size", 0), f"{name}: the size", *I64)
+        target = enum_arg(d.get("target"), no, f"{name}: the target")
+        b = self.s.bound.get(target, 0) if is_buffer_target(target) else 0
+        if size <= 0 or not b or b in self.s.immutable_buffers:
+            return
+        self.h_buffer_data(no, name, a, [("target", target), ("size", size), ("data", d.get("data")),
+                                         ("usage", "GL_STATIC_DRAW")])
+        self.s.immutable_buffers.add(b)
 
     def h_buffer_sub_data(self, no, name, a, args):
         d = dict(args)
@@ -180,6 +193,10 @@ class BufferCalls:
 
     def h_map_buffer(self, no, name, a, args):
         d = dict(args)
+        access = d.get("access", ())
+        if "GL_MAP_PERSISTENT_BIT" in (access if isinstance(access, (list, tuple)) else (access,)):
+            fail_call(no, f"{name}: a persistent mapping, whose writes apitrace does not record as it "
+                      "records other mapped writes: not emulated")
         b = self.bound_buffer(no, name, d.get("target"))
         buf = self.s.buffers.get(b)
         ptr = self.ret
@@ -218,6 +235,7 @@ class BufferCalls:
                 self.s.buffers.pop(b, None)
                 self.s.buffer_versions.pop(b, None)
                 self.s.buffer_written.pop(b, None)
+                self.s.immutable_buffers.discard(b)
                 self.held_bytes(no, name, b, 0)
                 self.s.buffer_held.pop(b, None)
                 self.s.mappings.pop(b, None)
@@ -234,6 +252,7 @@ class BufferCalls:
         "glBindBufferRange": h_bind_buffer_base,
         "glBufferData": h_buffer_data,
         "glBufferSubData": h_buffer_sub_data,
+        "glBufferStorage": h_buffer_storage,
         "glCopyBufferSubData": h_copy_buffer_sub_data,
         "glMapBuffer": h_map_buffer,
         "glMapBufferRange": h_map_buffer,

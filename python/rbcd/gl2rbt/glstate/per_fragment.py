@@ -6,7 +6,7 @@ import numpy as np
 
 from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
-from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES
+from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES, base_name
 from . import clamped01, enum_arg, gl_boolean, number
 
 CLEAR_BITS = {0x100: "GL_DEPTH_BUFFER_BIT", 0x200: "GL_ACCUM_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT",
@@ -89,6 +89,23 @@ class PerFragmentCalls:
             rect = self.scissor_rect()
             self.emit(b"C" + struct.pack("<Qd4i", no, self.s.clear_depth, *rect))
 
+    def h_clear_buffer(self, no, name, a, args):
+        """glClearBufferfv(GL_DEPTH, 0, [d]) and glClearBufferfi(GL_DEPTH_STENCIL,
+        0, d, s): a depth clear as glClear's, to d clamped to [0, 1]; the
+        colour and stencil forms change no depth."""
+        d = dict(args)
+        buffer = enum_arg(d.get("buffer"), no, f"{name}: the buffer")
+        if (buffer, base_name(name)) not in (("GL_DEPTH", "glClearBufferfv"), ("GL_DEPTH_STENCIL", "glClearBufferfi")):
+            return
+        if checked(no, integer, d.get("drawbuffer"), f"{name}: the draw buffer", *I32) != 0:
+            return   # GL_INVALID_VALUE
+        value = d.get("value")
+        depth = value[0] if isinstance(value, list) and value else d.get("depth", value)
+        depth = clamped01(depth, no, f"{name}: the depth")
+        if self.active and self.s.depth_mask:
+            self.open_frame(no)
+            self.emit(b"C" + struct.pack("<Qd4i", no, depth, *self.scissor_rect()))
+
     def enable(self, no, cap, on):
         s = self.s
         simple = {"GL_DEPTH_TEST": "depth_test", "GL_CULL_FACE": "cull", "GL_SCISSOR_TEST": "scissor_test",
@@ -124,6 +141,10 @@ class PerFragmentCalls:
         "glClearDepth": h_clear_depth,
         "glClearDepthf": h_clear_depth,
         "glClear": h_clear,
+        "glClearBufferfv": h_clear_buffer,
+        "glClearBufferfi": h_clear_buffer,
+        "glClearBufferiv": h_clear_buffer,
+        "glClearBufferuiv": h_clear_buffer,
         "glEnable": h_enable,
         "glDisable": h_disable,
     }
