@@ -561,3 +561,34 @@ def test_gl4_and_es3_forms_of_clears_and_buffers():
     with pytest.raises(ConvertError, match="a persistent mapping"):
         gl.glMapBufferRange(target="GL_ARRAY_BUFFER", offset=0, length=12,
                             access=("GL_MAP_WRITE_BIT", "GL_MAP_PERSISTENT_BIT"), ret=1 << 20)
+
+
+def test_rules_name_textures_uploaded_as_gl4_and_es3_do(tmp_path):
+    """glTexStorage2D then a glTexSubImage2D of the whole level (or a
+    compressed image) gives the texture a digest rules can name; an update
+    of part of the level leaves it; the reduced capture carries the digest
+    in place of the pixels and matches as the pixels do."""
+    from rbcd.gl2rbt.glstate.framebuffers import texture_image_digest
+    from rbcd.gl2rbt.reduced import reduced_args
+    from rbcd.gl2rbt.selection import Selection
+    image = bytes(range(256)) * 16
+    sub = dict(target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=32, height=32, format="GL_RGBA",
+               type="GL_UNSIGNED_BYTE", pixels=image)
+    comp = dict(target="GL_TEXTURE_2D", level=0, internalformat="GL_COMPRESSED_RGB8_ETC2", width=32, height=32,
+                border=0, imageSize=512, data=image[:512])
+    rules = tmp_path / "rules.toml"
+    for upload, digest in ((sub, texture_image_digest(sub)), (comp, texture_image_digest(comp))):
+        assert digest and len(digest) == 16
+        rules.write_text(f'[[object]]\nid = 9\ntexture_image = ["{digest[:8]}"]\n')
+        name = "glTexSubImage2D" if "xoffset" in upload else "glCompressedTexImage2D"
+        for args in (upload, dict(reduced_args(name, list(upload.items()))), None):
+            gl = GL()
+            gl.conv.select = Selection(str(rules))
+            gl.glBindTexture(target="GL_TEXTURE_2D", texture=4)
+            gl.glTexStorage2D(target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA8", width=32, height=32)
+            if args is not None:
+                getattr(gl, name)(**args)
+            # A part of the level: the digest stays.
+            gl.glTexSubImage2D(**dict(sub, xoffset=8, width=8, height=8, pixels=image[:256]))
+            square(gl)
+            assert [d["object"] for d in gl.draws()] == [0 if args is None else 9], (name, args is None)

@@ -32,7 +32,8 @@ REDUCED_KEEP = ("glX", "egl", "wgl")
 # Arguments a handled call carries that the emulation never reads whole:
 # texture images (a texture's size is read, and its image's digest, which
 # takes the pixels' place).
-REDUCED_DROP = {"glTexImage2D": "pixels", "glTexImage2DMultisample": None}
+REDUCED_DROP = {"glTexImage2D": "pixels", "glTexSubImage2D": "pixels", "glCompressedTexImage2D": "data",
+                "glCompressedTexSubImage2D": "data", "glTexImage2DMultisample": None}
 
 
 def reduced_keeps(name):

@@ -26,7 +26,7 @@ def texture_image_digest(d):
     them). Selection rules name textures by it (`texture_image`): unlike the
     GL name, it does not depend on the order the game loads its textures,
     so one rule names a kart's texture on every track."""
-    pixels = d.get("pixels")
+    pixels = d.get("pixels", d.get("data"))
     if isinstance(pixels, tuple):
         # A reduced capture's digest; anything else in its place is the
         # file's error (the handler's net names the call).
@@ -82,6 +82,18 @@ class FramebufferCalls:
         if d.get("level", 0) == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
             self.s.sizes[("texture", tex)] = (w, h)
+            self.s.texture_images[tex] = texture_image_digest(d)
+
+    def h_tex_sub_image(self, no, name, a, args):
+        """glTexSubImage2D and glCompressedTexSubImage2D of a whole level 0 (the
+        usual upload after glTexStorage2D): the texture's image is the one
+        given, and rules name it by its digest (of the call's own size,
+        format, type and pixels); a part of a level leaves the digest of the
+        last whole upload."""
+        d = dict(args)
+        tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+        if d.get("level", 0) == 0 and d.get("xoffset") == 0 and d.get("yoffset") == 0 and \
+                self.s.sizes.get(("texture", tex)) == (d.get("width"), d.get("height")):
             self.s.texture_images[tex] = texture_image_digest(d)
 
     def h_active_texture(self, no, name, a, args):
@@ -164,6 +176,9 @@ class FramebufferCalls:
         "glRenderbufferStorageMultisample": h_renderbuffer_storage,
         "glTexImage2D": h_tex_image,
         "glTexStorage2D": h_tex_image,
+        "glCompressedTexImage2D": h_tex_image,
+        "glTexSubImage2D": h_tex_sub_image,
+        "glCompressedTexSubImage2D": h_tex_sub_image,
         "glTexImage2DMultisample": h_tex_image,
         "glTexStorage2DMultisample": h_tex_image,
         "glActiveTexture": h_active_texture,
