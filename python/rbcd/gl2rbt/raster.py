@@ -3,13 +3,14 @@ rasterizes it through the scene front end's tile rasterizer and writes the
 trace; and the run's report."""
 import json
 import os
+import re
 import shutil
 import struct
 import subprocess
 import tempfile
 
 from ..cli import check_outputs, write_output
-from .capture import check_input_file, read_calls
+from .capture import check_input_file, check_rest, read_calls
 from .converter import Converter
 from .errors import ConvertError, RasterStopped, ToolError, printable
 from .glstate.draws import FRAGMENT_EFFECT_KEYS
@@ -110,12 +111,14 @@ def convert_in(args, tmpdir, listing, ids):
 
 def run_calls(args, conv, reduced):
     """Every call of the capture into the converter, to the last frame asked for."""
-    for call in read_calls(args.trace):
+    calls = read_calls(args.trace)
+    for call in calls:
         conv.last_call = call[0]
         if reduced:
             reduced.call(call)
         conv.handle(call)
         if conv.last_frame is not None and conv.frame > conv.last_frame:
+            check_rest(calls)
             break
         if args.snapshots and conv.active and call[0] in args.snapshots:
             conv.open_frame(call[0])
