@@ -36,6 +36,11 @@ class UsageError(Exception):
     """Bad input or command line: one line, exit 2."""
 
 
+class WriteError(Exception):
+    """An output that could be created but not written (a full device, a
+    rename refused): "PATH: write failed: REASON", one line, exit 1."""
+
+
 # ---- the input rule: every value read from an input file, checked before use
 # for its type, finiteness and range (the C structs it is packed into, or
 # what the format allows), and named in the message when it fails.
@@ -321,6 +326,8 @@ def write_output(path, data, what="output"):
             raise UsageError(f"{path}: cannot create: {e.strerror}")
         try:
             _write_all(fd, data)
+        except OSError as e:
+            raise WriteError(f"{escape(path)}: write failed: {e.strerror}") from None
         finally:
             os.close(fd)
         return
@@ -338,13 +345,15 @@ def write_output(path, data, what="output"):
         os.close(fd)
         fd = -1
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as e:
         if fd >= 0:
             os.close(fd)
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(e, OSError):
+            raise WriteError(f"{escape(path)}: write failed: {e.strerror}") from None
         raise
     finally:
         _temporaries.discard(tmp)
@@ -371,8 +380,8 @@ def _interrupt(signum, _frame):
 
 def main_wrapper(prog, fn, argv):
     """fn(argv) with the project's exit statuses: its return value; 2 and one line for
-    UsageError (and a file nested too deep for the parser); 1 and one line for any
-    other error; 130 when interrupted. Never a traceback."""
+    UsageError; 1 and one line for WriteError and any other error; 130 when
+    interrupted. Never a traceback."""
     for s in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(s, _interrupt)
     try:
@@ -380,6 +389,9 @@ def main_wrapper(prog, fn, argv):
     except UsageError as e:
         say(prog, str(e))
         return 2
+    except WriteError as e:
+        say(prog, str(e))
+        return 1
     except KeyboardInterrupt:
         say(prog, "interrupted")
         return 130

@@ -173,3 +173,56 @@ def test_the_rest_of_a_reduced_capture_is_checked(tmp_path):
                         ("noend.xz", "no end record")):
         refused(gl2rbt(tmp_path, tmp_path / name, "-o", tmp_path / "o.rbt", "--frames", "0:0"), name, words)
     assert left_behind(tmp_path, ["good.xz", "g.rbt", "junk.xz", "cut.xz", "noend.xz"]) == []
+
+
+# ---- the hidden outputs and late write failures
+
+def test_hidden_outputs_never_destroy_inputs(tmp_path):
+    """--stream-out and --depth-out are checked against the inputs and the
+    other outputs as every output is (--stream-out naming the selection file
+    had emptied it before it was read, with exit 0)."""
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    rules = tmp_path / "rules.toml"
+    rules.write_text('[[object]]\nid = 3\nvertex_count = [3, 3]\n')
+    before = {p: open(p, "rb").read() for p in (cap, rules)}
+    out = ["-o", tmp_path / "c.rbt"]
+    refused(gl2rbt(tmp_path, cap, *out, "--stream-out", cap), "--stream-out", "is also the capture")
+    refused(gl2rbt(tmp_path, cap, *out, "--select", rules, "--stream-out", rules), "is also the selection file")
+    refused(gl2rbt(tmp_path, cap, *out, "--stream-out", tmp_path / "c.rbt"), "is also -o's output")
+    os.mkdir(tmp_path / "d")
+    depth_cap = tmp_path / "d" / "x.0.depth"
+    os.link(cap, depth_cap)   # a capture named as --depth-out's first file
+    refused(gl2rbt(tmp_path, depth_cap, *out, "--depth-out", tmp_path / "d" / "x", "--snapshot-calls", "7"),
+            "--depth-out")
+    os.symlink(cap, tmp_path / "d" / "y.0.depth")   # one of its files a link to the capture
+    refused(gl2rbt(tmp_path, cap, *out, "--depth-out", tmp_path / "d" / "y", "--snapshot-calls", "7"),
+            "is also the capture")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "d" / "z.0.depth", "--depth-out", tmp_path / "d" / "z"),
+            "--depth-out")
+    for p, data in before.items():
+        assert open(p, "rb").read() == data, f"{p} was changed"
+    assert left_behind(tmp_path, ["c.xz", "rules.toml", "d"]) == []
+    assert sorted(os.listdir(tmp_path / "d")) == ["x.0.depth", "y.0.depth"]
+
+
+def test_a_failed_run_leaves_no_stream_copy(tmp_path):
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--frames", "7:9", "--stream-out",
+                   tmp_path / "stream.bin"), "--frames selects none")
+    assert left_behind(tmp_path, ["c.xz"]) == [], "a partial stream copy was left"
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--stream-out", tmp_path / "stream.bin")
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "stream.bin").read_bytes().startswith(b"RBCDGLD2")
+    assert left_behind(tmp_path, ["c.xz", "c.rbt", "stream.bin"]) == []
+
+
+@pytest.mark.parametrize("args", [["-o", "c.rbt", "--summary", "/dev/full"],
+                                  ["--list-draws", "0", "--image", "/dev/full"]], ids=["summary", "image"])
+def test_a_full_device_is_named(tmp_path, args):
+    """--summary and --image on a full device: "PATH: write failed", exit 1,
+    as -o and --geometry (it was "internal error: OSError"), nothing left."""
+    pytest.importorskip("PIL")
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, *[tmp_path / a if a == "c.rbt" else a for a in args])
+    refused(r, "/dev/full: write failed: No space left on device", status=1)
+    assert left_behind(tmp_path, ["c.xz"]) == []
