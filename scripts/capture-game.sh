@@ -22,8 +22,11 @@
 # --from-trace T makes the entry from T, a capture this script kept, with the
 # same arguments, without running the game again.
 #
-# Exit 2 with one line on a bad argument; 1 when the game, Xvfb, apitrace or
-# the conversion fails. OUT_DIR is written only at the end, complete.
+# Exit 2 with one line on a bad argument (an OUT_DIR that is empty, exists,
+# is a symlink or cannot be created, an unusable TMPDIR: said before the game
+# runs), on a capture that holds fewer frames than asked for, or on a
+# capture the converter refuses; 1 when the game, Xvfb, apitrace or the
+# conversion otherwise fails. OUT_DIR is written only at the end, complete.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
@@ -51,6 +54,8 @@ case "$game" in openarena|neverball|supertuxkart) ;; *) usage "unknown game '$ga
 # The shipped SuperTuxKart rules know four kart models (below).
 [[ "$karts" =~ ^[1-4]$ ]] || usage "--karts '$karts' is not a number from 1 to 4"
 [ -z "$skip" ] || [[ "$skip" =~ ^[0-9]{1,4}$ ]] || usage "--skip '$skip' is not a number below 10000"
+[ -n "$out" ] || usage "OUT_DIR is empty"
+[ ! -L "$out" ] || usage "$out is a symlink: the entry is written only into a new directory"
 [ ! -e "$out" ] || usage "$out exists: the entry is written only into a new directory"
 [ -z "$from" ] || [ -f "$from" ] || usage "--from-trace $from: not a file"
 # Games and tools: scripts/setup.sh --games (and --gl for the converter).
@@ -78,7 +83,7 @@ staged=$(mktemp -d "$parent/.$(basename "$out").XXXXXXXX" 2>/dev/null) ||
   usage "$out: cannot create the entry in $parent (not writable?)"
 trap 'rm -rf "$staged"' EXIT
 work=$(mktemp -d "${TMPDIR:-/tmp}/capture-game.XXXXXXXX" 2>/dev/null) ||
-  { echo "capture-game.sh: cannot create a work directory in ${TMPDIR:-/tmp}" >&2; exit 1; }
+  { echo "capture-game.sh: cannot create a work directory in $(oneline "${TMPDIR:-/tmp}") (TMPDIR)" >&2; exit 2; }
 trap 'rm -rf "$work" "$staged"' EXIT
 mkdir -p "$work/home" "$work/entry"
 width=800 height=480
@@ -224,7 +229,7 @@ RBCD_GL_RASTER=$raster "$here/rbcd-gl2rbt" "$capture" -o "$work/trace.rbt.zst" -
   --screen $width $height --select "$rules" --geometry "$work/geometry.geo" \
   --summary "$work/entry/summary.jsonl" --reduced-out "$work/entry/calls.xz" -q
 got=$(wc -l <"$work/entry/summary.jsonl")
-[ "$got" = "$frames" ] || { echo "capture-game.sh: the capture holds only $got of the $frames frames asked for after the first $skip" >&2; exit 1; }
+[ "$got" = "$frames" ] || { echo "capture-game.sh: the capture holds only $got of the $frames frames asked for after the first $skip" >&2; exit 2; }
 sum() { sha256sum | cut -d' ' -f1; }
 {
   echo "# How this game-suite entry was captured (scripts/capture-game.sh; docs/games.md)."

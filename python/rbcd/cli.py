@@ -36,6 +36,11 @@ class UsageError(Exception):
     """Bad input or command line: one line, exit 2."""
 
 
+class WriteError(Exception):
+    """An output that could be created but not written (a full device, a
+    rename refused): "PATH: write failed: REASON", one line, exit 1."""
+
+
 # ---- the input rule: every value read from an input file, checked before use
 # for its type, finiteness and range (the C structs it is packed into, or
 # what the format allows), and named in the message when it fails.
@@ -48,24 +53,73 @@ U63 = (0, (1 << 63) - 1)
 def integer(v, what, lo, hi):
     """v, an integer in [lo, hi] (a bool is not one); UsageError naming `what`."""
     if isinstance(v, bool) or not isinstance(v, int):
-        raise UsageError(f"{what}: {escape(repr(v))[:60]} is not an integer")
+        raise UsageError(f"{what}: {describe(v)} is not an integer")
     if not lo <= v <= hi:
-        raise UsageError(f"{what}: {v} is outside [{lo}, {hi}]")
+        raise UsageError(f"{what}: {describe(v)} is outside [{lo}, {hi}]")
     return v
 
 
 def real(v, what, lo=None, hi=None):
     """v, a finite number in [lo, hi] (either bound may be None), as a float."""
     if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise UsageError(f"{what}: {escape(repr(v))[:60]} is not a number")
+        raise UsageError(f"{what}: {describe(v)} is not a number")
     if isinstance(v, float) and v != v or v in (float("inf"), float("-inf")):
         raise UsageError(f"{what}: {v} is not finite")
     if (lo is not None and v < lo) or (hi is not None and v > hi):
-        raise UsageError(f"{what}: {v} is outside [{lo}, {hi}]")
+        raise UsageError(f"{what}: {describe(v)} is outside [{lo}, {hi}]")
     try:
         return float(v)
     except OverflowError:
-        raise UsageError(f"{what}: {v} is too large")
+        raise UsageError(f"{what}: {describe(v)} is too large")
+
+
+# A value described in a message: containers to this depth and this many
+# items, integers written out up to this many bits.
+DESCRIBE_DEPTH, DESCRIBE_ITEMS, DESCRIBE_BITS = 2, 4, 128
+
+
+def describe(v, limit=60):
+    """A value read from an input, for a message: one escaped line of at
+    most `limit` characters, built in time and memory bounded whatever the
+    value holds. Only a bounded part of it is ever looked at: a string's
+    first `limit` characters, a container's first DESCRIBE_ITEMS items to
+    DESCRIBE_DEPTH levels (a pickle of shared references can make a list of
+    10^9 elements out of a kilobyte; its repr would take gigabytes), bytes
+    and long integers by their size."""
+    text = escape(_describe(v, DESCRIBE_DEPTH, limit))
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def _describe(v, depth, limit):
+    if v is None or isinstance(v, (bool, float)):
+        return repr(v)
+    if isinstance(v, int):
+        bits = v.bit_length()
+        return repr(int(v)) if bits <= DESCRIBE_BITS else f"an integer of {bits} bits"
+    if isinstance(v, str):
+        return repr(v[:limit]) + ("..." if len(v) > limit else "")
+    if isinstance(v, (bytes, bytearray, memoryview)):
+        return f"{len(v)} bytes"
+    if isinstance(v, (list, tuple)):
+        kind = "a list" if isinstance(v, list) else "a tuple"
+        if depth <= 0 or len(v) > DESCRIBE_ITEMS:
+            return f"{kind} of {len(v)} elements"
+        inner = ", ".join(_describe(x, depth - 1, limit) for x in v)
+        return f"[{inner}]" if isinstance(v, list) else f"({inner}{',' if len(v) == 1 else ''})"
+    if isinstance(v, dict):
+        return f"a dict of {len(v)} entries"
+    return f"a {type(v).__name__}"
+
+
+def exception_text(e, limit=200):
+    """An exception's message, bounded as describe() is: str(e) when its
+    arguments are text and small numbers (its own wording), else its
+    arguments described (a KeyError's key, say, can be any value read)."""
+    if all(a is None or isinstance(a, (str, bool, float)) or isinstance(a, int) and a.bit_length() <= DESCRIBE_BITS
+           or isinstance(a, bytes) and len(a) <= limit for a in e.args) \
+            and (len(e.args) == 1 or sum(len(a) for a in e.args if isinstance(a, str)) <= limit * 4):
+        return str(e)
+    return ", ".join(describe(a, limit) for a in e.args[:DESCRIBE_ITEMS])
 
 
 def _escape_char(ch):
@@ -272,6 +326,8 @@ def write_output(path, data, what="output"):
             raise UsageError(f"{path}: cannot create: {e.strerror}")
         try:
             _write_all(fd, data)
+        except OSError as e:
+            raise WriteError(f"{escape(path)}: write failed: {e.strerror}") from None
         finally:
             os.close(fd)
         return
@@ -289,13 +345,15 @@ def write_output(path, data, what="output"):
         os.close(fd)
         fd = -1
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as e:
         if fd >= 0:
             os.close(fd)
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(e, OSError):
+            raise WriteError(f"{escape(path)}: write failed: {e.strerror}") from None
         raise
     finally:
         _temporaries.discard(tmp)
@@ -322,8 +380,8 @@ def _interrupt(signum, _frame):
 
 def main_wrapper(prog, fn, argv):
     """fn(argv) with the project's exit statuses: its return value; 2 and one line for
-    UsageError (and a file nested too deep for the parser); 1 and one line for any
-    other error; 130 when interrupted. Never a traceback."""
+    UsageError; 1 and one line for WriteError and any other error; 130 when
+    interrupted. Never a traceback."""
     for s in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(s, _interrupt)
     try:
@@ -331,6 +389,9 @@ def main_wrapper(prog, fn, argv):
     except UsageError as e:
         say(prog, str(e))
         return 2
+    except WriteError as e:
+        say(prog, str(e))
+        return 1
     except KeyboardInterrupt:
         say(prog, "interrupted")
         return 130

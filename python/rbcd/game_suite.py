@@ -11,7 +11,8 @@ the fragment traces and geometry the figures run on.
         scripts/rbcd-gl2rbt, then checked against the recorded checksums. An
         entry whose outputs are already there and match is not converted
         again. --frames K converts only the first K frames (no checksum:
-        the tests' cut-down inputs).
+        the tests' cut-down inputs). No output may be an input of an entry
+        or a symlink (check_expand_outputs).
 
 Exit 2 with one line on a malformed entry or argument (naming the file and
 key), 1 when a regenerated file does not match its checksum or the converter
@@ -25,7 +26,8 @@ import subprocess
 import sys
 import tomllib
 
-from rbcd.cli import UsageError, main_wrapper, open_trace, read_input_text, say, trace_errors, write_output
+from rbcd.cli import (UsageError, check_outputs, main_wrapper, open_trace, read_input_text, say, trace_errors,
+                      write_output)
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter
@@ -65,6 +67,8 @@ class Entry:
             doc = tomllib.loads(text)
         except tomllib.TOMLDecodeError as e:
             raise UsageError(f"{self.toml}: {e}")
+        except RecursionError:   # tomllib parses nested arrays and tables recursively
+            raise UsageError(f"{self.toml}: nested too deep to read") from None
 
         def key(k, kind, table=doc, prefix=""):
             if k not in table:
@@ -86,6 +90,7 @@ class Entry:
         if os.path.isabs(sel) or ".." in sel.split("/"):
             raise UsageError(f"{self.toml}: selection: must be a path inside the repository")
         self.selection = os.path.join(ROOT, sel)
+        self.summary = os.path.join(self.dir, "summary.jsonl")
         sums = key("sha256", dict)
         self.sha = {}
         for k in ("calls", "trace", "geometry"):
@@ -98,6 +103,9 @@ class Entry:
     def check(self):
         if not os.path.isfile(self.calls):
             raise UsageError(f"{self.calls}: cannot read the reduced capture: missing")
+        if not os.path.isfile(self.selection):
+            raise UsageError(f"{self.toml}: selection: {self.selection}: "
+                             + ("not a regular file" if os.path.exists(self.selection) else "missing"))
         got = sha256_file(self.calls)
         if got != self.sha["calls"]:   # the input changed: bad input, exit 2
             raise UsageError(f"{self.calls}: checksum {got[:16]}... is not capture.toml's "
@@ -109,6 +117,14 @@ class Entry:
         # gzip's speed, and --jobs passes over the frames before a worker's.
         return base + ".rbt.zst", base + ".geo", base + ".summary.jsonl"
 
+    def inputs(self):
+        """What expand reads of the entry (the checksums are capture.toml's)."""
+        return [("the reduced capture", self.calls), ("capture.toml", self.toml),
+                ("summary.jsonl", self.summary), ("the selection file", self.selection)]
+
+    def all_outputs(self, out):
+        return self.outputs(out) + (os.path.join(out, self.name + ".capture"),)
+
     def describe(self, out):
         """OUT/NAME.capture: the entry's capture.toml beside its trace (the
         evaluation reads the game from it), named so that nothing takes it
@@ -118,8 +134,7 @@ class Entry:
 
     def committed_summary(self, frames=None):
         """The entry's summary.jsonl as committed, its first `frames` lines."""
-        path = os.path.join(self.dir, "summary.jsonl")
-        text = read_input_text(path, "the entry's summary", 64 << 20)
+        text = read_input_text(self.summary, "the entry's summary", 64 << 20)
         lines = text.splitlines(keepends=True)
         return "".join(lines[:frames] if frames else lines)
 
@@ -178,6 +193,21 @@ class Entry:
         return f"{self.name}: {frames or self.frames} frames"
 
 
+def check_expand_outputs(entries, out):
+    """Before anything is opened: no output of expand is a symlink (it
+    writes its outputs as files of their own: a link there could lead into
+    an entry's inputs or anywhere else), and none is an input of any entry
+    being expanded or another output (device and inode, or the path of a
+    file not yet there: rbcd.cli.check_outputs)."""
+    for e in entries:
+        for p in e.all_outputs(out):
+            if os.path.islink(p):
+                raise UsageError(f"{p}: a symlink: expand writes its outputs as files of their own, "
+                                 "never through a link (remove it)")
+    check_outputs([(f"{e.name}'s {what}", p) for e in entries for what, p in e.inputs()],
+                  [("-o", p) for e in entries for p in e.all_outputs(out)])
+
+
 def entries_of(paths):
     if not paths:
         base = os.path.join(ROOT, "workloads", "games")
@@ -226,6 +256,7 @@ def run(argv):
             raise UsageError("--frames must be at least 1")
         if os.path.exists(args.out) and not os.path.isdir(args.out):
             raise UsageError(f"-o {args.out}: not a directory")
+        check_expand_outputs(entries, args.out)
         try:
             os.makedirs(args.out, exist_ok=True)
         except OSError as e:

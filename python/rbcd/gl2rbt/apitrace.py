@@ -19,6 +19,56 @@ def apitrace_tool():
     return exe
 
 
+# The values one call may carry: the elements of its lists, tuples and dicts,
+# all levels counted, every reference counted (a list naming one list twice
+# counts it twice). The game suite's calls carry at most 31; a reduced
+# capture of 11 KB can carry a list of 30 million references, which the
+# handlers would walk for seconds (and one of shared references, 10^9).
+MAX_RECORD_VALUES = 1 << 20
+
+
+_CONTAINERS = (list, tuple, dict)   # what a pickle read by CallReader can nest
+
+
+def call_values_within(call, limit=MAX_RECORD_VALUES):
+    """Whether the call (no, name, args, ret, flags) carries at most `limit`
+    values in its arguments and return value (MAX_RECORD_VALUES). The walk
+    stops as soon as the count passes the limit, so it costs at most `limit`
+    steps whatever the call holds (about a microsecond for a call of scalar
+    arguments: a tenth of reading it)."""
+    args = call[2]
+    n = len(args)
+    if n > limit:
+        return False
+    stack = []
+    for a in args:   # (name, value) pairs; anything else walked whole
+        if type(a) is tuple:
+            for v in a:
+                if type(v) in _CONTAINERS:
+                    stack.append(v)
+        elif type(a) in _CONTAINERS:
+            stack.append(a)
+    if type(call[3]) in _CONTAINERS:
+        stack.append(call[3])
+    while stack:
+        x = stack.pop()
+        n += len(x)
+        if n > limit:
+            return False
+        if type(x) is dict:
+            n += len(x)
+            x = (*x.keys(), *x.values())
+        for y in x:
+            if type(y) in _CONTAINERS:
+                stack.append(y)
+    return True
+
+
+def too_many_values(no):
+    return ConvertError(f"call {no}: more than {MAX_RECORD_VALUES} values in one call (the limit; "
+                        "docs/gl-capture.md)")
+
+
 class PointerType(int):
     """apitrace's pickled pointers (unpickle.Pointer): an address."""
 
@@ -41,6 +91,7 @@ def read_apitrace_calls(trace, calls=None):
     err = tempfile.TemporaryFile()
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL)
     last = None
+    stopped = False
     try:
         reader = CallReader(p.stdout)
         while True:
@@ -53,13 +104,21 @@ def read_apitrace_calls(trace, calls=None):
             if not (isinstance(c, tuple) and len(c) == 5 and isinstance(c[0], int) and isinstance(c[1], str)
                     and isinstance(c[2], list) and 0 <= c[0] <= (1 << 63) - 1):
                 raise ConvertError(f"{where(last)}: the capture does not decode (unexpected record)")
+            if not call_values_within(c):
+                raise too_many_values(c[0])
             last = c[0]
-            yield c
+            if (yield c) is not None:
+                # capture.check_rest: reading stops at the last frame asked
+                # for, and what apitrace says of the rest is not read.
+                stopped = True
+                break
     finally:
         if p.poll() is None:
             p.kill()
         p.stdout.close()
         rc = p.wait()
+    if stopped:
+        return
     err.seek(0)
     msg = err.read(4096).decode("utf-8", "replace")
     bad = [l for l in msg.splitlines() if "error" in l.lower() or "warning: unexpected end" in l.lower()

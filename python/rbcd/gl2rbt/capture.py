@@ -4,7 +4,7 @@ import stat
 
 from .apitrace import read_apitrace_calls
 from .errors import ConvertError, printable
-from .reduced import is_reduced_capture, read_reduced_calls
+from .reduced import CHECK_REST, is_reduced_capture, read_reduced_calls
 
 
 def read_calls(trace, calls=None):
@@ -17,6 +17,17 @@ def read_calls(trace, calls=None):
         yield from read_reduced_calls(trace)
     else:
         yield from read_apitrace_calls(trace, calls)
+
+
+def check_rest(calls):
+    """When the converter stops reading at the last frame asked for, before
+    the capture's end: a reduced capture's rest is checked (its xz stream to
+    its end, and its end record: reduced.check_rest); an apitrace capture's
+    is not read (docs/gl-capture.md, "Bad input")."""
+    try:
+        calls.send(CHECK_REST)
+    except StopIteration:
+        pass
 
 
 def check_input_file(path):

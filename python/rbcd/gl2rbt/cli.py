@@ -4,7 +4,7 @@ import re
 import signal
 import sys
 
-from ..cli import UsageError, to_standard_output
+from ..cli import UsageError, WriteError, to_standard_output
 from .errors import ConvertError, ToolError, printable
 
 PROG = "rbcd-gl2rbt"
@@ -106,7 +106,7 @@ def run(args):
     except UsageError as e:   # an output rbcd.cli could not write
         sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
         return 2
-    except ToolError as e:
+    except (ToolError, WriteError) as e:   # WriteError: --summary, --image (rbcd.cli.write_output)
         sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
         return 1
     except KeyboardInterrupt:

@@ -9,7 +9,7 @@ import tempfile
 import numpy as np
 
 from .capture import check_input_file, read_calls
-from .converter import Converter
+from .raster import new_converter
 from .errors import ConvertError, ToolError, printable
 from .raster import convert
 from .reduced import is_reduced_capture
@@ -88,7 +88,7 @@ def check_depth(args):
         raise ConvertError("--check-depth replays the capture with Mesa: give the capture itself, "
                            "not a reduced capture")
     # Pass 1: the calls, from the GL state alone.
-    probe = Converter(args, False, None)
+    probe = new_converter(args, False)
     for call in read_calls(args.trace):
         probe.last_call = call[0]
         probe.handle(call)

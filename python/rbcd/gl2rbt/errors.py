@@ -1,5 +1,5 @@
 """The converter's errors and how it names what it read."""
-from ..cli import UsageError, escape
+from ..cli import UsageError, describe, escape, exception_text
 
 
 class ConvertError(UsageError):
@@ -16,8 +16,15 @@ class RasterStopped(Exception):
 
 
 def printable(s, limit=200):
-    """One line (rbcd_cli.escape: non-printable bytes as \\xNN), cut at `limit`."""
-    s = escape(s)
+    """One line (rbcd.cli.escape: non-printable bytes as \\xNN), cut at
+    `limit`; in time and memory bounded by `limit`, whatever `s` is: text is
+    cut before it is escaped, an exception's arguments and any other value
+    are described (rbcd.cli.describe), never written out whole."""
+    if isinstance(s, BaseException):
+        s = exception_text(s, limit)
+    elif not isinstance(s, (str, bytes, bytearray)):
+        return describe(s, limit)
+    s = escape(bytes(s[:limit + 1]) if isinstance(s, bytearray) else s[:limit + 1])
     return s if len(s) <= limit else s[:limit] + "..."
 
 

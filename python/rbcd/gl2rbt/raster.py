@@ -3,13 +3,14 @@ rasterizes it through the scene front end's tile rasterizer and writes the
 trace; and the run's report."""
 import json
 import os
+import re
 import shutil
 import struct
 import subprocess
 import tempfile
 
 from ..cli import check_outputs, write_output
-from .capture import check_input_file, read_calls
+from .capture import check_input_file, check_rest, read_calls
 from .converter import Converter
 from .errors import ConvertError, RasterStopped, ToolError, printable
 from .glstate.draws import FRAGMENT_EFFECT_KEYS
@@ -52,10 +53,55 @@ def convert(args, listing=False, ids=None):
 
 def check_paths(args):
     """The outputs against the inputs and each other, before anything is
-    opened (rbcd.cli.check_outputs)."""
-    check_outputs([("the capture", args.trace), ("the selection file", args.select)],
-                  [("-o", args.output), ("--geometry", args.geometry), ("--summary", args.summary),
-                   ("--reduced-out", getattr(args, "reduced_out", None)), ("--image", getattr(args, "image", None))])
+    opened (rbcd.cli.check_outputs); the hidden ones too (--stream-out, and
+    the files --depth-out PREFIX names, PREFIX.N.depth)."""
+    outputs = [("-o", args.output), ("--geometry", args.geometry), ("--summary", args.summary),
+               ("--reduced-out", getattr(args, "reduced_out", None)), ("--image", getattr(args, "image", None)),
+               ("--stream-out", getattr(args, "stream_out", None))]
+    depth_out = getattr(args, "depth_out", None)
+    if depth_out:
+        check_depth_prefix(depth_out, [args.trace, args.select] + [p for _, p in outputs])
+        outputs += [("--depth-out", p) for p in depth_files(depth_out)]
+    check_outputs([("the capture", args.trace), ("the selection file", args.select)], outputs)
+
+
+def depth_pattern(prefix):
+    return re.compile(re.escape(os.path.basename(prefix)) + r"\.[0-9]+\.depth")
+
+
+def depth_files(prefix):
+    """The files rbcd-gl-raster's --depth-out PREFIX may replace that exist
+    already: PREFIX.N.depth, N an output frame."""
+    d = os.path.dirname(prefix) or "."
+    try:
+        names = os.listdir(d)
+    except OSError:
+        return []   # rbcd-gl-raster says why it cannot create them
+    pattern = depth_pattern(prefix)
+    return [os.path.join(d, n) for n in names if pattern.fullmatch(n)]
+
+
+def check_depth_prefix(prefix, paths):
+    """No input or other output is named as one of --depth-out's files
+    (by path; depth_files' existing ones are compared as files)."""
+    d = os.path.realpath(os.path.dirname(prefix) or ".")
+    pattern = depth_pattern(prefix)
+    for p in paths:
+        if p and p != "-" and pattern.fullmatch(os.path.basename(p)) and \
+                os.path.realpath(os.path.dirname(p) or ".") == d:
+            raise ConvertError(f"--depth-out {printable(prefix)}: would write {printable(p)}, "
+                               "an input or another output")
+
+
+def new_converter(args, raster_in):
+    """The Converter, its --stream-out opened here as every other output
+    (SafeText: a temporary, renamed into place at the end, removed on
+    failure), not by the Converter (which would open it in place at once)."""
+    stream_out, args.stream_out = getattr(args, "stream_out", None), None
+    try:
+        return Converter(args, raster_in, None)
+    finally:
+        args.stream_out = stream_out
 
 
 def convert_in(args, tmpdir, listing, ids):
@@ -63,7 +109,7 @@ def convert_in(args, tmpdir, listing, ids):
     check_paths(args)
     if getattr(args, "reduced_out", None) and is_reduced_capture(args.trace):
         raise ConvertError("--reduced-out: the capture is already a reduced capture")
-    conv = Converter(args, None, None)   # reads the selection file: refused before any output exists
+    conv = new_converter(args, None)   # reads the selection file: refused before any output exists
     if listing:
         conv.listing = []
     summary_path = os.path.join(tmpdir, "summary.jsonl")
@@ -75,6 +121,9 @@ def convert_in(args, tmpdir, listing, ids):
     outputs = []   # streamed outputs: committed at the end, abandoned on any failure
     proc = None
     try:
+        if getattr(args, "stream_out", None):
+            conv.stream_copy = SafeText(args.stream_out, binary=True)
+            outputs.append(conv.stream_copy)
         if args.geometry:
             conv.geo = SafeText(args.geometry)
             outputs.append(conv.geo)
@@ -100,8 +149,6 @@ def convert_in(args, tmpdir, listing, ids):
         raster_result(proc, args.trace)
         raise ToolError("rbcd-gl-raster stopped reading without a message")
     finally:
-        if conv.stream_copy is not None:
-            conv.stream_copy.close()
         if outputs:
             stop(proc)
             for o in outputs:
@@ -110,12 +157,14 @@ def convert_in(args, tmpdir, listing, ids):
 
 def run_calls(args, conv, reduced):
     """Every call of the capture into the converter, to the last frame asked for."""
-    for call in read_calls(args.trace):
+    calls = read_calls(args.trace)
+    for call in calls:
         conv.last_call = call[0]
         if reduced:
             reduced.call(call)
         conv.handle(call)
         if conv.last_frame is not None and conv.frame > conv.last_frame:
+            check_rest(calls)
             break
         if args.snapshots and conv.active and call[0] in args.snapshots:
             conv.open_frame(call[0])

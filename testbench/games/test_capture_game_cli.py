@@ -1,0 +1,62 @@
+"""scripts/capture-game.sh's refusals (docs/games.md): an output folder it
+cannot use (empty, a symlink, dangling or not, a missing folder) or an
+unusable TMPDIR is one line, exit 2, before any game runs or any conversion
+starts; a capture holding fewer frames than asked for is one line, exit 2.
+Run with --from-trace (no game needed); nothing is left."""
+import os
+import subprocess
+
+import pytest
+
+from conftest import ROOT, program
+
+CAPTURE_GAME = os.path.join(ROOT, "scripts", "capture-game.sh")
+
+
+def capture_game(tmp_path, *args, tmpdir=None):
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmpdir or tmp_path))
+    return subprocess.run(["bash", CAPTURE_GAME] + [str(a) for a in args], capture_output=True, text=True,
+                          env=env, stdin=subprocess.DEVNULL, timeout=600)
+
+
+def refused(r, *words):
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and all(w in lines[0] for w in words), \
+        f"exit {r.returncode}, {lines} (wanted {words})"
+    assert "converting" not in r.stdout and "capturing" not in r.stdout, "refused only after the work started"
+
+
+def test_an_unusable_output_folder_is_refused_before_the_work(tmp_path):
+    for tool in ("apitrace", "gzip", "sha256sum"):
+        if subprocess.run(["bash", "-c", f"command -v {tool}"], capture_output=True).returncode:
+            pytest.skip(f"{tool} is missing (scripts/setup.sh --gl --games)")
+    cap = tmp_path / "not-looked-at.trace"
+    cap.write_bytes(b"refused before the converter reads it")
+    os.symlink(tmp_path / "nowhere" / "x", tmp_path / "dangling")
+    os.symlink(tmp_path, tmp_path / "to-a-folder")
+    base = ["openarena", "oa_dm1", "3"]
+    refused(capture_game(tmp_path, *base, "", "--from-trace", cap), "OUT_DIR is empty")
+    refused(capture_game(tmp_path, *base, tmp_path / "dangling", "--from-trace", cap), "is a symlink")
+    refused(capture_game(tmp_path, *base, tmp_path / "to-a-folder", "--from-trace", cap), "is a symlink")
+    refused(capture_game(tmp_path, *base, tmp_path / "no" / "x", "--from-trace", cap), "does not exist")
+    refused(capture_game(tmp_path, *base, tmp_path / "out", "--from-trace", cap, tmpdir=tmp_path / "missing"),
+            "cannot create a work directory", "TMPDIR")
+    assert sorted(os.listdir(tmp_path)) == ["dangling", "not-looked-at.trace", "to-a-folder"], "something was left"
+
+
+def boxes_capture():
+    """The test program's capture (testbench/gl/test_gl_capture.py makes it)."""
+    for d in (os.environ.get("RBCD_GL_CAPTURES"),
+              os.environ.get("RBCD_BIN") and os.path.join(os.environ["RBCD_BIN"], "..", "testbench", "gl", "captures"),
+              os.path.join(ROOT, "build", "testbench", "gl", "captures")):
+        if d and os.path.isfile(os.path.join(d, "boxes.trace")):
+            return os.path.join(d, "boxes.trace")
+    pytest.skip("no capture of testbench/gl/gl_boxes.c (the gl tests make it: ctest -R gl_capture)")
+
+
+def test_more_frames_than_the_capture_holds(tmp_path):
+    cap = boxes_capture()
+    r = capture_game(tmp_path, "openarena", "oa_dm1", "500", tmp_path / "out", "--from-trace", cap, "--skip", "0")
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "frames asked for" in lines[0], (r.returncode, lines)
+    assert os.listdir(tmp_path) == [], "something was left"

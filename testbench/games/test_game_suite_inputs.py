@@ -1,0 +1,95 @@
+"""game-suite held to the project's rule for bad input (docs/games.md): an
+entry's capture.toml nested too deep, or whose selection file is missing or
+not a file, is one line naming the file and key, exit 2; expand never writes
+into an entry's inputs (or anywhere else) through a link or another name for
+them in its output folder: refused before anything is opened, nothing
+changed."""
+import os
+import shutil
+import subprocess
+
+import pytest
+
+from conftest import ROOT, program
+
+GAME_SUITE = os.path.join(ROOT, "scripts", "game-suite")
+SOURCE = os.path.join(ROOT, "workloads", "games", "neverball-locks")
+NAME = "neverball-locks"
+
+
+@pytest.fixture
+def entry(tmp_path):
+    """A copy of neverball-locks (its selection file stays the repository's)."""
+    d = tmp_path / "entries" / NAME
+    shutil.copytree(SOURCE, d)
+    return d
+
+
+def game_suite(tmp_path, *args):
+    env = dict(os.environ, TMPDIR=str(tmp_path))
+    try:
+        env["RBCD_GL_RASTER"] = program("rbcd-gl-raster")
+    except pytest.skip.Exception:
+        pass   # the refusals come before any conversion
+    return subprocess.run(["/usr/bin/python3", GAME_SUITE] + [str(a) for a in args], capture_output=True,
+                          text=True, env=env, stdin=subprocess.DEVNULL, timeout=600)
+
+
+def refused(r, *words):
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and all(w in lines[0] for w in words), \
+        f"exit {r.returncode}, {lines} (wanted {words})"
+
+
+def snapshot(d):
+    return {p: open(os.path.join(d, p), "rb").read() for p in sorted(os.listdir(d))}
+
+
+def test_a_capture_description_nested_too_deep(tmp_path, entry):
+    toml = entry / "capture.toml"
+    toml.write_text(toml.read_text() + "deep = " + "[" * 20000 + "]" * 20000 + "\n")
+    refused(game_suite(tmp_path, "check", entry), str(toml), "nested too deep to read")
+
+
+@pytest.mark.parametrize("selection, words", [
+    ("workloads/games/no-such-select.toml", "missing"),
+    ("workloads/games", "not a regular file"),
+], ids=["missing", "directory"])
+def test_check_refuses_an_entry_without_its_selection_file(tmp_path, entry, selection, words):
+    toml = entry / "capture.toml"
+    text = toml.read_text()
+    start = text.index('selection = "')
+    end = text.index('"', start + len('selection = "'))
+    toml.write_text(text[:start] + f'selection = "{selection}"' + text[end + 1:])
+    refused(game_suite(tmp_path, "check", entry), str(toml), "selection", words)
+
+
+@pytest.mark.parametrize("output, target", [
+    (f"{NAME}.summary.jsonl", "summary.jsonl"),
+    (f"{NAME}.geo", "capture.toml"),
+    (f"{NAME}.rbt.zst", "calls.xz"),
+    (f"{NAME}.capture", None),   # a file outside the entry
+], ids=["summary", "geometry", "trace", "unrelated"])
+@pytest.mark.parametrize("link", ["symlink", "hard link"])
+def test_expand_never_writes_through_its_output_folder_into_an_input(tmp_path, entry, output, target, link):
+    """A link planted in expand's output folder (its summary.jsonl once
+    went from 150 lines to 1 with exit 0; its capture.toml became a
+    geometry)."""
+    victim = tmp_path / "victim.txt"
+    victim.write_text("not expand's\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    dest = entry / target if target else victim
+    (os.symlink if link == "symlink" else os.link)(dest, out / output)
+    before, kept = snapshot(entry), victim.read_text()
+    r = game_suite(tmp_path, "expand", "-o", out, "--frames", "1", "-j", "1", entry)
+    if link == "symlink":
+        refused(r, str(out / output), "a symlink")
+    elif target:
+        refused(r, str(out / output), f"is also {NAME}'s")
+    else:   # a hard link to an unrelated file is a file of expand's output folder: replaced, not written through
+        assert r.returncode == 0, r.stderr
+        assert victim.read_text() == kept
+    assert snapshot(entry) == before, "an input of the entry changed"
+    assert victim.read_text() == kept, "a file outside the output folder changed"
+    assert not [p for p in os.listdir(out) if p.startswith(".")], "a temporary was left"
