@@ -371,6 +371,38 @@ def test_state_not_emulated_is_refused(tmp_path, build, words):
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
+def test_rules_name_shader_draws_by_their_vertex_data(tmp_path):
+    """`vertex_data` under a program: an indexed draw is named by its index
+    type, base vertex and the indices it reads, an array draw by its first
+    per-vertex attribute's format and the bytes of the vertices it draws,
+    wherever they sit in their buffers; --list-draws shows the digest."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    import hashlib
+    idx = np.array([0, 1, 2], "<u2").tobytes()
+    c = shader_calls(VS)
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glBindBuffer", target="GL_ELEMENT_ARRAY_BUFFER", buffer=3)
+    c.add("glBufferData", target="GL_ELEMENT_ARRAY_BUFFER", size=8 + len(idx), data=bytes(8) + idx,
+          usage="GL_STATIC_DRAW")
+    c.add("glDrawElements", mode="GL_TRIANGLES", count=3, type="GL_UNSIGNED_SHORT", indices=8)
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    cap = c.swap().write(tmp_path / "c.xz")
+    elements = hashlib.blake2b(repr(("elements", "GL_UNSIGNED_SHORT", 0)).encode() + idx, digest_size=8).hexdigest()
+    arrays = hashlib.blake2b(repr(("arrays", "GL_FLOAT", 3, 12)).encode() + TRIANGLE, digest_size=8).hexdigest()
+    listing = gl2rbt(tmp_path, cap, "--list-draws", "0")
+    assert listing.returncode == 0, listing.stderr
+    assert elements[:8] in listing.stdout and arrays[:8] in listing.stdout, listing.stdout
+    for digest, objects in ((elements, "[3]"), (arrays, "[3]")):
+        rules = tmp_path / "r.toml"
+        rules.write_text(f'[[object]]\nid = 3\nvertex_data = ["{digest[:8]}"]\n')
+        r = gl2rbt(tmp_path, cap, "-o", tmp_path / "v.rbt", "--select", rules, "--summary", tmp_path / "v.jsonl")
+        assert r.returncode == 0, r.stderr
+        s0 = json.loads((tmp_path / "v.jsonl").read_text().splitlines()[0])
+        assert s0["objects"] == [3] and s0["other"] > 0, ("one draw chosen, the other other work", digest, s0)
+
+
 def test_a_polygon_offset_past_any_depth_is_clamped(tmp_path):
     """glPolygonOffset(0, 3e38), legal GL: the offset depth is clamped to
     the far plane, and the triangle (collisionable, depth test on) still

@@ -592,3 +592,26 @@ def test_rules_name_textures_uploaded_as_gl4_and_es3_do(tmp_path):
             gl.glTexSubImage2D(**dict(sub, xoffset=8, width=8, height=8, pixels=image[:256]))
             square(gl)
             assert [d["object"] for d in gl.draws()] == [0 if args is None else 9], (name, args is None)
+
+
+def test_rules_name_a_draw_by_its_vertex_data(tmp_path):
+    """`vertex_data` names a draw by the digest of its own data, whatever
+    buffer or place holds it: under the fixed-function transform, the
+    object-space positions it draws (single precision, in order)."""
+    import hashlib
+    from rbcd.gl2rbt.selection import Selection
+    z = 0.5
+    v = np.array([[0, 0, z], [1, 0, z], [1, 1, z], [0, 0, z], [1, 1, z], [0, 1, z]], "<f4")
+    pos = np.hstack([v.astype(np.float64), np.ones((6, 1))])
+    digest = hashlib.blake2b(repr(("positions", "GL_TRIANGLES")).encode() + pos.astype("<f4").tobytes(),
+                             digest_size=8).hexdigest()
+    rules = tmp_path / "rules.toml"
+    rules.write_text(f'[[object]]\nid = 6\nvertex_data = ["{digest[:8]}"]\n')
+    gl = GL()
+    gl.conv.select = Selection(str(rules))
+    square(gl)          # at z = 0: other data
+    square(gl, z=z)     # the rule's
+    assert [d["object"] for d in gl.draws()] == [0, 6]
+    rules.write_text('[[object]]\nid = 6\nvertex_data = ["XYZ"]\n')
+    with pytest.raises(ConvertError, match=r"object\[0\]\.vertex_data: must be a list of vertex data digests"):
+        Selection(str(rules))

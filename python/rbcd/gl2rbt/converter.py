@@ -70,6 +70,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.draw_instance = None        # the instance (baseinstance + i) of the draw under a program
         self.draw_effects = False        # its fragment shader can discard or write gl_FragDepth
         self.draw_shade = 0              # its fragment shader's cost, percent of a reference fragment (0: none)
+        self.vertex_data = None          # its vertex data's digest, or what computes it (draw_vertex_data)
         self.shading_costs = None        # ShadingCosts, at the first draw under a program
         self.vertex_stage_ = None        # Mesa, started at the first draw under a program
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)

@@ -27,13 +27,13 @@ def list_draws(args):
         frames, conv = convert(args, listing=True, ids=(ids_path, 0))
         rows = conv.listing
         print(f"frame {frame}: {len(rows)} draws, {len(frames[0]['objects'])} collisionable objects")
-        print("  #   call  function              verts  tex  image     program   proj  own-mv depth  func       "
-              "box (x0 y0 x1 y1)     object  rule")
+        print("  #   call  function              verts  tex  image     program   data      proj  own-mv depth  "
+              "func       box (x0 y0 x1 y1)     object  rule")
         for r in rows:
             x0, y0, x1, y1 = r["box"]
             obj = "-" if r["object"] is None else str(r["object"])
             print(f"{r['index']:3d} {r['call']:6d}  {printable(r['function'], 20):20s} {r['vertices']:6d} {r['texture']:4d}  "
-                  f"{r['texture_image'][:8] or '-':8s}  {r['program'][:8] or '-':8s}  "
+                  f"{r['texture_image'][:8] or '-':8s}  {r['program'][:8] or '-':8s}  {r['vertex_data'][:8] or '-':8s}  "
                   f"{r['projection'][:5]:5s} {'yes' if r['own_modelview'] else 'no':6s} "
                   f"{'write' if r['depth_write'] else '-':5s}  {r['depth_func'][3:]:9s}  "
                   f"{x0:4d} {y0:4d} {x1:4d} {y1:4d}     {obj:6s}  {printable(r['rule'], 40)}")

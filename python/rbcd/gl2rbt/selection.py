@@ -17,7 +17,7 @@ class Selection:
 
     KEYS = {"id", "name", "calls", "frames", "vertex_count", "texture", "depth_write", "group_by",
             "projection", "modelview_differs_from_view", "min_screen_area", "max_screen_area",
-            "program", "pass", "instances", "group_instances", "texture_image"}
+            "program", "pass", "instances", "group_instances", "texture_image", "vertex_data"}
 
     def __init__(self, path):
         self.path = path
@@ -103,10 +103,11 @@ class Selection:
                 isinstance(x, str) and re.fullmatch(r"[0-9a-f]{8,64}", x) for x in r["program"])):
             raise ConvertError(f"{where}.program: must be a list of program digests (8 to 64 lower-case hex "
                                "digits, as --list-draws shows them)")
-        if "texture_image" in r and not (isinstance(r["texture_image"], list) and r["texture_image"] and all(
-                isinstance(x, str) and re.fullmatch(r"[0-9a-f]{8,16}", x) for x in r["texture_image"])):
-            raise ConvertError(f"{where}.texture_image: must be a list of texture image digests (8 to 16 "
-                               "lower-case hex digits, as --list-draws shows them)")
+        for k, what in (("texture_image", "texture image"), ("vertex_data", "vertex data")):
+            if k in r and not (isinstance(r[k], list) and r[k] and all(
+                    isinstance(x, str) and re.fullmatch(r"[0-9a-f]{8,16}", x) for x in r[k])):
+                raise ConvertError(f"{where}.{k}: must be a list of {what} digests (8 to 16 "
+                                   "lower-case hex digits, as --list-draws shows them)")
         if "pass" in r and not (isinstance(r["pass"], list) and r["pass"] and
                                 all(isinstance(x, str) for x in r["pass"])):
             raise ConvertError(f"{where}.pass: must be a list of pass names (strings)")
@@ -136,9 +137,9 @@ class Selection:
             return False
         if "program" in r and not any(d["program"].startswith(p) for p in r["program"]):
             return False
-        if "texture_image" in r and not (d["texture_image"] and
-                                         any(d["texture_image"].startswith(p) for p in r["texture_image"])):
-            return False
+        for k in ("texture_image", "vertex_data"):
+            if k in r and not (d[k] and any(d[k].startswith(p) for p in r[k])):
+                return False
         if "pass" in r and d["pass"] not in r["pass"]:
             return False
         if "instances" in r and not (r["instances"][0] <= d["instances"] <= r["instances"][1]):

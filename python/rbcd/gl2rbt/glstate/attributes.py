@@ -2,12 +2,18 @@
 each attribute's array (format, buffer and offset or client memory, divisor)
 and its current value when the array is disabled, the element array buffer
 of each vertex array object, and primitive restart."""
+import hashlib
+
 import numpy as np
 
 from ...cli import I32, U32, integer
 from ..errors import checked, fail_call
 
 MAX_ATTRIBS = 32   # GL_MAX_VERTEX_ATTRIBS as Mesa (llvmpipe) answers it
+INDEX_SIZES = {"GL_UNSIGNED_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_UNSIGNED_INT": 4}
+ATTRIB_SIZES = {"GL_BYTE": 1, "GL_UNSIGNED_BYTE": 1, "GL_SHORT": 2, "GL_UNSIGNED_SHORT": 2, "GL_INT": 4,
+                "GL_UNSIGNED_INT": 4, "GL_FLOAT": 4, "GL_DOUBLE": 8, "GL_HALF_FLOAT": 2, "GL_HALF_FLOAT_OES": 2,
+                "GL_FIXED": 4, "GL_INT_2_10_10_10_REV": 1, "GL_UNSIGNED_INT_2_10_10_10_REV": 1}
 
 
 class Attrib:
@@ -45,6 +51,46 @@ class AttributeCalls:
 
     def current_vao(self):
         return self.s.vaos[self.s.vao]
+
+    def vertex_data_digest(self, name, d):
+        """What a rule's `vertex_data` names a draw under a program by: the
+        digest (BLAKE2b, 16 hex digits) of the data it reads that is its
+        mesh's own, whatever the buffer's name or the data's place in it:
+        an indexed draw's index type, base vertex and indices; an array
+        draw's first per-vertex attribute (the lowest enabled one without a
+        divisor), its format and the bytes of the vertices it draws. "" when
+        that data is not in the capture."""
+        h = hashlib.blake2b(digest_size=8)
+        if "Elements" in name:
+            kind, count, indices = d.get("type"), d["count"], d.get("indices")
+            size = INDEX_SIZES.get(kind)
+            if size is None:
+                return ""
+            if isinstance(indices, (bytes, bytearray)):
+                data, start = indices, 0
+            else:
+                data = self.s.buffers.get(self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0))
+                start = indices if isinstance(indices, int) else 0
+            if data is None or start < 0 or start + count * size > len(data):
+                return ""
+            h.update(repr(("elements", kind, d.get("basevertex", 0))).encode())
+            h.update(bytes(data[start:start + count * size]))
+            return h.hexdigest()
+        for i, at in sorted(self.current_vao().attribs.items()):
+            if not at.enabled or at.divisor or not isinstance(at.size, int) or at.type not in ATTRIB_SIZES:
+                continue
+            elem = at.size * ATTRIB_SIZES[at.type]
+            stride = at.stride or elem
+            first, count = d.get("first", 0), d["count"]
+            data = self.s.buffers.get(at.buffer) if at.buffer else at.client
+            start = (at.offset if at.buffer else 0) + first * stride
+            end = start + (count - 1) * stride + elem
+            if data is None or start < 0 or end > len(data):
+                return ""
+            h.update(repr(("arrays", at.type, at.size, stride)).encode())
+            h.update(bytes(data[start:end]))
+            return h.hexdigest()
+        return ""
 
     def instance_origin(self, no, index, instance):
         """The first three components of attribute `index` of the bound

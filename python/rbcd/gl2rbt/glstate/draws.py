@@ -61,6 +61,10 @@ class DrawCalls:
             return
         if self.frame_view is None and abs(proj[3, 3]) < 1e-12:
             self.frame_view = mv.copy()
+        # Its vertex data for the rules: the object-space positions it draws,
+        # in single precision, in the order drawn.
+        self.vertex_data = lambda: hashlib.blake2b(repr(("positions", mode)).encode() +
+                                                   positions.astype("<f4").tobytes(), digest_size=8).hexdigest()
         obj_id = self.object_of(no, mv, proj, len(positions), clip)
         eye = (lambda: mat_mul(positions, mv.T)) if self.geo is not None else None
         # A program of only a fragment shader: its discard or gl_FragDepth
@@ -69,6 +73,7 @@ class DrawCalls:
         self.draw_effects = p is not None and (p.discards or p.frag_depth)
         self.draw_record(no, name, clip, tris, obj_id, len(positions), mv, proj, eye)
         self.draw_effects = False
+        self.vertex_data = None
         if p is not None:
             self.note_fragment_effects(p, obj_id is not None)
 
@@ -200,6 +205,7 @@ class DrawCalls:
         self.open_frame(no)
         tagged = False
         self.draw_instances = instances
+        self.vertex_data = lambda: self.vertex_data_digest(base_name(name), d)
         self.draw_effects = p.discards or p.frag_depth
         self.draw_shade = self.program_shade(p)
         from ..vertex_stage import DrawRejected
@@ -230,6 +236,7 @@ class DrawCalls:
                 obj += i   # one object per instance, unless the rule that chose it groups them
             self.draw_record(no, name, clip, tris, obj, d["count"], None, None, None)
         self.draw_instances = 1
+        self.vertex_data = None
         self.draw_effects = False
         self.draw_shade = 0
         self.note_fragment_effects(p, tagged)

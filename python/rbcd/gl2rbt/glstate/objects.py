@@ -32,7 +32,7 @@ class ObjectCalls:
                              "projection": d["projection"],
                              "own_modelview": d["own_modelview"], "depth_write": d["depth_write"],
                              "depth_func": self.s.depth_func, "box": box, "object": obj_id,
-                             "program": d["program"], "pass": d["pass"],
+                             "program": d["program"], "pass": d["pass"], "vertex_data": d["vertex_data"],
                              "rule": self.last_rule,
                              "translation": [0.0] * 3 if mv is None else [round(float(v), 2) for v in mv[0:3, 3]]})
 
@@ -76,7 +76,18 @@ class ObjectCalls:
                 "projection": projection_of(proj, clip),
                 "own_modelview": mv is not None and view is not None and not np.allclose(mv, view, atol=1e-6),
                 "screen_area": area, "box": (lo, hi), "program": self.program_digest(),
-                "pass": self.pass_name(), "instances": self.draw_instances}
+                "pass": self.pass_name(), "instances": self.draw_instances,
+                "vertex_data": self.draw_vertex_data()}
+
+    def draw_vertex_data(self):
+        """The digest rules' `vertex_data` names the current draw by (its
+        instances share it): computed once a draw, when a rule or a
+        listing asks."""
+        if self.vertex_data is None:
+            return ""
+        if callable(self.vertex_data):
+            self.vertex_data = self.vertex_data()
+        return self.vertex_data
 
     def program_digest(self):
         """The digest of the sources of the program a draw runs ("" without a vertex shader)."""
