@@ -74,6 +74,7 @@ void LlvmpipeDepth::set_draw(const DrawState& s) {
     // unit, already doubled); llvmpipe adds them as units * (1 / (2^bits - 1)).
     units_ = float(s.offset_units * (1.0 / double(depth_scale_)));
     factor_ = float(s.offset_factor);
+    flatshade_first_ = s.first_vertex_provokes;
     user_planes_.clear();
     for (const auto& p : s.clip_planes) user_planes_.push_back({float(p[0]), float(p[1]), float(p[2]), float(p[3])});
 }
@@ -167,24 +168,29 @@ LlvmpipeDepth::Range LlvmpipeDepth::add_triangle(const Eigen::Vector4d& c0, cons
         std::swap(in, out);
         n = m;
     }
-    // emit_poly with the last vertex provoking (GL's default).
-    for (int i = 2; i < n; ++i) setup(in[i - 1], in[i], in[0]);
+    // emit_poly: the provoking vertex stays where the convention puts it.
+    for (int i = 2; i < n; ++i) {
+        if (flatshade_first_) setup(in[0], in[i - 1], in[i]);
+        else setup(in[i - 1], in[i], in[0]);
+    }
     r.count = static_cast<std::uint32_t>(planes_.size()) - r.first;
     return r;
 }
 
 void LlvmpipeDepth::setup(const Vert& a, const Vert& b, const Vert& c) {
     // calc_fixed_position and triangle_both: the snapped area's sign picks
-    // the order (v1, v0, v2 when clockwise), a zero area draws nothing.
+    // the order (v1, v0, v2 when clockwise; v0, v2, v1 when the first vertex
+    // provokes), a zero area draws nothing.
     const Vert* v[3] = {&a, &b, &c};
     std::int64_t x[3], y[3];
     for (int i = 0; i < 3; ++i) x[i] = snap(v[i]->win[0]), y[i] = snap(v[i]->win[1]);
     const std::int64_t area = (x[0] - x[1]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[0] - y[1]);
     if (area == 0) return;
     if (area < 0) {
-        std::swap(v[0], v[1]);
-        std::swap(x[0], x[1]);
-        std::swap(y[0], y[1]);
+        const int i = flatshade_first_ ? 1 : 0;
+        std::swap(v[i], v[i + 1]);
+        std::swap(x[i], x[i + 1]);
+        std::swap(y[i], y[i + 1]);
     }
     const float X0 = v[0]->win[0], Y0 = v[0]->win[1], Z0 = v[0]->win[2];
     const float X1 = v[1]->win[0], Y1 = v[1]->win[1], Z1 = v[1]->win[2];

@@ -18,10 +18,12 @@
 //    user planes): Sutherland-Hodgman in float32 in that plane order, each
 //    new vertex interpolated from the end nearer the plane, its window
 //    position recomputed without FMA, the polygon fanned out as
-//    (p[i-1], p[i], p[0]);
+//    (p[i-1], p[i], p[0]), or (p[0], p[i-1], p[i]) when the first vertex
+//    provokes;
 //  - per triangle: positions snapped to 1/256 pixel decide the winding
-//    (vertices 0 and 1 swapped when it is clockwise, dropped when the area
-//    is zero), then the float32 plane a0 + dzdx * px + dzdy * py over the
+//    (vertices 0 and 1 swapped when it is clockwise, 1 and 2 when the first
+//    vertex provokes; dropped when the area is zero), then the float32
+//    plane a0 + dzdx * px + dzdy * py over the
 //    framebuffer's pixel coordinates, a0 taken at pixel (0, 0);
 //  - per pixel z = fma(dzdy, py, fma(dzdx, px, a0)) (+ polygon offset),
 //    clamped to [0, 1], depth = round-half-even(f32(z * (2^bits - 1))).
@@ -87,6 +89,7 @@ private:
     bool fma_;
     float sx_ = 0, tx_ = 0, sy_ = 0, ty_ = 0, sz_ = 0, tz_ = 0;
     float units_ = 0, factor_ = 0;
+    bool flatshade_first_ = false;
     std::vector<std::array<float, 4>> user_planes_;
     std::vector<Plane> planes_;
 };

@@ -74,6 +74,10 @@ struct DrawState {
     // captured draw under such a fragment shader): the depth it writes to
     // the kept buffer is an upper bound, marked in depth_marks().
     bool fragment_effects = false;
+    // glProvokingVertex(GL_FIRST_VERTEX_CONVENTION): no fragment changes;
+    // read by the llvmpipe emulation (keep_llvmpipe_depth), whose clipped
+    // polygons fan out and whose clockwise triangles are reordered by it.
+    bool first_vertex_provokes = false;
     // What shading one of its fragments costs, in percent of
     // gpu.cycles_per_fragment (a captured draw's fragment shader; 0: not
     // given, counted as 100). A tile any such draw reaches carries the mean

@@ -26,8 +26,10 @@ struct Expect {
     std::uint32_t depth;   // llvmpipe's 24-bit depth there
 };
 
-LlvmpipeDepth::Range add(LlvmpipeDepth& lp, const std::array<Eigen::Vector4d, 3>& v) {
-    lp.set_draw(DrawState::full_screen(800, 480));
+LlvmpipeDepth::Range add(LlvmpipeDepth& lp, const std::array<Eigen::Vector4d, 3>& v, bool first_provokes = false) {
+    DrawState s = DrawState::full_screen(800, 480);
+    s.first_vertex_provokes = first_provokes;
+    lp.set_draw(s);
     return lp.add_triangle(v[0], v[1], v[2]);
 }
 
@@ -90,6 +92,16 @@ TEST_CASE("llvmpipe depth: a triangle crossing the near plane and the viewport's
     check(without, add(without, kNearLeft),
           {{0x1.30d26cp+0f, 0x1.aad204p-10f, -0x1.2cd844p-8f, 294, 242, 9369927},
            {0x1.30d278p+0f, 0x1.aad204p-10f, -0x1.2cd850p-8f, 138, 220, 6802914}});
+}
+
+TEST_CASE("llvmpipe depth: with the first vertex provoking", "[llvmpipe]") {
+    // The clipped polygon fans out from its first vertex, (p0, p[i-1], p[i]),
+    // and a clockwise triangle is set up as (v0, v2, v1): other roundings.
+    LlvmpipeDepth lp(480, 24, true);
+    check(lp, add(lp, kNearLeft, true),
+          {{0x1.30d26cp+0f, 0x1.aad206p-10f, -0x1.2cd844p-8f, 294, 242, 9369927},
+           {0x1.30d274p+0f, 0x1.aad206p-10f, -0x1.2cd84ep-8f, 138, 220, 6802910}});
+    check(lp, add(lp, kFlatCw, true), {{0x1.ed6d88p-1f, 0x1.2b97cp-14f, -0x1.381382p-10f, 400, 260, 11455043}});
 }
 
 TEST_CASE("llvmpipe depth: triangles wholly outside one plane draw nothing", "[llvmpipe]") {
