@@ -116,9 +116,10 @@ void DrawStreamReader::read_draw() {
     s = scene::DrawState{};
     s.id = get<std::uint32_t>();
     const auto flags = get<std::uint8_t>();
-    if (flags & ~3u) fail("unknown draw flags");
+    if (flags & ~7u) fail("unknown draw flags");
     s.collisionable = flags & 1u;
     s.fragment_effects = (flags & 2u) != 0;
+    s.first_vertex_provokes = (flags & 4u) != 0;
     const auto cull = get<std::uint8_t>();
     if (cull > std::uint8_t(scene::CullFace::FrontAndBack)) fail("cull mode out of range");
     s.cull = scene::CullFace(cull);

@@ -6,9 +6,13 @@
 // command, but it is held to the same rules: a malformed stream is one line
 // naming the call, exit 2, and no output left behind.
 //
-//   rbcd-gl-raster --trace OUT.rbt[.gz] [--depth-out PREFIX] [--summary FILE] [--name CAPTURE]
-//                  [--ids-out FILE --ids-frame N]
+//   rbcd-gl-raster --trace OUT.rbt[.gz] [--depth-out PREFIX [--llvmpipe-depth-out PREFIX2]]
+//                  [--summary FILE] [--name CAPTURE] [--ids-out FILE --ids-frame N]
 //
+// --llvmpipe-depth-out: beside the depth buffer of GL's exact depths, the one
+// Mesa's llvmpipe would hold with the same covered pixels and its own float32
+// depth arithmetic (scene/llvmpipe_depth.h), written at the same snapshots in
+// the same format; for the depth check only, the trace is the same.
 // --ids-out: for frame N, the draw (its index in the frame) nearest the eye
 // at every pixel, displayed faces only ("rbcd-ids 1 W H", then W*H u16 little
 // endian, 0xFFFF none): rbcd-gl2rbt --list-draws --image labels draws with it.
@@ -31,7 +35,7 @@
 namespace {
 
 struct Options {
-    std::string trace, depth_out, summary, ids_out, name = "draw stream";
+    std::string trace, depth_out, llvmpipe_depth_out, summary, ids_out, name = "draw stream";
     std::uint64_t ids_frame = 0;
 };
 
@@ -45,6 +49,7 @@ Options parse(int argc, char** argv) {
         };
         if (a == "--trace") o.trace = value();
         else if (a == "--depth-out") o.depth_out = value();
+        else if (a == "--llvmpipe-depth-out") o.llvmpipe_depth_out = value();
         else if (a == "--summary") o.summary = value();
         else if (a == "--name") o.name = value();
         else if (a == "--ids-out") o.ids_out = value();
@@ -57,6 +62,8 @@ Options parse(int argc, char** argv) {
         else throw rbcd::InputError("unknown option '" + a + "' (see gl/gl_raster_main.cpp)");
     }
     if (o.trace.empty()) throw rbcd::InputError("--trace is required");
+    if (!o.llvmpipe_depth_out.empty() && o.depth_out.empty())
+        throw rbcd::InputError("--llvmpipe-depth-out needs --depth-out");
     return o;
 }
 
@@ -86,6 +93,8 @@ int run(const Options& o) {
     const auto& h = in.header();
     rbcd::scene::TileRasterizer raster(h.width, h.height, h.tile_w, h.tile_h, h.depth_bits);
     raster.keep_depth_buffer(!o.depth_out.empty());
+    // The replay runs on this machine: its JIT code fuses multiply-adds when the CPU can.
+    if (!o.llvmpipe_depth_out.empty()) raster.keep_llvmpipe_depth(rbcd::scene::LlvmpipeDepth::host_has_fma());
 
     // Every output is committed only at the end: a run that fails leaves none.
     rbcd::OutputFile trace_file(o.trace);
@@ -167,19 +176,21 @@ int run(const Options& o) {
                     ids.write(reinterpret_cast<const char*>(row.data()), row.size() * sizeof row[0]);
                 }
             }
-            if (snapshot && !o.depth_out.empty()) {
-                // rbcd-depth 2 W H BITS, then W*H u32 little endian, rows from
-                // the top, then W*H u8: 1 where a draw whose fragment stage can
-                // discard or write depth wrote the pixel's depth last.
-                depth_files.emplace_back(o.depth_out + "." + std::to_string(in.frame()) + ".depth");
+            // rbcd-depth 2 W H BITS, then W*H u32 little endian, rows from the
+            // top, then W*H u8: 1 where a draw whose fragment stage can
+            // discard or write depth wrote the pixel's depth last.
+            const auto dump = [&](const std::string& prefix, const std::vector<std::uint32_t>& buf,
+                                  const std::vector<std::uint8_t>& marks) {
+                depth_files.emplace_back(prefix + "." + std::to_string(in.frame()) + ".depth");
                 rbcd::OutputFile& df = depth_files.back();
                 df.write("rbcd-depth 2 " + std::to_string(h.width) + " " + std::to_string(h.height) + " " +
                          std::to_string(h.depth_bits) + "\n");
-                const auto& buf = raster.depth_buffer();
                 df.write(reinterpret_cast<const char*>(buf.data()), buf.size() * sizeof buf[0]);
-                const auto& marks = raster.depth_marks();
                 df.write(reinterpret_cast<const char*>(marks.data()), marks.size());
-            }
+            };
+            if (snapshot && !o.depth_out.empty()) dump(o.depth_out, raster.depth_buffer(), raster.depth_marks());
+            if (snapshot && !o.llvmpipe_depth_out.empty())
+                dump(o.llvmpipe_depth_out, raster.llvmpipe_depth_buffer(), raster.llvmpipe_depth_marks());
             break;
         }
         default: break;

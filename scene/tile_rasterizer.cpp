@@ -105,7 +105,7 @@ DrawState DrawState::full_screen(unsigned width, unsigned height) {
 }
 
 TileRasterizer::TileRasterizer(unsigned width, unsigned height, unsigned tile_w, unsigned tile_h, unsigned depth_bits)
-    : width_(width), height_(height), tile_w_(tile_w), tile_h_(tile_h),
+    : width_(width), height_(height), tile_w_(tile_w), tile_h_(tile_h), depth_bits_(depth_bits),
       depth_max_(double((std::uint64_t(1) << depth_bits) - 1)) {
     tiles_x_ = (width_ + tile_w_ - 1) / tile_w_;
     tiles_y_ = (height_ + tile_h_ - 1) / tile_h_;
@@ -124,6 +124,46 @@ void TileRasterizer::begin_frame(std::uint64_t f) {
     if (keep_depth_ && depth_.empty()) {
         depth_.assign(std::size_t(width_) * height_, 0);
         marks_.assign(depth_.size(), 0);
+    }
+    if (lp_) {
+        lp_->clear();
+        lp_range_.clear();
+        if (lp_depth_.empty()) {
+            lp_depth_.assign(std::size_t(width_) * height_, 0);
+            lp_marks_.assign(lp_depth_.size(), 0);
+        }
+    }
+}
+
+void TileRasterizer::keep_llvmpipe_depth(bool fma) { lp_ = std::make_unique<LlvmpipeDepth>(height_, depth_bits_, fma); }
+
+// The planes llvmpipe sets up for one triangle, shared by the entries of
+// tris_ it gave from first_tri on.
+void TileRasterizer::note_llvmpipe(const Eigen::Vector4d& c0, const Eigen::Vector4d& c1, const Eigen::Vector4d& c2,
+                                   std::size_t first_tri) {
+    if (tris_.size() == first_tri) return;
+    const auto r = lp_->add_triangle(c0, c1, c2);
+    lp_range_.resize(first_tri, LlvmpipeDepth::Range{});
+    lp_range_.resize(tris_.size(), r);
+}
+
+// The llvmpipe buffer's depth test and write at one covered pixel; a pixel
+// of a triangle llvmpipe draws nothing of keeps the exact depth.
+void TileRasterizer::write_llvmpipe_depth(std::uint32_t ti, const DrawState& s, std::int32_t x, std::int32_t y) {
+    const Tri& t = tris_[ti];
+    const std::size_t at = std::size_t(y) * width_ + std::size_t(x);
+    const LlvmpipeDepth::Range r = ti < lp_range_.size() ? lp_range_[ti] : LlvmpipeDepth::Range{};
+    std::uint32_t depth;
+    if (r.count) {
+        depth = lp_->depth_at(r, x, y);
+    } else {
+        const double z = t.z0 + t.zx * (x + 0.5 - t.x0) + t.zy * (y + 0.5 - t.y0);
+        depth = static_cast<std::uint32_t>(std::clamp(z, 0.0, depth_max_) + 0.5);
+    }
+    std::uint32_t& stored = lp_depth_[at];
+    if (s.depth_write && depth_passes(s.depth_func, depth, stored)) {
+        stored = depth;
+        lp_marks_[at] = s.fragment_effects;
     }
 }
 
@@ -164,6 +204,7 @@ bool TileRasterizer::project(const DrawState& s, const Eigen::Vector4d& clip, Sc
 bool TileRasterizer::add_mesh(std::uint32_t draw, const Eigen::Vector4d* clip, std::size_t nv,
                               const std::array<std::uint32_t, 3>* tris, std::size_t ntris) {
     const DrawState& s = draws_[draw];
+    if (lp_) lp_->set_draw(s);
     outcode_.resize(nv);
     screen_.resize(nv);
     for (std::size_t v = 0; v < nv; ++v) {
@@ -174,12 +215,14 @@ bool TileRasterizer::add_mesh(std::uint32_t draw, const Eigen::Vector4d* clip, s
         const auto& tri = tris[i];
         const std::uint16_t o0 = outcode_[tri[0]], o1 = outcode_[tri[1]], o2 = outcode_[tri[2]];
         if (o0 & o1 & o2) continue;   // wholly outside one plane
+        const std::size_t first_tri = tris_.size();
         if ((o0 | o1 | o2) == 0) {
             setup(screen_[tri[0]], screen_[tri[1]], screen_[tri[2]], draw);
         } else {
             const Eigen::Vector4d* c[3] = {&clip[tri[0]], &clip[tri[1]], &clip[tri[2]]};
             if (!clip_and_setup(c, draw)) return false;
         }
+        if (lp_) note_llvmpipe(clip[tri[0]], clip[tri[1]], clip[tri[2]], first_tri);
     }
     return true;
 }
@@ -381,8 +424,10 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
         const std::int32_t x0 = std::max(tx0, t.px0), x1 = std::min(tx1, t.px1);
         const std::int32_t y0 = std::max(ty0, t.py0), y1 = std::min(ty1, t.py1);
         if (t.clear) {
-            if (ti < depth_limit_)
+            if (ti < depth_limit_) {
                 clear_depth(depth_, marks_, width_, x0, x1, y0, y1, static_cast<std::uint32_t>(t.z0 + 0.5));
+                if (lp_) clear_depth(lp_depth_, lp_marks_, width_, x0, x1, y0, y1, static_cast<std::uint32_t>(t.z0 + 0.5));
+            }
             continue;
         }
         const DrawState& s = draws_[t.draw];
@@ -457,6 +502,7 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
                             stored = depth;
                             marks_[at] = s.fragment_effects;
                         }
+                        if (lp_) write_llvmpipe_depth(ti, s, x, y);
                     }
                 }
                 e0 += ax0;

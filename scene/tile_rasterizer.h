@@ -22,11 +22,13 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "rbcd/common/fragment.h"
+#include "rbcd/scene/llvmpipe_depth.h"
 #include "rbcd/scene/scene_source.h"
 
 namespace rbcd::scene {
@@ -72,6 +74,10 @@ struct DrawState {
     // captured draw under such a fragment shader): the depth it writes to
     // the kept buffer is an upper bound, marked in depth_marks().
     bool fragment_effects = false;
+    // glProvokingVertex(GL_FIRST_VERTEX_CONVENTION): no fragment changes;
+    // read by the llvmpipe emulation (keep_llvmpipe_depth), whose clipped
+    // polygons fan out and whose clockwise triangles are reordered by it.
+    bool first_vertex_provokes = false;
     // What shading one of its fragments costs, in percent of
     // gpu.cycles_per_fragment (a captured draw's fragment shader; 0: not
     // given, counted as 100). A tile any such draw reaches carries the mean
@@ -121,6 +127,14 @@ public:
     // Per pixel of the kept depth buffer: 1 where its depth was last written
     // by a draw with fragment_effects, 0 elsewhere.
     const std::vector<std::uint8_t>& depth_marks() const { return marks_; }
+    // With the depth buffer kept, a second one beside it for the depth
+    // check: the same triangles, the same covered pixels, each pixel's depth
+    // (and so its depth tests) as Mesa's llvmpipe computes it from the same
+    // clip-space vertices (LlvmpipeDepth, scene/llvmpipe_depth.h). Call
+    // before the first frame; fma as LlvmpipeDepth's.
+    void keep_llvmpipe_depth(bool fma);
+    const std::vector<std::uint32_t>& llvmpipe_depth_buffer() const { return lp_depth_; }
+    const std::vector<std::uint8_t>& llvmpipe_depth_marks() const { return lp_marks_; }
 
     // Of the current frame: triangles set up and binned.
     std::size_t triangles_set_up() const { return tris_.size(); }
@@ -151,8 +165,12 @@ private:
     void setup(const ScreenVert& v0, const ScreenVert& v1, const ScreenVert& v2, std::uint32_t draw);
     void bin(std::uint32_t tri_index);
     void raster_tile(unsigned col, unsigned row, Tile& tile, SceneSource::FrameImage* image);
+    void note_llvmpipe(const Eigen::Vector4d& c0, const Eigen::Vector4d& c1, const Eigen::Vector4d& c2,
+                       std::size_t first_tri);
+    void write_llvmpipe_depth(std::uint32_t tri, const DrawState& s, std::int32_t x, std::int32_t y);
 
     unsigned width_, height_, tile_w_, tile_h_, tiles_x_, tiles_y_;
+    unsigned depth_bits_;
     double depth_max_;
 
     std::uint64_t frame_ = 0;
@@ -164,6 +182,12 @@ private:
     std::size_t depth_limit_ = SIZE_MAX;   // entries of tris_ from here on leave the depth buffer alone
     std::vector<std::uint32_t> depth_;
     std::vector<std::uint8_t> marks_;
+    // The llvmpipe buffer (keep_llvmpipe_depth): per entry of tris_, the
+    // planes of the triangle it came from (a clipped triangle's pieces share them).
+    std::unique_ptr<LlvmpipeDepth> lp_;
+    std::vector<LlvmpipeDepth::Range> lp_range_;
+    std::vector<std::uint32_t> lp_depth_;
+    std::vector<std::uint8_t> lp_marks_;
     // Per-vertex scratch of the mesh being set up.
     std::vector<std::uint16_t> outcode_;
     std::vector<ScreenVert> screen_;

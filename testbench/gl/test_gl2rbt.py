@@ -69,6 +69,13 @@ def test_mesa(gl):
     m = re.search(r"agreement: ([0-9.]+)% of (\d+) covered pixels in (\d+) frames", r.stdout)
     assert m and float(m.group(1)) >= 99.0 and int(m.group(2)) > 1000 and int(m.group(3)) == 2, \
         f"agreement below 99% or too little checked: {r.stdout}"
+    # The second comparison: llvmpipe's float32 arithmetic replayed on the
+    # converter's vertices, per frame and in all, over the same pixels.
+    per_frame = re.findall(r"^  with llvmpipe's arithmetic on the converter's geometry: ([0-9.]+)% of (\d+) "
+                           r"covered pixels agree$", r.stdout, re.M)
+    lp = re.search(r"^agreement with llvmpipe's arithmetic on the converter's geometry: ([0-9.]+)% of (\d+) "
+                   r"covered pixels$", r.stdout, re.M)
+    assert len(per_frame) == 2 and lp and float(lp.group(1)) >= 99.0 and lp.group(2) == m.group(2), r.stdout
 
 
 def test_refusals(gl):

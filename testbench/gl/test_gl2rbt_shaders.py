@@ -89,6 +89,11 @@ def test_mesa(gl):
     # pixels are checked as a bound (Mesa's depth at or behind ours).
     m = re.search(r"agreement: .*; consistent ([0-9.]+)%: .* on ([0-9.]+)% of those (\d+) ", r.stdout)
     assert m and float(m.group(1)) >= 99.0 and float(m.group(2)) == 100.0 and int(m.group(3)) > 100, r.stdout
+    # The same against llvmpipe's arithmetic on the converter's vertices: the
+    # shader path's clip coordinates are Mesa's own float32 outputs.
+    lp = re.search(r"^agreement with llvmpipe's arithmetic on the converter's geometry: ([0-9.]+)% of (\d+) "
+                   r"covered pixels; consistent ([0-9.]+)%: ([0-9.]+)% of the (\d+) outside", r.stdout, re.M)
+    assert lp and float(lp.group(3)) >= 99.0 and float(lp.group(4)) == 100.0, r.stdout
 
 
 def test_geometry(gl):

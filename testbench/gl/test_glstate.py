@@ -323,6 +323,23 @@ def test_polygon_offset_and_mode():
         gl.glPolygonMode("GL_FRONT_AND_BACK", "GL_LINE")
 
 
+def test_the_provoking_vertex_reaches_the_depth_check_only():
+    """glProvokingVertex changes no fragment: it is flag bit 2 of a draw, read
+    by the depth check's llvmpipe emulation, and the reduced capture (whose
+    outputs are the capture's) leaves it out."""
+    from rbcd.gl2rbt.reduced import reduced_keeps
+    gl = GL()
+    square(gl)
+    gl.glProvokingVertex("GL_FIRST_VERTEX_CONVENTION")
+    square(gl)
+    gl.glProvokingVertex("GL_TRIANGLES")   # GL_INVALID_ENUM: nothing changes
+    square(gl)
+    gl.glProvokingVertex("GL_LAST_VERTEX_CONVENTION")
+    square(gl)
+    assert [d["collisionable"] & 4 for d in gl.draws()] == [0, 4, 4, 0]
+    assert not reduced_keeps("glProvokingVertex") and reduced_keeps("glPolygonOffset")
+
+
 def test_clip_planes_are_kept_in_eye_space():
     gl = GL()
     gl.glTranslatef(0, 0, -3)

@@ -53,6 +53,9 @@ def parse_args(argv):
     ap.add_argument("--min-agreement", type=float, default=99.0,
                     help="with --check-depth: exit 1 below this percentage (default 99)")
     ap.add_argument("--depth-out", help=argparse.SUPPRESS)
+    # With --check-depth: keep the depth dumps and Mesa's depth buffers in DIR,
+    # and take Mesa's from there when present (a replay takes minutes a frame).
+    ap.add_argument("--check-keep", help=argparse.SUPPRESS)
     ap.add_argument("--stream-out", help=argparse.SUPPRESS)   # a copy of the draw stream (fuzz seeds)
     ap.add_argument("--snapshot-calls", help=argparse.SUPPRESS)
     return ap.parse_args(argv)

@@ -77,12 +77,32 @@ def bound_note(counts):
             f"those {cov - cov_out} Mesa's depth lies at or behind the converter's bound")
 
 
+def compare(ours, marks, bits, mesa, step):
+    """Counts of one frame: covered pixels (drawn in either buffer), those
+    agreeing within one step; the same outside the marked pixels; the marked
+    pixels where Mesa's depth lies at or behind ours (an upper bound there)."""
+    ours01 = ours.astype(np.float64) * step
+    mesa64 = mesa.astype(np.float64)
+    covered = (ours < (1 << bits) - 1) | (mesa < 1.0)
+    agree = np.abs(ours01 - mesa64) <= step * 1.0001 + 1e-7
+    bound = mesa64 >= ours01 - (step * 1.0001 + 1e-7)
+    return np.array([covered.sum(), (agree & covered).sum(), (covered & ~marks).sum(),
+                     (agree & covered & ~marks).sum(), (bound & covered & marks).sum()], dtype=np.int64)
+
+
+LLVMPIPE = "with llvmpipe's arithmetic on the converter's geometry"
+
+
 def check_depth(args):
     """Converts the selected frames with a depth snapshot at each frame's last
     draw with the depth test on, replays the capture to the same call with
     Mesa (glretrace -D) and prints, per frame, the share of covered pixels
     (drawn in either buffer) where the two depths agree within one step of
-    depth_bits."""
+    depth_bits: with the converter's depths (GL's exact values), and with
+    the depths llvmpipe's float32 arithmetic gives the converter's vertices
+    and state on the same covered pixels (rbcd-gl-raster
+    --llvmpipe-depth-out), which tells the driver's rounding from a
+    difference of geometry or state."""
     check_input_file(args.trace)
     if is_reduced_capture(args.trace):
         raise ConvertError("--check-depth replays the capture with Mesa: give the capture itself, "
@@ -108,37 +128,52 @@ def check_depth(args):
     if len(frames) > args.check_frames:
         step = len(frames) / args.check_frames
         frames = [frames[int(i * step)] for i in range(args.check_frames)]
-    tmp = tempfile.mkdtemp(prefix="rbcd-gl2rbt-check.")
+    keep = getattr(args, "check_keep", None)
+    if keep:
+        os.makedirs(keep, exist_ok=True)
+    tmp = keep or tempfile.mkdtemp(prefix="rbcd-gl2rbt-check.")
     try:
         args.output = os.path.join(tmp, "check.rbt")
         args.geometry = args.summary = None
         args.depth_out = os.path.join(tmp, "depth")
+        args.llvmpipe_depth_out = os.path.join(tmp, "llvmpipe")
         args.snapshots = {call for _, _, call in frames}
         convert(args)
         total = np.zeros(5, dtype=np.int64)   # covered, agreeing; the same outside marked pixels; bound holds
+        total_lp = np.zeros(5, dtype=np.int64)   # the same against the llvmpipe emulation
         step = 1.0 / ((1 << args.depth_bits) - 1)
         for out_frame, cap_frame, call in frames:
             w, h, bits, ours, marks = read_depth_file(f"{args.depth_out}.{out_frame}.depth")
-            mw, mh, mesa = mesa_depth_at(args.trace, call, args.check_timeout)
+            _, _, _, lp, lp_marks = read_depth_file(f"{args.llvmpipe_depth_out}.{out_frame}.depth")
+            cached = os.path.join(keep, f"mesa.{call}.npy") if keep else None
+            if cached and os.path.exists(cached):
+                mesa = np.load(cached)
+                mh, mw = mesa.shape
+            else:
+                mw, mh, mesa = mesa_depth_at(args.trace, call, args.check_timeout)
+                if cached:
+                    np.save(cached, mesa)
             if (mw, mh) != (w, h):
                 raise ToolError(f"frame {cap_frame}: Mesa's depth buffer is {mw}x{mh}, the screen {w}x{h}")
-            ours01 = ours.astype(np.float64) * step
-            covered = (ours < (1 << bits) - 1) | (mesa < 1.0)
-            agree = np.abs(ours01 - mesa.astype(np.float64)) <= step * 1.0001 + 1e-7
             # Where a draw under a discarding fragment shader wrote our depth
             # last, ours is an upper bound: Mesa's lies at it or behind it.
-            bound = mesa.astype(np.float64) >= ours01 - (step * 1.0001 + 1e-7)
-            counts = np.array([covered.sum(), (agree & covered).sum(), (covered & ~marks).sum(),
-                               (agree & covered & ~marks).sum(), (bound & covered & marks).sum()], dtype=np.int64)
+            counts = compare(ours, marks, bits, mesa, step)
+            counts_lp = compare(lp, lp_marks, bits, mesa, step)
             total += counts
+            total_lp += counts_lp
             print(f"frame {cap_frame} (call {call}): {pct(counts[1], counts[0]):.2f}% of {counts[0]} covered "
                   f"pixels agree with Mesa{bound_note(counts)}")
+            print(f"  {LLVMPIPE}: {pct(counts_lp[1], counts_lp[0]):.2f}% of {counts_lp[0]} covered pixels "
+                  f"agree{bound_note(counts_lp)}")
         print(f"agreement: {pct(total[1], total[0]):.2f}% of {total[0]} covered pixels in {len(frames)} frames"
               f"{bound_note(total)}")
+        print(f"agreement {LLVMPIPE}: {pct(total_lp[1], total_lp[0]):.2f}% of {total_lp[0]} covered pixels"
+              f"{bound_note(total_lp)}")
         # Passes when the depths agree outside the pixels a draw under a
         # fragment shader that can discard or write depth wrote last, and
         # Mesa's lies at or behind the converter's (an upper bound by design,
         # docs/gl-capture.md) on those, on --min-agreement of all covered.
         return 0 if pct(total[3] + total[4], total[0]) >= args.min_agreement else 1
     finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if not keep:
+            shutil.rmtree(tmp, ignore_errors=True)

@@ -40,10 +40,9 @@ IGNORED_PREFIXES = (
     "glColorTable", "glConvolution", "glHistogram", "glMinmax", "glResetHistogram", "glResetMinmax",
     "glSeparableFilter", "glMap1", "glMap2", "glMapGrid", "memcpy", "glMemcpy", "glBlendEquation",
     # Sampler objects (filtering and wrapping: a vertex shader reads only
-    # texture buffers, which samplers do not touch), fences, the provoking
-    # vertex (which vertex gives flat-shaded values).
+    # texture buffers, which samplers do not touch), fences.
     "glGenSamplers", "glBindSampler", "glSamplerParameter", "glDeleteSamplers", "glFenceSync",
-    "glClientWaitSync", "glWaitSync", "glDeleteSync", "glProvokingVertex",
+    "glClientWaitSync", "glWaitSync", "glDeleteSync",
     # Renderbuffer names (their storage's size is read: glRenderbufferStorage).
     "glGenRenderbuffers", "glDeleteRenderbuffers",
     # Hints that a framebuffer's contents are no longer needed (ES 3 and its

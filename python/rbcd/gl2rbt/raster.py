@@ -116,6 +116,8 @@ def convert_in(args, tmpdir, listing, ids):
     cmd = [raster_program(), "--trace", args.output, "--summary", summary_path, "--name", args.trace]
     if args.depth_out:
         cmd += ["--depth-out", args.depth_out]
+        if getattr(args, "llvmpipe_depth_out", None):
+            cmd += ["--llvmpipe-depth-out", args.llvmpipe_depth_out]
     if ids:
         cmd += ["--ids-out", ids[0], "--ids-frame", str(ids[1])]
     outputs = []   # streamed outputs: committed at the end, abandoned on any failure

@@ -39,9 +39,17 @@ REDUCED_DROP = {"glTexImage2D": "pixels", "glTexSubImage2D": "pixels", "glCompre
                 "glCompressedTexSubImage2D": "data", "glTexImage2DMultisample": None}
 
 
+# Read by the emulation for the depth check alone (which replays the capture
+# itself, never a reduced one): left out, as they change no output.
+REDUCED_CHECK_ONLY = {"glProvokingVertex"}
+
+
 def reduced_keeps(name):
-    """Whether the emulation reads the call: it has a handler, or it is not
-    passed over (and is refused), or it is the window system's."""
+    """Whether the emulation reads the call for the outputs: it has a
+    handler, or it is not passed over (and is refused), or it is the window
+    system's."""
+    if base_name(name) in REDUCED_CHECK_ONLY:
+        return False
     return base_name(name) in Converter.HANDLERS or not name.startswith(IGNORED_PREFIXES) \
         or name.startswith(REDUCED_KEEP)
 

@@ -48,6 +48,7 @@ class GLState:
         self.cull = False
         self.cull_face = "GL_BACK"
         self.front_face = "GL_CCW"
+        self.provoking_first = False   # glProvokingVertex(GL_FIRST_VERTEX_CONVENTION)
         self.offset_fill = False
         self.offset = (0.0, 0.0)
         self.clip_planes = [None] * MAX_CLIP_PLANES

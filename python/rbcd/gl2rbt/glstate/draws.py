@@ -127,8 +127,9 @@ class DrawCalls:
         ou *= MESA_STEPS_PER_UNIT
         rec = bytearray(b"D")
         # Flags: bit 0 collisionable; bit 1 its fragment shader can discard or
-        # write gl_FragDepth (the depth it writes is an upper bound).
-        flags = (1 if collisionable else 0) | (2 if self.draw_effects else 0)
+        # write gl_FragDepth (the depth it writes is an upper bound); bit 2
+        # the first vertex provokes (read by the depth check's emulation only).
+        flags = (1 if collisionable else 0) | (2 if self.draw_effects else 0) | (4 if st.provoking_first else 0)
         rec += struct.pack("<QIBBBBBBBH", no, obj_id if collisionable else 0, flags, cull,
                            1 if front_ccw else 0, 1 if st.depth_test else 0, depth_func,
                            1 if st.depth_mask else 0, len(planes), self.draw_shade)

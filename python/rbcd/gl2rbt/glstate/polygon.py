@@ -19,6 +19,13 @@ class PolygonCalls:
     def h_polygon_offset(self, no, name, a, args):
         self.s.offset = (number(a[0], no, "the offset factor"), number(a[1], no, "the offset units"))
 
+    def h_provoking_vertex(self, no, name, a, args):
+        # Which vertex is flat shading's changes no fragment; it is read for
+        # the depth check, whose llvmpipe emulation orders a clipped
+        # polygon's triangles and a triangle's set-up by it.
+        if a[0] in ("GL_FIRST_VERTEX_CONVENTION", "GL_LAST_VERTEX_CONVENTION"):
+            self.s.provoking_first = a[0] == "GL_FIRST_VERTEX_CONVENTION"
+
     def h_polygon_mode(self, no, name, a, args):
         if a[1] in ("GL_LINE", "GL_POINT"):
             fail_call(no, f"glPolygonMode({printable(a[1])}): only GL_FILL is emulated")
@@ -29,4 +36,5 @@ class PolygonCalls:
         "glFrontFace": h_front_face,
         "glPolygonOffset": h_polygon_offset,
         "glPolygonMode": h_polygon_mode,
+        "glProvokingVertex": h_provoking_vertex,
     }
