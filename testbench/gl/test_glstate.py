@@ -632,3 +632,78 @@ def test_rules_name_a_draw_by_its_vertex_data(tmp_path):
     rules.write_text('[[object]]\nid = 6\nvertex_data = ["XYZ"]\n')
     with pytest.raises(ConvertError, match=r"object\[0\]\.vertex_data: must be a list of vertex data digests"):
         Selection(str(rules))
+
+
+def storage(gl, target, data, flags):
+    """glBufferStorage, whose `flags` argument the GL helper's keyword for
+    the call's own flags would take."""
+    gl.no += 1
+    gl.conv.handle((gl.no, "glBufferStorage", [("target", target), ("size", len(data)), ("data", data),
+                                              ("flags", flags)], None, 0))
+
+
+def test_more_odd_calls_do_what_mesa_does():
+    """A second round of calls GL answers with an error, each found
+    converting otherwise (the depth check then disagreeing with Mesa):
+    clears under rasterizer discard, viewport and scissor arrays past Mesa's
+    16 or with a negative size anywhere, glBufferSubData into immutable
+    storage without GL_DYNAMIC_STORAGE_BIT, copies between overlapping
+    ranges of one buffer or outside a buffer, glMatrixMode(GL_COLOR) (Mesa
+    has no colour matrix), glUniform with no program, a core profile's
+    glPolygonMode of one face, glUseProgram of a deleted program; a
+    GLboolean transpose of 2 transposes; the later of two calls setting an
+    array uniform's storage wins."""
+    from rbcd.gl2rbt.glstate.programs import Program
+    gl = GL()
+    gl.glEnable("GL_RASTERIZER_DISCARD")
+    gl.glClear("GL_DEPTH_BUFFER_BIT")
+    gl.glClearBufferfv(buffer="GL_DEPTH", drawbuffer=0, value=[0.5])
+    gl.glDisable("GL_RASTERIZER_DISCARD")
+    assert gl.stream.getvalue() == b"", "a clear under rasterizer discard was written"
+    gl.glViewport(0, 0, W, H)
+    gl.glViewportArrayv(first=0, count=17, v=[0.0, 0.0, 8.0, 8.0] * 17)
+    gl.glViewportArrayv(first=0, count=2, v=[0.0, 0.0, 8.0, 8.0, 0.0, 0.0, -1.0, -1.0])
+    assert gl.conv.s.viewport == (0, 0, W, H)
+    gl.glScissor(0, 0, 5, 5)
+    gl.glScissorArrayv(first=0, count=17, v=[0, 0, 16, 16] * 17)
+    gl.glScissorArrayv(first=0, count=2, v=[0, 0, 16, 16, 0, 0, -1, 5])
+    assert gl.conv.s.scissor == (0, 0, 5, 5)
+    gl.glBindBuffer(target="GL_COPY_READ_BUFFER", buffer=5)
+    storage(gl, "GL_COPY_READ_BUFFER", bytes(range(16)), 0)
+    gl.glBufferSubData(target="GL_COPY_READ_BUFFER", offset=0, size=4, data=b"abcd")
+    gl.glBindBuffer(target="GL_COPY_WRITE_BUFFER", buffer=5)
+    gl.glCopyBufferSubData(readTarget="GL_COPY_READ_BUFFER", writeTarget="GL_COPY_WRITE_BUFFER",
+                           readOffset=0, writeOffset=4, size=8)
+    gl.glCopyBufferSubData(readTarget="GL_COPY_READ_BUFFER", writeTarget="GL_COPY_WRITE_BUFFER",
+                           readOffset=12, writeOffset=0, size=8)
+    assert bytes(gl.conv.s.buffers[5]) == bytes(range(16)), "an ignored write changed the buffer"
+    gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=6)
+    storage(gl, "GL_ARRAY_BUFFER", b"wxyz", "GL_DYNAMIC_STORAGE_BIT")
+    gl.glBufferSubData(target="GL_ARRAY_BUFFER", offset=0, size=2, data=b"ab")
+    assert bytes(gl.conv.s.buffers[6]) == b"abyz"
+    gl.glMatrixMode("GL_COLOR")
+    gl.glTranslatef(0, 0, -60)
+    assert gl.conv.s.mode == "GL_MODELVIEW" and stack_top(gl)[2][3] == -60
+    gl.glUniform4f(7, 1.0, 2.0, 3.0, 4.0)   # no program in use: nothing
+    gl.conv.core = True
+    gl.glPolygonMode("GL_FRONT", "GL_LINE")   # core: GL_INVALID_ENUM, not a refusal
+    for name in (2, 3):
+        gl.conv.s.programs[name] = p = Program()
+        p.linked = ({"vertex": "void main() {}"}, {})
+    gl.glUseProgram(2)
+    gl.glDeleteProgram(3)
+    gl.glDeleteProgram(2)
+    gl.glUseProgram(3)
+    assert gl.conv.s.program == 2 and 2 in gl.conv.s.programs, "the deleted program in use stays"
+    gl.glUniformMatrix4fv(location=1, count=1, transpose=2, value=[0.0] * 16)
+    assert gl.conv.s.programs[2].uniforms[1][2] is True
+    gl.glUniform1fv(location=4, count=1, value=[0.3])
+    gl.glUniform1fv(location=3, count=3, value=[0.0, 0.0, 0.0])
+    assert list(gl.conv.s.programs[2].uniforms) == [1, 4, 3]
+    gl.glUniform1fv(location=4, count=1, value=[0.3])
+    assert list(gl.conv.s.programs[2].uniforms) == [1, 3, 4], "kept in the order last set"
+    gl.glUseProgram(0)
+    assert 2 not in gl.conv.s.programs, "a deleted program goes once no longer in use"
+    gl.glCreateShader("GL_VERTEX_SHADER", ret=9)
+    with pytest.raises(ConvertError, match="characters of source, more than"):
+        gl.glShaderSource(shader=9, count=3, string=["x" * (8 << 20)] * 3, length=None)

@@ -11,9 +11,10 @@ PROG = "rbcd-gl2rbt"
 
 
 def parse_frames(text):
-    m = re.fullmatch(r"(\d+):(\d*)", text or "")
+    m = re.fullmatch(r"(\d{1,18}):(\d{0,18})", text or "")
     if not m:
-        raise ConvertError(f"--frames: '{printable(text)}' is not A:B (first and last frame; B may be empty)")
+        raise ConvertError(f"--frames: '{printable(text)}' is not A:B (first and last frame, at most 18 digits "
+                           "each; B may be empty)")
     a = int(m.group(1))
     b = int(m.group(2)) if m.group(2) else None
     if b is not None and b < a:
@@ -80,8 +81,8 @@ def run(args):
             args.snapshots = set()
             if args.check_frames < 1:
                 raise ConvertError("--check-frames must be at least 1")
-            if args.check_timeout < 1:
-                raise ConvertError("--check-timeout must be at least 1 (seconds)")
+            if not 1 <= args.check_timeout <= 1 << 31:
+                raise ConvertError("--check-timeout must be from 1 to 2^31 (seconds)")
             if not 0.0 <= args.min_agreement <= 100.0:   # NaN fails both
                 raise ConvertError("--min-agreement must be a percentage, 0 to 100")
             return depth_check.check_depth(args)

@@ -35,7 +35,7 @@ IGNORED_PREFIXES = (
     "glRasterPos", "glBitmap", "glDrawPixels", "glCopyPixels",
     "glPrimitiveRestart", "glLoadName", "glPushName", "glPopName", "glInitNames", "glRenderMode",
     "glGenLists", "glDeleteLists", "glListBase", "glCompileShader", "glShaderSource", "glCreateShader",
-    "glCreateProgram", "glAttachShader", "glLinkProgram", "glDeleteShader", "glDeleteProgram", "glDetachShader",
+    "glCreateProgram", "glAttachShader", "glLinkProgram", "glDeleteShader", "glDetachShader",
     "glBindAttribLocation", "glUniform", "glValidateProgram", "glBindFragDataLocation", "glTexEnv", "glTexGen",
     "glColorTable", "glConvolution", "glHistogram", "glMinmax", "glResetHistogram", "glResetMinmax",
     "glSeparableFilter", "glMap1", "glMap2", "glMapGrid", "memcpy", "glMemcpy", "glBlendEquation",

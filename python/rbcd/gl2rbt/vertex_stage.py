@@ -15,7 +15,7 @@ import re
 
 import numpy as np
 
-from .errors import ConvertError, fail_call, printable
+from .errors import fail_call, printable
 from .glstate.buffers import merge_extents
 from .mesa import Mesa
 
@@ -26,6 +26,7 @@ SAMPLER = re.compile(r"GL_(INT_|UNSIGNED_INT_)?(SAMPLER|IMAGE)_")
 GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INVALID_OPERATION",
              0x505: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
 UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
+MAX_MESA_BUFFER_BYTES = 2 << 30   # the declared sizes of the buffers given to Mesa, in all
 # Built-in inputs a vertex shader may read that the draw call itself gives;
 # every other gl_ input or uniform is fixed-function state (gl_Vertex,
 # gl_ModelViewProjectionMatrix, ...), which Mesa's program would read from
@@ -66,6 +67,8 @@ class VertexStage:
         self.vaos = {}       # capture vertex array -> Mesa vertex array
         self.textures = {}   # capture texture -> Mesa texture
         self.scratch = []    # client memory (attributes, indices) goes through these buffers
+        self.mesa_bytes = 0  # the declared sizes of the buffers Mesa holds copies of
+        self.no = None       # the draw call being run, for messages
         GL = self.gl
         # Mesa's values of the sampler types that are not texture buffers.
         self.texture_samplers = {int(getattr(GL, n)): n for n in dir(GL)
@@ -78,10 +81,18 @@ class VertexStage:
         GL = self.gl
         data = conv.s.buffers.get(b)
         if data is None:
-            raise ConvertError(f"buffer {b} holds no data")
+            fail_call(self.no, f"the draw reads buffer {b}, which holds no data (never given any, or deleted)")
         entry = self.buffers.get(b)
         if entry is None:
-            entry = self.buffers[b] = [int(GL.glGenBuffers(1)), None]
+            entry = self.buffers[b] = [int(GL.glGenBuffers(1)), None, 0]
+        if entry[2] != len(data):
+            # Mesa's copy has the declared size, zero-filled: its memory,
+            # unlike the converter's, is taken at once.
+            self.mesa_bytes += len(data) - entry[2]
+            entry[2] = len(data)
+            if self.mesa_bytes > MAX_MESA_BUFFER_BYTES:
+                fail_call(self.no, f"the draws' buffers would take more than {MAX_MESA_BUFFER_BYTES >> 30} GiB in "
+                          "Mesa, which allocates a buffer's declared size (docs/gl-capture.md, limits)")
         version = conv.s.buffer_versions.get(b)
         if entry[1] != version:
             GL.glBindBuffer(GL.GL_COPY_WRITE_BUFFER, entry[0])
@@ -131,6 +142,13 @@ class VertexStage:
                 except GLError:
                     pass   # GL_INVALID_OPERATION (a type or count its uniform lacks): the capture's call did nothing
                 mp.applied[loc] = value
+                # An array and its elements share storage: what was set
+                # through another of its locations is no longer what Mesa holds.
+                base = p.uniform_names.get(loc, "").split("[")[0]
+                if base:
+                    for other in [o for o in mp.applied if o != loc
+                                  and p.uniform_names.get(o, "").split("[")[0] == base]:
+                        del mp.applied[other]
         for idx, binding in p.block_bindings.items():
             block = p.block_names.get(idx)
             if block is not None:
@@ -297,6 +315,7 @@ class VertexStage:
         (vertices, 4) float64, three a triangle, one array per instance."""
         from OpenGL.error import GLError
         GL = self.gl
+        self.no = no
         try:
             self.program(conv, no, conv.s.program)
             indices = d.get("indices")

@@ -34,8 +34,9 @@ class Array:
 class GLState:
     def __init__(self):
         I = np.identity(4)
-        self.stacks = {"GL_MODELVIEW": [I.copy()], "GL_PROJECTION": [I.copy()], "GL_TEXTURE": [I.copy()],
-                       "GL_COLOR": [I.copy()]}
+        # Mesa has no colour matrix (ARB_imaging): glMatrixMode(GL_COLOR) is
+        # GL_INVALID_ENUM there.
+        self.stacks = {"GL_MODELVIEW": [I.copy()], "GL_PROJECTION": [I.copy()], "GL_TEXTURE": [I.copy()]}
         self.mode = "GL_MODELVIEW"
         self.viewport = None
         self.scissor = None
@@ -60,7 +61,7 @@ class GLState:
         self.buffer_versions = {}
         self.buffer_written = {}   # large buffers: the [start, end) extents ever written
         self.buffer_held = {}      # buffer -> bytes of memory its data holds
-        self.immutable_buffers = set()   # made by glBufferStorage
+        self.immutable_buffers = {}   # made by glBufferStorage: buffer -> GL_DYNAMIC_STORAGE_BIT set
         self.buffer_bytes_in_all = 0
         self.next_version = 0
         self.bound = {"GL_ARRAY_BUFFER": 0, "GL_ELEMENT_ARRAY_BUFFER": 0}
@@ -95,6 +96,9 @@ class GLState:
         self.begin_mode = None
         self.begin_verts = []
         self.list_compiling = False
+
+
+MAX_VIEWPORTS = 16   # GL_MAX_VIEWPORTS as Mesa (llvmpipe) answers it
 
 
 def enum_arg(v, no, what):

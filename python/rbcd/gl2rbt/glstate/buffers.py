@@ -147,7 +147,11 @@ class BufferCalls:
             return
         self.h_buffer_data(no, name, a, [("target", target), ("size", size), ("data", d.get("data")),
                                          ("usage", "GL_STATIC_DRAW")])
-        self.s.immutable_buffers.add(b)
+        flags = d.get("flags", 0)
+        parts = flags if isinstance(flags, (list, tuple)) else (flags,)
+        names = {n.strip() for f in parts if isinstance(f, str) for n in f.split("|")}
+        self.s.immutable_buffers[b] = "GL_DYNAMIC_STORAGE_BIT" in names or \
+            any(isinstance(f, int) and not isinstance(f, bool) and f & 0x0100 for f in parts)
 
     def h_buffer_sub_data(self, no, name, a, args):
         d = dict(args)
@@ -157,8 +161,10 @@ class BufferCalls:
         if not isinstance(off, int) or not isinstance(size, int) or not isinstance(data, (bytes, bytearray)) \
                 or len(data) < size:
             fail_call(no, f"{name}: malformed arguments (offset, size or data)")
-        if buf is None or off < 0 or size < 0 or off + size > len(buf):
-            return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
+        if buf is None or off < 0 or size < 0 or off + size > len(buf) or self.s.immutable_buffers.get(b) is False:
+            # GL_INVALID_VALUE or GL_INVALID_OPERATION (immutable storage
+            # without GL_DYNAMIC_STORAGE_BIT): the call does nothing
+            return
         buf[off:off + size] = data[:size]
         self.changed(no, name, b, off, off + size)
 
@@ -168,14 +174,16 @@ class BufferCalls:
         wb = self.bound_buffer(no, name, d.get("writeTarget"))
         dst = self.s.buffers.get(wb)
         ro, wo, size = d.get("readOffset"), d.get("writeOffset"), d.get("size")
-        if src is None or dst is None or not all(isinstance(v, int) and v >= 0 for v in (ro, wo, size)) \
-                or ro + size > len(src) or wo + size > len(dst):
-            fail_call(no, f"{name}: a range outside a buffer's data")
+        if not all(isinstance(v, int) and not isinstance(v, bool) for v in (ro, wo, size)):
+            fail_call(no, f"{name}: the offsets and size are not integers")
+        rb = self.bound_buffer(no, name, d.get("readTarget"))
+        if src is None or dst is None or min(ro, wo, size) < 0 or ro + size > len(src) or wo + size > len(dst) \
+                or (rb == wb and ro < wo + size and wo < ro + size):
+            return   # GL_INVALID_VALUE or GL_INVALID_OPERATION (also overlapping ranges of one buffer): nothing
         # Only the source's written extents are copied (the rest is zero);
         # the destination's bytes the copy zeroes are zeroed where they may
         # hold data, so that a copy out of storage never written takes no
         # memory.
-        rb = self.bound_buffer(no, name, d.get("readTarget"))
         pieces = [(max(s, ro), min(e, ro + size)) for s, e in self.written_extents(rb) if s < ro + size and e > ro]
         pieces = [(s - ro + wo, e - ro + wo, bytes(src[s:e])) for s, e in pieces if e > s]
         at = wo
@@ -235,7 +243,7 @@ class BufferCalls:
                 self.s.buffers.pop(b, None)
                 self.s.buffer_versions.pop(b, None)
                 self.s.buffer_written.pop(b, None)
-                self.s.immutable_buffers.discard(b)
+                self.s.immutable_buffers.pop(b, None)
                 self.held_bytes(no, name, b, 0)
                 self.s.buffer_held.pop(b, None)
                 self.s.mappings.pop(b, None)

@@ -7,7 +7,7 @@ import numpy as np
 from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES, base_name
-from . import clamped01, enum_arg, gl_boolean, number
+from . import MAX_VIEWPORTS, clamped01, enum_arg, gl_boolean, number
 
 CLEAR_BITS = {0x100: "GL_DEPTH_BUFFER_BIT", 0x200: "GL_ACCUM_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT",
               0x4000: "GL_COLOR_BUFFER_BIT"}
@@ -28,9 +28,18 @@ class PerFragmentCalls:
         if "Array" in name:
             first = checked(no, integer, d.get("first"), f"{name}: first", *I32)
             count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
-            if first != 0 or count <= 0:
-                return   # another scissor, or GL_INVALID_VALUE
-            vals = d.get("v")
+            v = d.get("v")
+            if not isinstance(v, list) or len(v) < 4 * max(count, 0):
+                fail_call(no, f"{name}: fewer values than four a scissor")
+            # GL_INVALID_VALUE for the whole call: past Mesa's 16 scissors, or
+            # any negative size.
+            if first < 0 or count < 0 or first + count > MAX_VIEWPORTS or \
+                    any(checked(no, integer, x, f"{name}: a scissor size", *I32) < 0
+                        for i in range(count) for x in v[4 * i + 2:4 * i + 4]):
+                return
+            if first != 0 or count == 0:
+                return   # another scissor
+            vals = v
         else:
             index = checked(no, integer, d.get("index"), f"{name}: index", *I32)
             if index != 0:
@@ -82,8 +91,8 @@ class PerFragmentCalls:
 
     def h_clear(self, no, name, a, args):
         bits = self.clear_bits(no, name, a[0])
-        if bits is None:
-            return   # GL_INVALID_VALUE: nothing is cleared
+        if bits is None or self.s.rasterizer_discard:
+            return   # GL_INVALID_VALUE, or discarded with the rasterizer: nothing is cleared
         if "GL_DEPTH_BUFFER_BIT" in bits and self.active and self.s.depth_mask:
             self.open_frame(no)
             rect = self.scissor_rect()
@@ -102,7 +111,7 @@ class PerFragmentCalls:
         value = d.get("value")
         depth = value[0] if isinstance(value, list) and value else d.get("depth", value)
         depth = clamped01(depth, no, f"{name}: the depth")
-        if self.active and self.s.depth_mask:
+        if self.active and self.s.depth_mask and not self.s.rasterizer_discard:
             self.open_frame(no)
             self.emit(b"C" + struct.pack("<Qd4i", no, depth, *self.scissor_rect()))
 

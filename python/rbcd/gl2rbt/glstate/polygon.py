@@ -27,6 +27,8 @@ class PolygonCalls:
             self.s.provoking_first = a[0] == "GL_FIRST_VERTEX_CONVENTION"
 
     def h_polygon_mode(self, no, name, a, args):
+        if (self.core or self.es) and a[0] != "GL_FRONT_AND_BACK":
+            return   # GL_INVALID_ENUM: core profiles set both faces at once
         if a[1] in ("GL_LINE", "GL_POINT"):
             fail_call(no, f"glPolygonMode({printable(a[1])}): only GL_FILL is emulated")
         # GL_FILL, or GL_INVALID_ENUM: nothing changes.

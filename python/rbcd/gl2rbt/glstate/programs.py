@@ -17,6 +17,7 @@ from ..gl_tables import base_name
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
           "GL_COMPUTE_SHADER": "compute"}
+MAX_SOURCE_CHARS = 16 << 20   # one shader's sources (the largest game shaders are tens of kilobytes)
 COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
 UNIFORM = re.compile(r"gl(Program)?Uniform(Matrix)?([1-4])(x[2-4])?(f|d|i|ui)(v?)$")
 
@@ -38,6 +39,7 @@ class Program:
         self.uniform_names = {}    # capture location -> name
         self.block_names = {}      # capture block index -> name
         self.uniforms = {}         # capture location -> (function, values): the last value set
+        self.deleted = False       # glDeleteProgram while in use
         self.block_bindings = {}   # capture block index -> binding point
         self.discards = False      # its fragment shader has a discard statement
         self.frag_depth = False    # its fragment shader writes gl_FragDepth
@@ -81,6 +83,10 @@ class ProgramCalls:
             fail_call(no, f"{name}: no shader, or sources that are not text or not as many as its count")
         if isinstance(lengths, list):
             strings = [s if not isinstance(n, int) or n < 0 else s[:n] for s, n in zip(strings, lengths)]
+        total = sum(len(s) for s in strings)
+        if total > MAX_SOURCE_CHARS:
+            fail_call(no, f"{name}: {total} characters of source, more than {MAX_SOURCE_CHARS} "
+                      "(docs/gl-capture.md, limits)")
         sh.sources = strings
 
     def h_compile_shader(self, no, name, a, args):
@@ -137,7 +143,22 @@ class ProgramCalls:
             fail_call(no, f"{name}: impossible program {printable(v)}")
         if v and (v not in self.s.programs or self.s.programs[v].linked is None):
             return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
+        old = self.s.programs.get(self.s.program)
+        if old is not None and old.deleted and v != self.s.program:
+            del self.s.programs[self.s.program]   # deleted while in use: gone once no longer used
         self.s.program = v
+
+    def h_delete_program(self, no, name, a, args):
+        """glDeleteProgram: the name goes at once unless the program is in
+        use, then when it no longer is (a later glUseProgram of it is
+        GL_INVALID_VALUE, and the program in use stays)."""
+        v = a[0] if a else None
+        if not isinstance(v, int) or isinstance(v, bool) or v not in self.s.programs:
+            return   # 0 is ignored; an unknown name is GL_INVALID_VALUE
+        if v == self.s.program:
+            self.s.programs[v].deleted = True
+        else:
+            del self.s.programs[v]
 
     def h_get_uniform_location(self, no, name, a, args):
         d = dict(args)
@@ -183,7 +204,7 @@ class ProgramCalls:
             p, rest = self.program(no, name, a[0] if a else None), a[1:]
         else:
             if not self.s.program:
-                fail_call(no, f"{name} with no program in use")
+                return   # GL_INVALID_OPERATION: no program in use, the call does nothing
             p, rest = self.s.programs[self.s.program], a
         loc = checked(no, integer, rest[0], f"{name}: the location", *I32)
         if loc == -1:
@@ -202,9 +223,13 @@ class ProgramCalls:
                 fail_call(no, f"{name}: {len(values)} values, not its count ({count}) of {width}")
         elif not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values):
             fail_call(no, f"{name}: the values are not numbers")
-        transpose = m.group(2) is not None and dict(args).get("transpose") in ("GL_TRUE", True, 1)
+        # Any GLboolean but zero transposes (Mesa tests it as C does).
+        transpose = m.group(2) is not None and dict(args).get("transpose") not in ("GL_FALSE", False, 0, None)
         # As Mesa's program is given it: the glUniform function, the values,
         # their component type and, for the v forms, their count.
+        # Kept in the order last set: an array's element and the array
+        # itself name the same storage, and the later call wins.
+        p.uniforms.pop(loc, None)
         p.uniforms[loc] = (name.replace("glProgramUniform", "glUniform"), values, transpose, m.group(5), count)
 
     def h_refuse_stage(self, no, name, a, args):
@@ -240,6 +265,7 @@ class ProgramCalls:
         "glLinkProgram": h_link_program,
         "glUseProgram": h_use_program,
         "glUseProgramObject": h_use_program,
+        "glDeleteProgram": h_delete_program,
         "glGetUniformLocation": h_get_uniform_location,
         "glGetUniformBlockIndex": h_get_uniform_block_index,
         "glUniformBlockBinding": h_uniform_block_binding,
