@@ -53,7 +53,9 @@ case "$game" in openarena|neverball|supertuxkart) ;; *) usage "unknown game '$ga
 [[ "$bots" =~ ^[1-9]$ ]] || usage "--bots '$bots' is not a number from 1 to 9"
 # The shipped SuperTuxKart rules know four kart models (below).
 [[ "$karts" =~ ^[1-4]$ ]] || usage "--karts '$karts' is not a number from 1 to 4"
-[ -z "$skip" ] || [[ "$skip" =~ ^[0-9]{1,4}$ ]] || usage "--skip '$skip' is not a number below 10000"
+# Without leading zeros: bash's arithmetic would read 08 as octal, and the
+# value goes into capture.toml as written.
+[ -z "$skip" ] || [[ "$skip" =~ ^(0|[1-9][0-9]{0,3})$ ]] || usage "--skip '$skip' is not a number below 10000"
 [ -n "$out" ] || usage "OUT_DIR is empty"
 [ ! -L "$out" ] || usage "$out is a symlink: the entry is written only into a new directory"
 [ ! -e "$out" ] || usage "$out exists: the entry is written only into a new directory"
@@ -77,9 +79,9 @@ raster=${RBCD_GL_RASTER:-}
 # The entry is staged beside OUT_DIR under an unpredictable name (no planted
 # link to follow) and renamed into place complete: made first, so that an
 # output folder that cannot take it is said before the game runs.
-parent=$(dirname "$out")
+parent=$(dirname -- "$out")
 [ -d "$parent" ] || usage "$out: its folder $parent does not exist"
-staged=$(mktemp -d "$parent/.$(basename "$out").XXXXXXXX" 2>/dev/null) ||
+staged=$(mktemp -d "$parent/.$(basename -- "$out").XXXXXXXX" 2>/dev/null) ||
   usage "$out: cannot create the entry in $parent (not writable?)"
 trap 'rm -rf "$staged"' EXIT
 work=$(mktemp -d "${TMPDIR:-/tmp}/capture-game.XXXXXXXX" 2>/dev/null) ||

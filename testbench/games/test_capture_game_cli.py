@@ -31,7 +31,7 @@ def test_an_unusable_output_folder_is_refused_before_the_work(tmp_path):
         if subprocess.run(["bash", "-c", f"command -v {tool}"], capture_output=True).returncode:
             pytest.skip(f"{tool} is missing (scripts/setup.sh --gl --games)")
     cap = tmp_path / "not-looked-at.trace"
-    cap.write_bytes(b"refused before the converter reads it")
+    cap.write_bytes(b"refused before the converter reads it, or by it")
     os.symlink(tmp_path / "nowhere" / "x", tmp_path / "dangling")
     os.symlink(tmp_path, tmp_path / "to-a-folder")
     base = ["openarena", "oa_dm1", "3"]
@@ -39,6 +39,15 @@ def test_an_unusable_output_folder_is_refused_before_the_work(tmp_path):
     refused(capture_game(tmp_path, *base, tmp_path / "dangling", "--from-trace", cap), "is a symlink")
     refused(capture_game(tmp_path, *base, tmp_path / "to-a-folder", "--from-trace", cap), "is a symlink")
     refused(capture_game(tmp_path, *base, tmp_path / "no" / "x", "--from-trace", cap), "does not exist")
+    # A leading zero (bash would read 08 as octal) and an output folder
+    # that reads as an option to dirname.
+    refused(capture_game(tmp_path, *base, tmp_path / "out", "--from-trace", cap, "--skip", "08"),
+            "--skip '08' is not a number")
+    os.chdir(tmp_path)
+    r = capture_game(tmp_path, *base, "-x", "--from-trace", cap, "--skip", "0")
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "dirname" not in lines[0] and "not-looked-at" in lines[0], \
+        f"an output folder named -x: exit {r.returncode}, {lines} (its capture is the one refused)"
     refused(capture_game(tmp_path, *base, tmp_path / "out", "--from-trace", cap, tmpdir=tmp_path / "missing"),
             "cannot create a work directory", "TMPDIR")
     assert sorted(os.listdir(tmp_path)) == ["dangling", "not-looked-at.trace", "to-a-folder"], "something was left"

@@ -216,8 +216,10 @@ def test_odd_calls_do_what_mesa_does():
     (lambda gl: gl.glPushDebugGroup(source="GL_DEBUG_SOURCE_APPLICATION", id=1, length=-1, message=[1]),
      "the message is not a string"),
     (lambda gl: gl.glFlush(flags=-1), "the call's flags -1 are not apitrace's"),
+    (lambda gl: gl.glDepthFunc(1 << 70), "is not an enumerant"),
+    (lambda gl: gl.glDepthMask(256), "is not a GLboolean"),
 ], ids=["begin_list", "mask_list", "mask_none", "clear_none", "clear_float", "func_nan", "mode_none", "message",
-        "flags"])
+        "flags", "enum_width", "boolean_width"])
 def test_values_no_gl_call_takes_are_refused_naming_the_call(call, words):
     gl = GL()
     with pytest.raises(ConvertError, match=r"^call 1: .*" + re.escape(words)):

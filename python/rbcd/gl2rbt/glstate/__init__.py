@@ -105,9 +105,9 @@ def enum_arg(v, no, what):
     """An enumerant as apitrace records it: its name, or a number for a
     value it has no name for (which GL answers with GL_INVALID_ENUM); any
     other value is the capture's error."""
-    if isinstance(v, str) or (isinstance(v, int) and not isinstance(v, bool)):
+    if isinstance(v, str) or (isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 1 << 32):
         return v
-    fail_call(no, f"{what}: {printable(v, 40)} is not an enumerant")
+    fail_call(no, f"{what}: {printable(v, 40)} is not an enumerant (a name, or a 32-bit value)")
 
 
 def gl_boolean(v, no, what):
@@ -118,9 +118,9 @@ def gl_boolean(v, no, what):
         return True
     if v in ("GL_FALSE", False):
         return False
-    if isinstance(v, int) and not isinstance(v, bool):
+    if isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 256:
         return bool(v & 1)
-    fail_call(no, f"{what}: {printable(v, 40)} is not a GLboolean")
+    fail_call(no, f"{what}: {printable(v, 40)} is not a GLboolean (an unsigned byte)")
 
 
 def clamped01(v, no, what):
