@@ -709,3 +709,21 @@ def test_more_odd_calls_do_what_mesa_does():
     gl.glCreateShader("GL_VERTEX_SHADER", ret=9)
     with pytest.raises(ConvertError, match="characters of source, more than"):
         gl.glShaderSource(shader=9, count=3, string=["x" * (8 << 20)] * 3, length=None)
+
+
+def test_fixed_function_draws_restart_their_primitives():
+    """Primitive restart under the fixed-function transform: the restart
+    index (the fixed one of the index type first) ends a strip and starts
+    the next, as Mesa assembles them; without restart the index is a vertex."""
+    v = np.array([[i, i % 2, 0] for i in range(6)], "<f4")
+    idx = np.array([0, 1, 2, 255, 3, 4, 5], "u1").tobytes()
+    for fixed in (True, False):
+        gl = GL()
+        gl.glEnableClientState("GL_VERTEX_ARRAY")
+        gl.glVertexPointer(size=3, type="GL_FLOAT", stride=0, pointer=v.tobytes())
+        gl.glEnable("GL_PRIMITIVE_RESTART_FIXED_INDEX" if fixed else "GL_PRIMITIVE_RESTART")
+        if not fixed:
+            gl.glPrimitiveRestartIndex(255)
+        gl.glDrawElements(mode="GL_TRIANGLE_STRIP", count=7, type="GL_UNSIGNED_BYTE", indices=idx)
+        d = gl.draws()[-1]
+        assert d["clip"][:, 0].tolist() == [0, 1, 2, 3, 4, 5] and d["tris"] == [[0, 1, 2], [3, 4, 5]], d["tris"]

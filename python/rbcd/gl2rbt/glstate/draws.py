@@ -22,6 +22,7 @@ MAX_DRAW_PRIMITIVES = 1 << 22   # triangles of one draw under a program, all its
 # Per frame, draws under a fragment shader that can remove fragments
 # (discard) or move them in depth (gl_FragDepth): the converter keeps all
 # their fragments, at the depth the rasterizer computes (docs/gl-capture.md).
+RESTART_FIXED = {"GL_UNSIGNED_BYTE": 0xFF, "GL_UNSIGNED_SHORT": 0xFFFF, "GL_UNSIGNED_INT": 0xFFFFFFFF}
 FRAGMENT_EFFECT_KEYS = ("discard_draws", "discard_collisionable", "frag_depth_draws", "frag_depth_collisionable")
 
 
@@ -29,9 +30,10 @@ class DrawCalls:
     """Draws: positions through the fixed-function transform into draw records."""
 
     # ---- draws
-    def draw(self, no, mode, positions, name):
+    def draw(self, no, mode, positions, name, tris=None):
         """positions: (n, 4) object-space vertices in GL order for `mode`,
-        through the fixed-function transform."""
+        through the fixed-function transform; tris, the triangles GL
+        assembles from them when primitive restart cut them into pieces."""
         if not self.active:
             return
         if self.vertex_program():
@@ -48,7 +50,8 @@ class DrawCalls:
         if mode not in PRIM_TRIANGLES:
             fail_call(no, f"{name}: primitive mode {printable(mode)} is not emulated")
         self.open_frame(no)
-        tris = triangle_indices(mode, len(positions))
+        if tris is None:
+            tris = triangle_indices(mode, len(positions))
         mv = self.s.stacks["GL_MODELVIEW"][-1]
         proj = self.s.stacks["GL_PROJECTION"][-1]
         # As a GL implementation does: single precision, the model-view-projection
@@ -324,11 +327,26 @@ class DrawCalls:
         # Indices outside glDrawRangeElements' [start, end] are drawn (GL
         # leaves them undefined; Mesa draws them).
         idx = self.index_values(type_, indices, count, no)
-        hi = int(idx.max()) + 1 if len(idx) else 0
+        # Primitive restart (the fixed index first, as GL orders them): the
+        # index ends one primitive and starts the next, each assembled alone.
+        restart = RESTART_FIXED[type_] if self.s.restart_fixed else self.s.restart_index if self.s.restart else None
+        cut = idx == restart if restart is not None else None
+        kept = idx[~cut] if cut is not None else idx
+        hi = int(kept.max()) + 1 if len(kept) else 0
         if hi > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: index {hi - 1} is past any vertex array this converter takes")
         verts = self.array_values(arr, 0, hi, no)
-        self.draw(no, mode, verts[idx], name)
+        tris = None
+        if cut is not None and cut.any():
+            bounds = np.flatnonzero(np.concatenate(([True], cut, [True])))
+            parts, at = [], 0
+            for a_, b_ in zip(bounds[:-1], bounds[1:]):
+                seg = b_ - a_ - 1
+                if seg > 0:
+                    parts.append(triangle_indices(mode, seg) + np.uint32(at))
+                    at += seg
+            tris = np.concatenate(parts) if parts else np.zeros((0, 3), np.uint32)
+        self.draw(no, mode, verts[kept], name, tris)
 
     def h_rect(self, no, name, a, args):
         vals = a[0] + a[1] if len(a) == 2 else a[:4]
