@@ -87,7 +87,7 @@ class Entry:
             raise UsageError(f"{self.toml}: screen: must be [W, H], 1..8192")
         self.screen = screen
         sel = key("selection", str)
-        if os.path.isabs(sel) or ".." in sel.split("/"):
+        if os.path.isabs(sel) or ".." in sel.split("/") or "\0" in sel:
             raise UsageError(f"{self.toml}: selection: must be a path inside the repository")
         self.selection = os.path.join(ROOT, sel)
         self.summary = os.path.join(self.dir, "summary.jsonl")
@@ -135,6 +135,10 @@ class Entry:
     def committed_summary(self, frames=None):
         """The entry's summary.jsonl as committed, its first `frames` lines."""
         text = read_input_text(self.summary, "the entry's summary", 64 << 20)
+        # A line a frame: counted before the text is split, so a file of
+        # many short lines costs no more than its bytes.
+        if text.count("\n") > self.frames:
+            raise UsageError(f"{self.summary}: more lines than the entry's {self.frames} frames")
         lines = text.splitlines(keepends=True)
         return "".join(lines[:frames] if frames else lines)
 

@@ -54,7 +54,8 @@ def test_a_capture_description_nested_too_deep(tmp_path, entry):
 @pytest.mark.parametrize("selection, words", [
     ("workloads/games/no-such-select.toml", "missing"),
     ("workloads/games", "not a regular file"),
-], ids=["missing", "directory"])
+    ("workloads/games/neverball-select.toml\\u0000x", "must be a path inside the repository"),
+], ids=["missing", "directory", "nul"])
 def test_check_refuses_an_entry_without_its_selection_file(tmp_path, entry, selection, words):
     toml = entry / "capture.toml"
     text = toml.read_text()
@@ -93,3 +94,17 @@ def test_expand_never_writes_through_its_output_folder_into_an_input(tmp_path, e
     assert snapshot(entry) == before, "an input of the entry changed"
     assert victim.read_text() == kept, "a file outside the output folder changed"
     assert not [p for p in os.listdir(out) if p.startswith(".")], "a temporary was left"
+
+
+def test_a_summary_of_more_lines_than_frames_is_refused_cheaply(tmp_path, entry):
+    """An entry's summary.jsonl holds a line a frame: 30 million short lines
+    (60 MB, under the read limit) are refused before being split (they had
+    taken 2.2 GB), naming the file."""
+    (entry / "summary.jsonl").write_bytes(b"a\n" * (30 << 20))
+    r = subprocess.run(["/usr/bin/time", "-f", "maxrss %M", "/usr/bin/python3", GAME_SUITE, "expand", "-o",
+                        tmp_path / "out", "--frames", "1", entry], capture_output=True, text=True,
+                       env=dict(os.environ, TMPDIR=str(tmp_path)), timeout=600)
+    lines = [line for line in r.stderr.splitlines() if not line.startswith(("maxrss", "Command exited"))]
+    assert r.returncode == 2 and len(lines) == 1 and "more lines than the entry's 150 frames" in lines[0], lines
+    peak_mb = int(r.stderr.split("maxrss ")[1].split()[0]) / 1024
+    assert peak_mb < 400, f"{peak_mb:.0f} MB for a 60 MB summary"
