@@ -226,3 +226,13 @@ def test_a_full_device_is_named(tmp_path, args):
     r = gl2rbt(tmp_path, cap, *[tmp_path / a if a == "c.rbt" else a for a in args])
     refused(r, "/dev/full: write failed: No space left on device", status=1)
     assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+def test_a_report_standard_output_cannot_take_is_one_line(tmp_path):
+    """Standard output on a full device: the outputs are in place and
+    whole, the lost report is one line, exit 1 (it was an internal error)."""
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    with open("/dev/full", "w") as full:
+        r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", stdout=full)
+    refused(r, "the report: write failed", status=1)
+    assert (tmp_path / "c.rbt").read_text().startswith("rbcd-trace ")

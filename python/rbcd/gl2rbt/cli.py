@@ -102,7 +102,14 @@ def run(args):
         frames, conv = raster.convert(args)
         if not args.quiet:
             outputs = [args.output, args.geometry, args.summary, args.reduced_out]
-            raster.report(frames, conv, sys.stderr if to_standard_output(outputs) else sys.stdout)
+            stream = sys.stderr if to_standard_output(outputs) else sys.stdout
+            try:
+                raster.report(frames, conv, stream)
+                stream.flush()
+            except OSError as e:
+                # The outputs are in place and whole; only the report is lost.
+                sys.stderr.write(f"{PROG}: the report: write failed: {e.strerror or e}\n")
+                return 1
         return 0
     except ConvertError as e:
         sys.stderr.write(f"{PROG}: {printable(args.trace)}: {printable(e, 400)}\n")
