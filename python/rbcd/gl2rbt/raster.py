@@ -28,12 +28,12 @@ RASTER_DIRS = (os.path.join(PACKAGE, "..", "..", "..", "build", "bin"),
 def raster_program():
     env = os.environ.get("RBCD_GL_RASTER")
     if env:
-        if not os.access(env, os.X_OK):
-            raise ToolError(f"RBCD_GL_RASTER={printable(env)} is not an executable")
+        if not os.path.isfile(env) or not os.access(env, os.X_OK):
+            raise ToolError(f"RBCD_GL_RASTER={printable(env)} is not an executable file")
         return env
     for d in RASTER_DIRS:
         exe = os.path.join(d, "rbcd-gl-raster")
-        if os.access(exe, os.X_OK):
+        if os.path.isfile(exe) and os.access(exe, os.X_OK):
             return exe
     exe = shutil.which("rbcd-gl-raster")
     if exe:
