@@ -236,3 +236,18 @@ def test_a_report_standard_output_cannot_take_is_one_line(tmp_path):
         r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", stdout=full)
     refused(r, "the report: write failed", status=1)
     assert (tmp_path / "c.rbt").read_text().startswith("rbcd-trace ")
+
+
+def test_a_listing_image_on_standard_output_has_it_to_itself(tmp_path):
+    """--list-draws N --image - (or /dev/stdout): the PNG alone on standard
+    output, the listing on standard error (they had been mixed, and "-" had
+    made a file of that name)."""
+    pytest.importorskip("PIL", reason="python3-pil is missing (installed with apitrace: scripts/setup.sh --gl)")
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    for image in ("-", "/dev/stdout"):
+        env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+        r = subprocess.run(["/usr/bin/python3", GL2RBT, cap, "--list-draws", "0", "--image", image],
+                           capture_output=True, env=env, timeout=120)
+        assert r.returncode == 0 and r.stdout.startswith(b"\x89PNG\r\n\x1a\n"), (image, r.stderr)
+        assert b"frame 0:" in r.stderr and b"frame 0:" not in r.stdout
+        assert sorted(os.listdir(tmp_path)) == ["c.xz"], os.listdir(tmp_path)

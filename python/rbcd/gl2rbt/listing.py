@@ -2,11 +2,12 @@
 import io
 import os
 import shutil
+import sys
 import tempfile
 
 import numpy as np
 
-from ..cli import write_output
+from ..cli import to_standard_output, write_output
 from .errors import ToolError, printable
 from .raster import convert
 
@@ -18,6 +19,11 @@ def list_draws(args):
     and labelled with its index."""
     frame = args.list_draws
     args.frame_range = (frame, frame)
+    # An image on standard output ("-" names it, as for the other outputs)
+    # has it to itself: the listing goes to standard error.
+    if args.image == "-":
+        args.image = "/dev/stdout"
+    out = sys.stderr if args.image and to_standard_output([args.image]) else sys.stdout
     tmp = tempfile.mkdtemp(prefix="rbcd-gl2rbt-list.")
     try:
         args.output = os.path.join(tmp, "list.rbt")
@@ -26,9 +32,9 @@ def list_draws(args):
         ids_path = os.path.join(tmp, "ids")
         frames, conv = convert(args, listing=True, ids=(ids_path, 0))
         rows = conv.listing
-        print(f"frame {frame}: {len(rows)} draws, {len(frames[0]['objects'])} collisionable objects")
+        print(f"frame {frame}: {len(rows)} draws, {len(frames[0]['objects'])} collisionable objects", file=out)
         print("  #   call  function              verts  tex  image     program   data      proj  own-mv depth  "
-              "func       box (x0 y0 x1 y1)     object  rule")
+              "func       box (x0 y0 x1 y1)     object  rule", file=out)
         for r in rows:
             x0, y0, x1, y1 = r["box"]
             obj = "-" if r["object"] is None else str(r["object"])
@@ -36,11 +42,11 @@ def list_draws(args):
                   f"{r['texture_image'][:8] or '-':8s}  {r['program'][:8] or '-':8s}  {r['vertex_data'][:8] or '-':8s}  "
                   f"{r['projection'][:5]:5s} {'yes' if r['own_modelview'] else 'no':6s} "
                   f"{'write' if r['depth_write'] else '-':5s}  {r['depth_func'][3:]:9s}  "
-                  f"{x0:4d} {y0:4d} {x1:4d} {y1:4d}     {obj:6s}  {printable(r['rule'], 40)}")
+                  f"{x0:4d} {y0:4d} {x1:4d} {y1:4d}     {obj:6s}  {printable(r['rule'], 40)}", file=out)
         passes = [(r["call"], r["pass"]) for i, r in enumerate(rows) if r["pass"] and
                   (i == 0 or rows[i - 1]["pass"] != r["pass"])]
         if passes:
-            print("passes: " + ", ".join(f"from call {c} {printable(p, 60)!r}" for c, p in passes))
+            print("passes: " + ", ".join(f"from call {c} {printable(p, 60)!r}" for c, p in passes), file=out)
         if args.image:
             write_draw_image(args.image, ids_path, rows)
         return 0
