@@ -403,6 +403,21 @@ def test_rules_name_shader_draws_by_their_vertex_data(tmp_path):
         assert s0["objects"] == [3] and s0["other"] > 0, ("one draw chosen, the other other work", digest, s0)
 
 
+def test_draw_records_of_a_frame_are_bounded(tmp_path):
+    """Twenty multi-draws of 65,536 draws each, within each call's limit
+    (3.5 KB of reduced capture that ran past two minutes): refused once a
+    frame passes its documented number of draw records, in seconds."""
+    import rbcd.gl2rbt.glstate.draws as draws
+    c = Calls()
+    n = 1 << 16
+    for _ in range(20):
+        c.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
+        c.add("glMultiDrawArrays", mode="GL_TRIANGLES", first=[0] * n, count=[3] * n, drawcount=n)
+    r = gl2rbt(tmp_path, c.swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    refused(r, f"more than {draws.MAX_FRAME_RECORDS} draw records")
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
 def test_a_polygon_offset_past_any_depth_is_clamped(tmp_path):
     """glPolygonOffset(0, 3e38), legal GL: the offset depth is clamped to
     the far plane, and the triangle (collisionable, depth test on) still
@@ -508,7 +523,9 @@ def test_a_fragment_only_program_is_counted(tmp_path):
     (lambda c: c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=1 << 32), "4294967296 is outside"),
     (lambda c: c.add("glUniform1i", location=1 << 40, v0=1), "the location: 1099511627776 is outside"),
     (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0), "glDrawArrays: no count"),
-], ids=["uniform_count", "memcpy_length", "source_count", "framebuffer_name", "location", "no_count"])
+    (lambda c: c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=[1, 2], usage="GL_STATIC_DRAW"),
+     "the data is neither bytes"),
+], ids=["uniform_count", "memcpy_length", "source_count", "framebuffer_name", "location", "no_count", "data_list"])
 def test_records_that_no_gl_call_makes(tmp_path, build, words):
     c = shader_calls(VS)
     build(c)

@@ -52,6 +52,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.frame = 0                   # capture frame (swaps seen)
         self.out_frame = -1              # output frame number
         self.frame_open = False          # its start record is written
+        self.frame_records = 0           # draw records in it
         self.frame_view = None           # the frame's view matrix (the first perspective draw's model-view)
         self.screen = tuple(args.screen) if args.screen else None
         self.drawable = None             # the window's size, as apitrace records it at each MakeCurrent
@@ -135,6 +136,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.write_geometry_frame()
         self.frame += 1
         self.frame_open = False
+        self.frame_records = 0
         self.active = self.in_range(self.frame)
         self.drawn_surfaces = set()
         self.geo_objects = {}

@@ -103,6 +103,8 @@ class Selection:
                 isinstance(x, str) and re.fullmatch(r"[0-9a-f]{8,64}", x) for x in r["program"])):
             raise ConvertError(f"{where}.program: must be a list of program digests (8 to 64 lower-case hex "
                                "digits, as --list-draws shows them)")
+        if "name" in r and not isinstance(r["name"], str):
+            raise ConvertError(f"{where}.name: must be a string")
         for k, what in (("texture_image", "texture image"), ("vertex_data", "vertex data")):
             if k in r and not (isinstance(r[k], list) and r[k] and all(
                     isinstance(x, str) and re.fullmatch(r"[0-9a-f]{8,16}", x) for x in r[k])):

@@ -122,6 +122,9 @@ class BufferCalls:
         if size > MAX_BUFFER_BYTES:
             fail_call(no, f"{name}: {size} bytes, more than a buffer's {MAX_BUFFER_BYTES} (docs/gl-capture.md, limits)")
         data = d.get("data")
+        if data is not None and not isinstance(data, (bytes, bytearray)) and not (isinstance(data, int)
+                                                                               and not isinstance(data, bool)):
+            fail_call(no, f"{name}: the data is neither bytes, NULL nor an address apitrace recorded")
         buf = storage(size)
         written = 0
         if isinstance(data, (bytes, bytearray)):

@@ -14,6 +14,7 @@ PRIM_MODES = PRIM_TRIANGLES | PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STR
                                               "GL_TRIANGLE_STRIP_ADJACENCY", "GL_PATCHES"}
 MESA_STEPS_PER_UNIT = 2.0
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
+MAX_FRAME_RECORDS = 1 << 17    # draw records of one frame (a game's frame has a few thousand)
 # A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
 # that could need more is refused before anything is computed for it.
 MAX_RECORD_VERTICES = 1 << 22
@@ -85,6 +86,10 @@ class DrawCalls:
         object obj_id (None: other work); eye() gives the eye-space vertices
         for the geometry output (None: a draw under a program, whose geometry
         is written in normalized device coordinates)."""
+        self.frame_records += 1
+        if self.frame_records > MAX_FRAME_RECORDS:
+            fail_call(no, f"{name}: more than {MAX_FRAME_RECORDS} draw records (draws and their instances) in one "
+                      "frame (docs/gl-capture.md, limits)")
         collisionable = obj_id is not None
         if collisionable:
             # A surface drawn in several passes is collisionable once: its first
