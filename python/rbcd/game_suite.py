@@ -22,12 +22,13 @@ import argparse
 import concurrent.futures
 import hashlib
 import os
+import re
 import subprocess
 import sys
 import tomllib
 
-from rbcd.cli import (UsageError, check_outputs, main_wrapper, open_trace, read_input_text, say, trace_errors,
-                      write_output)
+from rbcd.cli import (UsageError, check_outputs, escape, main_wrapper, open_trace, read_input_text, say,
+                      trace_errors, write_output)
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter
@@ -59,7 +60,12 @@ def sha256_file(path, decompress=False):
 class Entry:
     def __init__(self, path):
         self.dir = path.rstrip("/")
-        self.name = os.path.basename(self.dir)
+        # The entry's name names its outputs: a folder's own name, not "",
+        # "." or ".." (the root, or a path that ends there).
+        self.name = os.path.basename(os.path.abspath(path))
+        if self.name in ("", ".", "..") or not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.+-]{0,127}", self.name):
+            raise UsageError(f"{escape(path)[:200]}: an entry is a folder with a name of letters, digits and "
+                             "_.+- (its outputs are named after it)")
         self.toml = os.path.join(self.dir, "capture.toml")
         self.calls = os.path.join(self.dir, "calls.xz")
         text = read_input_text(self.toml, "the capture description", MAX_TOML)
@@ -137,8 +143,8 @@ class Entry:
         text = read_input_text(self.summary, "the entry's summary", 64 << 20)
         # A line a frame: counted before the text is split, so a file of
         # many short lines costs no more than its bytes.
-        if text.count("\n") > self.frames:
-            raise UsageError(f"{self.summary}: more lines than the entry's {self.frames} frames")
+        if text.count("\n") != self.frames:
+            raise UsageError(f"{self.summary}: not a line for each of the entry's {self.frames} frames")
         lines = text.splitlines(keepends=True)
         return "".join(lines[:frames] if frames else lines)
 

@@ -105,6 +105,20 @@ def test_a_summary_of_more_lines_than_frames_is_refused_cheaply(tmp_path, entry)
                         tmp_path / "out", "--frames", "1", entry], capture_output=True, text=True,
                        env=dict(os.environ, TMPDIR=str(tmp_path)), timeout=600)
     lines = [line for line in r.stderr.splitlines() if not line.startswith(("maxrss", "Command exited"))]
-    assert r.returncode == 2 and len(lines) == 1 and "more lines than the entry's 150 frames" in lines[0], lines
+    assert r.returncode == 2 and len(lines) == 1 and "not a line for each of the entry's 150 frames" in lines[0], lines
     peak_mb = int(r.stderr.split("maxrss ")[1].split()[0]) / 1024
     assert peak_mb < 400, f"{peak_mb:.0f} MB for a 60 MB summary"
+
+
+def test_an_entry_is_a_named_folder_whose_summary_matches_its_frames(tmp_path, entry):
+    """The root is no entry (its name would be empty); "." is the folder's
+    own name (outputs named after it, not "..rbt.zst"); a capture.toml
+    claiming more frames than its summary's lines is refused."""
+    refused(game_suite(tmp_path, "check", "/"), "an entry is a folder with a name")
+    r = subprocess.run(["/usr/bin/python3", GAME_SUITE, "check", "."], capture_output=True, text=True, cwd=entry,
+                       env=dict(os.environ, TMPDIR=str(tmp_path)), timeout=600)
+    assert r.returncode == 0 and r.stdout.startswith(f"{NAME}: "), (r.stdout, r.stderr)
+    toml = entry / "capture.toml"
+    toml.write_text(toml.read_text().replace("frames = 150", "frames = 100000", 1))
+    refused(game_suite(tmp_path, "expand", "-o", tmp_path / "out", "--frames", "1", entry),
+            "not a line for each of the entry's 100000 frames")
