@@ -216,7 +216,9 @@ if [ "$game" = supertuxkart ]; then
   # before it are the loading screens).
   race_start=$(apitrace dump --color=never "$capture" 2>/dev/null |
     awk '/ glXSwapBuffers\(| eglSwapBuffers\(/ {f++} /buf = "Solid Pass begin"/ {print f + 0; exit}') || true
-  [ -n "$race_start" ] || { echo "capture-game.sh: $capture: no frame draws the race (no \"Solid Pass begin\" marker)" >&2; exit 1; }
+  # A capture given with --from-trace is the input, and without the race it
+  # is bad input (2); one the game just made failed to reach the race (1).
+  [ -n "$race_start" ] || { echo "capture-game.sh: $capture: no frame draws the race (no \"Solid Pass begin\" marker)" >&2; exit $([ -n "$from" ] && echo 2 || echo 1); }
   echo "capture-game.sh: the race starts at frame $race_start of the capture"
   skip=$(( race_start + skip ))
 fi
