@@ -69,3 +69,13 @@ def test_more_frames_than_the_capture_holds(tmp_path):
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 2 and len(lines) == 1 and "frames asked for" in lines[0], (r.returncode, lines)
     assert os.listdir(tmp_path) == [], "something was left"
+
+
+def test_a_capture_without_the_race_is_bad_input(tmp_path):
+    """--from-trace supertuxkart with a capture that never draws the race
+    (the test program's): one line naming it, exit 2."""
+    cap = boxes_capture()
+    r = capture_game(tmp_path, "supertuxkart", "lighthouse", "2", tmp_path / "out", "--from-trace", cap)
+    lines = [line for line in r.stderr.strip().splitlines()]
+    assert r.returncode == 2 and len(lines) == 1 and "no frame draws the race" in lines[0], (r.returncode, lines)
+    assert not (tmp_path / "out").exists()
