@@ -727,3 +727,17 @@ def test_fixed_function_draws_restart_their_primitives():
         gl.glDrawElements(mode="GL_TRIANGLE_STRIP", count=7, type="GL_UNSIGNED_BYTE", indices=idx)
         d = gl.draws()[-1]
         assert d["clip"][:, 0].tolist() == [0, 1, 2, 3, 4, 5] and d["tris"] == [[0, 1, 2], [3, 4, 5]], d["tris"]
+
+
+def test_the_check_reads_the_screen_out_of_a_grown_replay_window():
+    """glretrace grows its window to hold every viewport (a 64x64 window with
+    glViewport(-10, -20, 84, 94) replays at 74x74): the check compares the
+    screen's pixels, the lower left of Mesa's dump, whose rows run down."""
+    from rbcd.gl2rbt.depth_check import window_of
+    from rbcd.gl2rbt.errors import ToolError
+    mesa = np.arange(74 * 74, dtype=np.float32).reshape(74, 74)
+    got = window_of(mesa, 64, 64, 1)
+    assert got.shape == (64, 64) and got[0, 0] == mesa[10, 0] and got[-1, -1] == mesa[-1, 63]
+    assert window_of(mesa, 74, 74, 1) is not None
+    with pytest.raises(ToolError, match="smaller than the screen"):
+        window_of(mesa, 80, 64, 1)

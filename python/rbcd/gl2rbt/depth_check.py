@@ -49,6 +49,17 @@ def mesa_depth_at(trace, call, timeout):
     return w, h, vals   # rows from the top, as glretrace writes them (not PFM's bottom-up)
 
 
+def window_of(mesa, w, h, frame):
+    """The screen's w x h pixels of Mesa's depth dump (rows from the top).
+    glretrace grows its window to hold every viewport the capture sets
+    (glViewport(-10, -20, 84, 94) on a 64x64 window gives 74x74): the
+    screen is then its lower left part, GL's origin being the lower left."""
+    mh, mw = mesa.shape
+    if mw < w or mh < h:
+        raise ToolError(f"frame {frame}: Mesa's depth buffer is {mw}x{mh}, smaller than the screen {w}x{h}")
+    return mesa[mh - h:, :w]
+
+
 def read_depth_file(path):
     """rbcd-gl-raster's depth dump: the depths, and where they were last
     written by a draw whose fragment shader can discard or write depth."""
@@ -148,13 +159,11 @@ def check_depth(args):
             cached = os.path.join(keep, f"mesa.{call}.npy") if keep else None
             if cached and os.path.exists(cached):
                 mesa = np.load(cached)
-                mh, mw = mesa.shape
             else:
-                mw, mh, mesa = mesa_depth_at(args.trace, call, args.check_timeout)
+                _, _, mesa = mesa_depth_at(args.trace, call, args.check_timeout)
                 if cached:
                     np.save(cached, mesa)
-            if (mw, mh) != (w, h):
-                raise ToolError(f"frame {cap_frame}: Mesa's depth buffer is {mw}x{mh}, the screen {w}x{h}")
+            mesa = window_of(mesa, w, h, cap_frame)
             # Where a draw under a discarding fragment shader wrote our depth
             # last, ours is an upper bound: Mesa's lies at it or behind it.
             counts = compare(ours, marks, bits, mesa, step)
