@@ -741,3 +741,25 @@ def test_the_check_reads_the_screen_out_of_a_grown_replay_window():
     assert window_of(mesa, 74, 74, 1) is not None
     with pytest.raises(ToolError, match="smaller than the screen"):
         window_of(mesa, 80, 64, 1)
+
+
+def test_a_deleted_buffer_lives_on_in_the_vertex_arrays_that_hold_it():
+    """glDeleteBuffers of a buffer an unbound vertex array object holds: the
+    object keeps its data (GL 4.5 5.1.3; Mesa draws it; the converter had
+    refused the draw with "holds no data"), the name is free again, and the
+    bound object lets the buffer go."""
+    gl = GL()
+    gl.conv.core = True
+    data = np.arange(9, dtype="<f4").tobytes()
+    for vao in (7, 8):
+        gl.glGenVertexArrays(n=1, arrays=[vao])
+        gl.glBindVertexArray(array=vao)
+        gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=3)
+        gl.glBufferData(target="GL_ARRAY_BUFFER", size=len(data), data=data, usage="GL_STATIC_DRAW")
+        gl.glEnableVertexAttribArray(index=0)
+        gl.glVertexAttribPointer(index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    gl.glDeleteBuffers(n=1, buffers=[3])   # vertex array 8 is bound
+    s = gl.conv.s
+    assert 3 not in s.buffers and s.vaos[8].attribs[0].buffer == 0, "the bound object let it go"
+    kept = s.vaos[7].attribs[0].buffer
+    assert kept != 3 and bytes(s.buffers[kept]) == data, "vertex array 7 kept the data"

@@ -239,10 +239,41 @@ class BufferCalls:
                 return
         fail_call(no, "memcpy into memory that is not a mapped buffer's")
 
+    def keep_for_other_vertex_arrays(self, b):
+        """A buffer deleted while a vertex array object that is not bound
+        holds it lives on for that object (GL 4.5, 5.1.3; Mesa draws it):
+        its data moves to a name no call can give, which those objects take;
+        the bound object lets it go, as GL detaches it there."""
+        if b not in self.s.buffers:
+            return
+        current = self.current_vao()
+        holders = [v for v in self.s.vaos.values() if v is not current and
+                   (v.element == b or any(at.buffer == b for at in v.attribs.values()))]
+        for at in current.attribs.values():
+            if at.buffer == b:
+                at.buffer = 0
+        if not holders:
+            return
+        self.s.next_version += 1
+        kept = ("deleted", b, self.s.next_version)
+        self.s.buffers[kept] = self.s.buffers[b]
+        self.s.buffer_versions[kept] = self.s.buffer_versions.get(b)
+        if b in self.s.buffer_written:
+            self.s.buffer_written[kept] = self.s.buffer_written[b]
+        self.s.buffer_held[kept] = self.s.buffer_held.get(b, 0)
+        self.s.buffer_bytes_in_all += self.s.buffer_held[kept]
+        for v in holders:
+            if v.element == b:
+                v.element = kept
+            for at in v.attribs.values():
+                if at.buffer == b:
+                    at.buffer = kept
+
     def h_delete_buffers(self, no, name, a, args):
         d = dict(args)
         for b in d.get("buffers") or []:
             if isinstance(b, int):
+                self.keep_for_other_vertex_arrays(b)
                 self.s.buffers.pop(b, None)
                 self.s.buffer_versions.pop(b, None)
                 self.s.buffer_written.pop(b, None)
