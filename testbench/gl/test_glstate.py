@@ -763,3 +763,20 @@ def test_a_deleted_buffer_lives_on_in_the_vertex_arrays_that_hold_it():
     assert 3 not in s.buffers and s.vaos[8].attribs[0].buffer == 0, "the bound object let it go"
     kept = s.vaos[7].attribs[0].buffer
     assert kept != 3 and bytes(s.buffers[kept]) == data, "vertex array 7 kept the data"
+
+
+def test_a_core_profile_binds_only_generated_buffer_names():
+    """Core profile: glBindBuffer of a name glGenBuffers never returned is
+    GL_INVALID_OPERATION, the old binding stays and takes the data; a name
+    glDeleteBuffers freed is not a name any more; a compatibility profile
+    binds any name."""
+    for core in (True, False):
+        gl = GL()
+        gl.conv.core = core
+        gl.glGenBuffers(n=1, buffers=[1])
+        gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=1)
+        gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=777)
+        assert gl.conv.s.bound["GL_ARRAY_BUFFER"] == (1 if core else 777)
+        gl.glDeleteBuffers(n=1, buffers=[1])
+        gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=1)
+        assert gl.conv.s.bound["GL_ARRAY_BUFFER"] == (0 if core else 1)

@@ -30,7 +30,7 @@ IGNORED_PREFIXES = (
     "glFogCoordPointer", "glEdgeFlagPointer", "glIndexPointer", "glMultiTexCoord", "glTexCoord", "glFogCoord",
     "glEdgeFlag", "glIndex", "glAccum", "glSampleCoverage", "glGenQueries", "glBeginQuery", "glEndQuery",
     "glDeleteQueries", "glQueryCounter", "glStringMarker", "glFrameTerminator", "glInsertEventMarker",
-    "glDebugMessageInsert", "glGenBuffers", "glSampleMask",
+    "glDebugMessageInsert", "glSampleMask",
     "glDepthBounds", "glGenFramebuffers",
     "glRasterPos", "glBitmap", "glDrawPixels", "glCopyPixels",
     "glPrimitiveRestart", "glLoadName", "glPushName", "glPopName", "glInitNames", "glRenderMode",

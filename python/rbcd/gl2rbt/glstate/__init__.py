@@ -61,6 +61,7 @@ class GLState:
         self.buffer_versions = {}
         self.buffer_written = {}   # large buffers: the [start, end) extents ever written
         self.buffer_held = {}      # buffer -> bytes of memory its data holds
+        self.buffer_names = None   # names glGenBuffers returned (None: the capture showed none)
         self.immutable_buffers = {}   # made by glBufferStorage: buffer -> GL_DYNAMIC_STORAGE_BIT set
         self.buffer_bytes_in_all = 0
         self.next_version = 0

@@ -90,7 +90,25 @@ class BufferCalls:
         buf = checked(no, integer, d["buffer"], f"{name}: the buffer", *U32)
         if not is_buffer_target(target):
             return   # GL_INVALID_ENUM: the call does nothing
+        if not self.generated(buf):
+            return   # GL_INVALID_OPERATION: a core profile binds only generated names
         self.s.bound[target] = buf
+
+    def generated(self, buf):
+        """Whether a core profile takes `buf` as a buffer name: 0, or one
+        glGenBuffers returned (and no glDeleteBuffers freed since). A
+        capture that shows no glGenBuffers at all (a reduced capture written
+        before they were kept) is taken as it binds."""
+        return not (self.core and buf and self.s.buffer_names is not None and buf not in self.s.buffer_names)
+
+    def h_gen_buffers(self, no, name, a, args):
+        names = dict(args).get("buffers")
+        if not isinstance(names, list):
+            return   # apitrace recorded no names (a negative count: GL_INVALID_VALUE)
+        if self.s.buffer_names is None:
+            self.s.buffer_names = set()
+        for b in names:
+            self.s.buffer_names.add(checked(no, integer, b, f"{name}: a buffer name", *U32))
 
     def h_bind_buffer_base(self, no, name, a, args):
         d = dict(args)
@@ -101,8 +119,9 @@ class BufferCalls:
         size = d.get("size")
         if size is not None:
             size = checked(no, integer, size, f"{name}: the size", *I64)
-        if not is_buffer_target(target) or index >= MAX_BINDINGS or offset < 0 or (size is not None and size <= 0):
-            return   # GL_INVALID_ENUM or GL_INVALID_VALUE: the call does nothing
+        if not is_buffer_target(target) or index >= MAX_BINDINGS or offset < 0 or (size is not None and size <= 0) \
+                or not self.generated(buf):
+            return   # GL_INVALID_ENUM, GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
         self.s.bound[target] = buf   # glBindBufferBase and Range also bind the generic target
         self.s.indexed[(target, index)] = (buf, offset, size)
 
@@ -273,6 +292,8 @@ class BufferCalls:
         d = dict(args)
         for b in d.get("buffers") or []:
             if isinstance(b, int):
+                if self.s.buffer_names is not None:
+                    self.s.buffer_names.discard(b)
                 self.keep_for_other_vertex_arrays(b)
                 self.s.buffers.pop(b, None)
                 self.s.buffer_versions.pop(b, None)
@@ -290,6 +311,7 @@ class BufferCalls:
 
     HANDLERS = {
         "glBindBuffer": h_bind_buffer,
+        "glGenBuffers": h_gen_buffers,
         "glBindBufferBase": h_bind_buffer_base,
         "glBindBufferRange": h_bind_buffer_base,
         "glBufferData": h_buffer_data,
