@@ -17,7 +17,7 @@ map GL function names (without ARB/EXT) to its handlers, called as
 h(self, call_no, name, argument values, (name, value) arguments)."""
 import numpy as np
 
-from ...cli import real
+from ...cli import I32, integer, real
 from ..errors import checked, fail_call, printable
 from ..gl_tables import MAX_CLIP_PLANES
 from .attributes import VertexArrayObject
@@ -100,6 +100,22 @@ class GLState:
 
 
 MAX_VIEWPORTS = 16   # GL_MAX_VIEWPORTS as Mesa (llvmpipe) answers it
+
+
+def first_of_array(no, name, d, what, size_of):
+    """glViewportArrayv's and glScissorArrayv's rectangle 0 (four values),
+    or None when the call sets no rectangle 0: GL_INVALID_VALUE for the
+    whole call past Mesa's 16 or with any negative size (size_of reads a
+    size, checked), or a range from another index."""
+    first = checked(no, integer, d.get("first"), f"{name}: first", *I32)
+    count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
+    v = d.get("v")
+    if not isinstance(v, list) or len(v) < 4 * max(count, 0):
+        fail_call(no, f"{name}: fewer values than four a {what}")
+    if first < 0 or count < 0 or first + count > MAX_VIEWPORTS or \
+            any(size_of(x, no, f"{name}: a {what} size") < 0 for i in range(count) for x in v[4 * i + 2:4 * i + 4]):
+        return None
+    return v[:4] if first == 0 and count else None
 
 
 def enum_arg(v, no, what):

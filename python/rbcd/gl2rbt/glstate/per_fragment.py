@@ -7,7 +7,7 @@ import numpy as np
 from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES, base_name
-from . import MAX_VIEWPORTS, clamped01, enum_arg, gl_boolean, number
+from . import clamped01, enum_arg, first_of_array, gl_boolean, number
 
 CLEAR_BITS = {0x100: "GL_DEPTH_BUFFER_BIT", 0x200: "GL_ACCUM_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT",
               0x4000: "GL_COLOR_BUFFER_BIT"}
@@ -26,20 +26,9 @@ class PerFragmentCalls:
         the others are selected only by a geometry shader, which is refused."""
         d = dict(args)
         if "Array" in name:
-            first = checked(no, integer, d.get("first"), f"{name}: first", *I32)
-            count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
-            v = d.get("v")
-            if not isinstance(v, list) or len(v) < 4 * max(count, 0):
-                fail_call(no, f"{name}: fewer values than four a scissor")
-            # GL_INVALID_VALUE for the whole call: past Mesa's 16 scissors, or
-            # any negative size.
-            if first < 0 or count < 0 or first + count > MAX_VIEWPORTS or \
-                    any(checked(no, integer, x, f"{name}: a scissor size", *I32) < 0
-                        for i in range(count) for x in v[4 * i + 2:4 * i + 4]):
+            vals = first_of_array(no, name, d, "scissor", lambda x, n, w: checked(n, integer, x, w, *I32))
+            if vals is None:
                 return
-            if first != 0 or count == 0:
-                return   # another scissor
-            vals = v
         else:
             index = checked(no, integer, d.get("index"), f"{name}: index", *I32)
             if index != 0:

@@ -8,7 +8,7 @@ from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CALL_FLAG_FAKE, MAX_CLIP_PLANES
 from ..glmath import mat_frustum, mat_mul, mat_ortho, mat_rotate, mat_scale, mat_translate
-from . import MAX_VIEWPORTS, clamped01, enum_arg, number
+from . import clamped01, enum_arg, first_of_array, number
 
 # Mesa's limits (llvmpipe, Mesa 22.3): matrix stack depths, the largest
 # viewport, and the range a viewport's corner is clamped to.
@@ -119,20 +119,9 @@ class TransformCalls:
         is refused, so they change nothing drawn."""
         d = dict(args)
         if "Array" in name:
-            first = checked(no, integer, d.get("first"), f"{name}: first", *I32)
-            count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
-            v = d.get("v")
-            if not isinstance(v, list) or len(v) < 4 * max(count, 0):
-                fail_call(no, f"{name}: fewer values than four a viewport")
-            # GL_INVALID_VALUE for the whole call: past Mesa's 16 viewports,
-            # or any negative size.
-            if first < 0 or count < 0 or first + count > MAX_VIEWPORTS or \
-                    any(number(x, no, f"{name}: a viewport size") < 0
-                        for i in range(count) for x in v[4 * i + 2:4 * i + 4]):
+            vals = first_of_array(no, name, d, "viewport", number)
+            if vals is None:
                 return
-            if first != 0 or count == 0:
-                return
-            vals = v[:4]
         else:
             index = checked(no, integer, d.get("index"), f"{name}: index", *I32)
             if index != 0:
