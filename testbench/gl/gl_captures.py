@@ -19,7 +19,9 @@ edge-on and cover nothing.
 """
 import gzip
 import os
+import re
 import subprocess
+import time
 
 import pytest
 
@@ -30,6 +32,38 @@ CAPTURES = os.environ.get("RBCD_GL_CAPTURES") or os.path.join(ROOT, "build", "te
 FAULTS = ["nan", "index", "ortho", "list", "shader", "line", "underflow"]
 SHADER_FAULTS = ["geometry", "texture", "compile", "separable"]
 DEPTH_MAX = (1 << 24) - 1
+
+
+# ---- the converter run as the hostile-input tests run it: under
+# /usr/bin/time (peak memory), timed, with no standard input.
+
+def gl2rbt_timed(tmp_path, *args, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL):
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    t = time.monotonic()
+    r = subprocess.run(["/usr/bin/time", "-f", "maxrss %M", "/usr/bin/python3", GL2RBT] + [str(a) for a in args],
+                       stdout=stdout, stderr=subprocess.PIPE, stdin=stdin, text=True, env=env, timeout=120)
+    r.seconds = time.monotonic() - t
+    return r
+
+
+def lines_of(r):
+    return [line for line in r.stderr.strip().splitlines()
+            if not line.startswith(("maxrss ", "Command exited with non-zero status"))]   # /usr/bin/time's
+
+
+def refused(r, *words, status=2):
+    lines = lines_of(r)
+    assert r.returncode == status and len(lines) == 1 and all(w in lines[0] for w in words), \
+        f"exit {r.returncode}, {lines} (wanted {words})"
+    return lines[0]
+
+
+def peak_mb(r):
+    return int(re.search(r"maxrss (\d+)", r.stderr).group(1)) / 1024
+
+
+def left_behind(tmp_path, keep):
+    return sorted(set(os.listdir(tmp_path)) - set(keep))
 
 
 def run(cmd, **kw):

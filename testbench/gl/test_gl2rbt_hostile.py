@@ -8,16 +8,15 @@ import json
 import lzma
 import os
 import pickle
-import re
 import subprocess
 
 import numpy as np
 import pytest
 
-from conftest import ROOT, program
+from conftest import program
+from gl_captures import gl2rbt_timed as gl2rbt, left_behind, peak_mb, refused
 from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_EXPANSION, REDUCED_HEADER, ReducedWriter
 
-GL2RBT = os.path.join(ROOT, "scripts", "rbcd-gl2rbt")
 END_FRAME = 32   # apitrace's flag on a call that ends a frame
 TRIANGLE = np.array([[4, 4, -10], [40, 4, -10], [4, 40, -10]], "<f4").tobytes()
 
@@ -56,28 +55,6 @@ class Calls:
             w.call(c)
         w.commit()
         return str(path)
-
-
-def gl2rbt(tmp_path, *args, stdout=subprocess.PIPE):
-    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
-    return subprocess.run(["/usr/bin/time", "-f", "maxrss %M", "/usr/bin/python3", GL2RBT] + [str(a) for a in args],
-                          stdout=stdout, stderr=subprocess.PIPE, text=True, env=env)
-
-
-def refused(r, *words):
-    lines = [line for line in r.stderr.strip().splitlines()
-             if not line.startswith(("maxrss ", "Command exited with non-zero status"))]   # /usr/bin/time's
-    assert r.returncode == 2 and len(lines) == 1 and all(w in lines[0] for w in words), \
-        f"exit {r.returncode}, {lines} (wanted {words})"
-    return lines[0]
-
-
-def peak_mb(r):
-    return int(re.search(r"maxrss (\d+)", r.stderr).group(1)) / 1024
-
-
-def left_behind(tmp_path, keep):
-    return sorted(set(os.listdir(tmp_path)) - set(keep))
 
 
 def test_a_good_capture_converts(tmp_path):

@@ -9,19 +9,18 @@ captures (no Xvfb, no apitrace)."""
 import lzma
 import os
 import pickle
-import re
 import subprocess
 import time
 
 import pytest
 
-from conftest import ROOT, program
+from conftest import program
+from gl_captures import GL2RBT, gl2rbt_timed as gl2rbt, left_behind, peak_mb, refused
 from rbcd.cli import describe
 from rbcd.gl2rbt.apitrace import MAX_RECORD_VALUES
 from rbcd.gl2rbt.errors import printable
 from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_HEADER
 
-GL2RBT = os.path.join(ROOT, "scripts", "rbcd-gl2rbt")
 END_FRAME = 32   # apitrace's flag on a call that ends a frame
 TRIANGLE = bytes.fromhex("0000804000008040000020c1" "0000204200008040000020c1" "00008040000020420000" "20c1")
 # A pickle of shared references: a 10^9-element list in a few kilobytes (its
@@ -62,35 +61,6 @@ class Calls:
         with open(path, "wb") as f:
             f.write(data + z.flush())
         return str(path)
-
-
-def gl2rbt(tmp_path, *args, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL):
-    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
-    t = time.monotonic()
-    r = subprocess.run(["/usr/bin/time", "-f", "maxrss %M", "/usr/bin/python3", GL2RBT] + [str(a) for a in args],
-                       stdout=stdout, stderr=subprocess.PIPE, stdin=stdin, text=True, env=env, timeout=120)
-    r.seconds = time.monotonic() - t
-    return r
-
-
-def lines_of(r):
-    return [line for line in r.stderr.strip().splitlines()
-            if not line.startswith(("maxrss ", "Command exited with non-zero status"))]   # /usr/bin/time's
-
-
-def refused(r, *words, status=2):
-    lines = lines_of(r)
-    assert r.returncode == status and len(lines) == 1 and all(w in lines[0] for w in words), \
-        f"exit {r.returncode}, {lines} (wanted {words})"
-    return lines[0]
-
-
-def peak_mb(r):
-    return int(re.search(r"maxrss (\d+)", r.stderr).group(1)) / 1024
-
-
-def left_behind(tmp_path, keep):
-    return sorted(set(os.listdir(tmp_path)) - set(keep))
 
 
 # ---- messages built from input values
