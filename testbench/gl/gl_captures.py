@@ -1,7 +1,9 @@
 """What the GL tests share: the captures of testbench/gl/gl_boxes.c and
 gl_shaders.c that test_gl_capture.py makes (RBCD_GL_CAPTURES, set by CTest;
-by hand build/testbench/gl/captures), the converter run as users run it, and
-a reader of the traces it writes. What gl_shaders draws is in
+by hand build/testbench/gl/captures), captures the tests write call by call
+(Calls, as reduced captures), the converter run as users run it and as the
+hostile-input tests run it (peak memory, time, one-line refusals), and a
+reader of the traces it writes. What gl_shaders draws is in
 test_gl2rbt_shaders.py.
 
 What gl_boxes draws, 128 x 96, glOrtho(0, 128, 0, 96, -100, 100) in frames 0
@@ -20,18 +22,64 @@ edge-on and cover nothing.
 import gzip
 import os
 import re
+import struct
 import subprocess
 import time
 
 import pytest
 
 from conftest import ROOT, program
+from rbcd.gl2rbt.reduced import ReducedWriter
 
 GL2RBT = os.path.join(ROOT, "scripts", "rbcd-gl2rbt")
 CAPTURES = os.environ.get("RBCD_GL_CAPTURES") or os.path.join(ROOT, "build", "testbench", "gl", "captures")
 FAULTS = ["nan", "index", "ortho", "list", "shader", "line", "underflow"]
 SHADER_FAULTS = ["geometry", "texture", "compile", "separable"]
 DEPTH_MAX = (1 << 24) - 1
+
+
+# ---- captures written by the tests, call by call
+
+END_FRAME = 32   # apitrace's flag on a call that ends a frame
+TRIANGLE = struct.pack("<9f", 4, 4, -10, 40, 4, -10, 4, 40, -10)
+
+
+class Calls:
+    """A capture's calls, numbered from 1, as apitrace's reader yields them,
+    written as a reduced capture (the converter's own format): every call,
+    value and file is the test's."""
+
+    def __init__(self, w=64, h=48):
+        self.calls = []
+        self.add("glViewport", x=0, y=0, width=w, height=h, flags=1)   # apitrace's record of the window
+        self.add("glMatrixMode", mode="GL_PROJECTION")
+        self.add("glOrtho", left=0, right=w, bottom=0, top=h, zNear=-100, zFar=100)
+        self.add("glMatrixMode", mode="GL_MODELVIEW")
+        self.add("glEnableClientState", array="GL_VERTEX_ARRAY")
+
+    def add(self, fn, ret=None, flags=0, **args):
+        self.calls.append((len(self.calls) + 1, fn, list(args.items()), ret, flags))
+        return self
+
+    def triangle(self, obj=None):
+        if obj is not None:
+            self.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=obj, length=-1,
+                     message="rbcd-object")
+        self.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
+        self.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        if obj is not None:
+            self.add("glPopDebugGroup")
+        return self
+
+    def swap(self):
+        return self.add("glXSwapBuffers", dpy=1, drawable=2, flags=END_FRAME)
+
+    def write(self, path):
+        w = ReducedWriter(str(path))
+        for c in self.calls:
+            w.call(c)
+        w.commit()
+        return str(path)
 
 
 # ---- the converter run as the hostile-input tests run it: under

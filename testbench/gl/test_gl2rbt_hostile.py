@@ -14,48 +14,8 @@ import numpy as np
 import pytest
 
 from conftest import program
-from gl_captures import gl2rbt_timed as gl2rbt, left_behind, peak_mb, refused
-from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_EXPANSION, REDUCED_HEADER, ReducedWriter
-
-END_FRAME = 32   # apitrace's flag on a call that ends a frame
-TRIANGLE = np.array([[4, 4, -10], [40, 4, -10], [4, 40, -10]], "<f4").tobytes()
-
-
-class Calls:
-    """A capture's calls, numbered from 1, as apitrace's reader yields them."""
-
-    def __init__(self, w=64, h=48):
-        self.calls = []
-        self.add("glViewport", x=0, y=0, width=w, height=h, flags=1)   # apitrace's record of the window
-        self.add("glMatrixMode", mode="GL_PROJECTION")
-        self.add("glOrtho", left=0, right=w, bottom=0, top=h, zNear=-100, zFar=100)
-        self.add("glMatrixMode", mode="GL_MODELVIEW")
-        self.add("glEnableClientState", array="GL_VERTEX_ARRAY")
-
-    def add(self, fn, ret=None, flags=0, **args):
-        self.calls.append((len(self.calls) + 1, fn, list(args.items()), ret, flags))
-        return self
-
-    def triangle(self, obj=None):
-        if obj is not None:
-            self.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=obj, length=-1,
-                     message="rbcd-object")
-        self.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
-        self.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
-        if obj is not None:
-            self.add("glPopDebugGroup")
-        return self
-
-    def swap(self):
-        return self.add("glXSwapBuffers", dpy=1, drawable=2, flags=END_FRAME)
-
-    def write(self, path):
-        w = ReducedWriter(str(path))
-        for c in self.calls:
-            w.call(c)
-        w.commit()
-        return str(path)
-
+from gl_captures import END_FRAME, TRIANGLE, Calls, gl2rbt_timed as gl2rbt, left_behind, peak_mb, refused
+from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_EXPANSION, REDUCED_HEADER
 
 def test_a_good_capture_converts(tmp_path):
     cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")

@@ -15,38 +15,23 @@ import time
 import pytest
 
 from conftest import program
-from gl_captures import GL2RBT, gl2rbt_timed as gl2rbt, left_behind, peak_mb, refused
+from gl_captures import GL2RBT, Calls as SharedCalls, gl2rbt_timed as gl2rbt, left_behind, peak_mb, refused
 from rbcd.cli import describe
 from rbcd.gl2rbt.apitrace import MAX_RECORD_VALUES
 from rbcd.gl2rbt.errors import printable
 from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_HEADER
 
-END_FRAME = 32   # apitrace's flag on a call that ends a frame
-TRIANGLE = bytes.fromhex("0000804000008040000020c1" "0000204200008040000020c1" "00008040000020420000" "20c1")
 # A pickle of shared references: a 10^9-element list in a few kilobytes (its
 # repr would take gigabytes and minutes).
 BOMB = [[[0] * 1000] * 1000] * 1000
 
 
-class Calls:
-    """A capture's calls, numbered from 1, as apitrace's reader yields them."""
-
-    def __init__(self, w=64, h=48):
-        self.calls = []
-        self.add("glViewport", x=0, y=0, width=w, height=h, flags=1)
-        self.add("glMatrixMode", mode="GL_PROJECTION")
-        self.add("glOrtho", left=0, right=w, bottom=0, top=h, zNear=-100, zFar=100)
-        self.add("glMatrixMode", mode="GL_MODELVIEW")
-        self.add("glEnableClientState", array="GL_VERTEX_ARRAY")
-
-    def add(self, fn, ret=None, flags=0, **args):
-        self.calls.append((len(self.calls) + 1, fn, list(args.items()), ret, flags))
-        return self
+class Calls(SharedCalls):
+    """The shared test captures, with a frame of one triangle and a writer
+    of their own."""
 
     def frame(self):
-        self.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
-        self.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
-        return self.add("glXSwapBuffers", dpy=1, drawable=2, flags=END_FRAME)
+        return self.triangle().swap()
 
     def write(self, path, end=True):
         """As ReducedWriter writes it, each record pickled on its own (its
