@@ -51,6 +51,8 @@ class Selection:
                     raise ConvertError(f"{where}: must be a table")
                 self.check_rule(where, kind, r)
                 self.rules.append((kind, r))
+        # A draw's vertex data is hashed only when a rule names it.
+        self.names_vertex_data = any("vertex_data" in r for _, r in self.rules)
         self.last_rule = {}
 
     @staticmethod

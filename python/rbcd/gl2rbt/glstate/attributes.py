@@ -8,12 +8,13 @@ import numpy as np
 
 from ...cli import I32, U32, integer
 from ..errors import checked, fail_call
+from ..gl_tables import ARRAY_TYPES, INDEX_TYPES
 
 MAX_ATTRIBS = 32   # GL_MAX_VERTEX_ATTRIBS as Mesa (llvmpipe) answers it
-INDEX_SIZES = {"GL_UNSIGNED_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_UNSIGNED_INT": 4}
-ATTRIB_SIZES = {"GL_BYTE": 1, "GL_UNSIGNED_BYTE": 1, "GL_SHORT": 2, "GL_UNSIGNED_SHORT": 2, "GL_INT": 4,
-                "GL_UNSIGNED_INT": 4, "GL_FLOAT": 4, "GL_DOUBLE": 8, "GL_HALF_FLOAT": 2, "GL_HALF_FLOAT_OES": 2,
-                "GL_FIXED": 4, "GL_INT_2_10_10_10_REV": 1, "GL_UNSIGNED_INT_2_10_10_10_REV": 1}
+# Bytes a component of an attribute array (the packed formats: a quarter of
+# their four-component word).
+ATTRIB_SIZES = {t: np.dtype(v).itemsize for t, v in ARRAY_TYPES.items()} | {
+    "GL_HALF_FLOAT_OES": 2, "GL_FIXED": 4, "GL_INT_2_10_10_10_REV": 1, "GL_UNSIGNED_INT_2_10_10_10_REV": 1}
 
 
 class Attrib:
@@ -63,9 +64,9 @@ class AttributeCalls:
         h = hashlib.blake2b(digest_size=8)
         if "Elements" in name:
             kind, count, indices = d.get("type"), d["count"], d.get("indices")
-            size = INDEX_SIZES.get(kind)
-            if size is None:
+            if kind not in INDEX_TYPES:
                 return ""
+            size = np.dtype(INDEX_TYPES[kind]).itemsize
             if isinstance(indices, (bytes, bytearray)):
                 data, start = indices, 0
             else:

@@ -23,7 +23,6 @@ MAX_DRAW_PRIMITIVES = 1 << 22   # triangles of one draw under a program, all its
 # Per frame, draws under a fragment shader that can remove fragments
 # (discard) or move them in depth (gl_FragDepth): the converter keeps all
 # their fragments, at the depth the rasterizer computes (docs/gl-capture.md).
-RESTART_FIXED = {"GL_UNSIGNED_BYTE": 0xFF, "GL_UNSIGNED_SHORT": 0xFFFF, "GL_UNSIGNED_INT": 0xFFFFFFFF}
 FRAGMENT_EFFECT_KEYS = ("discard_draws", "discard_collisionable", "frag_depth_draws", "frag_depth_collisionable")
 
 
@@ -334,7 +333,9 @@ class DrawCalls:
         idx = self.index_values(type_, indices, count, no)
         # Primitive restart (the fixed index first, as GL orders them): the
         # index ends one primitive and starts the next, each assembled alone.
-        restart = RESTART_FIXED[type_] if self.s.restart_fixed else self.s.restart_index if self.s.restart else None
+        # GL_PRIMITIVE_RESTART_FIXED_INDEX's index is the type's largest value.
+        restart = int(np.iinfo(INDEX_TYPES[type_]).max) if self.s.restart_fixed else \
+            self.s.restart_index if self.s.restart else None
         cut = idx == restart if restart is not None else None
         kept = idx[~cut] if cut is not None else idx
         hi = int(kept.max()) + 1 if len(kept) else 0

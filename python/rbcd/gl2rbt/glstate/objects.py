@@ -77,7 +77,8 @@ class ObjectCalls:
                 "own_modelview": mv is not None and view is not None and not np.allclose(mv, view, atol=1e-6),
                 "screen_area": area, "box": (lo, hi), "program": self.program_digest(),
                 "pass": self.pass_name(), "instances": self.draw_instances,
-                "vertex_data": self.draw_vertex_data()}
+                "vertex_data": self.draw_vertex_data() if self.listing is not None or self.select.names_vertex_data
+                else ""}
 
     def draw_vertex_data(self):
         """The digest rules' `vertex_data` names the current draw by (its

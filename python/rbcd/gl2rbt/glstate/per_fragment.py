@@ -7,7 +7,7 @@ import numpy as np
 from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES, base_name
-from . import clamped01, enum_arg, first_of_array, gl_boolean, number
+from . import clamped01, enum_arg, first_of_array, gl_boolean
 
 CLEAR_BITS = {0x100: "GL_DEPTH_BUFFER_BIT", 0x200: "GL_ACCUM_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT",
               0x4000: "GL_COLOR_BUFFER_BIT"}
@@ -82,10 +82,15 @@ class PerFragmentCalls:
         bits = self.clear_bits(no, name, a[0])
         if bits is None or self.s.rasterizer_discard:
             return   # GL_INVALID_VALUE, or discarded with the rasterizer: nothing is cleared
-        if "GL_DEPTH_BUFFER_BIT" in bits and self.active and self.s.depth_mask:
+        if "GL_DEPTH_BUFFER_BIT" in bits:
+            self.depth_clear(no, self.s.clear_depth)
+
+    def depth_clear(self, no, value):
+        """A depth clear to `value` in [0, 1] (glClear, glClearBuffer), under
+        the scissor; nothing without depth writes or outside the frames."""
+        if self.active and self.s.depth_mask:
             self.open_frame(no)
-            rect = self.scissor_rect()
-            self.emit(b"C" + struct.pack("<Qd4i", no, self.s.clear_depth, *rect))
+            self.emit(b"C" + struct.pack("<Qd4i", no, value, *self.scissor_rect()))
 
     def h_clear_buffer(self, no, name, a, args):
         """glClearBufferfv(GL_DEPTH, 0, [d]) and glClearBufferfi(GL_DEPTH_STENCIL,
@@ -100,9 +105,8 @@ class PerFragmentCalls:
         value = d.get("value")
         depth = value[0] if isinstance(value, list) and value else d.get("depth", value)
         depth = clamped01(depth, no, f"{name}: the depth")
-        if self.active and self.s.depth_mask and not self.s.rasterizer_discard:
-            self.open_frame(no)
-            self.emit(b"C" + struct.pack("<Qd4i", no, depth, *self.scissor_rect()))
+        if not self.s.rasterizer_discard:
+            self.depth_clear(no, depth)
 
     def enable(self, no, cap, on):
         s = self.s
