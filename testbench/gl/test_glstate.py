@@ -577,9 +577,9 @@ def test_gl4_and_es3_forms_of_clears_and_buffers():
     gl.glVertexPointer(size=3, type="GL_FLOAT", stride=0, pointer=0)
     gl.glDrawArrays(mode="GL_TRIANGLES", first=0, count=3)
     assert gl.draws()[-1]["clip"][:, :3].tolist() == verts.tolist()
-    with pytest.raises(ConvertError, match="a persistent mapping"):
-        gl.glMapBufferRange(target="GL_ARRAY_BUFFER", offset=0, length=12,
-                            access=("GL_MAP_WRITE_BIT", "GL_MAP_PERSISTENT_BIT"), ret=1 << 20)
+    for access in (("GL_MAP_WRITE_BIT", "GL_MAP_PERSISTENT_BIT"), "GL_MAP_WRITE_BIT | GL_MAP_PERSISTENT_BIT", 0x42):
+        with pytest.raises(ConvertError, match="a persistent mapping"):
+            gl.glMapBufferRange(target="GL_ARRAY_BUFFER", offset=0, length=12, access=access, ret=1 << 20)
 
 
 def test_rules_name_textures_uploaded_as_gl4_and_es3_do(tmp_path):

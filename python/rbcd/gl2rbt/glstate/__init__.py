@@ -118,6 +118,23 @@ def first_of_array(no, name, d, what, size_of):
     return v[:4] if first == 0 and count else None
 
 
+def bitfield(mask, no, what, bits):
+    """A GLbitfield as apitrace records it (bit names, alone, joined by "|"
+    or in a list, or a number) as the names of `bits` (value -> name) it
+    sets, and whether it sets a bit `bits` does not name; any other value
+    is the capture's error."""
+    names, unknown = set(), False
+    for p in mask if isinstance(mask, (list, tuple)) else (mask,):
+        if isinstance(p, str):
+            names |= {n.strip() for n in p.split("|")} - {"0"}
+        elif isinstance(p, int) and not isinstance(p, bool) and 0 <= p < 1 << 32:
+            names |= {n for v, n in bits.items() if p & v}
+            unknown = unknown or bool(p & ~sum(bits))
+        else:
+            fail_call(no, f"{what}: {printable(mask, 40)} is not a bitfield")
+    return names, unknown
+
+
 def enum_arg(v, no, what):
     """An enumerant as apitrace records it: its name, or a number for a
     value it has no name for (which GL answers with GL_INVALID_ENUM); any

@@ -8,9 +8,12 @@ import mmap
 
 from ...cli import U32, integer
 from ..errors import checked, fail_call, printable
-from . import enum_arg
+from . import bitfield, enum_arg
 
 I64 = (-(1 << 63), (1 << 63) - 1)
+# The bits of glBufferStorage's flags and glMapBufferRange's access the
+# converter reads.
+STORAGE_BITS = {0x0040: "GL_MAP_PERSISTENT_BIT", 0x0100: "GL_DYNAMIC_STORAGE_BIT"}
 BUFFER_USAGES = {f"GL_{f}_{a}" for f in ("STREAM", "STATIC", "DYNAMIC") for a in ("DRAW", "READ", "COPY")}
 MAX_BINDINGS = 1024   # indexed binding points kept (llvmpipe has fewer: Mesa refuses the rest at a draw)
 from ..gl_tables import MAX_BUFFER_BYTES, MAX_BUFFER_BYTES_IN_ALL
@@ -169,11 +172,8 @@ class BufferCalls:
             return
         self.h_buffer_data(no, name, a, [("target", target), ("size", size), ("data", d.get("data")),
                                          ("usage", "GL_STATIC_DRAW")])
-        flags = d.get("flags", 0)
-        parts = flags if isinstance(flags, (list, tuple)) else (flags,)
-        names = {n.strip() for f in parts if isinstance(f, str) for n in f.split("|")}
-        self.s.immutable_buffers[b] = "GL_DYNAMIC_STORAGE_BIT" in names or \
-            any(isinstance(f, int) and not isinstance(f, bool) and f & 0x0100 for f in parts)
+        flags, _ = bitfield(d.get("flags", 0), no, f"{name}: the flags", STORAGE_BITS)
+        self.s.immutable_buffers[b] = "GL_DYNAMIC_STORAGE_BIT" in flags
 
     def h_buffer_sub_data(self, no, name, a, args):
         d = dict(args)
@@ -208,9 +208,9 @@ class BufferCalls:
         # memory.
         pieces = [(max(s, ro), min(e, ro + size)) for s, e in self.written_extents(rb) if s < ro + size and e > ro]
         pieces = [(s - ro + wo, e - ro + wo, bytes(src[s:e])) for s, e in pieces if e > s]
-        at = wo
+        at, held = wo, self.written_extents(wb)
         for s, e, _ in pieces + [(wo + size, wo + size, b"")]:
-            for zs, ze in self.written_extents(wb):
+            for zs, ze in held:
                 lo, hi = max(zs, at), min(ze, s)
                 if lo < hi:
                     dst[lo:hi] = bytes(hi - lo)
@@ -223,8 +223,8 @@ class BufferCalls:
 
     def h_map_buffer(self, no, name, a, args):
         d = dict(args)
-        access = d.get("access", ())
-        if "GL_MAP_PERSISTENT_BIT" in (access if isinstance(access, (list, tuple)) else (access,)):
+        access, _ = bitfield(d.get("access", ()), no, f"{name}: the access", STORAGE_BITS)
+        if "GL_MAP_PERSISTENT_BIT" in access:
             fail_call(no, f"{name}: a persistent mapping, whose writes apitrace does not record as it "
                       "records other mapped writes: not emulated")
         b = self.bound_buffer(no, name, d.get("target"))

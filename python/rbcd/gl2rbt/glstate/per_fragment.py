@@ -7,7 +7,7 @@ import numpy as np
 from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES, base_name
-from . import clamped01, enum_arg, first_of_array, gl_boolean
+from . import bitfield, clamped01, enum_arg, first_of_array, gl_boolean
 
 CLEAR_BITS = {0x100: "GL_DEPTH_BUFFER_BIT", 0x200: "GL_ACCUM_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT",
               0x4000: "GL_COLOR_BUFFER_BIT"}
@@ -63,18 +63,9 @@ class PerFragmentCalls:
         """glClear's mask as bit names, or None when GL ignores the call
         (GL_INVALID_VALUE: a bit that names no buffer, or the accumulation
         buffer, which core and ES contexts lack)."""
-        parts = mask if isinstance(mask, (list, tuple)) else (mask,)
-        bits = set()
-        for p in parts:
-            if isinstance(p, str):
-                bits |= {b.strip() for b in p.split("|")}
-            elif isinstance(p, int) and not isinstance(p, bool) and 0 <= p < 1 << 32:
-                bits |= {n for v, n in CLEAR_BITS.items() if p & v}
-                if p & ~sum(CLEAR_BITS):
-                    return None
-            else:
-                fail_call(no, f"{name}: the mask: {printable(mask, 40)} is not a bitfield")
-        bits.discard("0")
+        bits, unknown = bitfield(mask, no, f"{name}: the mask", CLEAR_BITS)
+        if unknown:
+            return None
         allowed = set(CLEAR_BITS.values()) - ({"GL_ACCUM_BUFFER_BIT"} if self.core or self.es else set())
         return bits if bits <= allowed else None
 
