@@ -41,6 +41,16 @@ inline bool depth_passes(DepthFunc f, std::uint32_t z, std::uint32_t stored) {
     }
 }
 
+// A fragment's depth test and write at `at` of a kept depth buffer and its
+// marks (where a draw with fragment effects wrote last).
+inline void test_and_write(std::vector<std::uint32_t>& buf, std::vector<std::uint8_t>& marks, std::size_t at,
+                           const DrawState& s, std::uint32_t depth) {
+    if (s.depth_write && depth_passes(s.depth_func, depth, buf[at])) {
+        buf[at] = depth;
+        marks[at] = s.fragment_effects;
+    }
+}
+
 // A tile's header and empty lists, before its triangles are walked.
 void begin_tile(Tile& tile, std::uint64_t frame, unsigned col, unsigned row) {
     tile.frame = frame;
@@ -147,24 +157,14 @@ void TileRasterizer::note_llvmpipe(const Eigen::Vector4d& c0, const Eigen::Vecto
     lp_range_.resize(tris_.size(), r);
 }
 
-// The llvmpipe buffer's depth test and write at one covered pixel; a pixel
-// of a triangle llvmpipe draws nothing of keeps the exact depth.
-void TileRasterizer::write_llvmpipe_depth(std::uint32_t ti, const DrawState& s, std::int32_t x, std::int32_t y) {
-    const Tri& t = tris_[ti];
-    const std::size_t at = std::size_t(y) * width_ + std::size_t(x);
+// The llvmpipe buffer's depth test and write at one covered pixel, whose
+// exact depth is `exact`: a pixel of a triangle llvmpipe draws nothing of
+// keeps it.
+void TileRasterizer::write_llvmpipe_depth(std::uint32_t ti, const DrawState& s, std::int32_t x, std::int32_t y,
+                                          std::uint32_t exact) {
     const LlvmpipeDepth::Range r = ti < lp_range_.size() ? lp_range_[ti] : LlvmpipeDepth::Range{};
-    std::uint32_t depth;
-    if (r.count) {
-        depth = lp_->depth_at(r, x, y);
-    } else {
-        const double z = t.z0 + t.zx * (x + 0.5 - t.x0) + t.zy * (y + 0.5 - t.y0);
-        depth = static_cast<std::uint32_t>(std::clamp(z, 0.0, depth_max_) + 0.5);
-    }
-    std::uint32_t& stored = lp_depth_[at];
-    if (s.depth_write && depth_passes(s.depth_func, depth, stored)) {
-        stored = depth;
-        lp_marks_[at] = s.fragment_effects;
-    }
+    test_and_write(lp_depth_, lp_marks_, std::size_t(y) * width_ + std::size_t(x), s,
+                   r.count ? lp_->depth_at(r, x, y) : exact);
 }
 
 std::uint32_t TileRasterizer::add_draw(DrawState s) {
@@ -496,13 +496,8 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
                         }
                     }
                     if (depth_buffer) {
-                        const std::size_t at = std::size_t(y) * width_ + std::size_t(x);
-                        std::uint32_t& stored = depth_[at];
-                        if (s.depth_write && depth_passes(s.depth_func, depth, stored)) {
-                            stored = depth;
-                            marks_[at] = s.fragment_effects;
-                        }
-                        if (lp_) write_llvmpipe_depth(ti, s, x, y);
+                        test_and_write(depth_, marks_, std::size_t(y) * width_ + std::size_t(x), s, depth);
+                        if (lp_) write_llvmpipe_depth(ti, s, x, y, depth);
                     }
                 }
                 e0 += ax0;

@@ -167,7 +167,8 @@ private:
     void raster_tile(unsigned col, unsigned row, Tile& tile, SceneSource::FrameImage* image);
     void note_llvmpipe(const Eigen::Vector4d& c0, const Eigen::Vector4d& c1, const Eigen::Vector4d& c2,
                        std::size_t first_tri);
-    void write_llvmpipe_depth(std::uint32_t tri, const DrawState& s, std::int32_t x, std::int32_t y);
+    void write_llvmpipe_depth(std::uint32_t tri, const DrawState& s, std::int32_t x, std::int32_t y,
+                              std::uint32_t exact);
 
     unsigned width_, height_, tile_w_, tile_h_, tiles_x_, tiles_y_;
     unsigned depth_bits_;
