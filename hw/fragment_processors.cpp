@@ -12,15 +12,17 @@ namespace rbcd {
 std::uint64_t FragmentPipe::walk_tile_cut_at_c(const Tile& tile, std::uint64_t& t_io, unsigned& used_io,
                                                unsigned rate, std::uint64_t run) {
     Regs r = load(t_io, used_io);
-    // A long run goes through shade_long, which takes the state from the
-    // members: stored for it, and loaded back.
+    // A long run, or any run while the pipe is in a periodic regime, goes
+    // through shade_run, which takes the state from the members: stored for
+    // it, and loaded back. A short run stepped here leaves the regime's
+    // record behind.
     const auto shade_run_here = [&](std::uint64_t m) {
-        if (m < kLongRun || stepwise) {
+        if (!orbit_ && (m < kLongRun || stepwise)) {
             shade_in(r, rate, m);
             return;
         }
         store(r, t_io, used_io);
-        shade_long(t_io, used_io, rate, m);
+        shade_run(t_io, used_io, rate, m);
         r = load(t_io, used_io);
     };
     const auto cut = [&] {

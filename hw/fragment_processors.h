@@ -47,6 +47,7 @@ public:
     // Frame barrier: an empty queue and idle processors from cycle t on.
     // (Slots and processors free "at 0" constrain nothing: every cycle is >= 0.)
     void restart(std::uint64_t t) {
+        orbit_ = false;
         std::fill(slot_free_.begin(), slot_free_.end(), 0);
         std::fill(proc_free_.begin(), proc_free_.end(), 0);
         qi_ = pi_ = 0;
@@ -58,6 +59,7 @@ public:
     std::uint64_t slot_free_next() const { return slot_free_[qi_]; }
     // The next fragment enters at e (>= room(e)); returns its dispatch cycle.
     [[gnu::always_inline]] std::uint64_t push(std::uint64_t e) {
+        orbit_ = false;
         const std::uint64_t s = std::max(e + ez_, proc_free_[pi_]);
         proc_free_[pi_] = s + c_;
         slot_free_[qi_] = s;
@@ -71,10 +73,8 @@ public:
     // has room. Returns the cycles the rasterizer waited. The same as m times
     // room() and push(), with the state in registers.
     [[gnu::always_inline]] std::uint64_t shade(std::uint64_t& t_io, unsigned& used_io, unsigned rate, std::uint64_t m) {
-        Regs r = load(t_io, used_io);
-        const std::uint64_t wait = shade_in(r, rate, m);
-        store(r, t_io, used_io);
-        return wait;
+        orbit_ = false;
+        return step(t_io, used_io, rate, m);
     }
 
     // The same as shade(), for any m. A run of identical fragments is a
@@ -86,9 +86,26 @@ public:
     // repeats; a pipe in its periodic regime (a long stretch of a game
     // frame's other fragments) is verified by one block wherever the regime
     // began. Its cost does not grow with the run's length.
+    //
+    // The regime outlives the run. Until something else changes the pipe
+    // (push(), restart(), another cost), setups or c fragments between two
+    // runs move only the rasterizer's clock. In a shader-bound pipe (game
+    // frames keep it so) the processors, not the clock, decide when the next
+    // fragments are dispatched: the run's fragments are stepped beside the
+    // clock the regime would have had, and once the two clocks meet, every
+    // fragment having been dispatched when the regime dispatches it, the
+    // pipe is back in the regime and the rest of the run jumps. Nothing is
+    // assumed: a fragment dispatched otherwise, or clocks that do not meet
+    // within a block, and the run is verified afresh.
     [[gnu::always_inline]] std::uint64_t shade_run(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
-        if (m < kLongRun || stepwise) return shade(t, used, rate, m);
-        return shade_long(t, used, rate, m);
+        if (stepwise) return shade(t, used, rate, m);
+        std::uint64_t wait = 0;
+        if (orbit_ && m) {
+            m -= rejoin(t, used, rate, m, wait);
+            if (orbit_) return m ? wait + shade_on_orbit(t, used, rate, m) : wait;
+        }
+        if (m < kLongRun) return wait + step(t, used, rate, m);
+        return wait + shade_long(t, used, rate, m);
     }
     static constexpr std::uint64_t kLongRun = 48;
     // Every run fragment by fragment: the reference the bulk runs are tested
@@ -106,13 +123,20 @@ public:
     std::uint64_t walk_tile_cut_at_c(const Tile& tile, std::uint64_t& t, unsigned& used, unsigned rate,
                                      std::uint64_t run);
 
+    // Whether the last run left the pipe in a verified periodic regime that
+    // the next run may continue (shade_run()).
+    bool periodic() const { return orbit_; }
+
     // The cycle every fragment pushed since restart() has finished.
     std::uint64_t done() const { return done_; }
     unsigned processors() const { return p_; }
     unsigned cycles_per_fragment() const { return c_; }
     // The service time of the fragments pushed from now on (a tile's shade=);
     // those in flight keep theirs.
-    void set_cycles_per_fragment(unsigned c) { c_ = c; }
+    void set_cycles_per_fragment(unsigned c) {
+        orbit_ &= c == c_;
+        c_ = c;
+    }
 
     // The block shade_long() compares states after: a multiple of the
     // processors' and the rasterizer's periods, and at least 16 fragments.
@@ -136,6 +160,12 @@ public:
         pi_ = o.pi_;
         done_ = o.done_;
         shift_by(shift);
+        orbit_ = o.orbit_;
+        orbit_block_ = o.orbit_block_;
+        orbit_delta_ = o.orbit_delta_;
+        orbit_wait_ = o.orbit_wait_;
+        orbit_t_ = o.orbit_t_ + shift;
+        orbit_used_ = o.orbit_used_;
     }
     // The state in age order (oldest first): queue slots, then processors.
     void state(std::vector<std::uint64_t>& out) const {
@@ -158,6 +188,79 @@ private:
         done_ = r.done;
         qi_ = r.qi;
         pi_ = r.pi;
+    }
+    // m fragments, leaving the periodic regime's record as it is: the
+    // callers say whether the state stays on it.
+    [[gnu::always_inline]] std::uint64_t step(std::uint64_t& t_io, unsigned& used_io, unsigned rate, std::uint64_t m) {
+        Regs r = load(t_io, used_io);
+        const std::uint64_t wait = shade_in(r, rate, m);
+        store(r, t_io, used_io);
+        return wait;
+    }
+    // Steps the run's fragments from clock (t, used) beside the clock the
+    // regime would have had, (orbit_t_, orbit_used_), while the two differ;
+    // the rings stay the regime's as long as each fragment is dispatched when
+    // the regime dispatches it. Returns the fragments stepped (their waits
+    // added to `wait`). The regime stays recorded, with the clock it has
+    // there, when the clocks met or the run ended first; a fragment
+    // dispatched otherwise, or a block without meeting, clears it.
+    std::uint64_t rejoin(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m, std::uint64_t& wait) {
+        std::uint64_t gt = orbit_t_;
+        unsigned gu = orbit_used_;
+        std::uint64_t k = 0;
+        for (; (t != gt || used != gu) && k < m; ++k) {
+            if (k == orbit_block_) {
+                orbit_ = false;
+                return k;
+            }
+            const std::uint64_t room = slot_free_[qi_];
+            if (gu == rate) {
+                ++gt;
+                gu = 0;
+            }
+            if (room > gt) {
+                gt = room;
+                gu = 0;
+            }
+            ++gu;
+            if (used == rate) {
+                ++t;
+                used = 0;
+            }
+            if (room > t) {
+                wait += room - t;
+                t = room;
+                used = 0;
+            }
+            ++used;
+            const std::uint64_t s = std::max(t + ez_, proc_free_[pi_]);
+            orbit_ = s == std::max(gt + ez_, proc_free_[pi_]);
+            proc_free_[pi_] = s + c_;
+            slot_free_[qi_] = s;
+            pi_ = branch_free::next(pi_, p_);
+            qi_ = branch_free::next(qi_, q_);
+            done_ = std::max(done_, s + c_);
+            if (!orbit_) return k + 1;
+        }
+        orbit_t_ = gt;
+        orbit_used_ = gu;
+        return k;
+    }
+    // The rest of a run that is in the periodic regime: the whole blocks in
+    // one jump, the others stepped.
+    std::uint64_t shade_on_orbit(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
+        std::uint64_t wait = 0;
+        const std::uint64_t jumps = m / orbit_block_;
+        if (jumps) {
+            shift_by(jumps * orbit_delta_);
+            t += jumps * orbit_delta_;
+            wait += jumps * orbit_wait_;
+            m -= jumps * orbit_block_;
+        }
+        wait += step(t, used, rate, m);
+        orbit_t_ = t;
+        orbit_used_ = used;
+        return wait;
     }
     // shade()'s loop on that state; shade() and walk_tile_cut_at_c() load it
     // once and store it once around as many runs as they have.
@@ -193,7 +296,7 @@ private:
         // A setup just before the run leaves the rasterizer's clock off the
         // regime's cycle; the run's first fragment, waiting for the queue,
         // puts it back, so the first block compared is usually periodic.
-        std::uint64_t wait = shade(t, used, rate, 1);
+        std::uint64_t wait = step(t, used, rate, 1);
         --m;
         const std::uint64_t block = period_hint(rate);
         // One block to compare and at least one to jump over.
@@ -202,7 +305,7 @@ private:
             ref_proc_ = proc_free_;
             const unsigned ref_qi = qi_, ref_pi = pi_, ref_used = used;
             const std::uint64_t ref_t = t, ref_done = done_;
-            const std::uint64_t block_wait = shade(t, used, rate, block);
+            const std::uint64_t block_wait = step(t, used, rate, block);
             m -= block;
             wait += block_wait;
             const std::uint64_t delta = t - ref_t;
@@ -212,10 +315,17 @@ private:
                 t += jumps * delta;
                 wait += jumps * block_wait;
                 m -= jumps * block;
+                orbit_ = true;
+                orbit_block_ = block;
+                orbit_delta_ = delta;
+                orbit_wait_ = block_wait;
                 break;
             }
         }
-        return wait + shade(t, used, rate, m);
+        wait += step(t, used, rate, m);
+        orbit_t_ = t;
+        orbit_used_ = used;
+        return wait;
     }
     // The rings and last finish are those given (positions qi, pi) later by
     // `shift`: every queue slot and processor in age order.
@@ -249,6 +359,15 @@ private:
     std::vector<std::uint64_t> ref_slot_, ref_proc_;   // shade_long's state a block before
     unsigned qi_ = 0, pi_ = 0;
     std::uint64_t done_ = 0;
+    // The periodic regime shade_long() last verified: from the state after
+    // the last run, with the rasterizer's clock then at (orbit_t_,
+    // orbit_used_), every orbit_block_ fragments move the whole state
+    // orbit_delta_ cycles later and wait orbit_wait_ cycles (the waits repeat
+    // with the states). Valid while orbit_; whatever changes the state but a
+    // run's own fragments clears it.
+    bool orbit_ = false;
+    std::uint64_t orbit_block_ = 0, orbit_delta_ = 0, orbit_wait_ = 0, orbit_t_ = 0;
+    unsigned orbit_used_ = 0;
 };
 
 // The block: the with-unit timeline's fragment queue and processors, with

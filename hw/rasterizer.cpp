@@ -123,8 +123,6 @@ void walk_tile_without_setups(const Tile& tile, V& v) {
     }
 }
 
-inline std::uint64_t shade_one(rasterizer::Cursor& r, FragmentPipe& fp) { return fp.shade(r.t, r.used, r.rate, 1); }
-
 // Whether timeline (rb, pb) is timeline (ra, pa) later by some cycles, set in
 // `shift`: the rasterizer's clock and slot count, the queue, the processors.
 bool follows(const rasterizer::Cursor& rb, const FragmentPipe& pb, const rasterizer::Cursor& ra, const FragmentPipe& pa,

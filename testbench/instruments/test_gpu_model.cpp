@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <random>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "rbcd/hw/even_split.h"
@@ -331,6 +333,85 @@ TEST_CASE("gpu: a run from any state is computed in bulk exactly", "[gpu]") {
             REQUIRE(wb == ws);
             REQUIRE(same_pipe(bulk, t, u, step, ts, us));
         }
+    }
+}
+
+// Runs one after another, as a tile's walk gives them: between two runs the
+// rasterizer sets up primitives or emits c fragments (its clock moves, the
+// pipe does not), or the pipe takes one fragment by push() or another cost.
+// A run that continues the periodic regime the run before it verified
+// (shade_run()) must give what going fragment by fragment gives, and the
+// regime must be continued often enough for that to be what is tested.
+TEST_CASE("gpu: runs continuing a periodic regime across setups are exact", "[gpu]") {
+    std::mt19937_64 gen(4141);
+    const auto pick = [&](std::uint64_t lo, std::uint64_t hi) { return lo + gen() % (hi - lo + 1); };
+    for (const PipeCase c : kPipeCases) {
+        const GpuConfig g = c.gpu();
+        std::uint64_t continued = 0;
+        for (int trial = 0; trial < 40; ++trial) {
+            FragmentPipe bulk(g), step(g);
+            bulk.restart(0);
+            step.restart(0);
+            std::uint64_t tb = 0, ts = 0;
+            unsigned ub = 0, us = 0;
+            for (int event = 0; event < 200; ++event) {
+                INFO("rate " << c.rate << " queue " << c.queue << " procs " << c.procs << " trial " << trial
+                             << " event " << event);
+                const bool was_periodic = bulk.periodic();
+                const std::uint64_t m = pick(0, 3) ? pick(1, 120) : pick(120, 3000);
+                const std::uint64_t wb = bulk.shade_run(tb, ub, c.rate, m);
+                std::uint64_t ws = 0;
+                for (std::uint64_t k = 0; k < m; ++k) ws += step.shade(ts, us, c.rate, 1);
+                REQUIRE(wb == ws);
+                REQUIRE(same_pipe(bulk, tb, ub, step, ts, us));
+                continued += was_periodic && bulk.periodic();
+                switch (pick(0, 9)) {
+                case 0: case 1: case 2: case 3: {   // setups: the clock moves on
+                    const std::uint64_t cycles = pick(0, 3) ? pick(1, 4) : pick(5, 400);
+                    tb = (ub ? tb + 1 : tb) + cycles;   // rasterizer::Cursor::busy
+                    ts = (us ? ts + 1 : ts) + cycles;
+                    ub = us = 0;
+                    break;
+                }
+                case 4: case 5: {   // c fragments: rasterizer slots only
+                    for (std::uint64_t k = pick(1, 6); k > 0; --k) {
+                        for (auto [t, u] : {std::pair{&tb, &ub}, std::pair{&ts, &us}}) {
+                            if (*u == c.rate) {
+                                ++*t;
+                                *u = 0;
+                            }
+                            ++*u;
+                        }
+                    }
+                    break;
+                }
+                case 6: {   // one fragment pushed outside a run, held back as the unit's queue may hold it
+                    const std::uint64_t held = pick(0, 1) ? 0 : pick(0, 1) ? pick(1, 50) : pick(50, 2000);
+                    for (auto [p, t, u] : {std::tuple{&bulk, &tb, &ub}, std::tuple{&step, &ts, &us}}) {
+                        if (*u == c.rate) {
+                            ++*t;
+                            *u = 0;
+                        }
+                        const std::uint64_t e = p->room(*t + held);
+                        if (e > *t) *u = 0;
+                        *t = e;
+                        ++*u;
+                        p->push(e);
+                    }
+                    break;
+                }
+                case 7: {   // another shading cost, or the same again
+                    const unsigned cost = pick(0, 1) ? c.cycles : static_cast<unsigned>(pick(1, 3 * c.cycles + 2));
+                    bulk.set_cycles_per_fragment(cost);
+                    step.set_cycles_per_fragment(cost);
+                    break;
+                }
+                default: break;   // runs back to back
+                }
+            }
+        }
+        INFO("rate " << c.rate << " queue " << c.queue << " procs " << c.procs);
+        CHECK(continued > 100);
     }
 }
 
