@@ -530,3 +530,130 @@ def test_instances_keep_ids_by_their_origin(tmp_path):
     rules.write_text('[settings]\norigin_attribute = 5\n[[object]]\ngroup_by = "instance_origin"\n')
     refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "j.rbt", "--select", rules),
             "attribute 5 is not a per-instance float array")
+
+
+# ---- odd-but-legal calls: what Mesa 22.3 (llvmpipe) computes for each,
+# measured with the capture replayed there, is what the converter computes
+
+def strip_of(c, restart):
+    """A strip of four vertices and one of three, in one glBegin/glEnd cut
+    by glPrimitiveRestartNV, or in two."""
+    c.add("glBegin", mode="GL_TRIANGLE_STRIP")
+    for x, y in ((4, 4), (40, 4), (4, 40), (40, 40)):
+        c.add("glVertex3f", x=x, y=y, z=-10)
+    if restart:
+        c.add("glPrimitiveRestartNV")
+    else:
+        c.add("glEnd").add("glBegin", mode="GL_TRIANGLE_STRIP")
+    for x, y in ((50, 4), (60, 4), (50, 40)):
+        c.add("glVertex3f", x=x, y=y, z=-10)
+    return c.add("glEnd")
+
+
+def pointer(c):
+    return c.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
+
+
+def vertex_buffer(c):
+    c.add("glGenBuffers", n=1, buffers=[1]).add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+    return c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE, usage="GL_STATIC_DRAW")
+
+
+INDICES = np.array([0, 1, 2], "<u4").tobytes()
+
+
+@pytest.mark.parametrize("odd, same", [
+    # glRenderMode(GL_SELECT or GL_FEEDBACK): draws and glClear reach no pixel.
+    (lambda c: c.add("glRenderMode", mode="GL_SELECT").triangle(obj=1).add("glClear", mask="GL_DEPTH_BUFFER_BIT")
+     .add("glRenderMode", mode="GL_RENDER"), lambda c: c),
+    (lambda c: c.add("glRenderMode", mode="GL_FEEDBACK").triangle(obj=1), lambda c: c),
+    (lambda c: c.add("glRenderMode", mode="GL_FOO").triangle(obj=1), lambda c: c.triangle(obj=1)),
+    # A multi-draw with a negative count anywhere is GL_INVALID_VALUE as a whole.
+    (lambda c: pointer(c).add("glMultiDrawArrays", mode="GL_TRIANGLES", first=[0, 0], count=[3, -1], drawcount=2),
+     lambda c: pointer(c)),
+    (lambda c: pointer(c).add("glMultiDrawElements", mode="GL_TRIANGLES", count=[3, -1], type="GL_UNSIGNED_INT",
+                              indices=[INDICES, INDICES], drawcount=2), lambda c: pointer(c)),
+    # glPrimitiveRestartNV between glBegin and glEnd starts a new primitive.
+    (lambda c: strip_of(c, True), lambda c: strip_of(c, False)),
+    # An unknown primitive mode is GL_INVALID_ENUM before any vertex is read.
+    (lambda c: pointer(c).add("glDrawArrays", mode="GL_FOO", first=0, count=100), lambda c: pointer(c)),
+    (lambda c: c.add("glDisableClientState", array="GL_VERTEX_ARRAY").add("glDrawArrays", mode=0x77, first=0,
+                                                                          count=3), lambda c: c),
+    (lambda c: pointer(c).add("glDrawElements", mode="GL_FOO", count=3, type="GL_UNSIGNED_INT",
+                              indices=np.array([0, 1, 99], "<u4").tobytes()), lambda c: pointer(c)),
+    # A viewport Mesa clamps to a corner far off the screen: nothing drawn.
+    (lambda c: c.add("glViewport", x=-(1 << 31), y=(1 << 31) - 1, width=(1 << 31) - 1, height=(1 << 31) - 1)
+     .triangle(obj=1), lambda c: c.add("glViewport", x=-(1 << 31), y=(1 << 31) - 1, width=(1 << 31) - 1,
+                                       height=(1 << 31) - 1)),
+    # The fixed-function vertex array is state of the bound vertex array
+    # object; binding a name glGenVertexArrays did not give is an error.
+    (lambda c: vertex_buffer(c.add("glGenVertexArrays", n=2, arrays=[1, 2]).add("glBindVertexArray", array=1))
+     .add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=0)
+     .add("glEnableClientState", array="GL_VERTEX_ARRAY").add("glBindVertexArray", array=2)
+     .add("glEnableClientState", array="GL_VERTEX_ARRAY").add("glVertexPointer", size=3, type="GL_FLOAT", stride=0,
+                                                             pointer=12)
+     .add("glBindVertexArray", array=1).add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3),
+     lambda c: vertex_buffer(c).add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=0)
+     .add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)),
+    (lambda c: pointer(c).add("glBindVertexArray", array=55).add("glDrawArrays", mode="GL_TRIANGLES", first=0,
+                                                                  count=3),
+     lambda c: pointer(c).add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)),
+], ids=["select", "feedback", "render_mode_enum", "multi_arrays", "multi_elements", "restart_nv", "mode_past_array",
+        "mode_no_array", "mode_elements", "viewport_off_screen", "vao_fixed_array", "vao_not_generated"])
+def test_odd_calls_draw_what_mesa_draws(tmp_path, odd, same):
+    """Each odd capture converts to the trace of the capture Mesa treats it as."""
+    a = odd(Calls()).swap()
+    b = same(Calls()).swap()
+    assert trace_bytes(tmp_path, a, "odd") == trace_bytes(tmp_path, b, "same")
+
+
+@pytest.mark.parametrize("build, words", [
+    # Pixel rectangles that write depth (the depth test on): not emulated.
+    (lambda c: c.add("glEnable", cap="GL_DEPTH_TEST").add("glRasterPos3f", x=10, y=10, z=-50)
+     .add("glDrawPixels", width=10, height=10, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=b"\0" * 400),
+     "glDrawPixels with the depth test on writes depth: not emulated"),
+    (lambda c: c.add("glEnable", cap="GL_DEPTH_TEST").add("glBitmap", width=16, height=16, xorig=0, yorig=0,
+                                                         xmove=0, ymove=0, bitmap=b"\xff" * 32),
+     "glBitmap with the depth test on"),
+    (lambda c: c.add("glEnable", cap="GL_DEPTH_TEST").add("glCopyPixels", x=0, y=0, width=16, height=16,
+                                                         type="GL_DEPTH"), "glCopyPixels with the depth test on"),
+    # glMultiDrawArrays does not check its firsts: Mesa reads before the array.
+    (lambda c: pointer(c).add("glMultiDrawArrays", mode="GL_TRIANGLES", first=[0, -1], count=[3, 3], drawcount=2),
+     "a negative first"),
+], ids=["draw_pixels", "bitmap", "copy_pixels", "multi_first"])
+def test_calls_mesa_draws_unlike_gl_are_refused(tmp_path, build, words):
+    c = build(Calls()).triangle(obj=1).swap()
+    refused(gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), words)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+def test_pixel_rectangles_without_depth_writes_pass(tmp_path):
+    """glBitmap of no size (moving the raster position) and pixel rectangles
+    with the depth test off change no depth: passed over."""
+    c = Calls().add("glBitmap", width=0, height=0, xorig=0, yorig=0, xmove=5, ymove=0, bitmap=None)
+    c.add("glDrawPixels", width=10, height=10, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=b"\0" * 400)
+    c.add("glEnable", cap="GL_DEPTH_TEST").add("glBitmap", width=0, height=0, xorig=0, yorig=0, xmove=5, ymove=0,
+                                                bitmap=None)
+    assert trace_bytes(tmp_path, c.triangle(obj=1).swap(), "a") == \
+        trace_bytes(tmp_path, Calls().add("glEnable", cap="GL_DEPTH_TEST").triangle(obj=1).swap(), "b")
+
+
+@pytest.mark.parametrize("build, words", [
+    (lambda c: vertex_buffer(c).add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=1.5)
+     .add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3), "glVertexPointer: the buffer offset: 1.5 is not"),
+    (lambda c: pointer(c).add("glBindBuffer", target="GL_ELEMENT_ARRAY_BUFFER", buffer=2)
+     .add("glBufferData", target="GL_ELEMENT_ARRAY_BUFFER", size=12, data=INDICES, usage="GL_STATIC_DRAW")
+     .add("glDrawElements", mode="GL_TRIANGLES", count=3, type="GL_UNSIGNED_INT", indices=True),
+     "the index buffer offset: True is not an integer"),
+], ids=["vertex_offset", "index_offset"])
+def test_buffer_offsets_are_integers(tmp_path, build, words):
+    """An offset into a buffer object that is not an integer (it had been
+    truncated, or taken as 0 or 1)."""
+    c = build(Calls()).swap()
+    refused(gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), words)
+
+
+def test_a_call_number_that_is_a_boolean(tmp_path):
+    c = Calls().triangle(obj=1).swap()
+    c.calls[0] = (True,) + c.calls[0][1:]
+    refused(gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), "unexpected record")

@@ -2,7 +2,6 @@
 draw stream rbcd-gl-raster reads (docs/gl-capture.md)."""
 import struct
 
-import numpy as np
 
 from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
@@ -162,10 +161,11 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.immediate_vertex(no, base, a)
                 return
             if base == "glEnd":
-                mode, verts = s.begin_mode, s.begin_verts
-                s.begin_mode, s.begin_verts = None, []
-                if verts:
-                    self.draw(no, mode, np.array(verts, dtype=np.float64), "glBegin/glEnd")
+                self.end_primitive(no)
+                return
+            if base == "glPrimitiveRestartNV":   # ends the primitive and starts another of its mode
+                if len(s.begin_verts) > (s.begin_cuts[-1] if s.begin_cuts else 0):   # (as many as vertices)
+                    s.begin_cuts.append(len(s.begin_verts))
                 return
             if base.startswith(("glColor", "glNormal", "glTexCoord", "glMultiTexCoord", "glMaterial",
                                 "glSecondaryColor", "glFogCoord", "glEdgeFlag", "glIndex")):

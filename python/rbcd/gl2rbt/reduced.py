@@ -143,7 +143,8 @@ def read_reduced_calls(path):
                         raise ConvertError(f"{where(last)}: the reduced capture does not decode (bad end record)")
                     break
                 count += 1
-                if not (isinstance(c, tuple) and len(c) == 5 and isinstance(c[0], int) and isinstance(c[1], str)
+                if not (isinstance(c, tuple) and len(c) == 5 and isinstance(c[0], int) and not isinstance(c[0], bool)
+                        and isinstance(c[1], str)
                         and isinstance(c[2], list) and isinstance(c[4], int)
                         and 0 <= c[0] <= U63[1] and (last is None or c[0] > last)):
                     raise ConvertError(f"{where(last)}: the reduced capture does not decode (unexpected record)")

@@ -30,6 +30,8 @@ class VertexArrayObject:
     def __init__(self):
         self.attribs = {}     # index -> Attrib
         self.element = 0      # the element array buffer
+        self.fixed = None     # glVertexPointer's array (glstate.Array), made when first used
+        self.fixed_enabled = False   # GL_VERTEX_ARRAY
 
     def attrib(self, index):
         a = self.attribs.get(index)
@@ -119,8 +121,8 @@ class AttributeCalls:
 
     def h_bind_vertex_array(self, no, name, a, args):
         v = checked(no, integer, dict(args)["array"], f"{name}: the vertex array", *U32)
-        if v and v not in self.s.vaos and self.core:
-            return   # not a name glGenVertexArrays gave: GL_INVALID_OPERATION in a core context
+        if v and v not in self.s.vaos:
+            return   # not a name glGenVertexArrays gave (or one deleted): GL_INVALID_OPERATION (Mesa, every profile)
         self.current_vao().element = self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
         self.s.vao = v
         vao = self.s.vaos.setdefault(v, VertexArrayObject())
@@ -186,6 +188,7 @@ class AttributeCalls:
         "glVertexAttribIPointer": h_attrib_pointer,
         "glVertexAttribDivisor": h_attrib_divisor,
         "glPrimitiveRestartIndex": h_primitive_restart_index,
+        "glPrimitiveRestartIndexNV": h_primitive_restart_index,
     } | dict.fromkeys([f"glVertexAttrib{n}{t}{v}" for n in "1234" for t in ("f", "d", "s") for v in ("", "v")]
                      + [f"glVertexAttribI4{t}{v}" for t in ("i", "ui") for v in ("", "v")]
                      + [f"glVertexAttrib4N{t}v" for t in ("b", "s", "i", "ub", "us", "ui")]

@@ -1,7 +1,7 @@
 """The fixed-function vertex array: where a GL 1.x draw's positions come from."""
 import numpy as np
 
-from ...cli import I32, integer
+from ...cli import I32, U63, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import ARRAY_TYPES, INDEX_TYPES
 from . import enum_arg
@@ -59,7 +59,8 @@ class VertexArrayCalls:
             buf = self.s.buffers.get(eb)
             if buf is None:
                 fail_call(no, f"the element array buffer {eb} holds no data")
-            off = int(indices) if isinstance(indices, int) else 0
+            # An offset into the element buffer: what a pointer holds.
+            off = checked(no, integer, 0 if indices is None else indices, "the index buffer offset", *U63)
             data = buf
         else:
             if not isinstance(indices, (bytes, bytearray)):
@@ -73,6 +74,9 @@ class VertexArrayCalls:
     def h_client_state(self, no, name, a, args):
         if a[0] == "GL_VERTEX_ARRAY":
             self.s.vertex_array_enabled = name.startswith("glEnable")
+        elif a[0] == "GL_PRIMITIVE_RESTART_NV":
+            # NV_primitive_restart's switch: GL_PRIMITIVE_RESTART's state in Mesa.
+            self.s.restart = name.startswith("glEnable")
 
     def h_vertex_pointer(self, no, name, a, args):
         d = dict(args)
@@ -94,7 +98,9 @@ class VertexArrayCalls:
         p = d.get("pointer")
         arr.buffer = self.s.bound["GL_ARRAY_BUFFER"]
         if arr.buffer:
-            arr.offset, arr.data = int(p or 0), None
+            # An offset into the buffer: what a pointer holds.
+            arr.offset = checked(no, integer, 0 if p is None else p, f"{name}: the buffer offset", *U63)
+            arr.data = None
         else:
             arr.offset = 0
             arr.data = p if isinstance(p, (bytes, bytearray)) else None
