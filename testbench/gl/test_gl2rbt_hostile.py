@@ -657,3 +657,38 @@ def test_a_call_number_that_is_a_boolean(tmp_path):
     c = Calls().triangle(obj=1).swap()
     c.calls[0] = (True,) + c.calls[0][1:]
     refused(gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), "unexpected record")
+
+
+def test_uniform_calls_gl_ignores_keep_the_earlier_value(tmp_path):
+    """glUniform1f(x0, 0.5) then a call that sets nothing in GL (a count of
+    0, a count of 2 for a single float, another type or size: no change, or
+    GL_INVALID_OPERATION in Mesa): x0 stays 0.5 (the later call had taken
+    its place and Mesa's program was given neither)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+
+    def x0(*later):
+        c = shader_calls(VS_X0).add("glGetUniformLocation", program=2, name="x0", ret=5)
+        c.add("glUniform1f", location=5, v0=0.5)
+        for fn, kw in later:
+            c.add(fn, location=5, **kw)
+        return shader_draw(c, vao=7)
+    half = trace_bytes(tmp_path, x0(), "half")
+    for i, later in enumerate([("glUniform1fv", dict(count=0, value=[])),
+                               ("glUniform1fv", dict(count=2, value=[0.9, 0.9])),
+                               ("glUniform1i", dict(v0=1)), ("glUniform2f", dict(v0=1.0, v1=1.0))]):
+        assert trace_bytes(tmp_path, x0(later), f"later{i}") == half, later
+
+
+@pytest.mark.parametrize("fn, values, words", [
+    ("glUniform1f", dict(v0=10 ** 400), "a value: an integer of 1329 bits is too large"),
+    ("glUniform1i", dict(v0=1 << 31), "a value: 2147483648 is outside"),
+    ("glUniform1ui", dict(v0=-1), "a value: -1 is outside"),
+    ("glUniform1i", dict(v0=1.5), "a value: 1.5 is not an integer"),
+    ("glUniform3f", dict(v0=1.0, v1=1.0), "2 values, not 3"),
+])
+def test_uniform_values_past_their_c_types_are_named(tmp_path, fn, values, words):
+    """Values a glUniform's C types cannot take: the capture's error, named
+    (one had ended in 'internal error: ArgumentError')."""
+    c = shader_calls(VS_X0).add("glGetUniformLocation", program=2, name="x0", ret=5).add(fn, location=5, **values)
+    refused(gl2rbt(tmp_path, shader_draw(c, vao=7).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), words)
+    assert left_behind(tmp_path, ["c.xz"]) == []
