@@ -692,3 +692,10 @@ def test_uniform_values_past_their_c_types_are_named(tmp_path, fn, values, words
     c = shader_calls(VS_X0).add("glGetUniformLocation", program=2, name="x0", ret=5).add(fn, location=5, **values)
     refused(gl2rbt(tmp_path, shader_draw(c, vao=7).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), words)
     assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+def test_frames_are_ascii_digits(tmp_path):
+    """--frames of other scripts' digits ('\u0661:\u0662', which int() reads
+    as 1:2) is not A:B."""
+    cap = Calls().triangle(obj=1).swap().triangle(obj=1).swap().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--frames", "\u0661:\u0662"), "is not A:B")

@@ -11,7 +11,7 @@ PROG = "rbcd-gl2rbt"
 
 
 def parse_frames(text):
-    m = re.fullmatch(r"(\d{1,18}):(\d{0,18})", text or "")
+    m = re.fullmatch(r"([0-9]{1,18}):([0-9]{0,18})", text or "")
     if not m:
         raise ConvertError(f"--frames: '{printable(text)}' is not A:B (first and last frame, at most 18 digits "
                            "each; B may be empty)")
