@@ -79,3 +79,17 @@ def test_a_capture_without_the_race_is_bad_input(tmp_path):
     lines = [line for line in r.stderr.strip().splitlines()]
     assert r.returncode == 2 and len(lines) == 1 and "no frame draws the race" in lines[0], (r.returncode, lines)
     assert not (tmp_path / "out").exists()
+
+
+def test_names_that_read_as_options(tmp_path):
+    """An output folder and a capture whose names begin with '-' are
+    files like any other: the entry is made (mv had taken the folder
+    '--keep-trace' for an option after the work, exit 1 and two lines; the
+    converter, the capture '-boxes.trace')."""
+    os.chdir(tmp_path)
+    os.symlink(boxes_capture(), tmp_path / "-boxes.trace")
+    r = capture_game(tmp_path, "openarena", "oa_dm1", "2", "--keep-trace", "--from-trace", "-boxes.trace",
+                     "--skip", "0")
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    assert sorted(os.listdir(tmp_path / "--keep-trace")) == ["calls.xz", "capture.toml", "summary.jsonl"]
+    assert sorted(os.listdir(tmp_path)) == ["--keep-trace", "-boxes.trace"], "something else was left"
