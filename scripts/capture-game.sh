@@ -280,7 +280,10 @@ if [ "$keep" = yes ]; then
   mv "$work/trace.rbt.zst" "$work/geometry.geo" "$work/entry/"
 fi
 chmod "$(printf '%o' $((0777 & ~0$(umask))))" "$staged"   # mktemp's 0700, made what mkdir would
-mv "$work/entry"/* "$staged"/
+# Across file systems mv copies: a full device is one line, exit 1 (the
+# staged folder goes with the trap).
+err=$(mv "$work/entry"/* "$staged"/ 2>&1) ||
+  { echo "capture-game.sh: $out: write failed: $(oneline "${err%%$'\n'*}")" >&2; exit 1; }
 mv -T -- "$staged" "$out"
 staged=
 echo "capture-game.sh: wrote $out ($(du -sh -- "$out" | cut -f1))"
