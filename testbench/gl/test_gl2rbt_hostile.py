@@ -699,3 +699,45 @@ def test_frames_are_ascii_digits(tmp_path):
     as 1:2) is not A:B."""
     cap = Calls().triangle(obj=1).swap().triangle(obj=1).swap().triangle(obj=1).swap().write(tmp_path / "c.xz")
     refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--frames", "\u0661:\u0662"), "is not A:B")
+
+
+def attrib_draw(pointer=0, indices=None, source=VS):
+    c = shader_calls(source).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=pointer)
+    if indices is None:
+        return c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
+    c.add("glBindBuffer", target="GL_ELEMENT_ARRAY_BUFFER", buffer=3)
+    c.add("glBufferData", target="GL_ELEMENT_ARRAY_BUFFER", size=12, data=INDICES, usage="GL_STATIC_DRAW")
+    return c.add("glDrawElements", mode="GL_TRIANGLES", count=3, type="GL_UNSIGNED_INT", indices=indices).swap()
+
+
+@pytest.mark.parametrize("build, words", [
+    (lambda: attrib_draw(pointer=1 << 64), "glVertexAttribPointer: the buffer offset: 18446744073709551616 is outside"),
+    (lambda: attrib_draw(pointer=1.5), "glVertexAttribPointer: the buffer offset: 1.5 is not an integer"),
+    (lambda: attrib_draw(indices=1 << 64), "glDrawElements: the index buffer offset: 18446744073709551616 is outside"),
+], ids=["attrib_past_64_bits", "attrib_float", "indices_past_64_bits"])
+def test_offsets_under_a_program_are_pointers(tmp_path, build, words):
+    """Offsets past a pointer's 64 bits under a program: refused (ctypes had
+    made them NULL, and the draw read from the buffer's start)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    refused(gl2rbt(tmp_path, build().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), words)
+
+
+def test_a_shader_comment_that_is_not_utf8(tmp_path):
+    """A byte that is not UTF-8 in a vertex shader's comment (apitrace gives
+    it as a surrogate; GLSL allows it there): the shader is Mesa's as it
+    was, not refused at the draw as the draw's malformed arguments."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    assert trace_bytes(tmp_path, attrib_draw(source=VS + "// caf\udce9\n"), "odd") == \
+        trace_bytes(tmp_path, attrib_draw(), "plain")
+
+
+def test_a_multi_draw_past_its_limit_is_named(tmp_path):
+    """A glMultiDrawArrays of more draws than the documented limit, its
+    lists whole: the limit named (it had been 'impossible draw count or
+    lists', as for a call whose lists are short)."""
+    n = (1 << 16) + 1
+    c = pointer(Calls()).add("glMultiDrawArrays", mode="GL_TRIANGLES", first=[0] * n, count=[0] * n, drawcount=n)
+    refused(gl2rbt(tmp_path, c.swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+            "65537 draws, more than 65536 in one multi-draw")

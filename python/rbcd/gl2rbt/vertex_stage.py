@@ -167,7 +167,9 @@ class VertexStage:
         if "vertex" not in sources:
             fail_call(no, f"{where} has no vertex shader")
         sh = GL.glCreateShader(GL.GL_VERTEX_SHADER)
-        GL.glShaderSource(sh, sources["vertex"])
+        # The capture's bytes as they were (apitrace's text keeps bytes that
+        # are not UTF-8 as surrogates; GLSL allows them in comments).
+        GL.glShaderSource(sh, sources["vertex"].encode("utf-8", "surrogateescape"))
         GL.glCompileShader(sh)
         if not GL.glGetShaderiv(sh, GL.GL_COMPILE_STATUS):
             log = GL.glGetShaderInfoLog(sh).decode("utf-8", "replace").strip().splitlines()

@@ -6,7 +6,7 @@ import hashlib
 
 import numpy as np
 
-from ...cli import I32, U32, integer
+from ...cli import I32, U32, U63, integer
 from ..errors import checked, fail_call
 from ..gl_tables import ARRAY_TYPES, INDEX_TYPES
 
@@ -153,7 +153,9 @@ class AttributeCalls:
         p = d.get("pointer")
         at.buffer = self.s.bound.get("GL_ARRAY_BUFFER", 0)
         if at.buffer:
-            at.offset, at.client = int(p or 0), None
+            # An offset into the buffer: what a pointer holds.
+            at.offset = checked(no, integer, 0 if p is None else p, f"{name}: the buffer offset", *U63)
+            at.client = None
         else:
             # Client memory: apitrace records what the draws read as a blob.
             at.offset, at.client = 0, p if isinstance(p, (bytes, bytearray)) else None

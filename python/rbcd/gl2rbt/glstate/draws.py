@@ -4,7 +4,7 @@ import struct
 
 import numpy as np
 
-from ...cli import I32, integer
+from ...cli import I32, U63, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CULL, DEPTH_FUNCS, INDEX_TYPES, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
 from ..glmath import mat_mul, triangle_indices
@@ -14,6 +14,7 @@ PRIM_MODES = PRIM_TRIANGLES | PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STR
                                               "GL_TRIANGLE_STRIP_ADJACENCY", "GL_PATCHES"}
 MESA_STEPS_PER_UNIT = 2.0
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
+MAX_MULTI_DRAWS = 1 << 16      # draws of one multi-draw
 MAX_FRAME_RECORDS = 1 << 17    # draw records of one frame (a game's frame has a few thousand)
 # A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
 # that could need more is refused before anything is computed for it.
@@ -290,6 +291,9 @@ class DrawCalls:
                     return None
         if d.get("end", 0) < d.get("start", 0):
             return None
+        if not isinstance(d.get("indices"), (bytes, bytearray, type(None))):
+            # An offset into the element buffer: what a pointer holds.
+            checked(no, integer, d["indices"], f"{name}: the index buffer offset", *U63)
         return d
 
     def h_draw_under_program(self, no, name, a, args):
@@ -311,9 +315,12 @@ class DrawCalls:
         lists = {k: d.get(k) for k in ("first", "count", "indices", "basevertex") if k in d}
         if isinstance(n, int) and not isinstance(n, bool) and n < 0:
             return   # GL_INVALID_VALUE: the call does nothing
-        if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= 1 << 16 or \
-                not all(isinstance(v, list) and len(v) >= n for v in lists.values()):
+        if not isinstance(n, int) or isinstance(n, bool) or \
+                not all(isinstance(v, list) and len(v) >= min(n, MAX_MULTI_DRAWS + 1) for v in lists.values()):
             fail_call(no, f"{name}: impossible draw count or lists")
+        if n > MAX_MULTI_DRAWS:
+            fail_call(no, f"{name}: {n} draws, more than {MAX_MULTI_DRAWS} in one multi-draw (docs/gl-capture.md, "
+                      "limits)")
         for k in ("first", "count"):
             if k in lists:
                 lists[k] = [checked(no, integer, v, f"{name}: a {k}", *I32) for v in lists[k][:n]]
