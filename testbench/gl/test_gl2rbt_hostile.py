@@ -741,3 +741,17 @@ def test_a_multi_draw_past_its_limit_is_named(tmp_path):
     c = pointer(Calls()).add("glMultiDrawArrays", mode="GL_TRIANGLES", first=[0] * n, count=[0] * n, drawcount=n)
     refused(gl2rbt(tmp_path, c.swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
             "65537 draws, more than 65536 in one multi-draw")
+
+
+def test_fixed_point_vertices_of_opengl_es_1(tmp_path):
+    """glVertexPointer of GL_FIXED (16.16) in an OpenGL ES 1 context, which
+    docs/gl-capture.md lists: the triangle its floats give (it was refused
+    as not emulated)."""
+    def es1(kind, data):
+        c = Calls().add("eglCreateContext", dpy=1, config=1, share_context=0,
+                        attrib_list=["EGL_CONTEXT_CLIENT_VERSION", 1, "EGL_NONE"], ret=1)
+        c.add("glVertexPointer", size=3, type=kind, stride=0, pointer=data)
+        return c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
+    fixed = (np.frombuffer(TRIANGLE, "<f4") * 65536).astype("<i4").tobytes()
+    assert trace_bytes(tmp_path, es1("GL_FIXED", fixed), "fixed") == trace_bytes(tmp_path, es1("GL_FLOAT", TRIANGLE),
+                                                                                "float")

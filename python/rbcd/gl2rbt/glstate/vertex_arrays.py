@@ -10,6 +10,8 @@ from . import enum_arg
 VERTEX_POINTER_TYPES = {"GL_SHORT", "GL_INT", "GL_FLOAT", "GL_DOUBLE", "GL_HALF_FLOAT", "GL_INT_2_10_10_10_REV",
                         "GL_UNSIGNED_INT_2_10_10_10_REV"}
 VERTEX_POINTER_TYPES_ES = {"GL_BYTE", "GL_SHORT", "GL_FLOAT", "GL_FIXED"}
+# OpenGL ES 1's GL_FIXED: 32-bit integers of 16.16 fixed point.
+FIXED_SCALE = 1.0 / 65536.0
 
 
 class VertexArrayCalls:
@@ -18,9 +20,10 @@ class VertexArrayCalls:
     # ---- vertex data
     def array_values(self, arr, first, count, no):
         """(count, 4) float64 positions of vertices first .. first+count-1."""
-        if arr.type not in ARRAY_TYPES or arr.size not in (2, 3, 4):
+        fixed = arr.type == "GL_FIXED"
+        if (arr.type not in ARRAY_TYPES and not fixed) or arr.size not in (2, 3, 4):
             fail_call(no, f"vertex array of {arr.size} x {printable(arr.type)} is not emulated")
-        dt = np.dtype(ARRAY_TYPES[arr.type])
+        dt = np.dtype("<i4" if fixed else ARRAY_TYPES[arr.type])
         elem = dt.itemsize * arr.size
         stride = arr.stride or elem
         if arr.buffer:
@@ -47,7 +50,7 @@ class VertexArrayCalls:
                 .reshape(count, arr.size)
         out = np.zeros((count, 4))
         out[:, 3] = 1.0
-        out[:, :arr.size] = v
+        out[:, :arr.size] = v * FIXED_SCALE if fixed else v
         return out
 
     def index_values(self, type_, indices, count, no):
