@@ -755,3 +755,23 @@ def test_fixed_point_vertices_of_opengl_es_1(tmp_path):
     fixed = (np.frombuffer(TRIANGLE, "<f4") * 65536).astype("<i4").tobytes()
     assert trace_bytes(tmp_path, es1("GL_FIXED", fixed), "fixed") == trace_bytes(tmp_path, es1("GL_FLOAT", TRIANGLE),
                                                                                 "float")
+
+
+def test_the_texture_matrix_may_hold_any_float(tmp_path):
+    """NaN and infinities on the texture stack, which moves no vertex: the
+    draw is what it is without them (the capture was refused); on the
+    model-view stack they are still the capture's error."""
+    nan, inf = float("nan"), float("inf")
+
+    def texture(*calls):
+        c = Calls().add("glMatrixMode", mode="GL_TEXTURE")
+        for fn, kw in calls:
+            c.add(fn, **kw)
+        return c.add("glMatrixMode", mode="GL_MODELVIEW").triangle(obj=1).swap()
+    plain = trace_bytes(tmp_path, texture(), "plain")
+    for i, call in enumerate([("glLoadMatrixf", dict(m=[nan] * 16)), ("glRotatef", dict(angle=inf, x=0, y=0, z=1)),
+                              ("glScalef", dict(x=1e300, y=1e300, z=1)), ("glOrtho", dict(left=nan, right=1, bottom=0,
+                                                                                         top=1, zNear=0, zFar=1))]):
+        assert trace_bytes(tmp_path, texture(call, ("glScalef", dict(x=1e300, y=1e300, z=1))), f"t{i}") == plain, call
+    refused(gl2rbt(tmp_path, Calls().add("glLoadMatrixf", m=[nan] * 16).triangle(obj=1).swap()
+                   .write(tmp_path / "m.xz"), "-o", tmp_path / "m.rbt"), "a matrix element: nan is not finite")
