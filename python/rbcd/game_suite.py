@@ -11,7 +11,8 @@ the fragment traces and geometry the figures run on.
         scripts/rbcd-gl2rbt, then checked against the recorded checksums. An
         entry whose outputs are already there and match is not converted
         again. --frames K converts only the first K frames (no checksum:
-        the tests' cut-down inputs). No output may be an input of an entry
+        the tests' cut-down inputs; K of all an entry's frames or more is
+        the whole entry, checked). No output may be an input of an entry
         or a symlink (check_expand_outputs).
 
 Exit 2 with one line on a malformed entry or argument (naming the file and
@@ -223,6 +224,8 @@ class Entry:
                 pass
 
     def expand_in(self, out, frames):
+        if frames is not None and frames >= self.frames:
+            frames = None   # the whole entry: converted and checked as without --frames
         self.check()
         self.committed_summary(frames)   # read before anything is written: a bad one leaves nothing
         if frames is None and self.up_to_date(out):

@@ -147,3 +147,12 @@ def test_an_interrupted_expand_leaves_nothing(tmp_path, sig):
     assert p.returncode == 130 and err.strip().splitlines() == ["game-suite: interrupted"], (p.returncode, err)
     time.sleep(1)
     assert os.listdir(out) == [], "an interrupted expand left files"
+
+
+def test_frames_past_the_entry_expand_the_whole_entry(tmp_path):
+    """--frames K of more frames than the entry has: the entry's frames,
+    checked against its checksums, and said as many (it reported K frames,
+    unchecked)."""
+    program("rbcd-gl-raster")
+    r = game_suite(tmp_path, "expand", "-o", tmp_path / "out", "--frames", "100000", SOURCE)
+    assert r.returncode == 0 and r.stdout.strip() == f"{NAME}: 150 frames", (r.returncode, r.stdout, r.stderr)
