@@ -61,6 +61,7 @@ def test_a_described_value_is_bounded():
     assert printable(BOMB) == "a list of 1000 elements" and printable("\x00" * 10 ** 7, 20) == "\\x00" * 5 + "..."
     assert printable(TypeError("unhashable type: 'list'")) == "unhashable type: 'list'"
     assert printable(OSError(28, "No space left on device")) == "[Errno 28] No space left on device"
+    assert printable(MemoryError()) == "MemoryError", "an exception of no words is named by its type"
     assert time.monotonic() - t < 1.0
 
 
