@@ -54,7 +54,15 @@ def reduced_keeps(name):
         or name.startswith(REDUCED_KEEP)
 
 
+# Arguments of handled calls the emulation never reads: left out (None).
+# Pixel rectangles are read for their size alone.
+REDUCED_BLANK = {"glDrawPixels": "pixels", "glBitmap": "bitmap"}
+
+
 def reduced_args(name, args):
+    blank = REDUCED_BLANK.get(base_name(name))
+    if blank is not None:
+        return [(k, None if k == blank else plain_value(v)) for k, v in args]
     drop = REDUCED_DROP.get(base_name(name))
     if drop is None:
         return [(k, plain_value(v)) for k, v in args]
