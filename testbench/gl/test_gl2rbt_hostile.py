@@ -775,3 +775,57 @@ def test_the_texture_matrix_may_hold_any_float(tmp_path):
         assert trace_bytes(tmp_path, texture(call, ("glScalef", dict(x=1e300, y=1e300, z=1))), f"t{i}") == plain, call
     refused(gl2rbt(tmp_path, Calls().add("glLoadMatrixf", m=[nan] * 16).triangle(obj=1).swap()
                    .write(tmp_path / "m.xz"), "-o", tmp_path / "m.rbt"), "a matrix element: nan is not finite")
+
+
+def test_a_clear_of_another_framebuffer_keeps_the_frames_depth(tmp_path):
+    """glClear and glClearBuffer of the depth of a framebuffer object that is
+    not the camera pass (a 16 x 16 shadow map) between two draws: the
+    frame's depth buffer at the end is the one without them (it had been
+    cleared: the depth check's buffer and --depth-out)."""
+    near = np.array([4, 4, -50, 40, 4, -50, 4, 40, -50], "<f4").tobytes()
+    far = np.array([4, 4, 50, 40, 4, 50, 4, 40, 50], "<f4").tobytes()
+
+    def depth_after(name, clear):
+        c = Calls().add("glEnable", cap="GL_DEPTH_TEST").add("glVertexPointer", size=3, type="GL_FLOAT", stride=0,
+                                                              pointer=near)
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        if clear:
+            c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3)
+            c.add("glBindRenderbuffer", target="GL_RENDERBUFFER", renderbuffer=4)
+            c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_DEPTH_COMPONENT24", width=16,
+                  height=16)
+            c.add("glFramebufferRenderbuffer", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+                  renderbuffertarget="GL_RENDERBUFFER", renderbuffer=4)
+            c.add(*clear[:1], **clear[1])
+            c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0)
+        c.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=far)
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        last = len(c.calls)
+        cap = c.swap().write(tmp_path / f"{name}.xz")
+        r = gl2rbt(tmp_path, cap, "-o", tmp_path / f"{name}.rbt", "--depth-out", tmp_path / name,
+                   "--snapshot-calls", last)
+        assert r.returncode == 0, r.stderr
+        return (tmp_path / f"{name}.0.depth").read_bytes()
+    plain = depth_after("plain", None)
+    assert depth_after("clear", ("glClear", dict(mask="GL_DEPTH_BUFFER_BIT"))) == plain
+    assert depth_after("buffer", ("glClearBufferfv", dict(buffer="GL_DEPTH", drawbuffer=0, value=[1.0]))) == plain
+
+
+@pytest.mark.parametrize("first", ["draw", "clear"])
+def test_a_frame_that_begins_in_another_framebuffer(tmp_path, first):
+    """The first frame opening with a pass into a framebuffer object (a
+    shadow map, drawn or cleared) before anything reaches the screen, no
+    --screen given: the screen is the window's, as for any other first
+    call (it was 'malformed arguments (TypeError ...)', exit 2)."""
+    c = Calls().add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3)
+    c.add("glBindRenderbuffer", target="GL_RENDERBUFFER", renderbuffer=4)
+    c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_DEPTH_COMPONENT24", width=16, height=16)
+    c.add("glFramebufferRenderbuffer", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+          renderbuffertarget="GL_RENDERBUFFER", renderbuffer=4)
+    if first == "draw":
+        c.triangle()
+    else:
+        c.add("glClear", mask="GL_DEPTH_BUFFER_BIT")
+    c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0)
+    assert trace_bytes(tmp_path, c.triangle(obj=1).swap(), "fbo") == \
+        trace_bytes(tmp_path, Calls().triangle(obj=1).swap(), "plain")

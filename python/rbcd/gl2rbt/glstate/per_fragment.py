@@ -81,8 +81,10 @@ class PerFragmentCalls:
 
     def depth_clear(self, no, value):
         """A depth clear to `value` in [0, 1] (glClear, glClearBuffer), under
-        the scissor; nothing without depth writes or outside the frames."""
-        if self.active and self.s.depth_mask:
+        the scissor; nothing without depth writes, outside the frames, or
+        while a framebuffer that is not the camera pass's is bound (its own
+        depth buffer is cleared, not the frame's)."""
+        if self.active and self.s.depth_mask and self.camera_pass():
             self.open_frame(no)
             self.emit(b"C" + struct.pack("<Qd4i", no, value, *self.scissor_rect()))
 
