@@ -28,7 +28,7 @@ class Selection:
         except UsageError as e:
             raise ConvertError(str(e)) from None
         except UnicodeDecodeError as e:
-            raise ConvertError(f"{path}: cannot read: {printable(e)}")
+            raise ConvertError(f"{path}: not UTF-8 text (byte {e.start})")
         except tomllib.TOMLDecodeError as e:
             raise ConvertError(f"{path}: {printable(e)}")
         except RecursionError:
