@@ -829,3 +829,27 @@ def test_a_frame_that_begins_in_another_framebuffer(tmp_path, first):
     c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0)
     assert trace_bytes(tmp_path, c.triangle(obj=1).swap(), "fbo") == \
         trace_bytes(tmp_path, Calls().triangle(obj=1).swap(), "plain")
+
+
+def test_geometry_stays_within_what_rbcd_cpucd_reads(tmp_path):
+    """The geometry file is one rbcd-cpucd reads: a vertex no triangle keeps
+    at w = 1e-38 (a shader's cull) is not written (it had been, at 8.7e37,
+    and rbcd-cpucd refused the file the converter left with exit 0); a
+    collisionable vertex past its 1e9 is refused naming the call, and the
+    same capture converts without --geometry."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    tiny = VS.replace("0.0, 1.0); }", "0.0, gl_VertexID == 0 ? 1e-38 : 1.0); }")
+    cap = shader_draw(shader_calls(tiny), vao=7).write(tmp_path / "tiny.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "tiny.rbt", "--geometry", tmp_path / "tiny.geo")
+    assert r.returncode == 0, r.stderr
+    cpucd = subprocess.run([program("rbcd-cpucd"), "--geometry", tmp_path / "tiny.geo", "--pairs", tmp_path / "p.csv"],
+                           capture_output=True, text=True)
+    assert cpucd.returncode == 0, cpucd.stderr
+    far = Calls().add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=1, length=-1, message="rbcd-object")
+    far.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0,
+            pointer=np.array([4, 4, -10, 2e9, 4, -10, 4, 40, -10], "<f4").tobytes())
+    cap = far.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup").swap() \
+        .write(tmp_path / "far.xz")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "far.rbt", "--geometry", tmp_path / "far.geo"),
+            "call 8: --geometry: a collisionable vertex lies past 1e+09 in eye space")
+    assert gl2rbt(tmp_path, cap, "-o", tmp_path / "far.rbt").returncode == 0
