@@ -853,3 +853,18 @@ def test_geometry_stays_within_what_rbcd_cpucd_reads(tmp_path):
     refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "far.rbt", "--geometry", tmp_path / "far.geo"),
             "call 8: --geometry: a collisionable vertex lies past 1e+09 in eye space")
     assert gl2rbt(tmp_path, cap, "-o", tmp_path / "far.rbt").returncode == 0
+
+
+def test_instances_past_the_last_object_id(tmp_path):
+    """An instanced draw of two instances in debug group 2^32 - 1: its second
+    instance would be object 2^32 (instance i of object N is object N + i),
+    which no trace holds: named (it was struct.error's words)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=(1 << 32) - 1, length=-1,
+          message="rbcd-object")
+    c.add("glDrawArraysInstanced", mode="GL_TRIANGLES", first=0, count=3, instancecount=2).add("glPopDebugGroup")
+    refused(gl2rbt(tmp_path, c.swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+            "instance 1 of object 4294967295 would be object 4294967296")

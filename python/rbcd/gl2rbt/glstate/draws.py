@@ -4,7 +4,7 @@ import struct
 
 import numpy as np
 
-from ...cli import I32, U63, integer
+from ...cli import I32, U32, U63, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CULL, DEPTH_FUNCS, INDEX_TYPES, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
 from ..glmath import mat_mul, triangle_indices
@@ -261,6 +261,9 @@ class DrawCalls:
             if obj is not None and not self.last_rule_table.get("group_instances") \
                     and not self.last_rule_table.get("group_by"):
                 obj += i   # one object per instance, unless the rule that chose it groups them
+                if obj > U32[1]:
+                    fail_call(no, f"{name}: instance {i} of object {obj - i} would be object {obj}, past "
+                              f"{U32[1]} (an instanced draw's instance i of object N is object N + i)")
             self.draw_record(no, name, clip, tris, obj, d["count"], None, None, None)
         self.draw_instances = 1
         self.vertex_data = None
