@@ -142,7 +142,7 @@ class VertexStage:
                 try:
                     self.set_uniform(mp, p, loc, value)
                 except GLError:
-                    continue   # GL_INVALID_OPERATION (a type or count its uniform lacks): the capture's call did nothing
+                    continue   # GL_INVALID_OPERATION (a type or count its uniform lacks): the call did nothing
                 # Another form at this location, or an array and its elements
                 # (they share storage): what was set through them is no
                 # longer what Mesa holds.
