@@ -868,3 +868,28 @@ def test_instances_past_the_last_object_id(tmp_path):
     c.add("glDrawArraysInstanced", mode="GL_TRIANGLES", first=0, count=3, instancecount=2).add("glPopDebugGroup")
     refused(gl2rbt(tmp_path, c.swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
             "instance 1 of object 4294967295 would be object 4294967296")
+
+
+def test_compatibility_calls_in_a_core_profile(tmp_path):
+    """A core-profile capture calling the compatibility profile's functions
+    (glEnableClientState, glVertexPointer, glMatrixMode, glBegin, a display
+    list), then drawing with no program: GL_INVALID_OPERATION for each in
+    Mesa, and a draw without a vertex shader draws nothing there (the
+    converter had drawn the triangle through its fixed-function path, or
+    refused the display list)."""
+    def core(*extra):
+        c = Calls()
+        c.add("glXCreateContextAttribsARB", attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3,
+              "GLX_CONTEXT_MINOR_VERSION_ARB", 3, "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0],
+              ret=1)
+        c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+        for fn, kw in extra:
+            c.add(fn, **kw)
+        return c.swap()
+    nothing = trace_bytes(tmp_path, core(), "nothing")
+    assert trace_bytes(tmp_path, core(("glEnableClientState", dict(array="GL_VERTEX_ARRAY")),
+                                      ("glVertexPointer", dict(size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)),
+                                      ("glMatrixMode", dict(mode="GL_PROJECTION")),
+                                      ("glNewList", dict(list=1, mode="GL_COMPILE")),
+                                      ("glBegin", dict(mode="GL_TRIANGLES")),
+                                      ("glDrawArrays", dict(mode="GL_TRIANGLES", first=0, count=3))), "core") == nothing

@@ -305,6 +305,8 @@ class DrawCalls:
         if d is None:
             return   # GL_INVALID_VALUE
         if not self.vertex_program():
+            if self.core:
+                return   # no vertex shader in a core profile: nothing is drawn (Mesa)
             fail_call(no, f"{name} without a vertex shader is not emulated")
         self.shader_draw(no, name, d)
 
@@ -346,6 +348,8 @@ class DrawCalls:
             return   # GL_INVALID_VALUE
         if self.vertex_program():
             return self.shader_draw(no, name, d)
+        if self.core:
+            return   # no vertex shader in a core profile: nothing is drawn (Mesa)
         mode, first, count = enum_arg(d["mode"], no, f"{name}: the mode"), d.get("first", 0), d["count"]
         if mode not in PRIM_MODES:
             return   # GL_INVALID_ENUM: no vertex is read
@@ -362,6 +366,8 @@ class DrawCalls:
             return   # GL_INVALID_VALUE
         if self.vertex_program():
             return self.shader_draw(no, name, d)
+        if self.core:
+            return   # no vertex shader in a core profile: nothing is drawn (Mesa)
         mode, count, type_, indices = d["mode"], d["count"], d.get("type"), d.get("indices")
         if enum_arg(mode, no, f"{name}: the mode") not in PRIM_MODES:
             return   # GL_INVALID_ENUM: no index or vertex is read
