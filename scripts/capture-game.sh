@@ -60,6 +60,9 @@ case "$game" in openarena|neverball|supertuxkart) ;; *) usage "unknown game '$ga
 [ ! -L "$out" ] || usage "$out is a symlink: the entry is written only into a new directory"
 [ ! -e "$out" ] || usage "$out exists: the entry is written only into a new directory"
 [ -z "$from" ] || [ -f "$from" ] || usage "--from-trace $from: not a file"
+# A capture whose name begins with '-' is passed on as ./-NAME: the tools
+# that read it (the converter, apitrace, cp) would take it for an option.
+case "$from" in -*) from=./$from ;; esac
 # Games and tools: scripts/setup.sh --games (and --gl for the converter).
 need=(apitrace gzip sha256sum)
 if [ -z "$from" ]; then
@@ -197,7 +200,9 @@ if [ -n "$from" ]; then
 else
 echo "capture-game.sh: capturing $game $map under Xvfb (at most ${limit} s)"
 set +e
-SDL_AUDIODRIVER=dummy timeout --signal=TERM --kill-after=30 "$limit" \
+# xvfb-run's own temporary folder inside the work directory, which goes
+# at the end: xvfb-run stopped by the time limit leaves it.
+SDL_AUDIODRIVER=dummy TMPDIR=$work timeout --signal=TERM --kill-after=30 "$limit" \
   xvfb-run -a -s "-screen 0 1024x768x24" apitrace trace -o "$work/capture.trace" "${cmd[@]}" \
   >"$work/game.log" 2>&1
 rc=$?
@@ -271,11 +276,14 @@ print(sha256_file(sys.argv[1], decompress=True))' "$work/trace.rbt.zst")\"      
   echo "geometry = \"$(sum <"$work/geometry.geo")\""
 } >"$work/entry/capture.toml"
 if [ "$keep" = yes ]; then
-  cp "$capture" "$work/entry/capture.trace"
+  cp -- "$capture" "$work/entry/capture.trace"
   mv "$work/trace.rbt.zst" "$work/geometry.geo" "$work/entry/"
 fi
 chmod "$(printf '%o' $((0777 & ~0$(umask))))" "$staged"   # mktemp's 0700, made what mkdir would
-mv "$work/entry"/* "$staged"/
-mv -T "$staged" "$out"
+# Across file systems mv copies: a full device is one line, exit 1 (the
+# staged folder goes with the trap).
+err=$(mv "$work/entry"/* "$staged"/ 2>&1) ||
+  { echo "capture-game.sh: $out: write failed: $(oneline "${err%%$'\n'*}")" >&2; exit 1; }
+mv -T -- "$staged" "$out"
 staged=
-echo "capture-game.sh: wrote $out ($(du -sh "$out" | cut -f1))"
+echo "capture-game.sh: wrote $out ($(du -sh -- "$out" | cut -f1))"

@@ -114,7 +114,10 @@ def _describe(v, depth, limit):
 def exception_text(e, limit=200):
     """An exception's message, bounded as describe() is: str(e) when its
     arguments are text and small numbers (its own wording), else its
-    arguments described (a KeyError's key, say, can be any value read)."""
+    arguments described (a KeyError's key, say, can be any value read);
+    its type's name when it has no words (a MemoryError, say)."""
+    if not e.args or e.args == ("",):
+        return type(e).__name__
     if all(a is None or isinstance(a, (str, bool, float)) or isinstance(a, int) and a.bit_length() <= DESCRIBE_BITS
            or isinstance(a, bytes) and len(a) <= limit for a in e.args) \
             and (len(e.args) == 1 or sum(len(a) for a in e.args if isinstance(a, str)) <= limit * 4):

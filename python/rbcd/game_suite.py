@@ -11,7 +11,8 @@ the fragment traces and geometry the figures run on.
         scripts/rbcd-gl2rbt, then checked against the recorded checksums. An
         entry whose outputs are already there and match is not converted
         again. --frames K converts only the first K frames (no checksum:
-        the tests' cut-down inputs). No output may be an input of an entry
+        the tests' cut-down inputs; K of all an entry's frames or more is
+        the whole entry, checked). No output may be an input of an entry
         or a symlink (check_expand_outputs).
 
 Exit 2 with one line on a malformed entry or argument (naming the file and
@@ -25,6 +26,7 @@ import os
 import re
 import subprocess
 import sys
+import threading
 import tomllib
 
 from rbcd.cli import (UsageError, check_outputs, escape, main_wrapper, open_trace, read_input_text, say,
@@ -43,6 +45,48 @@ MAX_TOML = 1 << 16
 class Mismatch(Exception):
     """A regenerated file differs from its recorded checksum, or the converter
     failed on a well-formed entry: exit 1."""
+
+
+class Conversions:
+    """The converters expand's workers run. When expand is interrupted
+    (SIGINT, SIGTERM, SIGHUP) they are stopped at once (SIGTERM: each
+    removes its temporaries) and the entries they were making are removed,
+    so that nothing an interrupted run made looks complete."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.running = set()
+        self.stopped = False
+
+    def run(self, cmd):
+        with self.lock:
+            if self.stopped:
+                raise Stopped()
+            p = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                 text=True, errors="replace")
+            self.running.add(p)
+        try:
+            _, err = p.communicate()
+        finally:
+            with self.lock:
+                self.running.discard(p)
+        return p.returncode, err
+
+    def stop(self):
+        with self.lock:
+            self.stopped = True
+            for p in self.running:
+                try:
+                    p.terminate()
+                except OSError:
+                    pass
+
+
+class Stopped(Exception):
+    """A worker's entry abandoned: expand was interrupted."""
+
+
+CONVERSIONS = Conversions()
 
 
 def sha256_file(path, decompress=False):
@@ -166,6 +210,22 @@ class Entry:
             return False
 
     def expand(self, out, frames=None):
+        try:
+            return self.expand_in(out, frames)
+        except Stopped:
+            self.remove_outputs(out)
+            raise
+
+    def remove_outputs(self, out):
+        for p in self.all_outputs(out):
+            try:
+                os.unlink(p)
+            except OSError:
+                pass
+
+    def expand_in(self, out, frames):
+        if frames is not None and frames >= self.frames:
+            frames = None   # the whole entry: converted and checked as without --frames
         self.check()
         self.committed_summary(frames)   # read before anything is written: a bad one leaves nothing
         if frames is None and self.up_to_date(out):
@@ -178,11 +238,12 @@ class Entry:
         cmd = [os.path.join(ROOT, "scripts", "rbcd-gl2rbt"), self.calls, "-o", trace, "--geometry", geo,
                "--summary", summary, "--frames", f"{self.first}:{last}",
                "--screen", str(self.screen[0]), str(self.screen[1]), "--select", self.selection, "-q"]
-        r = subprocess.run(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                           text=True, errors="replace")
-        if r.returncode != 0:
-            msg = (r.stderr.strip().splitlines() or [f"exit {r.returncode}"])[0]
-            raise (UsageError if r.returncode == 2 else Mismatch)(f"{self.name}: conversion failed: {msg}")
+        returncode, stderr = CONVERSIONS.run(cmd)
+        if CONVERSIONS.stopped:
+            raise Stopped()
+        if returncode != 0:
+            msg = (stderr.strip().splitlines() or [f"exit {returncode}"])[0]
+            raise (UsageError if returncode == 2 else Mismatch)(f"{self.name}: conversion failed: {msg}")
         problem = None
         if frames is None:
             for path, k, gz in ((trace, "trace", True), (geo, "geometry", False)):
@@ -199,6 +260,8 @@ class Entry:
                 except OSError:
                     pass
             raise Mismatch(f"{self.name}: {problem}")
+        if CONVERSIONS.stopped:
+            raise Stopped()
         self.describe(out)
         return f"{self.name}: {frames or self.frames} frames"
 
@@ -272,9 +335,16 @@ def run(argv):
         except OSError as e:
             raise UsageError(f"-o {args.out}: cannot create: {e.strerror}")
         with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
-            futs = [pool.submit(e.expand, args.out, args.frames) for e in entries]
-            for f in futs:
-                print(f.result())
+            try:
+                futs = [pool.submit(e.expand, args.out, args.frames) for e in entries]
+                for f in futs:
+                    print(f.result())
+            except KeyboardInterrupt:
+                # The workers' converters stopped and their entries removed
+                # before the pool is waited for.
+                CONVERSIONS.stop()
+                pool.shutdown(wait=True, cancel_futures=True)
+                raise
         return 0
     except Mismatch as e:
         say(PROG, str(e))

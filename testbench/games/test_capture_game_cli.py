@@ -4,6 +4,7 @@ unusable TMPDIR is one line, exit 2, before any game runs or any conversion
 starts; a capture holding fewer frames than asked for is one line, exit 2.
 Run with --from-trace (no game needed); nothing is left."""
 import os
+import shutil
 import subprocess
 
 import pytest
@@ -79,3 +80,36 @@ def test_a_capture_without_the_race_is_bad_input(tmp_path):
     lines = [line for line in r.stderr.strip().splitlines()]
     assert r.returncode == 2 and len(lines) == 1 and "no frame draws the race" in lines[0], (r.returncode, lines)
     assert not (tmp_path / "out").exists()
+
+
+def test_names_that_read_as_options(tmp_path):
+    """An output folder and a capture whose names begin with '-' are
+    files like any other: the entry is made (mv had taken the folder
+    '--keep-trace' for an option after the work, exit 1 and two lines; the
+    converter, the capture '-boxes.trace')."""
+    os.chdir(tmp_path)
+    os.symlink(boxes_capture(), tmp_path / "-boxes.trace")
+    r = capture_game(tmp_path, "openarena", "oa_dm1", "2", "--keep-trace", "--from-trace", "-boxes.trace",
+                     "--skip", "0")
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    assert sorted(os.listdir(tmp_path / "--keep-trace")) == ["calls.xz", "capture.toml", "summary.jsonl"]
+    assert sorted(os.listdir(tmp_path)) == ["--keep-trace", "-boxes.trace"], "something else was left"
+
+
+def test_a_full_device_is_one_line(tmp_path):
+    """OUT_DIR on a full file system (a 4 KiB tmpfs): one line, exit 1,
+    nothing left there (mv had written a line for each file)."""
+    if os.geteuid() != 0 or shutil.which("unshare") is None:
+        pytest.skip("needs root and unshare to mount a small tmpfs")
+    full = tmp_path / "full"
+    full.mkdir()
+    script = (f"mount -t tmpfs -o size=4k tmpfs {full} || exit 77; "
+              f"bash {CAPTURE_GAME} openarena oa_dm1 2 {full}/entry --from-trace {boxes_capture()} --skip 0; "
+              f"rc=$?; ls -A {full} >&2; exit $rc")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = subprocess.run(["unshare", "-m", "--propagation", "private", "bash", "-c", script], capture_output=True,
+                       text=True, env=env, stdin=subprocess.DEVNULL, timeout=600)
+    if r.returncode == 77:
+        pytest.skip("cannot mount a tmpfs here")
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 1 and len(lines) == 1 and "write failed" in lines[0], (r.returncode, lines)

@@ -6,7 +6,9 @@ them in its output folder: refused before anything is opened, nothing
 changed."""
 import os
 import shutil
+import signal
 import subprocess
+import time
 
 import pytest
 
@@ -122,3 +124,35 @@ def test_an_entry_is_a_named_folder_whose_summary_matches_its_frames(tmp_path, e
     toml.write_text(toml.read_text().replace("frames = 150", "frames = 100000", 1))
     refused(game_suite(tmp_path, "expand", "-o", tmp_path / "out", "--frames", "1", entry),
             "not a line for each of the entry's 100000 frames")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["term", "int"])
+def test_an_interrupted_expand_leaves_nothing(tmp_path, sig):
+    """SIGTERM or SIGINT to expand while an entry converts: the converter is
+    stopped with it and nothing is left in the output folder (the
+    conversion had run on to its end and left the whole entry, .capture
+    included, after 'interrupted')."""
+    program("rbcd-gl-raster")
+    out = tmp_path / "out"
+    env = dict(os.environ, TMPDIR=str(tmp_path), RBCD_GL_RASTER=program("rbcd-gl-raster"))
+    p = subprocess.Popen(["/usr/bin/python3", GAME_SUITE, "expand", "-o", out, "--frames", "40", SOURCE],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                         stdin=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (out.is_dir() and os.listdir(out)):
+        time.sleep(0.05)   # until the converter's temporaries are there
+    assert p.poll() is None, "expand ended before it was interrupted"
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130 and err.strip().splitlines() == ["game-suite: interrupted"], (p.returncode, err)
+    time.sleep(1)
+    assert os.listdir(out) == [], "an interrupted expand left files"
+
+
+def test_frames_past_the_entry_expand_the_whole_entry(tmp_path):
+    """--frames K of more frames than the entry has: the entry's frames,
+    checked against its checksums, and said as many (it reported K frames,
+    unchecked)."""
+    program("rbcd-gl-raster")
+    r = game_suite(tmp_path, "expand", "-o", tmp_path / "out", "--frames", "100000", SOURCE)
+    assert r.returncode == 0 and r.stdout.strip() == f"{NAME}: 150 frames", (r.returncode, r.stdout, r.stderr)

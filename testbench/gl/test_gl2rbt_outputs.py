@@ -61,6 +61,7 @@ def test_a_described_value_is_bounded():
     assert printable(BOMB) == "a list of 1000 elements" and printable("\x00" * 10 ** 7, 20) == "\\x00" * 5 + "..."
     assert printable(TypeError("unhashable type: 'list'")) == "unhashable type: 'list'"
     assert printable(OSError(28, "No space left on device")) == "[Errno 28] No space left on device"
+    assert printable(MemoryError()) == "MemoryError", "an exception of no words is named by its type"
     assert time.monotonic() - t < 1.0
 
 
@@ -206,3 +207,25 @@ def test_a_listing_image_on_standard_output_has_it_to_itself(tmp_path):
         assert r.returncode == 0 and r.stdout.startswith(b"\x89PNG\r\n\x1a\n"), (image, r.stderr)
         assert b"frame 0:" in r.stderr and b"frame 0:" not in r.stdout
         assert sorted(os.listdir(tmp_path)) == ["c.xz"], os.listdir(tmp_path)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--list-draws", "0", "-o", "x.rbt"], "-o goes with a conversion, not with --list-draws"),
+    (["--list-draws", "0", "--geometry", "x.geo"], "--geometry goes with a conversion, not with --list-draws"),
+    (["--check-depth", "--summary", "x.jsonl"], "--summary goes with a conversion, not with --check-depth"),
+    (["--list-draws", "0", "--check-depth"], "two commands"),
+], ids=["listing_o", "listing_geometry", "check_summary", "both"])
+def test_outputs_a_command_does_not_write_are_refused(tmp_path, args, words):
+    """An output the command would pass over (--list-draws and --check-depth
+    write no trace, geometry or summary): refused, where it had exited 0
+    with no such file."""
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    refused(gl2rbt(tmp_path, cap, *args), words)
+    assert sorted(os.listdir(tmp_path)) == ["c.xz"]
+
+
+def test_a_selection_file_that_is_not_utf8_says_where(tmp_path):
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    (tmp_path / "r.toml").write_bytes(b"[[object]]\nid = 1\nname = '\xff'\n")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--select", tmp_path / "r.toml"),
+            "r.toml: not UTF-8 text (byte 26)")

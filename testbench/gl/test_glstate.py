@@ -698,12 +698,12 @@ def test_more_odd_calls_do_what_mesa_does():
     gl.glUseProgram(3)
     assert gl.conv.s.program == 2 and 2 in gl.conv.s.programs, "the deleted program in use stays"
     gl.glUniformMatrix4fv(location=1, count=1, transpose=2, value=[0.0] * 16)
-    assert gl.conv.s.programs[2].uniforms[1][2] is True
+    assert gl.conv.s.programs[2].uniforms[(1, "glUniformMatrix4fv", 1)][2] is True
     gl.glUniform1fv(location=4, count=1, value=[0.3])
     gl.glUniform1fv(location=3, count=3, value=[0.0, 0.0, 0.0])
-    assert list(gl.conv.s.programs[2].uniforms) == [1, 4, 3]
+    assert [k[0] for k in gl.conv.s.programs[2].uniforms] == [1, 4, 3]
     gl.glUniform1fv(location=4, count=1, value=[0.3])
-    assert list(gl.conv.s.programs[2].uniforms) == [1, 3, 4], "kept in the order last set"
+    assert [k[0] for k in gl.conv.s.programs[2].uniforms] == [1, 3, 4], "kept in the order last set"
     gl.glUseProgram(0)
     assert 2 not in gl.conv.s.programs, "a deleted program goes once no longer in use"
     gl.glCreateShader("GL_VERTEX_SHADER", ret=9)

@@ -73,3 +73,16 @@ def test_an_xz_file_of_something_else(tmp_path):
     with pytest.raises(ConvertError, match="not a reduced capture"):
         list(read_reduced_calls(str(p)))
     assert not is_reduced_capture(str(tmp_path / "missing.xz"))
+
+
+def test_pixel_rectangles_keep_their_size_not_their_pixels(tmp_path):
+    """glDrawPixels and glBitmap, read for their size and what they would
+    write (not emulated with depth writes on): kept, their pixels left out."""
+    p = tmp_path / "c.calls.xz"
+    write(p, CALLS[:1] + [
+        (2, "glDrawPixels", [("width", 10), ("height", 10), ("format", "GL_RGBA"), ("pixels", b"\0" * 400)], None, 0),
+        (3, "glBitmap", [("width", 0), ("height", 0), ("xmove", 5.0), ("bitmap", None)], None, 0),
+        (4, "glPrimitiveRestartNV", [], None, 0)] + CALLS[5:])
+    got = list(read_reduced_calls(str(p)))
+    assert [c[1] for c in got] == ["glViewport", "glDrawPixels", "glBitmap", "glPrimitiveRestartNV", "glXSwapBuffers"]
+    assert got[1][2] == [("width", 10), ("height", 10), ("format", "GL_RGBA"), ("pixels", None)]

@@ -91,10 +91,11 @@ def test_each_condition(tmp_path, field, value, inside, outside):
     ("[[object]]\nid = 1\ninstances = [3, 1]\n", "object[0].instances: must be [MIN, MAX]"),
     ("[[object]]\nid = 1\ngroup_instances = 1\n", "object[0].group_instances: must be true or false"),
     ("[[object]]\nid = 1\ntexture_image = [\"89ABCDEF\"]\n", "object[0].texture_image: must be a list"),
+    ("[[exclude]]\nid = \"x\"\n", "exclude[0].id: must be an integer in"),
 ], ids=["vertex_count", "unknown_key", "no_id", "negative_id", "bool_id", "id_past_u32", "up_axis", "deep", "projection", "texture", "group_by",
         "screen_area", "settings_key", "settings_type", "object_type", "unknown_table", "toml_syntax",
         "program_short", "program_empty", "pass_type", "instances_order", "group_instances_type",
-        "texture_image_case"])
+        "texture_image_case", "exclude_id"])
 def test_bad_rules_are_named(tmp_path, text, words):
     with pytest.raises(ConvertError) as e:
         rules(tmp_path, text)

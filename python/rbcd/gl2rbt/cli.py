@@ -11,7 +11,7 @@ PROG = "rbcd-gl2rbt"
 
 
 def parse_frames(text):
-    m = re.fullmatch(r"(\d{1,18}):(\d{0,18})", text or "")
+    m = re.fullmatch(r"([0-9]{1,18}):([0-9]{0,18})", text or "")
     if not m:
         raise ConvertError(f"--frames: '{printable(text)}' is not A:B (first and last frame, at most 18 digits "
                            "each; B may be empty)")
@@ -70,6 +70,16 @@ def run(args):
         # the call: numpy's warnings would only repeat them, before the line.
         np.seterr(all="ignore")
         from . import depth_check, listing, raster   # they compute with numpy
+        if args.list_draws is not None or args.check_depth:
+            # The conversion's outputs are not written there: given, they
+            # would be passed over.
+            mode = "--list-draws" if args.list_draws is not None else "--check-depth"
+            if args.list_draws is not None and args.check_depth:
+                raise ConvertError("--list-draws and --check-depth are two commands: give one")
+            for opt, value in (("-o", args.output), ("--geometry", args.geometry), ("--summary", args.summary),
+                               ("--reduced-out", args.reduced_out)):
+                if value is not None:
+                    raise ConvertError(f"{opt} goes with a conversion, not with {mode}")
         if args.list_draws is not None:
             if args.list_draws < 0:
                 raise ConvertError("--list-draws: FRAME must be a frame number")

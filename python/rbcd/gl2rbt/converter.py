@@ -2,12 +2,11 @@
 draw stream rbcd-gl-raster reads (docs/gl-capture.md)."""
 import struct
 
-import numpy as np
 
 from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
-from .gl_tables import CALL_FLAG_END_FRAME, IGNORED_PREFIXES, base_name
+from .gl_tables import CALL_FLAG_END_FRAME, COMPAT_ONLY, IGNORED_PREFIXES, base_name
 from .glstate import GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
@@ -162,10 +161,11 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.immediate_vertex(no, base, a)
                 return
             if base == "glEnd":
-                mode, verts = s.begin_mode, s.begin_verts
-                s.begin_mode, s.begin_verts = None, []
-                if verts:
-                    self.draw(no, mode, np.array(verts, dtype=np.float64), "glBegin/glEnd")
+                self.end_primitive(no)
+                return
+            if base == "glPrimitiveRestartNV":   # ends the primitive and starts another of its mode
+                if len(s.begin_verts) > (s.begin_cuts[-1] if s.begin_cuts else 0):   # (as many as vertices)
+                    s.begin_cuts.append(len(s.begin_verts))
                 return
             if base.startswith(("glColor", "glNormal", "glTexCoord", "glMultiTexCoord", "glMaterial",
                                 "glSecondaryColor", "glFogCoord", "glEdgeFlag", "glIndex")):
@@ -174,6 +174,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 fail_call(no, f"{printable(name)} between glBegin and glEnd is not emulated")
             return   # any other call there is GL_INVALID_OPERATION: it does nothing
         h = self.HANDLERS.get(base)
+        if self.core and base in COMPAT_ONLY:
+            h = Converter.h_not_in_core
         if h is not None:
             try:
                 h(self, no, name, a, args)
@@ -189,6 +191,9 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
         if flags & CALL_FLAG_END_FRAME:
             self.end_frame(no)
+
+    def h_not_in_core(self, no, name, a, args):
+        pass   # a compatibility-profile call in a core profile: GL_INVALID_OPERATION, nothing changes
 
     def h_refuse(self, no, name, a, args):
         fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")

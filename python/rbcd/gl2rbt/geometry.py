@@ -12,6 +12,19 @@ import numpy as np
 from .errors import fail_call
 
 W_MIN = 1e-5
+# rbcd-cpucd's bound on a vertex's coordinates and the view's entries
+# (docs/limits.md): the converter's geometry keeps it, or the draw is refused.
+GEOMETRY_LIMIT = 1e9
+
+
+def past_limit(verts, tris):
+    """Whether a finite vertex a triangle uses lies past GEOMETRY_LIMIT (a
+    vertex at infinity, w = 0, is left out with its triangles when written)."""
+    if len(tris) == 0:
+        return False
+    used = verts[np.unique(tris)]
+    used = used[np.isfinite(used).all(axis=1)]
+    return bool((np.abs(used) > GEOMETRY_LIMIT).any())
 
 
 def clip_near(clip, tris):
@@ -73,12 +86,20 @@ class GeometryOutput:
         self.geo_space = space
         if eye is not None:
             e = eye()
-            self.geo_objects.setdefault(obj_id, []).append((e[:, 0:3] / e[:, 3:4], tris.copy()))
+            verts, kept = e[:, 0:3] / e[:, 3:4], tris
+            if not (np.abs(proj) <= GEOMETRY_LIMIT).all():
+                fail_call(no, f"--geometry: the projection has an entry past {GEOMETRY_LIMIT:g}, the geometry's "
+                          "limit (rbcd-cpucd; docs/limits.md)")
             self.geo_view = proj.copy()   # the objects' projection, not a later overlay's
-            return
-        verts, kept = clip_near(clip, tris)
-        self.geo_objects.setdefault(obj_id, []).append((verts[:, 0:3] / verts[:, 3:4], kept.copy()))
-        self.geo_view = np.identity(4)
+        else:
+            verts, kept = clip_near(clip, tris)
+            verts = verts[:, 0:3] / verts[:, 3:4]
+            self.geo_view = np.identity(4)
+        if past_limit(verts, kept):
+            fail_call(no, f"--geometry: a collisionable vertex lies past {GEOMETRY_LIMIT:g} in "
+                      f"{'eye space' if eye is not None else 'normalized device coordinates'}, the geometry's limit "
+                      "(rbcd-cpucd; docs/limits.md)")
+        self.geo_objects.setdefault(obj_id, []).append((verts, kept.copy()))
 
     def write_geometry_frame(self):
         g = self.geo
@@ -93,12 +114,16 @@ class GeometryOutput:
             offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
             tris = np.concatenate([t + o for (_, t), o in zip(parts, offsets)])
             # A vertex no triangle keeps may lie at w = 0 (a vertex shader's
-            # way to cull it): at infinity once divided. It is not written,
-            # nor any triangle that would reach it.
+            # way to cull it): at infinity once divided, or past the limit
+            # near it. It is not written, nor any triangle that would reach
+            # an infinite one (add_geometry refused a used one past the limit).
             finite = np.isfinite(verts).all(axis=1)
-            if not finite.all():
-                tris = tris[finite[tris].all(axis=1)]
-                verts, tris = verts[finite], (np.cumsum(finite) - 1)[tris]
+            tris = tris[finite[tris].all(axis=1)]
+            used = np.zeros(len(verts), dtype=bool)
+            used[tris.ravel()] = True
+            written = finite & (used | (np.abs(verts) <= GEOMETRY_LIMIT).all(axis=1))
+            if not written.all():
+                verts, tris = verts[written], (np.cumsum(written) - 1)[tris]
             # GL hands the vertices over once per index (a mesh's corners
             # repeat); written once each, the file is a third of the size. Nine
             # significant digits hold a single-precision vertex exactly and the

@@ -32,8 +32,7 @@ IGNORED_PREFIXES = (
     "glDeleteQueries", "glQueryCounter", "glStringMarker", "glFrameTerminator", "glInsertEventMarker",
     "glDebugMessageInsert", "glSampleMask",
     "glDepthBounds", "glGenFramebuffers",
-    "glRasterPos", "glBitmap", "glDrawPixels", "glCopyPixels",
-    "glPrimitiveRestart", "glLoadName", "glPushName", "glPopName", "glInitNames", "glRenderMode",
+    "glRasterPos", "glLoadName", "glPushName", "glPopName", "glInitNames",
     "glGenLists", "glDeleteLists", "glListBase", "glCompileShader", "glShaderSource", "glCreateShader",
     "glCreateProgram", "glAttachShader", "glLinkProgram", "glDeleteShader", "glDetachShader",
     "glBindAttribLocation", "glUniform", "glValidateProgram", "glBindFragDataLocation", "glTexEnv", "glTexGen",
@@ -49,6 +48,20 @@ IGNORED_PREFIXES = (
     # EXT form): they change no pixel a later draw or the unit sees.
     "glInvalidateFramebuffer", "glInvalidateSubFramebuffer", "glDiscardFramebuffer",
 )
+# The compatibility profile's calls (by base name): in a core profile they
+# are GL_INVALID_OPERATION in Mesa and change nothing.
+COMPAT_ONLY = {
+    "glMatrixMode", "glLoadIdentity", "glLoadMatrixf", "glLoadMatrixd", "glLoadTransposeMatrixf",
+    "glLoadTransposeMatrixd", "glMultMatrixf", "glMultMatrixd", "glMultTransposeMatrixf", "glMultTransposeMatrixd",
+    "glTranslatef", "glTranslated", "glRotatef", "glRotated", "glScalef", "glScaled", "glPushMatrix", "glPopMatrix",
+    "glOrtho", "glFrustum", "glClipPlane", "glVertexPointer", "glEnableClientState", "glDisableClientState",
+    "glInterleavedArrays", "glBegin", "glEnd", "glRectf", "glRectd", "glRecti", "glRects", "glRectfv", "glRectdv",
+    "glRectiv", "glRectsv", "glRenderMode", "glDrawPixels", "glCopyPixels", "glBitmap", "glPrimitiveRestartNV",
+    "glPrimitiveRestartIndexNV", "glNewList", "glCallList", "glCallLists", "glArrayElement", "glEvalMesh1",
+    "glEvalMesh2", "glEvalCoord1f", "glEvalCoord2f", "glEvalPoint1", "glEvalPoint2", "glPushAttrib", "glPopAttrib",
+    "glPushClientAttrib", "glPopClientAttrib",
+}
+
 # Capabilities of glEnable/glDisable whose effect on the unit's input is nil or
 # emulated; others are refused when enabled.
 CAPS_IGNORED = {

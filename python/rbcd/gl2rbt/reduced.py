@@ -54,7 +54,15 @@ def reduced_keeps(name):
         or name.startswith(REDUCED_KEEP)
 
 
+# Arguments of handled calls the emulation never reads: left out (None).
+# Pixel rectangles are read for their size alone.
+REDUCED_BLANK = {"glDrawPixels": "pixels", "glBitmap": "bitmap"}
+
+
 def reduced_args(name, args):
+    blank = REDUCED_BLANK.get(base_name(name))
+    if blank is not None:
+        return [(k, None if k == blank else plain_value(v)) for k, v in args]
     drop = REDUCED_DROP.get(base_name(name))
     if drop is None:
         return [(k, plain_value(v)) for k, v in args]
@@ -143,7 +151,8 @@ def read_reduced_calls(path):
                         raise ConvertError(f"{where(last)}: the reduced capture does not decode (bad end record)")
                     break
                 count += 1
-                if not (isinstance(c, tuple) and len(c) == 5 and isinstance(c[0], int) and isinstance(c[1], str)
+                if not (isinstance(c, tuple) and len(c) == 5 and isinstance(c[0], int) and not isinstance(c[0], bool)
+                        and isinstance(c[1], str)
                         and isinstance(c[2], list) and isinstance(c[4], int)
                         and 0 <= c[0] <= U63[1] and (last is None or c[0] > last)):
                     raise ConvertError(f"{where(last)}: the reduced capture does not decode (unexpected record)")

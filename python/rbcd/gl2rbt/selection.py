@@ -28,7 +28,7 @@ class Selection:
         except UsageError as e:
             raise ConvertError(str(e)) from None
         except UnicodeDecodeError as e:
-            raise ConvertError(f"{path}: cannot read: {printable(e)}")
+            raise ConvertError(f"{path}: not UTF-8 text (byte {e.start})")
         except tomllib.TOMLDecodeError as e:
             raise ConvertError(f"{path}: {printable(e)}")
         except RecursionError:
@@ -88,9 +88,9 @@ class Selection:
         if kind == "object":
             if "id" not in r and r.get("group_by") not in ("modelview", "instance_origin"):
                 raise ConvertError(f"{where}: needs id (or group_by)")
-            if "id" in r and (not isinstance(r["id"], int) or isinstance(r["id"], bool)
-                              or not U32[0] <= r["id"] <= U32[1]):
-                raise ConvertError(f"{where}.id: must be an integer in [0, {U32[1]}]")
+        if "id" in r and (not isinstance(r["id"], int) or isinstance(r["id"], bool)
+                          or not U32[0] <= r["id"] <= U32[1]):
+            raise ConvertError(f"{where}.id: must be an integer in [0, {U32[1]}]")
         for k in ("calls", "frames", "vertex_count", "instances"):
             if k in r:
                 v = r[k]

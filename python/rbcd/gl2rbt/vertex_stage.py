@@ -55,7 +55,7 @@ class MesaProgram:
     def __init__(self, name, version):
         self.name, self.version = name, version
         self.locations = {}   # active uniform name (and name[i]) -> Mesa location
-        self.applied = {}     # capture location -> the value last set
+        self.applied = {}     # Program.uniforms key -> the value last given Mesa
 
 
 class VertexStage:
@@ -135,20 +135,21 @@ class VertexStage:
         GL = self.gl
         GL.glUseProgram(mp.name)
         from OpenGL.error import GLError
-        for loc, value in p.uniforms.items():
-            if mp.applied.get(loc) != value:
+        for key, value in p.uniforms.items():
+            if mp.applied.get(key) != value:
+                loc = key[0]
+                mp.applied[key] = value
                 try:
                     self.set_uniform(mp, p, loc, value)
                 except GLError:
-                    pass   # GL_INVALID_OPERATION (a type or count its uniform lacks): the capture's call did nothing
-                mp.applied[loc] = value
-                # An array and its elements share storage: what was set
-                # through another of its locations is no longer what Mesa holds.
+                    continue   # GL_INVALID_OPERATION (a type or count its uniform lacks): the call did nothing
+                # Another form at this location, or an array and its elements
+                # (they share storage): what was set through them is no
+                # longer what Mesa holds.
                 base = p.uniform_names.get(loc, "").split("[")[0]
-                if base:
-                    for other in [o for o in mp.applied if o != loc
-                                  and p.uniform_names.get(o, "").split("[")[0] == base]:
-                        del mp.applied[other]
+                for other in [o for o in mp.applied if o != key and (
+                        o[0] == loc or base and p.uniform_names.get(o[0], "").split("[")[0] == base)]:
+                    del mp.applied[other]
         for idx, binding in p.block_bindings.items():
             block = p.block_names.get(idx)
             if block is not None:
@@ -166,7 +167,9 @@ class VertexStage:
         if "vertex" not in sources:
             fail_call(no, f"{where} has no vertex shader")
         sh = GL.glCreateShader(GL.GL_VERTEX_SHADER)
-        GL.glShaderSource(sh, sources["vertex"])
+        # The capture's bytes as they were (apitrace's text keeps bytes that
+        # are not UTF-8 as surrogates; GLSL allows them in comments).
+        GL.glShaderSource(sh, sources["vertex"].encode("utf-8", "surrogateescape"))
         GL.glCompileShader(sh)
         if not GL.glGetShaderiv(sh, GL.GL_COMPILE_STATUS):
             log = GL.glGetShaderInfoLog(sh).decode("utf-8", "replace").strip().splitlines()

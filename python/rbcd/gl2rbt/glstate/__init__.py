@@ -54,8 +54,6 @@ class GLState:
         self.offset = (0.0, 0.0)
         self.clip_planes = [None] * MAX_CLIP_PLANES
         self.clip_enabled = [False] * MAX_CLIP_PLANES
-        self.vertex_array_enabled = False
-        self.vertex_array = Array()
         # Buffer objects (buffers.py): contents, versions, bindings, mappings.
         self.buffers = {}
         self.buffer_versions = {}
@@ -96,7 +94,27 @@ class GLState:
         self.marker = ""        # the last message the application inserted in the frame
         self.begin_mode = None
         self.begin_verts = []
+        self.begin_cuts = []     # glPrimitiveRestartNV between glBegin and glEnd: vertex counts at each
+        # glRenderMode: GL_SELECT and GL_FEEDBACK draw and glClear no pixel.
+        self.render_mode = "GL_RENDER"
         self.list_compiling = False
+
+    # The fixed-function vertex array (glVertexPointer, GL_VERTEX_ARRAY) is
+    # state of the bound vertex array object, as generic attributes are.
+    @property
+    def vertex_array(self):
+        vao = self.vaos[self.vao]
+        if vao.fixed is None:
+            vao.fixed = Array()
+        return vao.fixed
+
+    @property
+    def vertex_array_enabled(self):
+        return self.vaos[self.vao].fixed_enabled
+
+    @vertex_array_enabled.setter
+    def vertex_array_enabled(self, on):
+        self.vaos[self.vao].fixed_enabled = on
 
 
 MAX_VIEWPORTS = 16   # GL_MAX_VIEWPORTS as Mesa (llvmpipe) answers it

@@ -6,7 +6,7 @@ import hashlib
 
 import numpy as np
 
-from ...cli import I32, U32, integer
+from ...cli import I32, U32, U63, integer
 from ..errors import checked, fail_call
 from ..gl_tables import ARRAY_TYPES, INDEX_TYPES
 
@@ -30,6 +30,8 @@ class VertexArrayObject:
     def __init__(self):
         self.attribs = {}     # index -> Attrib
         self.element = 0      # the element array buffer
+        self.fixed = None     # glVertexPointer's array (glstate.Array), made when first used
+        self.fixed_enabled = False   # GL_VERTEX_ARRAY
 
     def attrib(self, index):
         a = self.attribs.get(index)
@@ -119,8 +121,8 @@ class AttributeCalls:
 
     def h_bind_vertex_array(self, no, name, a, args):
         v = checked(no, integer, dict(args)["array"], f"{name}: the vertex array", *U32)
-        if v and v not in self.s.vaos and self.core:
-            return   # not a name glGenVertexArrays gave: GL_INVALID_OPERATION in a core context
+        if v and v not in self.s.vaos:
+            return   # not a name glGenVertexArrays gave (or one deleted): GL_INVALID_OPERATION (Mesa, every profile)
         self.current_vao().element = self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
         self.s.vao = v
         vao = self.s.vaos.setdefault(v, VertexArrayObject())
@@ -151,7 +153,9 @@ class AttributeCalls:
         p = d.get("pointer")
         at.buffer = self.s.bound.get("GL_ARRAY_BUFFER", 0)
         if at.buffer:
-            at.offset, at.client = int(p or 0), None
+            # An offset into the buffer: what a pointer holds.
+            at.offset = checked(no, integer, 0 if p is None else p, f"{name}: the buffer offset", *U63)
+            at.client = None
         else:
             # Client memory: apitrace records what the draws read as a blob.
             at.offset, at.client = 0, p if isinstance(p, (bytes, bytearray)) else None
@@ -186,6 +190,7 @@ class AttributeCalls:
         "glVertexAttribIPointer": h_attrib_pointer,
         "glVertexAttribDivisor": h_attrib_divisor,
         "glPrimitiveRestartIndex": h_primitive_restart_index,
+        "glPrimitiveRestartIndexNV": h_primitive_restart_index,
     } | dict.fromkeys([f"glVertexAttrib{n}{t}{v}" for n in "1234" for t in ("f", "d", "s") for v in ("", "v")]
                      + [f"glVertexAttribI4{t}{v}" for t in ("i", "ui") for v in ("", "v")]
                      + [f"glVertexAttrib4N{t}v" for t in ("b", "s", "i", "ub", "us", "ui")]

@@ -4,7 +4,7 @@ import struct
 
 import numpy as np
 
-from ...cli import integer
+from ...cli import I32, U32, U63, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CULL, DEPTH_FUNCS, INDEX_TYPES, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
 from ..glmath import mat_mul, triangle_indices
@@ -14,6 +14,7 @@ PRIM_MODES = PRIM_TRIANGLES | PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STR
                                               "GL_TRIANGLE_STRIP_ADJACENCY", "GL_PATCHES"}
 MESA_STEPS_PER_UNIT = 2.0
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
+MAX_MULTI_DRAWS = 1 << 16      # draws of one multi-draw
 MAX_FRAME_RECORDS = 1 << 17    # draw records of one frame (a game's frame has a few thousand)
 # A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
 # that could need more is refused before anything is computed for it.
@@ -26,15 +27,32 @@ MAX_DRAW_PRIMITIVES = 1 << 22   # triangles of one draw under a program, all its
 FRAGMENT_EFFECT_KEYS = ("discard_draws", "discard_collisionable", "frag_depth_draws", "frag_depth_collisionable")
 
 
+def restart_triangles(mode, lengths):
+    """The triangles of primitives of `lengths` vertices each, one after
+    another in one vertex list (primitive restart cut them apart: each is
+    assembled alone, as GL assembles a primitive)."""
+    parts, at = [], 0
+    for n in lengths:
+        if n > 0:
+            parts.append(triangle_indices(mode, n) + np.uint32(at))
+            at += n
+    return np.concatenate(parts) if parts else np.zeros((0, 3), np.uint32)
+
+
 class DrawCalls:
     """Draws: positions through the fixed-function transform into draw records."""
+
+    def renders(self):
+        """Whether draws now reach pixels: not in glRenderMode's selection
+        or feedback mode."""
+        return self.s.render_mode == "GL_RENDER"
 
     # ---- draws
     def draw(self, no, mode, positions, name, tris=None):
         """positions: (n, 4) object-space vertices in GL order for `mode`,
         through the fixed-function transform; tris, the triangles GL
         assembles from them when primitive restart cut them into pieces."""
-        if not self.active:
+        if not self.active or not self.renders():
             return
         if self.vertex_program():
             fail_call(no, f"{name} with program {self.s.program} bound: immediate-mode and glRect draws "
@@ -103,8 +121,9 @@ class DrawCalls:
         st = self.s
         w, h = self.screen
         vx, vy, vw, vh = st.viewport if st.viewport else (0, 0, w, h)
-        if vw <= 0 or vh <= 0:
-            return
+        top = h - (vy + vh)   # the viewport's top row, screen rows down
+        if vw <= 0 or vh <= 0 or vx >= w or vx + vw <= 0 or top >= h or top + vh <= 0:
+            return   # the viewport (as Mesa clamps it) meets no pixel of the screen: nothing is drawn
         scissor = self.scissor_rect()
         planes = []
         if any(st.clip_enabled):
@@ -141,7 +160,7 @@ class DrawCalls:
                            1 if front_ccw else 0, 1 if st.depth_test else 0, depth_func,
                            1 if st.depth_mask else 0, len(planes), self.draw_shade)
         # GL's window y grows upwards; the screen's rows downwards.
-        rec += struct.pack("<8d", vx, h - (vy + vh), vw, vh, st.depth_range[0], st.depth_range[1], of, ou)
+        rec += struct.pack("<8d", vx, top, vw, vh, st.depth_range[0], st.depth_range[1], of, ou)
         rec += struct.pack("<4i", *scissor)
         for p in planes:
             rec += struct.pack("<4d", *p)
@@ -191,7 +210,7 @@ class DrawCalls:
         if mode not in PRIM_MODES or (self.core and self.s.vao == 0) or \
                 (d.get("type", "GL_UNSIGNED_INT") not in INDEX_TYPES and "Elements" in name):
             return   # GL_INVALID_ENUM, or no vertex array object in a core context: nothing is drawn
-        if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard:
+        if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard or not self.renders():
             return
         p = self.s.programs[self.s.program]
         for stage in ("geometry", "tess_control", "tess_evaluation"):
@@ -242,6 +261,9 @@ class DrawCalls:
             if obj is not None and not self.last_rule_table.get("group_instances") \
                     and not self.last_rule_table.get("group_by"):
                 obj += i   # one object per instance, unless the rule that chose it groups them
+                if obj > U32[1]:
+                    fail_call(no, f"{name}: instance {i} of object {obj - i} would be object {obj}, past "
+                              f"{U32[1]} (an instanced draw's instance i of object N is object N + i)")
             self.draw_record(no, name, clip, tris, obj, d["count"], None, None, None)
         self.draw_instances = 1
         self.vertex_data = None
@@ -272,6 +294,9 @@ class DrawCalls:
                     return None
         if d.get("end", 0) < d.get("start", 0):
             return None
+        if not isinstance(d.get("indices"), (bytes, bytearray, type(None))):
+            # An offset into the element buffer: what a pointer holds.
+            checked(no, integer, d["indices"], f"{name}: the index buffer offset", *U63)
         return d
 
     def h_draw_under_program(self, no, name, a, args):
@@ -280,19 +305,34 @@ class DrawCalls:
         if d is None:
             return   # GL_INVALID_VALUE
         if not self.vertex_program():
+            if self.core:
+                return   # no vertex shader in a core profile: nothing is drawn (Mesa)
             fail_call(no, f"{name} without a vertex shader is not emulated")
         self.shader_draw(no, name, d)
 
     def h_multi_draw(self, no, name, a, args):
-        """glMultiDraw*: the draws it stands for, one after another."""
+        """glMultiDraw*: the draws it stands for, one after another; nothing
+        when any count is negative (Mesa checks them all first:
+        GL_INVALID_VALUE for the whole call). Its firsts are not checked
+        there: a negative one reads before the array, which is refused."""
         d = dict(args)
         n = d.get("drawcount", d.get("primcount"))
         lists = {k: d.get(k) for k in ("first", "count", "indices", "basevertex") if k in d}
         if isinstance(n, int) and not isinstance(n, bool) and n < 0:
             return   # GL_INVALID_VALUE: the call does nothing
-        if not isinstance(n, int) or not 0 <= n <= 1 << 16 or \
-                not all(isinstance(v, list) and len(v) >= n for v in lists.values()):
+        if not isinstance(n, int) or isinstance(n, bool) or \
+                not all(isinstance(v, list) and len(v) >= min(n, MAX_MULTI_DRAWS + 1) for v in lists.values()):
             fail_call(no, f"{name}: impossible draw count or lists")
+        if n > MAX_MULTI_DRAWS:
+            fail_call(no, f"{name}: {n} draws, more than {MAX_MULTI_DRAWS} in one multi-draw (docs/gl-capture.md, "
+                      "limits)")
+        for k in ("first", "count"):
+            if k in lists:
+                lists[k] = [checked(no, integer, v, f"{name}: a {k}", *I32) for v in lists[k][:n]]
+        if any(v < 0 for v in lists.get("count", [])):
+            return   # GL_INVALID_VALUE: the call does nothing
+        if any(v < 0 for v in lists.get("first", [])):
+            fail_call(no, f"{name}: a negative first: Mesa reads before the array; not emulated")
         single, handler = ("glDrawArrays", self.h_draw_arrays) if "Arrays" in name else \
             ("glDrawElementsBaseVertex", self.h_draw_under_program) if "BaseVertex" in name else \
             ("glDrawElements", self.h_draw_elements)
@@ -308,7 +348,11 @@ class DrawCalls:
             return   # GL_INVALID_VALUE
         if self.vertex_program():
             return self.shader_draw(no, name, d)
-        mode, first, count = d["mode"], d.get("first", 0), d["count"]
+        if self.core:
+            return   # no vertex shader in a core profile: nothing is drawn (Mesa)
+        mode, first, count = enum_arg(d["mode"], no, f"{name}: the mode"), d.get("first", 0), d["count"]
+        if mode not in PRIM_MODES:
+            return   # GL_INVALID_ENUM: no vertex is read
         if count > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {count} vertices, more than a draw record's {MAX_RECORD_VERTICES}")
         if not self.active or count == 0:
@@ -322,7 +366,11 @@ class DrawCalls:
             return   # GL_INVALID_VALUE
         if self.vertex_program():
             return self.shader_draw(no, name, d)
+        if self.core:
+            return   # no vertex shader in a core profile: nothing is drawn (Mesa)
         mode, count, type_, indices = d["mode"], d["count"], d.get("type"), d.get("indices")
+        if enum_arg(mode, no, f"{name}: the mode") not in PRIM_MODES:
+            return   # GL_INVALID_ENUM: no index or vertex is read
         if count > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {count} indices, more than a draw record's {MAX_RECORD_VERTICES} vertices")
         if not self.active or count == 0 or type_ not in INDEX_TYPES:
@@ -345,13 +393,7 @@ class DrawCalls:
         tris = None
         if cut is not None and cut.any():
             bounds = np.flatnonzero(np.concatenate(([True], cut, [True])))
-            parts, at = [], 0
-            for a_, b_ in zip(bounds[:-1], bounds[1:]):
-                seg = b_ - a_ - 1
-                if seg > 0:
-                    parts.append(triangle_indices(mode, seg) + np.uint32(at))
-                    at += seg
-            tris = np.concatenate(parts) if parts else np.zeros((0, 3), np.uint32)
+            tris = restart_triangles(mode, (bounds[1:] - bounds[:-1] - 1).tolist())
         self.draw(no, mode, verts[kept], name, tris)
 
     def h_rect(self, no, name, a, args):
@@ -367,9 +409,47 @@ class DrawCalls:
             return   # GL_INVALID_ENUM: not inside glBegin/glEnd, and what follows is not a vertex list
         self.s.begin_mode = mode
         self.s.begin_verts = []
+        self.s.begin_cuts = []
+
+    def end_primitive(self, no):
+        """glEnd: the vertices since glBegin drawn, each piece that
+        glPrimitiveRestartNV cut off assembled alone."""
+        s = self.s
+        mode, verts, cuts = s.begin_mode, s.begin_verts, s.begin_cuts
+        s.begin_mode, s.begin_verts, s.begin_cuts = None, [], []
+        if not verts:
+            return
+        tris = None
+        if cuts:
+            ends = cuts + [len(verts)]
+            tris = restart_triangles(mode, [b - a for a, b in zip([0] + cuts, ends)])
+        self.draw(no, mode, np.array(verts, dtype=np.float64), "glBegin/glEnd", tris)
 
     def h_end(self, no, name, a, args):
         pass   # glEnd without glBegin: GL_INVALID_OPERATION, the call does nothing
+
+    def h_primitive_restart_nv(self, no, name, a, args):
+        pass   # outside glBegin/glEnd (converter.handle takes it there): GL_INVALID_OPERATION
+
+    def h_render_mode(self, no, name, a, args):
+        mode = enum_arg(a[0] if a else None, no, f"{name}: the mode")
+        # Selection and feedback exist in the compatibility profile only.
+        if mode in ("GL_RENDER", "GL_SELECT", "GL_FEEDBACK") and not self.core and not self.es:
+            self.s.render_mode = mode   # (Mesa sets it even without glSelectBuffer, after its error)
+
+    def h_pixel_rectangle(self, no, name, a, args):
+        """glDrawPixels, glCopyPixels, glBitmap: rectangles of fragments at the
+        raster position, which the unit does not take as an object's. They
+        change no depth unless the depth test is on with depth writes: then
+        later draws' visibility depends on them, which is not emulated."""
+        d = dict(args)
+        w = checked(no, integer, d.get("width"), f"{name}: the width", *I32)
+        h = checked(no, integer, d.get("height"), f"{name}: the height", *I32)
+        if w <= 0 or h <= 0:
+            return   # no fragment (glBitmap(0, 0, ...) moves the raster position), or GL_INVALID_VALUE
+        if self.active and self.renders() and not self.s.rasterizer_discard and self.s.depth_test \
+                and self.s.depth_mask and self.camera_pass():
+            fail_call(no, f"{printable(name)} with the depth test on writes depth: not emulated")
 
     HANDLERS = {
         "glDrawArraysInstanced": h_draw_under_program,
@@ -396,4 +476,9 @@ class DrawCalls:
         "glRectsv": h_rect,
         "glBegin": h_begin,
         "glEnd": h_end,
+        "glPrimitiveRestartNV": h_primitive_restart_nv,
+        "glRenderMode": h_render_mode,
+        "glDrawPixels": h_pixel_rectangle,
+        "glCopyPixels": h_pixel_rectangle,
+        "glBitmap": h_pixel_rectangle,
     }

@@ -162,6 +162,8 @@ class FramebufferCalls:
         fb = self.s.draw_fbo
         if not fb:
             return True
+        if self.screen is None:
+            self.write_header()   # the screen, from the window or the viewport (or the capture's error)
         depth = self.s.fbo_depth.get(fb)
         return depth is not None and self.s.sizes.get(depth) == tuple(self.screen)
 

@@ -71,15 +71,20 @@ class PerFragmentCalls:
 
     def h_clear(self, no, name, a, args):
         bits = self.clear_bits(no, name, a[0])
-        if bits is None or self.s.rasterizer_discard:
-            return   # GL_INVALID_VALUE, or discarded with the rasterizer: nothing is cleared
+        if bits is None or self.s.rasterizer_discard or self.s.render_mode != "GL_RENDER":
+            # GL_INVALID_VALUE, discarded with the rasterizer, or in selection
+            # or feedback mode (Mesa clears then only in GL_RENDER; glClearBuffer
+            # clears in every mode): nothing is cleared.
+            return
         if "GL_DEPTH_BUFFER_BIT" in bits:
             self.depth_clear(no, self.s.clear_depth)
 
     def depth_clear(self, no, value):
         """A depth clear to `value` in [0, 1] (glClear, glClearBuffer), under
-        the scissor; nothing without depth writes or outside the frames."""
-        if self.active and self.s.depth_mask:
+        the scissor; nothing without depth writes, outside the frames, or
+        while a framebuffer that is not the camera pass's is bound (its own
+        depth buffer is cleared, not the frame's)."""
+        if self.active and self.s.depth_mask and self.camera_pass():
             self.open_frame(no)
             self.emit(b"C" + struct.pack("<Qd4i", no, value, *self.scissor_rect()))
 
@@ -114,7 +119,9 @@ class PerFragmentCalls:
                 s.clip_planes[i] = np.zeros(4)   # GL's default plane (0,0,0,0) keeps everything
             s.clip_enabled[i] = on
             return
-        if cap in CAPS_IGNORED or not on:
+        # GL_PRIMITIVE_RESTART_NV is a client state (glEnableClientState):
+        # glEnable of it is GL_INVALID_ENUM in Mesa.
+        if cap in CAPS_IGNORED or cap == "GL_PRIMITIVE_RESTART_NV" or not on:
             return
         fail_call(no, f"glEnable({printable(cap)}) is not emulated and may change geometry or visibility")
 

@@ -10,7 +10,7 @@ location no call named is an explicit one, the same in Mesa)."""
 import hashlib
 import re
 
-from ...cli import I32, integer
+from ...cli import I32, U32, integer, real
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 
@@ -38,12 +38,29 @@ class Program:
         self.version = 0           # a new one at each link
         self.uniform_names = {}    # capture location -> name
         self.block_names = {}      # capture block index -> name
-        self.uniforms = {}         # capture location -> (function, values): the last value set
+        # (capture location, function, count) -> (function, values, transpose,
+        # component type, count): the last values each form of glUniform set
+        # at a location, in the order last set (Mesa ignores a form its
+        # uniform lacks, and the last form it takes holds).
+        self.uniforms = {}
         self.deleted = False       # glDeleteProgram while in use
         self.block_bindings = {}   # capture block index -> binding point
         self.discards = False      # its fragment shader has a discard statement
         self.frag_depth = False    # its fragment shader writes gl_FragDepth
         self.digest = ""           # SHA-256 of its stages' sources at the last link (selection rules)
+
+
+def uniform_values(no, name, kind, values):
+    """A glUniform's values as the C types of its form take them: a float
+    or double any number a double holds (NaN and infinities are values a
+    shader may be given), an int or unsigned int its 32 bits."""
+    for v in values:
+        if kind in ("i", "ui"):
+            checked(no, integer, v, f"{name}: a value", *(I32 if kind == "i" else U32))
+        elif isinstance(v, bool) or not isinstance(v, (int, float)):
+            fail_call(no, f"{name}: the values are not numbers")
+        elif isinstance(v, int):
+            checked(no, real, v, f"{name}: a value")   # an integer past a double's range is refused
 
 
 def name_arg(no, name, v, what):
@@ -212,8 +229,7 @@ class ProgramCalls:
         values, count = rest[1:], None
         if m.group(6):   # the v forms: count, [transpose,] values
             values = [v for v in values if isinstance(v, list)]
-            if len(values) != 1 or not all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                                           for x in values[0]):
+            if len(values) != 1:
                 fail_call(no, f"{name}: the values are not numbers")
             values = values[0]
             count = dict(args).get("count")
@@ -221,16 +237,21 @@ class ProgramCalls:
             width = int(m.group(3)) * (int(cols) if cols else int(m.group(3)) if m.group(2) else 1)
             if not isinstance(count, int) or count < 0 or len(values) != count * width:
                 fail_call(no, f"{name}: {len(values)} values, not its count ({count}) of {width}")
-        elif not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values):
-            fail_call(no, f"{name}: the values are not numbers")
+            if count == 0:
+                return   # sets nothing (GL: no error, no change)
+        elif len(values) != int(m.group(3)):
+            fail_call(no, f"{name}: {len(values)} values, not {m.group(3)}")
+        uniform_values(no, name, m.group(5), values)
         # Any GLboolean but zero transposes (Mesa tests it as C does).
         transpose = m.group(2) is not None and dict(args).get("transpose") not in ("GL_FALSE", False, 0, None)
         # As Mesa's program is given it: the glUniform function, the values,
         # their component type and, for the v forms, their count.
         # Kept in the order last set: an array's element and the array
         # itself name the same storage, and the later call wins.
-        p.uniforms.pop(loc, None)
-        p.uniforms[loc] = (name.replace("glProgramUniform", "glUniform"), values, transpose, m.group(5), count)
+        func = name.replace("glProgramUniform", "glUniform")
+        key = (loc, func, count)
+        p.uniforms.pop(key, None)
+        p.uniforms[key] = (func, values, transpose, m.group(5), count)
 
     def h_refuse_stage(self, no, name, a, args):
         fail_call(no, f"{printable(name)}: separable programs and pipelines are not emulated yet")

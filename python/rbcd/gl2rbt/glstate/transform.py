@@ -24,15 +24,28 @@ class TransformCalls:
         return self.s.stacks[self.s.mode][-1]
 
     def set_cur(self, m, no):
-        if not np.all(np.isfinite(m)):
+        if not np.all(np.isfinite(m)) and self.s.mode != "GL_TEXTURE":
             fail_call(no, "the matrix becomes non-finite (NaN or infinity)")
         self.s.stacks[self.s.mode][-1] = m
+
+    def matrix_numbers(self, vals, no, what):
+        """The numbers of a matrix call, finite; on the texture stack, whose
+        matrices move no vertex (they transform texture coordinates, which
+        the converter does not use), any float: None when one is NaN or
+        infinite there (the matrix becomes NaN: nothing reads it)."""
+        if self.s.mode == "GL_TEXTURE" and any(isinstance(v, float) and not math.isfinite(v) for v in vals):
+            self.s.stacks["GL_TEXTURE"][-1] = np.full((4, 4), np.nan)
+            return None
+        return [number(v, no, what) for v in vals]
 
     def matrix_arg(self, call, no, transpose=False):
         vals = call[2][0][1]
         if not isinstance(vals, (list, tuple)) or len(vals) != 16:
             fail_call(no, f"{call[1]}: the matrix does not have 16 numbers")
-        m = np.array([number(v, no, "a matrix element") for v in vals], dtype=np.float64).reshape(4, 4)
+        vals = self.matrix_numbers(vals, no, "a matrix element")
+        if vals is None:
+            return None
+        m = np.array(vals, dtype=np.float64).reshape(4, 4)
         return m if transpose else m.T   # GL matrices are column-major
 
     def h_matrix_mode(self, no, name, a, args):
@@ -46,19 +59,30 @@ class TransformCalls:
         self.set_cur(np.identity(4), no)
 
     def h_load_matrix(self, no, name, a, args):
-        self.set_cur(self.matrix_arg((no, name, args), no, transpose="Transpose" in name), no)
+        m = self.matrix_arg((no, name, args), no, transpose="Transpose" in name)
+        if m is not None:
+            self.set_cur(m, no)
 
     def h_mult_matrix(self, no, name, a, args):
-        self.set_cur(mat_mul(self.cur(), self.matrix_arg((no, name, args), no, transpose="Transpose" in name)), no)
+        m = self.matrix_arg((no, name, args), no, transpose="Transpose" in name)
+        if m is not None:
+            self.set_cur(mat_mul(self.cur(), m), no)
 
     def h_translate(self, no, name, a, args):
-        self.set_cur(mat_mul(self.cur(), mat_translate(*[number(x, no, "an offset") for x in a[:3]])), no)
+        v = self.matrix_numbers(a[:3], no, "an offset")
+        if v is not None:
+            self.set_cur(mat_mul(self.cur(), mat_translate(*v)), no)
 
     def h_scale(self, no, name, a, args):
-        self.set_cur(mat_mul(self.cur(), mat_scale(*[number(x, no, "a scale") for x in a[:3]])), no)
+        v = self.matrix_numbers(a[:3], no, "a scale")
+        if v is not None:
+            self.set_cur(mat_mul(self.cur(), mat_scale(*v)), no)
 
     def h_rotate(self, no, name, a, args):
-        angle, x, y, z = [number(v, no, "a rotation") for v in a[:4]]
+        v = self.matrix_numbers(a[:4], no, "a rotation")
+        if v is None:
+            return
+        angle, x, y, z = v
         if sum(v != 0.0 for v in (x, y, z)) > 1:
             # An axis off the coordinate axes is normalised in single
             # precision (Mesa's _math_matrix_rotate): one of length 1e-4 or
@@ -77,13 +101,19 @@ class TransformCalls:
         self.set_cur(mat_mul(self.cur(), mat_rotate(angle, x, y, z)), no)
 
     def h_ortho(self, no, name, a, args):
-        l, r, b, t, n, f = [number(x, no, "a bound") for x in a[:6]]
+        v = self.matrix_numbers(a[:6], no, "a bound")
+        if v is None:
+            return
+        l, r, b, t, n, f = v
         if l == r or b == t or n == f:
             return   # GL_INVALID_VALUE: the call does nothing
         self.set_cur(mat_mul(self.cur(), mat_ortho(l, r, b, t, n, f)), no)
 
     def h_frustum(self, no, name, a, args):
-        l, r, b, t, n, f = [number(x, no, "a bound") for x in a[:6]]
+        v = self.matrix_numbers(a[:6], no, "a bound")
+        if v is None:
+            return
+        l, r, b, t, n, f = v
         if n <= 0 or f <= 0 or l == r or b == t or n == f:
             return   # GL_INVALID_VALUE: the call does nothing
         self.set_cur(mat_mul(self.cur(), mat_frustum(l, r, b, t, n, f)), no)

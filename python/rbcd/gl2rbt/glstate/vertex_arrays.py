@@ -1,7 +1,7 @@
 """The fixed-function vertex array: where a GL 1.x draw's positions come from."""
 import numpy as np
 
-from ...cli import I32, integer
+from ...cli import I32, U63, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import ARRAY_TYPES, INDEX_TYPES
 from . import enum_arg
@@ -10,6 +10,8 @@ from . import enum_arg
 VERTEX_POINTER_TYPES = {"GL_SHORT", "GL_INT", "GL_FLOAT", "GL_DOUBLE", "GL_HALF_FLOAT", "GL_INT_2_10_10_10_REV",
                         "GL_UNSIGNED_INT_2_10_10_10_REV"}
 VERTEX_POINTER_TYPES_ES = {"GL_BYTE", "GL_SHORT", "GL_FLOAT", "GL_FIXED"}
+# OpenGL ES 1's GL_FIXED: 32-bit integers of 16.16 fixed point.
+FIXED_SCALE = 1.0 / 65536.0
 
 
 class VertexArrayCalls:
@@ -18,9 +20,10 @@ class VertexArrayCalls:
     # ---- vertex data
     def array_values(self, arr, first, count, no):
         """(count, 4) float64 positions of vertices first .. first+count-1."""
-        if arr.type not in ARRAY_TYPES or arr.size not in (2, 3, 4):
+        fixed = arr.type == "GL_FIXED"
+        if (arr.type not in ARRAY_TYPES and not fixed) or arr.size not in (2, 3, 4):
             fail_call(no, f"vertex array of {arr.size} x {printable(arr.type)} is not emulated")
-        dt = np.dtype(ARRAY_TYPES[arr.type])
+        dt = np.dtype("<i4" if fixed else ARRAY_TYPES[arr.type])
         elem = dt.itemsize * arr.size
         stride = arr.stride or elem
         if arr.buffer:
@@ -47,7 +50,7 @@ class VertexArrayCalls:
                 .reshape(count, arr.size)
         out = np.zeros((count, 4))
         out[:, 3] = 1.0
-        out[:, :arr.size] = v
+        out[:, :arr.size] = v * FIXED_SCALE if fixed else v
         return out
 
     def index_values(self, type_, indices, count, no):
@@ -59,7 +62,8 @@ class VertexArrayCalls:
             buf = self.s.buffers.get(eb)
             if buf is None:
                 fail_call(no, f"the element array buffer {eb} holds no data")
-            off = int(indices) if isinstance(indices, int) else 0
+            # An offset into the element buffer: what a pointer holds.
+            off = checked(no, integer, 0 if indices is None else indices, "the index buffer offset", *U63)
             data = buf
         else:
             if not isinstance(indices, (bytes, bytearray)):
@@ -73,6 +77,9 @@ class VertexArrayCalls:
     def h_client_state(self, no, name, a, args):
         if a[0] == "GL_VERTEX_ARRAY":
             self.s.vertex_array_enabled = name.startswith("glEnable")
+        elif a[0] == "GL_PRIMITIVE_RESTART_NV":
+            # NV_primitive_restart's switch: GL_PRIMITIVE_RESTART's state in Mesa.
+            self.s.restart = name.startswith("glEnable")
 
     def h_vertex_pointer(self, no, name, a, args):
         d = dict(args)
@@ -94,7 +101,9 @@ class VertexArrayCalls:
         p = d.get("pointer")
         arr.buffer = self.s.bound["GL_ARRAY_BUFFER"]
         if arr.buffer:
-            arr.offset, arr.data = int(p or 0), None
+            # An offset into the buffer: what a pointer holds.
+            arr.offset = checked(no, integer, 0 if p is None else p, f"{name}: the buffer offset", *U63)
+            arr.data = None
         else:
             arr.offset = 0
             arr.data = p if isinstance(p, (bytes, bytearray)) else None
