@@ -17,7 +17,9 @@ std::uint64_t FragmentPipe::walk_tile_cut_at_c(const Tile& tile, std::uint64_t& 
     // it, and loaded back. A short run stepped here leaves the regime's
     // record behind.
     const auto shade_run_here = [&](std::uint64_t m) {
-        if (!orbit_ && (m < kLongRun || stepwise)) {
+        if (m == 0) return;
+        if (m < kLongRun || stepwise) {
+            orbit_ = false;
             shade_in(r, rate, m);
             return;
         }

@@ -88,7 +88,9 @@ public:
     // began. Its cost does not grow with the run's length.
     //
     // The regime outlives the run. Until something else changes the pipe
-    // (push(), restart(), another cost), setups or c fragments between two
+    // (a run too short to jump, which is stepped and clears the record:
+    // keeping it through such runs returned under 5% on game frames;
+    // push(), restart(), another cost), setups or c fragments between two
     // runs move only the rasterizer's clock. In a shader-bound pipe (game
     // frames keep it so) the processors, not the clock, decide when the next
     // fragments are dispatched: the run's fragments are stepped beside the
@@ -99,13 +101,12 @@ public:
     // within a block, and the run is verified afresh.
     [[gnu::always_inline]] std::uint64_t shade_run(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
         if (stepwise) return shade(t, used, rate, m);
-        std::uint64_t wait = 0;
-        if (orbit_ && m) {
-            m -= rejoin(t, used, rate, m, wait);
-            if (orbit_) return m ? wait + shade_on_orbit(t, used, rate, m) : wait;
+        if (m < kLongRun) {
+            orbit_ &= m == 0;
+            return step(t, used, rate, m);
         }
-        if (m < kLongRun) return wait + step(t, used, rate, m);
-        return wait + shade_long(t, used, rate, m);
+        if (orbit_) return shade_from_regime(t, used, rate, m);
+        return shade_long(t, used, rate, m);
     }
     static constexpr std::uint64_t kLongRun = 48;
     // Every run fragment by fragment: the reference the bulk runs are tested
@@ -196,6 +197,15 @@ private:
         const std::uint64_t wait = shade_in(r, rate, m);
         store(r, t_io, used_io);
         return wait;
+    }
+    // shade_run() of a run after one that left the regime recorded. Out of
+    // line: the walks that inline shade_run() keep their loops small.
+    [[gnu::noinline]] std::uint64_t shade_from_regime(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
+        std::uint64_t wait = 0;
+        m -= rejoin(t, used, rate, m, wait);
+        if (orbit_) return m ? wait + shade_on_orbit(t, used, rate, m) : wait;
+        if (m < kLongRun) return wait + step(t, used, rate, m);
+        return wait + shade_long(t, used, rate, m);
     }
     // Steps the run's fragments from clock (t, used) beside the clock the
     // regime would have had, (orbit_t_, orbit_used_), while the two differ;
