@@ -224,25 +224,8 @@ private:
                 return k;
             }
             const std::uint64_t room = slot_free_[qi_];
-            if (gu == rate) {
-                ++gt;
-                gu = 0;
-            }
-            if (room > gt) {
-                gt = room;
-                gu = 0;
-            }
-            ++gu;
-            if (used == rate) {
-                ++t;
-                used = 0;
-            }
-            if (room > t) {
-                wait += room - t;
-                t = room;
-                used = 0;
-            }
-            ++used;
+            enter(gt, gu, rate, room);
+            wait += enter(t, used, rate, room);
             const std::uint64_t s = std::max(t + ez_, proc_free_[pi_]);
             orbit_ = s == std::max(gt + ez_, proc_free_[pi_]);
             proc_free_[pi_] = s + c_;
@@ -272,6 +255,24 @@ private:
         orbit_used_ = used;
         return wait;
     }
+    // The rasterizer's clock (t, used) as the next fragment enters the
+    // queue, whose slot frees at `room`: the rasterizer's next slot, or the
+    // slot's freeing if later. Returns the cycles it waited.
+    [[gnu::always_inline]] static std::uint64_t enter(std::uint64_t& t, unsigned& used, unsigned rate,
+                                                      std::uint64_t room) {
+        if (used == rate) {
+            ++t;
+            used = 0;
+        }
+        if (room <= t) {
+            ++used;
+            return 0;
+        }
+        const std::uint64_t wait = room - t;
+        t = room;
+        used = 1;
+        return wait;
+    }
     // shade()'s loop on that state; shade() and walk_tile_cut_at_c() load it
     // once and store it once around as many runs as they have.
     [[gnu::always_inline]] std::uint64_t shade_in(Regs& r, unsigned rate, std::uint64_t m) {
@@ -280,17 +281,7 @@ private:
         std::uint64_t* const slot_free = slot_free_.data();
         std::uint64_t* const proc_free = proc_free_.data();
         for (std::uint64_t k = 0; k < m; ++k) {
-            if (used == rate) {
-                ++t;
-                used = 0;
-            }
-            const std::uint64_t room = slot_free[qi];
-            if (room > t) {
-                wait += room - t;
-                t = room;
-                used = 0;
-            }
-            ++used;
+            wait += enter(t, used, rate, slot_free[qi]);
             const std::uint64_t s = std::max(t + ez_, proc_free[pi]);
             proc_free[pi] = s + c_;
             slot_free[qi] = s;
