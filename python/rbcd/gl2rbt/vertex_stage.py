@@ -282,11 +282,21 @@ class VertexStage:
         from OpenGL.error import GLError
         GL = self.gl
         for (target, index), (buf, offset, size) in conv.s.indexed.items():
-            if target not in ("GL_UNIFORM_BUFFER", "GL_SHADER_STORAGE_BUFFER") or not buf:
+            if target not in ("GL_UNIFORM_BUFFER", "GL_SHADER_STORAGE_BUFFER"):
                 continue
-            mb = self.buffer(conv, buf)
+            if buf in conv.s.buffers and size is not None and not 0 <= offset <= len(conv.s.buffers[buf]):
+                # Mesa binds a range that starts outside its buffer and
+                # takes the lesser of its size and the buffer's size less
+                # the offset (unsigned, wrapped): it reads memory outside
+                # the buffer, which GL does not define.
+                fail_call(self.no, f"{target} binding {index} starts at {offset}, outside buffer {buf} "
+                          f"({len(conv.s.buffers[buf])} bytes): what Mesa reads there is not defined")
+            # 0: unbound since an earlier draw bound it here, or a buffer
+            # with no data store yet, which a shader reads as zeros as it
+            # reads an unbound block (and a program of no blocks not at all).
+            mb = self.buffer(conv, buf) if buf in conv.s.buffers else 0
             try:
-                if size is None:
+                if size is None or not buf:
                     GL.glBindBufferBase(self.mesa.enum(target), index, mb)
                 else:
                     GL.glBindBufferRange(self.mesa.enum(target), index, mb, offset, size)
