@@ -959,3 +959,49 @@ def test_uniform_buffer_bindings_as_mesa_keeps_them(tmp_path):
     c = shader_calls(VS).add("glGenBuffers", n=1, buffers=[9])
     c.add("glBindBufferBase", target="GL_UNIFORM_BUFFER", index=3, buffer=9)
     assert fragments(tmp_path, shader_draw(c, vao=7).write(tmp_path / "c.xz")) == [still]
+
+
+VS_TEXEL = ("#version 330 core\nin vec3 p;\nuniform samplerBuffer t;\n"
+            "void main() { gl_Position = vec4(p.x / 32.0 - 1.0 + texelFetch(t, 0).x, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+
+
+def texel_draw(*calls):
+    """The triangle moved right by texelFetch(t, 0).x of a texture buffer
+    whose buffer holds 1.5 at 0 (half of it off screen), after `calls`
+    (glTexBuffer or glTexBufferRange of texture 4)."""
+    c = shader_calls(VS_TEXEL)
+    c.add("glGenBuffers", n=1, buffers=[9]).add("glBindBuffer", target="GL_TEXTURE_BUFFER", buffer=9)
+    c.add("glBufferData", target="GL_TEXTURE_BUFFER", size=32, data=np.float32([1.5] + [0] * 7).tobytes(),
+          usage="GL_STATIC_DRAW")
+    c.add("glGenTextures", n=1, textures=[4]).add("glBindTexture", target="GL_TEXTURE_BUFFER", texture=4)
+    for fn, kw in calls:
+        c.add(fn, target="GL_TEXTURE_BUFFER", **kw)
+    c.add("glGetUniformLocation", program=2, name="t", ret=0).add("glUniform1i", location=0, v0=0)
+    return shader_draw(c, vao=7)
+
+
+def test_texture_buffers_as_mesa_takes_them(tmp_path):
+    """glTexBuffer and glTexBufferRange calls Mesa 22.3 answers with
+    GL_INVALID_VALUE or GL_INVALID_ENUM change nothing, and the draw reads
+    what the texture had (they had reached Mesa at the draw, whose error
+    dropped the draw: 0 fragments); a buffer of 0 or of no data store
+    detaches (it was 'reads buffer 0, which holds no data'); an offset or
+    size that is no 64-bit integer is named (NaN was 'internal error:
+    ArgumentError', exit 1; 2^70 converted)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    moved, still = 354, 630
+    whole = ("glTexBuffer", dict(internalformat="GL_R32F", buffer=9))
+    def rng(offset=0, size=16, fmt="GL_R32F", buf=9):
+        return ("glTexBufferRange", dict(internalformat=fmt, buffer=buf, offset=offset, size=size))
+    for calls, frags in [([whole], moved), ([rng()], moved), ([rng(offset=4)], still), ([whole, rng(offset=4)], moved),
+                         ([whole, rng(offset=-16)], moved), ([whole, rng(size=0)], moved),
+                         ([whole, rng(offset=16, size=32)], moved), ([rng(fmt="GL_DEPTH_COMPONENT24")], still),
+                         ([whole, rng(fmt="GL_LUMINANCE8")], moved), ([whole, rng(fmt=0x8229)], moved),
+                         ([whole, ("glTexBuffer", dict(internalformat="GL_R32F", buffer=0))], still)]:
+        assert fragments(tmp_path, texel_draw(*calls).write(tmp_path / "a.xz")) == [frags], calls
+    for value, words in [(float("nan"), "the offset: nan is not an integer"),
+                         (1 << 70, "the offset: 1180591620717411303424 is outside")]:
+        c = texel_draw(rng(offset=value))
+        refused(gl2rbt(tmp_path, c.write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"), "b.xz", "glTexBufferRange",
+                words)
+        assert left_behind(tmp_path, ["a.xz", "b.xz", "s.rbt", "s.jsonl"]) == []

@@ -303,18 +303,22 @@ class VertexStage:
             except GLError:
                 pass   # past Mesa's binding points, or a range it refuses: GL ignores the capture's call
         for (unit, target), tex in conv.s.units.items():
-            if target != "GL_TEXTURE_BUFFER" or tex not in conv.s.texture_buffers:
+            if target != "GL_TEXTURE_BUFFER" or not tex:
                 continue
-            fmt, buf, offset, size = conv.s.texture_buffers[tex]
             mt = self.textures.get(tex)
             if mt is None:
                 mt = self.textures[tex] = int(GL.glGenTextures(1))
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
             GL.glBindTexture(GL.GL_TEXTURE_BUFFER, mt)
-            if size is None:
-                GL.glTexBuffer(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), self.buffer(conv, buf))
+            if tex not in conv.s.texture_buffers:
+                continue   # bound with no buffer yet (GL leaves its reads undefined): Mesa's as the capture's
+            fmt, buf, offset, size = conv.s.texture_buffers[tex]
+            # A buffer of no data store yet (or 0, none) is read as none.
+            mb = self.buffer(conv, buf) if buf in conv.s.buffers else 0
+            if size is None or not mb:
+                GL.glTexBuffer(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb)
             else:
-                GL.glTexBufferRange(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), self.buffer(conv, buf), offset, size)
+                GL.glTexBufferRange(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb, offset, size)
         GL.glActiveTexture(GL.GL_TEXTURE0)
         if not self.mesa.es:
             (GL.glEnable if conv.s.restart else GL.glDisable)(GL.GL_PRIMITIVE_RESTART)

@@ -12,8 +12,16 @@ import re
 
 from ...cli import U32, integer
 from ..errors import checked, fail_call, printable
+from .buffers import I64
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
+# The internal formats glTexBuffer takes in Mesa 22.3 (GL 4.5's table 8.18);
+# a compatibility context also the legacy ones. Another is GL_INVALID_ENUM.
+TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}{t}" for c in ("R", "RG", "RGBA") for b, ts in
+                          (("8", ("", "I", "UI")), ("16", ("", "F", "I", "UI")), ("32", ("F", "I", "UI")))
+                          for t in ts} | {"GL_RGB32F", "GL_RGB32I", "GL_RGB32UI"}
+LEGACY_TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}" for c in ("ALPHA", "INTENSITY", "LUMINANCE") for b in ("8", "16")} \
+    | {"GL_LUMINANCE8_ALPHA8", "GL_LUMINANCE16_ALPHA16"}
 # A texture image's digest as a reduced capture carries it in place of the
 # pixels: ("rbcd-digest", 16 lower-case hex digits).
 DIGEST_TAG = "rbcd-digest"
@@ -146,9 +154,27 @@ class FramebufferCalls:
         d = dict(args)
         tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
         buf, fmt = d.get("buffer"), d.get("internalformat")
-        if not tex or not isinstance(buf, int) or buf < 0:
+        if not tex or not isinstance(buf, int) or isinstance(buf, bool) or buf < 0:
             fail_call(no, f"{name}: no texture bound, or an impossible buffer")
-        self.s.texture_buffers[tex] = (fmt, buf, d.get("offset", 0), d.get("size"))
+        buf = checked(no, integer, buf, f"{name}: the buffer", *U32)
+        offset, size = d.get("offset", 0), d.get("size")
+        if name == "glTexBufferRange":
+            offset = checked(no, integer, offset, f"{name}: the offset", *I64)
+            size = checked(no, integer, size, f"{name}: the size", *I64)
+        if not isinstance(fmt, str) or fmt not in TEXTURE_BUFFER_FORMATS and (self.core or fmt not in
+                                                                      LEGACY_TEXTURE_BUFFER_FORMATS):
+            return   # GL_INVALID_ENUM: the call changes nothing
+        # Mesa's GL_INVALID_VALUE and GL_INVALID_OPERATION (GL 4.5, 8.1):
+        # a range of a buffer at a negative offset or one not a multiple of
+        # 16 (GL_TEXTURE_BUFFER_OFFSET_ALIGNMENT in llvmpipe), of no bytes,
+        # or past the buffer's size as it is now; a name that is no buffer.
+        # The texture keeps what it had.
+        if size is not None and buf and (offset < 0 or offset % 16 or size <= 0
+                                         or offset + size > len(self.s.buffers.get(buf, b""))):
+            return
+        if not self.generated(buf):
+            return
+        self.s.texture_buffers[tex] = (fmt, buf, offset, size)
 
     def h_delete_framebuffers(self, no, name, a, args):
         for fb in dict(args).get("framebuffers") or []:
