@@ -1005,3 +1005,28 @@ def test_texture_buffers_as_mesa_takes_them(tmp_path):
         refused(gl2rbt(tmp_path, c.write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"), "b.xz", "glTexBufferRange",
                 words)
         assert left_behind(tmp_path, ["a.xz", "b.xz", "s.rbt", "s.jsonl"]) == []
+
+
+def test_draws_in_one_context(tmp_path):
+    """The converter keeps one context's state: a capture that draws in a
+    second context is refused (the two were merged: 2 triangles, one of
+    them drawn with the other context's state), and so is a draw with no
+    context current (GL draws nothing; it was drawn). A first context made
+    current, released and followed by a second that draws, as the game
+    entries' captures do, converts."""
+    def ctx(n):
+        return ("glXMakeCurrent", dict(dpy=1, drawable=2, ctx=n, ret=1))
+    def capture(*steps):
+        c = Calls()
+        for step in steps:
+            if step == "draw":
+                c.triangle(5)
+            else:
+                c.add(step[0], **step[1])
+        return c.swap()
+    refused(gl2rbt(tmp_path, capture(ctx(7), "draw", ctx(8), "draw").write(tmp_path / "a.xz"), "-o", tmp_path / "a.rbt"),
+            "a.xz", "a draw in GL context 8 after draws in 7")
+    refused(gl2rbt(tmp_path, capture(ctx(7), ctx(0), "draw").write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"),
+            "b.xz", "a draw with no GL context current")
+    assert left_behind(tmp_path, ["a.xz", "b.xz"]) == []
+    assert fragments(tmp_path, capture(ctx(7), ctx(0), ctx(8), "draw").write(tmp_path / "c.xz")) == [630]
