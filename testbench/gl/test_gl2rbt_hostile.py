@@ -1030,3 +1030,33 @@ def test_draws_in_one_context(tmp_path):
             "b.xz", "a draw with no GL context current")
     assert left_behind(tmp_path, ["a.xz", "b.xz"]) == []
     assert fragments(tmp_path, capture(ctx(7), ctx(0), ctx(8), "draw").write(tmp_path / "c.xz")) == [630]
+
+
+def test_a_depth_attachment_has_its_levels_size(tmp_path):
+    """A depth texture attached at a level other than 0 has that level's
+    size (glTexImage2D's of the level, or glTexStorage2D's halving), and
+    none when the level has no image (the framebuffer is incomplete and
+    draws nothing): the pass is the camera's only at the screen's size (the
+    level was passed over, level 0's size taken: a 32 x 24 level of a
+    64 x 48 texture was the camera pass). A level that is no integer is
+    named."""
+    def fbo(level, *tex):
+        c = Calls()
+        c.add("glGenFramebuffers", n=1, framebuffers=[3]).add("glBindFramebuffer", target="GL_FRAMEBUFFER",
+                                                               framebuffer=3)
+        c.add("glBindTexture", target="GL_TEXTURE_2D", texture=9)
+        for fn, kw in tex:
+            c.add(fn, target="GL_TEXTURE_2D", **kw)
+        c.add("glFramebufferTexture2D", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+              textarget="GL_TEXTURE_2D", texture=9, level=level)
+        return c.triangle(5).swap()
+    def img(level, w, h):
+        return ("glTexImage2D", dict(level=level, internalformat="GL_DEPTH_COMPONENT24", width=w, height=h, border=0,
+                                     format="GL_DEPTH_COMPONENT", type="GL_UNSIGNED_INT", pixels=None))
+    storage = ("glTexStorage2D", dict(levels=3, internalformat="GL_DEPTH_COMPONENT24", width=128, height=96))
+    for level, tex, frags in [(0, [img(0, 64, 48)], 630), (1, [img(0, 64, 48)], 0),
+                              (1, [img(0, 64, 48), img(1, 32, 24)], 0), (1, [img(0, 128, 96), img(1, 64, 48)], 630),
+                              (1, [storage], 630), (3, [storage], 0)]:
+        assert fragments(tmp_path, fbo(level, *tex).write(tmp_path / "a.xz")) == [frags], (level, tex)
+    refused(gl2rbt(tmp_path, fbo("x", img(0, 64, 48)).write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"), "b.xz",
+            "glFramebufferTexture2D: the level: 'x' is not an integer")

@@ -70,7 +70,13 @@ class FramebufferCalls:
         if d.get("attachment") in DEPTH_ATTACHMENTS and self.s.draw_fbo:
             kind = "renderbuffer" if "Renderbuffer" in name else "texture"
             obj = d.get("renderbuffer" if kind == "renderbuffer" else "texture")
-            self.s.fbo_depth[self.s.draw_fbo] = (kind, obj) if obj else None
+            level = checked(no, integer, d.get("level", 0), f"{name}: the level", -(1 << 31), (1 << 31) - 1) \
+                if kind == "texture" else 0
+            if level < 0:
+                return   # GL_INVALID_VALUE: the attachment stays
+            # A texture's level other than 0 has that level's size (or none
+            # given: the framebuffer is incomplete and draws nothing there).
+            self.s.fbo_depth[self.s.draw_fbo] = None if not obj else (kind, obj) if level == 0 else (kind, obj, level)
 
     def h_renderbuffer_storage(self, no, name, a, args):
         d = dict(args)
@@ -87,10 +93,18 @@ class FramebufferCalls:
         and the digest of its image (what rules name it by)."""
         d = dict(args)
         w, h = d.get("width"), d.get("height", 1)
-        if d.get("level", 0) == 0 and isinstance(w, int) and isinstance(h, int):
+        level = d.get("level", 0)
+        if level == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
             self.s.sizes[("texture", tex)] = (w, h)
             self.s.texture_images[tex] = texture_image_digest(d)
+            levels = d.get("levels")
+            if isinstance(levels, int) and not isinstance(levels, bool):   # glTexStorage2D: the levels below
+                for i in range(1, min(levels, 32)):
+                    self.s.sizes[("texture", tex, i)] = (max(1, w >> i), max(1, h >> i))
+        elif isinstance(level, int) and isinstance(w, int) and isinstance(h, int):
+            tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+            self.s.sizes[("texture", tex, level)] = (w, h)   # a framebuffer attachment of that level
 
     def h_tex_sub_image(self, no, name, a, args):
         """glTexSubImage2D and glCompressedTexSubImage2D of a whole level 0 (the
