@@ -1060,3 +1060,26 @@ def test_a_depth_attachment_has_its_levels_size(tmp_path):
         assert fragments(tmp_path, fbo(level, *tex).write(tmp_path / "a.xz")) == [frags], (level, tex)
     refused(gl2rbt(tmp_path, fbo("x", img(0, 64, 48)).write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"), "b.xz",
             "glFramebufferTexture2D: the level: 'x' is not an integer")
+
+
+@pytest.mark.parametrize("call", [
+    ("glVertexAttribIPointer", dict(size=3, type="GL_FLOAT")),
+    ("glVertexAttribPointer", dict(size=3, type=0x1234, normalized="GL_FALSE")),
+    ("glVertexAttribPointer", dict(size="GL_BGRA", type="GL_FLOAT", normalized="GL_TRUE")),
+    ("glVertexAttribPointer", dict(size=3, type="GL_INT_2_10_10_10_REV", normalized="GL_TRUE")),
+], ids=["integer_of_float", "unknown_type", "bgra_of_float", "packed_of_three"])
+def test_an_attribute_format_mesa_refuses_keeps_the_earlier_pointer(tmp_path, call):
+    """glVertexAttribPointer and glVertexAttribIPointer of a type or size
+    Mesa 22.3 refuses change nothing there: the draw reads the pointer set
+    before (the converter had taken the call, Mesa then refused the draw
+    and nothing was drawn, exit 0)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    fn, kw = call
+    c = shader_calls(VS)
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add(fn, index=0, stride=0, pointer=0, **kw)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+    assert fragments(tmp_path, c.swap().write(tmp_path / "a.xz")) == [630]
