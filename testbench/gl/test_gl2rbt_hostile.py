@@ -893,3 +893,193 @@ def test_compatibility_calls_in_a_core_profile(tmp_path):
                                       ("glNewList", dict(list=1, mode="GL_COMPILE")),
                                       ("glBegin", dict(mode="GL_TRIANGLES")),
                                       ("glDrawArrays", dict(mode="GL_TRIANGLES", first=0, count=3))), "core") == nothing
+
+
+VS_BLOCK = ("#version 330 core\nin vec3 p;\nlayout(std140) uniform B { vec4 off; };\n"
+            "void main() { gl_Position = vec4(p.x / 32.0 - 1.0 + off.x, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+
+
+def block_draws(*between, size=64, before=()):
+    """The triangle moved right by off.x = 1.5 (48 pixels, half of it off
+    screen) from a uniform buffer bound at 0, the calls `before`, drawn; the
+    calls `between`; drawn again (object 6)."""
+    c = shader_calls(VS_BLOCK)
+    c.add("glGetUniformBlockIndex", program=2, uniformBlockName="B", ret=0)
+    c.add("glUniformBlockBinding", program=2, uniformBlockIndex=0, uniformBlockBinding=0)
+    c.add("glGenBuffers", n=1, buffers=[9]).add("glBindBuffer", target="GL_UNIFORM_BUFFER", buffer=9)
+    c.add("glBufferData", target="GL_UNIFORM_BUFFER", size=size, data=np.float32([1.5] + [0] * (size // 4 - 1)).tobytes(),
+          usage="GL_STATIC_DRAW")
+    c.add("glBindBufferBase", target="GL_UNIFORM_BUFFER", index=0, buffer=9)
+    for fn, kw in before:
+        c.add(fn, **kw)
+    shader_draw(c, vao=7).calls.pop()   # its swap
+    for fn, kw in between:
+        c.add(fn, **kw)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=6, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+    return c.swap()
+
+
+def test_uniform_buffer_bindings_as_mesa_keeps_them(tmp_path):
+    """What Mesa 22.3 (llvmpipe) does with a uniform buffer binding between
+    two draws: a range at an offset not a multiple of 16, or at binding 90
+    and past, is GL_INVALID_VALUE and the earlier bindings stay (the
+    converter had bound the range, and the second draw read zeros; or bound
+    the generic target, which glBufferSubData then wrote);
+    unbinding (glBindBufferBase of 0, glBindBufferRange of 0 with size 0)
+    and deleting the buffer leave the block reading zeros (Mesa's copy had
+    kept the first draw's binding); a range starting outside the buffer,
+    which Mesa binds and reads memory outside the buffer through, is refused
+    at the draw (it converted, at random); a buffer with no data store bound
+    where the program reads none is no error (it was 'reads buffer 9, which
+    holds no data')."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    moved, still = 354, 630   # the second draw's fragments, moved or not
+    for between, second in [
+            ([], moved),
+            ([("glBindBufferRange", dict(target="GL_UNIFORM_BUFFER", index=0, buffer=9, offset=4, size=16))], moved),
+            ([("glBindBufferRange", dict(target="GL_UNIFORM_BUFFER", index=0, buffer=9, offset=16, size=16))], still),
+            ([("glBindBufferRange", dict(target="GL_UNIFORM_BUFFER", index=0, buffer=9, offset=32, size=64))], still),
+            ([("glBindBufferBase", dict(target="GL_UNIFORM_BUFFER", index=0, buffer=0))], still),
+            ([("glBindBufferRange", dict(target="GL_UNIFORM_BUFFER", index=0, buffer=0, offset=0, size=0))], still),
+            ([("glDeleteBuffers", dict(n=1, buffers=[9]))], still),
+            ([("glGenBuffers", dict(n=1, buffers=[10])), ("glBindBuffer", dict(target="GL_UNIFORM_BUFFER", buffer=9)),
+              ("glBindBufferRange", dict(target="GL_UNIFORM_BUFFER", index=95, buffer=10, offset=0, size=16)),
+              ("glBufferSubData", dict(target="GL_UNIFORM_BUFFER", offset=0, size=4, data=np.float32([0]).tobytes()))],
+             still)]:
+        assert fragments(tmp_path, block_draws(*between).write(tmp_path / "a.xz")) == [moved + second], between
+    unaligned = ("glBindBufferRange", dict(target="GL_UNIFORM_BUFFER", index=0, buffer=9, offset=4, size=16))
+    assert fragments(tmp_path, block_draws(before=[unaligned]).write(tmp_path / "a.xz")) == [2 * moved]
+    for offset in (-16, 128):
+        c = block_draws(("glBindBufferRange", dict(target="GL_UNIFORM_BUFFER", index=0, buffer=9, offset=offset,
+                                                   size=16)))
+        refused(gl2rbt(tmp_path, c.write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"), "b.xz",
+                f"GL_UNIFORM_BUFFER binding 0 starts at {offset}, outside buffer 9 (64 bytes)")
+        assert left_behind(tmp_path, ["a.xz", "b.xz", "s.rbt", "s.jsonl"]) == []
+    c = shader_calls(VS).add("glGenBuffers", n=1, buffers=[9])
+    c.add("glBindBufferBase", target="GL_UNIFORM_BUFFER", index=3, buffer=9)
+    assert fragments(tmp_path, shader_draw(c, vao=7).write(tmp_path / "c.xz")) == [still]
+
+
+VS_TEXEL = ("#version 330 core\nin vec3 p;\nuniform samplerBuffer t;\n"
+            "void main() { gl_Position = vec4(p.x / 32.0 - 1.0 + texelFetch(t, 0).x, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+
+
+def texel_draw(*calls):
+    """The triangle moved right by texelFetch(t, 0).x of a texture buffer
+    whose buffer holds 1.5 at 0 (half of it off screen), after `calls`
+    (glTexBuffer or glTexBufferRange of texture 4)."""
+    c = shader_calls(VS_TEXEL)
+    c.add("glGenBuffers", n=1, buffers=[9]).add("glBindBuffer", target="GL_TEXTURE_BUFFER", buffer=9)
+    c.add("glBufferData", target="GL_TEXTURE_BUFFER", size=32, data=np.float32([1.5] + [0] * 7).tobytes(),
+          usage="GL_STATIC_DRAW")
+    c.add("glGenTextures", n=1, textures=[4]).add("glBindTexture", target="GL_TEXTURE_BUFFER", texture=4)
+    for fn, kw in calls:
+        c.add(fn, target="GL_TEXTURE_BUFFER", **kw)
+    c.add("glGetUniformLocation", program=2, name="t", ret=0).add("glUniform1i", location=0, v0=0)
+    return shader_draw(c, vao=7)
+
+
+def test_texture_buffers_as_mesa_takes_them(tmp_path):
+    """glTexBuffer and glTexBufferRange calls Mesa 22.3 answers with
+    GL_INVALID_VALUE or GL_INVALID_ENUM change nothing, and the draw reads
+    what the texture had (they had reached Mesa at the draw, whose error
+    dropped the draw: 0 fragments); a buffer of 0 or of no data store
+    detaches (it was 'reads buffer 0, which holds no data'); an offset or
+    size that is no 64-bit integer is named (NaN was 'internal error:
+    ArgumentError', exit 1; 2^70 converted)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    moved, still = 354, 630
+    whole = ("glTexBuffer", dict(internalformat="GL_R32F", buffer=9))
+    def rng(offset=0, size=16, fmt="GL_R32F", buf=9):
+        return ("glTexBufferRange", dict(internalformat=fmt, buffer=buf, offset=offset, size=size))
+    for calls, frags in [([whole], moved), ([rng()], moved), ([rng(offset=4)], still), ([whole, rng(offset=4)], moved),
+                         ([whole, rng(offset=-16)], moved), ([whole, rng(size=0)], moved),
+                         ([whole, rng(offset=16, size=32)], moved), ([rng(fmt="GL_DEPTH_COMPONENT24")], still),
+                         ([whole, rng(fmt="GL_LUMINANCE8")], moved), ([whole, rng(fmt=0x8229)], moved),
+                         ([whole, ("glTexBuffer", dict(internalformat="GL_R32F", buffer=0))], still)]:
+        assert fragments(tmp_path, texel_draw(*calls).write(tmp_path / "a.xz")) == [frags], calls
+    for value, words in [(float("nan"), "the offset: nan is not an integer"),
+                         (1 << 70, "the offset: 1180591620717411303424 is outside")]:
+        c = texel_draw(rng(offset=value))
+        refused(gl2rbt(tmp_path, c.write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"), "b.xz", "glTexBufferRange",
+                words)
+        assert left_behind(tmp_path, ["a.xz", "b.xz", "s.rbt", "s.jsonl"]) == []
+
+
+def test_draws_in_one_context(tmp_path):
+    """The converter keeps one context's state: a capture that draws in a
+    second context is refused (the two were merged: 2 triangles, one of
+    them drawn with the other context's state), and so is a draw with no
+    context current (GL draws nothing; it was drawn). A first context made
+    current, released and followed by a second that draws, as the game
+    entries' captures do, converts."""
+    def ctx(n):
+        return ("glXMakeCurrent", dict(dpy=1, drawable=2, ctx=n, ret=1))
+    def capture(*steps):
+        c = Calls()
+        for step in steps:
+            if step == "draw":
+                c.triangle(5)
+            else:
+                c.add(step[0], **step[1])
+        return c.swap()
+    refused(gl2rbt(tmp_path, capture(ctx(7), "draw", ctx(8), "draw").write(tmp_path / "a.xz"), "-o", tmp_path / "a.rbt"),
+            "a.xz", "a draw in GL context 8 after draws in 7")
+    refused(gl2rbt(tmp_path, capture(ctx(7), ctx(0), "draw").write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"),
+            "b.xz", "a draw with no GL context current")
+    assert left_behind(tmp_path, ["a.xz", "b.xz"]) == []
+    assert fragments(tmp_path, capture(ctx(7), ctx(0), ctx(8), "draw").write(tmp_path / "c.xz")) == [630]
+
+
+def test_a_depth_attachment_has_its_levels_size(tmp_path):
+    """A depth texture attached at a level other than 0 has that level's
+    size (glTexImage2D's of the level, or glTexStorage2D's halving), and
+    none when the level has no image (the framebuffer is incomplete and
+    draws nothing): the pass is the camera's only at the screen's size (the
+    level was passed over, level 0's size taken: a 32 x 24 level of a
+    64 x 48 texture was the camera pass). A level that is no integer is
+    named."""
+    def fbo(level, *tex):
+        c = Calls()
+        c.add("glGenFramebuffers", n=1, framebuffers=[3]).add("glBindFramebuffer", target="GL_FRAMEBUFFER",
+                                                               framebuffer=3)
+        c.add("glBindTexture", target="GL_TEXTURE_2D", texture=9)
+        for fn, kw in tex:
+            c.add(fn, target="GL_TEXTURE_2D", **kw)
+        c.add("glFramebufferTexture2D", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+              textarget="GL_TEXTURE_2D", texture=9, level=level)
+        return c.triangle(5).swap()
+    def img(level, w, h):
+        return ("glTexImage2D", dict(level=level, internalformat="GL_DEPTH_COMPONENT24", width=w, height=h, border=0,
+                                     format="GL_DEPTH_COMPONENT", type="GL_UNSIGNED_INT", pixels=None))
+    storage = ("glTexStorage2D", dict(levels=3, internalformat="GL_DEPTH_COMPONENT24", width=128, height=96))
+    for level, tex, frags in [(0, [img(0, 64, 48)], 630), (1, [img(0, 64, 48)], 0),
+                              (1, [img(0, 64, 48), img(1, 32, 24)], 0), (1, [img(0, 128, 96), img(1, 64, 48)], 630),
+                              (1, [storage], 630), (3, [storage], 0)]:
+        assert fragments(tmp_path, fbo(level, *tex).write(tmp_path / "a.xz")) == [frags], (level, tex)
+    refused(gl2rbt(tmp_path, fbo("x", img(0, 64, 48)).write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"), "b.xz",
+            "glFramebufferTexture2D: the level: 'x' is not an integer")
+
+
+@pytest.mark.parametrize("call", [
+    ("glVertexAttribIPointer", dict(size=3, type="GL_FLOAT")),
+    ("glVertexAttribPointer", dict(size=3, type=0x1234, normalized="GL_FALSE")),
+    ("glVertexAttribPointer", dict(size="GL_BGRA", type="GL_FLOAT", normalized="GL_TRUE")),
+    ("glVertexAttribPointer", dict(size=3, type="GL_INT_2_10_10_10_REV", normalized="GL_TRUE")),
+], ids=["integer_of_float", "unknown_type", "bgra_of_float", "packed_of_three"])
+def test_an_attribute_format_mesa_refuses_keeps_the_earlier_pointer(tmp_path, call):
+    """glVertexAttribPointer and glVertexAttribIPointer of a type or size
+    Mesa 22.3 refuses change nothing there: the draw reads the pointer set
+    before (the converter had taken the call, Mesa then refused the draw
+    and nothing was drawn, exit 0)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    fn, kw = call
+    c = shader_calls(VS)
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add(fn, index=0, stride=0, pointer=0, **kw)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+    assert fragments(tmp_path, c.swap().write(tmp_path / "a.xz")) == [630]

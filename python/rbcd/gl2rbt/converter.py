@@ -55,6 +55,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.frame_view = None           # the frame's view matrix (the first perspective draw's model-view)
         self.screen = tuple(args.screen) if args.screen else None
         self.drawable = None             # the window's size, as apitrace records it at each MakeCurrent
+        self.context = None              # the context made current last (None: none named yet; 0: released)
+        self.draw_context = None         # the context the frames' draws were made in
         self.flags = 0                   # of the call being handled
         self.ret = None                  # its return value, as apitrace recorded it
         self.select = Selection(args.select) if args.select else None
@@ -118,7 +120,18 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         return self.first_frame <= frame and (self.last_frame is None or frame <= self.last_frame)
 
     def open_frame(self, no):
-        """Writes the frame's start record before its first record."""
+        """Writes the frame's start record before its first record. A record
+        comes from the context of the earlier ones: the converter keeps one
+        context's state, and a draw with none current does nothing in GL
+        (games make a first context current, release it, and draw in a
+        second; a capture that draws in two is refused, not merged)."""
+        if self.context == 0:
+            fail_call(no, "a draw with no GL context current (released by a MakeCurrent call)")
+        if self.draw_context is None:
+            self.draw_context = self.context
+        elif self.context != self.draw_context:
+            fail_call(no, f"a draw in GL context {printable(self.context)} after draws in "
+                      f"{printable(self.draw_context)}: each context's state is its own, not emulated")
         if self.frame_open:
             return
         self.write_header()
@@ -209,6 +222,14 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                                                     "EGL_CONTEXT_OPENGL_PROFILE_MASK",
                                                     "EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT")
 
+    def h_make_current(self, no, name, a, args):
+        """glXMakeCurrent, glXMakeContextCurrent, eglMakeCurrent and
+        wglMakeCurrent: the context their last argument names (0: none)."""
+        ctx = a[-1] if a else None
+        if not isinstance(ctx, int) or isinstance(ctx, bool):
+            fail_call(no, f"{printable(name)}: the context {printable(ctx, 40)} is not a handle")
+        self.context = ctx
+
     def h_glx_create_context(self, no, name, a, args):
         self.core = context_is_core(dict(args).get("attrib_list"), "GLX_CONTEXT_MAJOR_VERSION_ARB",
                                     "GLX_CONTEXT_MINOR_VERSION_ARB", "GLX_CONTEXT_PROFILE_MASK_ARB",
@@ -220,6 +241,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         "eglBindAPI": h_egl_bind_api,
         "eglCreateContext": h_egl_create_context,
         "glXCreateContextAttribs": h_glx_create_context,
+        "glXMakeCurrent": h_make_current,
+        "glXMakeContextCurrent": h_make_current,
+        "eglMakeCurrent": h_make_current,
+        "wglMakeCurrent": h_make_current,
     }
     # Calls that can change geometry or visibility in ways not emulated.
     REFUSED = {

@@ -282,29 +282,43 @@ class VertexStage:
         from OpenGL.error import GLError
         GL = self.gl
         for (target, index), (buf, offset, size) in conv.s.indexed.items():
-            if target not in ("GL_UNIFORM_BUFFER", "GL_SHADER_STORAGE_BUFFER") or not buf:
+            if target not in ("GL_UNIFORM_BUFFER", "GL_SHADER_STORAGE_BUFFER"):
                 continue
-            mb = self.buffer(conv, buf)
+            if buf in conv.s.buffers and size is not None and not 0 <= offset <= len(conv.s.buffers[buf]):
+                # Mesa binds a range that starts outside its buffer and
+                # takes the lesser of its size and the buffer's size less
+                # the offset (unsigned, wrapped): it reads memory outside
+                # the buffer, which GL does not define.
+                fail_call(self.no, f"{target} binding {index} starts at {offset}, outside buffer {buf} "
+                          f"({len(conv.s.buffers[buf])} bytes): what Mesa reads there is not defined")
+            # 0: unbound since an earlier draw bound it here, or a buffer
+            # with no data store yet, which a shader reads as zeros as it
+            # reads an unbound block (and a program of no blocks not at all).
+            mb = self.buffer(conv, buf) if buf in conv.s.buffers else 0
             try:
-                if size is None:
+                if size is None or not buf:
                     GL.glBindBufferBase(self.mesa.enum(target), index, mb)
                 else:
                     GL.glBindBufferRange(self.mesa.enum(target), index, mb, offset, size)
             except GLError:
                 pass   # past Mesa's binding points, or a range it refuses: GL ignores the capture's call
         for (unit, target), tex in conv.s.units.items():
-            if target != "GL_TEXTURE_BUFFER" or tex not in conv.s.texture_buffers:
+            if target != "GL_TEXTURE_BUFFER" or not tex:
                 continue
-            fmt, buf, offset, size = conv.s.texture_buffers[tex]
             mt = self.textures.get(tex)
             if mt is None:
                 mt = self.textures[tex] = int(GL.glGenTextures(1))
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
             GL.glBindTexture(GL.GL_TEXTURE_BUFFER, mt)
-            if size is None:
-                GL.glTexBuffer(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), self.buffer(conv, buf))
+            if tex not in conv.s.texture_buffers:
+                continue   # bound with no buffer yet (GL leaves its reads undefined): Mesa's as the capture's
+            fmt, buf, offset, size = conv.s.texture_buffers[tex]
+            # A buffer of no data store yet (or 0, none) is read as none.
+            mb = self.buffer(conv, buf) if buf in conv.s.buffers else 0
+            if size is None or not mb:
+                GL.glTexBuffer(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb)
             else:
-                GL.glTexBufferRange(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), self.buffer(conv, buf), offset, size)
+                GL.glTexBufferRange(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb, offset, size)
         GL.glActiveTexture(GL.GL_TEXTURE0)
         if not self.mesa.es:
             (GL.glEnable if conv.s.restart else GL.glDisable)(GL.GL_PRIMITIVE_RESTART)

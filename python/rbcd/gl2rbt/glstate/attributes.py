@@ -8,13 +8,39 @@ import numpy as np
 
 from ...cli import I32, U32, U63, integer
 from ..errors import checked, fail_call
-from ..gl_tables import ARRAY_TYPES, INDEX_TYPES
+from ..gl_tables import ARRAY_TYPES, INDEX_TYPES, base_name
 
 MAX_ATTRIBS = 32   # GL_MAX_VERTEX_ATTRIBS as Mesa (llvmpipe) answers it
 # Bytes a component of an attribute array (the packed formats: a quarter of
 # their four-component word).
 ATTRIB_SIZES = {t: np.dtype(v).itemsize for t, v in ARRAY_TYPES.items()} | {
     "GL_HALF_FLOAT_OES": 2, "GL_FIXED": 4, "GL_INT_2_10_10_10_REV": 1, "GL_UNSIGNED_INT_2_10_10_10_REV": 1}
+
+
+# The attribute types Mesa 22.3 takes (GL 4.5 and OpenGL ES 3.2, 10.3.1):
+# the integer ones for glVertexAttribIPointer; GL_BGRA only of
+# GL_UNSIGNED_BYTE and the packed 2_10_10_10 types, normalized; the packed
+# types of four components (or GL_BGRA), GL_UNSIGNED_INT_10F_11F_11F_REV of
+# three.
+INTEGER_ATTRIB_TYPES = {"GL_BYTE", "GL_UNSIGNED_BYTE", "GL_SHORT", "GL_UNSIGNED_SHORT", "GL_INT", "GL_UNSIGNED_INT"}
+PACKED_ATTRIB_TYPES = {"GL_INT_2_10_10_10_REV", "GL_UNSIGNED_INT_2_10_10_10_REV"}
+ATTRIB_TYPES = INTEGER_ATTRIB_TYPES | PACKED_ATTRIB_TYPES | {
+    "GL_FLOAT", "GL_DOUBLE", "GL_HALF_FLOAT", "GL_HALF_FLOAT_ARB", "GL_HALF_FLOAT_OES", "GL_FIXED",
+    "GL_UNSIGNED_INT_10F_11F_11F_REV"}
+
+
+def attrib_format_valid(name, size, kind, normalized):
+    """Whether glVertexAttribPointer or glVertexAttribIPointer of this size
+    and type is a call Mesa takes (the size is 1 to 4 or GL_BGRA)."""
+    if base_name(name) == "glVertexAttribIPointer":
+        return kind in INTEGER_ATTRIB_TYPES and size != "GL_BGRA"
+    if kind not in ATTRIB_TYPES:
+        return False
+    if size == "GL_BGRA":
+        return (kind == "GL_UNSIGNED_BYTE" or kind in PACKED_ATTRIB_TYPES) and normalized in ("GL_TRUE", True, 1)
+    if kind in PACKED_ATTRIB_TYPES:
+        return size == 4
+    return kind != "GL_UNSIGNED_INT_10F_11F_11F_REV" or size == 3
 
 
 class Attrib:
@@ -147,6 +173,8 @@ class AttributeCalls:
         stride = checked(no, integer, d.get("stride", 0), f"{name}: the stride", *I32)
         if i is None or not (size in (1, 2, 3, 4) or size == "GL_BGRA") or stride < 0:
             return   # GL_INVALID_VALUE: the call does nothing
+        if not attrib_format_valid(name, size, d.get("type"), d.get("normalized", "GL_FALSE")):
+            return   # GL_INVALID_ENUM, GL_INVALID_VALUE or GL_INVALID_OPERATION in Mesa: the earlier pointer stays
         at = self.current_vao().attrib(i)
         at.call, at.size, at.type, at.stride = name, size, d.get("type"), stride
         at.normalized = d.get("normalized", "GL_FALSE") in ("GL_TRUE", True, 1)

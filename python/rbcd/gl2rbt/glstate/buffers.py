@@ -16,6 +16,12 @@ I64 = (-(1 << 63), (1 << 63) - 1)
 STORAGE_BITS = {0x0040: "GL_MAP_PERSISTENT_BIT", 0x0100: "GL_DYNAMIC_STORAGE_BIT"}
 BUFFER_USAGES = {f"GL_{f}_{a}" for f in ("STREAM", "STATIC", "DYNAMIC") for a in ("DRAW", "READ", "COPY")}
 MAX_BINDINGS = 1024   # indexed binding points kept (llvmpipe has fewer: Mesa refuses the rest at a draw)
+# The binding points the shader path hands Mesa, as llvmpipe (Mesa 22.3)
+# defines them: how many (GL_MAX_*_BUFFER_BINDINGS) and the alignment of a
+# range's offset (GL_*_BUFFER_OFFSET_ALIGNMENT). A call past either is
+# GL_INVALID_VALUE there and changes nothing, neither the indexed binding
+# nor the generic one.
+SHADER_BINDINGS = {"GL_UNIFORM_BUFFER": (90, 16), "GL_SHADER_STORAGE_BUFFER": (80, 16)}
 from ..gl_tables import MAX_BUFFER_BYTES, MAX_BUFFER_BYTES_IN_ALL
 
 
@@ -122,7 +128,16 @@ class BufferCalls:
         size = d.get("size")
         if size is not None:
             size = checked(no, integer, size, f"{name}: the size", *I64)
-        if not is_buffer_target(target) or index >= MAX_BINDINGS or offset < 0 or (size is not None and size <= 0) \
+        if target in SHADER_BINDINGS:
+            # Mesa's checks, in its order: the index, a range's size (of a
+            # buffer, not of 0, which unbinds), the offset's alignment (of
+            # 0 too). A negative offset passes them: a draw that would read
+            # before the buffer is refused (vertex_stage).
+            count, align = SHADER_BINDINGS[target]
+            if index >= count or (size is not None and ((buf and size <= 0) or offset % align)) \
+                    or not self.generated(buf):
+                return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the earlier binding stays
+        elif not is_buffer_target(target) or index >= MAX_BINDINGS or offset < 0 or (size is not None and size <= 0) \
                 or not self.generated(buf):
             return   # GL_INVALID_ENUM, GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
         self.s.bound[target] = buf   # glBindBufferBase and Range also bind the generic target
@@ -307,7 +322,7 @@ class BufferCalls:
                         self.s.bound[t] = 0
                 for k, (v, _, _) in list(self.s.indexed.items()):
                     if v == b:
-                        del self.s.indexed[k]
+                        self.s.indexed[k] = (0, 0, None)   # unbound, also in Mesa's copy an earlier draw bound
 
     HANDLERS = {
         "glBindBuffer": h_bind_buffer,

@@ -12,8 +12,16 @@ import re
 
 from ...cli import U32, integer
 from ..errors import checked, fail_call, printable
+from .buffers import I64
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
+# The internal formats glTexBuffer takes in Mesa 22.3 (GL 4.5's table 8.18);
+# a compatibility context also the legacy ones. Another is GL_INVALID_ENUM.
+TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}{t}" for c in ("R", "RG", "RGBA") for b, ts in
+                          (("8", ("", "I", "UI")), ("16", ("", "F", "I", "UI")), ("32", ("F", "I", "UI")))
+                          for t in ts} | {"GL_RGB32F", "GL_RGB32I", "GL_RGB32UI"}
+LEGACY_TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}" for c in ("ALPHA", "INTENSITY", "LUMINANCE") for b in ("8", "16")} \
+    | {"GL_LUMINANCE8_ALPHA8", "GL_LUMINANCE16_ALPHA16"}
 # A texture image's digest as a reduced capture carries it in place of the
 # pixels: ("rbcd-digest", 16 lower-case hex digits).
 DIGEST_TAG = "rbcd-digest"
@@ -62,7 +70,13 @@ class FramebufferCalls:
         if d.get("attachment") in DEPTH_ATTACHMENTS and self.s.draw_fbo:
             kind = "renderbuffer" if "Renderbuffer" in name else "texture"
             obj = d.get("renderbuffer" if kind == "renderbuffer" else "texture")
-            self.s.fbo_depth[self.s.draw_fbo] = (kind, obj) if obj else None
+            level = checked(no, integer, d.get("level", 0), f"{name}: the level", -(1 << 31), (1 << 31) - 1) \
+                if kind == "texture" else 0
+            if level < 0:
+                return   # GL_INVALID_VALUE: the attachment stays
+            # A texture's level other than 0 has that level's size (or none
+            # given: the framebuffer is incomplete and draws nothing there).
+            self.s.fbo_depth[self.s.draw_fbo] = None if not obj else (kind, obj) if level == 0 else (kind, obj, level)
 
     def h_renderbuffer_storage(self, no, name, a, args):
         d = dict(args)
@@ -79,10 +93,18 @@ class FramebufferCalls:
         and the digest of its image (what rules name it by)."""
         d = dict(args)
         w, h = d.get("width"), d.get("height", 1)
-        if d.get("level", 0) == 0 and isinstance(w, int) and isinstance(h, int):
+        level = d.get("level", 0)
+        if level == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
             self.s.sizes[("texture", tex)] = (w, h)
             self.s.texture_images[tex] = texture_image_digest(d)
+            levels = d.get("levels")
+            if isinstance(levels, int) and not isinstance(levels, bool):   # glTexStorage2D: the levels below
+                for i in range(1, min(levels, 32)):
+                    self.s.sizes[("texture", tex, i)] = (max(1, w >> i), max(1, h >> i))
+        elif isinstance(level, int) and isinstance(w, int) and isinstance(h, int):
+            tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+            self.s.sizes[("texture", tex, level)] = (w, h)   # a framebuffer attachment of that level
 
     def h_tex_sub_image(self, no, name, a, args):
         """glTexSubImage2D and glCompressedTexSubImage2D of a whole level 0 (the
@@ -146,9 +168,27 @@ class FramebufferCalls:
         d = dict(args)
         tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
         buf, fmt = d.get("buffer"), d.get("internalformat")
-        if not tex or not isinstance(buf, int) or buf < 0:
+        if not tex or not isinstance(buf, int) or isinstance(buf, bool) or buf < 0:
             fail_call(no, f"{name}: no texture bound, or an impossible buffer")
-        self.s.texture_buffers[tex] = (fmt, buf, d.get("offset", 0), d.get("size"))
+        buf = checked(no, integer, buf, f"{name}: the buffer", *U32)
+        offset, size = d.get("offset", 0), d.get("size")
+        if name == "glTexBufferRange":
+            offset = checked(no, integer, offset, f"{name}: the offset", *I64)
+            size = checked(no, integer, size, f"{name}: the size", *I64)
+        if not isinstance(fmt, str) or fmt not in TEXTURE_BUFFER_FORMATS and (self.core or fmt not in
+                                                                      LEGACY_TEXTURE_BUFFER_FORMATS):
+            return   # GL_INVALID_ENUM: the call changes nothing
+        # Mesa's GL_INVALID_VALUE and GL_INVALID_OPERATION (GL 4.5, 8.1):
+        # a range of a buffer at a negative offset or one not a multiple of
+        # 16 (GL_TEXTURE_BUFFER_OFFSET_ALIGNMENT in llvmpipe), of no bytes,
+        # or past the buffer's size as it is now; a name that is no buffer.
+        # The texture keeps what it had.
+        if size is not None and buf and (offset < 0 or offset % 16 or size <= 0
+                                         or offset + size > len(self.s.buffers.get(buf, b""))):
+            return
+        if not self.generated(buf):
+            return
+        self.s.texture_buffers[tex] = (fmt, buf, offset, size)
 
     def h_delete_framebuffers(self, no, name, a, args):
         for fb in dict(args).get("framebuffers") or []:
