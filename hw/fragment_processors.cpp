@@ -19,7 +19,7 @@ std::uint64_t FragmentPipe::walk_tile_cut_at_c(const Tile& tile, std::uint64_t& 
     const auto shade_run_here = [&](std::uint64_t m) {
         if (m == 0) return;
         if (m < kLongRun || stepwise) {
-            orbit_ = false;
+            regime_.on = false;
             shade_in(r, rate, m);
             return;
         }

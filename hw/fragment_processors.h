@@ -47,7 +47,7 @@ public:
     // Frame barrier: an empty queue and idle processors from cycle t on.
     // (Slots and processors free "at 0" constrain nothing: every cycle is >= 0.)
     void restart(std::uint64_t t) {
-        orbit_ = false;
+        regime_.on = false;
         std::fill(slot_free_.begin(), slot_free_.end(), 0);
         std::fill(proc_free_.begin(), proc_free_.end(), 0);
         qi_ = pi_ = 0;
@@ -59,7 +59,7 @@ public:
     std::uint64_t slot_free_next() const { return slot_free_[qi_]; }
     // The next fragment enters at e (>= room(e)); returns its dispatch cycle.
     [[gnu::always_inline]] std::uint64_t push(std::uint64_t e) {
-        orbit_ = false;
+        regime_.on = false;
         const std::uint64_t s = std::max(e + ez_, proc_free_[pi_]);
         proc_free_[pi_] = s + c_;
         slot_free_[qi_] = s;
@@ -73,7 +73,7 @@ public:
     // has room. Returns the cycles the rasterizer waited. The same as m times
     // room() and push(), with the state in registers.
     [[gnu::always_inline]] std::uint64_t shade(std::uint64_t& t_io, unsigned& used_io, unsigned rate, std::uint64_t m) {
-        orbit_ = false;
+        regime_.on = false;
         return step(t_io, used_io, rate, m);
     }
 
@@ -102,10 +102,10 @@ public:
     [[gnu::always_inline]] std::uint64_t shade_run(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
         if (stepwise) return shade(t, used, rate, m);
         if (m < kLongRun) {
-            orbit_ &= m == 0;
+            regime_.on &= m == 0;
             return step(t, used, rate, m);
         }
-        if (orbit_) return shade_from_regime(t, used, rate, m);
+        if (regime_.on) return shade_from_regime(t, used, rate, m);
         return shade_long(t, used, rate, m);
     }
     static constexpr std::uint64_t kLongRun = 48;
@@ -126,7 +126,7 @@ public:
 
     // Whether the last run left the pipe in a verified periodic regime that
     // the next run may continue (shade_run()).
-    bool periodic() const { return orbit_; }
+    bool periodic() const { return regime_.on; }
 
     // The cycle every fragment pushed since restart() has finished.
     std::uint64_t done() const { return done_; }
@@ -135,7 +135,7 @@ public:
     // The service time of the fragments pushed from now on (a tile's shade=);
     // those in flight keep theirs.
     void set_cycles_per_fragment(unsigned c) {
-        orbit_ &= c == c_;
+        regime_.on &= c == c_;
         c_ = c;
     }
 
@@ -161,12 +161,8 @@ public:
         pi_ = o.pi_;
         done_ = o.done_;
         shift_by(shift);
-        orbit_ = o.orbit_;
-        orbit_block_ = o.orbit_block_;
-        orbit_delta_ = o.orbit_delta_;
-        orbit_wait_ = o.orbit_wait_;
-        orbit_t_ = o.orbit_t_ + shift;
-        orbit_used_ = o.orbit_used_;
+        regime_ = o.regime_;
+        regime_.t += shift;
     }
     // The state in age order (oldest first): queue slots, then processors.
     void state(std::vector<std::uint64_t>& out) const {
@@ -203,56 +199,51 @@ private:
     [[gnu::noinline]] std::uint64_t shade_from_regime(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
         std::uint64_t wait = 0;
         m -= rejoin(t, used, rate, m, wait);
-        if (orbit_) return m ? wait + shade_on_orbit(t, used, rate, m) : wait;
+        if (regime_.on) return m ? wait + shade_in_regime(t, used, rate, m) : wait;
         if (m < kLongRun) return wait + step(t, used, rate, m);
         return wait + shade_long(t, used, rate, m);
     }
     // Steps the run's fragments from clock (t, used) beside the clock the
-    // regime would have had, (orbit_t_, orbit_used_), while the two differ;
+    // regime would have had, (regime_.t, regime_.used), while the two differ;
     // the rings stay the regime's as long as each fragment is dispatched when
     // the regime dispatches it. Returns the fragments stepped (their waits
     // added to `wait`). The regime stays recorded, with the clock it has
     // there, when the clocks met or the run ended first; a fragment
     // dispatched otherwise, or a block without meeting, clears it.
     std::uint64_t rejoin(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m, std::uint64_t& wait) {
-        std::uint64_t gt = orbit_t_;
-        unsigned gu = orbit_used_;
+        std::uint64_t gt = regime_.t;
+        unsigned gu = regime_.used;
         std::uint64_t k = 0;
         for (; (t != gt || used != gu) && k < m; ++k) {
-            if (k == orbit_block_) {
-                orbit_ = false;
+            if (k == regime_.block) {
+                regime_.on = false;
                 return k;
             }
             const std::uint64_t room = slot_free_[qi_];
             enter(gt, gu, rate, room);
             wait += enter(t, used, rate, room);
-            const std::uint64_t s = std::max(t + ez_, proc_free_[pi_]);
-            orbit_ = s == std::max(gt + ez_, proc_free_[pi_]);
-            proc_free_[pi_] = s + c_;
-            slot_free_[qi_] = s;
-            pi_ = branch_free::next(pi_, p_);
-            qi_ = branch_free::next(qi_, q_);
-            done_ = std::max(done_, s + c_);
-            if (!orbit_) return k + 1;
+            const std::uint64_t regime_s = std::max(gt + ez_, proc_free_[pi_]);
+            regime_.on = push(t) == regime_s;
+            if (!regime_.on) return k + 1;
         }
-        orbit_t_ = gt;
-        orbit_used_ = gu;
+        regime_.t = gt;
+        regime_.used = gu;
         return k;
     }
     // The rest of a run that is in the periodic regime: the whole blocks in
     // one jump, the others stepped.
-    std::uint64_t shade_on_orbit(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
+    std::uint64_t shade_in_regime(std::uint64_t& t, unsigned& used, unsigned rate, std::uint64_t m) {
         std::uint64_t wait = 0;
-        const std::uint64_t jumps = m / orbit_block_;
+        const std::uint64_t jumps = m / regime_.block;
         if (jumps) {
-            shift_by(jumps * orbit_delta_);
-            t += jumps * orbit_delta_;
-            wait += jumps * orbit_wait_;
-            m -= jumps * orbit_block_;
+            shift_by(jumps * regime_.delta);
+            t += jumps * regime_.delta;
+            wait += jumps * regime_.wait;
+            m -= jumps * regime_.block;
         }
         wait += step(t, used, rate, m);
-        orbit_t_ = t;
-        orbit_used_ = used;
+        regime_.t = t;
+        regime_.used = used;
         return wait;
     }
     // The rasterizer's clock (t, used) as the next fragment enters the
@@ -316,16 +307,16 @@ private:
                 t += jumps * delta;
                 wait += jumps * block_wait;
                 m -= jumps * block;
-                orbit_ = true;
-                orbit_block_ = block;
-                orbit_delta_ = delta;
-                orbit_wait_ = block_wait;
+                regime_.on = true;
+                regime_.block = block;
+                regime_.delta = delta;
+                regime_.wait = block_wait;
                 break;
             }
         }
         wait += step(t, used, rate, m);
-        orbit_t_ = t;
-        orbit_used_ = used;
+        regime_.t = t;
+        regime_.used = used;
         return wait;
     }
     // The rings and last finish are those given (positions qi, pi) later by
@@ -361,14 +352,15 @@ private:
     unsigned qi_ = 0, pi_ = 0;
     std::uint64_t done_ = 0;
     // The periodic regime shade_long() last verified: from the state after
-    // the last run, with the rasterizer's clock then at (orbit_t_,
-    // orbit_used_), every orbit_block_ fragments move the whole state
-    // orbit_delta_ cycles later and wait orbit_wait_ cycles (the waits repeat
-    // with the states). Valid while orbit_; whatever changes the state but a
-    // run's own fragments clears it.
-    bool orbit_ = false;
-    std::uint64_t orbit_block_ = 0, orbit_delta_ = 0, orbit_wait_ = 0, orbit_t_ = 0;
-    unsigned orbit_used_ = 0;
+    // the last run, with the rasterizer's clock then at (t, used), every
+    // `block` fragments move the whole state `delta` cycles later and wait
+    // `wait` cycles (the waits repeat with the states). Valid while `on`;
+    // whatever changes the state but a run's own fragments clears it.
+    struct Regime {
+        bool on = false;
+        std::uint64_t block = 0, delta = 0, wait = 0, t = 0;
+        unsigned used = 0;
+    } regime_;
 };
 
 // The block: the with-unit timeline's fragment queue and processors, with
