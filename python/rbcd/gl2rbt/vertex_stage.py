@@ -244,25 +244,28 @@ class VertexStage:
         if mv is None:
             mv = self.vaos[conv.s.vao] = int(GL.glGenVertexArrays(1))
         GL.glBindVertexArray(mv)
-        for i, at in sorted(vao.attribs.items()):
+        # Each attribute on a binding point of its own, at its binding's
+        # offset plus its relative offset: what it reads whichever points
+        # the capture's attributes shared.
+        for i, at, b in vao.sources():
             if not at.enabled:
                 GL.glDisableVertexAttribArray(i)
                 continue
-            if at.buffer:
-                buf, offset = self.buffer(conv, at.buffer), at.offset
-            elif at.client is not None:
-                buf, offset = self.client(at.client), 0
+            if b.buffer:
+                buf, offset = self.buffer(conv, b.buffer), b.offset + at.relative
+            elif b.client is not None:
+                buf, offset = self.client(b.client), at.relative
             else:
                 fail_call(no, f"attribute {i} is enabled with no buffer and no data in the capture")
-            GL.glBindBuffer(GL.GL_ARRAY_BUFFER, buf)
             size = self.mesa.enum(at.size) if isinstance(at.size, str) else at.size
             kind = self.mesa.enum(at.type)
-            if at.call.startswith("glVertexAttribIPointer"):
-                GL.glVertexAttribIPointer(i, size, kind, at.stride, ctypes.c_void_p(offset))
+            if at.integer:
+                self.mesa.attrib_i_format(i, size, kind, 0)
             else:
-                GL.glVertexAttribPointer(i, size, kind, GL.GL_TRUE if at.normalized else GL.GL_FALSE, at.stride,
-                                         ctypes.c_void_p(offset))
-            GL.glVertexAttribDivisor(i, at.divisor)
+                self.mesa.attrib_format(i, size, kind, 1 if at.normalized else 0, 0)
+            self.mesa.attrib_binding(i, i)
+            self.mesa.bind_vertex_buffer(i, buf, offset, b.stride)
+            self.mesa.binding_divisor(i, b.divisor)
             GL.glEnableVertexAttribArray(i)
         elem = conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
         if client_indices is not None:
