@@ -1032,6 +1032,45 @@ def test_draws_in_one_context(tmp_path):
     assert fragments(tmp_path, capture(ctx(7), ctx(0), ctx(8), "draw").write(tmp_path / "c.xz")) == [630]
 
 
+def test_a_new_context_after_the_drawing_one_is_destroyed(tmp_path):
+    """glmark2-es2's pattern: a first context made current, given state and
+    cleared, destroyed; a second, sharing no objects, made current and drawn
+    in. The second starts from GL's initial state (the first's scissor and
+    translation would leave nothing of the triangle: the capture was
+    refused as a draw in a second context). A second context that shares
+    the first's objects, or a first one not destroyed, is refused as
+    before (two contexts' states are not emulated)."""
+    def capture(share=0, destroy=True):
+        c = Calls()   # the window's viewport and glOrtho, before any context
+        c.add("eglBindAPI", api="EGL_OPENGL_API", ret="EGL_TRUE")
+        c.add("eglCreateContext", dpy=1, config=1, share_context=0, attrib_list=["EGL_NONE"], ret=7)
+        c.add("eglMakeCurrent", dpy=1, draw=2, read=2, ctx=7, ret="EGL_TRUE")
+        c.add("glEnable", cap="GL_SCISSOR_TEST").add("glScissor", x=0, y=0, width=1, height=1)
+        c.add("glTranslatef", x=1000, y=0, z=0).add("glClear", mask="GL_DEPTH_BUFFER_BIT")
+        if destroy:
+            c.add("eglDestroyContext", dpy=1, ctx=7, ret="EGL_TRUE")
+        c.add("eglCreateContext", dpy=1, config=1, share_context=share, attrib_list=["EGL_NONE"], ret=8)
+        c.add("eglMakeCurrent", dpy=1, draw=2, read=2, ctx=8, ret="EGL_TRUE")
+        c.add("glViewport", x=0, y=0, width=64, height=48, flags=1)   # apitrace's record of the window
+        c.add("glMatrixMode", mode="GL_PROJECTION").add("glOrtho", left=0, right=64, bottom=0, top=48,
+                                                        zNear=-100, zFar=100)
+        c.add("glMatrixMode", mode="GL_MODELVIEW").add("glEnableClientState", array="GL_VERTEX_ARRAY")
+        return c.triangle(5).swap()
+    assert fragments(tmp_path, capture().write(tmp_path / "a.xz")) == [630]
+    refused(gl2rbt(tmp_path, capture(share=7).write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"),
+            "b.xz", "a draw in GL context 8 after draws in 7")
+    refused(gl2rbt(tmp_path, capture(destroy=False).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+            "c.xz", "a draw in GL context 8 after draws in 7")
+
+
+def test_a_framebuffer_status_query_changes_nothing(tmp_path):
+    """glCheckFramebufferStatus (glmark2-es2's desktop, shadow and refract
+    scenes) only answers: the capture converts as without it (it was
+    refused as a call not emulated)."""
+    c = Calls().add("glCheckFramebufferStatus", target="GL_FRAMEBUFFER", ret="GL_FRAMEBUFFER_COMPLETE")
+    assert fragments(tmp_path, c.triangle(5).swap().write(tmp_path / "a.xz")) == [630]
+
+
 def test_a_depth_attachment_has_its_levels_size(tmp_path):
     """A depth texture attached at a level other than 0 has that level's
     size (glTexImage2D's of the level, or glTexStorage2D's halving), and
