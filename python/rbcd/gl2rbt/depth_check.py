@@ -9,18 +9,35 @@ import tempfile
 import numpy as np
 
 from .capture import check_input_file, read_calls
-from .raster import new_converter
 from .errors import ConvertError, ToolError, printable
-from .raster import convert
+from .raster import convert, new_converter, raster_program
 from .reduced import is_reduced_capture
 
-def mesa_depth_at(trace, call, timeout):
+READBACK = "rbcd-es-depth-readback.so"
+
+
+def es_readback_library():
+    """gl/es_depth_readback.c's library, beside rbcd-gl-raster as
+    bin/../lib/rbcd/ (the build tree and an installed tree alike)."""
+    lib = os.path.normpath(os.path.join(os.path.dirname(raster_program()), "..", "lib", "rbcd", READBACK))
+    if not os.path.isfile(lib):
+        raise ToolError(f"--check-depth on an OpenGL ES capture needs {printable(lib)}, built with the OpenGL ES "
+                        "headers (scripts/setup.sh --gl installs libgles-dev; then build again)")
+    return lib
+
+
+def mesa_depth_at(trace, call, timeout, es=False):
     """Mesa's depth buffer after `call` (glretrace -D), as (width, height, rows
-    from the top of float32 values in [0, 1])."""
+    from the top of float32 values in [0, 1]). An OpenGL ES capture's is
+    read back through gl/es_depth_readback.c, preloaded into glretrace
+    alone (not into Xvfb)."""
     exe = shutil.which("glretrace")
     if not exe:
         raise ToolError("glretrace is not installed (scripts/setup.sh --gl installs apitrace)")
     cmd = [exe, "-D", str(call), trace]
+    if es:
+        preload = ":".join(p for p in (es_readback_library(), os.environ.get("LD_PRELOAD")) if p)
+        cmd = ["env", f"LD_PRELOAD={preload}"] + cmd
     if not os.environ.get("DISPLAY"):
         xvfb = shutil.which("xvfb-run")
         if not xvfb:
@@ -126,8 +143,7 @@ def check_depth(args):
         if probe.last_frame is not None and probe.frame > probe.last_frame:
             break
     if probe.es:
-        raise ToolError("--check-depth: glretrace cannot read the depth buffer of an OpenGL ES capture "
-                        "(ES has no depth readback); the check is for desktop OpenGL captures")
+        es_readback_library()   # missing: said before the conversion, not after it
     frames = [(o, c, call) for o, c, call in probe.last_3d_draws if call is not None]
     # glretrace replays a capture's first frame wrongly at times (seen: the
     # test program's first frame replays without its clear): it is checked
@@ -160,7 +176,7 @@ def check_depth(args):
             if cached and os.path.exists(cached):
                 mesa = np.load(cached)
             else:
-                _, _, mesa = mesa_depth_at(args.trace, call, args.check_timeout)
+                _, _, mesa = mesa_depth_at(args.trace, call, args.check_timeout, probe.es)
                 if cached:
                     np.save(cached, mesa)
             mesa = window_of(mesa, w, h, cap_frame)
