@@ -1063,6 +1063,45 @@ def test_a_new_context_after_the_drawing_one_is_destroyed(tmp_path):
             "c.xz", "a draw in GL context 8 after draws in 7")
 
 
+def test_a_new_contexts_objects_are_its_own_in_mesa(tmp_path):
+    """Program 2 and buffer 1 of a destroyed ES context, drawn through Mesa,
+    and program 2 and buffer 1 of the new one, named alike, differ: the new
+    context's draw runs its own shader on its own data (Mesa's copies of
+    the first context's were dropped; a program and buffer of the same
+    names and versions would have been taken as up to date). Its frame is
+    the frame a capture of the second context alone gives."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    import struct
+
+    def context(c, ctx, scale, data):
+        vs = ("#version 100\nattribute vec3 p;\nvoid main() { gl_Position = "
+              f"vec4(p.x / {scale:.1f} - 1.0, p.y / {scale:.1f} - 1.0, 0.0, 1.0); }}\n")
+        c.add("eglCreateContext", dpy=1, config=1, share_context=0,
+              attrib_list=["EGL_CONTEXT_CLIENT_VERSION", 2, "EGL_NONE"], ret=ctx)
+        c.add("eglMakeCurrent", dpy=1, draw=2, read=2, ctx=ctx, ret="EGL_TRUE")
+        c.add("glViewport", x=0, y=0, width=64, height=48, flags=1)   # apitrace's record of the window
+        c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
+        c.add("glShaderSource", shader=1, count=1, string=[vs], length=None).add("glCompileShader", shader=1)
+        c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
+        c.add("glBindAttribLocation", program=2, index=0, name="p")
+        c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+        c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+        c.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(data), data=data, usage="GL_STATIC_DRAW")
+        c.add("glEnableVertexAttribArray", index=0)
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        return c.add("eglSwapBuffers", dpy=1, surface=1, flags=END_FRAME)
+    other = struct.pack("<9f", 2, 2, -10, 20, 2, -10, 2, 30, -10)
+    both = context(Calls(), 7, 32, TRIANGLE)
+    both.add("eglDestroyContext", dpy=1, ctx=7, ret="EGL_TRUE")
+    context(both, 8, 16, other)
+    alone = context(Calls(), 8, 16, other)
+    frames = trace_bytes(tmp_path, both, "both").split(b"\nframe ")
+    assert len(frames) == 3 and b"\no " in frames[2]
+    assert frames[2].split(b"\n", 1)[1] == trace_bytes(tmp_path, alone, "alone").split(b"\nframe ")[1].split(b"\n", 1)[1]
+    assert frames[1].split(b"\n", 1)[1] != frames[2].split(b"\n", 1)[1]
+
+
 def test_a_framebuffer_status_query_changes_nothing(tmp_path):
     """glCheckFramebufferStatus (glmark2-es2's desktop, shadow and refract
     scenes) only answers: the capture converts as without it (it was
