@@ -76,6 +76,22 @@ class VertexStage:
                                  and isinstance(getattr(GL, n), int)}
 
     # ---- objects
+    def forget_objects(self):
+        """Deletes Mesa's copies of the capture's objects: their names now
+        belong to another context (a new one, made current after the one
+        that named them was destroyed)."""
+        GL = self.gl
+        if self.buffers:
+            GL.glDeleteBuffers(len(self.buffers), [e[0] for e in self.buffers.values()])
+        for mp in self.programs.values():
+            GL.glDeleteProgram(mp.name)
+        if self.vaos:
+            GL.glDeleteVertexArrays(len(self.vaos), list(self.vaos.values()))
+        if self.textures:
+            GL.glDeleteTextures(len(self.textures), list(self.textures.values()))
+        self.buffers, self.programs, self.vaos, self.textures = {}, {}, {}, {}
+        self.mesa_bytes = 0
+
     def buffer(self, conv, b):
         """Mesa's copy of capture buffer b, up to date."""
         GL = self.gl
