@@ -218,3 +218,39 @@ def test_a_depth_blit_into_the_camera_pass_is_refused(tmp_path, src, w, words):
     r = gl2rbt(tmp_path, c.write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt")
     refused(r, "glBlitFramebuffer", words)
     assert not (tmp_path / "b.rbt").exists()
+
+
+VS_OFF = VS.replace("in vec3 p;", "in vec3 p;\nin vec4 off;\nin ivec4 k;").replace(
+    "p.x / 32.0 - 1.0", "p.x / 32.0 - 1.0 + off.x + float(k.y) / 32.0")
+
+
+def with_current_values(*calls):
+    """The reference triangle under VS_OFF, whose disabled attributes 1 (off)
+    and 2 (k) take the current values the calls set."""
+    c = shader_calls(VS_OFF)
+    c.add("glBindAttribLocation", program=2, index=1, name="off").add("glBindAttribLocation", program=2, index=2,
+                                                                        name="k")
+    c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+    for fn, kw in calls:
+        c.add(fn, **kw)
+    return reference(c)
+
+
+def test_current_values_of_every_form(tmp_path):
+    """glVertexAttrib4Nub, the I forms of one to three components and of
+    bytes and shorts: the values Mesa's attribute
+    takes, as the float and int forms give them (off.x = 1 moves the
+    triangle 32 pixels right, k.y = 8 eight more)."""
+    want = trace(tmp_path, with_current_values(("glVertexAttrib4f", dict(index=1, x=1.0, y=0.0, z=0.0, w=1.0)),
+                                               ("glVertexAttribI4i", dict(index=2, x=0, y=8, z=0, w=0))), "want")
+    assert want != trace(tmp_path, reference(shader_calls(VS)), "plain")
+    forms = [
+        [("glVertexAttrib4Nub", dict(index=1, x=255, y=0, z=0, w=255)), ("glVertexAttribI2i", dict(index=2, x=0, y=8))],
+        [("glVertexAttrib4Nubv", dict(index=1, v=[255, 0, 0, 255])),
+         ("glVertexAttribI4ubv", dict(index=2, v=[0, 8, 0, 0]))],
+        [("glVertexAttrib1f", dict(index=1, x=1.0)), ("glVertexAttribI3uiv", dict(index=2, v=[0, 8, 0]))],
+        [("glVertexAttrib4Nsv", dict(index=1, v=[32767, 0, 0, 32767])),
+         ("glVertexAttribI4sv", dict(index=2, v=[0, 8, 0, 0]))],
+    ]
+    for k, calls in enumerate(forms):
+        assert trace(tmp_path, with_current_values(*calls), f"form{k}") == want, calls

@@ -119,6 +119,33 @@ def compare(ours, marks, bits, mesa, step):
 
 
 LLVMPIPE = "with llvmpipe's arithmetic on the converter's geometry"
+# The largest window the check lets glretrace grow to (4096 x 4096): a
+# window of 4000 x 4000 peaks at 690 MB (glretrace's window and its depth
+# dump as text, the comparison's arrays).
+MAX_REPLAY_PIXELS = 1 << 24
+
+
+def drawable_growth(call):
+    """The size glretrace (11.1, glretrace.py) grows its window to at this
+    call, while no framebuffer object is bound: glViewport's x + width and
+    y + height, those of viewport 0 of the array and indexed forms, a
+    blit's farther destination corner; None for other calls (and for
+    values that are not numbers, which the conversion has refused)."""
+    name, d = call[1], dict(call[2])
+    try:
+        if name == "glViewport":
+            return d["x"] + d["width"], d["y"] + d["height"]
+        if name in ("glViewportIndexedf", "glViewportIndexedfv") and d.get("index") == 0:
+            x, y, w, h = (d["x"], d["y"], d["w"], d["h"]) if name.endswith("f") else d["v"][:4]
+            return int(x + w), int(y + h)
+        if name == "glViewportArrayv" and d.get("first") == 0 and d.get("count", 0) > 0:
+            x, y, w, h = d["v"][:4]
+            return int(x + w), int(y + h)
+        if name in ("glBlitFramebuffer", "glBlitFramebufferEXT"):
+            return max(d["dstX0"], d["dstX1"]), max(d["dstY0"], d["dstY1"])
+    except (KeyError, TypeError, ValueError, OverflowError, IndexError):
+        return None
+    return None
 
 
 def check_depth(args):
@@ -135,11 +162,17 @@ def check_depth(args):
     if is_reduced_capture(args.trace):
         raise ConvertError("--check-depth replays the capture with Mesa: give the capture itself, "
                            "not a reduced capture")
-    # Pass 1: the calls, from the GL state alone.
+    # Pass 1: the calls, from the GL state alone, and the window glretrace
+    # will grow to (refused past MAX_REPLAY_PIXELS before it runs).
     probe = new_converter(args, False)
     for call in read_calls(args.trace):
         probe.last_call = call[0]
         probe.handle(call)
+        grown = drawable_growth(call) if not probe.s.draw_fbo else None
+        if grown and grown[0] * grown[1] > MAX_REPLAY_PIXELS:
+            raise ConvertError(f"call {call[0]}: {printable(call[1])} would make glretrace's window "
+                               f"{grown[0]} x {grown[1]} pixels, more than the check's {MAX_REPLAY_PIXELS} "
+                               "(docs/gl-capture.md, the check against Mesa)")
         if probe.last_frame is not None and probe.frame > probe.last_frame:
             break
     if probe.es:

@@ -34,6 +34,9 @@ MAX_MESA_BUFFER_BYTES = 2 << 30   # the declared sizes of the buffers given to M
 # every other gl_ input or uniform is fixed-function state (gl_Vertex,
 # gl_ModelViewProjectionMatrix, ...), which Mesa's program would read from
 # its own context, not the capture's.
+# The C type of a glVertexAttrib*v's values, by its suffix.
+ATTRIB_VALUE_TYPES = {"b": np.int8, "s": np.int16, "i": np.int32, "ub": np.uint8, "us": np.uint16, "ui": np.uint32,
+                      "f": np.float32, "d": np.float64}
 CLIP_DISTANCES = re.compile(r"\bgl_(Clip|Cull)Distance\b")
 BUILTIN_INPUTS = {"gl_VertexID", "gl_InstanceID", "gl_DrawID", "gl_BaseVertex", "gl_BaseInstance",
                   "gl_VertexIndex", "gl_InstanceIndex"}
@@ -359,8 +362,7 @@ class VertexStage:
             fn = getattr(GL, func.removesuffix("ARB"))
             if func.endswith("v"):
                 fn(i, np.array(vals[0] if len(vals) == 1 and isinstance(vals[0], list) else vals,
-                               dtype=np.int32 if "I" in func[14:] else np.float64 if func.endswith("dv")
-                               else np.float32))
+                               dtype=ATTRIB_VALUE_TYPES[re.search(r"(ub|us|ui|b|s|i|f|d)v$", func).group(1)]))
             else:
                 fn(i, *vals)
 

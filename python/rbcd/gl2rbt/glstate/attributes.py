@@ -413,6 +413,7 @@ class AttributeCalls:
         "glPrimitiveRestartIndex": h_primitive_restart_index,
         "glPrimitiveRestartIndexNV": h_primitive_restart_index,
     } | dict.fromkeys([f"glVertexAttrib{n}{t}{v}" for n in "1234" for t in ("f", "d", "s") for v in ("", "v")]
-                     + [f"glVertexAttribI4{t}{v}" for t in ("i", "ui") for v in ("", "v")]
-                     + [f"glVertexAttrib4N{t}v" for t in ("b", "s", "i", "ub", "us", "ui")]
+                     + [f"glVertexAttribI{n}{t}{v}" for n in "1234" for t in ("i", "ui") for v in ("", "v")]
+                     + [f"glVertexAttribI4{t}v" for t in ("b", "s", "ub", "us")]
+                     + [f"glVertexAttrib4N{t}v" for t in ("b", "s", "i", "ub", "us", "ui")] + ["glVertexAttrib4Nub"]
                      + [f"glVertexAttrib4{t}v" for t in ("b", "i", "ub", "us", "ui")], h_attrib_value)
