@@ -9,6 +9,7 @@ captures (no Xvfb, no apitrace)."""
 import lzma
 import os
 import pickle
+import shutil
 import subprocess
 import time
 
@@ -229,3 +230,17 @@ def test_a_selection_file_that_is_not_utf8_says_where(tmp_path):
     (tmp_path / "r.toml").write_bytes(b"[[object]]\nid = 1\nname = '\xff'\n")
     refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--select", tmp_path / "r.toml"),
             "r.toml: not UTF-8 text (byte 26)")
+
+
+def test_the_rasterizer_the_run_starts_is_never_an_output(tmp_path):
+    """RBCD_GL_RASTER naming a copy of rbcd-gl-raster where -o points: the
+    copy had been replaced by the trace, with exit 0."""
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    tool = tmp_path / "tool"
+    shutil.copy(program("rbcd-gl-raster"), tool)
+    before = tool.read_bytes()
+    env = dict(os.environ, RBCD_GL_RASTER=str(tool), TMPDIR=str(tmp_path))
+    r = subprocess.run(["/usr/bin/python3", GL2RBT, cap, "-o", tool], stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, text=True, env=env, timeout=120)
+    refused(r, "-o", "is also rbcd-gl-raster")
+    assert tool.read_bytes() == before and left_behind(tmp_path, ["c.xz", "tool"]) == []

@@ -62,7 +62,14 @@ def check_paths(args):
     if depth_out:
         check_depth_prefix(depth_out, [args.trace, args.select] + [p for _, p in outputs])
         outputs += [("--depth-out", p) for p in depth_files(depth_out)]
-    check_outputs([("the capture", args.trace), ("the selection file", args.select)], outputs)
+    # The rasterizer the run starts is an input too (RBCD_GL_RASTER may name
+    # a copy where an output would go).
+    try:
+        raster = raster_program()
+    except ToolError:
+        raster = None   # said when the run needs it
+    check_outputs([("the capture", args.trace), ("the selection file", args.select), ("rbcd-gl-raster", raster)],
+                  outputs)
 
 
 def depth_pattern(prefix):
