@@ -119,3 +119,15 @@ def test_vertex_shaders_whose_output_the_converter_cannot_follow_are_refused(tmp
 def test_clip_distances_named_only_in_a_comment_convert(tmp_path):
     source = VS.replace("void main() {", "// gl_ClipDistance is not written\nvoid main() {")
     assert trace(tmp_path, draw(shader_calls(source)), "c") == trace(tmp_path, draw(shader_calls(VS)), "r")
+
+
+def test_a_vertex_shader_of_huge_arrays_is_refused_before_mesa_compiles_it(tmp_path):
+    """A local float[1000000]: Mesa's LLVM had taken minutes and 1.9 GB on it,
+    deaf to SIGTERM; refused before Mesa sees it. An index like v[0] is not
+    a declaration, yet counts: the bound is on all literal sizes."""
+    big = VS.replace("void main() {", "void main() { float big[1000000]; big[gl_VertexID] = 1.0;")
+    r = gl2rbt(tmp_path, draw(shader_calls(big)).write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt")
+    refused(r, "call ", "declares arrays of 1000000 elements in all, more than 65536")
+    assert left_behind(tmp_path, ["b.xz"]) == []
+    small = VS.replace("void main() {", "void main() { float a[4]; a[0] = 0.0;")
+    assert trace(tmp_path, draw(shader_calls(small)), "s").count(b"\nf ") > 100

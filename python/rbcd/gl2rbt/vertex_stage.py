@@ -37,6 +37,11 @@ MAX_MESA_BUFFER_BYTES = 2 << 30   # the declared sizes of the buffers given to M
 # The C type of a glVertexAttrib*v's values, by its suffix.
 ATTRIB_VALUE_TYPES = {"b": np.int8, "s": np.int16, "i": np.int32, "ub": np.uint8, "us": np.uint16, "ui": np.uint32,
                       "f": np.float32, "d": np.float64}
+# Arrays a vertex shader declares, by their literal sizes, in all: a vertex
+# shader's uniform storage holds 16,384 components in llvmpipe, games'
+# bone arrays a few hundred matrices.
+ARRAY_SIZES = re.compile(r"\[\s*([0-9]{1,12})[uU]?\s*\]")
+MAX_ARRAY_ELEMENTS = 1 << 16
 CLIP_DISTANCES = re.compile(r"\bgl_(Clip|Cull)Distance\b")
 BUILTIN_INPUTS = {"gl_VertexID", "gl_InstanceID", "gl_DrawID", "gl_BaseVertex", "gl_BaseInstance",
                   "gl_VertexIndex", "gl_InstanceIndex"}
@@ -241,7 +246,15 @@ class VertexStage:
         where = f"program {pname} (linked at call {p.link_call})"
         if "vertex" not in sources:
             fail_call(no, f"{where} has no vertex shader")
-        if CLIP_DISTANCES.search(COMMENTS.sub(" ", sources["vertex"])):
+        code = COMMENTS.sub(" ", sources["vertex"])
+        elements = sum(int(n) for n in ARRAY_SIZES.findall(code))
+        if elements > MAX_ARRAY_ELEMENTS:
+            # Mesa's compile of such a shader is bounded in neither time nor
+            # memory (a local float[1000000]: minutes in LLVM, 1.9 GB), and a
+            # signal waits until it returns.
+            fail_call(no, f"{where}: its vertex shader declares arrays of {elements} elements in all, more than "
+                      f"{MAX_ARRAY_ELEMENTS} (docs/gl-capture.md, limits)")
+        if CLIP_DISTANCES.search(code):
             # Mesa 22.3 clips by them even with GL_CLIP_DISTANCEi disabled.
             fail_call(no, f"{where}: its vertex shader writes clip or cull distances (gl_ClipDistance, "
                       "gl_CullDistance): not emulated")
