@@ -131,3 +131,16 @@ def test_a_vertex_shader_of_huge_arrays_is_refused_before_mesa_compiles_it(tmp_p
     assert left_behind(tmp_path, ["b.xz"]) == []
     small = VS.replace("void main() {", "void main() { float a[4]; a[0] = 0.0;")
     assert trace(tmp_path, draw(shader_calls(small)), "s").count(b"\nf ") > 100
+
+
+@pytest.mark.parametrize("fn, extra", [
+    ("glBufferData", dict(usage="GL_STATIC_DRAW")),
+    ("glBufferSubData", dict(offset=0)),
+])
+def test_buffer_data_of_another_length_than_its_size_is_refused(tmp_path, fn, extra):
+    """apitrace records exactly the size's bytes: more (or fewer) is a
+    capture cut or altered, named, not taken."""
+    c = shader_calls(VS).add(fn, target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE + b"\0" * 4, **extra)
+    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "d.xz"), "-o", tmp_path / "d.rbt")
+    refused(r, fn, "40 bytes of data, not its size (36)" if fn == "glBufferData" else "the size's bytes")
+    assert left_behind(tmp_path, ["d.xz"]) == []

@@ -198,8 +198,10 @@ class BufferCalls:
         buf = storage(size)
         written = 0
         if isinstance(data, (bytes, bytearray)):
-            if len(data) < size:
-                fail_call(no, f"{name}: the data is shorter than the size")
+            if len(data) != size:
+                # apitrace records the size's bytes: another length is a
+                # capture cut or altered.
+                fail_call(no, f"{name}: {len(data)} bytes of data, not its size ({size})")
             buf[:] = data[:size]
             written = size
         self.s.buffers[b] = buf
@@ -229,8 +231,8 @@ class BufferCalls:
         buf = self.s.buffers.get(b)
         off, size, data = d.get("offset", 0), d.get("size", 0), d.get("data")
         if not isinstance(off, int) or not isinstance(size, int) or not isinstance(data, (bytes, bytearray)) \
-                or len(data) < size:
-            fail_call(no, f"{name}: malformed arguments (offset, size or data)")
+                or len(data) != max(size, 0):
+            fail_call(no, f"{name}: malformed arguments (offset, size or data: apitrace records the size's bytes)")
         if buf is None or off < 0 or size < 0 or off + size > len(buf) or self.s.immutable_buffers.get(b) is False:
             # GL_INVALID_VALUE or GL_INVALID_OPERATION (immutable storage
             # without GL_DYNAMIC_STORAGE_BIT): the call does nothing
