@@ -22,6 +22,7 @@ fails; the outputs of a failed entry are removed.
 import argparse
 import concurrent.futures
 import hashlib
+import json
 import os
 import re
 import subprocess
@@ -231,10 +232,24 @@ class Entry:
         text = read_input_text(self.summary, "the entry's summary", 64 << 20)
         # A line a frame: counted before the text is split, so a file of
         # many short lines costs no more than its bytes.
-        if text.count("\n") != self.frames:
+        if text.count("\n") != self.frames or not text.endswith("\n"):
             raise UsageError(f"{self.summary}: not a line for each of the entry's {self.frames} frames")
-        lines = text.splitlines(keepends=True)
-        return "".join(lines[:frames] if frames else lines)
+        # Each line as the converter writes it: a JSON object ended by LF
+        # alone. Anything else (CR LF line ends) is the input's fault, said
+        # before the conversion: it could never match the regenerated one.
+        lines = text.split("\n")[:-1]
+        for i, line in enumerate(lines, 1):
+            if "\r" in line:
+                raise UsageError(f"{self.summary}: line {i} " + ("ends in CR LF" if line.endswith("\r") else
+                                 "holds a CR") + ": the converter's lines end in LF alone")
+            try:
+                ok = isinstance(json.loads(line), dict)
+            except (ValueError, RecursionError):
+                ok = False
+            if not ok:
+                raise UsageError(f"{self.summary}: line {i}: not a JSON object (the converter's figures "
+                                 "for a frame)")
+        return "".join(line + "\n" for line in (lines[:frames] if frames else lines))
 
     def summary_matches(self, summary, frames=None):
         try:
