@@ -23,8 +23,9 @@
 # same arguments, without running the game again.
 #
 # Exit 2 with one line on a bad argument (an OUT_DIR that is empty, exists,
-# is a symlink or cannot be created, an unusable TMPDIR: said before the game
-# runs), on a capture that holds fewer frames than asked for, or on a
+# is a symlink or cannot be created, an unusable TMPDIR, a MAP whose path is
+# not UTF-8, which capture.toml cannot record: said before the game runs), on
+# a capture that holds fewer frames than asked for, or on a
 # capture the converter refuses; 1 when the game, Xvfb, apitrace or the
 # conversion otherwise fails. OUT_DIR is written only at the end, complete.
 set -euo pipefail
@@ -175,10 +176,10 @@ print(" ".join(out))' "$tracks") || races=
 else
   [ -f "$map" ] || usage "$map is not a file"
   # Its name goes into capture.toml as a TOML string: printable, no quote or backslash.
-  [[ "$(basename "$map")" =~ ^[][A-Za-z0-9\ _.,+=@%:~()-]{1,128}$ ]] ||
+  [[ "$(basename -- "$map")" =~ ^[][A-Za-z0-9\ _.,+=@%:~()-]{1,128}$ ]] ||
     usage "MAP '$map': a file name of letters, digits, spaces and .,_+=@%:~()[]- only"
   case "$map" in
-    *.nbr) mode=(-r "$(realpath "$map")") ;;
+    *.nbr) mode=(-r "$(realpath -- "$map")") ;;
     *.sol) mode=(-l "$map") ;;
     *) usage "MAP '$map' is neither a replay (.nbr) nor a level (.sol)" ;;
   esac
@@ -192,6 +193,20 @@ else
   # time limit, and frames past the replay are simply not converted.
   limit=$(( 60 + (skip + frames) / 5 ))
 fi
+
+# Every string capture.toml records, as a TOML string (escaped: a map's
+# path may hold quotes, backslashes or control characters), the work
+# directory written TMP in the command line (replaced as text: TMPDIR may
+# hold anything). Made before the game runs: a string TOML cannot hold (a
+# path that is not UTF-8) is refused first.
+apitrace_version=$(dpkg-query -W -f='${Version}' apitrace 2>/dev/null || echo unknown)
+mesa_version=$(dpkg-query -W -f='${Version}' libgl1-mesa-dri 2>/dev/null || echo unknown)
+strings=$(PYTHONPATH="$root/python" /usr/bin/python3 -c '
+import sys
+from rbcd.game_suite import capture_strings
+sys.exit(capture_strings(sys.argv[1:]))' "$work" "$game" "$version" "$(basename -- "$map")" "$apitrace_version" \
+  "$mesa_version" "workloads/games/$(basename -- "$rules")" -- "${cmd[@]}") || exit $?
+mapfile -t q <<<"$strings"
 
 capture=$work/capture.trace
 if [ -n "$from" ]; then
@@ -242,9 +257,9 @@ got=$(wc -l <"$work/entry/summary.jsonl")
 sum() { sha256sum | cut -d' ' -f1; }
 {
   echo "# How this game-suite entry was captured (scripts/capture-game.sh; docs/games.md)."
-  echo "game = \"$game\""
-  echo "game_version = \"$version\""
-  echo "map = \"$(basename "$map")\""
+  echo "game = ${q[0]}"
+  echo "game_version = ${q[1]}"
+  echo "map = ${q[2]}"
   echo "frames = $frames"
   echo "first_frame = $skip      # of the capture: the warm-up before it is emulated, not converted"
   echo "screen = [$width, $height]"
@@ -258,10 +273,10 @@ sum() { sha256sum | cut -d' ' -f1; }
     echo "karts = $karts"
     echo "race_seconds = $race_s"
   fi
-  echo "apitrace_version = \"$(dpkg-query -W -f='${Version}' apitrace 2>/dev/null || echo unknown)\""
-  echo "mesa_version = \"$(dpkg-query -W -f='${Version}' libgl1-mesa-dri 2>/dev/null || echo unknown)\""
-  echo "selection = \"workloads/games/$(basename "$rules")\""
-  printf 'command = ['; printf '"%s", ' "${cmd[@]}" | sed "s|$work|TMP|g; s/, \$//"; echo ']'
+  echo "apitrace_version = ${q[3]}"
+  echo "mesa_version = ${q[4]}"
+  echo "selection = ${q[5]}"
+  echo "command = ${q[6]}"
   if [ "$game" = openarena ]; then echo "config = '''"; cat "$work/rbcdcap.cfg"; echo "'''"; fi
   if [ -f "$work/entry/game-config.xml" ]; then
     echo "game_config = \"game-config.xml\"      # the game's configuration as it wrote it at the end of the run"

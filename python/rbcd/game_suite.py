@@ -22,6 +22,7 @@ fails; the outputs of a failed entry are removed.
 import argparse
 import concurrent.futures
 import hashlib
+import json
 import os
 import re
 import subprocess
@@ -99,6 +100,50 @@ def sha256_file(path, decompress=False):
                 break
             h.update(b)
     return h.hexdigest()
+
+
+def toml_string(text):
+    """`text` as a TOML basic string, for capture-game.sh's capture.toml:
+    quoted, with `"` and `\\` escaped and control characters (C0, DEL, C1)
+    written as \\uXXXX, so that any Unicode text reads back as it was. Text
+    that is not Unicode (a path of bytes that are not UTF-8, read through
+    surrogateescape) has no TOML form: ValueError."""
+    out = []
+    for ch in text:
+        cp = ord(ch)
+        if 0xd800 <= cp <= 0xdfff:
+            raise ValueError("not UTF-8 text")
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif cp < 0x20 or 0x7f <= cp <= 0x9f:
+            out.append(f"\\u{cp:04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def capture_strings(argv):
+    """capture-game.sh's strings for capture.toml, each a TOML basic string
+    on a line of its own (stdout, UTF-8): argv is WORK VALUE... -- COMMAND...;
+    the values one a line, then the command as a TOML array, its work
+    directory WORK written TMP (replaced as text, whatever the path holds).
+    A string with no TOML form is one line on stderr naming it, exit 2."""
+    work, rest = argv[0], argv[1:]
+    sep = rest.index("--")
+
+    def quoted(v):
+        try:
+            return toml_string(v)
+        except ValueError as e:
+            raise UsageError(f"'{escape(v)}': {e}: capture.toml (TOML) cannot record it") from None
+    try:
+        lines = [quoted(v) for v in rest[:sep]]
+        lines.append("[" + ", ".join(quoted(a.replace(work, "TMP")) for a in rest[sep + 1:]) + "]")
+    except UsageError as e:
+        say("capture-game.sh", str(e))
+        return 2
+    sys.stdout.buffer.write("".join(line + "\n" for line in lines).encode("utf-8"))
+    return 0
 
 
 class Entry:
@@ -187,10 +232,24 @@ class Entry:
         text = read_input_text(self.summary, "the entry's summary", 64 << 20)
         # A line a frame: counted before the text is split, so a file of
         # many short lines costs no more than its bytes.
-        if text.count("\n") != self.frames:
+        if text.count("\n") != self.frames or not text.endswith("\n"):
             raise UsageError(f"{self.summary}: not a line for each of the entry's {self.frames} frames")
-        lines = text.splitlines(keepends=True)
-        return "".join(lines[:frames] if frames else lines)
+        # Each line as the converter writes it: a JSON object ended by LF
+        # alone. Anything else (CR LF line ends) is the input's fault, said
+        # before the conversion: it could never match the regenerated one.
+        lines = text.split("\n")[:-1]
+        for i, line in enumerate(lines, 1):
+            if "\r" in line:
+                raise UsageError(f"{self.summary}: line {i} " + ("ends in CR LF" if line.endswith("\r") else
+                                 "holds a CR") + ": the converter's lines end in LF alone")
+            try:
+                ok = isinstance(json.loads(line), dict)
+            except (ValueError, RecursionError):
+                ok = False
+            if not ok:
+                raise UsageError(f"{self.summary}: line {i}: not a JSON object (the converter's figures "
+                                 "for a frame)")
+        return "".join(line + "\n" for line in (lines[:frames] if frames else lines))
 
     def summary_matches(self, summary, frames=None):
         try:

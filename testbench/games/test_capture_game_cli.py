@@ -2,10 +2,13 @@
 cannot use (empty, a symlink, dangling or not, a missing folder) or an
 unusable TMPDIR is one line, exit 2, before any game runs or any conversion
 starts; a capture holding fewer frames than asked for is one line, exit 2.
+capture.toml records any map path and any TMPDIR as TOML reads them back;
+a map path TOML cannot hold (not UTF-8) is refused before the work.
 Run with --from-trace (no game needed); nothing is left."""
 import os
 import shutil
 import subprocess
+import tomllib
 
 import pytest
 
@@ -113,3 +116,63 @@ def test_a_full_device_is_one_line(tmp_path):
         pytest.skip("cannot mount a tmpfs here")
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 1 and len(lines) == 1 and "write failed" in lines[0], (r.returncode, lines)
+
+
+def toml_of(entry):
+    with open(entry / "capture.toml", "rb") as f:
+        return tomllib.load(f)
+
+
+@pytest.mark.parametrize("folder", ['q"d', "b\\q", "n\nl", "de\x7f", "t\tb", "e\u00e9\u0085\\1"],
+                         ids=["quote", "backslash", "newline", "del", "tab", "unicode"])
+def test_a_map_path_toml_must_escape(tmp_path, folder):
+    """A neverball replay in a folder whose name holds a quote, a backslash
+    or a control character: its path is written into capture.toml's command
+    line escaped, and reads back as it is (it was written raw, and game-suite
+    refused the entry capture-game.sh had said it wrote, exit 0)."""
+    d = tmp_path / "maps" / folder
+    d.mkdir(parents=True)
+    (d / "x.nbr").write_text("x\n")
+    r = capture_game(tmp_path, "neverball", d / "x.nbr", "1", tmp_path / "entry", "--from-trace",
+                     boxes_capture(), "--skip", "0")
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    assert sorted(os.listdir(tmp_path)) == ["entry", "maps"], "something else was left"
+    doc = toml_of(tmp_path / "entry")
+    assert doc["command"] == ["env", "HOME=TMP/home", "/usr/games/neverball", "-r", os.path.realpath(d / "x.nbr")]
+    assert doc["map"] == "x.nbr" and doc["game"] == "neverball"
+    r = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "scripts", "game-suite"), "check",
+                        tmp_path / "entry"], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+
+
+def test_a_map_path_toml_cannot_hold_is_refused_before_the_work(tmp_path):
+    """A path that is not UTF-8 has no TOML form: refused naming it, one
+    line, exit 2, before the game (or the conversion), nothing left."""
+    d = tmp_path / os.fsdecode(b"u\xffx")
+    d.mkdir()
+    (d / "x.nbr").write_text("x\n")
+    (tmp_path / "tmp").mkdir()
+    refused(capture_game(tmp_path, "neverball", d / "x.nbr", "1", tmp_path / "entry", "--from-trace",
+                         boxes_capture(), "--skip", "0", tmpdir=tmp_path / "tmp"),
+            "u\\xffx/x.nbr", "not UTF-8", "capture.toml")
+    assert sorted(os.listdir(tmp_path)) == sorted([os.fsdecode(b"u\xffx"), "tmp"]) and not os.listdir(tmp_path / "tmp")
+
+
+@pytest.mark.parametrize("name", ["tp|x", "tb[x", "tq\\1x", "ta&x", "td.x", "tn\nx", 't"x'],
+                         ids=["pipe", "bracket", "backref", "ampersand", "dot", "newline", "quote"])
+@pytest.mark.parametrize("game", ["openarena", "neverball"])
+def test_any_tmpdir_works(tmp_path, name, game):
+    """TMPDIR is a path like any other: its work directory is written TMP in
+    capture.toml's command line, replaced as text (a sed pattern made of the
+    path had failed after the conversion, exit 1, with sed's message)."""
+    tmpdir = tmp_path / name
+    tmpdir.mkdir()
+    (tmp_path / "x.nbr").write_text("x\n")
+    args = ["oa_dm1", "2"] if game == "openarena" else [tmp_path / "x.nbr", "1"]
+    r = capture_game(tmp_path, game, *args, tmp_path / "entry", "--from-trace", boxes_capture(), "--skip", "0",
+                     tmpdir=tmpdir)
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    command = toml_of(tmp_path / "entry")["command"]
+    assert ("HOME=TMP/home" if game == "neverball" else "TMP/home") in command, command
+    assert not any(name in a for a in command), command
+    assert os.listdir(tmpdir) == [], "the work directory was left"

@@ -1,9 +1,10 @@
 """game-suite held to the project's rule for bad input (docs/games.md): an
 entry's capture.toml nested too deep, or whose selection file is missing or
-not a file, is one line naming the file and key, exit 2; expand never writes
-into an entry's inputs (or anywhere else) through a link or another name for
-them in its output folder: refused before anything is opened, nothing
-changed."""
+not a file, is one line naming the file and key, exit 2, as is a
+summary.jsonl not as the converter writes it (CR LF line ends); expand
+never writes into an entry's inputs (or anywhere else) through a link or
+another name for them in its output folder: refused before anything is
+opened, nothing changed."""
 import os
 import shutil
 import signal
@@ -156,3 +157,28 @@ def test_frames_past_the_entry_expand_the_whole_entry(tmp_path):
     program("rbcd-gl-raster")
     r = game_suite(tmp_path, "expand", "-o", tmp_path / "out", "--frames", "100000", SOURCE)
     assert r.returncode == 0 and r.stdout.strip() == f"{NAME}: 150 frames", (r.returncode, r.stdout, r.stderr)
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda t: t.replace(b"\n", b"\r\n"), "line 1 ends in CR LF"),
+    (lambda t: t.replace(b"\n", b"\r\n", 3).replace(b"\r\n", b"\n", 2), "line 3 ends in CR LF"),
+    (lambda t: t.replace(b",", b"\r,", 1), "line 1 holds a CR"),
+    (lambda t: b"\xef\xbb\xbf" + t, "line 1: not a JSON object"),
+    (lambda t: t[:t.index(b"\n", 100)] + b"\nnot json" + t[t.index(b"\n", 100):t.rindex(b"\n", 0, -1) + 1],
+     "line 2: not a JSON object"),
+    (lambda t: t + b"x", "not a line for each"),
+], ids=["crlf", "crlf_line3", "cr", "bom", "not_json", "unterminated"])
+def test_a_summary_not_as_the_converter_writes_it_is_the_entrys_error(tmp_path, entry, edit, words):
+    """An entry's summary.jsonl that no conversion can match (CR LF line
+    ends; a line that is not a JSON object) is bad input, one line naming
+    the file and line, exit 2, before any conversion, nothing written (with
+    CR LF ends the entry had been converted, then 'the regenerated summary
+    differs', exit 1)."""
+    summary = entry / "summary.jsonl"
+    text = summary.read_bytes()
+    summary.write_bytes(edit(text))
+    assert summary.read_bytes().count(b"\n") == text.count(b"\n")
+    out = tmp_path / "out"
+    r = game_suite(tmp_path, "expand", "-o", out, "--frames", "1", "-j", "1", entry)
+    refused(r, str(summary), words)
+    assert not out.exists() or os.listdir(out) == [], "something was written"
