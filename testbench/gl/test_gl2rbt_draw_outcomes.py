@@ -144,3 +144,17 @@ def test_buffer_data_of_another_length_than_its_size_is_refused(tmp_path, fn, ex
     r = gl2rbt(tmp_path, draw(c).write(tmp_path / "d.xz"), "-o", tmp_path / "d.rbt")
     refused(r, fn, "40 bytes of data, not its size (36)" if fn == "glBufferData" else "the size's bytes")
     assert left_behind(tmp_path, ["d.xz"]) == []
+
+
+def test_two_vertex_shader_objects_link_as_one_stage(tmp_path):
+    """Desktop GL links several shader objects of one stage: main in one, a
+    function it calls in the other (each with its own #version line, which
+    the converter had pasted into one text Mesa could not compile)."""
+    c = shader_calls("#version 330 core\nin vec3 p;\nvec4 xf(vec3 q);\nvoid main() { gl_Position = xf(p); }\n")
+    c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=3)
+    c.add("glShaderSource", shader=3, count=1, string=[
+        "#version 330 core\nvec4 xf(vec3 q) { return vec4(q.x / 32.0 - 1.0, q.y / 24.0 - 1.0, 0.0, 1.0); }\n"],
+        length=None)
+    c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
+    c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+    assert trace(tmp_path, draw(c), "two") == trace(tmp_path, draw(shader_calls(VS)), "one")

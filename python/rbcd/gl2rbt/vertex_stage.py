@@ -258,16 +258,20 @@ class VertexStage:
             # Mesa 22.3 clips by them even with GL_CLIP_DISTANCEi disabled.
             fail_call(no, f"{where}: its vertex shader writes clip or cull distances (gl_ClipDistance, "
                       "gl_CullDistance): not emulated")
-        sh = GL.glCreateShader(GL.GL_VERTEX_SHADER)
-        # The capture's bytes as they were (apitrace's text keeps bytes that
-        # are not UTF-8 as surrogates; GLSL allows them in comments).
-        GL.glShaderSource(sh, sources["vertex"].encode("utf-8", "surrogateescape"))
-        GL.glCompileShader(sh)
-        if not GL.glGetShaderiv(sh, GL.GL_COMPILE_STATUS):
-            log = GL.glGetShaderInfoLog(sh).decode("utf-8", "replace").strip().splitlines()
-            fail_call(no, f"{where}: Mesa does not compile its vertex shader: {printable((log or ['no log'])[0])}")
         prog = GL.glCreateProgram()
-        GL.glAttachShader(prog, sh)
+        shaders = []
+        for text in p.objects.get("vertex") or [sources["vertex"]]:
+            sh = GL.glCreateShader(GL.GL_VERTEX_SHADER)
+            shaders.append(sh)
+            # The capture's bytes as they were (apitrace's text keeps bytes
+            # that are not UTF-8 as surrogates; GLSL allows them in comments).
+            GL.glShaderSource(sh, text.encode("utf-8", "surrogateescape"))
+            GL.glCompileShader(sh)
+            if not GL.glGetShaderiv(sh, GL.GL_COMPILE_STATUS):
+                log = GL.glGetShaderInfoLog(sh).decode("utf-8", "replace").strip().splitlines()
+                fail_call(no, f"{where}: Mesa does not compile its vertex shader: "
+                          f"{printable((log or ['no log'])[0])}")
+            GL.glAttachShader(prog, sh)
         if self.mesa.es:
             # OpenGL ES links only whole programs: a fragment shader of the
             # vertex shader's language version that reads nothing.
@@ -281,7 +285,8 @@ class VertexStage:
         names = ctypes.cast((ctypes.c_char_p * 1)(b"gl_Position"), ctypes.POINTER(ctypes.POINTER(ctypes.c_char)))
         GL.glTransformFeedbackVaryings(prog, 1, names, GL.GL_INTERLEAVED_ATTRIBS)
         GL.glLinkProgram(prog)
-        GL.glDeleteShader(sh)
+        for sh in shaders:
+            GL.glDeleteShader(sh)
         if not GL.glGetProgramiv(prog, GL.GL_LINK_STATUS):
             log = GL.glGetProgramInfoLog(prog).decode("utf-8", "replace").strip().splitlines()
             fail_call(no, f"{where}: Mesa does not link its vertex stage: {printable((log or ['no log'])[0])}")

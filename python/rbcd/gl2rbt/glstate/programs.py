@@ -34,6 +34,7 @@ class Program:
         self.shaders = set()
         self.bindings = {}         # attribute name -> index
         self.linked = None         # ({stage: source}, {name: index}) at the last link
+        self.objects = {}          # {stage: [source of each shader object]} at the last link
         self.link_call = None
         self.version = 0           # a new one at each link
         self.uniform_names = {}    # capture location -> name
@@ -135,16 +136,20 @@ class ProgramCalls:
 
     def h_link_program(self, no, name, a, args):
         p = self.program(no, name, a[0] if a else None)
-        sources = {}
+        sources, objects = {}, {}
         for s in sorted(p.shaders):
             sh = self.s.shaders[s]
             if sh.compiled is None:
                 fail_call(no, f"{name}: shader {s} was never compiled")
+            # Several shader objects of one stage are linked together (each
+            # compiled on its own); the stage's source, which rules and
+            # checks read, is their texts joined.
+            objects.setdefault(sh.stage, []).append(sh.compiled)
             if sh.stage in sources:
-                sources[sh.stage] += "\n" + sh.compiled   # several shaders of one stage: linked together
+                sources[sh.stage] += "\n" + sh.compiled
             else:
                 sources[sh.stage] = sh.compiled
-        p.linked = (sources, dict(p.bindings))
+        p.linked, p.objects = (sources, dict(p.bindings)), objects
         p.digest = hashlib.sha256("".join(f"{stage}\0{sources[stage]}\0" for stage in sorted(sources))
                                   .encode("utf-8", "surrogateescape")).hexdigest()
         fragment = COMMENTS.sub(" ", sources.get("fragment", ""))
