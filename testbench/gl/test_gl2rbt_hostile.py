@@ -694,6 +694,23 @@ def test_uniform_values_past_their_c_types_are_named(tmp_path, fn, values, words
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
+@pytest.mark.parametrize("ret, words", [
+    (1 << 40, "glGetUniformLocation: the location returned: 1099511627776 is outside [-1, 2147483647]"),
+    (-2, "glGetUniformLocation: the location returned: -2 is outside [-1, 2147483647]"),
+    (0.5, "glGetUniformLocation: the location returned: 0.5 is not an integer"),
+])
+def test_a_returned_location_is_a_glint(tmp_path, ret, words):
+    """glGetUniformLocation returns a GLint, -1 or a location: another
+    value recorded is the capture's error, named (2^40 had been taken)."""
+    c = shader_calls(VS_X0).add("glGetUniformLocation", program=2, name="x0", ret=ret)
+    bad_call = len(c.calls)
+    c.add("glUniform1f", location=5, v0=0.5)
+    line = refused(gl2rbt(tmp_path, shader_draw(c, vao=7).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+                   words)
+    assert f": call {bad_call}: " in line, line
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
 def test_frames_are_ascii_digits(tmp_path):
     """--frames of other scripts' digits ('\u0661:\u0662', which int() reads
     as 1:2) is not A:B."""

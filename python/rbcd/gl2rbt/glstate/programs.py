@@ -180,8 +180,10 @@ class ProgramCalls:
     def h_get_uniform_location(self, no, name, a, args):
         d = dict(args)
         p = self.program(no, name, d.get("program"))
-        if isinstance(self.ret, int) and self.ret >= 0 and isinstance(d.get("name"), str):
-            p.uniform_names[self.ret] = d["name"]
+        # A GLint: -1 (no such uniform) or a location.
+        loc = checked(no, integer, self.ret, f"{name}: the location returned", -1, I32[1])
+        if loc >= 0 and isinstance(d.get("name"), str):
+            p.uniform_names[loc] = d["name"]
 
     def h_get_uniform_block_index(self, no, name, a, args):
         d = dict(args)
