@@ -694,6 +694,56 @@ def test_uniform_values_past_their_c_types_are_named(tmp_path, fn, values, words
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
+VS_M = VS.replace("in vec3 p;", "in vec3 p;\nuniform mat2 m;").replace(
+    "vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0)", "vec4(m * vec2(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0), 0.0, 1.0)")
+
+
+def boolean_draw(normalized="GL_FALSE", transpose="GL_FALSE"):
+    """A triangle of unsigned bytes (within the screen normalized, far past
+    it not) under a matrix that is not symmetric."""
+    c = shader_calls(VS_M).add("glGetUniformLocation", program=2, name="m", ret=4)
+    c.add("glUniformMatrix2fv", location=4, count=1, transpose=transpose, value=[1.0, 0.5, 0.0, 1.0])
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=3)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=9, data=bytes([20, 20, 0, 200, 20, 0, 20, 200, 0]),
+          usage="GL_STATIC_DRAW")
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_UNSIGNED_BYTE", normalized=normalized, stride=0,
+          pointer=0)
+    return c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
+
+
+def test_any_glboolean_but_zero_normalizes_and_transposes(tmp_path):
+    """glVertexAttribPointer's normalized and glUniformMatrix's transpose
+    as Mesa 22.3 tests them: any byte but 0 is true (normalized = 2 had
+    drawn the bytes unnormalized)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    plain = trace_bytes(tmp_path, boolean_draw(), "plain")
+    normalized = trace_bytes(tmp_path, boolean_draw(normalized="GL_TRUE"), "normalized")
+    transposed = trace_bytes(tmp_path, boolean_draw(transpose="GL_TRUE"), "transposed")
+    assert len({plain, normalized, transposed}) == 3
+    for v in (1, 2, 255):
+        assert trace_bytes(tmp_path, boolean_draw(normalized=v), f"n{v}") == normalized, v
+        assert trace_bytes(tmp_path, boolean_draw(transpose=v), f"t{v}") == transposed, v
+    assert trace_bytes(tmp_path, boolean_draw(normalized=0, transpose=0), "zero") == plain
+
+
+@pytest.mark.parametrize("arg, value, words", [
+    ("normalized", -1, "glVertexAttribPointer: normalized: -1 is not a GLboolean"),
+    ("normalized", 256, "glVertexAttribPointer: normalized: 256 is not a GLboolean"),
+    ("normalized", 1.0, "glVertexAttribPointer: normalized: 1.0 is not a GLboolean"),
+    ("transpose", -1, "glUniformMatrix2fv: transpose: -1 is not a GLboolean"),
+    ("transpose", 1 << 40, "glUniformMatrix2fv: transpose: 1099511627776 is not a GLboolean"),
+    ("transpose", "GL_ONE", "glUniformMatrix2fv: transpose: GL_ONE is not a GLboolean"),
+])
+def test_a_glboolean_past_a_byte_is_named(tmp_path, arg, value, words):
+    """A GLboolean is an unsigned byte: a value no C call can pass is the
+    capture's error, named (transpose = -1 had transposed)."""
+    refused(gl2rbt(tmp_path, boolean_draw(**{arg: value}).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+            words)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
 @pytest.mark.parametrize("ret, words", [
     (1 << 40, "glGetUniformLocation: the location returned: 1099511627776 is outside [-1, 2147483647]"),
     (-2, "glGetUniformLocation: the location returned: -2 is outside [-1, 2147483647]"),

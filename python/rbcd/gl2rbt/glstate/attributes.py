@@ -37,7 +37,7 @@ def attrib_format_valid(name, size, kind, normalized):
     if kind not in ATTRIB_TYPES:
         return False
     if size == "GL_BGRA":
-        return (kind == "GL_UNSIGNED_BYTE" or kind in PACKED_ATTRIB_TYPES) and normalized in ("GL_TRUE", True, 1)
+        return (kind == "GL_UNSIGNED_BYTE" or kind in PACKED_ATTRIB_TYPES) and normalized
     if kind in PACKED_ATTRIB_TYPES:
         return size == 4
     return kind != "GL_UNSIGNED_INT_10F_11F_11F_REV" or size == 3
@@ -171,13 +171,15 @@ class AttributeCalls:
         i = attrib_index(no, name, d["index"])
         size = d["size"]
         stride = checked(no, integer, d.get("stride", 0), f"{name}: the stride", *I32)
+        from . import gl_boolean   # the package imports this module before it defines gl_boolean
+        normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
         if i is None or not (size in (1, 2, 3, 4) or size == "GL_BGRA") or stride < 0:
             return   # GL_INVALID_VALUE: the call does nothing
-        if not attrib_format_valid(name, size, d.get("type"), d.get("normalized", "GL_FALSE")):
+        if not attrib_format_valid(name, size, d.get("type"), normalized):
             return   # GL_INVALID_ENUM, GL_INVALID_VALUE or GL_INVALID_OPERATION in Mesa: the earlier pointer stays
         at = self.current_vao().attrib(i)
         at.call, at.size, at.type, at.stride = name, size, d.get("type"), stride
-        at.normalized = d.get("normalized", "GL_FALSE") in ("GL_TRUE", True, 1)
+        at.normalized = normalized
         p = d.get("pointer")
         at.buffer = self.s.bound.get("GL_ARRAY_BUFFER", 0)
         if at.buffer:

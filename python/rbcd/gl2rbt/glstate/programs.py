@@ -13,6 +13,7 @@ import re
 from ...cli import I32, U32, integer, real
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
+from . import gl_boolean
 
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
@@ -226,6 +227,8 @@ class ProgramCalls:
                 return   # GL_INVALID_OPERATION: no program in use, the call does nothing
             p, rest = self.s.programs[self.s.program], a
         loc = checked(no, integer, rest[0], f"{name}: the location", *I32)
+        transpose = m.group(2) is not None and gl_boolean(dict(args).get("transpose"), no, f"{name}: transpose",
+                                                          nonzero=True)
         if loc == -1:
             return   # GL ignores a location of -1
         values, count = rest[1:], None
@@ -244,8 +247,6 @@ class ProgramCalls:
         elif len(values) != int(m.group(3)):
             fail_call(no, f"{name}: {len(values)} values, not {m.group(3)}")
         uniform_values(no, name, m.group(5), values)
-        # Any GLboolean but zero transposes (Mesa tests it as C does).
-        transpose = m.group(2) is not None and dict(args).get("transpose") not in ("GL_FALSE", False, 0, None)
         # As Mesa's program is given it: the glUniform function, the values,
         # their component type and, for the v forms, their count.
         # Kept in the order last set: an array's element and the array
