@@ -470,6 +470,28 @@ def test_records_that_no_gl_call_makes(tmp_path, build, words):
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
+@pytest.mark.parametrize("fn, args", [
+    ("glDrawArrays", dict(mode="GL_TRIANGLES", first=0, count=3)),
+    ("glViewport", dict(x=0, y=0, width=64, height=48)),
+])
+def test_the_end_of_frame_flag_only_on_a_swap(tmp_path, fn, args):
+    """apitrace flags the buffer swaps (and glFrameTerminatorGREMEDY) as
+    ending a frame, by name: a draw record carrying the flag had ended a
+    frame that was never swapped, and converted as a whole frame. A
+    reduced capture keeps glFrameTerminatorGREMEDY (it had been left out
+    with the calls the emulation passes over, and its frames with it)."""
+    c = Calls().add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
+    c.add("glEnableClientState", array="GL_VERTEX_ARRAY").add(fn, flags=END_FRAME, **args)
+    bad_call = len(c.calls)
+    for then in (c, c.swap()):
+        line = refused(gl2rbt(tmp_path, then.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+                       f"{fn}: the end-of-frame flag on a call that ends no frame")
+        assert f": call {bad_call}: " in line, line
+        assert left_behind(tmp_path, ["c.xz"]) == []
+    assert trace_bytes(tmp_path, Calls().triangle(obj=1).add("glFrameTerminatorGREMEDY", flags=END_FRAME),
+                       "gremedy") == trace_bytes(tmp_path, Calls().triangle(obj=1).swap(), "swap")
+
+
 def test_late_output_failures_leave_no_trace(tmp_path):
     cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
     refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--summary", tmp_path / "no" / "s.jsonl"),

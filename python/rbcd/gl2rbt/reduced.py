@@ -15,7 +15,7 @@ from .apitrace import CallReader, PointerType, call_values_within, too_many_valu
 from ..cli import U63
 from .errors import ConvertError, printable
 from .converter import Converter
-from .gl_tables import IGNORED_PREFIXES, base_name
+from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
 from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
 from .outputs import SafeText
 
@@ -30,7 +30,7 @@ REDUCED_END = "end"   # the last record, ("end", calls): a file cut anywhere lac
 CHECK_REST = object()
 XZ_MAGIC = b"\xfd7zXZ\x00"
 # Kept although the emulation passes over them: the window system (frame
-# ends, the window's size).
+# ends, the window's size), and glFrameTerminatorGREMEDY (END_FRAME_CALLS).
 REDUCED_KEEP = ("glX", "egl", "wgl")
 # Arguments a handled call carries that the emulation never reads whole:
 # texture images (a texture's size is read, and its image's digest, which
@@ -51,7 +51,7 @@ def reduced_keeps(name):
     if base_name(name) in REDUCED_CHECK_ONLY:
         return False
     return base_name(name) in Converter.HANDLERS or not name.startswith(IGNORED_PREFIXES) \
-        or name.startswith(REDUCED_KEEP)
+        or name.startswith(REDUCED_KEEP) or name in END_FRAME_CALLS
 
 
 # Arguments of handled calls the emulation never reads: left out (None).
