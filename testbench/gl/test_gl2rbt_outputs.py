@@ -184,14 +184,26 @@ def test_a_full_device_is_named(tmp_path, args):
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
-def test_a_report_standard_output_cannot_take_is_one_line(tmp_path):
-    """Standard output on a full device: the outputs are in place and
-    whole, the lost report is one line, exit 1 (it was an internal error)."""
+def test_a_report_standard_output_cannot_take_fails_the_run(tmp_path):
+    """Standard output on a full device, or closed: the report is written
+    before the outputs are committed, and its failure is the run's, as an
+    output's write failure is: one line, exit 1, no output left (they had
+    been left whole with exit 1, and with a closed standard output the
+    report was lost with exit 0)."""
     cap = Calls().frame().write(tmp_path / "c.xz")
+    outputs = ["-o", tmp_path / "c.rbt", "--summary", tmp_path / "s.jsonl", "--geometry", tmp_path / "g.geo"]
     with open("/dev/full", "w") as full:
-        r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", stdout=full)
-    refused(r, "the report: write failed", status=1)
-    assert (tmp_path / "c.rbt").read_text().startswith("rbcd-trace ")
+        r = gl2rbt(tmp_path, cap, *outputs, stdout=full)
+    refused(r, "the report: write failed: No space left on device; no output written", status=1)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = subprocess.run(["/usr/bin/python3", GL2RBT, cap] + [str(a) for a in outputs], stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, text=True, env=env, timeout=120, pass_fds=(),
+                       preexec_fn=lambda: os.close(1))
+    refused(r, "the report: write failed: standard output is closed; no output written", status=1)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    r = gl2rbt(tmp_path, cap, *outputs)
+    assert r.returncode == 0 and r.stdout.startswith("1 frames: "), r.stderr
 
 
 def test_a_listing_image_on_standard_output_has_it_to_itself(tmp_path):
