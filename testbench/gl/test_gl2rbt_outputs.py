@@ -9,6 +9,7 @@ captures (no Xvfb, no apitrace)."""
 import lzma
 import os
 import pickle
+import signal
 import subprocess
 import time
 
@@ -204,6 +205,44 @@ def test_a_report_standard_output_cannot_take_fails_the_run(tmp_path):
     assert left_behind(tmp_path, ["c.xz"]) == []
     r = gl2rbt(tmp_path, cap, *outputs)
     assert r.returncode == 0 and r.stdout.startswith("1 frames: "), r.stderr
+
+
+def run_or_fail(cmd, env, timeout, why):
+    """cmd's result; pytest.fail(why) when it runs past `timeout`, its
+    whole process group (the converter's rasterizer too) killed."""
+    p = subprocess.Popen([str(a) for a in cmd], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                         stdin=subprocess.DEVNULL, start_new_session=True)
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.communicate()
+        pytest.fail(why)
+    return subprocess.CompletedProcess(p.args, p.returncode, out, err)
+
+
+@pytest.mark.parametrize("args", [["-o", "fifo"], ["-o", "c.rbt", "--summary", "fifo"],
+                                  ["-o", "c.rbt", "--geometry", "fifo"], ["-o", "c.rbt", "--stream-out", "fifo"],
+                                  ["--list-draws", "0", "--image", "fifo"], ["-o", "c.rbt", "--depth-out", "d"]],
+                         ids=["trace", "summary", "geometry", "stream", "image", "depth"])
+def test_a_fifo_output_is_refused_before_it_is_opened(tmp_path, args):
+    """An output that is a FIFO no process reads: one line naming it, exit
+    2, at once (opening it had waited for a reader for ever); standard
+    output, a pipe, is still an output."""
+    os.mkfifo(tmp_path / "fifo")
+    os.mkfifo(tmp_path / "d.0.depth")
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = run_or_fail(["/usr/bin/python3", GL2RBT, cap] + [tmp_path / a if a in ("fifo", "c.rbt", "d") else a
+                                                         for a in args], env, 30,
+                    f"{args}: waited for a reader of the FIFO")
+    fifo = tmp_path / ("d.0.depth" if "--depth-out" in args else "fifo")
+    option = args[-2]
+    refused(r, f"{option} {fifo}: cannot create: is a FIFO, not a regular file")
+    assert left_behind(tmp_path, ["c.xz", "fifo", "d.0.depth"]) == []
+    r = subprocess.run(["/usr/bin/python3", GL2RBT, cap, "-o", "/dev/stdout", "-q"], capture_output=True, env=env,
+                       stdin=subprocess.DEVNULL, timeout=120)
+    assert r.returncode == 0 and r.stdout.startswith(b"rbcd-trace "), r.stderr
 
 
 def test_a_listing_image_on_standard_output_has_it_to_itself(tmp_path):
