@@ -260,6 +260,35 @@ def test_a_listing_image_on_standard_output_has_it_to_itself(tmp_path):
         assert sorted(os.listdir(tmp_path)) == ["c.xz"], os.listdir(tmp_path)
 
 
+def test_a_listing_image_of_a_large_screen_is_built_in_bounded_memory(tmp_path):
+    """--image of a 4096 x 4096 frame one draw covers: the label's place
+    from counts, not every pixel's coordinates (16 bytes a pixel, 256 MiB
+    here; 8192 x 8192 had peaked at 760 MB), and no array kept once the
+    next is made. numpy's arrays are what tracemalloc sees (PIL's picture,
+    4 bytes a pixel, is not)."""
+    pytest.importorskip("PIL", reason="python3-pil is missing (installed with apitrace: scripts/setup.sh --gl)")
+    import tracemalloc
+    import numpy as np
+    from rbcd.gl2rbt.listing import write_draw_image
+    side = 4096
+    ids = np.zeros((side, side), "<u2")
+    ids[:, :100] = 0xFFFF
+    ids[:50] = 1
+    with open(tmp_path / "ids", "wb") as f:
+        f.write(f"rbcd-ids 1 {side} {side}\n".encode())
+        ids.tofile(f)
+    del ids
+    rows = [{"index": 0, "object": 3}, {"index": 1, "object": None}]
+    tracemalloc.start()
+    try:
+        write_draw_image(str(tmp_path / "f.png"), str(tmp_path / "ids"), rows)
+        peak = tracemalloc.get_traced_memory()[1] / (1 << 20)
+    finally:
+        tracemalloc.stop()
+    assert (tmp_path / "f.png").read_bytes().startswith(b"\x89PNG")
+    assert peak < 120, f"{peak:.0f} MiB of arrays for a {side} x {side} picture"
+
+
 @pytest.mark.parametrize("args, words", [
     (["--list-draws", "0", "-o", "x.rbt"], "-o goes with a conversion, not with --list-draws"),
     (["--list-draws", "0", "--geometry", "x.geo"], "--geometry goes with a conversion, not with --list-draws"),
