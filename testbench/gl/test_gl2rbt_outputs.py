@@ -20,7 +20,7 @@ from gl_captures import GL2RBT, Calls as SharedCalls, gl2rbt_timed as gl2rbt, le
 from rbcd.cli import describe
 from rbcd.gl2rbt.apitrace import MAX_RECORD_VALUES
 from rbcd.gl2rbt.errors import printable
-from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_HEADER
+from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_EXPANSION, REDUCED_HEADER
 
 # A pickle of shared references: a 10^9-element list in a few kilobytes (its
 # repr would take gigabytes and minutes).
@@ -113,6 +113,39 @@ def test_a_call_of_too_many_values_is_refused_before_it_is_walked(tmp_path, fn, 
 
 
 # ---- the rest of a reduced capture, when --frames stops before it
+
+def frame(body):
+    return b"\x95" + len(body).to_bytes(8, "little") + body
+
+
+@pytest.mark.parametrize("framed", [True, False], ids=["framed", "unframed"])
+def test_a_record_of_tiny_objects_is_refused_in_bounded_memory(tmp_path, framed):
+    """A 9 KB reduced capture expanding to its limit (65 MB) in one record of
+    empty lists, 80 bytes of memory each from one byte: framed as the
+    writer frames records, its opcodes are counted before they are
+    unpickled; unframed, it is refused at once (16 million of them had
+    peaked at 1.3 GB; 65 million would take 5 GB). Run under a 2 GB address
+    space, so that the machine is spared when the limit fails."""
+    n = 60_000_000
+    chunk = (1 << 20) - 16
+    if framed:
+        record = b"\x80\x04" + frame(b"(" + b"]" * (chunk - 1)) + frame(b"]" * chunk) * (n // chunk) + frame(b"l.")
+        words = "does not decode (a record of more than 3145728 pickle opcodes"
+    else:
+        record = b"\x80\x04(" + b"]" * n + b"l."
+        words = "does not decode (a record not framed as the writer frames it)"
+    z = lzma.LZMACompressor(preset=6)
+    data = z.compress(pickle.dumps(REDUCED_HEADER, protocol=4)) + z.compress(record) + z.flush()
+    (tmp_path / "c.xz").write_bytes(data)
+    assert len(data) < 1 << 16 and len(record) < REDUCED_EXPANSION << 16, "not a capture at the expansion limit"
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = subprocess.run(["/usr/bin/time", "-f", "maxrss %M", "prlimit", f"--as={2 << 30}", "/usr/bin/python3", GL2RBT,
+                        tmp_path / "c.xz", "-o", tmp_path / "c.rbt"], capture_output=True, text=True, env=env,
+                       stdin=subprocess.DEVNULL, timeout=120)
+    refused(r, "c.xz: before its first call: the reduced capture " + words)
+    assert peak_mb(r) < 300, f"{peak_mb(r):.0f} MB"
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
 
 def test_the_rest_of_a_reduced_capture_is_checked(tmp_path):
     """--frames 0:0 of a two-frame reduced capture reads on to the end of
