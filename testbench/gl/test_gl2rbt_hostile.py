@@ -701,6 +701,59 @@ def test_uniform_calls_gl_ignores_keep_the_earlier_value(tmp_path):
         assert trace_bytes(tmp_path, x0(later), f"later{i}") == half, later
 
 
+VS_MOVED = VS_X0.replace("p.y / 24.0 - 1.0", "p.y / 24.0 - 0.5")
+
+
+def relink_draws(*relink):
+    """Program 2 (VS_X0, x0 = 0.5) drawn in one frame; then the calls
+    `relink` (name, arguments), glUniform1f(x0, 0.9) and a draw in a
+    second frame."""
+    c = shader_calls(VS_X0).add("glGetUniformLocation", program=2, name="x0", ret=5)
+    c.add("glUniform1f", location=5, v0=0.5)
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
+    for fn, kw in relink:
+        c.add(fn, **kw)
+    return c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
+
+
+def new_vertex_source(source):
+    return [("glShaderSource", dict(shader=1, count=1, string=[source], length=None)),
+            ("glCompileShader", dict(shader=1))]
+
+
+def test_a_failed_relink_keeps_the_executable_in_use(tmp_path):
+    """Mesa 22.3, as GL 4.6 section 7.3 says: a program in use linked again
+    without success keeps the executable it had, with its uniforms, until
+    another program is used (glUniform and glUseProgram of it are then
+    GL_INVALID_OPERATION): its draws are the earlier program's, where the
+    converter had refused them ("Mesa does not link its vertex stage"),
+    or, when only the fragment shader failed, had drawn the new vertex
+    shader's. A link that holds draws the new shaders."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    link, use = ("glLinkProgram", dict(program=2)), ("glUseProgram", dict(program=2))
+    uniform = ("glUniform1f", dict(location=5, v0=0.9))
+    same = trace_bytes(tmp_path, relink_draws(), "same")
+    bad_vertex = new_vertex_source("#version 330 core\nvoid main() { gl_Position = nonsense; }\n")
+    assert trace_bytes(tmp_path, relink_draws(*bad_vertex, link, uniform, use), "bad_vertex") == same
+    bad_fragment = new_vertex_source(VS_MOVED) + [
+        ("glCreateShader", dict(type="GL_FRAGMENT_SHADER", ret=3)),
+        ("glShaderSource", dict(shader=3, count=1, string=["#version 330 core\nvoid main() { nonsense; }\n"],
+                                length=None)),
+        ("glCompileShader", dict(shader=3)), ("glAttachShader", dict(program=2, shader=3))]
+    assert trace_bytes(tmp_path, relink_draws(*bad_fragment, link, uniform), "bad_fragment") == same
+    twice = bad_vertex + [link] + new_vertex_source("#version 330 core\nvoid main() { oops; }\n") + [link]
+    assert trace_bytes(tmp_path, relink_draws(*twice, uniform), "twice") == same
+    moved = trace_bytes(tmp_path, relink_draws(*new_vertex_source(VS_MOVED), link), "moved")
+    assert moved != same
+    # Not in use when its link fails: the program has no executable, and
+    # a draw with it is refused as before.
+    refused(gl2rbt(tmp_path, relink_draws(("glUseProgram", dict(program=0)), *bad_vertex, link, use)
+                   .write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), "Mesa does not compile its vertex shader")
+
+
 @pytest.mark.parametrize("fn, values, words", [
     ("glUniform1f", dict(v0=10 ** 400), "a value: an integer of 1329 bits is too large"),
     ("glUniform1i", dict(v0=1 << 31), "a value: 2147483648 is outside"),
