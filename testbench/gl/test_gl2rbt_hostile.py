@@ -572,6 +572,23 @@ def strip_of(c, restart):
     return c.add("glEnd")
 
 
+def test_a_swap_between_glbegin_and_glend(tmp_path):
+    """A buffer swap between glBegin and glEnd ends its frame, and the
+    primitive is drawn at glEnd, into the next, as Mesa 22.3 draws it
+    (llvmpipe under Xvfb: the swapped frame lacks it, the next has it); the
+    swap had been passed over, the two frames converted as one."""
+    def triangle(c):
+        for x, y in ((4, 4), (40, 4), (4, 40)):
+            c.add("glVertex3f", x=x, y=y, z=-10)
+        return c
+    across = triangle(Calls().add("glBegin", mode="GL_TRIANGLES")).swap().add("glEnd").swap()
+    after = triangle(Calls().swap().add("glBegin", mode="GL_TRIANGLES")).add("glEnd").swap()
+    r = gl2rbt(tmp_path, across.write(tmp_path / "a.xz"), "-o", tmp_path / "a.rbt", "--summary", tmp_path / "a.jsonl")
+    assert r.returncode == 0, r.stderr
+    assert [json.loads(line)["other"] > 0 for line in open(tmp_path / "a.jsonl")] == [False, True]
+    assert trace_bytes(tmp_path, across, "across") == trace_bytes(tmp_path, after, "after")
+
+
 def pointer(c):
     return c.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
 

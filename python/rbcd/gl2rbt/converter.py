@@ -188,6 +188,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 return
             if base.startswith(("glCallList", "glArrayElement", "glEvalCoord", "glEvalPoint", "glVertexAttrib")):
                 fail_call(no, f"{printable(name)} between glBegin and glEnd is not emulated")
+            if flags & CALL_FLAG_END_FRAME:
+                # A buffer swap there ends the frame; Mesa keeps the
+                # primitive's vertices and draws them at glEnd, into the next.
+                self.end_frame(no)
             return   # any other call there is GL_INVALID_OPERATION: it does nothing
         h = self.HANDLERS.get(base)
         if self.core and base in COMPAT_ONLY:
