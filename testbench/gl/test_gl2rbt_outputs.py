@@ -240,6 +240,23 @@ def test_a_report_standard_output_cannot_take_fails_the_run(tmp_path):
     assert r.returncode == 0 and r.stdout.startswith("1 frames: "), r.stderr
 
 
+def test_a_listing_standard_output_cannot_take_fails_the_run(tmp_path):
+    """--list-draws with standard output full or closed: one line, exit 1,
+    and no image (it had been an internal error, and with a closed
+    standard output the listing was lost with exit 0)."""
+    pytest.importorskip("PIL", reason="python3-pil is missing (installed with apitrace: scripts/setup.sh --gl)")
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    args = [cap, "--list-draws", "0", "--image", tmp_path / "f.png"]
+    with open("/dev/full", "w") as full:
+        refused(gl2rbt(tmp_path, *args, stdout=full), "the listing: write failed: No space left on device", status=1)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = subprocess.run(["/usr/bin/python3", GL2RBT] + [str(a) for a in args], stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, text=True, env=env, timeout=120, preexec_fn=lambda: os.close(1))
+    refused(r, "the listing: write failed: standard output is closed", status=1)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
 def run_or_fail(cmd, env, timeout, why):
     """cmd's result; pytest.fail(why) when it runs past `timeout`, its
     whole process group (the converter's rasterizer too) killed."""

@@ -23,7 +23,8 @@ def list_draws(args):
     # has it to itself: the listing goes to standard error.
     if args.image == "-":
         args.image = "/dev/stdout"
-    out = sys.stderr if args.image and to_standard_output([args.image]) else sys.stdout
+    stream = sys.stderr if args.image and to_standard_output([args.image]) else sys.stdout
+    out = io.StringIO()   # written whole before the image: a listing that cannot be written leaves no image
     tmp = tempfile.mkdtemp(prefix="rbcd-gl2rbt-list.")
     try:
         args.output = os.path.join(tmp, "list.rbt")
@@ -47,6 +48,13 @@ def list_draws(args):
                   (i == 0 or rows[i - 1]["pass"] != r["pass"])]
         if passes:
             print("passes: " + ", ".join(f"from call {c} {printable(p, 60)!r}" for c, p in passes), file=out)
+        if stream is None:   # closed when the program started
+            raise ToolError("the listing: write failed: standard output is closed")
+        try:
+            stream.write(out.getvalue())
+            stream.flush()
+        except OSError as e:
+            raise ToolError(f"the listing: write failed: {printable(e.strerror or e)}")
         if args.image:
             write_draw_image(args.image, ids_path, rows)
         return 0
