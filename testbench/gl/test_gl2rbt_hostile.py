@@ -414,6 +414,7 @@ def test_half_floats_of_opengl_es_2(tmp_path):
     GL_HALF_FLOAT) in an OpenGL ES 2.0 context: the same triangle as floats."""
     pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
     vs = "#version 100\nattribute vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n"
+    fs = "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(1.0); }\n"
 
     def es(kind, data):
         c = Calls()
@@ -421,7 +422,11 @@ def test_half_floats_of_opengl_es_2(tmp_path):
               attrib_list=["EGL_CONTEXT_CLIENT_VERSION", 2, "EGL_NONE"], ret=1)
         c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
         c.add("glShaderSource", shader=1, count=1, string=[vs], length=None).add("glCompileShader", shader=1)
+        # OpenGL ES links only whole programs.
+        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+        c.add("glShaderSource", shader=3, count=1, string=[fs], length=None).add("glCompileShader", shader=3)
         c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
+        c.add("glAttachShader", program=2, shader=3)
         c.add("glBindAttribLocation", program=2, index=0, name="p")
         c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
         c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
@@ -765,10 +770,24 @@ def test_a_failed_relink_keeps_the_executable_in_use(tmp_path):
     assert trace_bytes(tmp_path, relink_draws(*twice, uniform), "twice") == same
     moved = trace_bytes(tmp_path, relink_draws(*new_vertex_source(VS_MOVED), link), "moved")
     assert moved != same
+    # Another program whose link failed (its fragment shader): using it is
+    # GL_INVALID_OPERATION, the program in use draws (it had drawn the other
+    # program's vertex shader).
+    other = [("glCreateShader", dict(type="GL_VERTEX_SHADER", ret=8)),
+             ("glShaderSource", dict(shader=8, count=1, string=[VS_MOVED], length=None)),
+             ("glCompileShader", dict(shader=8))] + bad_fragment[-4:-1] + [
+        ("glCreateProgram", dict(ret=4)), ("glAttachShader", dict(program=4, shader=8)),
+        ("glAttachShader", dict(program=4, shader=3)), ("glBindAttribLocation", dict(program=4, index=0, name="p")),
+        ("glLinkProgram", dict(program=4)), ("glUseProgram", dict(program=4))]
+    assert trace_bytes(tmp_path, relink_draws(*other), "other") == same
     # Not in use when its link fails: the program has no executable, and
-    # a draw with it is refused as before.
-    refused(gl2rbt(tmp_path, relink_draws(("glUseProgram", dict(program=0)), *bad_vertex, link, use)
-                   .write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), "Mesa does not compile its vertex shader")
+    # glUseProgram of it is GL_INVALID_OPERATION: the draw runs with no
+    # program, which in a core profile draws nothing (it had been refused).
+    cap = relink_draws(("glUseProgram", dict(program=0)), *bad_vertex, link, use).write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--summary", tmp_path / "c.jsonl")
+    assert r.returncode == 0, r.stderr
+    drawn = [json.loads(line)["other"] for line in open(tmp_path / "c.jsonl")]
+    assert drawn[0] > 100 and drawn[1] == 0, drawn
 
 
 @pytest.mark.parametrize("fn, values, words", [

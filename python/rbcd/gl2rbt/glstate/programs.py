@@ -183,6 +183,9 @@ class ProgramCalls:
             fail_call(no, f"{name}: impossible program {printable(v)}")
         if v and (v not in self.s.programs or self.s.programs[v].linked is None):
             return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
+        if v and v != self.s.program and "vertex" in self.s.programs[v].linked[0] \
+                and not self.vertex_stage().links(self.s.programs[v]):
+            return   # its last link failed in Mesa: GL_INVALID_OPERATION, the program in use stays
         old = self.s.programs.get(self.s.program)
         if old is not None and v != self.s.program:
             old.in_use_before = None   # its executable is out of use
