@@ -17,8 +17,9 @@ pkgs=(g++ cmake ninja-build pkg-config libsystemc-dev catch2 libtomlplusplus-dev
 #   --gl     apitrace, Xvfb and Mesa (llvmpipe) to capture OpenGL programs, numpy for
 #            scripts/rbcd-gl2rbt, PyOpenGL and Mesa's EGL for its shader path (Mesa
 #            runs the captures' vertex shaders headless), and the GL, EGL, GLES and
-#            X11 headers for the test programs (docs/gl-capture.md), and python3-zstandard
-#            (scripts/game-suite checks the zstd traces it expands)
+#            X11 headers for the test programs (docs/gl-capture.md), python3-zstandard
+#            (scripts/game-suite checks the zstd traces it expands), and glmark2-es2-x11
+#            (an OpenGL ES 2.0 program the tests capture, testbench/gl/test_glmark2.py)
 #   --waves  verilator (its copy of GTKWave's fstapi sources: rbcd-sim --fst),
 #            gtkwave (fst2vcd for the FST test; the viewer) and libsqlite3-dev
 #            (rbcd-sim --db), docs/waveforms.md and docs/tile-database.md
@@ -39,7 +40,8 @@ for opt in "$@"; do
     --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib valgrind) ;;
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
     --gl) pkgs+=(apitrace xvfb xauth libgl1-mesa-dri libglx-mesa0 libgl-dev libx11-dev python3-numpy
-               python3-opengl libegl1 libegl-mesa0 libopengl0 libegl-dev libgles-dev python3-zstandard) ;;
+               python3-opengl libegl1 libegl-mesa0 libopengl0 libegl-dev libgles-dev python3-zstandard
+               glmark2-es2-x11) ;;
     --waves) pkgs+=(verilator gtkwave libsqlite3-dev) ;;
     --games) pkgs+=(openarena neverball) ;;
     --supertuxkart) pkgs+=(supertuxkart) ;;

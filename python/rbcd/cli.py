@@ -49,6 +49,7 @@ class WriteError(Exception):
 I32 = (-(1 << 31), (1 << 31) - 1)
 U32 = (0, (1 << 32) - 1)
 U63 = (0, (1 << 63) - 1)
+I64 = (-(1 << 63), (1 << 63) - 1)
 
 
 def integer(v, what, lo, hi):

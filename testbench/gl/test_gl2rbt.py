@@ -63,6 +63,17 @@ def test_pairs(gl):
     assert set(hits[2]) == {(1, 4)}, f"frame 2 pairs {hits[2]}"
 
 
+def test_mesa_check_bounds_the_replay_window(gl):
+    """glretrace grows its window to every viewport's far corner: past 2^24
+    pixels (4100 x 4100 here) the check is refused naming the call, before
+    glretrace runs (a viewport of 40,000 x 40,000 had taken it to 5 GB)."""
+    r = gl(capture_path("wide"), "--check-depth")
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "glViewport would make glretrace's window 4100 x 4100" \
+        in lines[0], lines
+    assert r.stdout == "" and os.listdir(gl.tmp) == [], "the check ran, or left files"
+
+
 def test_mesa(gl):
     r = gl(capture_path(), "--check-depth")
     assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"

@@ -409,12 +409,15 @@ def test_modern_forms_of_emulated_state(tmp_path):
     assert indexed == classic and classic != plain
 
 
+ES_FRAGMENT = "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(1.0); }\n"
+
+
 def test_half_floats_of_opengl_es_2(tmp_path):
     """OES_vertex_half_float's GL_HALF_FLOAT_OES (0x8D61, not desktop GL's
     GL_HALF_FLOAT) in an OpenGL ES 2.0 context: the same triangle as floats."""
     pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
     vs = "#version 100\nattribute vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n"
-    fs = "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(1.0); }\n"
+    fs = ES_FRAGMENT
 
     def es(kind, data):
         c = Calls()
@@ -1208,6 +1211,88 @@ def test_draws_in_one_context(tmp_path):
             "b.xz", "a draw with no GL context current")
     assert left_behind(tmp_path, ["a.xz", "b.xz"]) == []
     assert fragments(tmp_path, capture(ctx(7), ctx(0), ctx(8), "draw").write(tmp_path / "c.xz")) == [630]
+
+
+def test_a_new_context_after_the_drawing_one_is_destroyed(tmp_path):
+    """glmark2-es2's pattern: a first context made current, given state and
+    cleared, destroyed; a second, sharing no objects, made current and drawn
+    in. The second starts from GL's initial state (the first's scissor and
+    translation would leave nothing of the triangle: the capture was
+    refused as a draw in a second context). A second context that shares
+    the first's objects, or a first one not destroyed, is refused as
+    before (two contexts' states are not emulated)."""
+    def capture(share=0, destroy=True):
+        c = Calls()   # the window's viewport and glOrtho, before any context
+        c.add("eglBindAPI", api="EGL_OPENGL_API", ret="EGL_TRUE")
+        c.add("eglCreateContext", dpy=1, config=1, share_context=0, attrib_list=["EGL_NONE"], ret=7)
+        c.add("eglMakeCurrent", dpy=1, draw=2, read=2, ctx=7, ret="EGL_TRUE")
+        c.add("glEnable", cap="GL_SCISSOR_TEST").add("glScissor", x=0, y=0, width=1, height=1)
+        c.add("glTranslatef", x=1000, y=0, z=0).add("glClear", mask="GL_DEPTH_BUFFER_BIT")
+        if destroy:
+            c.add("eglDestroyContext", dpy=1, ctx=7, ret="EGL_TRUE")
+        c.add("eglCreateContext", dpy=1, config=1, share_context=share, attrib_list=["EGL_NONE"], ret=8)
+        c.add("eglMakeCurrent", dpy=1, draw=2, read=2, ctx=8, ret="EGL_TRUE")
+        c.add("glViewport", x=0, y=0, width=64, height=48, flags=1)   # apitrace's record of the window
+        c.add("glMatrixMode", mode="GL_PROJECTION").add("glOrtho", left=0, right=64, bottom=0, top=48,
+                                                        zNear=-100, zFar=100)
+        c.add("glMatrixMode", mode="GL_MODELVIEW").add("glEnableClientState", array="GL_VERTEX_ARRAY")
+        return c.triangle(5).swap()
+    assert fragments(tmp_path, capture().write(tmp_path / "a.xz")) == [630]
+    refused(gl2rbt(tmp_path, capture(share=7).write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"),
+            "b.xz", "a draw in GL context 8 after draws in 7")
+    refused(gl2rbt(tmp_path, capture(destroy=False).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+            "c.xz", "a draw in GL context 8 after draws in 7")
+
+
+def test_a_new_contexts_objects_are_its_own_in_mesa(tmp_path):
+    """Program 2 and buffer 1 of a destroyed ES context, drawn through Mesa,
+    and program 2 and buffer 1 of the new one, named alike, differ: the new
+    context's draw runs its own shader on its own data (Mesa's copies of
+    the first context's were dropped; a program and buffer of the same
+    names and versions would have been taken as up to date). Its frame is
+    the frame a capture of the second context alone gives."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    import struct
+
+    def context(c, ctx, scale, data):
+        vs = ("#version 100\nattribute vec3 p;\nvoid main() { gl_Position = "
+              f"vec4(p.x / {scale:.1f} - 1.0, p.y / {scale:.1f} - 1.0, 0.0, 1.0); }}\n")
+        c.add("eglCreateContext", dpy=1, config=1, share_context=0,
+              attrib_list=["EGL_CONTEXT_CLIENT_VERSION", 2, "EGL_NONE"], ret=ctx)
+        c.add("eglMakeCurrent", dpy=1, draw=2, read=2, ctx=ctx, ret="EGL_TRUE")
+        c.add("glViewport", x=0, y=0, width=64, height=48, flags=1)   # apitrace's record of the window
+        c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
+        c.add("glShaderSource", shader=1, count=1, string=[vs], length=None).add("glCompileShader", shader=1)
+        # OpenGL ES links only whole programs.
+        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+        c.add("glShaderSource", shader=3, count=1, string=[ES_FRAGMENT], length=None).add("glCompileShader", shader=3)
+        c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
+        c.add("glAttachShader", program=2, shader=3)
+        c.add("glBindAttribLocation", program=2, index=0, name="p")
+        c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+        c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+        c.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(data), data=data, usage="GL_STATIC_DRAW")
+        c.add("glEnableVertexAttribArray", index=0)
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        return c.add("eglSwapBuffers", dpy=1, surface=1, flags=END_FRAME)
+    other = struct.pack("<9f", 2, 2, -10, 20, 2, -10, 2, 30, -10)
+    both = context(Calls(), 7, 32, TRIANGLE)
+    both.add("eglDestroyContext", dpy=1, ctx=7, ret="EGL_TRUE")
+    context(both, 8, 16, other)
+    alone = context(Calls(), 8, 16, other)
+    frames = trace_bytes(tmp_path, both, "both").split(b"\nframe ")
+    assert len(frames) == 3 and b"\no " in frames[2]
+    assert frames[2].split(b"\n", 1)[1] == trace_bytes(tmp_path, alone, "alone").split(b"\nframe ")[1].split(b"\n", 1)[1]
+    assert frames[1].split(b"\n", 1)[1] != frames[2].split(b"\n", 1)[1]
+
+
+def test_a_framebuffer_status_query_changes_nothing(tmp_path):
+    """glCheckFramebufferStatus (glmark2-es2's desktop, shadow and refract
+    scenes) only answers: the capture converts as without it (it was
+    refused as a call not emulated)."""
+    c = Calls().add("glCheckFramebufferStatus", target="GL_FRAMEBUFFER", ret="GL_FRAMEBUFFER_COMPLETE")
+    assert fragments(tmp_path, c.triangle(5).swap().write(tmp_path / "a.xz")) == [630]
 
 
 def test_a_depth_attachment_has_its_levels_size(tmp_path):

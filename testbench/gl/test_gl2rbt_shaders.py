@@ -25,6 +25,7 @@ culling is on): 400 + 400 + 100 + 100 front fragments a frame, the floor
 import json
 import os
 import re
+import shutil
 
 import pytest
 
@@ -236,7 +237,28 @@ def test_gles_reduced_and_check(gl):
     assert a.returncode == 0 and b.returncode == 0, a.stderr + b.stderr
     with open(gl.path("a.rbt"), "rb") as f1, open(gl.path("b.rbt"), "rb") as f2:
         assert f1.read() == f2.read(), "the reduced ES capture converts differently"
-    # glretrace cannot read an ES depth buffer: said in one line, exit 1.
+    # Mesa's ES depth buffer, read back through gl/es_depth_readback.c
+    # preloaded into glretrace: frame 1 (the first frame is checked only
+    # alone) covers the floor's 40 x 40 pixels and the boxes' 400 + 400 + 100
+    # beside and in front of it.
+    r = gl(cap, "--check-depth")
+    assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"
+    m = re.search(r"^agreement: ([0-9.]+)% of (\d+) covered pixels in 1 frames", r.stdout, re.M)
+    assert m and float(m.group(1)) >= 99.0 and int(m.group(2)) >= 1600 + 400, r.stdout
+
+
+def test_gles_check_without_readback(gl, tmp_path):
+    """Without the readback library beside rbcd-gl-raster (built only with
+    the OpenGL ES headers) the ES check says what is missing, in one line,
+    before converting; a desktop capture's check does not need it."""
+    cap = gles_capture()
+    lone = tmp_path / "bin"
+    lone.mkdir()
+    raster = lone / "rbcd-gl-raster"
+    shutil.copy(program("rbcd-gl-raster"), raster)
+    gl.env["RBCD_GL_RASTER"] = str(raster)
     r = gl(cap, "--check-depth")
     lines = r.stderr.strip().splitlines()
-    assert r.returncode == 1 and len(lines) == 1 and "OpenGL ES capture" in lines[0], lines
+    assert r.returncode == 1 and len(lines) == 1 and "rbcd-es-depth-readback.so" in lines[0] \
+        and "libgles-dev" in lines[0], lines
+    assert r.stdout == "", "the check printed figures before saying the library is missing"

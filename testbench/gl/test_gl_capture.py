@@ -18,7 +18,10 @@ def test_capture():
         pytest.skip("RBCD_GL_BOXES or RBCD_GL_SHADERS names no program (CTest sets them; the GL headers: "
                     "scripts/setup.sh --gl)")
     os.makedirs(CAPTURES, exist_ok=True)
-    for name, program, extra in [("boxes", boxes, []), ("point", boxes, ["128", "96", "point"])] + \
+    # "wide": a window of 4100 x 4100, past what --check-depth lets
+    # glretrace grow to.
+    for name, program, extra in [("boxes", boxes, []), ("point", boxes, ["128", "96", "point"]),
+                                 ("wide", boxes, ["4100", "4100"])] + \
             [(f"fault-{f}", boxes, ["128", "96", f]) for f in FAULTS] + [("shaders", shaders, [])] + \
             [(f"shader-fault-{f}", shaders, ["128", "96", f]) for f in SHADER_FAULTS]:
         out = os.path.join(CAPTURES, name + ".trace")

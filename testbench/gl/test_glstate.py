@@ -762,8 +762,8 @@ def test_a_deleted_buffer_lives_on_in_the_vertex_arrays_that_hold_it():
         gl.glVertexAttribPointer(index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
     gl.glDeleteBuffers(n=1, buffers=[3])   # vertex array 8 is bound
     s = gl.conv.s
-    assert 3 not in s.buffers and s.vaos[8].attribs[0].buffer == 0, "the bound object let it go"
-    kept = s.vaos[7].attribs[0].buffer
+    assert 3 not in s.buffers and s.vaos[8].bindings[0].buffer == 0, "the bound object let it go"
+    kept = s.vaos[7].bindings[0].buffer
     assert kept != 3 and bytes(s.buffers[kept]) == data, "vertex array 7 kept the data"
 
 

@@ -17,7 +17,7 @@ def rules(tmp_path, text):
 def draw(**kw):
     d = {"call": 10, "frame": 0, "vertices": 36, "texture": 0, "depth_write": True, "projection": "perspective",
          "own_modelview": True, "screen_area": 500.0, "program": "", "pass": "", "instances": 1,
-         "texture_image": ""}
+         "texture_image": "", "draw_index": 0}
     d.update(kw)
     return d
 
@@ -58,6 +58,7 @@ projection = "orthographic"
     ("program", ["0123abcd"], {"program": "0123abcd" + "9" * 56}, {"program": "0123abce" + "9" * 56}),
     ("pass", ["Solid Pass"], {"pass": "Solid Pass"}, {"pass": "Transparent"}),
     ("instances", [2, 15], {"instances": 15}, {"instances": 1}),
+    ("draw_index", [3, 3], {"draw_index": 3}, {"draw_index": 4}),
     ("texture_image", ["89abcdef"], {"texture_image": "89abcdef01234567"}, {"texture_image": ""}),
 ], ids=lambda v: v if isinstance(v, str) else "")
 def test_each_condition(tmp_path, field, value, inside, outside):

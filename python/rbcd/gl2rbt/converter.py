@@ -57,6 +57,9 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.drawable = None             # the window's size, as apitrace records it at each MakeCurrent
         self.context = None              # the context made current last (None: none named yet; 0: released)
         self.draw_context = None         # the context the frames' draws were made in
+        self.state_context = None        # the context whose state self.s holds (the last made current)
+        self.unshared_contexts = set()   # made by eglCreateContext sharing no objects, never current yet
+        self.destroyed_contexts = set()  # eglDestroyContext's (a handle may be reused by a later context)
         self.flags = 0                   # of the call being handled
         self.ret = None                  # its return value, as apitrace recorded it
         self.select = Selection(args.select) if args.select else None
@@ -225,6 +228,12 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         # EGL's default API is OpenGL ES (eglBindAPI changes it).
         self.es = self.egl_api != "EGL_OPENGL_API"
         attrs = dict(args).get("attrib_list")
+        ctx = self.ret
+        if isinstance(ctx, int) and not isinstance(ctx, bool) and ctx:
+            self.destroyed_contexts.discard(ctx)
+            self.unshared_contexts.discard(ctx)
+            if dict(args).get("share_context") in (0, None):
+                self.unshared_contexts.add(ctx)
         self.core = not self.es and context_is_core(attrs, "EGL_CONTEXT_MAJOR_VERSION", "EGL_CONTEXT_MINOR_VERSION",
                                                     "EGL_CONTEXT_OPENGL_PROFILE_MASK",
                                                     "EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT")
@@ -236,6 +245,28 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if not isinstance(ctx, int) or isinstance(ctx, bool):
             fail_call(no, f"{printable(name)}: the context {printable(ctx, 40)} is not a handle")
         self.context = ctx
+        if ctx and ctx != self.state_context:
+            if self.state_context in self.destroyed_contexts and ctx in self.unshared_contexts:
+                self.new_context()
+            self.state_context = ctx
+        self.unshared_contexts.discard(ctx)
+
+    def h_egl_destroy_context(self, no, name, a, args):
+        ctx = dict(args).get("ctx")
+        if self.ret in ("EGL_TRUE", 1, True) and isinstance(ctx, int) and ctx:
+            self.destroyed_contexts.add(ctx)
+
+    def new_context(self):
+        """The state of a context made current for the first time, created
+        sharing no objects, after the context whose state the converter held
+        was destroyed (glmark2 makes one to read the GL strings and clear,
+        destroys it, and draws in a second): GL's initial state, with no
+        objects; the window's contents stay. That context's draws are no
+        longer those of another context."""
+        self.s = GLState()
+        if self.vertex_stage_ is not None:
+            self.vertex_stage_.forget_objects()
+        self.draw_context = None
 
     def h_glx_create_context(self, no, name, a, args):
         self.core = context_is_core(dict(args).get("attrib_list"), "GLX_CONTEXT_MAJOR_VERSION_ARB",
@@ -247,6 +278,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
     WINDOW_SYSTEM = {
         "eglBindAPI": h_egl_bind_api,
         "eglCreateContext": h_egl_create_context,
+        "eglDestroyContext": h_egl_destroy_context,
         "glXCreateContextAttribs": h_glx_create_context,
         "glXMakeCurrent": h_make_current,
         "glXMakeContextCurrent": h_make_current,

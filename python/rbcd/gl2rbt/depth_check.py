@@ -9,18 +9,35 @@ import tempfile
 import numpy as np
 
 from .capture import check_input_file, read_calls
-from .raster import new_converter
 from .errors import ConvertError, ToolError, printable
-from .raster import convert
+from .raster import convert, new_converter, raster_program
 from .reduced import is_reduced_capture
 
-def mesa_depth_at(trace, call, timeout):
+READBACK = "rbcd-es-depth-readback.so"
+
+
+def es_readback_library():
+    """gl/es_depth_readback.c's library, beside rbcd-gl-raster as
+    bin/../lib/rbcd/ (the build tree and an installed tree alike)."""
+    lib = os.path.normpath(os.path.join(os.path.dirname(raster_program()), "..", "lib", "rbcd", READBACK))
+    if not os.path.isfile(lib):
+        raise ToolError(f"--check-depth on an OpenGL ES capture needs {printable(lib)}, built with the OpenGL ES "
+                        "headers (scripts/setup.sh --gl installs libgles-dev; then build again)")
+    return lib
+
+
+def mesa_depth_at(trace, call, timeout, es=False):
     """Mesa's depth buffer after `call` (glretrace -D), as (width, height, rows
-    from the top of float32 values in [0, 1])."""
+    from the top of float32 values in [0, 1]). An OpenGL ES capture's is
+    read back through gl/es_depth_readback.c, preloaded into glretrace
+    alone (not into Xvfb)."""
     exe = shutil.which("glretrace")
     if not exe:
         raise ToolError("glretrace is not installed (scripts/setup.sh --gl installs apitrace)")
     cmd = [exe, "-D", str(call), trace]
+    if es:
+        preload = ":".join(p for p in (es_readback_library(), os.environ.get("LD_PRELOAD")) if p)
+        cmd = ["env", f"LD_PRELOAD={preload}"] + cmd
     if not os.environ.get("DISPLAY"):
         xvfb = shutil.which("xvfb-run")
         if not xvfb:
@@ -102,6 +119,33 @@ def compare(ours, marks, bits, mesa, step):
 
 
 LLVMPIPE = "with llvmpipe's arithmetic on the converter's geometry"
+# The largest window the check lets glretrace grow to (4096 x 4096): a
+# window of 4000 x 4000 peaks at 690 MB (glretrace's window and its depth
+# dump as text, the comparison's arrays).
+MAX_REPLAY_PIXELS = 1 << 24
+
+
+def drawable_growth(call):
+    """The size glretrace (11.1, glretrace.py) grows its window to at this
+    call, while no framebuffer object is bound: glViewport's x + width and
+    y + height, those of viewport 0 of the array and indexed forms, a
+    blit's farther destination corner; None for other calls (and for
+    values that are not numbers, which the conversion has refused)."""
+    name, d = call[1], dict(call[2])
+    try:
+        if name == "glViewport":
+            return d["x"] + d["width"], d["y"] + d["height"]
+        if name in ("glViewportIndexedf", "glViewportIndexedfv") and d.get("index") == 0:
+            x, y, w, h = (d["x"], d["y"], d["w"], d["h"]) if name.endswith("f") else d["v"][:4]
+            return int(x + w), int(y + h)
+        if name == "glViewportArrayv" and d.get("first") == 0 and d.get("count", 0) > 0:
+            x, y, w, h = d["v"][:4]
+            return int(x + w), int(y + h)
+        if name in ("glBlitFramebuffer", "glBlitFramebufferEXT"):
+            return max(d["dstX0"], d["dstX1"]), max(d["dstY0"], d["dstY1"])
+    except (KeyError, TypeError, ValueError, OverflowError, IndexError):
+        return None
+    return None
 
 
 def check_depth(args):
@@ -118,16 +162,21 @@ def check_depth(args):
     if is_reduced_capture(args.trace):
         raise ConvertError("--check-depth replays the capture with Mesa: give the capture itself, "
                            "not a reduced capture")
-    # Pass 1: the calls, from the GL state alone.
+    # Pass 1: the calls, from the GL state alone, and the window glretrace
+    # will grow to (refused past MAX_REPLAY_PIXELS before it runs).
     probe = new_converter(args, False)
     for call in read_calls(args.trace):
         probe.last_call = call[0]
         probe.handle(call)
+        grown = drawable_growth(call) if not probe.s.draw_fbo else None
+        if grown and grown[0] * grown[1] > MAX_REPLAY_PIXELS:
+            raise ConvertError(f"call {call[0]}: {printable(call[1])} would make glretrace's window "
+                               f"{grown[0]} x {grown[1]} pixels, more than the check's {MAX_REPLAY_PIXELS} "
+                               "(docs/gl-capture.md, the check against Mesa)")
         if probe.last_frame is not None and probe.frame > probe.last_frame:
             break
     if probe.es:
-        raise ToolError("--check-depth: glretrace cannot read the depth buffer of an OpenGL ES capture "
-                        "(ES has no depth readback); the check is for desktop OpenGL captures")
+        es_readback_library()   # missing: said before the conversion, not after it
     frames = [(o, c, call) for o, c, call in probe.last_3d_draws if call is not None]
     # glretrace replays a capture's first frame wrongly at times (seen: the
     # test program's first frame replays without its clear): it is checked
@@ -160,7 +209,7 @@ def check_depth(args):
             if cached and os.path.exists(cached):
                 mesa = np.load(cached)
             else:
-                _, _, mesa = mesa_depth_at(args.trace, call, args.check_timeout)
+                _, _, mesa = mesa_depth_at(args.trace, call, args.check_timeout, probe.es)
                 if cached:
                     np.save(cached, mesa)
             mesa = window_of(mesa, w, h, cap_frame)

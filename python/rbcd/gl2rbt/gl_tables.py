@@ -55,6 +55,8 @@ IGNORED_PREFIXES = (
     # Hints that a framebuffer's contents are no longer needed (ES 3 and its
     # EXT form): they change no pixel a later draw or the unit sees.
     "glInvalidateFramebuffer", "glInvalidateSubFramebuffer", "glDiscardFramebuffer",
+    # A query of the bound framebuffer's completeness: it changes no state.
+    "glCheckFramebufferStatus",
 )
 # The compatibility profile's calls (by base name): in a core profile they
 # are GL_INVALID_OPERATION in Mesa and change nothing.

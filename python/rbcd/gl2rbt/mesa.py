@@ -72,6 +72,22 @@ class Mesa:
         self.feedback = GL.glGenBuffers(1)
         self.feedback_size = 0
         self.queries = GL.glGenQueries(2)
+        # GL 4.3 / ES 3.1 vertex attribute binding, from EGL: PyOpenGL's
+        # desktop module reads the version string as desktop GL's before
+        # its first call of a GL 4.x function, and cannot read an ES one.
+        u, i, e, b = ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_ubyte
+        self.attrib_format = self.function(EGL, "glVertexAttribFormat", u, i, e, b, u)
+        self.attrib_i_format = self.function(EGL, "glVertexAttribIFormat", u, i, e, u)
+        self.attrib_binding = self.function(EGL, "glVertexAttribBinding", u, u)
+        self.bind_vertex_buffer = self.function(EGL, "glBindVertexBuffer", u, u, ctypes.c_ssize_t, i)
+        self.binding_divisor = self.function(EGL, "glVertexBindingDivisor", u, u)
+
+    @staticmethod
+    def function(EGL, name, *argtypes):
+        address = EGL.eglGetProcAddress(name.encode("ascii"))
+        if not address:
+            raise ToolError(f"Mesa's EGL gives no {name}")
+        return ctypes.CFUNCTYPE(None, *argtypes)(address)
 
     def enum(self, value):
         """A GL enumerant as apitrace writes it ("GL_FLOAT", a tuple of bit

@@ -17,7 +17,7 @@ class Selection:
 
     KEYS = {"id", "name", "calls", "frames", "vertex_count", "texture", "depth_write", "group_by",
             "projection", "modelview_differs_from_view", "min_screen_area", "max_screen_area",
-            "program", "pass", "instances", "group_instances", "texture_image", "vertex_data"}
+            "program", "pass", "instances", "group_instances", "texture_image", "vertex_data", "draw_index"}
 
     def __init__(self, path):
         self.path = path
@@ -91,7 +91,7 @@ class Selection:
         if "id" in r and (not isinstance(r["id"], int) or isinstance(r["id"], bool)
                           or not U32[0] <= r["id"] <= U32[1]):
             raise ConvertError(f"{where}.id: must be an integer in [0, {U32[1]}]")
-        for k in ("calls", "frames", "vertex_count", "instances"):
+        for k in ("calls", "frames", "vertex_count", "instances", "draw_index"):
             if k in r:
                 v = r[k]
                 if (not isinstance(v, list) or len(v) != 2 or
@@ -147,6 +147,8 @@ class Selection:
         if "pass" in r and d["pass"] not in r["pass"]:
             return False
         if "instances" in r and not (r["instances"][0] <= d["instances"] <= r["instances"][1]):
+            return False
+        if "draw_index" in r and not (r["draw_index"][0] <= d["draw_index"] <= r["draw_index"][1]):
             return False
         if "depth_write" in r and r["depth_write"] != d["depth_write"]:
             return False

@@ -16,7 +16,10 @@ import re
 import numpy as np
 
 from .errors import fail_call, printable
+from .gl_tables import INDEX_TYPES
+from .glstate.attributes import element_bytes
 from .glstate.buffers import merge_extents
+from .glstate.programs import COMMENTS
 from .mesa import Mesa
 
 # Sampler types a vertex shader may read: texture buffers, whose contents
@@ -31,6 +34,10 @@ MAX_MESA_BUFFER_BYTES = 2 << 30   # the declared sizes of the buffers given to M
 # every other gl_ input or uniform is fixed-function state (gl_Vertex,
 # gl_ModelViewProjectionMatrix, ...), which Mesa's program would read from
 # its own context, not the capture's.
+# The C type of a glVertexAttrib*v's values, by its suffix.
+ATTRIB_VALUE_TYPES = {"b": np.int8, "s": np.int16, "i": np.int32, "ub": np.uint8, "us": np.uint16, "ui": np.uint32,
+                      "f": np.float32, "d": np.float64}
+CLIP_DISTANCES = re.compile(r"\bgl_(Clip|Cull)Distance\b")
 BUILTIN_INPUTS = {"gl_VertexID", "gl_InstanceID", "gl_DrawID", "gl_BaseVertex", "gl_BaseInstance",
                   "gl_VertexIndex", "gl_InstanceIndex"}
 
@@ -39,12 +46,64 @@ def name_str(name):
     return name.decode("ascii", "replace") if isinstance(name, bytes) else str(name)
 
 
+def feedback_varying(GL, prog, i):
+    """The name of a linked program's transform feedback varying i."""
+    length, size, kind = ctypes.c_int(), ctypes.c_int(), ctypes.c_uint()
+    name = ctypes.create_string_buffer(256)
+    GL.glGetTransformFeedbackVarying(prog, i, 256, ctypes.byref(length), ctypes.byref(size), ctypes.byref(kind),
+                                     name)
+    return name.value.decode("ascii", "replace")
+
+
 def es_fragment_shader(vertex_source):
     m = re.search(r"^\s*#\s*version\s+(\d+)(\s+es)?", vertex_source, re.M)
     version = m.group(1) if m else "100"
     if version == "100":
         return "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(0.0); }\n"
     return f"#version {version} es\nprecision mediump float;\nout vec4 c;\nvoid main() {{ c = vec4(0.0); }}\n"
+
+
+def check_client_data(conv, no, name, d, instances, client_indices):
+    """What a draw reads from client memory must be in the capture: apitrace
+    records, for each client array and for client indices, the bytes the
+    draw reads. An indexed draw with no element array buffer bound and no
+    indices recorded (an offset, which would be an address), and data
+    shorter than the draw reads (a capture cut or altered, or apitrace's
+    blob of no bytes for an ES half-float array), are the capture's errors:
+    Mesa would read memory outside it."""
+    rows = None
+    if "Elements" in name:
+        kind = np.dtype(INDEX_TYPES[d["type"]])
+        if client_indices is None:
+            if not conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0):
+                fail_call(no, f"{name}: no element array buffer is bound and the capture holds no indices "
+                          f"(indices at address {d.get('indices') or 0})")
+        else:
+            if len(client_indices) < d["count"] * kind.itemsize:
+                fail_call(no, f"{name}: the capture's indices are {len(client_indices)} bytes, the draw reads "
+                          f"{d['count'] * kind.itemsize}")
+            idx = np.frombuffer(client_indices, dtype=kind, count=d["count"]).astype(np.int64)
+            if conv.s.restart_fixed:
+                idx = idx[idx != (1 << 8 * kind.itemsize) - 1]
+            elif conv.s.restart:
+                idx = idx[idx != conv.s.restart_index]
+            rows = int(idx.max()) + d.get("basevertex", 0) + 1 if len(idx) else 0
+    vao = conv.current_vao()
+    for i, at, b in vao.sources():
+        if not at.enabled or b.buffer or b.client is None:
+            continue
+        if b.divisor:
+            n = d.get("baseinstance", 0) + (instances - 1) // b.divisor + 1
+        elif "Elements" in name:
+            if rows is None:
+                continue   # indices in a buffer object: the blob is what apitrace found they read
+            n = rows
+        else:
+            n = d.get("first", 0) + d["count"]
+        need = at.relative + (n - 1) * b.stride + element_bytes(at.size, at.type) if n > 0 else 0
+        if len(b.client) < need:
+            fail_call(no, f"{name}: attribute {i}'s client array in the capture is {len(b.client)} bytes, "
+                      f"the draw reads {need}")
 
 
 class DrawRejected(Exception):
@@ -82,6 +141,22 @@ class VertexStage:
                                  and isinstance(getattr(GL, n), int)}
 
     # ---- objects
+    def forget_objects(self):
+        """Deletes Mesa's copies of the capture's objects: their names now
+        belong to another context (a new one, made current after the one
+        that named them was destroyed)."""
+        GL = self.gl
+        if self.buffers:
+            GL.glDeleteBuffers(len(self.buffers), [e[0] for e in self.buffers.values()])
+        for mp in self.programs.values():
+            GL.glDeleteProgram(mp.name)
+        if self.vaos:
+            GL.glDeleteVertexArrays(len(self.vaos), list(self.vaos.values()))
+        if self.textures:
+            GL.glDeleteTextures(len(self.textures), list(self.textures.values()))
+        self.buffers, self.programs, self.vaos, self.textures = {}, {}, {}, {}
+        self.mesa_bytes = 0
+
     def buffer(self, conv, b):
         """Mesa's copy of capture buffer b, up to date."""
         GL = self.gl
@@ -202,6 +277,10 @@ class VertexStage:
         where = f"program {pname} (linked at call {p.link_call})"
         if "vertex" not in sources:
             fail_call(no, f"{where} has no vertex shader")
+        if CLIP_DISTANCES.search(COMMENTS.sub(" ", sources["vertex"])):
+            # Mesa 22.3 clips by them even with GL_CLIP_DISTANCEi disabled.
+            fail_call(no, f"{where}: its vertex shader writes clip or cull distances (gl_ClipDistance, "
+                      "gl_CullDistance): not emulated")
         sh = GL.glCreateShader(GL.GL_VERTEX_SHADER)
         # The capture's bytes as they were (apitrace's text keeps bytes that
         # are not UTF-8 as surrogates; GLSL allows them in comments).
@@ -229,6 +308,13 @@ class VertexStage:
         if not GL.glGetProgramiv(prog, GL.GL_LINK_STATUS):
             log = GL.glGetProgramInfoLog(prog).decode("utf-8", "replace").strip().splitlines()
             fail_call(no, f"{where}: Mesa does not link its vertex stage: {printable((log or ['no log'])[0])}")
+        # xfb_buffer / xfb_offset qualifiers (GLSL 4.40) in the shader take
+        # the place of the gl_Position asked for above.
+        fed = [feedback_varying(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_TRANSFORM_FEEDBACK_VARYINGS))]
+        if fed != ["gl_Position"]:
+            GL.glDeleteProgram(prog)
+            fail_call(no, f"{where}: its vertex shader declares its own transform feedback outputs (xfb_ layout "
+                      "qualifiers): not emulated")
         mp = MesaProgram(prog, p.version)
         for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_ATTRIBUTES)):
             aname = name_str(GL.glGetActiveAttrib(prog, i)[0])
@@ -280,25 +366,28 @@ class VertexStage:
         if mv is None:
             mv = self.vaos[conv.s.vao] = int(GL.glGenVertexArrays(1))
         GL.glBindVertexArray(mv)
-        for i, at in sorted(vao.attribs.items()):
+        # Each attribute on a binding point of its own, at its binding's
+        # offset plus its relative offset: what it reads whichever points
+        # the capture's attributes shared.
+        for i, at, b in vao.sources():
             if not at.enabled:
                 GL.glDisableVertexAttribArray(i)
                 continue
-            if at.buffer:
-                buf, offset = self.buffer(conv, at.buffer), at.offset
-            elif at.client is not None:
-                buf, offset = self.client(at.client), 0
+            if b.buffer:
+                buf, offset = self.buffer(conv, b.buffer), b.offset + at.relative
+            elif b.client is not None:
+                buf, offset = self.client(b.client), at.relative
             else:
                 fail_call(no, f"attribute {i} is enabled with no buffer and no data in the capture")
-            GL.glBindBuffer(GL.GL_ARRAY_BUFFER, buf)
             size = self.mesa.enum(at.size) if isinstance(at.size, str) else at.size
             kind = self.mesa.enum(at.type)
-            if at.call.startswith("glVertexAttribIPointer"):
-                GL.glVertexAttribIPointer(i, size, kind, at.stride, ctypes.c_void_p(offset))
+            if at.integer:
+                self.mesa.attrib_i_format(i, size, kind, 0)
             else:
-                GL.glVertexAttribPointer(i, size, kind, GL.GL_TRUE if at.normalized else GL.GL_FALSE, at.stride,
-                                         ctypes.c_void_p(offset))
-            GL.glVertexAttribDivisor(i, at.divisor)
+                self.mesa.attrib_format(i, size, kind, 1 if at.normalized else 0, 0)
+            self.mesa.attrib_binding(i, i)
+            self.mesa.bind_vertex_buffer(i, buf, offset, b.stride)
+            self.mesa.binding_divisor(i, b.divisor)
             GL.glEnableVertexAttribArray(i)
         elem = conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
         if client_indices is not None:
@@ -309,8 +398,7 @@ class VertexStage:
             fn = getattr(GL, func.removesuffix("ARB"))
             if func.endswith("v"):
                 fn(i, np.array(vals[0] if len(vals) == 1 and isinstance(vals[0], list) else vals,
-                               dtype=np.int32 if "I" in func[14:] else np.float64 if func.endswith("dv")
-                               else np.float32))
+                               dtype=ATTRIB_VALUE_TYPES[re.search(r"(ub|us|ui|b|s|i|f|d)v$", func).group(1)]))
             else:
                 fn(i, *vals)
 
@@ -373,6 +461,7 @@ class VertexStage:
             self.program(conv, no, conv.s.program)
             indices = d.get("indices")
             client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
+            check_client_data(conv, no, name, d, instances, client_indices)
             self.vertex_array(conv, no, client_indices)
             self.bindings(conv)
             clip = self.mesa.feedback_positions(lambda: self.issue(name, d, client_indices is not None), prims)

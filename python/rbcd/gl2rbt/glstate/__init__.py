@@ -60,6 +60,7 @@ class GLState:
         self.buffer_written = {}   # large buffers: the [start, end) extents ever written
         self.buffer_held = {}      # buffer -> bytes of memory its data holds
         self.buffer_names = None   # names glGenBuffers returned (None: the capture showed none)
+        self.buffer_objects = set()   # buffer objects that exist: bound once, or made by glCreateBuffers
         self.immutable_buffers = {}   # made by glBufferStorage: buffer -> GL_DYNAMIC_STORAGE_BIT set
         self.buffer_bytes_in_all = 0
         self.next_version = 0
@@ -80,6 +81,7 @@ class GLState:
         self.program = 0
         # Framebuffers and textures (framebuffers.py).
         self.draw_fbo = 0
+        self.read_fbo = 0
         self.fbo_depth = {}
         self.sizes = {}
         self.renderbuffer = 0

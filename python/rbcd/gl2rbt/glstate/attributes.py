@@ -1,16 +1,25 @@
-"""Generic vertex attributes and vertex array objects (OpenGL 2.0+ and ES):
-each attribute's array (format, buffer and offset or client memory, divisor)
-and its current value when the array is disabled, the element array buffer
-of each vertex array object, and primitive restart."""
+"""Generic vertex attributes and vertex array objects (OpenGL 2.0+ and ES),
+in GL 4.3's terms (ARB_vertex_attrib_binding, ES 3.1): each attribute's
+format and the vertex buffer binding it reads (buffer and offset or client
+memory, stride, divisor), which glVertexAttrib*Pointer sets both of, as GL
+defines it; its current value when the array is disabled; the element array
+buffer of each vertex array object; the direct-state-access forms (GL 4.5)
+naming the vertex array object; primitive restart."""
 import hashlib
 
 import numpy as np
 
-from ...cli import I32, U32, U63, integer
+from ...cli import I32, I64, U32, U63, integer
 from ..errors import checked, fail_call
 from ..gl_tables import ARRAY_TYPES, INDEX_TYPES, base_name
 
-MAX_ATTRIBS = 32   # GL_MAX_VERTEX_ATTRIBS as Mesa (llvmpipe) answers it
+# As Mesa 22.3 (llvmpipe) answers them, in GL 4.5 and ES 3.2 contexts alike:
+# GL_MAX_VERTEX_ATTRIBS, GL_MAX_VERTEX_ATTRIB_BINDINGS,
+# GL_MAX_VERTEX_ATTRIB_RELATIVE_OFFSET, GL_MAX_VERTEX_ATTRIB_STRIDE.
+MAX_ATTRIBS = 16
+MAX_VERTEX_BINDINGS = 16
+MAX_RELATIVE_OFFSET = 2047
+MAX_STRIDE = 2048
 # Bytes a component of an attribute array (the packed formats: a quarter of
 # their four-component word).
 ATTRIB_SIZES = {t: np.dtype(v).itemsize for t, v in ARRAY_TYPES.items()} | {
@@ -29,10 +38,11 @@ ATTRIB_TYPES = INTEGER_ATTRIB_TYPES | PACKED_ATTRIB_TYPES | {
     "GL_UNSIGNED_INT_10F_11F_11F_REV"}
 
 
-def attrib_format_valid(name, size, kind, normalized):
-    """Whether glVertexAttribPointer or glVertexAttribIPointer of this size
-    and type is a call Mesa takes (the size is 1 to 4 or GL_BGRA)."""
-    if base_name(name) == "glVertexAttribIPointer":
+def attrib_format_valid(integer_form, size, kind, normalized):
+    """Whether a format of this size and type (glVertexAttrib*Pointer,
+    glVertexAttrib*Format; integer_form for their I forms) is one Mesa takes
+    (the size is 1 to 4 or GL_BGRA)."""
+    if integer_form:
         return kind in INTEGER_ATTRIB_TYPES and size != "GL_BGRA"
     if kind not in ATTRIB_TYPES:
         return False
@@ -44,26 +54,58 @@ def attrib_format_valid(name, size, kind, normalized):
 
 
 class Attrib:
-    """One generic attribute's array, as glVertexAttrib*Pointer left it."""
-    __slots__ = ("enabled", "call", "size", "type", "normalized", "stride", "buffer", "offset", "client", "divisor")
+    """One generic attribute: its format (glVertexAttrib*Format, or that half
+    of glVertexAttrib*Pointer; `integer` for the I forms) and the binding
+    point it reads."""
+    __slots__ = ("enabled", "integer", "size", "type", "normalized", "relative", "binding")
+
+    def __init__(self, index):
+        self.enabled, self.integer, self.size, self.type, self.normalized = False, False, 4, "GL_FLOAT", False
+        self.relative, self.binding = 0, index
+
+
+class Binding:
+    """A vertex buffer binding point: a buffer and an offset into it, or
+    client memory (glVertexAttribPointer with no buffer bound: apitrace
+    records what the draws read as a blob); the stride (0 reads one element
+    for every vertex: glVertexAttribPointer's 0 is the packed size, as GL
+    defines it); the divisor."""
+    __slots__ = ("buffer", "offset", "client", "stride", "divisor")
 
     def __init__(self):
-        self.enabled, self.call, self.size, self.type = False, None, 4, "GL_FLOAT"
-        self.normalized, self.stride, self.buffer, self.offset, self.client, self.divisor = False, 0, 0, 0, None, 0
+        self.buffer, self.offset, self.client, self.stride, self.divisor = 0, 0, None, 16, 0
+
+
+def element_bytes(size, kind):
+    """Bytes of one element of an attribute of `size` components of `kind`
+    (GL_BGRA: four)."""
+    return (4 if size == "GL_BGRA" else size) * ATTRIB_SIZES.get(kind, 4)
 
 
 class VertexArrayObject:
     def __init__(self):
         self.attribs = {}     # index -> Attrib
+        self.bindings = {}    # binding index -> Binding
         self.element = 0      # the element array buffer
+        self.exists = False   # bound once, or made by glCreateVertexArrays (what direct state access names)
         self.fixed = None     # glVertexPointer's array (glstate.Array), made when first used
         self.fixed_enabled = False   # GL_VERTEX_ARRAY
 
     def attrib(self, index):
         a = self.attribs.get(index)
         if a is None:
-            a = self.attribs[index] = Attrib()
+            a = self.attribs[index] = Attrib(index)
         return a
+
+    def binding(self, index):
+        b = self.bindings.get(index)
+        if b is None:
+            b = self.bindings[index] = Binding()
+        return b
+
+    def sources(self):
+        """(index, attribute, its binding) of every attribute, by index."""
+        return [(i, at, self.binding(at.binding)) for i, at in sorted(self.attribs.items())]
 
 
 def attrib_index(no, name, v):
@@ -80,6 +122,20 @@ class AttributeCalls:
 
     def current_vao(self):
         return self.s.vaos[self.s.vao]
+
+    def vao_named(self, no, name, v):
+        """The vertex array object a direct-state-access call names, or None
+        when GL ignores the call (GL_INVALID_OPERATION: 0, or not a name
+        glCreateVertexArrays made or glBindVertexArray bound)."""
+        v = checked(no, integer, v, f"{name}: the vertex array", *U32)
+        vao = self.s.vaos.get(v) if v else None
+        return vao if vao is not None and vao.exists else None
+
+    def vao_to_set(self, name):
+        """The bound vertex array object, or None when GL ignores a call of
+        vertex attribute binding on it (GL_INVALID_OPERATION: the default
+        one, in a core profile or OpenGL ES, as Mesa 22.3 has it)."""
+        return None if (self.core or self.es) and not self.s.vao else self.current_vao()
 
     def vertex_data_digest(self, name, d):
         """What a rule's `vertex_data` names a draw under a program by: the
@@ -105,18 +161,17 @@ class AttributeCalls:
             h.update(repr(("elements", kind, d.get("basevertex", 0))).encode())
             h.update(bytes(data[start:start + count * size]))
             return h.hexdigest()
-        for i, at in sorted(self.current_vao().attribs.items()):
-            if not at.enabled or at.divisor or not isinstance(at.size, int) or at.type not in ATTRIB_SIZES:
+        for i, at, b in self.current_vao().sources():
+            if not at.enabled or b.divisor or not isinstance(at.size, int) or at.type not in ATTRIB_SIZES:
                 continue
             elem = at.size * ATTRIB_SIZES[at.type]
-            stride = at.stride or elem
             first, count = d.get("first", 0), d["count"]
-            data = self.s.buffers.get(at.buffer) if at.buffer else at.client
-            start = (at.offset if at.buffer else 0) + first * stride
-            end = start + (count - 1) * stride + elem
+            data = self.s.buffers.get(b.buffer) if b.buffer else b.client
+            start = (b.offset if b.buffer else 0) + at.relative + first * b.stride
+            end = start + (count - 1) * b.stride + elem
             if data is None or start < 0 or end > len(data):
                 return ""
-            h.update(repr(("arrays", at.type, at.size, stride)).encode())
+            h.update(repr(("arrays", at.type, at.size, b.stride)).encode())
             h.update(bytes(data[start:end]))
             return h.hexdigest()
         return ""
@@ -126,13 +181,15 @@ class AttributeCalls:
         vertex array object for one instance (a per-instance float array,
         divisor >= 1, from a buffer object): an object's position in its
         world, for group_by = "instance_origin"."""
-        at = self.current_vao().attribs.get(index)
-        if at is None or not at.enabled or at.divisor == 0 or not at.buffer or at.type != "GL_FLOAT" \
+        vao = self.current_vao()
+        at = vao.attribs.get(index)
+        b = vao.binding(at.binding) if at is not None else None
+        if at is None or not at.enabled or b.divisor == 0 or not b.buffer or at.type != "GL_FLOAT" \
                 or not isinstance(at.size, int):
             fail_call(no, f"group_by = \"instance_origin\": attribute {index} is not a per-instance float "
                       "array in a buffer object (settings.origin_attribute)")
-        data = self.s.buffers.get(at.buffer)
-        at_byte = at.offset + (instance // at.divisor) * (at.stride or 4 * at.size)
+        data = self.s.buffers.get(b.buffer)
+        at_byte = b.offset + at.relative + (instance // b.divisor) * b.stride
         n = min(at.size, 3)
         if data is None or at_byte < 0 or at_byte + 4 * n > len(data):
             fail_call(no, f"attribute {index}'s instance {instance} reaches past its buffer's data")
@@ -141,9 +198,12 @@ class AttributeCalls:
         return origin
 
     def h_gen_vertex_arrays(self, no, name, a, args):
+        """glGenVertexArrays: names, whose objects exist once bound;
+        glCreateVertexArrays: objects at once (direct state access)."""
         for v in dict(args).get("arrays") or []:
-            if isinstance(v, int) and v > 0:
-                self.s.vaos.setdefault(v, VertexArrayObject())
+            if isinstance(v, int) and not isinstance(v, bool) and 0 < v < 1 << 32:
+                vao = self.s.vaos.setdefault(v, VertexArrayObject())
+                vao.exists = vao.exists or base_name(name) == "glCreateVertexArrays"
 
     def h_bind_vertex_array(self, no, name, a, args):
         v = checked(no, integer, dict(args)["array"], f"{name}: the vertex array", *U32)
@@ -152,6 +212,7 @@ class AttributeCalls:
         self.current_vao().element = self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
         self.s.vao = v
         vao = self.s.vaos.setdefault(v, VertexArrayObject())
+        vao.exists = True
         self.s.bound["GL_ELEMENT_ARRAY_BUFFER"] = vao.element
 
     def h_delete_vertex_arrays(self, no, name, a, args):
@@ -162,11 +223,18 @@ class AttributeCalls:
                 del self.s.vaos[v]
 
     def h_enable_attrib(self, no, name, a, args):
-        i = attrib_index(no, name, dict(args)["index"])
-        if i is not None:
-            self.current_vao().attrib(i).enabled = name.startswith("glEnable")
+        d = dict(args)
+        dsa = "vaobj" in d
+        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.current_vao()
+        i = attrib_index(no, name, d["index"])
+        if i is not None and vao is not None:
+            vao.attrib(i).enabled = name.startswith("glEnable")
 
     def h_attrib_pointer(self, no, name, a, args):
+        """glVertexAttrib*Pointer: the attribute's format, and binding point
+        `index` (which the attribute then reads) on the bound array buffer
+        at the pointer's offset, or on client memory; a stride of 0 is the
+        element's size there."""
         d = dict(args)
         i = attrib_index(no, name, d["index"])
         size = d["size"]
@@ -175,27 +243,137 @@ class AttributeCalls:
         normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
         if i is None or not (size in (1, 2, 3, 4) or size == "GL_BGRA") or stride < 0:
             return   # GL_INVALID_VALUE: the call does nothing
-        if not attrib_format_valid(name, size, d.get("type"), normalized):
+        integer_form = base_name(name) == "glVertexAttribIPointer"
+        if not attrib_format_valid(integer_form, size, d.get("type"), normalized):
             return   # GL_INVALID_ENUM, GL_INVALID_VALUE or GL_INVALID_OPERATION in Mesa: the earlier pointer stays
-        at = self.current_vao().attrib(i)
-        at.call, at.size, at.type, at.stride = name, size, d.get("type"), stride
-        at.normalized = normalized
+        vao = self.current_vao()
+        at = vao.attrib(i)
+        at.integer, at.size, at.type, at.relative, at.binding = integer_form, size, d.get("type"), 0, i
+        at.normalized = not integer_form and normalized
+        b = vao.binding(i)
+        b.stride = stride or element_bytes(size, at.type)
         p = d.get("pointer")
-        at.buffer = self.s.bound.get("GL_ARRAY_BUFFER", 0)
-        if at.buffer:
+        b.buffer = self.s.bound.get("GL_ARRAY_BUFFER", 0)
+        if b.buffer:
             # An offset into the buffer: what a pointer holds.
-            at.offset = checked(no, integer, 0 if p is None else p, f"{name}: the buffer offset", *U63)
-            at.client = None
+            b.offset = checked(no, integer, 0 if p is None else p, f"{name}: the buffer offset", *U63)
+            b.client = None
         else:
             # Client memory: apitrace records what the draws read as a blob.
-            at.offset, at.client = 0, p if isinstance(p, (bytes, bytearray)) else None
+            b.offset, b.client = 0, p if isinstance(p, (bytes, bytearray)) else None
+
+    def h_attrib_format(self, no, name, a, args):
+        """glVertexAttrib(I)Format and glVertexArrayAttrib(I)Format: an
+        attribute's format alone, at a relative offset into its binding's
+        elements."""
+        d = dict(args)
+        dsa = "vaobj" in d
+        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        i = attrib_index(no, name, d["attribindex"])
+        size = d["size"]
+        relative = checked(no, integer, d.get("relativeoffset", 0), f"{name}: the relative offset", *U32)
+        integer_form = base_name(name) in ("glVertexAttribIFormat", "glVertexArrayAttribIFormat")
+        from . import gl_boolean   # the package imports this module before it defines gl_boolean
+        normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
+        if vao is None or i is None or not (size in (1, 2, 3, 4) or size == "GL_BGRA") \
+                or relative > MAX_RELATIVE_OFFSET or not attrib_format_valid(integer_form, size, d.get("type"),
+                                                                               normalized):
+            return   # GL_INVALID_OPERATION, GL_INVALID_VALUE or GL_INVALID_ENUM: the call does nothing
+        at = vao.attrib(i)
+        at.integer, at.size, at.type, at.relative = integer_form, size, d.get("type"), relative
+        at.normalized = not integer_form and normalized
+
+    def h_attrib_binding(self, no, name, a, args):
+        """glVertexAttribBinding, glVertexArrayAttribBinding: which binding
+        point an attribute reads."""
+        d = dict(args)
+        dsa = "vaobj" in d
+        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        i = attrib_index(no, name, d["attribindex"])
+        point = checked(no, integer, d["bindingindex"], f"{name}: the binding index", *U32)
+        if vao is not None and i is not None and point < MAX_VERTEX_BINDINGS:
+            vao.attrib(i).binding = point
+
+    def bind_vertex_buffer(self, no, name, vao, point, buf, offset, stride):
+        """One binding point's buffer, offset and stride, as GL sets them:
+        an error (GL_INVALID_VALUE: a point, offset or stride out of range;
+        GL_INVALID_OPERATION: a name a core profile does not take) leaves
+        the point as it was."""
+        if point >= MAX_VERTEX_BINDINGS or offset < 0 or not 0 <= stride <= MAX_STRIDE or not self.generated(buf):
+            return
+        b = vao.binding(point)
+        b.buffer, b.offset, b.stride, b.client = buf, offset if buf else 0, stride, None
+
+    def h_bind_vertex_buffer(self, no, name, a, args):
+        """glBindVertexBuffer, glVertexArrayVertexBuffer."""
+        d = dict(args)
+        dsa = "vaobj" in d
+        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        point = checked(no, integer, d["bindingindex"], f"{name}: the binding index", *U32)
+        buf = checked(no, integer, d["buffer"], f"{name}: the buffer", *U32)
+        offset = checked(no, integer, d.get("offset", 0), f"{name}: the offset", *I64)
+        stride = checked(no, integer, d.get("stride", 0), f"{name}: the stride", *I32)
+        if vao is not None:
+            self.bind_vertex_buffer(no, name, vao, point, buf, offset, stride)
+
+    def h_bind_vertex_buffers(self, no, name, a, args):
+        """glBindVertexBuffers, glVertexArrayVertexBuffers (GL 4.4/4.5
+        multi-bind): points first .. first + count - 1, or none of them
+        (GL_INVALID_OPERATION: past the last point); no buffers unbinds
+        them all; an entry in error is left and the others are bound."""
+        d = dict(args)
+        dsa = "vaobj" in d
+        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        first = checked(no, integer, d["first"], f"{name}: the first binding", *U32)
+        count = checked(no, integer, d["count"], f"{name}: the count", *I32)
+        if vao is None or count < 0 or first + count > MAX_VERTEX_BINDINGS:
+            return
+        buffers, offsets, strides = d.get("buffers"), d.get("offsets"), d.get("strides")
+        if buffers is None:
+            for k in range(count):
+                self.bind_vertex_buffer(no, name, vao, first + k, 0, 0, 16)
+            return
+        if not all(isinstance(v, list) and len(v) >= count for v in (buffers, offsets, strides)):
+            fail_call(no, f"{name}: the buffers, offsets and strides are not {count} values each")
+        for k in range(count):
+            self.bind_vertex_buffer(no, name, vao, first + k,
+                                    checked(no, integer, buffers[k], f"{name}: a buffer", *U32),
+                                    checked(no, integer, offsets[k], f"{name}: an offset", *I64),
+                                    checked(no, integer, strides[k], f"{name}: a stride", *I32))
 
     def h_attrib_divisor(self, no, name, a, args):
+        """glVertexAttribDivisor: binding point `index` for the attribute,
+        with that divisor (as GL defines it)."""
         d = dict(args)
         i = attrib_index(no, name, d["index"])
         div = checked(no, integer, d["divisor"], f"{name}: the divisor", *U32)
         if i is not None:
-            self.current_vao().attrib(i).divisor = div
+            vao = self.current_vao()
+            vao.attrib(i).binding = i
+            vao.binding(i).divisor = div
+
+    def h_binding_divisor(self, no, name, a, args):
+        """glVertexBindingDivisor, glVertexArrayBindingDivisor."""
+        d = dict(args)
+        dsa = "vaobj" in d
+        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        point = checked(no, integer, d["bindingindex"], f"{name}: the binding index", *U32)
+        div = checked(no, integer, d["divisor"], f"{name}: the divisor", *U32)
+        if vao is not None and point < MAX_VERTEX_BINDINGS:
+            vao.binding(point).divisor = div
+
+    def h_element_buffer(self, no, name, a, args):
+        """glVertexArrayElementBuffer: the element array buffer of the named
+        vertex array object (the generic binding's too when it is bound)."""
+        d = dict(args)
+        vao = self.vao_named(no, name, d["vaobj"])
+        buf = checked(no, integer, d["buffer"], f"{name}: the buffer", *U32)
+        if vao is None or not self.generated(buf):
+            return
+        if vao is self.current_vao():
+            self.s.bound["GL_ELEMENT_ARRAY_BUFFER"] = buf
+        else:
+            vao.element = buf
 
     def h_attrib_value(self, no, name, a, args):
         """glVertexAttrib*: the value of a disabled attribute, replayed as called."""
@@ -212,16 +390,33 @@ class AttributeCalls:
 
     HANDLERS = {
         "glGenVertexArrays": h_gen_vertex_arrays,
+        "glCreateVertexArrays": h_gen_vertex_arrays,
         "glBindVertexArray": h_bind_vertex_array,
         "glDeleteVertexArrays": h_delete_vertex_arrays,
         "glEnableVertexAttribArray": h_enable_attrib,
         "glDisableVertexAttribArray": h_enable_attrib,
+        "glEnableVertexArrayAttrib": h_enable_attrib,
+        "glDisableVertexArrayAttrib": h_enable_attrib,
         "glVertexAttribPointer": h_attrib_pointer,
         "glVertexAttribIPointer": h_attrib_pointer,
         "glVertexAttribDivisor": h_attrib_divisor,
+        "glVertexAttribFormat": h_attrib_format,
+        "glVertexAttribIFormat": h_attrib_format,
+        "glVertexArrayAttribFormat": h_attrib_format,
+        "glVertexArrayAttribIFormat": h_attrib_format,
+        "glVertexAttribBinding": h_attrib_binding,
+        "glVertexArrayAttribBinding": h_attrib_binding,
+        "glBindVertexBuffer": h_bind_vertex_buffer,
+        "glVertexArrayVertexBuffer": h_bind_vertex_buffer,
+        "glBindVertexBuffers": h_bind_vertex_buffers,
+        "glVertexArrayVertexBuffers": h_bind_vertex_buffers,
+        "glVertexBindingDivisor": h_binding_divisor,
+        "glVertexArrayBindingDivisor": h_binding_divisor,
+        "glVertexArrayElementBuffer": h_element_buffer,
         "glPrimitiveRestartIndex": h_primitive_restart_index,
         "glPrimitiveRestartIndexNV": h_primitive_restart_index,
     } | dict.fromkeys([f"glVertexAttrib{n}{t}{v}" for n in "1234" for t in ("f", "d", "s") for v in ("", "v")]
-                     + [f"glVertexAttribI4{t}{v}" for t in ("i", "ui") for v in ("", "v")]
-                     + [f"glVertexAttrib4N{t}v" for t in ("b", "s", "i", "ub", "us", "ui")]
+                     + [f"glVertexAttribI{n}{t}{v}" for n in "1234" for t in ("i", "ui") for v in ("", "v")]
+                     + [f"glVertexAttribI4{t}v" for t in ("b", "s", "ub", "us")]
+                     + [f"glVertexAttrib4N{t}v" for t in ("b", "s", "i", "ub", "us", "ui")] + ["glVertexAttrib4Nub"]
                      + [f"glVertexAttrib4{t}v" for t in ("b", "i", "ub", "us", "ui")], h_attrib_value)

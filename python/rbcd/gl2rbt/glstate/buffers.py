@@ -6,11 +6,11 @@ version, by which the shader path's vertex stage knows what Mesa's copy
 lacks."""
 import mmap
 
-from ...cli import U32, integer
+from ...cli import I64, U32, integer
 from ..errors import checked, fail_call, printable
+from ..gl_tables import MAX_BUFFER_BYTES, MAX_BUFFER_BYTES_IN_ALL, base_name
 from . import bitfield, enum_arg
 
-I64 = (-(1 << 63), (1 << 63) - 1)
 # The bits of glBufferStorage's flags and glMapBufferRange's access the
 # converter reads.
 STORAGE_BITS = {0x0040: "GL_MAP_PERSISTENT_BIT", 0x0100: "GL_DYNAMIC_STORAGE_BIT"}
@@ -22,7 +22,6 @@ MAX_BINDINGS = 1024   # indexed binding points kept (llvmpipe has fewer: Mesa re
 # GL_INVALID_VALUE there and changes nothing, neither the indexed binding
 # nor the generic one.
 SHADER_BINDINGS = {"GL_UNIFORM_BUFFER": (90, 16), "GL_SHADER_STORAGE_BUFFER": (80, 16)}
-from ..gl_tables import MAX_BUFFER_BYTES, MAX_BUFFER_BYTES_IN_ALL
 
 
 def storage(size):
@@ -45,6 +44,32 @@ def merge_extents(extents):
 
 def is_buffer_target(target):
     return isinstance(target, str) and target.startswith("GL_") and target.endswith("_BUFFER")
+
+
+def named(handler, **targets):
+    """The direct-state-access form (GL 4.5) of a buffer call's handler:
+    each parameter in `targets` names a buffer object, which the handler
+    finds bound at a target of its own (named after no GL target) in place
+    of the target parameter it reads. A name that is not a buffer object
+    (0, or never bound nor made by glCreateBuffers) is GL_INVALID_OPERATION:
+    the call does nothing."""
+    def h(self, no, name, a, args):
+        d = dict(args)
+        pseudo = {}
+        for k, (param, target_param) in enumerate(targets.items()):
+            buf = checked(no, integer, d.get(param), f"{name}: the buffer", *U32)
+            if buf not in self.s.buffer_objects:
+                return
+            pseudo[param] = (target_param, f"GL_NAMED_{k}_BUFFER", buf)
+        args = [pseudo[k][:2] if k in pseudo else (k, v) for k, v in args]
+        for _, target, buf in pseudo.values():
+            self.s.bound[target] = buf
+        try:
+            handler(self, no, name, [v for _, v in args], args)
+        finally:
+            for _, target, _ in pseudo.values():
+                self.s.bound.pop(target, None)
+    return h
 
 
 class BufferCalls:
@@ -102,6 +127,8 @@ class BufferCalls:
         if not self.generated(buf):
             return   # GL_INVALID_OPERATION: a core profile binds only generated names
         self.s.bound[target] = buf
+        if buf:
+            self.s.buffer_objects.add(buf)
 
     def generated(self, buf):
         """Whether a core profile takes `buf` as a buffer name: 0, or one
@@ -111,6 +138,8 @@ class BufferCalls:
         return not (self.core and buf and self.s.buffer_names is not None and buf not in self.s.buffer_names)
 
     def h_gen_buffers(self, no, name, a, args):
+        """glGenBuffers: names, whose objects exist once bound;
+        glCreateBuffers: objects at once (direct state access)."""
         names = dict(args).get("buffers")
         if not isinstance(names, list):
             return   # apitrace recorded no names (a negative count: GL_INVALID_VALUE)
@@ -118,6 +147,8 @@ class BufferCalls:
             self.s.buffer_names = set()
         for b in names:
             self.s.buffer_names.add(checked(no, integer, b, f"{name}: a buffer name", *U32))
+            if base_name(name) == "glCreateBuffers" and b:
+                self.s.buffer_objects.add(b)
 
     def h_bind_buffer_base(self, no, name, a, args):
         d = dict(args)
@@ -142,6 +173,8 @@ class BufferCalls:
             return   # GL_INVALID_ENUM, GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
         self.s.bound[target] = buf   # glBindBufferBase and Range also bind the generic target
         self.s.indexed[(target, index)] = (buf, offset, size)
+        if buf:
+            self.s.buffer_objects.add(buf)
 
     def h_buffer_data(self, no, name, a, args):
         d = dict(args)
@@ -282,10 +315,10 @@ class BufferCalls:
             return
         current = self.current_vao()
         holders = [v for v in self.s.vaos.values() if v is not current and
-                   (v.element == b or any(at.buffer == b for at in v.attribs.values()))]
-        for at in current.attribs.values():
-            if at.buffer == b:
-                at.buffer = 0
+                   (v.element == b or any(p.buffer == b for p in v.bindings.values()))]
+        for p in current.bindings.values():
+            if p.buffer == b:
+                p.buffer = 0
         if not holders:
             return
         self.s.next_version += 1
@@ -299,9 +332,9 @@ class BufferCalls:
         for v in holders:
             if v.element == b:
                 v.element = kept
-            for at in v.attribs.values():
-                if at.buffer == b:
-                    at.buffer = kept
+            for p in v.bindings.values():
+                if p.buffer == b:
+                    p.buffer = kept
 
     def h_delete_buffers(self, no, name, a, args):
         d = dict(args)
@@ -309,6 +342,7 @@ class BufferCalls:
             if isinstance(b, int):
                 if self.s.buffer_names is not None:
                     self.s.buffer_names.discard(b)
+                self.s.buffer_objects.discard(b)
                 self.keep_for_other_vertex_arrays(b)
                 self.s.buffers.pop(b, None)
                 self.s.buffer_versions.pop(b, None)
@@ -327,6 +361,14 @@ class BufferCalls:
     HANDLERS = {
         "glBindBuffer": h_bind_buffer,
         "glGenBuffers": h_gen_buffers,
+        "glCreateBuffers": h_gen_buffers,
+        "glNamedBufferData": named(h_buffer_data, buffer="target"),
+        "glNamedBufferSubData": named(h_buffer_sub_data, buffer="target"),
+        "glNamedBufferStorage": named(h_buffer_storage, buffer="target"),
+        "glCopyNamedBufferSubData": named(h_copy_buffer_sub_data, readBuffer="readTarget", writeBuffer="writeTarget"),
+        "glMapNamedBuffer": named(h_map_buffer, buffer="target"),
+        "glMapNamedBufferRange": named(h_map_buffer, buffer="target"),
+        "glUnmapNamedBuffer": named(h_unmap_buffer, buffer="target"),
         "glBindBufferBase": h_bind_buffer_base,
         "glBindBufferRange": h_bind_buffer_base,
         "glBufferData": h_buffer_data,

@@ -12,6 +12,14 @@ from . import enum_arg, number
 
 PRIM_MODES = PRIM_TRIANGLES | PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY", "GL_TRIANGLES_ADJACENCY",
                                               "GL_TRIANGLE_STRIP_ADJACENCY", "GL_PATCHES"}
+# Modes a core profile and OpenGL ES do not have (GL_INVALID_ENUM there).
+LEGACY_MODES = {"GL_QUADS", "GL_QUAD_STRIP", "GL_POLYGON"}
+# The triangles a draw of n vertices under a program gives at most, by mode;
+# with no geometry shader the adjacency modes draw their triangles and pass
+# over the adjacent vertices (Mesa's transform feedback hands back those).
+TRIANGLES_PER_VERTICES = {"GL_TRIANGLES": lambda n: n // 3, "GL_TRIANGLE_STRIP": lambda n: max(0, n - 2),
+                          "GL_TRIANGLE_FAN": lambda n: max(0, n - 2), "GL_TRIANGLES_ADJACENCY": lambda n: n // 6,
+                          "GL_TRIANGLE_STRIP_ADJACENCY": lambda n: max(0, (n - 4) // 2)}
 MESA_STEPS_PER_UNIT = 2.0
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
 MAX_MULTI_DRAWS = 1 << 16      # draws of one multi-draw
@@ -128,7 +136,8 @@ class DrawCalls:
         planes = []
         if any(st.clip_enabled):
             if proj is None:
-                fail_call(no, f"{name}: user clip planes (glClipPlane) under a program are not emulated")
+                fail_call(no, f"{name}: user clip planes (glClipPlane) or clip distances (GL_CLIP_DISTANCEi) "
+                          "under a program are not emulated")
             try:
                 pinv = np.linalg.inv(proj)
             except np.linalg.LinAlgError:
@@ -208,8 +217,11 @@ class DrawCalls:
             fail_call(no, f"{name}: {instances} instances, more than {MAX_INSTANCES}")
         mode = d["mode"]
         if mode not in PRIM_MODES or (self.core and self.s.vao == 0) or \
-                (d.get("type", "GL_UNSIGNED_INT") not in INDEX_TYPES and "Elements" in name):
-            return   # GL_INVALID_ENUM, or no vertex array object in a core context: nothing is drawn
+                (d.get("type", "GL_UNSIGNED_INT") not in INDEX_TYPES and "Elements" in name) or \
+                ((self.core or self.es) and mode in LEGACY_MODES):
+            # GL_INVALID_ENUM (also quads and polygons in a core profile or
+            # ES), or no vertex array object in a core context: nothing is drawn
+            return
         if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard or not self.renders():
             return
         p = self.program_in_use()
@@ -217,15 +229,17 @@ class DrawCalls:
             if stage in p.linked[0]:
                 fail_call(no, f"{name}: program {self.s.program} (linked at call {p.link_call}) has a "
                           f"{stage.replace('_', ' ')} shader: not emulated yet")
-        if mode in PRIM_NO_AREA:
+        if mode == "GL_PATCHES":
+            return   # GL_INVALID_OPERATION with no tessellation stage: nothing is drawn
+        if mode in PRIM_NO_AREA or mode in ("GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"):
             self.ignored_prims += 1
             return
-        if mode not in ("GL_TRIANGLES", "GL_TRIANGLE_STRIP", "GL_TRIANGLE_FAN"):
+        if mode not in TRIANGLES_PER_VERTICES:
             fail_call(no, f"{name}: primitive mode {printable(mode)} under a program is not emulated")
         if not self.camera_pass():
             self.offscreen_draws += 1
             return
-        per = count // 3 if mode == "GL_TRIANGLES" else max(0, count - 2)   # at most, with no restart
+        per = TRIANGLES_PER_VERTICES[mode](count)   # at most, with no restart
         if per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {per * instances} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "
                       f"(or {MAX_RECORD_VERTICES // 3} an instance; docs/gl-capture.md)")

@@ -10,9 +10,9 @@ and counted (docs/gl-capture.md, "Which pass")."""
 import hashlib
 import re
 
-from ...cli import U32, integer
+from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
-from .buffers import I64
+from . import bitfield
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
 # The internal formats glTexBuffer takes in Mesa 22.3 (GL 4.5's table 8.18);
@@ -64,6 +64,8 @@ class FramebufferCalls:
         fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
         if target in ("GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER"):
             self.s.draw_fbo = fb
+        if target in ("GL_FRAMEBUFFER", "GL_READ_FRAMEBUFFER"):
+            self.s.read_fbo = fb
 
     def h_framebuffer_texture(self, no, name, a, args):
         d = dict(args)
@@ -196,10 +198,45 @@ class FramebufferCalls:
                 self.s.fbo_depth.pop(fb, None)
                 if self.s.draw_fbo == fb:
                     self.s.draw_fbo = 0   # GL binds the window's framebuffer again
+                if self.s.read_fbo == fb:
+                    self.s.read_fbo = 0
 
-    def camera_pass(self):
-        """Whether a draw now writes the frame's camera pass."""
-        fb = self.s.draw_fbo
+    def h_blit_framebuffer(self, no, name, a, args):
+        """glBlitFramebuffer, glBlitNamedFramebuffer. Only a depth copy into
+        the camera pass's framebuffer can change the unit's input. The
+        converter keeps one depth buffer for the camera pass, whichever of
+        its framebuffers a draw writes, so a copy from one of them to the
+        same rectangle of another (an MSAA resolve, a deferred renderer's
+        depth handed to its forward pass) changes nothing; a copy from
+        another pass, or moved or scaled, is refused naming the call. A
+        colour or stencil copy, one into another pass's framebuffer, and
+        one GL refuses (a bit no buffer has: GL_INVALID_VALUE; depth with
+        another filter than GL_NEAREST: GL_INVALID_OPERATION or
+        GL_INVALID_ENUM) change nothing."""
+        d = dict(args)
+        bits = {0x100: "GL_DEPTH_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT", 0x4000: "GL_COLOR_BUFFER_BIT"}
+        mask, unknown = bitfield(d.get("mask", 0), no, f"{name}: the mask", bits)
+        if "GL_DEPTH_BUFFER_BIT" not in mask or unknown or not mask <= set(bits.values()) \
+                or d.get("filter") not in ("GL_NEAREST", 0x2600):
+            return
+        if "drawFramebuffer" in d:
+            src = checked(no, integer, d["readFramebuffer"], f"{name}: the read framebuffer", *U32)
+            dst = checked(no, integer, d["drawFramebuffer"], f"{name}: the draw framebuffer", *U32)
+        else:
+            src, dst = self.s.read_fbo, self.s.draw_fbo
+        if not self.camera_pass(dst):
+            return
+        rect = [checked(no, integer, d.get(k), f"{name}: {k}", *I32)
+                for k in ("srcX0", "srcY0", "srcX1", "srcY1", "dstX0", "dstY0", "dstX1", "dstY1")]
+        if self.camera_pass(src) and rect[:4] == rect[4:]:
+            return
+        fail_call(no, f"{printable(name)}: a depth copy into the camera pass's depth buffer "
+                  f"{'moved or scaled' if self.camera_pass(src) else 'from another pass'} is not emulated")
+
+    def camera_pass(self, fb=None):
+        """Whether a draw now writes the frame's camera pass (or would,
+        into framebuffer `fb`)."""
+        fb = self.s.draw_fbo if fb is None else fb
         if not fb:
             return True
         if self.screen is None:
@@ -210,6 +247,8 @@ class FramebufferCalls:
     HANDLERS = {
         "glBindFramebuffer": h_bind_framebuffer,
         "glDeleteFramebuffers": h_delete_framebuffers,
+        "glBlitFramebuffer": h_blit_framebuffer,
+        "glBlitNamedFramebuffer": h_blit_framebuffer,
         "glFramebufferTexture2D": h_framebuffer_texture,
         "glFramebufferTexture": h_framebuffer_texture,
         "glFramebufferRenderbuffer": h_framebuffer_texture,

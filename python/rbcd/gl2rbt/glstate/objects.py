@@ -46,6 +46,11 @@ class ObjectCalls:
             self.last_rule = "untagged"
             return None
         d = self.describe(no, mv, proj, nverts, clip)
+        # The draw record's index in the frame's camera pass (the records
+        # before it; --list-draws numbers them so while every viewport meets
+        # the screen): a program that draws its objects in one order every
+        # frame (glmark2's pulsar quads) names each so.
+        d["draw_index"] = self.frame_records
         obj, self.last_rule = self.select.classify(d)
         self.last_rule_table = self.select.last_rule
         if obj == "entity" and self.last_rule_table["group_by"] == "instance_origin":
