@@ -812,9 +812,10 @@ VS_M = VS.replace("in vec3 p;", "in vec3 p;\nuniform mat2 m;").replace(
     "vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0)", "vec4(m * vec2(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0), 0.0, 1.0)")
 
 
-def boolean_draw(normalized="GL_FALSE", transpose="GL_FALSE"):
+def boolean_draw(normalized="GL_FALSE", transpose="GL_FALSE", form="pointer"):
     """A triangle of unsigned bytes (within the screen normalized, far past
-    it not) under a matrix that is not symmetric."""
+    it not) under a matrix that is not symmetric; its attribute set by
+    glVertexAttribPointer or by glVertexAttribFormat on binding point 0."""
     c = shader_calls(VS_M).add("glGetUniformLocation", program=2, name="m", ret=4)
     c.add("glUniformMatrix2fv", location=4, count=1, transpose=transpose, value=[1.0, 0.5, 0.0, 1.0])
     c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=3)
@@ -822,8 +823,14 @@ def boolean_draw(normalized="GL_FALSE", transpose="GL_FALSE"):
           usage="GL_STATIC_DRAW")
     c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
     c.add("glEnableVertexAttribArray", index=0)
-    c.add("glVertexAttribPointer", index=0, size=3, type="GL_UNSIGNED_BYTE", normalized=normalized, stride=0,
-          pointer=0)
+    if form == "pointer":
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_UNSIGNED_BYTE", normalized=normalized, stride=0,
+              pointer=0)
+    else:
+        c.add("glVertexAttribFormat", attribindex=0, size=3, type="GL_UNSIGNED_BYTE", normalized=normalized,
+              relativeoffset=0)
+        c.add("glVertexAttribBinding", attribindex=0, bindingindex=0)
+        c.add("glBindVertexBuffer", bindingindex=0, buffer=3, offset=0, stride=3)
     return c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
 
 
@@ -838,7 +845,9 @@ def test_any_glboolean_but_zero_normalizes_and_transposes(tmp_path):
     assert len({plain, normalized, transposed}) == 3
     for v in (1, 2, 255):
         assert trace_bytes(tmp_path, boolean_draw(normalized=v), f"n{v}") == normalized, v
+        assert trace_bytes(tmp_path, boolean_draw(normalized=v, form="format"), f"f{v}") == normalized, v
         assert trace_bytes(tmp_path, boolean_draw(transpose=v), f"t{v}") == transposed, v
+    assert trace_bytes(tmp_path, boolean_draw(normalized=0, form="format"), "f0") == plain
     assert trace_bytes(tmp_path, boolean_draw(normalized=0, transpose=0), "zero") == plain
 
 
@@ -856,6 +865,9 @@ def test_a_glboolean_past_a_byte_is_named(tmp_path, arg, value, words):
     refused(gl2rbt(tmp_path, boolean_draw(**{arg: value}).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
             words)
     assert left_behind(tmp_path, ["c.xz"]) == []
+    if arg == "normalized":
+        refused(gl2rbt(tmp_path, boolean_draw(normalized=value, form="format").write(tmp_path / "f.xz"), "-o",
+                       tmp_path / "f.rbt"), words.replace("glVertexAttribPointer", "glVertexAttribFormat"))
 
 
 @pytest.mark.parametrize("ret, words", [
