@@ -84,7 +84,14 @@ raster=${RBCD_GL_RASTER:-}
 # link to follow) and renamed into place complete: made first, so that an
 # output folder that cannot take it is said before the game runs.
 parent=$(dirname -- "$out")
-[ -d "$parent" ] || usage "$out: its folder $parent does not exist"
+if [ ! -d "$parent" ]; then
+  # The nearest part of the path that exists says why: a file where a
+  # folder is needed, or nothing there.
+  p=$parent
+  while [ ! -e "$p" ] && [ ! -L "$p" ] && [ "$p" != "$(dirname -- "$p")" ]; do p=$(dirname -- "$p"); done
+  [ ! -e "$p" ] || [ -d "$p" ] || usage "$out: $p is not a directory: the entry needs a folder there"
+  usage "$out: its folder $parent does not exist"
+fi
 staged=$(mktemp -d "$parent/.$(basename -- "$out").XXXXXXXX" 2>/dev/null) ||
   usage "$out: cannot create the entry in $parent (not writable?)"
 trap 'rm -rf "$staged"' EXIT

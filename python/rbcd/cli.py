@@ -16,7 +16,8 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
   symlink to one (the temporary beside the link's target, which a failed run
   leaves as it was); anything else (a device, a FIFO) written in place and
   never unlinked. check_outputs refuses, before anything is opened, an output
-  that names an input or another output. A temporary
+  that names an input or another output, or a FIFO or socket other than
+  standard output (opening one would wait for a reader). A temporary
   is removed on failure and on SIGINT/SIGTERM/SIGHUP (main_wrapper turns them
   into KeyboardInterrupt, so that cleanup code runs).
 """
@@ -287,6 +288,13 @@ def check_outputs(inputs, outputs):
         key, st = ident(path)
         if st is not None and stat.S_ISDIR(st.st_mode):
             raise UsageError(f"{path}: cannot create: is a directory")
+        # Opening a FIFO to write waits for a reader, for ever if none comes:
+        # refused unless it is standard output ("-", /dev/stdout), which the
+        # shell has opened already.
+        if st is not None and (stat.S_ISFIFO(st.st_mode) or stat.S_ISSOCK(st.st_mode)) \
+                and not to_standard_output([path]):
+            raise UsageError(f"{option} {path}: cannot create: is {_kind(st.st_mode)}, not a regular file "
+                             "(opening it would wait for a reader; - is standard output)")
         if key in taken:
             raise UsageError(f"{option} {path}: is also {taken[key]}")
         taken[key] = f"{option}'s output"

@@ -1,5 +1,6 @@
 """scripts/capture-game.sh's refusals (docs/games.md): an output folder it
-cannot use (empty, a symlink, dangling or not, a missing folder) or an
+cannot use (empty, a symlink, dangling or not, a missing folder or a file
+in its place) or an
 unusable TMPDIR is one line, exit 2, before any game runs or any conversion
 starts; a capture holding fewer frames than asked for is one line, exit 2.
 capture.toml records any map path and any TMPDIR as TOML reads them back;
@@ -43,6 +44,10 @@ def test_an_unusable_output_folder_is_refused_before_the_work(tmp_path):
     refused(capture_game(tmp_path, *base, tmp_path / "dangling", "--from-trace", cap), "is a symlink")
     refused(capture_game(tmp_path, *base, tmp_path / "to-a-folder", "--from-trace", cap), "is a symlink")
     refused(capture_game(tmp_path, *base, tmp_path / "no" / "x", "--from-trace", cap), "does not exist")
+    # A file where the entry's folder should be (it was said not to exist).
+    for out in (cap / "x", cap / "a" / "x"):
+        refused(capture_game(tmp_path, *base, out, "--from-trace", cap),
+                f"{out}: {cap} is not a directory: the entry needs a folder there")
     # A leading zero (bash would read 08 as octal) and an output folder
     # that reads as an option to dirname.
     refused(capture_game(tmp_path, *base, tmp_path / "out", "--from-trace", cap, "--skip", "08"),

@@ -99,6 +99,27 @@ def test_expand_never_writes_through_its_output_folder_into_an_input(tmp_path, e
     assert not [p for p in os.listdir(out) if p.startswith(".")], "a temporary was left"
 
 
+def test_expand_refuses_a_fifo_among_its_outputs(tmp_path, entry):
+    """A FIFO where expand writes an entry's output: one line naming it,
+    exit 2, before anything is opened (the converter had waited for a
+    reader for ever)."""
+    out = tmp_path / "out"
+    out.mkdir()
+    os.mkfifo(out / f"{NAME}.geo")
+    p = subprocess.Popen(["/usr/bin/python3", GAME_SUITE, "expand", "-o", out, "--frames", "1", "-j", "1", entry],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL,
+                         env=dict(os.environ, TMPDIR=str(tmp_path)), start_new_session=True)
+    try:
+        stdout, stderr = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)   # the converter and its rasterizer too
+        p.communicate()
+        pytest.fail("expand waited for a reader of the FIFO")
+    r = subprocess.CompletedProcess(p.args, p.returncode, stdout, stderr)
+    refused(r, f"{out / NAME}.geo: cannot create: is a FIFO, not a regular file")
+    assert os.listdir(out) == [f"{NAME}.geo"]
+
+
 def test_a_summary_of_more_lines_than_frames_is_refused_cheaply(tmp_path, entry):
     """An entry's summary.jsonl holds a line a frame: 30 million short lines
     (60 MB, under the read limit) are refused before being split (they had

@@ -7,8 +7,10 @@
  *
  * FAULT adds, in frame 1, one draw the converter must refuse, naming it:
  * geometry (a program with a geometry shader), texture (a vertex shader that
- * samples a 2D texture), compile (a vertex shader that does not compile,
- * drawn all the same), separable (a separable program).
+ * samples a 2D texture), separable (a separable program); or one it must
+ * convert as Mesa draws it: compile (a program whose vertex shader does not
+ * compile, used all the same: GL_INVALID_OPERATION, the draw runs the
+ * program in use).
  *
  * One program: a std140 uniform block Matrices {proj, view} at binding 2, a
  * uniform mat4 model, the position attribute bound with glBindAttribLocation
@@ -102,7 +104,7 @@ static GLuint compile(GLenum kind, const char* text) {
     return s;
 }
 
-/* The one refusable draw of frame 1 (see the header comment): a small
+/* The one fault draw of frame 1 (see the header comment): a small
  * triangle through a program of its own. */
 static void inject_fault(GLuint main_program) {
     if (!*fault) return;

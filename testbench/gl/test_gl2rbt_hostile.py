@@ -409,11 +409,15 @@ def test_modern_forms_of_emulated_state(tmp_path):
     assert indexed == classic and classic != plain
 
 
+ES_FRAGMENT = "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(1.0); }\n"
+
+
 def test_half_floats_of_opengl_es_2(tmp_path):
     """OES_vertex_half_float's GL_HALF_FLOAT_OES (0x8D61, not desktop GL's
     GL_HALF_FLOAT) in an OpenGL ES 2.0 context: the same triangle as floats."""
     pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
     vs = "#version 100\nattribute vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n"
+    fs = ES_FRAGMENT
 
     def es(kind, data):
         c = Calls()
@@ -421,7 +425,11 @@ def test_half_floats_of_opengl_es_2(tmp_path):
               attrib_list=["EGL_CONTEXT_CLIENT_VERSION", 2, "EGL_NONE"], ret=1)
         c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
         c.add("glShaderSource", shader=1, count=1, string=[vs], length=None).add("glCompileShader", shader=1)
+        # OpenGL ES links only whole programs.
+        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+        c.add("glShaderSource", shader=3, count=1, string=[fs], length=None).add("glCompileShader", shader=3)
         c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
+        c.add("glAttachShader", program=2, shader=3)
         c.add("glBindAttribLocation", program=2, index=0, name="p")
         c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
         c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
@@ -468,6 +476,28 @@ def test_records_that_no_gl_call_makes(tmp_path, build, words):
     build(c)
     refused(gl2rbt(tmp_path, c.swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), words)
     assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+@pytest.mark.parametrize("fn, args", [
+    ("glDrawArrays", dict(mode="GL_TRIANGLES", first=0, count=3)),
+    ("glViewport", dict(x=0, y=0, width=64, height=48)),
+])
+def test_the_end_of_frame_flag_only_on_a_swap(tmp_path, fn, args):
+    """apitrace flags the buffer swaps (and glFrameTerminatorGREMEDY) as
+    ending a frame, by name: a draw record carrying the flag had ended a
+    frame that was never swapped, and converted as a whole frame. A
+    reduced capture keeps glFrameTerminatorGREMEDY (it had been left out
+    with the calls the emulation passes over, and its frames with it)."""
+    c = Calls().add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
+    c.add("glEnableClientState", array="GL_VERTEX_ARRAY").add(fn, flags=END_FRAME, **args)
+    bad_call = len(c.calls)
+    for then in (c, c.swap()):
+        line = refused(gl2rbt(tmp_path, then.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+                       f"{fn}: the end-of-frame flag on a call that ends no frame")
+        assert f": call {bad_call}: " in line, line
+        assert left_behind(tmp_path, ["c.xz"]) == []
+    assert trace_bytes(tmp_path, Calls().triangle(obj=1).add("glFrameTerminatorGREMEDY", flags=END_FRAME),
+                       "gremedy") == trace_bytes(tmp_path, Calls().triangle(obj=1).swap(), "swap")
 
 
 def test_late_output_failures_leave_no_trace(tmp_path):
@@ -548,6 +578,23 @@ def strip_of(c, restart):
     for x, y in ((50, 4), (60, 4), (50, 40)):
         c.add("glVertex3f", x=x, y=y, z=-10)
     return c.add("glEnd")
+
+
+def test_a_swap_between_glbegin_and_glend(tmp_path):
+    """A buffer swap between glBegin and glEnd ends its frame, and the
+    primitive is drawn at glEnd, into the next, as Mesa 22.3 draws it
+    (llvmpipe under Xvfb: the swapped frame lacks it, the next has it); the
+    swap had been passed over, the two frames converted as one."""
+    def triangle(c):
+        for x, y in ((4, 4), (40, 4), (4, 40)):
+            c.add("glVertex3f", x=x, y=y, z=-10)
+        return c
+    across = triangle(Calls().add("glBegin", mode="GL_TRIANGLES")).swap().add("glEnd").swap()
+    after = triangle(Calls().swap().add("glBegin", mode="GL_TRIANGLES")).add("glEnd").swap()
+    r = gl2rbt(tmp_path, across.write(tmp_path / "a.xz"), "-o", tmp_path / "a.rbt", "--summary", tmp_path / "a.jsonl")
+    assert r.returncode == 0, r.stderr
+    assert [json.loads(line)["other"] > 0 for line in open(tmp_path / "a.jsonl")] == [False, True]
+    assert trace_bytes(tmp_path, across, "across") == trace_bytes(tmp_path, after, "after")
 
 
 def pointer(c):
@@ -679,6 +726,73 @@ def test_uniform_calls_gl_ignores_keep_the_earlier_value(tmp_path):
         assert trace_bytes(tmp_path, x0(later), f"later{i}") == half, later
 
 
+VS_MOVED = VS_X0.replace("p.y / 24.0 - 1.0", "p.y / 24.0 - 0.5")
+
+
+def relink_draws(*relink):
+    """Program 2 (VS_X0, x0 = 0.5) drawn in one frame; then the calls
+    `relink` (name, arguments), glUniform1f(x0, 0.9) and a draw in a
+    second frame."""
+    c = shader_calls(VS_X0).add("glGetUniformLocation", program=2, name="x0", ret=5)
+    c.add("glUniform1f", location=5, v0=0.5)
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
+    for fn, kw in relink:
+        c.add(fn, **kw)
+    return c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
+
+
+def new_vertex_source(source):
+    return [("glShaderSource", dict(shader=1, count=1, string=[source], length=None)),
+            ("glCompileShader", dict(shader=1))]
+
+
+def test_a_failed_relink_keeps_the_executable_in_use(tmp_path):
+    """Mesa 22.3, as GL 4.6 section 7.3 says: a program in use linked again
+    without success keeps the executable it had, with its uniforms, until
+    another program is used (glUniform and glUseProgram of it are then
+    GL_INVALID_OPERATION): its draws are the earlier program's, where the
+    converter had refused them ("Mesa does not link its vertex stage"),
+    or, when only the fragment shader failed, had drawn the new vertex
+    shader's. A link that holds draws the new shaders."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    link, use = ("glLinkProgram", dict(program=2)), ("glUseProgram", dict(program=2))
+    uniform = ("glUniform1f", dict(location=5, v0=0.9))
+    same = trace_bytes(tmp_path, relink_draws(), "same")
+    bad_vertex = new_vertex_source("#version 330 core\nvoid main() { gl_Position = nonsense; }\n")
+    assert trace_bytes(tmp_path, relink_draws(*bad_vertex, link, uniform, use), "bad_vertex") == same
+    bad_fragment = new_vertex_source(VS_MOVED) + [
+        ("glCreateShader", dict(type="GL_FRAGMENT_SHADER", ret=3)),
+        ("glShaderSource", dict(shader=3, count=1, string=["#version 330 core\nvoid main() { nonsense; }\n"],
+                                length=None)),
+        ("glCompileShader", dict(shader=3)), ("glAttachShader", dict(program=2, shader=3))]
+    assert trace_bytes(tmp_path, relink_draws(*bad_fragment, link, uniform), "bad_fragment") == same
+    twice = bad_vertex + [link] + new_vertex_source("#version 330 core\nvoid main() { oops; }\n") + [link]
+    assert trace_bytes(tmp_path, relink_draws(*twice, uniform), "twice") == same
+    moved = trace_bytes(tmp_path, relink_draws(*new_vertex_source(VS_MOVED), link), "moved")
+    assert moved != same
+    # Another program whose link failed (its fragment shader): using it is
+    # GL_INVALID_OPERATION, the program in use draws (it had drawn the other
+    # program's vertex shader).
+    other = [("glCreateShader", dict(type="GL_VERTEX_SHADER", ret=8)),
+             ("glShaderSource", dict(shader=8, count=1, string=[VS_MOVED], length=None)),
+             ("glCompileShader", dict(shader=8))] + bad_fragment[-4:-1] + [
+        ("glCreateProgram", dict(ret=4)), ("glAttachShader", dict(program=4, shader=8)),
+        ("glAttachShader", dict(program=4, shader=3)), ("glBindAttribLocation", dict(program=4, index=0, name="p")),
+        ("glLinkProgram", dict(program=4)), ("glUseProgram", dict(program=4))]
+    assert trace_bytes(tmp_path, relink_draws(*other), "other") == same
+    # Not in use when its link fails: the program has no executable, and
+    # glUseProgram of it is GL_INVALID_OPERATION: the draw runs with no
+    # program, which in a core profile draws nothing (it had been refused).
+    cap = relink_draws(("glUseProgram", dict(program=0)), *bad_vertex, link, use).write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--summary", tmp_path / "c.jsonl")
+    assert r.returncode == 0, r.stderr
+    drawn = [json.loads(line)["other"] for line in open(tmp_path / "c.jsonl")]
+    assert drawn[0] > 100 and drawn[1] == 0, drawn
+
+
 @pytest.mark.parametrize("fn, values, words", [
     ("glUniform1f", dict(v0=10 ** 400), "a value: an integer of 1329 bits is too large"),
     ("glUniform1i", dict(v0=1 << 31), "a value: 2147483648 is outside"),
@@ -691,6 +805,85 @@ def test_uniform_values_past_their_c_types_are_named(tmp_path, fn, values, words
     (one had ended in 'internal error: ArgumentError')."""
     c = shader_calls(VS_X0).add("glGetUniformLocation", program=2, name="x0", ret=5).add(fn, location=5, **values)
     refused(gl2rbt(tmp_path, shader_draw(c, vao=7).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"), words)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+VS_M = VS.replace("in vec3 p;", "in vec3 p;\nuniform mat2 m;").replace(
+    "vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0)", "vec4(m * vec2(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0), 0.0, 1.0)")
+
+
+def boolean_draw(normalized="GL_FALSE", transpose="GL_FALSE", form="pointer"):
+    """A triangle of unsigned bytes (within the screen normalized, far past
+    it not) under a matrix that is not symmetric; its attribute set by
+    glVertexAttribPointer or by glVertexAttribFormat on binding point 0."""
+    c = shader_calls(VS_M).add("glGetUniformLocation", program=2, name="m", ret=4)
+    c.add("glUniformMatrix2fv", location=4, count=1, transpose=transpose, value=[1.0, 0.5, 0.0, 1.0])
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=3)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=9, data=bytes([20, 20, 0, 200, 20, 0, 20, 200, 0]),
+          usage="GL_STATIC_DRAW")
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    if form == "pointer":
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_UNSIGNED_BYTE", normalized=normalized, stride=0,
+              pointer=0)
+    else:
+        c.add("glVertexAttribFormat", attribindex=0, size=3, type="GL_UNSIGNED_BYTE", normalized=normalized,
+              relativeoffset=0)
+        c.add("glVertexAttribBinding", attribindex=0, bindingindex=0)
+        c.add("glBindVertexBuffer", bindingindex=0, buffer=3, offset=0, stride=3)
+    return c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
+
+
+def test_any_glboolean_but_zero_normalizes_and_transposes(tmp_path):
+    """glVertexAttribPointer's normalized and glUniformMatrix's transpose
+    as Mesa 22.3 tests them: any byte but 0 is true (normalized = 2 had
+    drawn the bytes unnormalized)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    plain = trace_bytes(tmp_path, boolean_draw(), "plain")
+    normalized = trace_bytes(tmp_path, boolean_draw(normalized="GL_TRUE"), "normalized")
+    transposed = trace_bytes(tmp_path, boolean_draw(transpose="GL_TRUE"), "transposed")
+    assert len({plain, normalized, transposed}) == 3
+    for v in (1, 2, 255):
+        assert trace_bytes(tmp_path, boolean_draw(normalized=v), f"n{v}") == normalized, v
+        assert trace_bytes(tmp_path, boolean_draw(normalized=v, form="format"), f"f{v}") == normalized, v
+        assert trace_bytes(tmp_path, boolean_draw(transpose=v), f"t{v}") == transposed, v
+    assert trace_bytes(tmp_path, boolean_draw(normalized=0, form="format"), "f0") == plain
+    assert trace_bytes(tmp_path, boolean_draw(normalized=0, transpose=0), "zero") == plain
+
+
+@pytest.mark.parametrize("arg, value, words", [
+    ("normalized", -1, "glVertexAttribPointer: normalized: -1 is not a GLboolean"),
+    ("normalized", 256, "glVertexAttribPointer: normalized: 256 is not a GLboolean"),
+    ("normalized", 1.0, "glVertexAttribPointer: normalized: 1.0 is not a GLboolean"),
+    ("transpose", -1, "glUniformMatrix2fv: transpose: -1 is not a GLboolean"),
+    ("transpose", 1 << 40, "glUniformMatrix2fv: transpose: 1099511627776 is not a GLboolean"),
+    ("transpose", "GL_ONE", "glUniformMatrix2fv: transpose: GL_ONE is not a GLboolean"),
+])
+def test_a_glboolean_past_a_byte_is_named(tmp_path, arg, value, words):
+    """A GLboolean is an unsigned byte: a value no C call can pass is the
+    capture's error, named (transpose = -1 had transposed)."""
+    refused(gl2rbt(tmp_path, boolean_draw(**{arg: value}).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+            words)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    if arg == "normalized":
+        refused(gl2rbt(tmp_path, boolean_draw(normalized=value, form="format").write(tmp_path / "f.xz"), "-o",
+                       tmp_path / "f.rbt"), words.replace("glVertexAttribPointer", "glVertexAttribFormat"))
+
+
+@pytest.mark.parametrize("ret, words", [
+    (1 << 40, "glGetUniformLocation: the location returned: 1099511627776 is outside [-1, 2147483647]"),
+    (-2, "glGetUniformLocation: the location returned: -2 is outside [-1, 2147483647]"),
+    (0.5, "glGetUniformLocation: the location returned: 0.5 is not an integer"),
+])
+def test_a_returned_location_is_a_glint(tmp_path, ret, words):
+    """glGetUniformLocation returns a GLint, -1 or a location: another
+    value recorded is the capture's error, named (2^40 had been taken)."""
+    c = shader_calls(VS_X0).add("glGetUniformLocation", program=2, name="x0", ret=ret)
+    bad_call = len(c.calls)
+    c.add("glUniform1f", location=5, v0=0.5)
+    line = refused(gl2rbt(tmp_path, shader_draw(c, vao=7).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+                   words)
+    assert f": call {bad_call}: " in line, line
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
@@ -1082,7 +1275,11 @@ def test_a_new_contexts_objects_are_its_own_in_mesa(tmp_path):
         c.add("glViewport", x=0, y=0, width=64, height=48, flags=1)   # apitrace's record of the window
         c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
         c.add("glShaderSource", shader=1, count=1, string=[vs], length=None).add("glCompileShader", shader=1)
+        # OpenGL ES links only whole programs.
+        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+        c.add("glShaderSource", shader=3, count=1, string=[ES_FRAGMENT], length=None).add("glCompileShader", shader=3)
         c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
+        c.add("glAttachShader", program=2, shader=3)
         c.add("glBindAttribLocation", program=2, index=0, name="p")
         c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
         c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)

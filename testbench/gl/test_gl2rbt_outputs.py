@@ -10,6 +10,7 @@ import lzma
 import os
 import pickle
 import shutil
+import signal
 import subprocess
 import time
 
@@ -20,7 +21,7 @@ from gl_captures import GL2RBT, Calls as SharedCalls, gl2rbt_timed as gl2rbt, le
 from rbcd.cli import describe
 from rbcd.gl2rbt.apitrace import MAX_RECORD_VALUES
 from rbcd.gl2rbt.errors import printable
-from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_HEADER
+from rbcd.gl2rbt.reduced import REDUCED_END, REDUCED_EXPANSION, REDUCED_HEADER
 
 # A pickle of shared references: a 10^9-element list in a few kilobytes (its
 # repr would take gigabytes and minutes).
@@ -114,6 +115,39 @@ def test_a_call_of_too_many_values_is_refused_before_it_is_walked(tmp_path, fn, 
 
 # ---- the rest of a reduced capture, when --frames stops before it
 
+def frame(body):
+    return b"\x95" + len(body).to_bytes(8, "little") + body
+
+
+@pytest.mark.parametrize("framed", [True, False], ids=["framed", "unframed"])
+def test_a_record_of_tiny_objects_is_refused_in_bounded_memory(tmp_path, framed):
+    """A 9 KB reduced capture expanding to its limit (65 MB) in one record of
+    empty lists, 80 bytes of memory each from one byte: framed as the
+    writer frames records, its opcodes are counted before they are
+    unpickled; unframed, it is refused at once (16 million of them had
+    peaked at 1.3 GB; 65 million would take 5 GB). Run under a 2 GB address
+    space, so that the machine is spared when the limit fails."""
+    n = 60_000_000
+    chunk = (1 << 20) - 16
+    if framed:
+        record = b"\x80\x04" + frame(b"(" + b"]" * (chunk - 1)) + frame(b"]" * chunk) * (n // chunk) + frame(b"l.")
+        words = "does not decode (a record of more than 3145728 pickle opcodes"
+    else:
+        record = b"\x80\x04(" + b"]" * n + b"l."
+        words = "does not decode (a record not framed as the writer frames it)"
+    z = lzma.LZMACompressor(preset=6)
+    data = z.compress(pickle.dumps(REDUCED_HEADER, protocol=4)) + z.compress(record) + z.flush()
+    (tmp_path / "c.xz").write_bytes(data)
+    assert len(data) < 1 << 16 and len(record) < REDUCED_EXPANSION << 16, "not a capture at the expansion limit"
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = subprocess.run(["/usr/bin/time", "-f", "maxrss %M", "prlimit", f"--as={2 << 30}", "/usr/bin/python3", GL2RBT,
+                        tmp_path / "c.xz", "-o", tmp_path / "c.rbt"], capture_output=True, text=True, env=env,
+                       stdin=subprocess.DEVNULL, timeout=120)
+    refused(r, "c.xz: before its first call: the reduced capture " + words)
+    assert peak_mb(r) < 300, f"{peak_mb(r):.0f} MB"
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
 def test_the_rest_of_a_reduced_capture_is_checked(tmp_path):
     """--frames 0:0 of a two-frame reduced capture reads on to the end of
     its xz stream: junk after it, a stream cut short or one without its end
@@ -185,14 +219,81 @@ def test_a_full_device_is_named(tmp_path, args):
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
-def test_a_report_standard_output_cannot_take_is_one_line(tmp_path):
-    """Standard output on a full device: the outputs are in place and
-    whole, the lost report is one line, exit 1 (it was an internal error)."""
+def test_a_report_standard_output_cannot_take_fails_the_run(tmp_path):
+    """Standard output on a full device, or closed: the report is written
+    before the outputs are committed, and its failure is the run's, as an
+    output's write failure is: one line, exit 1, no output left (they had
+    been left whole with exit 1, and with a closed standard output the
+    report was lost with exit 0)."""
     cap = Calls().frame().write(tmp_path / "c.xz")
+    outputs = ["-o", tmp_path / "c.rbt", "--summary", tmp_path / "s.jsonl", "--geometry", tmp_path / "g.geo"]
     with open("/dev/full", "w") as full:
-        r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", stdout=full)
-    refused(r, "the report: write failed", status=1)
-    assert (tmp_path / "c.rbt").read_text().startswith("rbcd-trace ")
+        r = gl2rbt(tmp_path, cap, *outputs, stdout=full)
+    refused(r, "the report: write failed: No space left on device; no output written", status=1)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = subprocess.run(["/usr/bin/python3", GL2RBT, cap] + [str(a) for a in outputs], stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, text=True, env=env, timeout=120, pass_fds=(),
+                       preexec_fn=lambda: os.close(1))
+    refused(r, "the report: write failed: standard output is closed; no output written", status=1)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    r = gl2rbt(tmp_path, cap, *outputs)
+    assert r.returncode == 0 and r.stdout.startswith("1 frames: "), r.stderr
+
+
+def test_a_listing_standard_output_cannot_take_fails_the_run(tmp_path):
+    """--list-draws with standard output full or closed: one line, exit 1,
+    and no image (it had been an internal error, and with a closed
+    standard output the listing was lost with exit 0)."""
+    pytest.importorskip("PIL", reason="python3-pil is missing (installed with apitrace: scripts/setup.sh --gl)")
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    args = [cap, "--list-draws", "0", "--image", tmp_path / "f.png"]
+    with open("/dev/full", "w") as full:
+        refused(gl2rbt(tmp_path, *args, stdout=full), "the listing: write failed: No space left on device", status=1)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = subprocess.run(["/usr/bin/python3", GL2RBT] + [str(a) for a in args], stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, text=True, env=env, timeout=120, preexec_fn=lambda: os.close(1))
+    refused(r, "the listing: write failed: standard output is closed", status=1)
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+def run_or_fail(cmd, env, timeout, why):
+    """cmd's result; pytest.fail(why) when it runs past `timeout`, its
+    whole process group (the converter's rasterizer too) killed."""
+    p = subprocess.Popen([str(a) for a in cmd], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                         stdin=subprocess.DEVNULL, start_new_session=True)
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.communicate()
+        pytest.fail(why)
+    return subprocess.CompletedProcess(p.args, p.returncode, out, err)
+
+
+@pytest.mark.parametrize("args", [["-o", "fifo"], ["-o", "c.rbt", "--summary", "fifo"],
+                                  ["-o", "c.rbt", "--geometry", "fifo"], ["-o", "c.rbt", "--stream-out", "fifo"],
+                                  ["--list-draws", "0", "--image", "fifo"], ["-o", "c.rbt", "--depth-out", "d"]],
+                         ids=["trace", "summary", "geometry", "stream", "image", "depth"])
+def test_a_fifo_output_is_refused_before_it_is_opened(tmp_path, args):
+    """An output that is a FIFO no process reads: one line naming it, exit
+    2, at once (opening it had waited for a reader for ever); standard
+    output, a pipe, is still an output."""
+    os.mkfifo(tmp_path / "fifo")
+    os.mkfifo(tmp_path / "d.0.depth")
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = run_or_fail(["/usr/bin/python3", GL2RBT, cap] + [tmp_path / a if a in ("fifo", "c.rbt", "d") else a
+                                                         for a in args], env, 30,
+                    f"{args}: waited for a reader of the FIFO")
+    fifo = tmp_path / ("d.0.depth" if "--depth-out" in args else "fifo")
+    option = args[-2]
+    refused(r, f"{option} {fifo}: cannot create: is a FIFO, not a regular file")
+    assert left_behind(tmp_path, ["c.xz", "fifo", "d.0.depth"]) == []
+    r = subprocess.run(["/usr/bin/python3", GL2RBT, cap, "-o", "/dev/stdout", "-q"], capture_output=True, env=env,
+                       stdin=subprocess.DEVNULL, timeout=120)
+    assert r.returncode == 0 and r.stdout.startswith(b"rbcd-trace "), r.stderr
 
 
 def test_a_listing_image_on_standard_output_has_it_to_itself(tmp_path):
@@ -208,6 +309,35 @@ def test_a_listing_image_on_standard_output_has_it_to_itself(tmp_path):
         assert r.returncode == 0 and r.stdout.startswith(b"\x89PNG\r\n\x1a\n"), (image, r.stderr)
         assert b"frame 0:" in r.stderr and b"frame 0:" not in r.stdout
         assert sorted(os.listdir(tmp_path)) == ["c.xz"], os.listdir(tmp_path)
+
+
+def test_a_listing_image_of_a_large_screen_is_built_in_bounded_memory(tmp_path):
+    """--image of a 4096 x 4096 frame one draw covers: the label's place
+    from counts, not every pixel's coordinates (16 bytes a pixel, 256 MiB
+    here; 8192 x 8192 had peaked at 760 MB), and no array kept once the
+    next is made. numpy's arrays are what tracemalloc sees (PIL's picture,
+    4 bytes a pixel, is not)."""
+    pytest.importorskip("PIL", reason="python3-pil is missing (installed with apitrace: scripts/setup.sh --gl)")
+    import tracemalloc
+    import numpy as np
+    from rbcd.gl2rbt.listing import write_draw_image
+    side = 4096
+    ids = np.zeros((side, side), "<u2")
+    ids[:, :100] = 0xFFFF
+    ids[:50] = 1
+    with open(tmp_path / "ids", "wb") as f:
+        f.write(f"rbcd-ids 1 {side} {side}\n".encode())
+        ids.tofile(f)
+    del ids
+    rows = [{"index": 0, "object": 3}, {"index": 1, "object": None}]
+    tracemalloc.start()
+    try:
+        write_draw_image(str(tmp_path / "f.png"), str(tmp_path / "ids"), rows)
+        peak = tracemalloc.get_traced_memory()[1] / (1 << 20)
+    finally:
+        tracemalloc.stop()
+    assert (tmp_path / "f.png").read_bytes().startswith(b"\x89PNG")
+    assert peak < 120, f"{peak:.0f} MiB of arrays for a {side} x {side} picture"
 
 
 @pytest.mark.parametrize("args, words", [

@@ -171,7 +171,6 @@ def test_select_by_shader_state(gl):
 @pytest.mark.parametrize("fault, words", [
     ("geometry", "has a geometry shader"),
     ("texture", "reads texture heights (GL_SAMPLER_2D)"),
-    ("compile", "Mesa does not compile its vertex shader"),
     ("separable", "separable programs"),
 ])
 def test_refusals(gl, fault, words):
@@ -183,6 +182,16 @@ def test_refusals(gl, fault, words):
         f"{fault}: exit {r.returncode}: {lines}"
     assert not os.path.exists(out) and not os.path.exists(geo), f"{fault}: an output was left"
     assert not [f for f in os.listdir(gl.tmp) if f.startswith(".")], f"{fault}: a temporary was left"
+
+
+def test_a_program_that_does_not_link_is_not_used(gl):
+    """The fault "compile": glUseProgram of a program whose vertex shader
+    does not compile is GL_INVALID_OPERATION in Mesa, and its draw runs the
+    program in use: converted as Mesa draws it (the draw had been refused)."""
+    r = gl(capture_path("shader-fault-compile"), "--check-depth")
+    assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"
+    m = re.search(r"agreement: ([0-9.]+)% of (\d+) covered pixels in (\d+) frames", r.stdout)
+    assert m and float(m.group(1)) >= 99.0 and int(m.group(2)) > 2000, r.stdout
 
 
 # ---- OpenGL ES 2.0 (testbench/gl/gles_boxes.c, through EGL): a "#version 100"

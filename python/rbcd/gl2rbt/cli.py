@@ -109,17 +109,7 @@ def run(args):
             args.snapshots = set(int(x) for x in args.snapshot_calls.split(",")) if args.snapshot_calls else set()
         except ValueError:
             raise ConvertError("--snapshot-calls: not a list of call numbers")
-        frames, conv = raster.convert(args)
-        if not args.quiet:
-            outputs = [args.output, args.geometry, args.summary, args.reduced_out]
-            stream = sys.stderr if to_standard_output(outputs) else sys.stdout
-            try:
-                raster.report(frames, conv, stream)
-                stream.flush()
-            except OSError as e:
-                # The outputs are in place and whole; only the report is lost.
-                sys.stderr.write(f"{PROG}: the report: write failed: {e.strerror or e}\n")
-                return 1
+        raster.convert(args, report=None if args.quiet else write_report)
         return 0
     except ConvertError as e:
         sys.stderr.write(f"{PROG}: {printable(args.trace)}: {printable(e, 400)}\n")
@@ -135,6 +125,22 @@ def run(args):
     except Exception as e:   # noqa: BLE001: the promise is one line, whatever failed
         sys.stderr.write(f"{PROG}: internal error: {type(e).__name__}: {printable(e, 300)}\n")
         return 1
+
+
+def write_report(frames, conv):
+    """The run's report, written before the outputs are committed: one that
+    cannot be written (standard output full or closed) fails the run as an
+    output's write does, and no output is left."""
+    from . import raster
+    outputs = [conv.args.output, conv.args.geometry, conv.args.summary, conv.args.reduced_out]
+    stream = sys.stderr if to_standard_output(outputs) else sys.stdout
+    if stream is None:   # closed when the program started
+        raise ToolError("the report: write failed: standard output is closed; no output written")
+    try:
+        raster.report(frames, conv, stream)
+        stream.flush()
+    except OSError as e:
+        raise ToolError(f"the report: write failed: {printable(e.strerror or e)}; no output written")
 
 
 def require_numpy():

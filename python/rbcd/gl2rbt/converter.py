@@ -6,7 +6,7 @@ import struct
 from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
-from .gl_tables import CALL_FLAG_END_FRAME, COMPAT_ONLY, IGNORED_PREFIXES, base_name
+from .gl_tables import CALL_FLAG_END_FRAME, COMPAT_ONLY, END_FRAME_CALLS, IGNORED_PREFIXES, base_name
 from .glstate import GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
@@ -168,6 +168,9 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         no, name, args, ret, flags = call
         if isinstance(flags, bool) or not isinstance(flags, int) or not 0 <= flags < 1 << 32:
             fail_call(no, f"{printable(name)}: the call's flags {printable(flags, 40)} are not apitrace's")
+        if flags & CALL_FLAG_END_FRAME and name not in END_FRAME_CALLS:
+            fail_call(no, f"{printable(name)}: the end-of-frame flag on a call that ends no frame "
+                      "(apitrace sets it on buffer swaps only)")
         self.flags, self.ret = flags, ret
         s = self.s
         a = [v for _, v in args]
@@ -188,6 +191,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 return
             if base.startswith(("glCallList", "glArrayElement", "glEvalCoord", "glEvalPoint", "glVertexAttrib")):
                 fail_call(no, f"{printable(name)} between glBegin and glEnd is not emulated")
+            if flags & CALL_FLAG_END_FRAME:
+                # A buffer swap there ends the frame; Mesa keeps the
+                # primitive's vertices and draws them at glEnd, into the next.
+                self.end_frame(no)
             return   # any other call there is GL_INVALID_OPERATION: it does nothing
         h = self.HANDLERS.get(base)
         if self.core and base in COMPAT_ONLY:

@@ -4,6 +4,14 @@
 # state (the window's size at MakeCurrent), and a call that ends a frame.
 CALL_FLAG_FAKE = 1 << 0
 CALL_FLAG_END_FRAME = 1 << 5
+# The calls apitrace's reader flags as ending a frame (it flags calls by
+# their name: the buffer swaps and glFrameTerminatorGREMEDY). The flag on
+# any other call (a draw) is in no capture apitrace writes: the capture's
+# error, not a frame's end.
+END_FRAME_CALLS = frozenset({
+    "glXSwapBuffers", "eglSwapBuffers", "eglSwapBuffersWithDamageEXT", "eglSwapBuffersWithDamageKHR",
+    "wglSwapBuffers", "wglSwapLayerBuffers", "wglSwapMultipleBuffers", "CGLFlushDrawable",
+    "glFrameTerminatorGREMEDY"})
 
 PRIM_TRIANGLES = {"GL_TRIANGLES", "GL_TRIANGLE_STRIP", "GL_TRIANGLE_FAN", "GL_QUADS", "GL_QUAD_STRIP", "GL_POLYGON"}
 PRIM_NO_AREA = {"GL_POINTS", "GL_LINES", "GL_LINE_STRIP", "GL_LINE_LOOP"}

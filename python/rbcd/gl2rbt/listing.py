@@ -23,7 +23,8 @@ def list_draws(args):
     # has it to itself: the listing goes to standard error.
     if args.image == "-":
         args.image = "/dev/stdout"
-    out = sys.stderr if args.image and to_standard_output([args.image]) else sys.stdout
+    stream = sys.stderr if args.image and to_standard_output([args.image]) else sys.stdout
+    out = io.StringIO()   # written whole before the image: a listing that cannot be written leaves no image
     tmp = tempfile.mkdtemp(prefix="rbcd-gl2rbt-list.")
     try:
         args.output = os.path.join(tmp, "list.rbt")
@@ -47,6 +48,13 @@ def list_draws(args):
                   (i == 0 or rows[i - 1]["pass"] != r["pass"])]
         if passes:
             print("passes: " + ", ".join(f"from call {c} {printable(p, 60)!r}" for c, p in passes), file=out)
+        if stream is None:   # closed when the program started
+            raise ToolError("the listing: write failed: standard output is closed")
+        try:
+            stream.write(out.getvalue())
+            stream.flush()
+        except OSError as e:
+            raise ToolError(f"the listing: write failed: {printable(e.strerror or e)}")
         if args.image:
             write_draw_image(args.image, ids_path, rows)
         return 0
@@ -59,13 +67,34 @@ def write_draw_image(path, ids_path, rows):
         from PIL import Image, ImageDraw
     except ImportError:
         raise ToolError("--image needs python3-pil (installed with apitrace)")
+    # Memory: the image is built one whole array at a time, each freed as
+    # soon as the next is made (8192 x 8192: about 0.45 GB at the peak, the
+    # picture in PIL's four bytes a pixel beside its RGB array).
+    n = len(rows)
     with open(ids_path, "rb") as f:
         head = f.readline().split()
         w, h = int(head[2]), int(head[3])
-        ids = np.frombuffer(f.read(), dtype="<u2", count=w * h).reshape(h, w)
+        # Each pixel's draw index, the background (0xFFFF) and indices past
+        # the listing as n: the palette's last entry.
+        idx = np.fromfile(f, dtype="<u2", count=w * h).reshape(h, w)
+    idx = idx.astype(np.uint32 if n >= 0xFFFF else np.uint16, copy=False)
+    np.minimum(idx, n, out=idx)
+    if n > 0xFFFF:
+        idx[idx == 0xFFFF] = n
+    # Each visible draw's label at the median of its pixels (from counts
+    # per column and row: the pixels' coordinates of a draw covering the
+    # screen would take 16 bytes each).
+    labels = []
+    for r in rows:
+        mask = idx == r["index"]
+        across, down = mask.sum(axis=0), mask.sum(axis=1)
+        del mask
+        if across.sum() < 20:
+            continue
+        label = f"{r['index']}" + (f" ={r['object']}" if r["object"] is not None else "")
+        labels.append((int(median_of_counts(across)), int(median_of_counts(down)), label, r["object"] is None))
     # Collisionable draws in saturated colours, the rest in greys; the
     # background black.
-    n = len(rows)
     pal = np.zeros((max(n, 1) + 1, 3), np.uint8)
     for r in rows:
         k = r["index"]
@@ -78,19 +107,24 @@ def write_draw_image(path, ids_path, rows):
         else:
             g = 50 + (k * 37) % 90
             pal[k] = [g, g, g]
-    idx = np.where(ids == 0xFFFF, n, np.minimum(ids, n))
-    img = Image.fromarray(pal[idx], "RGB")
+    rgb = pal[idx]
+    del idx
+    img = Image.fromarray(rgb, "RGB")
+    del rgb
     draw = ImageDraw.Draw(img)
-    for r in rows:
-        ys, xs = np.nonzero(ids == r["index"])
-        if len(xs) < 20:
-            continue
-        label = f"{r['index']}" + (f" ={r['object']}" if r["object"] is not None else "")
-        x, y = int(np.median(xs)), int(np.median(ys))
-        draw.text((x - 6, y - 5), label, fill=(255, 255, 255) if r["object"] is None else (0, 0, 0))
+    for x, y, label, grey in labels:
+        draw.text((x - 6, y - 5), label, fill=(255, 255, 255) if grey else (0, 0, 0))
     buf = io.BytesIO()
     img.save(buf, format="PNG")
     write_output(path, buf.getvalue(), "image")
+
+
+def median_of_counts(counts):
+    """The median (numpy's: the mean of the two middle ones for an even
+    number) of the positions counted: counts[i] of position i."""
+    c = np.cumsum(counts)
+    n = int(c[-1])
+    return (np.searchsorted(c, (n - 1) // 2, side="right") + np.searchsorted(c, n // 2, side="right")) / 2
 
 
 # ---------------------------------------------------------------- the check against Mesa

@@ -41,12 +41,15 @@ def raster_program():
     raise ToolError("rbcd-gl-raster not found (build it: cmake --build build --target rbcd-gl-raster)")
 
 
-def convert(args, listing=False, ids=None):
+def convert(args, listing=False, ids=None, report=None):
+    """The conversion; `report(frames, conv)` writes the run's report
+    before the outputs are committed: a report that cannot be written fails
+    the run, and no output is left."""
     # The temporary directory goes whatever fails, before or after the
     # rasterizer starts (the test suite's refusals used to leave them).
     tmpdir = tempfile.mkdtemp(prefix="rbcd-gl2rbt.")
     try:
-        return convert_in(args, tmpdir, listing, ids)
+        return convert_in(args, tmpdir, listing, ids, report)
     finally:
         shutil.rmtree(tmpdir, ignore_errors=True)
 
@@ -111,7 +114,7 @@ def new_converter(args, raster_in):
         args.stream_out = stream_out
 
 
-def convert_in(args, tmpdir, listing, ids):
+def convert_in(args, tmpdir, listing, ids, report):
     check_input_file(args.trace)
     check_paths(args)
     if getattr(args, "reduced_out", None) and is_reduced_capture(args.trace):
@@ -144,12 +147,16 @@ def convert_in(args, tmpdir, listing, ids):
         proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
         conv.raster = proc.stdin
         run_calls(args, conv, reduced)
-        frames = finish(args, conv, proc, summary_path)   # -o is in place from here
+        frames = finish(args, conv, proc, summary_path)   # -o and --summary are in place from here
         try:
+            if report is not None:
+                report(frames, conv)
             for o in outputs:
                 o.commit()
         except BaseException:
             remove_trace(args.output)
+            if args.summary:
+                remove_trace(args.summary)
             raise
         outputs = []
         return frames, conv
@@ -215,8 +222,9 @@ def finish(args, conv, proc, summary_path):
 
 
 def remove_trace(path):
-    """The trace rbcd-gl-raster committed, when a later output fails: a
-    regular file only (a device or FIFO is never unlinked)."""
+    """The trace rbcd-gl-raster committed (or the summary written after it),
+    when a later output or the report fails: a regular file only (a device
+    or FIFO is never unlinked)."""
     try:
         if os.path.isfile(path) and not os.path.islink(path):
             os.unlink(path)

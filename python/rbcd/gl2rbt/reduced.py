@@ -11,11 +11,11 @@ import lzma
 import os
 import pickle
 
-from .apitrace import CallReader, PointerType, call_values_within, too_many_values, where
+from .apitrace import MAX_RECORD_VALUES, CallReader, PointerType, call_values_within, too_many_values, where
 from ..cli import U63
 from .errors import ConvertError, printable
 from .converter import Converter
-from .gl_tables import IGNORED_PREFIXES, base_name
+from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
 from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
 from .outputs import SafeText
 
@@ -30,7 +30,7 @@ REDUCED_END = "end"   # the last record, ("end", calls): a file cut anywhere lac
 CHECK_REST = object()
 XZ_MAGIC = b"\xfd7zXZ\x00"
 # Kept although the emulation passes over them: the window system (frame
-# ends, the window's size).
+# ends, the window's size), and glFrameTerminatorGREMEDY (END_FRAME_CALLS).
 REDUCED_KEEP = ("glX", "egl", "wgl")
 # Arguments a handled call carries that the emulation never reads whole:
 # texture images (a texture's size is read, and its image's digest, which
@@ -51,7 +51,7 @@ def reduced_keeps(name):
     if base_name(name) in REDUCED_CHECK_ONLY:
         return False
     return base_name(name) in Converter.HANDLERS or not name.startswith(IGNORED_PREFIXES) \
-        or name.startswith(REDUCED_KEEP)
+        or name.startswith(REDUCED_KEEP) or name in END_FRAME_CALLS
 
 
 # Arguments of handled calls the emulation never reads: left out (None).
@@ -125,6 +125,105 @@ class BoundedXz(io.RawIOBase):
         return n
 
 
+# A record as the writer pickles it (protocol 4): PROTO, then frames of at
+# most 64 KiB and one opcode, and between them the payloads of 64 KiB or more
+# (bytes, strings) the pickler writes outside frames. A frame of 1 MiB at
+# most; past RECORD_UNCOUNTED_BYTES of frames in one record, each further
+# frame's opcodes are counted before the unpickler reads them: each can make
+# an object (an empty list: 80 bytes of memory from 1 byte), so a record's
+# memory stays within about 0.3 GB whatever it holds, where a 10 KB file
+# had made 5 GB of empty lists in one record.
+PROTO, FRAME = 0x80, 0x95
+UNFRAMED_LENGTH = {ord("B"): 4, ord("X"): 4, 0x8E: 8, 0x8D: 8, 0x96: 8}   # BINBYTES, BINUNICODE, *8, BYTEARRAY8
+MAX_FRAME_BYTES = 1 << 20
+RECORD_UNCOUNTED_BYTES = 1 << 20
+RECORD_MAX_OPCODES = 3 << 20   # with MAX_RECORD_VALUES values a call carries, and their MARKs and memo
+
+
+class RecordStream:
+    """One record of a reduced capture for the unpickler, read from `f` as
+    the writer frames it (above); anything else is the file's error, raised
+    before the unpickler sees the bytes. The unpickler (C) reads an opcode
+    outside a frame as 1 byte, a length whole, a frame or payload whole."""
+
+    def __init__(self, f, no):
+        self.f, self.no = f, no
+        self.state, self.length = "proto", 0
+        self.framed = self.opcodes = 0
+
+    def fail(self, why):
+        raise ConvertError(f"{where(self.no)}: the reduced capture does not decode ({why})")
+
+    def take(self, n):
+        b = self.f.read(n)
+        if len(b) != n:
+            raise EOFError("the reduced capture is cut short")
+        return b
+
+    def read(self, n):
+        if self.state == "proto":   # PROTO 4: the record's first two bytes
+            b = self.take(n)
+            if n != 2 and n != 1 or b != bytes([PROTO, 4])[:n]:
+                self.fail("a record that is not a pickle as the writer makes it")
+            self.state = "proto arg" if n == 1 else "op"
+            return b
+        if self.state == "proto arg":
+            self.state = "op"
+            if n != 1 or self.take(1) != b"\x04":
+                self.fail("a record that is not a pickle as the writer makes it")
+            return b"\x04"
+        if self.state == "op":
+            op = self.take(1) if n == 1 else b""
+            if op and op[0] == FRAME:
+                self.state, self.length = "frame length", 8
+            elif op and op[0] in UNFRAMED_LENGTH:
+                self.state, self.length = "payload length", UNFRAMED_LENGTH[op[0]]
+            else:
+                self.fail("a record not framed as the writer frames it")
+            return op
+        if n != self.length:
+            self.fail("a record not framed as the writer frames it")
+        b = self.take(n)
+        if self.state == "frame length":
+            self.state, self.length = "frame", int.from_bytes(b, "little")
+            if self.length > MAX_FRAME_BYTES:
+                self.fail(f"a frame of {self.length} bytes, more than the writer makes")
+        elif self.state == "payload length":
+            self.state, self.length = "payload", int.from_bytes(b, "little")
+            if self.length < 1 << 16:   # a smaller one is in a frame
+                self.fail("a record not framed as the writer frames it")
+        else:
+            if self.state == "frame":
+                self.count(b)
+            self.state = "op"
+        return b
+
+    def count(self, frame):
+        """A frame's opcodes counted (past the record's first
+        RECORD_UNCOUNTED_BYTES of frames), before any is unpickled."""
+        self.framed += len(frame)
+        if self.framed <= RECORD_UNCOUNTED_BYTES:
+            self.opcodes += len(frame)   # at most one opcode a byte
+            return
+        import pickletools
+        try:
+            for _ in pickletools.genops(frame):
+                self.opcodes += 1
+                if self.opcodes > RECORD_MAX_OPCODES:
+                    self.fail(f"a record of more than {RECORD_MAX_OPCODES} pickle opcodes: more values than "
+                              f"the {MAX_RECORD_VALUES} a call may carry")
+        except ValueError:
+            pass   # the frame ends within an opcode (the unpickler says how)
+
+    def readinto(self, buf):
+        b = self.read(len(buf))
+        buf[:len(b)] = b
+        return len(b)
+
+    def readline(self):
+        self.fail("a record not framed as the writer frames it")
+
+
 def read_reduced_calls(path):
     last = None
     try:
@@ -135,7 +234,7 @@ def read_reduced_calls(path):
             # its own: a record cannot name an earlier record's objects (one
             # 5.9 KB file made a gigabyte of copies of one blob through the memo).
             try:
-                head = CallReader(f).load()
+                head = CallReader(RecordStream(f, None)).load()
             except EOFError:
                 head = None
             if head != REDUCED_HEADER:
@@ -143,7 +242,7 @@ def read_reduced_calls(path):
             count = 0
             while True:
                 try:
-                    c = CallReader(f).load()
+                    c = CallReader(RecordStream(f, last)).load()
                 except EOFError:
                     raise ConvertError(f"{where(last)}: the reduced capture is cut short (no end record)")
                 if isinstance(c, tuple) and len(c) == 2 and c[0] == REDUCED_END:

@@ -115,6 +115,11 @@ class DrawRejected(Exception):
     """Mesa answered the draw with a GL error: in GL the draw does nothing."""
 
 
+# The stages a program draws with, as Mesa links them together.
+LINKED_STAGES = {"vertex": "GL_VERTEX_SHADER", "fragment": "GL_FRAGMENT_SHADER", "geometry": "GL_GEOMETRY_SHADER",
+                 "tess_control": "GL_TESS_CONTROL_SHADER", "tess_evaluation": "GL_TESS_EVALUATION_SHADER"}
+
+
 class MesaProgram:
     def __init__(self, name, version):
         self.name, self.version = name, version
@@ -128,6 +133,7 @@ class VertexStage:
         self.gl = self.mesa.gl
         self.buffers = {}    # capture buffer -> [Mesa buffer, version uploaded]
         self.programs = {}   # capture program -> MesaProgram
+        self.link_status = {}   # (sources' digest, attribute bindings) -> whether Mesa links them (links)
         self.vaos = {}       # capture vertex array -> Mesa vertex array
         self.textures = {}   # capture texture -> Mesa texture
         self.scratch = []    # client memory (attributes, indices) goes through these buffers
@@ -206,7 +212,7 @@ class VertexStage:
             self.scratch = []
 
     def program(self, conv, no, pname):
-        p = conv.s.programs[pname]
+        p = conv.program_in_use()
         if p.linked is None:
             fail_call(no, f"a draw with program {pname}, which was never linked")
         mp = self.programs.get(pname)
@@ -237,6 +243,36 @@ class VertexStage:
                 if mi != GL.GL_INVALID_INDEX:
                     GL.glUniformBlockBinding(mp.name, mi, binding)
         return mp
+
+    def links(self, p):
+        """Whether Mesa links the program as its last link saw it, every
+        stage that draws (the capture's own link, whose failure leaves the
+        executable in use as it was: ProgramCalls.program_in_use)."""
+        sources, bindings = p.linked
+        key = (p.digest, tuple(sorted(bindings.items())))
+        if key not in self.link_status:
+            from OpenGL.error import GLError
+            GL = self.gl
+            prog, shaders = GL.glCreateProgram(), []
+            try:
+                for stage, source in sources.items():
+                    for text in (p.objects.get(stage) or [source]) if stage in LINKED_STAGES else []:
+                        sh = GL.glCreateShader(getattr(GL, LINKED_STAGES[stage]))
+                        shaders.append(sh)
+                        GL.glShaderSource(sh, text.encode("utf-8", "surrogateescape"))
+                        GL.glCompileShader(sh)
+                        GL.glAttachShader(prog, sh)
+                for attr, index in bindings.items():
+                    GL.glBindAttribLocation(prog, index, attr)
+                GL.glLinkProgram(prog)
+                self.link_status[key] = bool(GL.glGetProgramiv(prog, GL.GL_LINK_STATUS))
+            except GLError:
+                self.link_status[key] = False   # GL_INVALID_OPERATION: a binding GL refuses, no link
+            finally:
+                for sh in shaders:
+                    GL.glDeleteShader(sh)
+                GL.glDeleteProgram(prog)
+        return self.link_status[key]
 
     def build(self, no, pname, p):
         """The program as its last link saw it, vertex stage only (the

@@ -164,16 +164,18 @@ def enum_arg(v, no, what):
     fail_call(no, f"{what}: {printable(v, 40)} is not an enumerant (a name, or a 32-bit value)")
 
 
-def gl_boolean(v, no, what):
+def gl_boolean(v, no, what, nonzero=False):
     """A GLboolean argument as the driver keeps it: GL_TRUE/GL_FALSE, or the
     byte the application passed, of which a one-bit state keeps the low bit
-    (Mesa: glDepthMask(2) writes no depth)."""
-    if v in ("GL_TRUE", True):
+    (Mesa: glDepthMask(2) writes no depth), or, `nonzero`, any byte but 0 is
+    true (Mesa tests the argument as C does: glVertexAttribPointer's
+    normalized, glUniformMatrix's transpose)."""
+    if v == "GL_TRUE" or v is True:
         return True
-    if v in ("GL_FALSE", False):
+    if v == "GL_FALSE" or v is False:
         return False
-    if isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 256:
-        return bool(v & 1)
+    if type(v) is int and 0 <= v < 256:   # not a float equal to one (1.0 == True)
+        return v != 0 if nonzero else bool(v & 1)
     fail_call(no, f"{what}: {printable(v, 40)} is not a GLboolean (an unsigned byte)")
 
 

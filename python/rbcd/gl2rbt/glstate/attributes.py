@@ -47,7 +47,7 @@ def attrib_format_valid(integer_form, size, kind, normalized):
     if kind not in ATTRIB_TYPES:
         return False
     if size == "GL_BGRA":
-        return (kind == "GL_UNSIGNED_BYTE" or kind in PACKED_ATTRIB_TYPES) and normalized in ("GL_TRUE", True, 1)
+        return (kind == "GL_UNSIGNED_BYTE" or kind in PACKED_ATTRIB_TYPES) and normalized
     if kind in PACKED_ATTRIB_TYPES:
         return size == 4
     return kind != "GL_UNSIGNED_INT_10F_11F_11F_REV" or size == 3
@@ -239,15 +239,17 @@ class AttributeCalls:
         i = attrib_index(no, name, d["index"])
         size = d["size"]
         stride = checked(no, integer, d.get("stride", 0), f"{name}: the stride", *I32)
+        from . import gl_boolean   # the package imports this module before it defines gl_boolean
+        normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
         if i is None or not (size in (1, 2, 3, 4) or size == "GL_BGRA") or stride < 0:
             return   # GL_INVALID_VALUE: the call does nothing
         integer_form = base_name(name) == "glVertexAttribIPointer"
-        if not attrib_format_valid(integer_form, size, d.get("type"), d.get("normalized", "GL_FALSE")):
+        if not attrib_format_valid(integer_form, size, d.get("type"), normalized):
             return   # GL_INVALID_ENUM, GL_INVALID_VALUE or GL_INVALID_OPERATION in Mesa: the earlier pointer stays
         vao = self.current_vao()
         at = vao.attrib(i)
         at.integer, at.size, at.type, at.relative, at.binding = integer_form, size, d.get("type"), 0, i
-        at.normalized = not integer_form and d.get("normalized", "GL_FALSE") in ("GL_TRUE", True, 1)
+        at.normalized = not integer_form and normalized
         b = vao.binding(i)
         b.stride = stride or element_bytes(size, at.type)
         p = d.get("pointer")
@@ -271,14 +273,15 @@ class AttributeCalls:
         size = d["size"]
         relative = checked(no, integer, d.get("relativeoffset", 0), f"{name}: the relative offset", *U32)
         integer_form = base_name(name) in ("glVertexAttribIFormat", "glVertexArrayAttribIFormat")
-        normalized = d.get("normalized", "GL_FALSE")
+        from . import gl_boolean   # the package imports this module before it defines gl_boolean
+        normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
         if vao is None or i is None or not (size in (1, 2, 3, 4) or size == "GL_BGRA") \
                 or relative > MAX_RELATIVE_OFFSET or not attrib_format_valid(integer_form, size, d.get("type"),
                                                                                normalized):
             return   # GL_INVALID_OPERATION, GL_INVALID_VALUE or GL_INVALID_ENUM: the call does nothing
         at = vao.attrib(i)
         at.integer, at.size, at.type, at.relative = integer_form, size, d.get("type"), relative
-        at.normalized = not integer_form and normalized in ("GL_TRUE", True, 1)
+        at.normalized = not integer_form and normalized
 
     def h_attrib_binding(self, no, name, a, args):
         """glVertexAttribBinding, glVertexArrayAttribBinding: which binding

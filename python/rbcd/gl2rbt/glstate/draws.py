@@ -224,7 +224,7 @@ class DrawCalls:
             return
         if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard or not self.renders():
             return
-        p = self.s.programs[self.s.program]
+        p = self.program_in_use()
         for stage in ("geometry", "tess_control", "tess_evaluation"):
             if stage in p.linked[0]:
                 fail_call(no, f"{name}: program {self.s.program} (linked at call {p.link_call}) has a "

@@ -7,12 +7,14 @@ glBindAttribLocation calls, so that a replay's locations are the capture's).
 Uniform locations and block indices are the capture's; their names come from
 the capture's own glGetUniformLocation and glGetUniformBlockIndex calls (a
 location no call named is an explicit one, the same in Mesa)."""
+import copy
 import hashlib
 import re
 
 from ...cli import I32, U32, integer, real
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
+from . import gl_boolean
 
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
@@ -49,6 +51,10 @@ class Program:
         self.discards = False      # its fragment shader has a discard statement
         self.frag_depth = False    # its fragment shader writes gl_FragDepth
         self.digest = ""           # SHA-256 of its stages' sources at the last link (selection rules)
+        # Linked again while in use: the program as it was (its executable
+        # and uniforms), which stays in use if this link fails
+        # (program_in_use).
+        self.in_use_before = None
 
 
 def uniform_values(no, name, kind, values):
@@ -81,10 +87,21 @@ class ProgramCalls:
 
     def vertex_program(self):
         """Whether draws now run a vertex shader: a program is in use and its
-        last link had one (a program of only a fragment shader leaves the
+        executable has one (a program of only a fragment shader leaves the
         vertices to the fixed-function transform, in a compatibility context)."""
-        p = self.s.programs.get(self.s.program) if self.s.program else None
-        return p is not None and "vertex" in p.linked[0]
+        return self.s.program in self.s.programs and "vertex" in self.program_in_use().linked[0]
+
+    def program_in_use(self):
+        """The program whose executable draws run: the one in use as its last
+        link made it, or, when that link was made while it was in use and
+        fails in Mesa, the executable it had, with its uniforms (GL 4.6
+        §7.3, and Mesa: a failed relink leaves the last executable in use,
+        glUniform and glUseProgram of the program are then
+        GL_INVALID_OPERATION, until another program is used)."""
+        p = self.s.programs[self.s.program]
+        while p.in_use_before is not None and not self.vertex_stage().links(p):
+            p = p.in_use_before
+        return p
 
     def h_create_shader(self, no, name, a, args):
         stage = STAGES.get(a[0] if a else None)
@@ -136,6 +153,11 @@ class ProgramCalls:
 
     def h_link_program(self, no, name, a, args):
         p = self.program(no, name, a[0] if a else None)
+        before = None
+        if a[0] == self.s.program and p.linked is not None:
+            before = copy.copy(p)
+            if before.in_use_before is not None and self.vertex_stage().links(before):
+                before.in_use_before = None   # that link held: what it replaced is out of use
         sources, objects = {}, {}
         for s in sorted(p.shaders):
             sh = self.s.shaders[s]
@@ -158,6 +180,7 @@ class ProgramCalls:
         p.link_call = no
         p.version += 1
         p.uniform_names, p.block_names, p.uniforms, p.block_bindings = {}, {}, {}, {}
+        p.in_use_before = before
 
     def h_use_program(self, no, name, a, args):
         v = a[0] if a else None
@@ -165,9 +188,14 @@ class ProgramCalls:
             fail_call(no, f"{name}: impossible program {printable(v)}")
         if v and (v not in self.s.programs or self.s.programs[v].linked is None):
             return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
+        if v and v != self.s.program and "vertex" in self.s.programs[v].linked[0] \
+                and not self.vertex_stage().links(self.s.programs[v]):
+            return   # its last link failed in Mesa: GL_INVALID_OPERATION, the program in use stays
         old = self.s.programs.get(self.s.program)
-        if old is not None and old.deleted and v != self.s.program:
-            del self.s.programs[self.s.program]   # deleted while in use: gone once no longer used
+        if old is not None and v != self.s.program:
+            old.in_use_before = None   # its executable is out of use
+            if old.deleted:
+                del self.s.programs[self.s.program]   # deleted while in use: gone once no longer used
         self.s.program = v
 
     def h_delete_program(self, no, name, a, args):
@@ -185,8 +213,10 @@ class ProgramCalls:
     def h_get_uniform_location(self, no, name, a, args):
         d = dict(args)
         p = self.program(no, name, d.get("program"))
-        if isinstance(self.ret, int) and self.ret >= 0 and isinstance(d.get("name"), str):
-            p.uniform_names[self.ret] = d["name"]
+        # A GLint: -1 (no such uniform) or a location.
+        loc = checked(no, integer, self.ret, f"{name}: the location returned", -1, I32[1])
+        if loc >= 0 and isinstance(d.get("name"), str):
+            p.uniform_names[loc] = d["name"]
 
     def h_get_uniform_block_index(self, no, name, a, args):
         d = dict(args)
@@ -229,6 +259,8 @@ class ProgramCalls:
                 return   # GL_INVALID_OPERATION: no program in use, the call does nothing
             p, rest = self.s.programs[self.s.program], a
         loc = checked(no, integer, rest[0], f"{name}: the location", *I32)
+        transpose = m.group(2) is not None and gl_boolean(dict(args).get("transpose"), no, f"{name}: transpose",
+                                                          nonzero=True)
         if loc == -1:
             return   # GL ignores a location of -1
         values, count = rest[1:], None
@@ -247,8 +279,6 @@ class ProgramCalls:
         elif len(values) != int(m.group(3)):
             fail_call(no, f"{name}: {len(values)} values, not {m.group(3)}")
         uniform_values(no, name, m.group(5), values)
-        # Any GLboolean but zero transposes (Mesa tests it as C does).
-        transpose = m.group(2) is not None and dict(args).get("transpose") not in ("GL_FALSE", False, 0, None)
         # As Mesa's program is given it: the glUniform function, the values,
         # their component type and, for the v forms, their count.
         # Kept in the order last set: an array's element and the array
