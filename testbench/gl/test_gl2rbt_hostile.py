@@ -708,7 +708,7 @@ def test_a_call_number_that_is_a_boolean(tmp_path):
 
 def test_uniform_calls_gl_ignores_keep_the_earlier_value(tmp_path):
     """glUniform1f(x0, 0.5) then a call that sets nothing in GL (a count of
-    0, a count of 2 for a single float, another type or size: no change, or
+    0, NULL values too, a negative count, a count of 2 for a single float, another type or size: no change, or
     GL_INVALID_OPERATION in Mesa): x0 stays 0.5 (the later call had taken
     its place and Mesa's program was given neither)."""
     pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
@@ -721,6 +721,8 @@ def test_uniform_calls_gl_ignores_keep_the_earlier_value(tmp_path):
         return shader_draw(c, vao=7)
     half = trace_bytes(tmp_path, x0(), "half")
     for i, later in enumerate([("glUniform1fv", dict(count=0, value=[])),
+                               # a count of 0 with NULL (was "not numbers"), a negative one (GL_INVALID_VALUE)
+                               ("glUniform1fv", dict(count=0, value=None)), ("glUniform1fv", dict(count=-1, value=None)),
                                ("glUniform1fv", dict(count=2, value=[0.9, 0.9])),
                                ("glUniform1i", dict(v0=1)), ("glUniform2f", dict(v0=1.0, v1=1.0))]):
         assert trace_bytes(tmp_path, x0(later), f"later{i}") == half, later

@@ -265,17 +265,19 @@ class ProgramCalls:
             return   # GL ignores a location of -1
         values, count = rest[1:], None
         if m.group(6):   # the v forms: count, [transpose,] values
+            count = checked(no, integer, dict(args).get("count"), f"{name}: the count", *I32)
+            if count <= 0:
+                # GL_INVALID_VALUE, or no value set (the pointer unread,
+                # NULL too): the call changes nothing.
+                return
             values = [v for v in values if isinstance(v, list)]
             if len(values) != 1:
                 fail_call(no, f"{name}: the values are not numbers")
             values = values[0]
-            count = dict(args).get("count")
             rows, _, cols = (m.group(4) or "x").partition("x")
             width = int(m.group(3)) * (int(cols) if cols else int(m.group(3)) if m.group(2) else 1)
-            if not isinstance(count, int) or count < 0 or len(values) != count * width:
+            if len(values) != count * width:
                 fail_call(no, f"{name}: {len(values)} values, not its count ({count}) of {width}")
-            if count == 0:
-                return   # sets nothing (GL: no error, no change)
         elif len(values) != int(m.group(3)):
             fail_call(no, f"{name}: {len(values)} values, not {m.group(3)}")
         uniform_values(no, name, m.group(5), values)
