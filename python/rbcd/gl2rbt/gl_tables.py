@@ -31,7 +31,7 @@ IGNORED_PREFIXES = (
     "glEdgeFlag", "glIndex", "glAccum", "glSampleCoverage", "glGenQueries", "glBeginQuery", "glEndQuery",
     "glDeleteQueries", "glQueryCounter", "glStringMarker", "glFrameTerminator", "glInsertEventMarker",
     "glDebugMessageInsert", "glSampleMask",
-    "glDepthBounds", "glGenFramebuffers",
+    "glDepthBounds",
     "glRasterPos", "glLoadName", "glPushName", "glPopName", "glInitNames",
     "glGenLists", "glDeleteLists", "glListBase", "glCompileShader", "glShaderSource", "glCreateShader",
     "glCreateProgram", "glAttachShader", "glLinkProgram", "glDeleteShader", "glDetachShader",
@@ -42,8 +42,8 @@ IGNORED_PREFIXES = (
     # texture buffers, which samplers do not touch), fences.
     "glGenSamplers", "glBindSampler", "glSamplerParameter", "glDeleteSamplers", "glFenceSync",
     "glClientWaitSync", "glWaitSync", "glDeleteSync",
-    # Renderbuffer names (their storage's size is read: glRenderbufferStorage).
-    "glGenRenderbuffers", "glDeleteRenderbuffers",
+    # Renderbuffer deletion (their storage's size is read: glRenderbufferStorage).
+    "glDeleteRenderbuffers",
     # Hints that a framebuffer's contents are no longer needed (ES 3 and its
     # EXT form): they change no pixel a later draw or the unit sees.
     "glInvalidateFramebuffer", "glInvalidateSubFramebuffer", "glDiscardFramebuffer",

@@ -53,15 +53,41 @@ def texture_image_digest(d):
 
 class FramebufferCalls:
     """self.s.draw_fbo: the bound draw framebuffer; self.s.fbo_depth[fbo] =
-    ("texture" | "renderbuffer", name) of its depth attachment; the sizes of
+    ("texture" | "renderbuffer", name) of its depth attachment; the
+    framebuffer and renderbuffer names a core profile binds; the sizes of
     textures' level 0 and renderbuffers; the digests of textures' level-0
     images; texture units' bindings, and the buffers of texture buffer
     objects."""
+
+    def generated_name(self, names, n):
+        """Whether a core profile binds `n` as a framebuffer or renderbuffer
+        name (`names`: those glGen*/glCreate* returned and no glDelete*
+        freed since): 0 or such a name; another is GL_INVALID_OPERATION in
+        Mesa 22.3 (the earlier binding stays). A capture that shows no
+        glGenFramebuffers (glGenRenderbuffers) at all, such as a reduced
+        capture written before they were kept, is taken as it binds."""
+        return not (self.core and n and names is not None and n not in names)
+
+    def h_gen_framebuffer_names(self, no, name, a, args):
+        """glGenFramebuffers, glCreateFramebuffers, glGenRenderbuffers,
+        glCreateRenderbuffers: names a core profile binds."""
+        d = dict(args)
+        kind = "renderbuffer" if "Renderbuffer" in name else "framebuffer"
+        names = d.get(f"{kind}s")
+        if not isinstance(names, list):
+            return   # apitrace recorded no names (a negative count: GL_INVALID_VALUE)
+        attr = f"{kind}_names"
+        if getattr(self.s, attr) is None:
+            setattr(self.s, attr, set())
+        for n in names:
+            getattr(self.s, attr).add(checked(no, integer, n, f"{name}: a {kind} name", *U32))
 
     def h_bind_framebuffer(self, no, name, a, args):
         d = dict(args)
         target = d["target"]
         fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
+        if not self.generated_name(self.s.framebuffer_names, fb):
+            return
         if target in ("GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER"):
             self.s.draw_fbo = fb
         if target in ("GL_FRAMEBUFFER", "GL_READ_FRAMEBUFFER"):
@@ -88,7 +114,9 @@ class FramebufferCalls:
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
 
     def h_bind_renderbuffer(self, no, name, a, args):
-        self.s.renderbuffer = dict(args).get("renderbuffer")
+        rb = checked(no, integer, dict(args).get("renderbuffer"), f"{name}: the renderbuffer", *U32)
+        if self.generated_name(self.s.renderbuffer_names, rb):
+            self.s.renderbuffer = rb
 
     def h_tex_image(self, no, name, a, args):
         """The size of a texture's level 0 (a framebuffer attachment's size)
@@ -194,7 +222,9 @@ class FramebufferCalls:
 
     def h_delete_framebuffers(self, no, name, a, args):
         for fb in dict(args).get("framebuffers") or []:
-            if isinstance(fb, int) and fb > 0:
+            if isinstance(fb, int) and not isinstance(fb, bool) and fb > 0:
+                if self.s.framebuffer_names is not None:
+                    self.s.framebuffer_names.discard(fb)
                 self.s.fbo_depth.pop(fb, None)
                 if self.s.draw_fbo == fb:
                     self.s.draw_fbo = 0   # GL binds the window's framebuffer again
@@ -252,6 +282,10 @@ class FramebufferCalls:
         "glFramebufferTexture2D": h_framebuffer_texture,
         "glFramebufferTexture": h_framebuffer_texture,
         "glFramebufferRenderbuffer": h_framebuffer_texture,
+        "glGenFramebuffers": h_gen_framebuffer_names,
+        "glCreateFramebuffers": h_gen_framebuffer_names,
+        "glGenRenderbuffers": h_gen_framebuffer_names,
+        "glCreateRenderbuffers": h_gen_framebuffer_names,
         "glBindRenderbuffer": h_bind_renderbuffer,
         "glRenderbufferStorage": h_renderbuffer_storage,
         "glRenderbufferStorageMultisample": h_renderbuffer_storage,

@@ -1,0 +1,93 @@
+"""Framebuffer and renderbuffer names, in
+captures the tests write (reduced captures; Mesa runs the vertex shader):
+each odd call must give the bytes the same setup without it gives in GL.
+
+- A core profile binds only framebuffer and renderbuffer names glGen* or
+  glCreate* returned (another is GL_INVALID_OPERATION in Mesa: the earlier
+  binding stays; the converter had switched to it, leaving a draw out)."""
+import pytest
+
+from gl_captures import gl2rbt_timed as gl2rbt
+from test_gl2rbt_attrib_binding import reference
+from test_gl2rbt_hostile import VS, shader_calls
+
+pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+
+
+def trace(tmp_path, c, tag):
+    r = gl2rbt(tmp_path, c.write(tmp_path / f"{tag}.xz"), "-o", tmp_path / f"{tag}.rbt")
+    assert r.returncode == 0, f"{tag}: {r.stderr}"
+    return (tmp_path / f"{tag}.rbt").read_bytes()
+
+
+def fragments(t):
+    return t.count(b"\nf ")
+
+
+# ---- names a core profile binds
+
+def fbo(c, fb=3, rb=4, w=64, h=48, texture=False, gen=True):
+    """Framebuffer fb, bound, with a w x h depth renderbuffer rb (or depth
+    texture rb) as its only attachment; w x h = 64 x 48 is the screen's
+    size: the camera pass."""
+    if gen:
+        c.add("glGenFramebuffers", n=1, framebuffers=[fb])
+    c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=fb)
+    if texture:
+        c.add("glBindTexture", target="GL_TEXTURE_2D", texture=rb)
+        c.add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_DEPTH_COMPONENT24", width=w,
+              height=h, border=0, format="GL_DEPTH_COMPONENT", type="GL_UNSIGNED_INT", pixels=None)
+        return c.add("glFramebufferTexture2D", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+                     textarget="GL_TEXTURE_2D", texture=rb, level=0)
+    if gen:
+        c.add("glGenRenderbuffers", n=1, renderbuffers=[rb])
+    c.add("glBindRenderbuffer", target="GL_RENDERBUFFER", renderbuffer=rb)
+    c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_DEPTH_COMPONENT24", width=w,
+          height=h)
+    return c.add("glFramebufferRenderbuffer", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+                 renderbuffertarget="GL_RENDERBUFFER", renderbuffer=rb)
+
+
+@pytest.mark.parametrize("how", ["never generated", "deleted"])
+def test_a_core_profile_binds_only_generated_framebuffers(tmp_path, how):
+    """glBindFramebuffer of a name glGenFramebuffers did not give (the
+    capture shows that call for another name) or of one deleted: Mesa
+    keeps the window's framebuffer, and the triangle is drawn there."""
+    want = trace(tmp_path, reference(shader_calls(VS)), "reference")
+    assert fragments(want) > 100
+    c = shader_calls(VS).add("glGenFramebuffers", n=1, framebuffers=[3])
+    if how == "deleted":
+        c.add("glDeleteFramebuffers", n=1, framebuffers=[3])
+    c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3 if how == "deleted" else 77)
+    assert trace(tmp_path, reference(c), "bound") == want
+    # A compatibility profile binds any name: an object with no attachment,
+    # no camera pass.
+    c = shader_calls(VS, core=False).add("glGenFramebuffers", n=1, framebuffers=[3])
+    c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=77)
+    assert fragments(trace(tmp_path, reference(c), "compat")) == 0
+
+
+def test_a_capture_that_shows_no_glgenframebuffers_is_taken_as_it_binds(tmp_path):
+    """A reduced capture written before glGenFramebuffers was kept: its
+    binds are taken (framebuffer 3, the screen's size: the camera pass)."""
+    c = fbo(shader_calls(VS), gen=False)
+    assert trace(tmp_path, reference(c), "nogen") == trace(tmp_path, reference(shader_calls(VS)), "reference")
+
+
+@pytest.mark.parametrize("gen", [False, True])
+def test_a_core_profile_binds_only_generated_renderbuffers(tmp_path, gen):
+    """glBindRenderbuffer(99), a name never generated, is refused, so the
+    glRenderbufferStorage after it re-specifies renderbuffer 4, attached to
+    the bound framebuffer: 16 x 16, not the camera pass, nothing drawn
+    there. With 99 generated, renderbuffer 4 keeps the screen's size."""
+    c = fbo(shader_calls(VS))
+    if gen:
+        c.add("glGenRenderbuffers", n=1, renderbuffers=[99])
+    c.add("glBindRenderbuffer", target="GL_RENDERBUFFER", renderbuffer=99)
+    c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_DEPTH_COMPONENT24", width=16,
+          height=16)
+    got = trace(tmp_path, reference(c), "rb")
+    if gen:
+        assert got == trace(tmp_path, reference(shader_calls(VS)), "reference")
+    else:
+        assert fragments(got) == 0
