@@ -1,10 +1,14 @@
-"""Framebuffer and renderbuffer names, in
+"""Framebuffer and renderbuffer names, and attachments' lifetimes, in
 captures the tests write (reduced captures; Mesa runs the vertex shader):
 each odd call must give the bytes the same setup without it gives in GL.
 
 - A core profile binds only framebuffer and renderbuffer names glGen* or
   glCreate* returned (another is GL_INVALID_OPERATION in Mesa: the earlier
-  binding stays; the converter had switched to it, leaving a draw out)."""
+  binding stays; the converter had switched to it, leaving a draw out).
+- A renderbuffer or texture deleted while attached to the bound framebuffer
+  is detached there (the framebuffer, with no other attachment, is
+  incomplete: Mesa draws nothing; the converter had counted the draw);
+  attached to a framebuffer not bound, it lives on for it."""
 import pytest
 
 from gl_captures import gl2rbt_timed as gl2rbt
@@ -91,3 +95,47 @@ def test_a_core_profile_binds_only_generated_renderbuffers(tmp_path, gen):
         assert got == trace(tmp_path, reference(shader_calls(VS)), "reference")
     else:
         assert fragments(got) == 0
+
+
+# ---- images deleted while attached
+
+@pytest.mark.parametrize("texture", [False, True], ids=["renderbuffer", "texture"])
+def test_an_attachment_deleted_while_its_framebuffer_is_bound_is_detached(tmp_path, texture):
+    """As glFramebufferRenderbuffer (glFramebufferTexture2D) with 0: the
+    framebuffer has no attachment left, is incomplete, and Mesa draws
+    nothing (GL_INVALID_FRAMEBUFFER_OPERATION)."""
+    detach = "glFramebufferTexture2D" if texture else "glFramebufferRenderbuffer"
+    args = dict(textarget="GL_TEXTURE_2D", texture=0, level=0) if texture else \
+        dict(renderbuffertarget="GL_RENDERBUFFER", renderbuffer=0)
+    want = trace(tmp_path, reference(fbo(shader_calls(VS), texture=texture)
+                                     .add(detach, target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+                                          **args)), "detached")
+    assert fragments(want) == 0
+    c = fbo(shader_calls(VS), texture=texture)
+    if texture:
+        c.add("glDeleteTextures", n=1, textures=[4])
+    else:
+        c.add("glDeleteRenderbuffers", n=1, renderbuffers=[4])
+    assert trace(tmp_path, reference(c), "deleted") == want
+
+
+@pytest.mark.parametrize("texture", [False, True], ids=["renderbuffer", "texture"])
+def test_an_attachment_deleted_while_its_framebuffer_is_not_bound_lives_on(tmp_path, texture):
+    """GL 4.5, 9.2.7 and 9.2.8: the image is not detached from a
+    framebuffer that is not bound, and lives on there (5.1.3): framebuffer
+    3 is still the camera pass when bound again, even after a new 16 x 16
+    object took the name."""
+    want = trace(tmp_path, reference(fbo(shader_calls(VS), texture=texture)), "kept")
+    assert fragments(want) > 100
+    c = fbo(shader_calls(VS), texture=texture).add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0)
+    if texture:
+        c.add("glDeleteTextures", n=1, textures=[4]).add("glBindTexture", target="GL_TEXTURE_2D", texture=4)
+        c.add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_DEPTH_COMPONENT24", width=16,
+              height=16, border=0, format="GL_DEPTH_COMPONENT", type="GL_UNSIGNED_INT", pixels=None)
+    else:
+        c.add("glDeleteRenderbuffers", n=1, renderbuffers=[4]).add("glGenRenderbuffers", n=1, renderbuffers=[4])
+        c.add("glBindRenderbuffer", target="GL_RENDERBUFFER", renderbuffer=4)
+        c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_DEPTH_COMPONENT24", width=16,
+              height=16)
+    c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3)
+    assert trace(tmp_path, reference(c), "deleted") == want

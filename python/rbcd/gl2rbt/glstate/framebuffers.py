@@ -53,11 +53,12 @@ def texture_image_digest(d):
 
 class FramebufferCalls:
     """self.s.draw_fbo: the bound draw framebuffer; self.s.fbo_depth[fbo] =
-    ("texture" | "renderbuffer", name) of its depth attachment; the
-    framebuffer and renderbuffer names a core profile binds; the sizes of
-    textures' level 0 and renderbuffers; the digests of textures' level-0
-    images; texture units' bindings, and the buffers of texture buffer
-    objects."""
+    ("texture" | "renderbuffer", name) of its depth attachment (a deleted
+    image that lives on for a framebuffer not bound: ("deleted", name, n)
+    in the name's place); the framebuffer and renderbuffer names a core
+    profile binds; the sizes of textures' level 0 and renderbuffers; the
+    digests of textures' level-0 images; texture units' bindings, and the
+    buffers of texture buffer objects."""
 
     def generated_name(self, names, n):
         """Whether a core profile binds `n` as a framebuffer or renderbuffer
@@ -111,12 +112,60 @@ class FramebufferCalls:
         w, h = d.get("width"), d.get("height")
         if not isinstance(w, int) or not isinstance(h, int):
             fail_call(no, f"{name}: impossible size")
+        if not self.s.renderbuffer:
+            return   # no renderbuffer bound: GL_INVALID_OPERATION
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
 
     def h_bind_renderbuffer(self, no, name, a, args):
         rb = checked(no, integer, dict(args).get("renderbuffer"), f"{name}: the renderbuffer", *U32)
         if self.generated_name(self.s.renderbuffer_names, rb):
             self.s.renderbuffer = rb
+
+    def detach_deleted(self, kind, obj):
+        """A texture or renderbuffer deleted: detached from the bound draw
+        and read framebuffers, as though glFramebuffer{Texture,Renderbuffer}
+        had been called with 0 there (GL 4.5, 9.2.7 and 9.2.8; Mesa 22.3:
+        such a framebuffer with no other attachment is incomplete and draws
+        nothing). Framebuffers not bound keep the image: it lives on for
+        them, its size moved to a name no call can give (GL 4.5, 5.1.3),
+        and the name with its sizes is free for a new object."""
+        bound = {self.s.draw_fbo, self.s.read_fbo} - {0}
+        holders = []
+        for fb, att in self.s.fbo_depth.items():
+            if att is not None and att[0] == kind and att[1] == obj:
+                if fb in bound:
+                    self.s.fbo_depth[fb] = None
+                else:
+                    holders.append(fb)
+        keys = [k for k in self.s.sizes if k[0] == kind and k[1] == obj]
+        if holders:
+            self.s.deleted_images += 1
+            kept = ("deleted", obj, self.s.deleted_images)
+            for k in keys:
+                self.s.sizes[(kind, kept) + k[2:]] = self.s.sizes[k]
+            for fb in holders:
+                self.s.fbo_depth[fb] = (kind, kept) + self.s.fbo_depth[fb][2:]
+        for k in keys:
+            del self.s.sizes[k]
+
+    def h_delete_renderbuffers(self, no, name, a, args):
+        for rb in dict(args).get("renderbuffers") or []:
+            if isinstance(rb, int) and not isinstance(rb, bool) and rb > 0:
+                if self.s.renderbuffer_names is not None:
+                    self.s.renderbuffer_names.discard(rb)
+                if self.s.renderbuffer == rb:
+                    self.s.renderbuffer = 0   # GL binds renderbuffer 0
+                self.detach_deleted("renderbuffer", rb)
+
+    def h_delete_textures(self, no, name, a, args):
+        """glDeleteTextures: a texture is detached from the bound
+        framebuffers (detach_deleted); its name is free for a new texture,
+        with no target, size or image."""
+        for tex in dict(args).get("textures") or []:
+            if isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
+                self.detach_deleted("texture", tex)
+                self.s.texture_targets.pop(tex, None)
+                self.s.texture_images.pop(tex, None)
 
     def h_tex_image(self, no, name, a, args):
         """The size of a texture's level 0 (a framebuffer attachment's size)
@@ -286,6 +335,8 @@ class FramebufferCalls:
         "glCreateFramebuffers": h_gen_framebuffer_names,
         "glGenRenderbuffers": h_gen_framebuffer_names,
         "glCreateRenderbuffers": h_gen_framebuffer_names,
+        "glDeleteRenderbuffers": h_delete_renderbuffers,
+        "glDeleteTextures": h_delete_textures,
         "glBindRenderbuffer": h_bind_renderbuffer,
         "glRenderbufferStorage": h_renderbuffer_storage,
         "glRenderbufferStorageMultisample": h_renderbuffer_storage,
