@@ -1,4 +1,4 @@
-"""Framebuffer and renderbuffer names, and attachments' lifetimes, in
+"""Framebuffer, renderbuffer, texture and buffer names and lifetimes, in
 captures the tests write (reduced captures; Mesa runs the vertex shader):
 each odd call must give the bytes the same setup without it gives in GL.
 
@@ -8,7 +8,13 @@ each odd call must give the bytes the same setup without it gives in GL.
 - A renderbuffer or texture deleted while attached to the bound framebuffer
   is detached there (the framebuffer, with no other attachment, is
   incomplete: Mesa draws nothing; the converter had counted the draw);
-  attached to a framebuffer not bound, it lives on for it."""
+  attached to a framebuffer not bound, it lives on for it.
+- A buffer texture deleted while bound leaves its unit reading texture 0
+  (zeros); a buffer deleted while a buffer texture holds it lives on for
+  the texture (the converter had read the deleted texture and dropped the
+  buffer's data)."""
+import struct
+
 import pytest
 
 from gl_captures import gl2rbt_timed as gl2rbt
@@ -139,3 +145,59 @@ def test_an_attachment_deleted_while_its_framebuffer_is_not_bound_lives_on(tmp_p
               height=16)
     c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3)
     assert trace(tmp_path, reference(c), "deleted") == want
+
+
+# ---- buffer textures
+
+# The triangle moved by texel 0 of the buffer texture on unit 0.
+VS_TB = ("#version 330 core\nin vec3 p;\nuniform samplerBuffer tb;\nvoid main() {\n"
+         "  vec2 o = texelFetch(tb, 0).xy;\n"
+         "  gl_Position = vec4((p.x + o.x) / 32.0 - 1.0, (p.y + o.y) / 24.0 - 1.0, 0.0, 1.0);\n}\n")
+OFFSET = struct.pack("<4f", 12.0, 6.0, 0.0, 0.0)
+
+
+def buffer_texture(c, tex=8, buf=9, data=OFFSET):
+    c.add("glBindBuffer", target="GL_TEXTURE_BUFFER", buffer=buf)
+    c.add("glBufferData", target="GL_TEXTURE_BUFFER", size=len(data), data=data, usage="GL_STATIC_DRAW")
+    c.add("glBindTexture", target="GL_TEXTURE_BUFFER", texture=tex)
+    return c.add("glTexBuffer", target="GL_TEXTURE_BUFFER", internalformat="GL_RGBA32F", buffer=buf)
+
+
+def two_frames(between):
+    """The moved triangle in frame 0; `between(c)`; the triangle again in
+    frame 1."""
+    c = reference(buffer_texture(shader_calls(VS_TB)))
+    between(c)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+    return c.swap()
+
+
+def test_a_buffer_texture_deleted_while_bound_is_read_as_texture_0(tmp_path):
+    """GL unbinds a deleted texture from its units: frame 1's texelFetch
+    reads zeros (Mesa 22.3), as after the buffer's texel is zeroed; and as
+    after glBindTexture(GL_TEXTURE_BUFFER, 0), which Mesa's copy of the
+    unit must see too (it had kept the texture an earlier draw bound)."""
+    zeroed = trace(tmp_path, two_frames(lambda c: c.add("glBufferSubData", target="GL_TEXTURE_BUFFER", offset=0,
+                                                          size=16, data=bytes(16))), "zeroed")
+    moved = trace(tmp_path, two_frames(lambda c: None), "moved")
+    assert zeroed != moved and fragments(zeroed) > 100
+    deleted = trace(tmp_path, two_frames(lambda c: c.add("glDeleteTextures", n=1, textures=[8])), "deleted")
+    assert deleted == zeroed
+    unbound = trace(tmp_path, two_frames(lambda c: c.add("glBindTexture", target="GL_TEXTURE_BUFFER", texture=0)),
+                    "unbound")
+    assert unbound == zeroed
+
+
+def test_a_buffer_deleted_while_a_buffer_texture_holds_it_lives_on(tmp_path):
+    """GL frees the name, but the texture keeps the data (GL 4.5, 5.1.2;
+    Mesa draws with it): frame 1 is moved as frame 0, also after a new
+    buffer of zeros took the name."""
+    moved = trace(tmp_path, two_frames(lambda c: None), "moved")
+    for tag, rebind in (("deleted", False), ("reused", True)):
+        def between(c):
+            c.add("glDeleteBuffers", n=1, buffers=[9])
+            if rebind:
+                c.add("glBindBuffer", target="GL_TEXTURE_BUFFER", buffer=9)
+                c.add("glBufferData", target="GL_TEXTURE_BUFFER", size=16, data=bytes(16), usage="GL_STATIC_DRAW")
+        assert trace(tmp_path, two_frames(between), tag) == moved, tag

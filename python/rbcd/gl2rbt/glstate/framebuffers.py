@@ -158,14 +158,22 @@ class FramebufferCalls:
                 self.detach_deleted("renderbuffer", rb)
 
     def h_delete_textures(self, no, name, a, args):
-        """glDeleteTextures: a texture is detached from the bound
+        """glDeleteTextures: a texture bound to a unit is unbound there (the
+        unit's target reads texture 0: a buffer texture's texelFetch
+        then reads zeros, as in Mesa), detached from the bound
         framebuffers (detach_deleted); its name is free for a new texture,
-        with no target, size or image."""
+        with no target, size, image or buffer."""
         for tex in dict(args).get("textures") or []:
             if isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
+                for key, v in self.s.units.items():
+                    if v == tex:
+                        self.s.units[key] = 0
+                if self.s.texture == tex:
+                    self.s.texture = 0
                 self.detach_deleted("texture", tex)
                 self.s.texture_targets.pop(tex, None)
                 self.s.texture_images.pop(tex, None)
+                self.s.texture_buffers.pop(tex, None)
 
     def h_tex_image(self, no, name, a, args):
         """The size of a texture's level 0 (a framebuffer attachment's size)
