@@ -77,11 +77,26 @@ def test_a_core_profile_binds_only_generated_framebuffers(tmp_path, how):
     assert fragments(trace(tmp_path, reference(c), "compat")) == 0
 
 
-def test_a_capture_that_shows_no_glgenframebuffers_is_taken_as_it_binds(tmp_path):
-    """A reduced capture written before glGenFramebuffers was kept: its
-    binds are taken (framebuffer 3, the screen's size: the camera pass)."""
-    c = fbo(shader_calls(VS), gen=False)
+def test_a_capture_that_shows_no_glgenframebuffers_binds_none(tmp_path):
+    """An apitrace capture, or a reduced capture of version 2, shows every
+    glGenFramebuffers: with none at all, glBindFramebuffer(77) is refused
+    and the triangle drawn into the window (the converter had left it out
+    as another pass's, and --check-depth had not seen it)."""
+    c = shader_calls(VS).add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=77)
     assert trace(tmp_path, reference(c), "nogen") == trace(tmp_path, reference(shader_calls(VS)), "reference")
+
+
+def test_a_reduced_capture_of_version_1_is_taken_as_it_binds(tmp_path, monkeypatch):
+    """A reduced capture written before glGenFramebuffers and
+    glGenRenderbuffers were kept (version 1): its binds are taken until it
+    shows one (framebuffer 3, the screen's size: the camera pass; 77, no
+    attachment: another pass)."""
+    from rbcd.gl2rbt import reduced
+    monkeypatch.setattr(reduced, "REDUCED_HEADER", reduced.REDUCED_HEADER_1)
+    want = trace(tmp_path, reference(shader_calls(VS)), "reference")
+    assert trace(tmp_path, reference(fbo(shader_calls(VS), gen=False)), "v1") == want
+    c = shader_calls(VS).add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=77)
+    assert fragments(trace(tmp_path, reference(c), "v1_77")) == 0
 
 
 @pytest.mark.parametrize("gen", [False, True])

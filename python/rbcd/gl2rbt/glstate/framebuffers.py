@@ -64,9 +64,10 @@ class FramebufferCalls:
         """Whether a core profile binds `n` as a framebuffer or renderbuffer
         name (`names`: those glGen*/glCreate* returned and no glDelete*
         freed since): 0 or such a name; another is GL_INVALID_OPERATION in
-        Mesa 22.3 (the earlier binding stays). A capture that shows no
-        glGenFramebuffers (glGenRenderbuffers) at all, such as a reduced
-        capture written before they were kept, is taken as it binds."""
+        Mesa 22.3 (the earlier binding stays). A reduced capture written
+        before glGenFramebuffers and glGenRenderbuffers were kept (version
+        1) is taken as it binds until it shows one (`names` None;
+        Converter.initial_state)."""
         return not (self.core and n and names is not None and n not in names)
 
     def h_gen_framebuffer_names(self, no, name, a, args):
