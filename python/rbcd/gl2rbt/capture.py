@@ -4,7 +4,7 @@ import stat
 
 from .apitrace import read_apitrace_calls
 from .errors import ConvertError, printable
-from .reduced import CHECK_REST, is_reduced_capture, read_reduced_calls
+from .reduced import CHECK_REST, REDUCED_HEADER, is_reduced_capture, read_reduced_calls, reduced_header
 
 
 def read_calls(trace, calls=None):
@@ -17,6 +17,15 @@ def read_calls(trace, calls=None):
         yield from read_reduced_calls(trace)
     else:
         yield from read_apitrace_calls(trace, calls)
+
+
+def shows_every_gen(trace):
+    """Whether the capture shows every glGenFramebuffers and
+    glGenRenderbuffers call (a core profile then binds only the names they
+    returned): an apitrace capture records every call, and a reduced
+    capture keeps them from version 2 on. A reduced capture of version 1
+    dropped them: the names it binds are taken as it binds them."""
+    return not is_reduced_capture(trace) or reduced_header(trace) == REDUCED_HEADER
 
 
 def check_rest(calls):

@@ -44,7 +44,12 @@ STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls
 class Converter(*STATE_GROUPS, GeometryOutput):
     def __init__(self, args, raster_in, geometry_out):
         self.args = args
-        self.s = GLState()
+        # Whether the capture shows every glGenFramebuffers and
+        # glGenRenderbuffers call (capture.shows_every_gen); without a
+        # capture (the state tests), as a reduced capture of version 1.
+        from .capture import shows_every_gen
+        self.every_gen_shown = bool(getattr(args, "trace", None)) and shows_every_gen(args.trace)
+        self.s = self.initial_state()
         self.raster = raster_in          # binary stream to rbcd-gl-raster, or None
         self.stream_copy = open(args.stream_out, "wb") if getattr(args, "stream_out", None) else None
         self.geo = geometry_out          # text, or None
@@ -263,10 +268,21 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         destroys it, and draws in a second): GL's initial state, with no
         objects; the window's contents stay. That context's draws are no
         longer those of another context."""
-        self.s = GLState()
+        self.s = self.initial_state()
         if self.vertex_stage_ is not None:
             self.vertex_stage_.forget_objects()
         self.draw_context = None
+
+    def initial_state(self):
+        """GL's initial state. In a capture that shows every
+        glGenFramebuffers and glGenRenderbuffers call, no such name is
+        generated yet: a core profile binds none before its glGen*. A
+        reduced capture of version 1, which dropped them, is taken as it
+        binds until it shows one (framebuffers.generated_name)."""
+        s = GLState()
+        if self.every_gen_shown:
+            s.framebuffer_names, s.renderbuffer_names = set(), set()
+        return s
 
     def h_glx_create_context(self, no, name, a, args):
         self.core = context_is_core(dict(args).get("attrib_list"), "GLX_CONTEXT_MAJOR_VERSION_ARB",

@@ -27,7 +27,7 @@ MAX_CLIP_PLANES = 8
 # system. Listed in docs/gl-capture.md; anything else that is neither
 # emulated nor here is refused.
 IGNORED_PREFIXES = (
-    "glTex", "glBindTexture", "glGenTextures", "glDeleteTextures", "glActiveTexture", "glClientActiveTexture",
+    "glTex", "glBindTexture", "glGenTextures", "glActiveTexture", "glClientActiveTexture",
     "glCompressedTex", "glCopyTex", "glPixelStore", "glPixelTransfer", "glPixelZoom", "glGenerateMipmap",
     "glColor", "glSecondaryColor", "glNormal", "glFog", "glLight", "glMaterial", "glShadeModel", "glBlend",
     "glAlphaFunc", "glLogicOp", "glClearColor", "glClearStencil", "glClearAccum", "glStencil", "glColorMask",
@@ -39,7 +39,7 @@ IGNORED_PREFIXES = (
     "glEdgeFlag", "glIndex", "glAccum", "glSampleCoverage", "glGenQueries", "glBeginQuery", "glEndQuery",
     "glDeleteQueries", "glQueryCounter", "glStringMarker", "glFrameTerminator", "glInsertEventMarker",
     "glDebugMessageInsert", "glSampleMask",
-    "glDepthBounds", "glGenFramebuffers",
+    "glDepthBounds",
     "glRasterPos", "glLoadName", "glPushName", "glPopName", "glInitNames",
     "glGenLists", "glDeleteLists", "glListBase", "glCompileShader", "glShaderSource", "glCreateShader",
     "glCreateProgram", "glAttachShader", "glLinkProgram", "glDeleteShader", "glDetachShader",
@@ -50,8 +50,6 @@ IGNORED_PREFIXES = (
     # texture buffers, which samplers do not touch), fences.
     "glGenSamplers", "glBindSampler", "glSamplerParameter", "glDeleteSamplers", "glFenceSync",
     "glClientWaitSync", "glWaitSync", "glDeleteSync",
-    # Renderbuffer names (their storage's size is read: glRenderbufferStorage).
-    "glGenRenderbuffers", "glDeleteRenderbuffers",
     # Hints that a framebuffer's contents are no longer needed (ES 3 and its
     # EXT form): they change no pixel a later draw or the unit sees.
     "glInvalidateFramebuffer", "glInvalidateSubFramebuffer", "glDiscardFramebuffer",

@@ -19,7 +19,11 @@ from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
 from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
 from .outputs import SafeText
 
-REDUCED_HEADER = ("rbcd-reduced-capture", 1)
+REDUCED_HEADER = ("rbcd-reduced-capture", 2)
+# Version 1, written before glGenFramebuffers and glGenRenderbuffers were
+# kept: still read; the framebuffer and renderbuffer names it binds are taken
+# as it binds them (shows_every_gen).
+REDUCED_HEADER_1 = ("rbcd-reduced-capture", 1)
 # A reduced capture expands to at most this many times its size (the game
 # suite's expand 10 to 20 times; a file that expands more is refused before
 # its memory is spent).
@@ -90,6 +94,17 @@ def is_reduced_capture(path):
             return f.read(len(XZ_MAGIC)) == XZ_MAGIC
     except OSError:
         return False
+
+
+def reduced_header(path):
+    """A reduced capture's header record, or None when it does not decode
+    (read_reduced_calls then names the file's error)."""
+    try:
+        with open(path, "rb") as raw:
+            return CallReader(io.BufferedReader(BoundedXz(raw, 1 << 20))).load()
+    except (ConvertError, lzma.LZMAError, EOFError, OSError, pickle.UnpicklingError, ValueError, TypeError,
+            AttributeError, IndexError, MemoryError, RecursionError):
+        return None
 
 
 class BoundedXz(io.RawIOBase):
@@ -237,7 +252,7 @@ def read_reduced_calls(path):
                 head = CallReader(RecordStream(f, None)).load()
             except EOFError:
                 head = None
-            if head != REDUCED_HEADER:
+            if head not in (REDUCED_HEADER, REDUCED_HEADER_1):
                 raise ConvertError("an xz file that is not a reduced capture (rbcd-gl2rbt --reduced-out)")
             count = 0
             while True:

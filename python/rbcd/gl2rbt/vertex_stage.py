@@ -445,7 +445,13 @@ class VertexStage:
             except GLError:
                 pass   # past Mesa's binding points, or a range it refuses: GL ignores the capture's call
         for (unit, target), tex in conv.s.units.items():
-            if target != "GL_TEXTURE_BUFFER" or not tex:
+            if target != "GL_TEXTURE_BUFFER":
+                continue
+            if not tex:
+                # Unbound (or its texture deleted) since an earlier draw
+                # bound it in Mesa's copy: texture 0, read as zeros.
+                GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+                GL.glBindTexture(GL.GL_TEXTURE_BUFFER, 0)
                 continue
             mt = self.textures.get(tex)
             if mt is None:

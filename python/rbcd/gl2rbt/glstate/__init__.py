@@ -85,6 +85,9 @@ class GLState:
         self.fbo_depth = {}
         self.sizes = {}
         self.renderbuffer = 0
+        self.framebuffer_names = None    # names glGen/glCreateFramebuffers returned (None: the capture showed none)
+        self.renderbuffer_names = None   # the same for renderbuffers
+        self.deleted_images = 0   # deleted textures and renderbuffers that live on for framebuffers not bound
         self.active_unit = 0
         self.units = {}
         self.texture_targets = {}   # texture -> the target it was first bound to

@@ -308,35 +308,42 @@ class BufferCalls:
                 return
         fail_call(no, "memcpy into memory that is not a mapped buffer's")
 
-    def keep_for_other_vertex_arrays(self, b):
+    def keep_for_holders(self, b):
         """A buffer deleted while a vertex array object that is not bound
-        holds it lives on for that object (GL 4.5, 5.1.3; Mesa draws it):
-        its data moves to a name no call can give, which those objects take;
-        the bound object lets it go, as GL detaches it there."""
-        if b not in self.s.buffers:
-            return
+        holds it, or while a buffer texture holds it (glTexBuffer, bound or
+        not), lives on for them (GL 4.5, 5.1.2 and 5.1.3; Mesa draws it):
+        its data moves to a name no call can give, which they take; the
+        bound vertex array object lets it go, as GL detaches it there. A
+        buffer texture's buffer with no data store yet moves too, so that
+        a new buffer of the name is not the texture's."""
         current = self.current_vao()
         holders = [v for v in self.s.vaos.values() if v is not current and
-                   (v.element == b or any(p.buffer == b for p in v.bindings.values()))]
+                   (v.element == b or any(p.buffer == b for p in v.bindings.values()))] \
+            if b in self.s.buffers else []
         for p in current.bindings.values():
             if p.buffer == b:
                 p.buffer = 0
-        if not holders:
+        textures = [t for t, (_, buf, _, _) in self.s.texture_buffers.items() if buf == b] if b else []
+        if not holders and not textures:
             return
         self.s.next_version += 1
         kept = ("deleted", b, self.s.next_version)
-        self.s.buffers[kept] = self.s.buffers[b]
-        self.s.buffer_versions[kept] = self.s.buffer_versions.get(b)
-        if b in self.s.buffer_written:
-            self.s.buffer_written[kept] = self.s.buffer_written[b]
-        self.s.buffer_held[kept] = self.s.buffer_held.get(b, 0)
-        self.s.buffer_bytes_in_all += self.s.buffer_held[kept]
+        if b in self.s.buffers:
+            self.s.buffers[kept] = self.s.buffers[b]
+            self.s.buffer_versions[kept] = self.s.buffer_versions.get(b)
+            if b in self.s.buffer_written:
+                self.s.buffer_written[kept] = self.s.buffer_written[b]
+            self.s.buffer_held[kept] = self.s.buffer_held.get(b, 0)
+            self.s.buffer_bytes_in_all += self.s.buffer_held[kept]
         for v in holders:
             if v.element == b:
                 v.element = kept
             for p in v.bindings.values():
                 if p.buffer == b:
                     p.buffer = kept
+        for t in textures:
+            fmt, _, offset, size = self.s.texture_buffers[t]
+            self.s.texture_buffers[t] = (fmt, kept, offset, size)
 
     def h_delete_buffers(self, no, name, a, args):
         d = dict(args)
@@ -345,7 +352,7 @@ class BufferCalls:
                 if self.s.buffer_names is not None:
                     self.s.buffer_names.discard(b)
                 self.s.buffer_objects.discard(b)
-                self.keep_for_other_vertex_arrays(b)
+                self.keep_for_holders(b)
                 self.s.buffers.pop(b, None)
                 self.s.buffer_versions.pop(b, None)
                 self.s.buffer_written.pop(b, None)

@@ -53,15 +53,43 @@ def texture_image_digest(d):
 
 class FramebufferCalls:
     """self.s.draw_fbo: the bound draw framebuffer; self.s.fbo_depth[fbo] =
-    ("texture" | "renderbuffer", name) of its depth attachment; the sizes of
-    textures' level 0 and renderbuffers; the digests of textures' level-0
-    images; texture units' bindings, and the buffers of texture buffer
-    objects."""
+    ("texture" | "renderbuffer", name) of its depth attachment (a deleted
+    image that lives on for a framebuffer not bound: ("deleted", name, n)
+    in the name's place); the framebuffer and renderbuffer names a core
+    profile binds; the sizes of textures' level 0 and renderbuffers; the
+    digests of textures' level-0 images; texture units' bindings, and the
+    buffers of texture buffer objects."""
+
+    def generated_name(self, names, n):
+        """Whether a core profile binds `n` as a framebuffer or renderbuffer
+        name (`names`: those glGen*/glCreate* returned and no glDelete*
+        freed since): 0 or such a name; another is GL_INVALID_OPERATION in
+        Mesa 22.3 (the earlier binding stays). A reduced capture written
+        before glGenFramebuffers and glGenRenderbuffers were kept (version
+        1) is taken as it binds until it shows one (`names` None;
+        Converter.initial_state)."""
+        return not (self.core and n and names is not None and n not in names)
+
+    def h_gen_framebuffer_names(self, no, name, a, args):
+        """glGenFramebuffers, glCreateFramebuffers, glGenRenderbuffers,
+        glCreateRenderbuffers: names a core profile binds."""
+        d = dict(args)
+        kind = "renderbuffer" if "Renderbuffer" in name else "framebuffer"
+        names = d.get(f"{kind}s")
+        if not isinstance(names, list):
+            return   # apitrace recorded no names (a negative count: GL_INVALID_VALUE)
+        attr = f"{kind}_names"
+        if getattr(self.s, attr) is None:
+            setattr(self.s, attr, set())
+        for n in names:
+            getattr(self.s, attr).add(checked(no, integer, n, f"{name}: a {kind} name", *U32))
 
     def h_bind_framebuffer(self, no, name, a, args):
         d = dict(args)
         target = d["target"]
         fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
+        if not self.generated_name(self.s.framebuffer_names, fb):
+            return
         if target in ("GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER"):
             self.s.draw_fbo = fb
         if target in ("GL_FRAMEBUFFER", "GL_READ_FRAMEBUFFER"):
@@ -85,10 +113,68 @@ class FramebufferCalls:
         w, h = d.get("width"), d.get("height")
         if not isinstance(w, int) or not isinstance(h, int):
             fail_call(no, f"{name}: impossible size")
+        if not self.s.renderbuffer:
+            return   # no renderbuffer bound: GL_INVALID_OPERATION
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
 
     def h_bind_renderbuffer(self, no, name, a, args):
-        self.s.renderbuffer = dict(args).get("renderbuffer")
+        rb = checked(no, integer, dict(args).get("renderbuffer"), f"{name}: the renderbuffer", *U32)
+        if self.generated_name(self.s.renderbuffer_names, rb):
+            self.s.renderbuffer = rb
+
+    def detach_deleted(self, kind, obj):
+        """A texture or renderbuffer deleted: detached from the bound draw
+        and read framebuffers, as though glFramebuffer{Texture,Renderbuffer}
+        had been called with 0 there (GL 4.5, 9.2.7 and 9.2.8; Mesa 22.3:
+        such a framebuffer with no other attachment is incomplete and draws
+        nothing). Framebuffers not bound keep the image: it lives on for
+        them, its size moved to a name no call can give (GL 4.5, 5.1.3),
+        and the name with its sizes is free for a new object."""
+        bound = {self.s.draw_fbo, self.s.read_fbo} - {0}
+        holders = []
+        for fb, att in self.s.fbo_depth.items():
+            if att is not None and att[0] == kind and att[1] == obj:
+                if fb in bound:
+                    self.s.fbo_depth[fb] = None
+                else:
+                    holders.append(fb)
+        keys = [k for k in self.s.sizes if k[0] == kind and k[1] == obj]
+        if holders:
+            self.s.deleted_images += 1
+            kept = ("deleted", obj, self.s.deleted_images)
+            for k in keys:
+                self.s.sizes[(kind, kept) + k[2:]] = self.s.sizes[k]
+            for fb in holders:
+                self.s.fbo_depth[fb] = (kind, kept) + self.s.fbo_depth[fb][2:]
+        for k in keys:
+            del self.s.sizes[k]
+
+    def h_delete_renderbuffers(self, no, name, a, args):
+        for rb in dict(args).get("renderbuffers") or []:
+            if isinstance(rb, int) and not isinstance(rb, bool) and rb > 0:
+                if self.s.renderbuffer_names is not None:
+                    self.s.renderbuffer_names.discard(rb)
+                if self.s.renderbuffer == rb:
+                    self.s.renderbuffer = 0   # GL binds renderbuffer 0
+                self.detach_deleted("renderbuffer", rb)
+
+    def h_delete_textures(self, no, name, a, args):
+        """glDeleteTextures: a texture bound to a unit is unbound there (the
+        unit's target reads texture 0: a buffer texture's texelFetch
+        then reads zeros, as in Mesa), detached from the bound
+        framebuffers (detach_deleted); its name is free for a new texture,
+        with no target, size, image or buffer."""
+        for tex in dict(args).get("textures") or []:
+            if isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
+                for key, v in self.s.units.items():
+                    if v == tex:
+                        self.s.units[key] = 0
+                if self.s.texture == tex:
+                    self.s.texture = 0
+                self.detach_deleted("texture", tex)
+                self.s.texture_targets.pop(tex, None)
+                self.s.texture_images.pop(tex, None)
+                self.s.texture_buffers.pop(tex, None)
 
     def h_tex_image(self, no, name, a, args):
         """The size of a texture's level 0 (a framebuffer attachment's size)
@@ -194,7 +280,9 @@ class FramebufferCalls:
 
     def h_delete_framebuffers(self, no, name, a, args):
         for fb in dict(args).get("framebuffers") or []:
-            if isinstance(fb, int) and fb > 0:
+            if isinstance(fb, int) and not isinstance(fb, bool) and fb > 0:
+                if self.s.framebuffer_names is not None:
+                    self.s.framebuffer_names.discard(fb)
                 self.s.fbo_depth.pop(fb, None)
                 if self.s.draw_fbo == fb:
                     self.s.draw_fbo = 0   # GL binds the window's framebuffer again
@@ -252,6 +340,12 @@ class FramebufferCalls:
         "glFramebufferTexture2D": h_framebuffer_texture,
         "glFramebufferTexture": h_framebuffer_texture,
         "glFramebufferRenderbuffer": h_framebuffer_texture,
+        "glGenFramebuffers": h_gen_framebuffer_names,
+        "glCreateFramebuffers": h_gen_framebuffer_names,
+        "glGenRenderbuffers": h_gen_framebuffer_names,
+        "glCreateRenderbuffers": h_gen_framebuffer_names,
+        "glDeleteRenderbuffers": h_delete_renderbuffers,
+        "glDeleteTextures": h_delete_textures,
         "glBindRenderbuffer": h_bind_renderbuffer,
         "glRenderbufferStorage": h_renderbuffer_storage,
         "glRenderbufferStorageMultisample": h_renderbuffer_storage,
