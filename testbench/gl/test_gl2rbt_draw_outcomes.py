@@ -158,3 +158,45 @@ def test_two_vertex_shader_objects_link_as_one_stage(tmp_path):
     c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
     c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
     assert trace(tmp_path, draw(c), "two") == trace(tmp_path, draw(shader_calls(VS)), "one")
+
+
+def glx_context(c, attrs, ret=1):
+    """shader_calls' capture with its context call's attributes replaced."""
+    no, fn, _, _, flags = c.calls[5]
+    assert fn == "glXCreateContextAttribsARB"
+    c.calls[5] = (no, fn, [("attrib_list", attrs)], ret, flags)
+    return c
+
+
+ES2_VS = "#version 100\nattribute vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n"
+ES2_FS = "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(1.0); }\n"
+
+
+def es_calls():
+    """shader_calls' program with a fragment shader (OpenGL ES links only
+    whole programs)."""
+    c = shader_calls(ES2_VS)
+    c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+    c.add("glShaderSource", shader=3, count=1, string=[ES2_FS], length=None)
+    c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
+    return c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+
+
+def test_a_glx_context_of_the_es_profile_is_opengl_es(tmp_path):
+    """GLX_EXT_create_context_es2_profile: an OpenGL ES 2.0 context through
+    GLX draws as ES does (quads are GL_INVALID_ENUM there: nothing drawn;
+    a compatibility profile's quads under a program are refused as not
+    emulated); a context call that made nothing (NULL) changes nothing; a
+    version no GL has is the capture's error."""
+    es = ["GLX_CONTEXT_MAJOR_VERSION_ARB", 2, "GLX_CONTEXT_MINOR_VERSION_ARB", 0,
+          "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_ES2_PROFILE_BIT_EXT", 0]
+    got = trace(tmp_path, draw(glx_context(es_calls(), es), "GL_QUADS", 4, vao=0), "es")
+    assert got.count(b"\nf ") == 0 and b"\nframe 0" in got
+    assert trace(tmp_path, draw(glx_context(es_calls(), es), vao=0), "es-tri").count(b"\nf ") > 100
+    compat = glx_context(es_calls(), es, ret=0)   # not made: the default context's profile
+    r = gl2rbt(tmp_path, draw(compat, "GL_QUADS", 4, vao=0).write(tmp_path / "n.xz"), "-o", tmp_path / "n.rbt")
+    refused(r, "GL_QUADS under a program is not emulated")
+    bad = glx_context(shader_calls(VS), ["GLX_CONTEXT_MAJOR_VERSION_ARB", 99, 0])
+    r = gl2rbt(tmp_path, draw(bad).write(tmp_path / "v.xz"), "-o", tmp_path / "v.rbt")
+    refused(r, "glXCreateContextAttribsARB", "OpenGL 99.0")
+    assert left_behind(tmp_path, ["es.xz", "es.rbt", "es-tri.xz", "es-tri.rbt", "n.xz", "v.xz"]) == []

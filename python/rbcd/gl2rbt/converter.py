@@ -37,6 +37,12 @@ def context_is_core(attrs, major_key, minor_key, mask_key, core_bit):
     return mask == core_bit or (isinstance(mask, tuple) and core_bit in mask)
 
 
+# The versions a context can be asked for (GLX_ARB_create_context and its
+# ES profile extension): no driver makes another.
+GL_VERSIONS = {(1, m) for m in range(6)} | {(2, 0), (2, 1)} | {(3, m) for m in range(4)} | {(4, m) for m in range(7)}
+ES_VERSIONS = {(1, 0), (1, 1), (2, 0), (3, 0), (3, 1), (3, 2)}
+
+
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
                 ProgramCalls, FramebufferCalls, DrawCalls, ObjectCalls)
 
@@ -285,9 +291,26 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         return s
 
     def h_glx_create_context(self, no, name, a, args):
-        self.core = context_is_core(dict(args).get("attrib_list"), "GLX_CONTEXT_MAJOR_VERSION_ARB",
-                                    "GLX_CONTEXT_MINOR_VERSION_ARB", "GLX_CONTEXT_PROFILE_MASK_ARB",
-                                    "GLX_CONTEXT_CORE_PROFILE_BIT_ARB")
+        """glXCreateContextAttribsARB: a core profile, or OpenGL ES
+        (GLX_EXT_create_context_es2_profile); a context the call did not
+        make (NULL) changes nothing, and one of a version no GL has is the
+        capture's error."""
+        if not self.ret:
+            return
+        attrs = dict(args).get("attrib_list")
+        pairs = dict(zip(attrs[0::2], attrs[1::2])) if isinstance(attrs, list) else {}
+        mask = pairs.get("GLX_CONTEXT_PROFILE_MASK_ARB")
+        es = any(bit in (mask if isinstance(mask, tuple) else (mask,))
+                 for bit in ("GLX_CONTEXT_ES2_PROFILE_BIT_EXT", "GLX_CONTEXT_ES_PROFILE_BIT_EXT"))
+        version = (pairs.get("GLX_CONTEXT_MAJOR_VERSION_ARB", 1), pairs.get("GLX_CONTEXT_MINOR_VERSION_ARB", 0))
+        if version not in (ES_VERSIONS if es else GL_VERSIONS):
+            fail_call(no, f"{printable(name)}: a context of {'OpenGL ES' if es else 'OpenGL'} "
+                      f"{printable(version[0], 20)}.{printable(version[1], 20)}, a version that does not exist, "
+                      "was made")
+        self.es = es
+        self.core = not es and context_is_core(attrs, "GLX_CONTEXT_MAJOR_VERSION_ARB",
+                                               "GLX_CONTEXT_MINOR_VERSION_ARB", "GLX_CONTEXT_PROFILE_MASK_ARB",
+                                               "GLX_CONTEXT_CORE_PROFILE_BIT_ARB")
 
     # The window system's calls that say which API and profile the capture
     # drew with (the rest of them are passed over).
