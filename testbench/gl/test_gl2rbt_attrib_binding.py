@@ -43,28 +43,26 @@ def padded_buffer(c, name=2):
     return c.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(PADDED), data=PADDED, usage="GL_STATIC_DRAW")
 
 
-def shared_binding(c):
-    """Attribute 0 reads binding point 3: the padded records at offset 16,
-    stride 20, relative offset 4."""
+def at_point_three(c):
+    """Attribute 0 of vertex array 7 reads binding point 3: the padded
+    records at offset 16, stride 20, relative offset 4."""
     padded_buffer(c)
     c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
     c.add("glEnableVertexAttribArray", index=0)
     c.add("glVertexAttribFormat", attribindex=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", relativeoffset=4)
     c.add("glVertexAttribBinding", attribindex=0, bindingindex=3)
-    c.add("glBindVertexBuffer", bindingindex=3, buffer=2, offset=16, stride=20)
-    return tagged_draw(c)
+    return c.add("glBindVertexBuffer", bindingindex=3, buffer=2, offset=16, stride=20)
+
+
+def shared_binding(c):
+    return tagged_draw(at_point_three(c))
 
 
 def ignored_calls(c):
     """The shared binding, then calls GL refuses with an error, each of which
     would move the triangle: a relative offset past 2047, a stride past 2048,
     a binding point past 15, a divisor on it, attribute 16."""
-    padded_buffer(c)
-    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
-    c.add("glEnableVertexAttribArray", index=0)
-    c.add("glVertexAttribFormat", attribindex=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", relativeoffset=4)
-    c.add("glVertexAttribBinding", attribindex=0, bindingindex=3)
-    c.add("glBindVertexBuffer", bindingindex=3, buffer=2, offset=16, stride=20)
+    at_point_three(c)
     c.add("glVertexAttribFormat", attribindex=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", relativeoffset=4096)
     c.add("glBindVertexBuffer", bindingindex=3, buffer=2, offset=16, stride=4096)
     c.add("glVertexAttribBinding", attribindex=0, bindingindex=16)
@@ -77,12 +75,7 @@ def pointer_after_binding(c):
     """glVertexAttribPointer after the binding calls: attribute 0 reads its
     own binding point 0 again, on buffer 1, packed (GL's definition of the
     call), whatever binding 3 holds."""
-    padded_buffer(c)
-    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
-    c.add("glEnableVertexAttribArray", index=0)
-    c.add("glVertexAttribFormat", attribindex=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", relativeoffset=4)
-    c.add("glVertexAttribBinding", attribindex=0, bindingindex=3)
-    c.add("glBindVertexBuffer", bindingindex=3, buffer=2, offset=16, stride=20)
+    at_point_three(c)
     c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
     c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
     return tagged_draw(c)

@@ -10,7 +10,7 @@ import struct
 import pytest
 
 from gl_captures import TRIANGLE, gl2rbt_timed as gl2rbt, left_behind, refused
-from test_gl2rbt_hostile import VS, shader_calls
+from test_gl2rbt_hostile import ES_FRAGMENT, VS, shader_calls
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
 
@@ -169,7 +169,6 @@ def glx_context(c, attrs, ret=1):
 
 
 ES2_VS = "#version 100\nattribute vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n"
-ES2_FS = "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(1.0); }\n"
 
 
 def es_calls():
@@ -177,7 +176,7 @@ def es_calls():
     whole programs)."""
     c = shader_calls(ES2_VS)
     c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
-    c.add("glShaderSource", shader=3, count=1, string=[ES2_FS], length=None)
+    c.add("glShaderSource", shader=3, count=1, string=[ES_FRAGMENT], length=None)
     c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
     return c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
 

@@ -412,32 +412,37 @@ def test_modern_forms_of_emulated_state(tmp_path):
 ES_FRAGMENT = "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(1.0); }\n"
 
 
+def es_triangle(c, vs, data, kind="GL_FLOAT"):
+    """An OpenGL ES 2.0 program of vertex shader `vs` (and ES_FRAGMENT: ES
+    links only whole programs) drawing a triangle of `data` from buffer 1,
+    then the swap."""
+    c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
+    c.add("glShaderSource", shader=1, count=1, string=[vs], length=None).add("glCompileShader", shader=1)
+    c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+    c.add("glShaderSource", shader=3, count=1, string=[ES_FRAGMENT], length=None).add("glCompileShader", shader=3)
+    c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
+    c.add("glAttachShader", program=2, shader=3)
+    c.add("glBindAttribLocation", program=2, index=0, name="p")
+    c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(data), data=data, usage="GL_STATIC_DRAW")
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type=kind, normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    return c.add("eglSwapBuffers", dpy=1, surface=1, flags=END_FRAME)
+
+
 def test_half_floats_of_opengl_es_2(tmp_path):
     """OES_vertex_half_float's GL_HALF_FLOAT_OES (0x8D61, not desktop GL's
     GL_HALF_FLOAT) in an OpenGL ES 2.0 context: the same triangle as floats."""
     pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
     vs = "#version 100\nattribute vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n"
-    fs = ES_FRAGMENT
 
     def es(kind, data):
         c = Calls()
         c.add("eglCreateContext", dpy=1, config=1, share_context=0,
               attrib_list=["EGL_CONTEXT_CLIENT_VERSION", 2, "EGL_NONE"], ret=1)
-        c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
-        c.add("glShaderSource", shader=1, count=1, string=[vs], length=None).add("glCompileShader", shader=1)
-        # OpenGL ES links only whole programs.
-        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
-        c.add("glShaderSource", shader=3, count=1, string=[fs], length=None).add("glCompileShader", shader=3)
-        c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
-        c.add("glAttachShader", program=2, shader=3)
-        c.add("glBindAttribLocation", program=2, index=0, name="p")
-        c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
-        c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
-        c.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(data), data=data, usage="GL_STATIC_DRAW")
-        c.add("glEnableVertexAttribArray", index=0)
-        c.add("glVertexAttribPointer", index=0, size=3, type=kind, normalized="GL_FALSE", stride=0, pointer=0)
-        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
-        return c.add("eglSwapBuffers", dpy=1, surface=1, flags=END_FRAME)
+        return es_triangle(c, vs, data, kind)
     tri = np.frombuffer(TRIANGLE, "<f4")
     half = trace_bytes(tmp_path, es("GL_HALF_FLOAT_OES", tri.astype("<f2").tobytes()), "half")
     assert half == trace_bytes(tmp_path, es("GL_FLOAT", TRIANGLE), "float") and b"\no " in half
@@ -1275,21 +1280,7 @@ def test_a_new_contexts_objects_are_its_own_in_mesa(tmp_path):
               attrib_list=["EGL_CONTEXT_CLIENT_VERSION", 2, "EGL_NONE"], ret=ctx)
         c.add("eglMakeCurrent", dpy=1, draw=2, read=2, ctx=ctx, ret="EGL_TRUE")
         c.add("glViewport", x=0, y=0, width=64, height=48, flags=1)   # apitrace's record of the window
-        c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
-        c.add("glShaderSource", shader=1, count=1, string=[vs], length=None).add("glCompileShader", shader=1)
-        # OpenGL ES links only whole programs.
-        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
-        c.add("glShaderSource", shader=3, count=1, string=[ES_FRAGMENT], length=None).add("glCompileShader", shader=3)
-        c.add("glCreateProgram", ret=2).add("glAttachShader", program=2, shader=1)
-        c.add("glAttachShader", program=2, shader=3)
-        c.add("glBindAttribLocation", program=2, index=0, name="p")
-        c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
-        c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
-        c.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(data), data=data, usage="GL_STATIC_DRAW")
-        c.add("glEnableVertexAttribArray", index=0)
-        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
-        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
-        return c.add("eglSwapBuffers", dpy=1, surface=1, flags=END_FRAME)
+        return es_triangle(c, vs, data)
     other = struct.pack("<9f", 2, 2, -10, 20, 2, -10, 2, 30, -10)
     both = context(Calls(), 7, 32, TRIANGLE)
     both.add("eglDestroyContext", dpy=1, ctx=7, ret="EGL_TRUE")

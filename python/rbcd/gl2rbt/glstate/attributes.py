@@ -137,6 +137,12 @@ class AttributeCalls:
         one, in a core profile or OpenGL ES, as Mesa 22.3 has it)."""
         return None if (self.core or self.es) and not self.s.vao else self.current_vao()
 
+    def vao_of(self, no, name, d):
+        """The vertex array object a call of vertex attribute binding sets:
+        the one a direct-state-access form names (vaobj), or the bound one;
+        None when GL ignores the call."""
+        return self.vao_named(no, name, d["vaobj"]) if "vaobj" in d else self.vao_to_set(name)
+
     def vertex_data_digest(self, name, d):
         """What a rule's `vertex_data` names a draw under a program by: the
         digest (BLAKE2b, 16 hex digits) of the data it reads that is its
@@ -267,8 +273,7 @@ class AttributeCalls:
         attribute's format alone, at a relative offset into its binding's
         elements."""
         d = dict(args)
-        dsa = "vaobj" in d
-        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        vao = self.vao_of(no, name, d)
         i = attrib_index(no, name, d["attribindex"])
         size = d["size"]
         relative = checked(no, integer, d.get("relativeoffset", 0), f"{name}: the relative offset", *U32)
@@ -287,8 +292,7 @@ class AttributeCalls:
         """glVertexAttribBinding, glVertexArrayAttribBinding: which binding
         point an attribute reads."""
         d = dict(args)
-        dsa = "vaobj" in d
-        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        vao = self.vao_of(no, name, d)
         i = attrib_index(no, name, d["attribindex"])
         point = checked(no, integer, d["bindingindex"], f"{name}: the binding index", *U32)
         if vao is not None and i is not None and point < MAX_VERTEX_BINDINGS:
@@ -307,8 +311,7 @@ class AttributeCalls:
     def h_bind_vertex_buffer(self, no, name, a, args):
         """glBindVertexBuffer, glVertexArrayVertexBuffer."""
         d = dict(args)
-        dsa = "vaobj" in d
-        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        vao = self.vao_of(no, name, d)
         point = checked(no, integer, d["bindingindex"], f"{name}: the binding index", *U32)
         buf = checked(no, integer, d["buffer"], f"{name}: the buffer", *U32)
         offset = checked(no, integer, d.get("offset", 0), f"{name}: the offset", *I64)
@@ -322,8 +325,7 @@ class AttributeCalls:
         (GL_INVALID_OPERATION: past the last point); no buffers unbinds
         them all; an entry in error is left and the others are bound."""
         d = dict(args)
-        dsa = "vaobj" in d
-        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        vao = self.vao_of(no, name, d)
         first = checked(no, integer, d["first"], f"{name}: the first binding", *U32)
         count = checked(no, integer, d["count"], f"{name}: the count", *I32)
         if vao is None or count < 0 or first + count > MAX_VERTEX_BINDINGS:
@@ -355,8 +357,7 @@ class AttributeCalls:
     def h_binding_divisor(self, no, name, a, args):
         """glVertexBindingDivisor, glVertexArrayBindingDivisor."""
         d = dict(args)
-        dsa = "vaobj" in d
-        vao = self.vao_named(no, name, d["vaobj"]) if dsa else self.vao_to_set(name)
+        vao = self.vao_of(no, name, d)
         point = checked(no, integer, d["bindingindex"], f"{name}: the binding index", *U32)
         div = checked(no, integer, d["divisor"], f"{name}: the divisor", *U32)
         if vao is not None and point < MAX_VERTEX_BINDINGS:
