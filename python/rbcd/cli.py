@@ -25,6 +25,7 @@ import gzip
 import io
 import os
 import re
+import shutil
 import signal
 import stat
 import sys
@@ -324,6 +325,30 @@ def to_standard_output(paths):
 _temporaries = set()
 
 
+def register_temporary(path):
+    """A temporary file or folder of the run's: removed when the run ends,
+    however (main_wrapper), and by remove_temporaries."""
+    _temporaries.add(path)
+
+
+def unregister_temporary(path):
+    _temporaries.discard(path)
+
+
+def remove_temporaries():
+    """Removes every registered temporary (files and folders); safe to call
+    from another thread than the one running the tool."""
+    for t in list(_temporaries):
+        if os.path.isdir(t) and not os.path.islink(t):
+            shutil.rmtree(t, ignore_errors=True)
+        else:
+            try:
+                os.unlink(t)
+            except OSError:
+                pass
+        _temporaries.discard(t)
+
+
 def write_output(path, data, what="output"):
     """Writes `data` (str or bytes) to `path` as rbcd-sim writes its outputs."""
     if isinstance(data, str):
@@ -417,8 +442,4 @@ def main_wrapper(prog, fn, argv):
         say(prog, f"internal error: {type(e).__name__}: {e}")
         return 1
     finally:
-        for t in list(_temporaries):
-            try:
-                os.unlink(t)
-            except OSError:
-                pass
+        remove_temporaries()

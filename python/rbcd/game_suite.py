@@ -43,6 +43,10 @@ PROG = "game-suite"
 MAX_TOML = 1 << 16
 
 
+def reject_constant(name):
+    raise ValueError(f"{name} is no figure")
+
+
 class Mismatch(Exception):
     """A regenerated file differs from its recorded checksum, or the converter
     failed on a well-formed entry: exit 1."""
@@ -243,12 +247,21 @@ class Entry:
                 raise UsageError(f"{self.summary}: line {i} " + ("ends in CR LF" if line.endswith("\r") else
                                  "holds a CR") + ": the converter's lines end in LF alone")
             try:
-                ok = isinstance(json.loads(line), dict)
+                obj = json.loads(line, parse_constant=reject_constant)
             except (ValueError, RecursionError):
-                ok = False
-            if not ok:
+                obj = None
+            if not isinstance(obj, dict):
                 raise UsageError(f"{self.summary}: line {i}: not a JSON object (the converter's figures "
                                  "for a frame)")
+            # As the converter writes it: compact, its figures integers (or
+            # lists of them, the objects), frame after frame from 0.
+            whole = all((type(v) is int) or (isinstance(v, list) and all(type(x) is int for x in v))
+                        for v in obj.values())
+            if not whole or json.dumps(obj, separators=(",", ":")) != line:
+                raise UsageError(f"{self.summary}: line {i}: not as the converter writes a frame's figures "
+                                 "(compact JSON of integers)")
+            if obj.get("frame") != i - 1:
+                raise UsageError(f"{self.summary}: line {i}: not frame {i - 1}'s figures")
         return "".join(line + "\n" for line in (lines[:frames] if frames else lines))
 
     def summary_matches(self, summary, frames=None):

@@ -188,7 +188,14 @@ def test_frames_past_the_entry_expand_the_whole_entry(tmp_path):
     (lambda t: t[:t.index(b"\n", 100)] + b"\nnot json" + t[t.index(b"\n", 100):t.rindex(b"\n", 0, -1) + 1],
      "line 2: not a JSON object"),
     (lambda t: t + b"x", "not a line for each"),
-], ids=["crlf", "crlf_line3", "cr", "bom", "not_json", "unterminated"])
+    # JSON, but not as the converter writes a frame's figures.
+    (lambda t: t.replace(b",", b", ", 1), "line 1: not as the converter writes"),
+    (lambda t: t.replace(b'"frame":0,', b'"frame":0.0,', 1), "line 1: not as the converter writes"),
+    (lambda t: t.replace(b'"draws":', b'"draws":NaN,"x":', 1), "line 1: not a JSON object"),
+    (lambda t: t.replace(b'"draws":', b'"draws":"1","x":', 1), "line 1: not as the converter writes"),
+    (lambda t: t[:t.index(b"\n") + 1] * 2 + t[t.index(b"\n", t.index(b"\n") + 1) + 1:], "line 2: not frame 1"),
+], ids=["crlf", "crlf_line3", "cr", "bom", "not_json", "unterminated", "spaces", "float", "nan", "string",
+        "frame_twice"])
 def test_a_summary_not_as_the_converter_writes_it_is_the_entrys_error(tmp_path, entry, edit, words):
     """An entry's summary.jsonl that no conversion can match (CR LF line
     ends; a line that is not a JSON object) is bad input, one line naming

@@ -247,3 +247,31 @@ def test_current_values_of_every_form(tmp_path):
     ]
     for k, calls in enumerate(forms):
         assert trace(tmp_path, with_current_values(*calls), f"form{k}") == want, calls
+
+
+def test_a_bgra_format_and_null_multi_binds(tmp_path):
+    """glVertexAttribFormat of size GL_BGRA, which apitrace records as the
+    number 0x80E1 (the call had been taken as one GL refuses: the attribute
+    kept its float format), reads (B, G, R, A) bytes as (R, G, B, A): off =
+    (1, 0, 0, 1) as glVertexAttrib4f gives it; glBindVertexBuffers with NULL
+    arrays (apitrace's 0) unbinds its points (it had been refused)."""
+    want = trace(tmp_path, with_current_values(("glVertexAttrib4f", dict(index=1, x=1.0, y=0.0, z=0.0, w=1.0)),
+                                               ("glVertexAttribI4i", dict(index=2, x=0, y=8, z=0, w=0))), "want")
+    c = shader_calls(VS_OFF)
+    c.add("glBindAttribLocation", program=2, index=1, name="off").add("glBindAttribLocation", program=2, index=2,
+                                                                        name="k")
+    c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+    c.add("glVertexAttribI4i", index=2, x=0, y=8, z=0, w=0)
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=3)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=12, data=bytes([0, 0, 255, 255]) * 3, usage="GL_STATIC_DRAW")
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=1)
+    c.add("glVertexAttribFormat", attribindex=1, size=0x80E1, type="GL_UNSIGNED_BYTE", normalized="GL_TRUE",
+          relativeoffset=0)
+    c.add("glVertexAttribBinding", attribindex=1, bindingindex=5)
+    c.add("glBindVertexBuffer", bindingindex=5, buffer=3, offset=0, stride=4)
+    c.add("glBindVertexBuffers", first=9, count=2, buffers=0, offsets=0, strides=0)
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    assert trace(tmp_path, tagged_draw(c), "bgra") == want

@@ -5,11 +5,16 @@ adjacency modes draw what Mesa draws; an indexed draw with no indices and
 client data shorter than the draw reads are refused naming the call, with
 nothing left (Mesa would read memory outside the capture: the converter
 had crashed with SIGSEGV on the first)."""
+import os
+import signal
+import subprocess
 import struct
+import time
 
 import pytest
 
-from gl_captures import TRIANGLE, gl2rbt_timed as gl2rbt, left_behind, refused
+from conftest import program
+from gl_captures import GL2RBT, TRIANGLE, gl2rbt_timed as gl2rbt, left_behind, refused
 from test_gl2rbt_hostile import ES_FRAGMENT, VS, shader_calls
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
@@ -121,13 +126,36 @@ def test_clip_distances_named_only_in_a_comment_convert(tmp_path):
     assert trace(tmp_path, draw(shader_calls(source)), "c") == trace(tmp_path, draw(shader_calls(VS)), "r")
 
 
-def test_a_vertex_shader_of_huge_arrays_is_refused_before_mesa_compiles_it(tmp_path):
-    """A local float[1000000]: Mesa's LLVM had taken minutes and 1.9 GB on it,
-    deaf to SIGTERM; refused before Mesa sees it. An index like v[0] is not
-    a declaration, yet counts: the bound is on all literal sizes."""
-    big = VS.replace("void main() {", "void main() { float big[1000000]; big[gl_VertexID] = 1.0;")
-    r = gl2rbt(tmp_path, draw(shader_calls(big)).write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt")
-    refused(r, "call ", "declares arrays of 1000000 elements in all, more than 65536")
+BIG_ARRAY = VS.replace("void main() {", "const int K = 1000;\nvoid main() { float big[K * K]; big[gl_VertexID] = 1.0;") \
+    .replace("0.0, 1.0); }", "0.0, big[0]); }")
+
+
+def test_a_signal_while_mesa_works_ends_the_run_at_once(tmp_path):
+    """SIGTERM while Mesa compiles the shader above (Python's handler waits
+    until Mesa returns: it had waited minutes): the watchdog thread ends
+    the run, "interrupted", exit 130 (not the watchdog's own bound, exit
+    2), nothing left."""
+    cap = draw(shader_calls(BIG_ARRAY)).write(tmp_path / "b.xz")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    p = subprocess.Popen(["/usr/bin/python3", GL2RBT, cap, "-o", tmp_path / "b.rbt"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, env=env)
+    time.sleep(5)   # Mesa's LLVM is at work by then (it works for 20 s or more on this shader)
+    p.send_signal(signal.SIGTERM)
+    out, err = p.communicate(timeout=120)
+    assert p.returncode == 130 and err.strip().splitlines() == ["rbcd-gl2rbt: interrupted"], (p.returncode, err)
+    assert left_behind(tmp_path, ["b.xz"]) == []
+
+
+def test_mesa_work_out_of_proportion_ends_the_run(tmp_path):
+    """A local array of a million floats, its size spelled as a constant
+    expression: Mesa's LLVM had taken minutes and 1.9 GB on it, deaf to
+    SIGTERM. The watchdog ends the run after 30 s of Mesa's work on the
+    draw, or 1 GiB of memory Mesa took for it: one line naming the call,
+    exit 2, no output, no temporary."""
+    r = gl2rbt(tmp_path, draw(shader_calls(BIG_ARRAY)).write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt",
+               "--summary", tmp_path / "b.jsonl")
+    line = refused(r, "b.xz: call ", "glDrawArrays: Mesa ", "(docs/gl-capture.md, limits)")
+    assert "more than 30 s" in line or "more than 1024 MiB of memory" in line, line
     assert left_behind(tmp_path, ["b.xz"]) == []
     small = VS.replace("void main() {", "void main() { float a[4]; a[0] = 0.0;")
     assert trace(tmp_path, draw(shader_calls(small)), "s").count(b"\nf ") > 100

@@ -8,6 +8,7 @@ import tempfile
 
 import numpy as np
 
+from ..cli import register_temporary, unregister_temporary
 from .capture import check_input_file, read_calls
 from .errors import ConvertError, ToolError, printable
 from .raster import convert, new_converter, raster_program
@@ -192,6 +193,8 @@ def check_depth(args):
     if keep:
         os.makedirs(keep, exist_ok=True)
     tmp = keep or tempfile.mkdtemp(prefix="rbcd-gl2rbt-check.")
+    if not keep:
+        register_temporary(tmp)
     try:
         args.output = os.path.join(tmp, "check.rbt")
         args.geometry = args.summary = None
@@ -239,3 +242,4 @@ def check_depth(args):
     finally:
         if not keep:
             shutil.rmtree(tmp, ignore_errors=True)
+            unregister_temporary(tmp)

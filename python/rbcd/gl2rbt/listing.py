@@ -7,7 +7,7 @@ import tempfile
 
 import numpy as np
 
-from ..cli import to_standard_output, write_output
+from ..cli import register_temporary, to_standard_output, unregister_temporary, write_output
 from .errors import ToolError, printable
 from .raster import convert
 
@@ -26,6 +26,7 @@ def list_draws(args):
     stream = sys.stderr if args.image and to_standard_output([args.image]) else sys.stdout
     out = io.StringIO()   # written whole before the image: a listing that cannot be written leaves no image
     tmp = tempfile.mkdtemp(prefix="rbcd-gl2rbt-list.")
+    register_temporary(tmp)
     try:
         args.output = os.path.join(tmp, "list.rbt")
         args.geometry = args.summary = args.depth_out = None
@@ -60,6 +61,7 @@ def list_draws(args):
         return 0
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+        unregister_temporary(tmp)
 
 
 def write_draw_image(path, ids_path, rows):

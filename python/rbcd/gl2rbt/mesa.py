@@ -13,7 +13,12 @@ clip-space positions, assembled as GL assembles them (strips, fans,
 primitive restart, base vertex, instances in order)."""
 import ctypes
 import os
+import select
+import signal
+import threading
+import time
 
+from ..cli import remove_temporaries, say
 from .errors import ToolError
 
 # PyOpenGL picks its platform when first imported: EGL, for a context that
@@ -33,6 +38,97 @@ def _load():
     except ImportError as e:
         raise ToolError(f"the shader path needs PyOpenGL and Mesa's EGL (scripts/setup.sh --gl installs "
                         f"python3-opengl and libegl1): {e}")
+
+
+# Mesa's work for one draw or one link (compiling and linking the vertex
+# stage, LLVM's code for it, the draw) is bounded by Mesa in neither time
+# nor memory (a vertex shader with a local float[1000000]: minutes in LLVM
+# at 1.9 GB), and a signal's handler waits until Mesa returns: a watchdog
+# thread bounds both. The memory Mesa takes for a draw, buffers apart
+# (uploaded before it), is the JIT's and the fed-back positions' (48 bytes
+# a triangle, 2^22 triangles at most: 192 MiB).
+MESA_SECONDS = 30
+MESA_GROWTH = 1 << 30
+
+
+def resident_bytes():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+class Watchdog:
+    """One thread for the run: while the main thread is in Mesa's work
+    (`with watchdog.on(what, grows=...)`: a draw, a link), it checks every
+    0.1 s the time that work took and, for `grows`, the resident memory it
+    added. Past MESA_SECONDS or MESA_GROWTH it says so in one line naming
+    the capture and `what`, removes the run's temporaries and outputs,
+    closes the rasterizer's input (which then removes what it was writing)
+    and ends the process, exit status 2: the capture asks for work out of
+    proportion. (PyOpenGL's calls leave Python's lock while Mesa works.)"""
+
+    def __init__(self, conv):
+        self.conv = conv   # the converter: the capture's path, and its rasterizer once started
+        self.work = None   # (what, start time, resident bytes at the start or None)
+        self.lock = threading.Lock()
+        # A signal's number is written here by Python's own handler at once:
+        # SIGINT, SIGTERM or SIGHUP while Mesa works ends the run from this
+        # thread (the main thread's handler would wait until Mesa returns).
+        self.signals, w = os.pipe()
+        os.set_blocking(w, False)
+        try:
+            signal.set_wakeup_fd(w, warn_on_full_buffer=False)
+        except ValueError:
+            pass   # not the main thread (a library's use): signals wait for Mesa
+        threading.Thread(target=self.watch, daemon=True).start()
+
+    def on(self, what, grows=False):
+        return _Work(self, what, grows)
+
+    def watch(self):
+        while True:
+            ready = select.select([self.signals], [], [], 0.1)[0]
+            got = os.read(self.signals, 64) if ready else b""
+            with self.lock:
+                work = self.work
+            if work is None:
+                continue
+            if any(n in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP) for n in got):
+                self.end("interrupted", 130)
+            what, t0, rss0 = work
+            if time.monotonic() - t0 > MESA_SECONDS:
+                self.expire(what, f"Mesa worked on it for more than {MESA_SECONDS} s")
+            if rss0 is not None and resident_bytes() - rss0 > MESA_GROWTH:
+                self.expire(what, f"Mesa took more than {MESA_GROWTH >> 20} MiB of memory for it")
+
+    def expire(self, what, why):
+        self.end(f"{self.conv.args.trace}: {what}: {why} (docs/gl-capture.md, limits)", 2)
+
+    def end(self, message, status):
+        say("rbcd-gl2rbt", message)
+        remove_temporaries()
+        proc = getattr(self.conv, "raster_proc", None)
+        if proc is not None:
+            try:
+                proc.stdin.close()
+                proc.wait(10)
+            except Exception:   # noqa: BLE001: a closed pipe, or TimeoutExpired: ending all the same
+                proc.kill()
+        os._exit(status)
+
+
+class _Work:
+    def __init__(self, dog, what, grows):
+        self.dog, self.what, self.grows = dog, what, grows
+
+    def __enter__(self):
+        with self.dog.lock:
+            self.outer = self.dog.work
+            self.dog.work = (self.what, time.monotonic() if self.outer is None else self.outer[1],
+                             resident_bytes() if self.grows else None)
+
+    def __exit__(self, *exc):
+        with self.dog.lock:
+            self.dog.work = self.outer
 
 
 class Mesa:

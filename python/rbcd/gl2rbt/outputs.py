@@ -2,7 +2,7 @@
 import os
 import tempfile
 
-from ..cli import output_target
+from ..cli import output_target, register_temporary, unregister_temporary
 from .errors import ConvertError, ToolError, printable
 
 class SafeText:
@@ -24,6 +24,7 @@ class SafeText:
             else:
                 d = os.path.dirname(os.path.abspath(self.target))
                 fd, self.tmp = tempfile.mkstemp(prefix="." + os.path.basename(self.target) + ".", dir=d)
+                register_temporary(self.tmp)
         except OSError as e:
             raise ConvertError(f"{printable(path)}: cannot create: {printable(e.strerror)}")
         self.f = os.fdopen(fd, "wb" if binary else "w", buffering=1 << 20)
@@ -42,6 +43,7 @@ class SafeText:
         if self.tmp:
             os.chmod(self.tmp, 0o666 & ~current_umask())
             os.replace(self.tmp, self.target)
+            unregister_temporary(self.tmp)
             self.tmp = None
 
     def abandon(self):
@@ -54,6 +56,7 @@ class SafeText:
                 os.unlink(self.tmp)
             except OSError:
                 pass
+            unregister_temporary(self.tmp)
             self.tmp = None
 
 

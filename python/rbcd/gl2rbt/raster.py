@@ -9,7 +9,7 @@ import struct
 import subprocess
 import tempfile
 
-from ..cli import check_outputs, write_output
+from ..cli import check_outputs, register_temporary, unregister_temporary, write_output
 from .capture import check_input_file, check_rest, read_calls
 from .converter import Converter
 from .errors import ConvertError, RasterStopped, ToolError, printable
@@ -48,10 +48,12 @@ def convert(args, listing=False, ids=None, report=None):
     # The temporary directory goes whatever fails, before or after the
     # rasterizer starts (the test suite's refusals used to leave them).
     tmpdir = tempfile.mkdtemp(prefix="rbcd-gl2rbt.")
+    register_temporary(tmpdir)
     try:
         return convert_in(args, tmpdir, listing, ids, report)
     finally:
         shutil.rmtree(tmpdir, ignore_errors=True)
+        unregister_temporary(tmpdir)
 
 
 def check_paths(args):
@@ -145,7 +147,7 @@ def convert_in(args, tmpdir, listing, ids, report):
             reduced = ReducedWriter(args.reduced_out)
             outputs.append(reduced)
         proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
-        conv.raster = proc.stdin
+        conv.raster, conv.raster_proc = proc.stdin, proc
         run_calls(args, conv, reduced)
         frames = finish(args, conv, proc, summary_path)   # -o and --summary are in place from here
         try:

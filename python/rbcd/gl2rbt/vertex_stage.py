@@ -20,7 +20,7 @@ from .gl_tables import INDEX_TYPES
 from .glstate.attributes import element_bytes
 from .glstate.buffers import merge_extents
 from .glstate.programs import COMMENTS
-from .mesa import Mesa
+from .mesa import Mesa, Watchdog
 
 # Sampler types a vertex shader may read: texture buffers, whose contents
 # are buffer objects. Other textures' images are not kept (docs/gl-capture.md).
@@ -37,11 +37,6 @@ MAX_MESA_BUFFER_BYTES = 2 << 30   # the declared sizes of the buffers given to M
 # The C type of a glVertexAttrib*v's values, by its suffix.
 ATTRIB_VALUE_TYPES = {"b": np.int8, "s": np.int16, "i": np.int32, "ub": np.uint8, "us": np.uint16, "ui": np.uint32,
                       "f": np.float32, "d": np.float64}
-# Arrays a vertex shader declares, by their literal sizes, in all: a vertex
-# shader's uniform storage holds 16,384 components in llvmpipe, games'
-# bone arrays a few hundred matrices.
-ARRAY_SIZES = re.compile(r"\[\s*([0-9]{1,12})[uU]?\s*\]")
-MAX_ARRAY_ELEMENTS = 1 << 16
 CLIP_DISTANCES = re.compile(r"\bgl_(Clip|Cull)Distance\b")
 BUILTIN_INPUTS = {"gl_VertexID", "gl_InstanceID", "gl_DrawID", "gl_BaseVertex", "gl_BaseInstance",
                   "gl_VertexIndex", "gl_InstanceIndex"}
@@ -128,8 +123,9 @@ class MesaProgram:
 
 
 class VertexStage:
-    def __init__(self, es):
+    def __init__(self, es, conv):
         self.mesa = Mesa(es)
+        self.watchdog = Watchdog(conv)
         self.gl = self.mesa.gl
         self.buffers = {}    # capture buffer -> [Mesa buffer, version uploaded]
         self.programs = {}   # capture program -> MesaProgram
@@ -255,17 +251,18 @@ class VertexStage:
             GL = self.gl
             prog, shaders = GL.glCreateProgram(), []
             try:
-                for stage, source in sources.items():
-                    for text in (p.objects.get(stage) or [source]) if stage in LINKED_STAGES else []:
-                        sh = GL.glCreateShader(getattr(GL, LINKED_STAGES[stage]))
-                        shaders.append(sh)
-                        GL.glShaderSource(sh, text.encode("utf-8", "surrogateescape"))
-                        GL.glCompileShader(sh)
-                        GL.glAttachShader(prog, sh)
-                for attr, index in bindings.items():
-                    GL.glBindAttribLocation(prog, index, attr)
-                GL.glLinkProgram(prog)
-                self.link_status[key] = bool(GL.glGetProgramiv(prog, GL.GL_LINK_STATUS))
+                with self.watchdog.on(f"the program linked at call {p.link_call}", grows=True):
+                    for stage, source in sources.items():
+                        for text in (p.objects.get(stage) or [source]) if stage in LINKED_STAGES else []:
+                            sh = GL.glCreateShader(getattr(GL, LINKED_STAGES[stage]))
+                            shaders.append(sh)
+                            GL.glShaderSource(sh, text.encode("utf-8", "surrogateescape"))
+                            GL.glCompileShader(sh)
+                            GL.glAttachShader(prog, sh)
+                    for attr, index in bindings.items():
+                        GL.glBindAttribLocation(prog, index, attr)
+                    GL.glLinkProgram(prog)
+                    self.link_status[key] = bool(GL.glGetProgramiv(prog, GL.GL_LINK_STATUS))
             except GLError:
                 self.link_status[key] = False   # GL_INVALID_OPERATION: a binding GL refuses, no link
             finally:
@@ -282,15 +279,7 @@ class VertexStage:
         where = f"program {pname} (linked at call {p.link_call})"
         if "vertex" not in sources:
             fail_call(no, f"{where} has no vertex shader")
-        code = COMMENTS.sub(" ", sources["vertex"])
-        elements = sum(int(n) for n in ARRAY_SIZES.findall(code))
-        if elements > MAX_ARRAY_ELEMENTS:
-            # Mesa's compile of such a shader is bounded in neither time nor
-            # memory (a local float[1000000]: minutes in LLVM, 1.9 GB), and a
-            # signal waits until it returns.
-            fail_call(no, f"{where}: its vertex shader declares arrays of {elements} elements in all, more than "
-                      f"{MAX_ARRAY_ELEMENTS} (docs/gl-capture.md, limits)")
-        if CLIP_DISTANCES.search(code):
+        if CLIP_DISTANCES.search(COMMENTS.sub(" ", sources["vertex"])):
             # Mesa 22.3 clips by them even with GL_CLIP_DISTANCEi disabled.
             fail_call(no, f"{where}: its vertex shader writes clip or cull distances (gl_ClipDistance, "
                       "gl_CullDistance): not emulated")
@@ -482,13 +471,16 @@ class VertexStage:
         GL = self.gl
         self.no = no
         try:
-            self.program(conv, no, conv.s.program)
-            indices = d.get("indices")
-            client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
-            check_client_data(conv, no, name, d, instances, client_indices)
-            self.vertex_array(conv, no, client_indices)
-            self.bindings(conv)
-            clip = self.mesa.feedback_positions(lambda: self.issue(name, d, client_indices is not None), prims)
+            with self.watchdog.on(f"call {no}: {name}"):
+                self.program(conv, no, conv.s.program)
+                indices = d.get("indices")
+                client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
+                check_client_data(conv, no, name, d, instances, client_indices)
+                self.vertex_array(conv, no, client_indices)
+                self.bindings(conv)
+                with self.watchdog.on(f"call {no}: {name}", grows=True):
+                    clip = self.mesa.feedback_positions(lambda: self.issue(name, d, client_indices is not None),
+                                                        prims)
         except GLError as e:
             op = getattr(getattr(e, "baseOperation", None), "__name__", "a call")
             code = GL_ERRORS.get(getattr(e, "err", None), f"GL error {getattr(e, 'err', '?')}")

@@ -108,6 +108,12 @@ class VertexArrayObject:
         return [(i, at, self.binding(at.binding)) for i, at in sorted(self.attribs.items())]
 
 
+def attrib_size(v):
+    """An attribute's size as the handlers compare it: GL_BGRA by name
+    (apitrace records glVertexAttribFormat's as the number 0x80E1)."""
+    return "GL_BGRA" if v in ("GL_BGRA", 0x80E1) and not isinstance(v, bool) else v
+
+
 def attrib_index(no, name, v):
     """The attribute index, or None when GL ignores the call for it
     (GL_INVALID_VALUE: past GL_MAX_VERTEX_ATTRIBS)."""
@@ -243,7 +249,7 @@ class AttributeCalls:
         element's size there."""
         d = dict(args)
         i = attrib_index(no, name, d["index"])
-        size = d["size"]
+        size = attrib_size(d["size"])
         stride = checked(no, integer, d.get("stride", 0), f"{name}: the stride", *I32)
         from . import gl_boolean   # the package imports this module before it defines gl_boolean
         normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
@@ -275,7 +281,7 @@ class AttributeCalls:
         d = dict(args)
         vao = self.vao_of(no, name, d)
         i = attrib_index(no, name, d["attribindex"])
-        size = d["size"]
+        size = attrib_size(d["size"])
         relative = checked(no, integer, d.get("relativeoffset", 0), f"{name}: the relative offset", *U32)
         integer_form = base_name(name) in ("glVertexAttribIFormat", "glVertexArrayAttribIFormat")
         from . import gl_boolean   # the package imports this module before it defines gl_boolean
@@ -331,7 +337,7 @@ class AttributeCalls:
         if vao is None or count < 0 or first + count > MAX_VERTEX_BINDINGS:
             return
         buffers, offsets, strides = d.get("buffers"), d.get("offsets"), d.get("strides")
-        if buffers is None:
+        if buffers in (None, 0):   # NULL (apitrace records it as 0)
             for k in range(count):
                 self.bind_vertex_buffer(no, name, vao, first + k, 0, 0, 16)
             return

@@ -196,7 +196,7 @@ class DrawCalls:
     def vertex_stage(self):
         if self.vertex_stage_ is None:
             from ..vertex_stage import VertexStage   # PyOpenGL and EGL: only for captures that need them
-            self.vertex_stage_ = VertexStage(self.es)
+            self.vertex_stage_ = VertexStage(self.es, self)
         return self.vertex_stage_
 
     def program_shade(self, p):
