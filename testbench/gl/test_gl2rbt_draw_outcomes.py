@@ -5,7 +5,9 @@ adjacency modes draw what Mesa draws; an indexed draw with no indices and
 client data shorter than the draw reads are refused naming the call, with
 nothing left (Mesa would read memory outside the capture: the converter
 had crashed with SIGSEGV on the first)."""
+import lzma
 import os
+import pickle
 import signal
 import subprocess
 import struct
@@ -227,3 +229,19 @@ def test_a_glx_context_of_the_es_profile_is_opengl_es(tmp_path):
     r = gl2rbt(tmp_path, draw(bad).write(tmp_path / "v.xz"), "-o", tmp_path / "v.rbt")
     refused(r, "glXCreateContextAttribsARB", "OpenGL 99.0")
     assert left_behind(tmp_path, ["es.xz", "es.rbt", "es-tri.xz", "es-tri.rbt", "n.xz", "v.xz"]) == []
+
+
+def test_a_reduced_capture_of_another_version_or_miscounted_names(tmp_path):
+    """A reduced capture's header version that is not an int (True and 2.0
+    had passed as 1 and 2) or one this converter does not read is named as
+    such; glCreateBuffers and glGenVertexArrays whose names are not their
+    count are the capture's error."""
+    for version, words in ((True, "version True"), (2.0, "version 2.0"), (3, "version 3")):
+        data = lzma.compress(pickle.dumps(("rbcd-reduced-capture", version), protocol=4))
+        (tmp_path / "h.xz").write_bytes(data)
+        refused(gl2rbt(tmp_path, tmp_path / "h.xz", "-o", tmp_path / "h.rbt"), "a reduced capture of " + words)
+    for fn, key in (("glCreateBuffers", "buffers"), ("glGenVertexArrays", "arrays")):
+        c = shader_calls(VS).add(fn, n=3, **{key: [11, 12]})
+        refused(gl2rbt(tmp_path, draw(c).write(tmp_path / "n.xz"), "-o", tmp_path / "n.rbt"), fn,
+                "2 names, not its count (3)")
+    assert left_behind(tmp_path, ["h.xz", "n.xz"]) == []

@@ -152,7 +152,14 @@ def test_standard_output_holds_only_the_trace(tmp_path):
     (["--check-depth", "--min-agreement", "nan"], "--min-agreement"),
     (["--check-depth", "--min-agreement", "101"], "--min-agreement"),
     (["--check-depth", "--check-frames", "0"], "--check-frames"),
-])
+    # Digits of another script (int() takes them), an abbreviation, an
+    # option twice (the second had replaced the first).
+    (["--check-depth", "--check-frames", "\uff13"], "invalid integer"),
+    (["--list-draws", "\u0661"], "invalid integer"),
+    (["--check-depth", "--check-frame", "3"], "unrecognized arguments: --check-frame"),
+    (["-o", "a.rbt", "--output", "b.rbt"], "--output is given twice"),
+    (["-o", "a.rbt", "--select", "x.toml", "--select", "y.toml"], "--select is given twice"),
+], ids=["timeout", "nan", "101", "frames0", "fullwidth", "arabic", "abbreviated", "o_twice", "select_twice"])
 def test_bad_check_options(tmp_path, args, words):
     cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
     refused(gl2rbt(tmp_path, cap, *args), words)

@@ -23,42 +23,69 @@ def parse_frames(text):
 
 
 class ArgParser(argparse.ArgumentParser):
+    def __init__(self, **kw):
+        super().__init__(allow_abbrev=False, **kw)   # --geom is not --geometry
+
     def error(self, message):
         sys.stderr.write(f"{PROG}: {printable(message)}\n")
         sys.exit(2)
 
 
+class Once(argparse.Action):
+    """An option given once: a second one is the command line's error (it
+    had replaced the first)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        given = namespace.__dict__.setdefault("_given", set())
+        if self.dest in given:
+            parser.error(f"{option_string} is given twice")
+        given.add(self.dest)
+        setattr(namespace, self.dest, values)
+
+
+def ascii_int(text):
+    """An integer in ASCII digits (int() also takes other scripts' digits
+    and underscores)."""
+    if not re.fullmatch(r"[+-]?[0-9]+", text):
+        raise argparse.ArgumentTypeError(f"invalid integer: {text!r}")
+    return int(text)
+
+
 def parse_args(argv):
     ap = ArgParser(prog=PROG, description="A captured OpenGL stream (apitrace) into the unit's input.")
     ap.add_argument("trace", help="the apitrace capture (.trace)")
-    ap.add_argument("-o", "--output", help="the fragment trace to write (.rbt; .rbt.zst or .rbt.gz compressed)")
-    ap.add_argument("--geometry", help="each frame's collisionable geometry for rbcd-cpucd --geometry")
-    ap.add_argument("--frames", default="0:", help="A:B, the capture's frames to convert (B included; default all)")
-    ap.add_argument("--screen", nargs=2, type=int, metavar=("W", "H"),
+    ap.add_argument("-o", "--output", action=Once,
+                    help="the fragment trace to write (.rbt; .rbt.zst or .rbt.gz compressed)")
+    ap.add_argument("--geometry", action=Once, help="each frame's collisionable geometry for rbcd-cpucd --geometry")
+    ap.add_argument("--frames", action=Once, default="0:",
+                    help="A:B, the capture's frames to convert (B included; default all)")
+    ap.add_argument("--screen", action=Once, nargs=2, type=ascii_int, metavar=("W", "H"),
                     help="the screen (default: the window's size when the first converted frame starts)")
-    ap.add_argument("--tile", nargs=2, type=int, default=[16, 16], metavar=("W", "H"))
-    ap.add_argument("--depth-bits", type=int, default=24)
-    ap.add_argument("--select", help="selection rules (TOML) for programs that do not tag their objects")
-    ap.add_argument("--summary", help="one JSON line of figures per frame")
-    ap.add_argument("--reduced-out", metavar="FILE.xz",
+    ap.add_argument("--tile", action=Once, nargs=2, type=ascii_int, default=[16, 16], metavar=("W", "H"))
+    ap.add_argument("--depth-bits", action=Once, type=ascii_int, default=24)
+    ap.add_argument("--select", action=Once, help="selection rules (TOML) for programs that do not tag their objects")
+    ap.add_argument("--summary", action=Once, help="one JSON line of figures per frame")
+    ap.add_argument("--reduced-out", action=Once, metavar="FILE.xz",
                     help="also write the reduced capture: the calls that can change the unit's input, "
                          "xz-compressed; converting it gives the same outputs as the capture")
     ap.add_argument("-q", "--quiet", action="store_true", help="no summary on stdout")
-    ap.add_argument("--list-draws", type=int, metavar="FRAME",
+    ap.add_argument("--list-draws", action=Once, type=ascii_int, metavar="FRAME",
                     help="list every draw of the capture's frame FRAME and what it became")
-    ap.add_argument("--image", help="with --list-draws: a PNG of the frame, each visible draw labelled")
+    ap.add_argument("--image", action=Once, help="with --list-draws: a PNG of the frame, each visible draw labelled")
     ap.add_argument("--check-depth", action="store_true",
                     help="compare the depth buffer at each checked frame's last 3D draw with Mesa's (glretrace)")
-    ap.add_argument("--check-frames", type=int, default=5, help="frames to check, spread over --frames (default 5)")
-    ap.add_argument("--check-timeout", type=int, default=600, help="seconds per glretrace replay (default 600)")
-    ap.add_argument("--min-agreement", type=float, default=99.0,
+    ap.add_argument("--check-frames", action=Once, type=ascii_int, default=5,
+                    help="frames to check, spread over --frames (default 5)")
+    ap.add_argument("--check-timeout", action=Once, type=ascii_int, default=600,
+                    help="seconds per glretrace replay (default 600)")
+    ap.add_argument("--min-agreement", action=Once, type=float, default=99.0,
                     help="with --check-depth: exit 1 below this percentage (default 99)")
-    ap.add_argument("--depth-out", help=argparse.SUPPRESS)
+    ap.add_argument("--depth-out", action=Once, help=argparse.SUPPRESS)
     # With --check-depth: keep the depth dumps and Mesa's depth buffers in DIR,
     # and take Mesa's from there when present (a replay takes minutes a frame).
-    ap.add_argument("--check-keep", help=argparse.SUPPRESS)
-    ap.add_argument("--stream-out", help=argparse.SUPPRESS)   # a copy of the draw stream (fuzz seeds)
-    ap.add_argument("--snapshot-calls", help=argparse.SUPPRESS)
+    ap.add_argument("--check-keep", action=Once, help=argparse.SUPPRESS)
+    ap.add_argument("--stream-out", action=Once, help=argparse.SUPPRESS)   # a copy of the draw stream (fuzz seeds)
+    ap.add_argument("--snapshot-calls", action=Once, help=argparse.SUPPRESS)
     return ap.parse_args(argv)
 
 

@@ -252,6 +252,12 @@ def read_reduced_calls(path):
                 head = CallReader(RecordStream(f, None)).load()
             except EOFError:
                 head = None
+            # The header's version an int (True and 2.0 equal 1 and 2 in Python).
+            version = head[1] if isinstance(head, tuple) and len(head) == 2 and head[0] == REDUCED_HEADER[0] \
+                else None
+            if version is not None and (type(version) is not int or version not in (1, REDUCED_HEADER[1])):
+                raise ConvertError(f"a reduced capture of version {printable(version, 40)}: this converter reads "
+                                   f"versions 1 and {REDUCED_HEADER[1]}")
             if head not in (REDUCED_HEADER, REDUCED_HEADER_1):
                 raise ConvertError("an xz file that is not a reduced capture (rbcd-gl2rbt --reduced-out)")
             count = 0

@@ -10,7 +10,7 @@ import hashlib
 import numpy as np
 
 from ...cli import I32, I64, U32, U63, integer
-from ..errors import checked, fail_call
+from ..errors import checked, fail_call, printable
 from ..gl_tables import ARRAY_TYPES, INDEX_TYPES, base_name
 
 # As Mesa 22.3 (llvmpipe) answers them, in GL 4.5 and ES 3.2 contexts alike:
@@ -212,7 +212,10 @@ class AttributeCalls:
     def h_gen_vertex_arrays(self, no, name, a, args):
         """glGenVertexArrays: names, whose objects exist once bound;
         glCreateVertexArrays: objects at once (direct state access)."""
-        for v in dict(args).get("arrays") or []:
+        names = dict(args).get("arrays") or []
+        if isinstance(names, list) and names and dict(args).get("n") != len(names):
+            fail_call(no, f"{name}: {len(names)} names, not its count ({printable(dict(args).get('n'), 40)})")
+        for v in names:
             if isinstance(v, int) and not isinstance(v, bool) and 0 < v < 1 << 32:
                 vao = self.s.vaos.setdefault(v, VertexArrayObject())
                 vao.exists = vao.exists or base_name(name) == "glCreateVertexArrays"

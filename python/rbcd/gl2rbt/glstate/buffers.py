@@ -143,6 +143,8 @@ class BufferCalls:
         names = dict(args).get("buffers")
         if not isinstance(names, list):
             return   # apitrace recorded no names (a negative count: GL_INVALID_VALUE)
+        if dict(args).get("n") != len(names):
+            fail_call(no, f"{name}: {len(names)} names, not its count ({printable(dict(args).get('n'), 40)})")
         if self.s.buffer_names is None:
             self.s.buffer_names = set()
         for b in names:
