@@ -374,3 +374,12 @@ def test_the_rasterizer_the_run_starts_is_never_an_output(tmp_path):
                        stderr=subprocess.PIPE, text=True, env=env, timeout=120)
     refused(r, "-o", "is also rbcd-gl-raster")
     assert tool.read_bytes() == before and left_behind(tmp_path, ["c.xz", "tool"]) == []
+
+
+def test_an_output_path_with_a_newline_is_named_whole(tmp_path):
+    """rbcd-gl-raster's message about an -o it cannot create, relayed whole
+    (its first line alone had cut the path at the newline and lost the
+    reason), the newline escaped: one line."""
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "missing" / "a\nb.rbt"), "a\\x0ab.rbt: cannot create")
+    assert left_behind(tmp_path, ["c.xz"]) == []

@@ -271,7 +271,9 @@ def raster_result(proc, trace):
     rc = proc.wait()
     if rc == 0:
         return
-    line = (err.strip().splitlines() or [f"rbcd-gl-raster exited {rc}"])[0]
+    # Its one message whole: a path it names may hold a newline (escaped
+    # when the message is printed; its first line alone had cut the path).
+    line = err.strip()[:4096] or f"rbcd-gl-raster exited {rc}"
     line = line.removeprefix("rbcd-gl-raster: ").removeprefix(trace + ": ")
     if rc == 2:
         raise ConvertError(line)
