@@ -284,7 +284,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         glGenFramebuffers and glGenRenderbuffers call, no such name is
         generated yet: a core profile binds none before its glGen*. A
         reduced capture of version 1, which dropped them, is taken as it
-        binds until it shows one (framebuffers.generated_name)."""
+        binds until it shows one (glstate.generated_name)."""
         s = GLState()
         if self.every_gen_shown:
             s.framebuffer_names, s.renderbuffer_names = set(), set()

@@ -141,6 +141,16 @@ def first_of_array(no, name, d, what, size_of):
     return v[:4] if first == 0 and count else None
 
 
+def generated_name(core, names, n):
+    """Whether a core profile binds `n` as the name of an object whose names
+    glGen*/glCreate* hand out (`names`: those they returned and no glDelete*
+    freed since): 0 or such a name; another is GL_INVALID_OPERATION in Mesa
+    22.3 (the earlier binding stays). `names` None: the capture showed no
+    glGen* of the kind (a reduced capture written before they were kept),
+    taken as it binds."""
+    return not (core and n and names is not None and n not in names)
+
+
 def bitfield(mask, no, what, bits):
     """A GLbitfield as apitrace records it (bit names, alone, joined by "|"
     or in a list, or a number) as the names of `bits` (value -> name) it

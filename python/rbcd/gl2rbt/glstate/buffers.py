@@ -9,7 +9,7 @@ import mmap
 from ...cli import I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import MAX_BUFFER_BYTES, MAX_BUFFER_BYTES_IN_ALL, base_name
-from . import bitfield, enum_arg
+from . import bitfield, enum_arg, generated_name
 
 # The bits of glBufferStorage's flags and glMapBufferRange's access the
 # converter reads.
@@ -131,11 +131,8 @@ class BufferCalls:
             self.s.buffer_objects.add(buf)
 
     def generated(self, buf):
-        """Whether a core profile takes `buf` as a buffer name: 0, or one
-        glGenBuffers returned (and no glDeleteBuffers freed since). A
-        capture that shows no glGenBuffers at all (a reduced capture written
-        before they were kept) is taken as it binds."""
-        return not (self.core and buf and self.s.buffer_names is not None and buf not in self.s.buffer_names)
+        """Whether a core profile takes `buf` as a buffer name (generated_name)."""
+        return generated_name(self.core, self.s.buffer_names, buf)
 
     def h_gen_buffers(self, no, name, a, args):
         """glGenBuffers: names, whose objects exist once bound;

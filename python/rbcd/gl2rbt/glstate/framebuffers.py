@@ -12,7 +12,7 @@ import re
 
 from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
-from . import bitfield
+from . import bitfield, generated_name
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
 # The internal formats glTexBuffer takes in Mesa 22.3 (GL 4.5's table 8.18);
@@ -60,16 +60,6 @@ class FramebufferCalls:
     digests of textures' level-0 images; texture units' bindings, and the
     buffers of texture buffer objects."""
 
-    def generated_name(self, names, n):
-        """Whether a core profile binds `n` as a framebuffer or renderbuffer
-        name (`names`: those glGen*/glCreate* returned and no glDelete*
-        freed since): 0 or such a name; another is GL_INVALID_OPERATION in
-        Mesa 22.3 (the earlier binding stays). A reduced capture written
-        before glGenFramebuffers and glGenRenderbuffers were kept (version
-        1) is taken as it binds until it shows one (`names` None;
-        Converter.initial_state)."""
-        return not (self.core and n and names is not None and n not in names)
-
     def h_gen_framebuffer_names(self, no, name, a, args):
         """glGenFramebuffers, glCreateFramebuffers, glGenRenderbuffers,
         glCreateRenderbuffers: names a core profile binds."""
@@ -88,7 +78,7 @@ class FramebufferCalls:
         d = dict(args)
         target = d["target"]
         fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
-        if not self.generated_name(self.s.framebuffer_names, fb):
+        if not generated_name(self.core, self.s.framebuffer_names, fb):
             return
         if target in ("GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER"):
             self.s.draw_fbo = fb
@@ -119,7 +109,7 @@ class FramebufferCalls:
 
     def h_bind_renderbuffer(self, no, name, a, args):
         rb = checked(no, integer, dict(args).get("renderbuffer"), f"{name}: the renderbuffer", *U32)
-        if self.generated_name(self.s.renderbuffer_names, rb):
+        if generated_name(self.core, self.s.renderbuffer_names, rb):
             self.s.renderbuffer = rb
 
     def detach_deleted(self, kind, obj):
