@@ -40,8 +40,11 @@ ATTRIB_TYPES = INTEGER_ATTRIB_TYPES | PACKED_ATTRIB_TYPES | {
 
 def attrib_format_valid(integer_form, size, kind, normalized):
     """Whether a format of this size and type (glVertexAttrib*Pointer,
-    glVertexAttrib*Format; integer_form for their I forms) is one Mesa takes
-    (the size is 1 to 4 or GL_BGRA)."""
+    glVertexAttrib*Format; integer_form for their I forms) is one Mesa takes:
+    a size of 1 to 4 or GL_BGRA (GL_INVALID_VALUE otherwise), a type and
+    size of the rules above."""
+    if not (size in (1, 2, 3, 4) or size == "GL_BGRA"):
+        return False
     if integer_form:
         return kind in INTEGER_ATTRIB_TYPES and size != "GL_BGRA"
     if kind not in ATTRIB_TYPES:
@@ -256,10 +259,8 @@ class AttributeCalls:
         stride = checked(no, integer, d.get("stride", 0), f"{name}: the stride", *I32)
         from . import gl_boolean   # the package imports this module before it defines gl_boolean
         normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
-        if i is None or not (size in (1, 2, 3, 4) or size == "GL_BGRA") or stride < 0:
-            return   # GL_INVALID_VALUE: the call does nothing
         integer_form = base_name(name) == "glVertexAttribIPointer"
-        if not attrib_format_valid(integer_form, size, d.get("type"), normalized):
+        if i is None or stride < 0 or not attrib_format_valid(integer_form, size, d.get("type"), normalized):
             return   # GL_INVALID_ENUM, GL_INVALID_VALUE or GL_INVALID_OPERATION in Mesa: the earlier pointer stays
         vao = self.current_vao()
         at = vao.attrib(i)
@@ -289,9 +290,8 @@ class AttributeCalls:
         integer_form = base_name(name) in ("glVertexAttribIFormat", "glVertexArrayAttribIFormat")
         from . import gl_boolean   # the package imports this module before it defines gl_boolean
         normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
-        if vao is None or i is None or not (size in (1, 2, 3, 4) or size == "GL_BGRA") \
-                or relative > MAX_RELATIVE_OFFSET or not attrib_format_valid(integer_form, size, d.get("type"),
-                                                                               normalized):
+        if vao is None or i is None or relative > MAX_RELATIVE_OFFSET \
+                or not attrib_format_valid(integer_form, size, d.get("type"), normalized):
             return   # GL_INVALID_OPERATION, GL_INVALID_VALUE or GL_INVALID_ENUM: the call does nothing
         at = vao.attrib(i)
         at.integer, at.size, at.type, at.relative = integer_form, size, d.get("type"), relative
