@@ -110,6 +110,24 @@ class DrawRejected(Exception):
     """Mesa answered the draw with a GL error: in GL the draw does nothing."""
 
 
+def attach_stage(GL, prog, kind, texts, shaders):
+    """A stage's shader objects, each of `texts` compiled on its own and
+    attached to `prog`, as the capture linked them (each made is added to
+    `shaders`, for the caller to delete): the first that does not compile,
+    or None. The capture's bytes as they were (apitrace's text keeps bytes
+    that are not UTF-8 as surrogates; GLSL allows them in comments)."""
+    failed = None
+    for text in texts:
+        sh = GL.glCreateShader(kind)
+        shaders.append(sh)
+        GL.glShaderSource(sh, text.encode("utf-8", "surrogateescape"))
+        GL.glCompileShader(sh)
+        if failed is None and not GL.glGetShaderiv(sh, GL.GL_COMPILE_STATUS):
+            failed = sh
+        GL.glAttachShader(prog, sh)
+    return failed
+
+
 # The stages a program draws with, as Mesa links them together.
 LINKED_STAGES = {"vertex": "GL_VERTEX_SHADER", "fragment": "GL_FRAGMENT_SHADER", "geometry": "GL_GEOMETRY_SHADER",
                  "tess_control": "GL_TESS_CONTROL_SHADER", "tess_evaluation": "GL_TESS_EVALUATION_SHADER"}
@@ -244,7 +262,7 @@ class VertexStage:
         """Whether Mesa links the program as its last link saw it, every
         stage that draws (the capture's own link, whose failure leaves the
         executable in use as it was: ProgramCalls.program_in_use)."""
-        sources, bindings = p.linked
+        bindings = p.linked[1]
         key = (p.digest, tuple(sorted(bindings.items())))
         if key not in self.link_status:
             from OpenGL.error import GLError
@@ -252,13 +270,9 @@ class VertexStage:
             prog, shaders = GL.glCreateProgram(), []
             try:
                 with self.watchdog.on(f"the program linked at call {p.link_call}", grows=True):
-                    for stage, source in sources.items():
-                        for text in (p.objects.get(stage) or [source]) if stage in LINKED_STAGES else []:
-                            sh = GL.glCreateShader(getattr(GL, LINKED_STAGES[stage]))
-                            shaders.append(sh)
-                            GL.glShaderSource(sh, text.encode("utf-8", "surrogateescape"))
-                            GL.glCompileShader(sh)
-                            GL.glAttachShader(prog, sh)
+                    for stage, texts in p.objects.items():
+                        if stage in LINKED_STAGES:
+                            attach_stage(GL, prog, getattr(GL, LINKED_STAGES[stage]), texts, shaders)
                     for attr, index in bindings.items():
                         GL.glBindAttribLocation(prog, index, attr)
                     GL.glLinkProgram(prog)
@@ -285,18 +299,10 @@ class VertexStage:
                       "gl_CullDistance): not emulated")
         prog = GL.glCreateProgram()
         shaders = []
-        for text in p.objects.get("vertex") or [sources["vertex"]]:
-            sh = GL.glCreateShader(GL.GL_VERTEX_SHADER)
-            shaders.append(sh)
-            # The capture's bytes as they were (apitrace's text keeps bytes
-            # that are not UTF-8 as surrogates; GLSL allows them in comments).
-            GL.glShaderSource(sh, text.encode("utf-8", "surrogateescape"))
-            GL.glCompileShader(sh)
-            if not GL.glGetShaderiv(sh, GL.GL_COMPILE_STATUS):
-                log = GL.glGetShaderInfoLog(sh).decode("utf-8", "replace").strip().splitlines()
-                fail_call(no, f"{where}: Mesa does not compile its vertex shader: "
-                          f"{printable((log or ['no log'])[0])}")
-            GL.glAttachShader(prog, sh)
+        failed = attach_stage(GL, prog, GL.GL_VERTEX_SHADER, p.objects["vertex"], shaders)
+        if failed is not None:
+            log = GL.glGetShaderInfoLog(failed).decode("utf-8", "replace").strip().splitlines()
+            fail_call(no, f"{where}: Mesa does not compile its vertex shader: {printable((log or ['no log'])[0])}")
         if self.mesa.es:
             # OpenGL ES links only whole programs: a fragment shader of the
             # vertex shader's language version that reads nothing.
