@@ -131,7 +131,9 @@ void DrawStreamReader::read_draw() {
     s.depth_test = depth_test;
     s.depth_func = scene::DepthFunc(depth_func);
     s.depth_write = depth_write;
-    s.depth_from_unsnapped = true;   // as the GL implementation the captures are checked against
+    // As the GL implementation the captures are checked against.
+    s.depth_from_unsnapped = true;
+    s.bottom_left_fill = true;
     const auto planes = get<std::uint8_t>();
     s.shade = get<std::uint16_t>();
     if (s.shade > kShadeMax)

@@ -290,12 +290,13 @@ void TileRasterizer::setup(const ScreenVert& v0, const ScreenVert& v1in, const S
         t.a[i] = -dy;
         t.b[i] = dx;
         t.c[i] = dy * a.x - dx * a.y;
-        // Top-left rule (y down, clockwise on screen): a sample exactly on an
-        // edge belongs to the triangle only if the edge is a top or a left one.
+        // Fill rule (y down, clockwise on screen): a sample exactly on an edge
+        // belongs to the triangle only if the edge is a left one (going up) or
+        // a top one (going right; bottom_left_fill: a bottom one, going left).
         // The edge shared by two triangles runs in opposite directions in them,
         // so exactly one of them owns the samples on it.
-        const bool top_left = dy < 0 || (dy == 0 && dx > 0);
-        if (!top_left) t.c[i] -= 1;
+        const bool owned = dy < 0 || (dy == 0 && (s.bottom_left_fill ? dx < 0 : dx > 0));
+        if (!owned) t.c[i] -= 1;
         minx = std::min<std::int64_t>(minx, a.x);
         maxx = std::max<std::int64_t>(maxx, a.x);
         miny = std::min<std::int64_t>(miny, a.y);

@@ -7,8 +7,9 @@
 // submission order.
 //
 // The rules (docs/scene.md, "Rasterization"): pixel centres sample, 8
-// sub-pixel bits, top-left fill rule, window depth affine in screen space and
-// rounded to depth_bits at the pixel centre, a guard band of 4x the screen
+// sub-pixel bits, top-left fill rule (bottom-left for captured GL draws),
+// window depth affine in screen space and rounded to depth_bits at the
+// pixel centre, a guard band of 4x the screen
 // instead of side clipping. A triangle culled by its draw's face culling still
 // reaches the unit when its draw is collisionable (tagged `c`); otherwise it is
 // dropped before binning.
@@ -70,6 +71,11 @@ struct DrawState {
     // sub-pixel snapping (as Mesa's llvmpipe interpolates), rather than
     // through the snapped corners (the scene front end's rule).
     bool depth_from_unsnapped = false;
+    // A sample exactly on an edge belongs to the triangle when the edge is a
+    // left or a bottom one on screen (OpenGL's rule as Mesa applies it: in
+    // GL's window coordinates, y up, in a window and a framebuffer object
+    // alike), rather than a left or a top one (the scene front end's rule).
+    bool bottom_left_fill = false;
     // Its fragment stage can discard fragments or write their depth (a
     // captured draw under such a fragment shader): the depth it writes to
     // the kept buffer is an upper bound, marked in depth_marks().
