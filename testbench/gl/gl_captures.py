@@ -34,7 +34,7 @@ from rbcd.gl2rbt.reduced import ReducedWriter
 GL2RBT = os.path.join(ROOT, "scripts", "rbcd-gl2rbt")
 CAPTURES = os.environ.get("RBCD_GL_CAPTURES") or os.path.join(ROOT, "build", "testbench", "gl", "captures")
 FAULTS = ["nan", "index", "ortho", "list", "shader", "line", "underflow"]
-SHADER_FAULTS = ["geometry", "texture", "compile", "separable"]
+SHADER_FAULTS = ["geometry", "rendered", "texture", "compile", "separable"]
 DEPTH_MAX = (1 << 24) - 1
 
 
@@ -74,10 +74,16 @@ class Calls:
     def swap(self):
         return self.add("glXSwapBuffers", dpy=1, drawable=2, flags=END_FRAME)
 
-    def write(self, path):
+    def write(self, path, images=False):
+        """The reduced capture; `images`: with texture images, as a
+        capture has them (the writer leaves them out)."""
         w = ReducedWriter(str(path))
         for c in self.calls:
-            w.call(c)
+            if images:
+                w.put(c)
+                w.count += 1
+            else:
+                w.call(c)
         w.commit()
         return str(path)
 

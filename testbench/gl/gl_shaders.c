@@ -6,11 +6,14 @@
  *   gl_shaders [WIDTH HEIGHT [FAULT]]   (default 128 96; the window is the screen)
  *
  * FAULT adds, in frame 1, one draw the converter must refuse, naming it:
- * geometry (a program with a geometry shader), texture (a vertex shader that
- * samples a 2D texture), separable (a separable program); or one it must
- * convert as Mesa draws it: compile (a program whose vertex shader does not
- * compile, used all the same: GL_INVALID_OPERATION, the draw runs the
- * program in use).
+ * geometry (a program with a geometry shader), rendered (a vertex shader
+ * that samples a 2D texture the depth-only pass renders), separable (a
+ * separable program); or one it must convert as Mesa draws it: compile (a
+ * program whose vertex shader does not compile, used all the same:
+ * GL_INVALID_OPERATION, the draw runs the program in use), texture (a vertex
+ * shader that samples a 2D texture uploaded with glTexImage2D: the triangle
+ * (0,0,1) (1,0,1) (1,1,1) moved by texel (0, 0) to clip space (-0.75, -0.5,
+ * -0.5) (0.25, -0.5, -0.5) (0.25, 0.5, -0.5), in front of every box, object 9).
  *
  * One program: a std140 uniform block Matrices {proj, view} at binding 2, a
  * uniform mat4 model, the position attribute bound with glBindAttribLocation
@@ -112,7 +115,18 @@ static void inject_fault(GLuint main_program) {
     if (!strcmp(fault, "geometry")) {
         glAttachShader(p, compile(GL_VERTEX_SHADER, vertex_source));
         glAttachShader(p, compile(GL_GEOMETRY_SHADER, geometry_source));
+    } else if (!strcmp(fault, "rendered")) {
+        glAttachShader(p, compile(GL_VERTEX_SHADER, texture_source));   /* unit 0: the depth pass's texture */
     } else if (!strcmp(fault, "texture")) {
+        static const float texels[2][2][4] = {{{-0.75f, -0.5f, -1.5f, 0}, {9, 9, 9, 0}}, {{-9, -9, 9, 0}, {5, 5, 5, 0}}};
+        GLuint tex;
+        glActiveTexture(GL_TEXTURE2);
+        glGenTextures(1, &tex);
+        glBindTexture(GL_TEXTURE_2D, tex);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, 2, 2, 0, GL_RGBA, GL_FLOAT, texels);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glActiveTexture(GL_TEXTURE0);
         glAttachShader(p, compile(GL_VERTEX_SHADER, texture_source));
     } else if (!strcmp(fault, "compile")) {
         glAttachShader(p, compile(GL_VERTEX_SHADER, broken_source));
@@ -123,7 +137,12 @@ static void inject_fault(GLuint main_program) {
     glBindAttribLocation(p, 0, "position");
     glLinkProgram(p);
     glUseProgram(p);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
+    if (!strcmp(fault, "texture")) {
+        glUniform1i(glGetUniformLocation(p, "heights"), 2);
+        begin_object(9);
+    }
+    glDrawArrays(GL_TRIANGLES, !strcmp(fault, "texture") ? 4 : 0, 3);   /* the cube's first face from vertex 4 */
+    if (!strcmp(fault, "texture")) end_object();
     glUseProgram(main_program);
 }
 

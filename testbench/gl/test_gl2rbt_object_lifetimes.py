@@ -92,7 +92,7 @@ def test_a_reduced_capture_of_version_1_is_taken_as_it_binds(tmp_path, monkeypat
     shows one (framebuffer 3, the screen's size: the camera pass; 77, no
     attachment: another pass)."""
     from rbcd.gl2rbt import reduced
-    monkeypatch.setattr(reduced, "REDUCED_HEADER", reduced.REDUCED_HEADER_1)
+    monkeypatch.setattr(reduced, "REDUCED_HEADER", ("rbcd-reduced-capture", 1))
     want = trace(tmp_path, reference(shader_calls(VS)), "reference")
     assert trace(tmp_path, reference(fbo(shader_calls(VS), gen=False)), "v1") == want
     c = shader_calls(VS).add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=77)

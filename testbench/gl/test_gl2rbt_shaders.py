@@ -170,7 +170,7 @@ def test_select_by_shader_state(gl):
 
 @pytest.mark.parametrize("fault, words", [
     ("geometry", "has a geometry shader"),
-    ("texture", "reads texture heights (GL_SAMPLER_2D)"),
+    ("rendered", "attaches it to framebuffer"),
     ("separable", "separable programs"),
 ])
 def test_refusals(gl, fault, words):
@@ -182,6 +182,36 @@ def test_refusals(gl, fault, words):
         f"{fault}: exit {r.returncode}: {lines}"
     assert not os.path.exists(out) and not os.path.exists(geo), f"{fault}: an output was left"
     assert not [f for f in os.listdir(gl.tmp) if f.startswith(".")], f"{fault}: a temporary was left"
+
+
+def test_a_vertex_shader_reading_an_uploaded_texture(gl):
+    """The fault "texture": a vertex shader moves a triangle by a texel of
+    a texture uploaded with glTexImage2D, in front of every box: Mesa runs
+    it on the capture's image (the check agrees), and the reduced capture
+    carries the image and gives the same bytes."""
+    cap = capture_path("shader-fault-texture")
+    r = gl(cap, "--check-depth")
+    assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"
+    m = re.search(r"agreement: ([0-9.]+)% of (\d+) covered pixels in (\d+) frames", r.stdout)
+    assert m and float(m.group(1)) >= 99.0 and int(m.group(2)) > 2000, r.stdout
+    a, b, red = gl.path("t.rbt"), gl.path("t2.rbt"), gl.path("t.xz")
+    r = gl(cap, "-o", a, "--reduced-out", red)
+    assert r.returncode == 0, r.stderr
+    r = gl(red, "-o", b)
+    assert r.returncode == 0, r.stderr
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        trace = fa.read()
+        assert trace == fb.read()
+    # Object 9, frame 1: the triangle (16, 24) (80, 24) (80, 72) in window
+    # coordinates (half of 64x48 pixels, rows 24 to 71, its hypotenuse
+    # leaving column 16 out) at window depth 0.25.
+    frames, _ = read_trace(a)
+    tri = {xy: [d for d, obj, *_ in frags if obj == 9] for xy, frags in frames[1].items()}
+    tri = {xy: ds for xy, ds in tri.items() if ds}
+    assert len(tri) == 32 * 48 and min(x for x, _ in tri) == 17 and max(x for x, _ in tri) == 79, len(tri)
+    assert {y for _, y in tri} == set(range(24, 72))
+    assert all(abs(d - DEPTH_MAX / 4) <= 1 for ds in tri.values() for d in ds)
+    assert not any(9 in [obj for _, obj, *_ in frags] for frags in frames[0].values())
 
 
 def test_a_program_that_does_not_link_is_not_used(gl):

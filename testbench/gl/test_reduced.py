@@ -12,7 +12,7 @@ from rbcd.gl2rbt.reduced import ReducedWriter, is_reduced_capture, read_reduced_
 
 CALLS = [
     (1, "glViewport", [("x", 0), ("y", 0), ("width", 128), ("height", 96)], None, 1),
-    (2, "glTexParameteri", [("pname", "GL_TEXTURE_MIN_FILTER")], None, 0),   # cannot move a fragment: left out
+    (2, "glTexEnvi", [("pname", "GL_TEXTURE_ENV_MODE")], None, 0),   # cannot move a fragment: left out
     (3, "glTexImage2D", [("width", 64), ("height", 32), ("pixels", b"\xff" * 4096)], None, 0),   # its size kept
     (4, "glBindTexture", [("target", "GL_TEXTURE_2D"), ("texture", 7)], None, 0),   # kept: rules name textures
     (5, "glVertexPointer", [("size", 3), ("pointer", PointerType(0x7F00))], None, 0),
@@ -32,7 +32,7 @@ def test_round_trip_keeps_what_the_emulation_reads(tmp_path):
     write(p)
     assert is_reduced_capture(str(p))
     got = list(read_reduced_calls(str(p)))
-    assert [c[0] for c in got] == [1, 3, 4, 5, 6], "a texture parameter is left out, the binding kept"
+    assert [c[0] for c in got] == [1, 3, 4, 5, 6], "a texture environment call is left out, the binding kept"
     assert got[1][2] == [("width", 64), ("height", 32), ("pixels", ("rbcd-digest", texture_image_digest(
         dict(CALLS[2][2]))))], "a texture's size kept, and its image's digest in place of its pixels"
     assert got[3][2] == [("size", 3), ("pointer", 0x7F00)] and type(got[3][2][1][1]) is int, \

@@ -12,6 +12,7 @@ from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
 from .glstate.draws import DrawCalls
 from .glstate.framebuffers import FramebufferCalls
+from .glstate.textures import REDUCED_TEXTURES, TextureImageCalls
 from .glstate.objects import ObjectCalls
 from .glstate.per_fragment import PerFragmentCalls
 from .glstate.polygon import PolygonCalls
@@ -44,7 +45,7 @@ ES_VERSIONS = {(1, 0), (1, 1), (2, 0), (3, 0), (3, 1), (3, 2)}
 
 
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
-                ProgramCalls, FramebufferCalls, DrawCalls, ObjectCalls)
+                ProgramCalls, FramebufferCalls, TextureImageCalls, DrawCalls, ObjectCalls)
 
 
 class Converter(*STATE_GROUPS, GeometryOutput):
@@ -55,6 +56,13 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         # capture (the state tests), as a reduced capture of version 1.
         from .capture import shows_every_gen
         self.every_gen_shown = bool(getattr(args, "trace", None)) and shows_every_gen(args.trace)
+        from .reduced import is_reduced_capture
+        # A reduced capture carries, with a draw whose vertex shader reads
+        # textures, the calls that made them (REDUCED_TEXTURES); written
+        # there by run_calls when writes_reduced.
+        self.reads_reduced = bool(getattr(args, "trace", None)) and is_reduced_capture(args.trace)
+        self.writes_reduced = False
+        self.reduced_textures = []
         self.s = self.initial_state()
         self.raster = raster_in          # binary stream to rbcd-gl-raster, or None
         self.stream_copy = open(args.stream_out, "wb") if getattr(args, "stream_out", None) else None
@@ -184,6 +192,11 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                       "(apitrace sets it on buffer swaps only)")
         self.flags, self.ret = flags, ret
         s = self.s
+        if args and isinstance(args[-1], tuple) and args[-1][0] == REDUCED_TEXTURES:
+            if not self.reads_reduced:
+                fail_call(no, f"{printable(name)}: an argument apitrace does not write ({REDUCED_TEXTURES})")
+            self.restore_texture_calls(no, name, args[-1][1])
+            args = args[:-1]
         a = [v for _, v in args]
         base = base_name(name)
         if s.begin_mode is not None:

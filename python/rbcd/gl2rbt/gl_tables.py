@@ -46,9 +46,9 @@ IGNORED_PREFIXES = (
     "glBindAttribLocation", "glUniform", "glValidateProgram", "glBindFragDataLocation", "glTexEnv", "glTexGen",
     "glColorTable", "glConvolution", "glHistogram", "glMinmax", "glResetHistogram", "glResetMinmax",
     "glSeparableFilter", "glMap1", "glMap2", "glMapGrid", "memcpy", "glMemcpy", "glBlendEquation",
-    # Sampler objects (filtering and wrapping: a vertex shader reads only
-    # texture buffers, which samplers do not touch), fences.
-    "glGenSamplers", "glBindSampler", "glSamplerParameter", "glDeleteSamplers", "glFenceSync",
+    # Sampler object names (their bindings and parameters are kept for the
+    # vertex shaders that read 2D textures: glstate/textures.py), fences.
+    "glGenSamplers", "glCreateSamplers", "glFenceSync",
     "glClientWaitSync", "glWaitSync", "glDeleteSync",
     # Hints that a framebuffer's contents are no longer needed (ES 3 and its
     # EXT form): they change no pixel a later draw or the unit sees.

@@ -136,7 +136,7 @@ class Mesa:
 
     def __init__(self, es=False):
         EGL, GL = _load()
-        self.gl, self.es = GL, es
+        self.gl, self.egl, self.es = GL, EGL, es
         try:
             dpy = EGL.eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL.EGL_DEFAULT_DISPLAY, None)
             major, minor = EGL.EGLint(), EGL.EGLint()
@@ -184,6 +184,10 @@ class Mesa:
         if not address:
             raise ToolError(f"Mesa's EGL gives no {name}")
         return ctypes.CFUNCTYPE(None, *argtypes)(address)
+
+    def proc(self, name, *argtypes):
+        """A GL entry point of Mesa's, called with no wrapper."""
+        return self.function(self.egl, name, *argtypes)
 
     def enum(self, value):
         """A GL enumerant as apitrace writes it ("GL_FLOAT", a tuple of bit

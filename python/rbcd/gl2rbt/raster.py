@@ -176,11 +176,13 @@ def convert_in(args, tmpdir, listing, ids, report):
 def run_calls(args, conv, reduced):
     """Every call of the capture into the converter, to the last frame asked for."""
     calls = read_calls(args.trace)
+    conv.writes_reduced = reduced is not None
     for call in calls:
         conv.last_call = call[0]
-        if reduced:
-            reduced.call(call)
         conv.handle(call)
+        if reduced:
+            # After the call: a draw carries the textures its vertex shader read.
+            reduced.call(call, conv.take_reduced_textures())
         if conv.last_frame is not None and conv.frame > conv.last_frame:
             check_rest(calls)
             break

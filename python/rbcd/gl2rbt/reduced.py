@@ -17,13 +17,17 @@ from .errors import ConvertError, printable
 from .converter import Converter
 from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
 from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
+from .glstate.textures import REDUCED_TEXTURES
 from .outputs import SafeText
 
-REDUCED_HEADER = ("rbcd-reduced-capture", 2)
-# Version 1, written before glGenFramebuffers and glGenRenderbuffers were
-# kept: still read; the framebuffer and renderbuffer names it binds are taken
-# as it binds them (shows_every_gen).
-REDUCED_HEADER_1 = ("rbcd-reduced-capture", 1)
+REDUCED_HEADER = ("rbcd-reduced-capture", 3)
+# Versions read: 3 carries, with a draw whose vertex shader reads 2D
+# textures, the calls that made them (glstate.textures.REDUCED_TEXTURES);
+# 2 and 1 were written before vertex shaders could read them. Version 1,
+# written before glGenFramebuffers and glGenRenderbuffers were kept: the
+# framebuffer and renderbuffer names it binds are taken as it binds them
+# (shows_every_gen).
+REDUCED_VERSIONS = (1, 2, 3)
 # A reduced capture expands to at most this many times its size (the game
 # suite's expand 10 to 20 times; a file that expands more is refused before
 # its memory is spent).
@@ -255,10 +259,11 @@ def read_reduced_calls(path):
             # The header's version an int (True and 2.0 equal 1 and 2 in Python).
             version = head[1] if isinstance(head, tuple) and len(head) == 2 and head[0] == REDUCED_HEADER[0] \
                 else None
-            if version is not None and (type(version) is not int or version not in (1, REDUCED_HEADER[1])):
+            if version is not None and (type(version) is not int or version not in REDUCED_VERSIONS):
                 raise ConvertError(f"a reduced capture of version {printable(version, 40)}: this converter reads "
-                                   f"versions 1 and {REDUCED_HEADER[1]}")
-            if head not in (REDUCED_HEADER, REDUCED_HEADER_1):
+                                   f"versions {', '.join(map(str, REDUCED_VERSIONS[:-1]))} and "
+                                   f"{REDUCED_VERSIONS[-1]}")
+            if version is None:
                 raise ConvertError("an xz file that is not a reduced capture (rbcd-gl2rbt --reduced-out)")
             count = 0
             while True:
@@ -334,9 +339,13 @@ class ReducedWriter:
         pickle.dump(rec, self.pickler_buf, protocol=4)
         self.out.write(self.z.compress(self.pickler_buf.getvalue()))
 
-    def call(self, c):
+    def call(self, c, textures=None):
+        """Call `c` as the emulation reads it; `textures`: the calls that
+        made the textures its vertex shader read (REDUCED_TEXTURES), when
+        the reduced capture has not carried them yet."""
         if reduced_keeps(c[1]):
-            self.put((c[0], c[1], reduced_args(c[1], c[2]), plain_value(c[3]), c[4]))
+            extra = [(REDUCED_TEXTURES, textures)] if textures else []
+            self.put((c[0], c[1], reduced_args(c[1], c[2]) + extra, plain_value(c[3]), c[4]))
             self.count += 1
 
     def commit(self):

@@ -21,9 +21,11 @@ from .glstate.attributes import element_bytes
 from .glstate.buffers import merge_extents
 from .glstate.programs import COMMENTS
 from .mesa import Mesa, Watchdog
+from .vertex_textures import TEXTURE_2D_SAMPLERS, VertexTextures
 
 # Sampler types a vertex shader may read: texture buffers, whose contents
-# are buffer objects. Other textures' images are not kept (docs/gl-capture.md).
+# are buffer objects, and 2D textures (vertex_textures.py). Other textures'
+# images are not kept (docs/gl-capture.md).
 BUFFER_SAMPLERS = {"GL_SAMPLER_BUFFER", "GL_INT_SAMPLER_BUFFER", "GL_UNSIGNED_INT_SAMPLER_BUFFER"}
 SAMPLER = re.compile(r"GL_(INT_|UNSIGNED_INT_)?(SAMPLER|IMAGE)_")
 GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INVALID_OPERATION",
@@ -138,6 +140,7 @@ class MesaProgram:
         self.name, self.version = name, version
         self.locations = {}   # active uniform name (and name[i]) -> Mesa location
         self.applied = {}     # Program.uniforms key -> the value last given Mesa
+        self.texture_2d_locations = []   # Mesa locations of its 2D samplers (each element of an array)
 
 
 class VertexStage:
@@ -149,15 +152,18 @@ class VertexStage:
         self.programs = {}   # capture program -> MesaProgram
         self.link_status = {}   # (sources' digest, attribute bindings) -> whether Mesa links them (links)
         self.vaos = {}       # capture vertex array -> Mesa vertex array
-        self.textures = {}   # capture texture -> Mesa texture
+        self.textures = {}   # capture texture buffer -> Mesa texture
+        self.vertex_textures = VertexTextures(self.mesa)   # 2D textures and samplers
         self.scratch = []    # client memory (attributes, indices) goes through these buffers
         self.mesa_bytes = 0  # the declared sizes of the buffers Mesa holds copies of
         self.no = None       # the draw call being run, for messages
         GL = self.gl
-        # Mesa's values of the sampler types that are not texture buffers.
+        # Mesa's values of the sampler types that are neither texture
+        # buffers nor 2D textures.
         self.texture_samplers = {int(getattr(GL, n)): n for n in dir(GL)
-                                 if SAMPLER.match(n) and n not in BUFFER_SAMPLERS
+                                 if SAMPLER.match(n) and n not in BUFFER_SAMPLERS | TEXTURE_2D_SAMPLERS
                                  and isinstance(getattr(GL, n), int)}
+        self.texture_2d_samplers = {int(getattr(GL, n)) for n in TEXTURE_2D_SAMPLERS}
 
     # ---- objects
     def forget_objects(self):
@@ -173,6 +179,7 @@ class VertexStage:
             GL.glDeleteVertexArrays(len(self.vaos), list(self.vaos.values()))
         if self.textures:
             GL.glDeleteTextures(len(self.textures), list(self.textures.values()))
+        self.vertex_textures.forget()
         self.buffers, self.programs, self.vaos, self.textures = {}, {}, {}, {}
         self.mesa_bytes = 0
 
@@ -342,13 +349,16 @@ class VertexStage:
                           "the compatibility profile: not emulated")
             if int(utype) in self.texture_samplers:
                 fail_call(no, f"{where}: its vertex shader reads texture {printable(uname)} "
-                          f"({self.texture_samplers[int(utype)]}); only texture buffers are emulated")
+                          f"({self.texture_samplers[int(utype)]}); only texture buffers and 2D textures are "
+                          "emulated")
             base = uname[:-3] if uname.endswith("[0]") else uname
             loc = GL.glGetUniformLocation(prog, uname)
             mp.locations[uname] = loc
             mp.locations[base] = loc
             for k in range(1, size):
                 mp.locations[f"{base}[{k}]"] = GL.glGetUniformLocation(prog, f"{base}[{k}]")
+            if int(utype) in self.texture_2d_samplers:
+                mp.texture_2d_locations += [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]
         return mp
 
     def set_uniform(self, mp, p, loc, value):
@@ -478,12 +488,13 @@ class VertexStage:
         self.no = no
         try:
             with self.watchdog.on(f"call {no}: {name}"):
-                self.program(conv, no, conv.s.program)
+                mp = self.program(conv, no, conv.s.program)
                 indices = d.get("indices")
                 client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
                 check_client_data(conv, no, name, d, instances, client_indices)
                 self.vertex_array(conv, no, client_indices)
                 self.bindings(conv)
+                self.vertex_textures.bind(conv, no, name, mp)
                 with self.watchdog.on(f"call {no}: {name}", grows=True):
                     clip = self.mesa.feedback_positions(lambda: self.issue(name, d, client_indices is not None),
                                                         prims)

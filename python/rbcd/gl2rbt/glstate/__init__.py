@@ -10,7 +10,8 @@ unit, and the handlers of the calls that change it, one module a state group:
     buffers         buffer objects: contents, bindings, mapped writes
     attributes      generic attributes and vertex array objects
     programs        shaders, programs, uniforms and uniform blocks
-    framebuffers    which pass a draw writes; textures a vertex shader reads
+    framebuffers    which pass a draw writes; texture buffers a vertex shader reads
+    textures        2D texture images and sampler objects a vertex shader reads
 
 Each module holds a mixin of rbcd.gl2rbt.converter.Converter whose HANDLERS
 map GL function names (without ARB/EXT) to its handlers, called as
@@ -94,6 +95,15 @@ class GLState:
         self.texture_buffers = {}
         self.texture = 0
         self.texture_images = {}   # texture name: digest of its level-0 image, or None
+        # 2D textures' images and sampler objects (textures.py).
+        self.texture_calls = {}    # texture name -> TextureCalls
+        self.texture_bytes_kept = 0
+        self.unpack = {}           # glPixelStorei's unpack state, where not GL's default
+        self.samplers = {}         # sampler name -> {pname: (call name, arguments)}
+        self.sampler_units = {}    # unit -> sampler name
+        # --reduced-out: the version of each texture's calls written into
+        # the reduced capture (with a draw whose vertex shader read it).
+        self.reduced_texture_versions = {}
         self.groups = []   # innermost last: object id or None
         self.group_names = []   # the same groups: (object id or None, message)
         self.marker = ""        # the last message the application inserted in the frame

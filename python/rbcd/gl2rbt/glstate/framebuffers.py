@@ -12,6 +12,7 @@ import re
 
 from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
+from ..gl_tables import base_name
 from . import bitfield, generated_name
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
@@ -97,6 +98,12 @@ class FramebufferCalls:
             # A texture's level other than 0 has that level's size (or none
             # given: the framebuffer is incomplete and draws nothing there).
             self.s.fbo_depth[self.s.draw_fbo] = None if not obj else (kind, obj) if level == 0 else (kind, obj, level)
+        fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
+        tex = d.get("texture")
+        if "Texture" in name and fb and isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
+            # Its image is the GPU's from then on (a vertex shader that
+            # reads it is refused: the converter runs no fragment shader).
+            self.texture_rendered(tex, no, f"{name} attaches it to framebuffer {fb}")
 
     def h_renderbuffer_storage(self, no, name, a, args):
         d = dict(args)
@@ -165,11 +172,14 @@ class FramebufferCalls:
                 self.s.texture_targets.pop(tex, None)
                 self.s.texture_images.pop(tex, None)
                 self.s.texture_buffers.pop(tex, None)
+                self.forget_texture_calls(tex)
 
     def h_tex_image(self, no, name, a, args):
         """The size of a texture's level 0 (a framebuffer attachment's size)
         and the digest of its image (what rules name it by)."""
         d = dict(args)
+        if base_name(name) in ("glTexImage2D", "glTexStorage2D", "glCompressedTexImage2D"):
+            self.keep_texture_call(no, base_name(name), d)
         w, h = d.get("width"), d.get("height", 1)
         level = d.get("level", 0)
         if level == 0 and isinstance(w, int) and isinstance(h, int):
@@ -191,6 +201,7 @@ class FramebufferCalls:
         format, type and pixels); a part of a level leaves the digest of the
         last whole upload."""
         d = dict(args)
+        self.keep_texture_call(no, base_name(name), d)
         tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
         if d.get("level", 0) == 0 and d.get("xoffset") == 0 and d.get("yoffset") == 0 and \
                 self.s.sizes.get(("texture", tex)) == (d.get("width"), d.get("height")):

@@ -1,0 +1,278 @@
+"""Texture images and sampler objects that a vertex shader may read.
+
+A vertex shader that samples a 2D texture (a height map, a displacement, a
+skinning palette stored as an image) needs its images in Mesa. The capture
+holds them as the calls that made them, so each 2D texture keeps those
+calls (glTexImage2D, glTexSubImage2D, glTexStorage2D, their compressed
+forms, glTexParameter*, glGenerateMipmap, each with the pixel unpack state
+it was made under), and the vertex stage replays them into Mesa when a
+draw's vertex shader reads the texture (vertex_stage.py): Mesa then
+computes what the driver computed, errors included. Sampler objects keep
+their parameters the same way.
+
+Memory stays in proportion to what the textures hold now, not to the
+capture's length: an image call drops the earlier calls it replaces (a
+level defined again, a rectangle written again, a parameter set again), and
+the images kept in all textures are capped (MAX_TEXTURE_BYTES_KEPT). A
+texture that cannot be given to Mesa keeps the reason, and a draw whose
+vertex shader reads it is refused naming it: its image rendered by the GPU
+(a framebuffer attachment, glCopyTexImage2D), read from a pixel unpack
+buffer, or over the cap."""
+import math
+
+from ...cli import I32, U32, U63, integer
+from ..errors import checked, fail_call, printable
+from ..gl_tables import base_name
+
+VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
+# The argument a reduced capture adds to a draw whose vertex shader reads
+# textures: [(texture, [(call, name, arguments, unpack state)])], the calls
+# that made each texture as the converter keeps them (the reduced capture
+# keeps no texture image otherwise).
+REDUCED_TEXTURES = "rbcd-vertex-textures"
+MAX_TEXTURE_BYTES_KEPT = 1 << 30     # pixels kept in all textures (docs/gl-capture.md, limits)
+MAX_TEXTURE_CALLS_KEPT = 4096        # calls kept for one texture
+UNPACK_PARAMETERS = ("GL_UNPACK_SWAP_BYTES", "GL_UNPACK_LSB_FIRST", "GL_UNPACK_ROW_LENGTH", "GL_UNPACK_SKIP_ROWS",
+                     "GL_UNPACK_SKIP_PIXELS", "GL_UNPACK_ALIGNMENT", "GL_UNPACK_IMAGE_HEIGHT",
+                     "GL_UNPACK_SKIP_IMAGES")
+UNPACK_DEFAULTS = {"GL_UNPACK_ALIGNMENT": 4}
+# The calls that define a level's image (a whole one) or part of it.
+LEVEL_CALLS = ("glTexImage2D", "glCompressedTexImage2D")
+PART_CALLS = ("glTexSubImage2D", "glCompressedTexSubImage2D")
+PARAMETER_CALLS = ("glTexParameteri", "glTexParameterf", "glTexParameteriv", "glTexParameterfv",
+                   "glTexParameterIiv", "glTexParameterIuiv")
+KEPT_CALLS = LEVEL_CALLS + PART_CALLS + PARAMETER_CALLS + ("glTexStorage2D", "glGenerateMipmap")
+SAMPLER_PARAMETER_CALLS = ("glSamplerParameteri", "glSamplerParameterf", "glSamplerParameteriv",
+                           "glSamplerParameterfv", "glSamplerParameterIiv", "glSamplerParameterIuiv")
+
+
+class TextureCalls:
+    """The calls that made one texture's images, in order: (call number,
+    name, arguments as a dict, pixel unpack state as a tuple);
+    `version` changes with every call kept; `refused` is (call, reason)
+    once the texture holds an image the converter cannot give Mesa."""
+    __slots__ = ("calls", "version", "bytes", "refused")
+
+    def __init__(self):
+        self.calls, self.version, self.bytes, self.refused = [], 0, 0, None
+
+
+def pixels_of(d):
+    p = d.get("pixels", d.get("data"))
+    return p if isinstance(p, (bytes, bytearray)) else None
+
+
+def rectangle(d):
+    return tuple(d.get(k) for k in ("level", "xoffset", "yoffset", "width", "height"))
+
+
+def covers(outer, inner):
+    """Whether a part call's rectangle (level, x, y, w, h) covers another's."""
+    if not all(isinstance(v, int) for v in outer + inner) or outer[0] != inner[0]:
+        return False
+    return outer[1] <= inner[1] and outer[2] <= inner[2] and inner[1] + inner[3] <= outer[1] + outer[3] \
+        and inner[2] + inner[4] <= outer[2] + outer[4]
+
+
+class TextureImageCalls:
+    """self.s.texture_calls[texture] = TextureCalls of the 2D textures;
+    self.s.unpack: the pixel unpack state; self.s.samplers[sampler] = {pname:
+    (name, arguments)}, self.s.sampler_units[unit] = sampler."""
+
+    # ---- textures
+    def bound_texture(self, target):
+        return self.s.units.get((self.s.active_unit, target), 0)
+
+    def texture_calls(self, tex):
+        tc = self.s.texture_calls.get(tex)
+        if tc is None:
+            tc = self.s.texture_calls[tex] = TextureCalls()
+        return tc
+
+    def drop_texture_calls(self, tc, keep):
+        """Drops the calls of `tc` for which keep(call) is false."""
+        kept = [c for c in tc.calls if keep(c)]
+        for c in tc.calls:
+            if not keep(c) and pixels_of(c[2]) is not None:
+                tc.bytes -= len(pixels_of(c[2]))
+                self.s.texture_bytes_kept -= len(pixels_of(c[2]))
+        tc.calls = kept
+
+    def keep_texture_call(self, no, name, d):
+        """An image or parameter call on the bound 2D texture, kept (the
+        pixels too) with the calls it does not replace."""
+        if d.get("target") != VERTEX_TEXTURE_TARGET:
+            return
+        tex = self.bound_texture(VERTEX_TEXTURE_TARGET)
+        tc = self.texture_calls(tex)
+        if tc.refused is not None and tc.refused[1].startswith("more than"):
+            return   # over a cap: nothing more is kept for it
+        pixels = d.get("pixels", d.get("data"))
+        if name in LEVEL_CALLS + PART_CALLS:
+            unpack_buffer = self.s.bound.get("GL_PIXEL_UNPACK_BUFFER", 0)
+            if unpack_buffer:
+                tc.refused = (no, f"{name} read its pixels from pixel unpack buffer {unpack_buffer}")
+            elif isinstance(pixels, int) and not isinstance(pixels, bool) and pixels:
+                tc.refused = (no, f"{name}'s pixels are not in the capture (a pointer apitrace did not follow)")
+            storage = any(c[1] == "glTexStorage2D" for c in tc.calls)
+            if name in LEVEL_CALLS and not storage:
+                # A level defined again: its earlier image and parts go.
+                level = d.get("level")
+                self.drop_texture_calls(tc, lambda c: not (c[1] in LEVEL_CALLS + PART_CALLS
+                                                           and c[2].get("level") == level))
+            elif name in PART_CALLS:
+                r = rectangle(d)
+                self.drop_texture_calls(tc, lambda c: not (c[1] in PART_CALLS and covers(r, rectangle(c[2]))))
+        elif name == "glTexStorage2D" and not any(c[1] == "glTexStorage2D" for c in tc.calls):
+            self.drop_texture_calls(tc, lambda c: c[1] not in LEVEL_CALLS + PART_CALLS + ("glGenerateMipmap",))
+        elif name in PARAMETER_CALLS:
+            self.drop_texture_calls(tc, lambda c: not (c[1] in PARAMETER_CALLS
+                                                       and c[2].get("pname") == d.get("pname")))
+        elif name == "glGenerateMipmap" and tc.calls and tc.calls[-1][1] == name:
+            return
+        data = pixels_of(d)
+        size = len(data) if data is not None else 0
+        if self.s.texture_bytes_kept + size > MAX_TEXTURE_BYTES_KEPT or len(tc.calls) >= MAX_TEXTURE_CALLS_KEPT:
+            self.drop_texture_calls(tc, lambda c: False)
+            tc.refused = (no, f"more than {MAX_TEXTURE_BYTES_KEPT >> 20} MiB of texture images, or "
+                              f"{MAX_TEXTURE_CALLS_KEPT} calls for one texture, would be kept")
+            return
+        unpack = tuple(self.s.unpack.get(p, UNPACK_DEFAULTS.get(p, 0)) for p in UNPACK_PARAMETERS)
+        tc.calls.append((no, name, d, unpack))
+        tc.bytes += size
+        self.s.texture_bytes_kept += size
+        self.s.next_version += 1
+        tc.version = self.s.next_version
+
+    def texture_rendered(self, tex, no, how):
+        """A texture whose image the GPU writes: a vertex shader that reads
+        it is refused (the converter runs no fragment shader)."""
+        if self.s.texture_targets.get(tex, VERTEX_TEXTURE_TARGET) == VERTEX_TEXTURE_TARGET:
+            self.texture_calls(tex).refused = (no, how)
+
+    def forget_texture_calls(self, tex):
+        tc = self.s.texture_calls.pop(tex, None)
+        if tc is not None:
+            self.s.texture_bytes_kept -= tc.bytes
+
+    def h_pixel_store(self, no, name, a, args):
+        d = dict(args)
+        pname = d.get("pname")
+        if pname in UNPACK_PARAMETERS:
+            value = d.get("param")
+            if isinstance(value, float) and math.isfinite(value):
+                # glPixelStoref rounds to the nearest integer, halves away
+                # from zero (Mesa's IROUND).
+                value = int(math.floor(abs(value) + 0.5)) * (1 if value >= 0 else -1)
+            value = checked(no, integer, value, f"{name}: {pname}", *I32)
+            # Mesa's GL_INVALID_VALUE (negative, or an alignment other than
+            # 1, 2, 4, 8) leaves the state as it was.
+            if value < 0 or pname == "GL_UNPACK_ALIGNMENT" and value not in (1, 2, 4, 8):
+                return
+            self.s.unpack[pname] = value
+
+    def h_texture_parameter(self, no, name, a, args):
+        self.keep_texture_call(no, base_name(name), dict(args))
+
+    def h_generate_mipmap(self, no, name, a, args):
+        self.keep_texture_call(no, base_name(name), dict(args))
+
+    def h_copy_tex_image(self, no, name, a, args):
+        d = dict(args)
+        if d.get("target") == VERTEX_TEXTURE_TARGET:
+            self.texture_rendered(self.bound_texture(VERTEX_TEXTURE_TARGET), no,
+                                  f"{name} copies the framebuffer into it")
+
+    def vertex_texture_read(self, tex, tc):
+        """A draw's vertex shader reads texture `tex`: for --reduced-out,
+        the calls that made it go with the draw, unless these very calls
+        went with an earlier draw."""
+        if not self.writes_reduced or tc is None or self.s.reduced_texture_versions.get(tex) == tc.version:
+            return
+        from ..reduced import plain_value
+        self.s.reduced_texture_versions[tex] = tc.version
+        self.reduced_textures.append((tex, [(no, name, [(k, plain_value(v)) for k, v in d.items()], list(unpack))
+                                            for no, name, d, unpack in tc.calls]))
+
+    def take_reduced_textures(self):
+        taken, self.reduced_textures = self.reduced_textures, []
+        return taken
+
+    def restore_texture_calls(self, no, name, value):
+        """A reduced capture's REDUCED_TEXTURES: each texture's calls as
+        the converter that wrote it kept them, in place of its own (whose
+        images the reduced capture left out)."""
+        what = f"{printable(name)}: its {REDUCED_TEXTURES} (the reduced capture's)"
+        if not isinstance(value, list):
+            fail_call(no, f"{what}: not a list")
+        for item in value:
+            if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[1], list)
+                    and len(item[1]) <= MAX_TEXTURE_CALLS_KEPT):
+                fail_call(no, f"{what}: a texture's record that is not (texture, calls)")
+            tex = checked(no, integer, item[0], f"{what}: a texture", *U32)
+            self.forget_texture_calls(tex)
+            tc = self.texture_calls(tex)
+            for c in item[1]:
+                if not (isinstance(c, tuple) and len(c) == 4 and c[1] in KEPT_CALLS and isinstance(c[2], list)
+                        and all(isinstance(x, tuple) and len(x) == 2 and isinstance(x[0], str) for x in c[2])
+                        and isinstance(c[3], list) and len(c[3]) == len(UNPACK_PARAMETERS)):
+                    fail_call(no, f"{what}: a call's record that is not (call, name, arguments, unpack state)")
+                call_no = checked(no, integer, c[0], f"{what}: a call number", *U63)
+                unpack = tuple(checked(no, integer, v, f"{what}: an unpack parameter", *I32) for v in c[3])
+                d = dict(c[2])
+                size = len(pixels_of(d)) if pixels_of(d) is not None else 0
+                if self.s.texture_bytes_kept + size > MAX_TEXTURE_BYTES_KEPT:
+                    fail_call(no, f"{what}: more than {MAX_TEXTURE_BYTES_KEPT >> 20} MiB of texture images")
+                tc.calls.append((call_no, c[1], d, unpack))
+                tc.bytes += size
+                self.s.texture_bytes_kept += size
+            self.s.next_version += 1
+            tc.version = self.s.next_version
+
+    # ---- sampler objects
+    def h_bind_sampler(self, no, name, a, args):
+        d = dict(args)
+        if name == "glBindSampler":
+            pairs = [(d.get("unit"), d.get("sampler"))]
+        else:
+            first = checked(no, integer, d.get("first"), f"{name}: first", *U32)
+            count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
+            samplers = d.get("samplers")
+            if samplers is None:
+                samplers = [0] * max(count, 0)
+            if not isinstance(samplers, list) or len(samplers) < count:
+                fail_call(no, f"{name}: fewer samplers than its count")
+            pairs = [(first + i, s) for i, s in enumerate(samplers[:max(count, 0)])]
+        for unit, sampler in pairs:
+            unit = checked(no, integer, unit, f"{name}: the unit", *U32)
+            sampler = checked(no, integer, sampler, f"{name}: the sampler", *U32)
+            self.s.sampler_units[unit] = sampler
+
+    def h_sampler_parameter(self, no, name, a, args):
+        d = dict(args)
+        sampler = checked(no, integer, d.get("sampler"), f"{name}: the sampler", *U32)
+        if not isinstance(d.get("pname"), (str, int)) or isinstance(d.get("pname"), bool):
+            fail_call(no, f"{name}: a parameter name that is no enumerant")
+        params = self.s.samplers.setdefault(sampler, {})
+        params.pop(d["pname"], None)
+        params[d["pname"]] = (base_name(name), d)
+
+    def h_delete_samplers(self, no, name, a, args):
+        for sampler in dict(args).get("samplers") or []:
+            if isinstance(sampler, int) and not isinstance(sampler, bool) and sampler > 0:
+                self.s.samplers.pop(sampler, None)
+                for unit, bound in list(self.s.sampler_units.items()):
+                    if bound == sampler:
+                        self.s.sampler_units[unit] = 0
+
+    HANDLERS = {
+        "glPixelStorei": h_pixel_store,
+        "glPixelStoref": h_pixel_store,
+        "glGenerateMipmap": h_generate_mipmap,
+        "glCopyTexImage2D": h_copy_tex_image,
+        "glCopyTexSubImage2D": h_copy_tex_image,
+        "glBindSampler": h_bind_sampler,
+        "glBindSamplers": h_bind_sampler,
+        "glDeleteSamplers": h_delete_samplers,
+    } | dict.fromkeys(PARAMETER_CALLS, h_texture_parameter) \
+      | dict.fromkeys(SAMPLER_PARAMETER_CALLS, h_sampler_parameter)

@@ -1,0 +1,256 @@
+"""The 2D textures and sampler objects a draw's vertex shader reads, given to
+Mesa: the calls that made them (glstate/textures.py) replayed into Mesa's
+context, once per version, through Mesa's own entry points (EGL's
+eglGetProcAddress, with no wrapper between: Mesa reads the pixels as the
+driver read them, and reports its errors where the driver did, which leave
+the texture as the capture's driver left it).
+
+Before a call is replayed, its pixels are checked to hold what GL reads for
+its size, format, type and unpack state (GL 4.5, 8.4.4.1): Mesa would read
+past them."""
+import ctypes
+
+import numpy as np
+
+from ..cli import I32, U32, integer
+from .errors import checked, fail_call, printable
+from .glstate.textures import (LEVEL_CALLS, PARAMETER_CALLS, PART_CALLS, SAMPLER_PARAMETER_CALLS,
+                               UNPACK_PARAMETERS, VERTEX_TEXTURE_TARGET)
+
+# The images Mesa holds for vertex shaders, in all, counted at 16 bytes a
+# texel (the widest format), a third more for a mipmapped storage: Mesa
+# allocates a level's size whatever pixels a call gives.
+MAX_MESA_TEXTURE_BYTES = 1 << 30
+# Sampler types of the 2D textures a vertex shader may read.
+TEXTURE_2D_SAMPLERS = {"GL_SAMPLER_2D", "GL_INT_SAMPLER_2D", "GL_UNSIGNED_INT_SAMPLER_2D", "GL_SAMPLER_2D_SHADOW"}
+FORMAT_COMPONENTS = {"GL_RED": 1, "GL_GREEN": 1, "GL_BLUE": 1, "GL_ALPHA": 1, "GL_LUMINANCE": 1,
+                     "GL_RED_INTEGER": 1, "GL_GREEN_INTEGER": 1, "GL_BLUE_INTEGER": 1, "GL_ALPHA_INTEGER": 1,
+                     "GL_DEPTH_COMPONENT": 1, "GL_STENCIL_INDEX": 1, "GL_DEPTH_STENCIL": 1,
+                     "GL_LUMINANCE_ALPHA": 2, "GL_RG": 2, "GL_RG_INTEGER": 2,
+                     "GL_RGB": 3, "GL_BGR": 3, "GL_RGB_INTEGER": 3, "GL_BGR_INTEGER": 3,
+                     "GL_RGBA": 4, "GL_BGRA": 4, "GL_RGBA_INTEGER": 4, "GL_BGRA_INTEGER": 4}
+TYPE_BYTES = {"GL_UNSIGNED_BYTE": 1, "GL_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_SHORT": 2, "GL_UNSIGNED_INT": 4,
+              "GL_INT": 4, "GL_HALF_FLOAT": 2, "GL_HALF_FLOAT_OES": 2, "GL_FLOAT": 4}
+# Packed types: one element a pixel, of this many bytes.
+PACKED_BYTES = {"GL_UNSIGNED_BYTE_3_3_2": 1, "GL_UNSIGNED_BYTE_2_3_3_REV": 1,
+                "GL_UNSIGNED_SHORT_5_6_5": 2, "GL_UNSIGNED_SHORT_5_6_5_REV": 2, "GL_UNSIGNED_SHORT_4_4_4_4": 2,
+                "GL_UNSIGNED_SHORT_4_4_4_4_REV": 2, "GL_UNSIGNED_SHORT_5_5_5_1": 2,
+                "GL_UNSIGNED_SHORT_1_5_5_5_REV": 2, "GL_UNSIGNED_INT_8_8_8_8": 4, "GL_UNSIGNED_INT_8_8_8_8_REV": 4,
+                "GL_UNSIGNED_INT_10_10_10_2": 4, "GL_UNSIGNED_INT_2_10_10_10_REV": 4, "GL_UNSIGNED_INT_24_8": 4,
+                "GL_UNSIGNED_INT_10F_11F_11F_REV": 4, "GL_UNSIGNED_INT_5_9_9_9_REV": 4,
+                "GL_FLOAT_32_UNSIGNED_INT_24_8_REV": 8}
+
+u, i, e, f, sz, p = ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_float, ctypes.c_int, ctypes.c_void_p
+# Entry points and their C arguments after the target (or sampler).
+ENTRY_POINTS = {
+    "glTexImage2D": (e, i, i, sz, sz, i, e, e, p),
+    "glTexSubImage2D": (e, i, i, i, sz, sz, e, e, p),
+    "glTexStorage2D": (e, sz, e, sz, sz),
+    "glCompressedTexImage2D": (e, i, e, sz, sz, i, sz, p),
+    "glCompressedTexSubImage2D": (e, i, i, i, sz, sz, e, sz, p),
+    "glGenerateMipmap": (e,),
+    "glPixelStorei": (e, i),
+} | {n: (e, e, f if n.endswith("f") else i) for n in ("glTexParameteri", "glTexParameterf")} \
+  | {n: (e, e, p) for n in ("glTexParameteriv", "glTexParameterfv", "glTexParameterIiv", "glTexParameterIuiv")} \
+  | {n: (u, e, f if n.endswith("f") else i) for n in ("glSamplerParameteri", "glSamplerParameterf")} \
+  | {n: (u, e, p) for n in ("glSamplerParameteriv", "glSamplerParameterfv", "glSamplerParameterIiv",
+                            "glSamplerParameterIuiv")}
+ARGUMENTS = {
+    "glTexImage2D": ("target", "level", "internalformat", "width", "height", "border", "format", "type", "pixels"),
+    "glTexSubImage2D": ("target", "level", "xoffset", "yoffset", "width", "height", "format", "type", "pixels"),
+    "glTexStorage2D": ("target", "levels", "internalformat", "width", "height"),
+    "glCompressedTexImage2D": ("target", "level", "internalformat", "width", "height", "border", "imageSize",
+                               "data"),
+    "glCompressedTexSubImage2D": ("target", "level", "xoffset", "yoffset", "width", "height", "format",
+                                  "imageSize", "data"),
+    "glGenerateMipmap": ("target",),
+} | {n: ("target", "pname", "param") for n in ("glTexParameteri", "glTexParameterf")} \
+  | {n: ("target", "pname", "params") for n in PARAMETER_CALLS if n.endswith("v")} \
+  | {n: ("sampler", "pname", "param") for n in ("glSamplerParameteri", "glSamplerParameterf")} \
+  | {n: ("sampler", "pname", "params") for n in SAMPLER_PARAMETER_CALLS if n.endswith("v")}
+ENUM_ARGUMENTS = {"target", "internalformat", "format", "type", "pname"}
+
+
+def pixel_bytes(no, what, d, unpack):
+    """The bytes GL reads for a glTexImage2D's or glTexSubImage2D's pixels
+    (`what` names the call in messages)."""
+    w = checked(no, integer, d.get("width"), f"{what}: the width", *I32)
+    h = checked(no, integer, d.get("height"), f"{what}: the height", *I32)
+    if w <= 0 or h <= 0:
+        return 0
+    fmt, kind = d.get("format"), d.get("type")
+    if kind in PACKED_BYTES and fmt in FORMAT_COMPONENTS:
+        elem, group = PACKED_BYTES[kind], PACKED_BYTES[kind]
+    elif kind in TYPE_BYTES and fmt in FORMAT_COMPONENTS:
+        elem, group = TYPE_BYTES[kind], TYPE_BYTES[kind] * FORMAT_COMPONENTS[fmt]
+    else:
+        fail_call(no, f"{what}: pixels of format {printable(fmt)} and type {printable(kind)} are not emulated "
+                  "for a texture a vertex shader reads")
+    state = dict(zip(UNPACK_PARAMETERS, unpack))
+    row_length = state["GL_UNPACK_ROW_LENGTH"] or w
+    align = state["GL_UNPACK_ALIGNMENT"]
+    stride = row_length * group
+    if elem < align:
+        stride = -(-stride // align) * align
+    return state["GL_UNPACK_SKIP_ROWS"] * stride + state["GL_UNPACK_SKIP_PIXELS"] * group + (h - 1) * stride \
+        + w * group
+
+
+class VertexTextures:
+    def __init__(self, mesa):
+        self.mesa, self.gl = mesa, mesa.gl
+        self.images = {}     # capture texture -> (Mesa texture, version replayed, bytes counted)
+        self.image_bytes = 0
+        self.samplers = {}   # capture sampler -> (Mesa sampler, parameters replayed)
+        self.entry = {}
+        self.no = self.draw = None   # the draw's call and name, for messages
+
+    def call(self, name, *args):
+        fn = self.entry.get(name)
+        if fn is None:
+            fn = self.entry[name] = self.mesa.proc(name, *ENTRY_POINTS[name])
+        fn(*args)
+
+    def forget(self):
+        GL = self.gl
+        if self.images:
+            GL.glDeleteTextures(len(self.images), [e[0] for e in self.images.values()])
+        self.image_bytes = 0
+        if self.samplers:
+            GL.glDeleteSamplers(len(self.samplers), [m for m, _ in self.samplers.values()])
+        self.images, self.samplers = {}, {}
+
+    def bind(self, conv, no, name, mp):
+        """Binds, at every unit the program's 2D samplers name, the
+        capture's texture there and its sampler object; each texture read
+        is noted for the reduced capture (conv.vertex_texture_read)."""
+        GL = self.gl
+        self.no, self.draw = no, name
+        unit_of = np.zeros(1, np.int32)
+        for loc in mp.texture_2d_locations:
+            GL.glGetUniformiv(mp.name, loc, unit_of)
+            unit = int(unit_of[0])
+            tex = conv.s.units.get((unit, VERTEX_TEXTURE_TARGET), 0)
+            tc = conv.s.texture_calls.get(tex)
+            if tc is not None and tc.refused is not None:
+                fail_call(no, f"{name}: its vertex shader reads texture {tex} (unit {unit}), whose image the converter "
+                          f"cannot give Mesa: call {tc.refused[0]}: {printable(tc.refused[1])}")
+            mt = self.image(tex, tc)   # (made on unit 0)
+            sampler = conv.s.sampler_units.get(unit, 0)
+            ms = self.sampler(sampler, conv.s.samplers.get(sampler, {})) if sampler else 0
+            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+            GL.glBindTexture(GL.GL_TEXTURE_2D, mt)
+            GL.glBindSampler(unit, ms)
+            conv.vertex_texture_read(tex, tc)
+        GL.glActiveTexture(GL.GL_TEXTURE0)
+
+    def image(self, tex, tc):
+        GL = self.gl
+        version = tc.version if tc is not None else 0
+        entry = self.images.get(tex)
+        if entry is not None and entry[1] == version:
+            return entry[0]
+        if entry is not None:
+            GL.glDeleteTextures(1, [entry[0]])
+            self.image_bytes -= entry[2]
+            del self.images[tex]
+        size = 0
+        for _, name, d, _ in (tc.calls if tc is not None else []):
+            if name in LEVEL_CALLS + ("glTexStorage2D",):
+                w, h = d.get("width"), d.get("height")
+                if isinstance(w, int) and isinstance(h, int) and w > 0 and h > 0:
+                    size += w * h * 16 * (4 if name == "glTexStorage2D" else 3) // 3
+        if self.image_bytes + size > MAX_MESA_TEXTURE_BYTES:
+            fail_call(self.no, f"{self.draw}: texture {tex}, which its vertex shader reads: the textures given to "
+                      f"Mesa would take more than {MAX_MESA_TEXTURE_BYTES >> 30} GiB (docs/gl-capture.md, limits)")
+        self.image_bytes += size
+        mt = int(GL.glGenTextures(1))
+        self.images[tex] = (mt, version, size)
+        GL.glActiveTexture(GL.GL_TEXTURE0)
+        GL.glBindTexture(GL.GL_TEXTURE_2D, mt)
+        for call_no, name, d, unpack in (tc.calls if tc is not None else []):
+            self.replay(f"{self.draw}: texture {tex}, which its vertex shader reads: {name} (call {call_no})", name,
+                        d, unpack)
+        for pname in UNPACK_PARAMETERS:
+            self.call("glPixelStorei", self.mesa.enum(pname), 4 if pname == "GL_UNPACK_ALIGNMENT" else 0)
+        self.drain()
+        return mt
+
+    def sampler(self, sampler, params):
+        GL = self.gl
+        entry = self.samplers.get(sampler)
+        state = list(params.values())
+        if entry is not None and entry[1] == state:
+            return entry[0]
+        if entry is not None:
+            GL.glDeleteSamplers(1, [entry[0]])
+        ms = int(GL.glGenSamplers(1))
+        self.samplers[sampler] = (ms, state)
+        for name, d in state:
+            self.replay(f"{self.draw}: sampler {sampler}, bound where its vertex shader reads: {name}", name,
+                        dict(d, sampler=ms), None)
+        self.drain()
+        return ms
+
+    def drain(self):
+        """Mesa's errors from the calls replayed: the capture's driver
+        ignored those calls as Mesa did."""
+        while self.gl.glGetError():
+            pass
+
+    def replay(self, what, name, d, unpack):
+        """Call `name` of a texture or sampler (`what` names it in messages)
+        into Mesa; its arguments checked as the C call takes them."""
+        no = self.no
+        if unpack is not None:
+            for pname, value in zip(UNPACK_PARAMETERS, unpack):
+                self.call("glPixelStorei", self.mesa.enum(pname), value)
+        args, keep = [], []
+        for key, ctype in zip(ARGUMENTS[name], ENTRY_POINTS[name]):
+            v = d.get(key)
+            if key == "sampler":
+                args.append(v)
+            elif key in ("pixels", "data"):
+                args.append(self.pixels(what, name, d, unpack, v, keep))
+            elif key == "params":
+                if not isinstance(v, list) or not v or len(v) > 4:
+                    fail_call(no, f"{what}: parameter values that are not a list of one to four numbers")
+                kind = np.float32 if name.endswith("fv") else np.uint32 if name.endswith("uiv") else np.int32
+                try:
+                    arr = np.zeros(4, kind)
+                    arr[:len(v)] = [self.mesa.enum(x) if isinstance(x, str) else x for x in v]
+                except (ValueError, TypeError, OverflowError):
+                    fail_call(no, f"{what}: a parameter value of no type GL takes")
+                keep.append(arr)
+                args.append(arr.ctypes.data)
+            elif key in ENUM_ARGUMENTS or key == "param" and isinstance(v, str):
+                try:
+                    args.append(checked(no, integer, self.mesa.enum(v), f"{what}: {key}", *U32))
+                except ValueError:
+                    fail_call(no, f"{what}: {key} {printable(v)} is not an enumerant")
+            elif ctype is f:
+                if isinstance(v, bool) or not isinstance(v, (int, float)):
+                    fail_call(no, f"{what}: {key} is not a number")
+                args.append(float(v))
+            else:
+                args.append(checked(no, integer, v, f"{what}: {key}", *I32))
+        self.call(name, *args)
+
+    def pixels(self, what, name, d, unpack, v, keep):
+        """The address of a call's pixels, checked to hold what Mesa reads."""
+        no = self.no
+        if v is None or isinstance(v, int) and not isinstance(v, bool) and v == 0:
+            return None   # NULL: the level allocated, its contents undefined
+        if not isinstance(v, (bytes, bytearray)):
+            fail_call(no, f"{what}: its pixels are not in the reduced capture (a draw that reads the texture "
+                      "carries them)")
+        if name in LEVEL_CALLS + PART_CALLS and name.startswith("glCompressed"):
+            need = checked(no, integer, d.get("imageSize"), f"{what}: imageSize", *I32)
+        else:
+            need = pixel_bytes(no, what, d, unpack)
+        if len(v) < need:
+            fail_call(no, f"{what}: {len(v)} bytes of pixels, {need} read by GL for its size, format and "
+                      "unpack state")
+        buf = ctypes.create_string_buffer(bytes(v), len(v))
+        keep.append(buf)
+        return ctypes.addressof(buf)

@@ -1,0 +1,182 @@
+"""Vertex shaders that read 2D textures, in captures the tests write (Mesa
+runs the vertex shader on the capture's texture images): a triangle moved by
+a texel must give the bytes of the same triangle moved by a constant, for
+each way GL makes the image (glTexImage2D, glTexStorage2D with
+glTexSubImage2D under an odd unpack state, glGenerateMipmap, filtering set
+on the texture or overridden by a sampler object, a texture GL calls
+incomplete, a deleted one); a reduced capture carries the images and gives
+the same bytes; an image the converter cannot give Mesa (rendered into by a
+framebuffer, copied from one, read from a pixel unpack buffer, shorter than
+GL reads) is refused naming the call, nothing left."""
+import struct
+
+import pytest
+
+from gl_captures import Calls, gl2rbt_timed as gl2rbt, left_behind, refused
+from test_gl2rbt_hostile import shader_calls
+
+pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+
+# The triangle of shader_calls (window units over a 64x48 window), moved by
+# the texel's red and green.
+VS_TEXEL = ("#version 330 core\nin vec3 p;\nuniform sampler2D heights;\n"
+            "void main() { vec4 t = %s;\n"
+            "  gl_Position = vec4((p.x + t.r) / 32.0 - 1.0, (p.y + t.g) / 24.0 - 1.0, 0.0, 1.0); }\n")
+FETCH = "texelFetch(heights, ivec2(1, 0), 0)"
+MIDDLE = "textureLod(heights, vec2(0.5, 0.5), 0.0)"     # between texels 0 and 1
+LEVEL_1 = "textureLod(heights, vec2(0.25, 0.5), 1.0)"   # the 1x1 level
+VS_MOVED = ("#version 330 core\nin vec3 p;\n"
+            "void main() { gl_Position = vec4((p.x + %.1f) / 32.0 - 1.0, (p.y + %.1f) / 24.0 - 1.0, 0.0, 1.0); }\n")
+# A 2x1 RGBA32F image: texel 0 (0, 0), texel 1 (6, 2).
+TEXELS = struct.pack("<8f", 0, 0, 0, 0, 6, 2, 0, 0)
+
+
+def draw(c):
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    c.add("glPopDebugGroup")
+    return c.swap()
+
+
+def texture(c, name=3, unit=0, filters="GL_NEAREST", image=True):
+    c.add("glActiveTexture", texture=f"GL_TEXTURE{unit}")
+    c.add("glGenTextures", n=1, textures=[name]).add("glBindTexture", target="GL_TEXTURE_2D", texture=name)
+    if image:
+        c.add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA32F", width=2, height=1,
+              border=0, format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS)
+    if filters:
+        for pname in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER"):
+            c.add("glTexParameteri", target="GL_TEXTURE_2D", pname=pname, param=filters)
+    return c
+
+
+def on_unit(c, unit):
+    c.add("glGetUniformLocation", program=2, name="heights", ret=4)
+    return c.add("glUniform1i", location=4, v0=unit)
+
+
+def convert(tmp_path, c, tag, *extra):
+    r = gl2rbt(tmp_path, c.write(tmp_path / f"{tag}.xz", images=True), "-o", tmp_path / f"{tag}.rbt", *extra)
+    assert r.returncode == 0, f"{tag}: {r.stderr}"
+    return (tmp_path / f"{tag}.rbt").read_bytes()
+
+
+def moved(tmp_path, dx, dy):
+    return convert(tmp_path, draw(shader_calls(VS_MOVED % (dx, dy))), f"moved_{dx}_{dy}")
+
+
+def test_texel_fetch_from_an_image_of_glteximage2d(tmp_path):
+    want = moved(tmp_path, 6, 2)
+    assert want.count(b"\nf ") > 100 and want != moved(tmp_path, 0, 0)
+    assert convert(tmp_path, draw(texture(shader_calls(VS_TEXEL % FETCH))), "teximage") == want
+
+
+def test_storage_and_sub_image_under_an_unpack_state_on_another_unit(tmp_path):
+    """glTexStorage2D, then glTexSubImage2D of rows 3 texels long after a
+    skipped texel, packed to 1-byte alignment, on unit 5 named by the
+    sampler's uniform: GL reads texels 1 and 2 of the row."""
+    c = shader_calls(VS_TEXEL % FETCH)
+    texture(c, unit=5, image=False)
+    c.add("glTexStorage2D", target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA32F", width=2, height=1)
+    for pname, value in (("GL_UNPACK_ALIGNMENT", 1), ("GL_UNPACK_ROW_LENGTH", 3), ("GL_UNPACK_SKIP_PIXELS", 1)):
+        c.add("glPixelStorei", pname=pname, param=value)
+    c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=2, height=1,
+          format="GL_RGBA", type="GL_FLOAT", pixels=struct.pack("<4f", 9, 9, 9, 9) + TEXELS)
+    c.add("glPixelStorei", pname="GL_UNPACK_ALIGNMENT", param=3)   # GL_INVALID_VALUE: ignored
+    assert convert(tmp_path, draw(on_unit(c, 5)), "storage") == moved(tmp_path, 6, 2)
+
+
+@pytest.mark.parametrize("sampler, want", [(None, (3, 1)), ("GL_NEAREST", (6, 2))])
+def test_filtering_of_the_texture_or_of_a_sampler_object(tmp_path, sampler, want):
+    """Linear filtering between the two texels gives their mean; a sampler
+    object bound to the unit takes the texture's filtering's place."""
+    c = texture(shader_calls(VS_TEXEL % MIDDLE), filters="GL_LINEAR")
+    if sampler:
+        c.add("glGenSamplers", count=1, samplers=[8]).add("glBindSampler", unit=0, sampler=8)
+        c.add("glSamplerParameteri", sampler=8, pname="GL_TEXTURE_MAG_FILTER", param=sampler)
+        c.add("glSamplerParameteri", sampler=8, pname="GL_TEXTURE_MIN_FILTER", param=sampler)
+    assert convert(tmp_path, draw(c), f"filter_{sampler}") == moved(tmp_path, *want)
+
+
+def test_mipmaps_and_what_gl_reads_from_an_incomplete_or_deleted_texture(tmp_path):
+    """glGenerateMipmap's 1x1 level is the texels' mean; with the default
+    minifying filter and no mipmaps the texture is incomplete, and a deleted
+    one leaves the unit's default texture: both read as zeros."""
+    c = texture(shader_calls(VS_TEXEL % LEVEL_1), filters=None)
+    c.add("glTexParameteri", target="GL_TEXTURE_2D", pname="GL_TEXTURE_MIN_FILTER", param="GL_LINEAR_MIPMAP_NEAREST")
+    c.add("glGenerateMipmap", target="GL_TEXTURE_2D")
+    assert convert(tmp_path, draw(c), "mipmap") == moved(tmp_path, 3, 1)
+    zero = moved(tmp_path, 0, 0)
+    assert convert(tmp_path, draw(texture(shader_calls(VS_TEXEL % FETCH), filters=None)), "incomplete") == zero
+    c = texture(shader_calls(VS_TEXEL % FETCH)).add("glDeleteTextures", n=1, textures=[3])
+    assert convert(tmp_path, draw(c), "deleted") == zero
+
+
+def test_a_reduced_capture_carries_the_images_with_the_draw(tmp_path):
+    """A reduced capture keeps no texture image in its glTexImage2D (a digest
+    in its place), but a draw whose vertex shader reads a texture carries
+    the calls that made it: converted, the bytes of the capture. (The
+    writer's side: test_gl2rbt_shaders.py, on a capture of gl_shaders.c.)
+    Without them the draw is refused, naming it; a malformed one too."""
+    c = texture(shader_calls(VS_TEXEL % FETCH))
+    draw(c)
+    want = convert(tmp_path, c, "capture")
+    unpack = [0, 0, 0, 0, 0, 4, 0, 0]
+    made = [(no, fn, list(args), unpack) for no, fn, args, _, _ in c.calls if fn.startswith("glTex")]
+    assert [m[1] for m in made] == ["glTexImage2D", "glTexParameteri", "glTexParameteri"]
+
+    def reduced(tag, extra):
+        r = Calls()
+        r.calls = [(no, fn, args + ([("rbcd-vertex-textures", extra)] if fn == "glDrawArrays" and extra else []),
+                    ret, fl) for no, fn, args, ret, fl in c.calls]
+        return gl2rbt(tmp_path, r.write(tmp_path / f"{tag}.xz"), "-o", tmp_path / f"{tag}.rbt")
+
+    r = reduced("carried", [(3, made)])
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "carried.rbt").read_bytes() == want
+    refused(reduced("bare", None), "glDrawArrays", "texture 3, which its vertex shader reads: glTexImage2D (call",
+            "pixels are not in the reduced capture")
+    refused(reduced("bad", [(3, [made[0][:3]])]), "glDrawArrays", "not (call, name, arguments, unpack state)")
+    refused(reduced("bad2", "x"), "glDrawArrays", "its rbcd-vertex-textures (the reduced capture's): not a list")
+    assert left_behind(tmp_path, ["capture.xz", "capture.rbt", "carried.xz", "carried.rbt", "bare.xz", "bad.xz",
+                                  "bad2.xz"]) == []
+
+
+def unpack_buffer(c):
+    c.add("glGenBuffers", n=1, buffers=[9]).add("glBindBuffer", target="GL_PIXEL_UNPACK_BUFFER", buffer=9)
+    c.add("glBufferData", target="GL_PIXEL_UNPACK_BUFFER", size=32, data=TEXELS, usage="GL_STATIC_DRAW")
+    c.add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA32F", width=2, height=1,
+          border=0, format="GL_RGBA", type="GL_FLOAT", pixels=0)
+    return c.add("glBindBuffer", target="GL_PIXEL_UNPACK_BUFFER", buffer=0)
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda c: c.add("glGenFramebuffers", n=1, framebuffers=[6]).add("glBindFramebuffer", target="GL_FRAMEBUFFER",
+                                                                     framebuffer=6)
+     .add("glFramebufferTexture2D", target="GL_FRAMEBUFFER", attachment="GL_COLOR_ATTACHMENT0",
+          textarget="GL_TEXTURE_2D", texture=3, level=0)
+     .add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0), "attaches it to framebuffer 6"),
+    (lambda c: c.add("glCopyTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, x=0, y=0,
+                     width=2, height=1), "copies the framebuffer into it"),
+    (unpack_buffer, "pixel unpack buffer 9"),
+    (lambda c: c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=2, height=1,
+                     format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS[:31]), "31 bytes of pixels, 32 read by GL"),
+], ids=["framebuffer", "copy", "unpack_buffer", "short_pixels"])
+def test_images_the_converter_cannot_give_mesa_are_refused(tmp_path, make, words):
+    c = make(texture(shader_calls(VS_TEXEL % FETCH)))
+    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt", "--geometry", tmp_path / "x.geo")
+    refused(r, words)
+    assert left_behind(tmp_path, ["x.xz"]) == []
+
+
+def test_a_texture_past_what_mesa_is_given_is_refused(tmp_path):
+    """glTexStorage2D of 16384 x 16384 floats and no pixels: 4 GiB in Mesa."""
+    c = texture(shader_calls(VS_TEXEL % FETCH), image=False)
+    c.add("glTexStorage2D", target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA32F", width=16384,
+          height=16384)
+    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt")
+    refused(r, "glDrawArrays", "texture 3", "more than 1 GiB")
+    assert left_behind(tmp_path, ["x.xz"]) == []
