@@ -180,3 +180,19 @@ def test_a_texture_past_what_mesa_is_given_is_refused(tmp_path):
     r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt")
     refused(r, "glDrawArrays", "texture 3", "more than 1 GiB")
     assert left_behind(tmp_path, ["x.xz"]) == []
+
+
+def test_a_texture_of_more_calls_than_kept_is_refused_when_read(tmp_path):
+    """4,097 one-texel writes to distinct texels of one texture: past the
+    calls kept for a texture; refused only at a draw that reads it."""
+    c = texture(shader_calls(VS_TEXEL % FETCH), image=False)
+    c.add("glTexStorage2D", target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA32F", width=4097, height=1)
+    for x in range(4097):
+        c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=x, yoffset=0, width=1, height=1,
+              format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS[16:])
+    c.swap()   # a frame that reads nothing converts
+    r = gl2rbt(tmp_path, c.write(tmp_path / "ok.xz", images=True), "-o", tmp_path / "ok.rbt")
+    assert r.returncode == 0, r.stderr
+    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt")
+    refused(r, "glDrawArrays", "texture 3", "4096 calls for one texture")
+    assert left_behind(tmp_path, ["ok.xz", "ok.rbt", "x.xz"]) == []

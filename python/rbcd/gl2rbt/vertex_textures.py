@@ -155,7 +155,7 @@ class VertexTextures:
             self.image_bytes -= entry[2]
             del self.images[tex]
         size = 0
-        for _, name, d, _ in (tc.calls if tc is not None else []):
+        for _, name, d, _ in (tc.calls.values() if tc is not None else []):
             if name in LEVEL_CALLS + ("glTexStorage2D",):
                 w, h = d.get("width"), d.get("height")
                 if isinstance(w, int) and isinstance(h, int) and w > 0 and h > 0:
@@ -168,7 +168,7 @@ class VertexTextures:
         self.images[tex] = (mt, version, size)
         GL.glActiveTexture(GL.GL_TEXTURE0)
         GL.glBindTexture(GL.GL_TEXTURE_2D, mt)
-        for call_no, name, d, unpack in (tc.calls if tc is not None else []):
+        for call_no, name, d, unpack in (tc.calls.values() if tc is not None else []):
             self.replay(f"{self.draw}: texture {tex}, which its vertex shader reads: {name} (call {call_no})", name,
                         d, unpack)
         for pname in UNPACK_PARAMETERS:

@@ -47,14 +47,19 @@ SAMPLER_PARAMETER_CALLS = ("glSamplerParameteri", "glSamplerParameterf", "glSamp
 
 
 class TextureCalls:
-    """The calls that made one texture's images, in order: (call number,
-    name, arguments as a dict, pixel unpack state as a tuple);
-    `version` changes with every call kept; `refused` is (call, reason)
-    once the texture holds an image the converter cannot give Mesa."""
-    __slots__ = ("calls", "version", "bytes", "refused")
+    """The calls that made one texture's images, in order (`calls`: sequence
+    number -> (call number, name, arguments as a dict, pixel unpack state as
+    a tuple)); `keyed`: the call a later one replaces, by what it sets (a
+    part's rectangle, a parameter), so that a texture rewritten every frame
+    costs one lookup a call; `version` changes with every call kept;
+    `refused` is (call, reason) once the texture holds an image the
+    converter cannot give Mesa; `over`: past the limits, nothing more is
+    kept."""
+    __slots__ = ("calls", "keyed", "seq", "storage", "version", "bytes", "refused", "over")
 
     def __init__(self):
-        self.calls, self.version, self.bytes, self.refused = [], 0, 0, None
+        self.calls, self.keyed, self.seq, self.storage = {}, {}, 0, False
+        self.version, self.bytes, self.refused, self.over = 0, 0, None, False
 
 
 def pixels_of(d):
@@ -62,16 +67,16 @@ def pixels_of(d):
     return p if isinstance(p, (bytes, bytearray)) else None
 
 
-def rectangle(d):
-    return tuple(d.get(k) for k in ("level", "xoffset", "yoffset", "width", "height"))
-
-
-def covers(outer, inner):
-    """Whether a part call's rectangle (level, x, y, w, h) covers another's."""
-    if not all(isinstance(v, int) for v in outer + inner) or outer[0] != inner[0]:
-        return False
-    return outer[1] <= inner[1] and outer[2] <= inner[2] and inner[1] + inner[3] <= outer[1] + outer[3] \
-        and inner[2] + inner[4] <= outer[2] + outer[4]
+def replaced_by(name, d):
+    """What a later call of the same key replaces: a part's rectangle, a
+    parameter's value (None: nothing by key)."""
+    if name in PART_CALLS:
+        key = tuple(d.get(k) for k in ("level", "xoffset", "yoffset", "width", "height"))
+        return ("part",) + key if all(isinstance(v, int) for v in key) else None
+    if name in PARAMETER_CALLS:
+        pname = d.get("pname")
+        return ("parameter", pname) if isinstance(pname, (str, int)) else None
+    return None
 
 
 class TextureImageCalls:
@@ -89,14 +94,35 @@ class TextureImageCalls:
             tc = self.s.texture_calls[tex] = TextureCalls()
         return tc
 
-    def drop_texture_calls(self, tc, keep):
-        """Drops the calls of `tc` for which keep(call) is false."""
-        kept = [c for c in tc.calls if keep(c)]
-        for c in tc.calls:
-            if not keep(c) and pixels_of(c[2]) is not None:
-                tc.bytes -= len(pixels_of(c[2]))
-                self.s.texture_bytes_kept -= len(pixels_of(c[2]))
-        tc.calls = kept
+    def add_texture_call(self, tc, call):
+        size = len(pixels_of(call[2])) if pixels_of(call[2]) is not None else 0
+        key = replaced_by(call[1], call[2])
+        if key is not None and key in tc.keyed:
+            self.drop_texture_call(tc, tc.keyed[key])
+        tc.seq += 1
+        tc.calls[tc.seq] = call
+        if key is not None:
+            tc.keyed[key] = tc.seq
+        tc.storage |= call[1] == "glTexStorage2D"
+        tc.bytes += size
+        self.s.texture_bytes_kept += size
+        self.s.next_version += 1
+        tc.version = self.s.next_version
+
+    def drop_texture_call(self, tc, seq):
+        _, name, d, _ = tc.calls.pop(seq)
+        key = replaced_by(name, d)
+        if key is not None and tc.keyed.get(key) == seq:
+            del tc.keyed[key]
+        if pixels_of(d) is not None:
+            tc.bytes -= len(pixels_of(d))
+            self.s.texture_bytes_kept -= len(pixels_of(d))
+
+    def drop_texture_calls(self, tc, drop):
+        """Drops the calls for which drop(call) holds (a scan: for the calls
+        that redefine a level or the whole texture, made once or rarely)."""
+        for seq in [k for k, c in tc.calls.items() if drop(c)]:
+            self.drop_texture_call(tc, seq)
 
     def keep_texture_call(self, no, name, d):
         """An image or parameter call on the bound 2D texture, kept (the
@@ -105,8 +131,8 @@ class TextureImageCalls:
             return
         tex = self.bound_texture(VERTEX_TEXTURE_TARGET)
         tc = self.texture_calls(tex)
-        if tc.refused is not None and tc.refused[1].startswith("more than"):
-            return   # over a cap: nothing more is kept for it
+        if tc.over:
+            return
         pixels = d.get("pixels", d.get("data"))
         if name in LEVEL_CALLS + PART_CALLS:
             unpack_buffer = self.s.bound.get("GL_PIXEL_UNPACK_BUFFER", 0)
@@ -114,35 +140,24 @@ class TextureImageCalls:
                 tc.refused = (no, f"{name} read its pixels from pixel unpack buffer {unpack_buffer}")
             elif isinstance(pixels, int) and not isinstance(pixels, bool) and pixels:
                 tc.refused = (no, f"{name}'s pixels are not in the capture (a pointer apitrace did not follow)")
-            storage = any(c[1] == "glTexStorage2D" for c in tc.calls)
-            if name in LEVEL_CALLS and not storage:
+            if name in LEVEL_CALLS and not tc.storage:
                 # A level defined again: its earlier image and parts go.
                 level = d.get("level")
-                self.drop_texture_calls(tc, lambda c: not (c[1] in LEVEL_CALLS + PART_CALLS
-                                                           and c[2].get("level") == level))
-            elif name in PART_CALLS:
-                r = rectangle(d)
-                self.drop_texture_calls(tc, lambda c: not (c[1] in PART_CALLS and covers(r, rectangle(c[2]))))
-        elif name == "glTexStorage2D" and not any(c[1] == "glTexStorage2D" for c in tc.calls):
-            self.drop_texture_calls(tc, lambda c: c[1] not in LEVEL_CALLS + PART_CALLS + ("glGenerateMipmap",))
-        elif name in PARAMETER_CALLS:
-            self.drop_texture_calls(tc, lambda c: not (c[1] in PARAMETER_CALLS
-                                                       and c[2].get("pname") == d.get("pname")))
-        elif name == "glGenerateMipmap" and tc.calls and tc.calls[-1][1] == name:
+                self.drop_texture_calls(tc, lambda c: c[1] in LEVEL_CALLS + PART_CALLS and c[2].get("level") == level)
+        elif name == "glTexStorage2D" and not tc.storage:
+            self.drop_texture_calls(tc, lambda c: c[1] in LEVEL_CALLS + PART_CALLS + ("glGenerateMipmap",))
+        elif name == "glGenerateMipmap" and tc.calls and next(reversed(tc.calls.values()))[1] == name:
             return
         data = pixels_of(d)
         size = len(data) if data is not None else 0
         if self.s.texture_bytes_kept + size > MAX_TEXTURE_BYTES_KEPT or len(tc.calls) >= MAX_TEXTURE_CALLS_KEPT:
-            self.drop_texture_calls(tc, lambda c: False)
+            self.drop_texture_calls(tc, lambda c: True)
+            tc.over = True
             tc.refused = (no, f"more than {MAX_TEXTURE_BYTES_KEPT >> 20} MiB of texture images, or "
                               f"{MAX_TEXTURE_CALLS_KEPT} calls for one texture, would be kept")
             return
         unpack = tuple(self.s.unpack.get(p, UNPACK_DEFAULTS.get(p, 0)) for p in UNPACK_PARAMETERS)
-        tc.calls.append((no, name, d, unpack))
-        tc.bytes += size
-        self.s.texture_bytes_kept += size
-        self.s.next_version += 1
-        tc.version = self.s.next_version
+        self.add_texture_call(tc, (no, name, d, unpack))
 
     def texture_rendered(self, tex, no, how):
         """A texture whose image the GPU writes: a vertex shader that reads
@@ -192,7 +207,7 @@ class TextureImageCalls:
         from ..reduced import plain_value
         self.s.reduced_texture_versions[tex] = tc.version
         self.reduced_textures.append((tex, [(no, name, [(k, plain_value(v)) for k, v in d.items()], list(unpack))
-                                            for no, name, d, unpack in tc.calls]))
+                                            for no, name, d, unpack in tc.calls.values()]))
 
     def take_reduced_textures(self):
         taken, self.reduced_textures = self.reduced_textures, []
@@ -223,11 +238,7 @@ class TextureImageCalls:
                 size = len(pixels_of(d)) if pixels_of(d) is not None else 0
                 if self.s.texture_bytes_kept + size > MAX_TEXTURE_BYTES_KEPT:
                     fail_call(no, f"{what}: more than {MAX_TEXTURE_BYTES_KEPT >> 20} MiB of texture images")
-                tc.calls.append((call_no, c[1], d, unpack))
-                tc.bytes += size
-                self.s.texture_bytes_kept += size
-            self.s.next_version += 1
-            tc.version = self.s.next_version
+                self.add_texture_call(tc, (call_no, c[1], d, unpack))
 
     # ---- sampler objects
     def h_bind_sampler(self, no, name, a, args):
