@@ -196,3 +196,57 @@ def test_a_texture_of_more_calls_than_kept_is_refused_when_read(tmp_path):
     r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt")
     refused(r, "glDrawArrays", "texture 3", "4096 calls for one texture")
     assert left_behind(tmp_path, ["ok.xz", "ok.rbt", "x.xz"]) == []
+
+
+# ---- direct state access (GL 4.5) on textures, framebuffers, renderbuffers
+
+def test_a_texture_made_by_direct_state_access(tmp_path):
+    """glCreateTextures, glTextureStorage2D, glTextureSubImage2D and
+    glTextureParameteri, bound with glBindTextureUnit: the image of
+    glTexImage2D; the same calls on a name that is no texture do nothing."""
+    c = shader_calls(VS_TEXEL % FETCH)
+    c.add("glCreateTextures", target="GL_TEXTURE_2D", n=1, textures=[3])
+    c.add("glTextureStorage2D", texture=3, levels=1, internalformat="GL_RGBA32F", width=2, height=1)
+    c.add("glTextureSubImage2D", texture=3, level=0, xoffset=0, yoffset=0, width=2, height=1, format="GL_RGBA",
+          type="GL_FLOAT", pixels=TEXELS)
+    for pname in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER"):
+        c.add("glTextureParameteri", texture=3, pname=pname, param="GL_NEAREST")
+    c.add("glTextureSubImage2D", texture=8, level=0, xoffset=0, yoffset=0, width=2, height=1, format="GL_RGBA",
+          type="GL_FLOAT", pixels=TEXELS[::-1])   # texture 8 does not exist: GL_INVALID_OPERATION
+    c.add("glBindTextureUnit", unit=0, texture=3)
+    assert convert(tmp_path, draw(c), "dsa") == moved(tmp_path, 6, 2)
+
+
+@pytest.mark.parametrize("image", ["texture", "renderbuffer"])
+def test_a_camera_pass_framebuffer_made_by_direct_state_access(tmp_path, image):
+    """A framebuffer of the screen's size made with glCreateFramebuffers and
+    a depth texture or renderbuffer attached by name: the camera pass, as
+    the window is (a draw into another pass would be left out). (Clears by
+    name: test_glstate.py.)"""
+    def made(c, dsa):
+        if dsa:
+            c.add("glCreateFramebuffers", n=1, framebuffers=[5])
+            if image == "texture":
+                c.add("glCreateTextures", target="GL_TEXTURE_2D", n=1, textures=[6])
+                c.add("glTextureStorage2D", texture=6, levels=1, internalformat="GL_DEPTH_COMPONENT24", width=64,
+                      height=48)
+                c.add("glNamedFramebufferTexture", framebuffer=5, attachment="GL_DEPTH_ATTACHMENT", texture=6, level=0)
+            else:
+                c.add("glCreateRenderbuffers", n=1, renderbuffers=[6])
+                c.add("glNamedRenderbufferStorage", renderbuffer=6, internalformat="GL_DEPTH_COMPONENT24", width=64,
+                      height=48)
+                c.add("glNamedFramebufferRenderbuffer", framebuffer=5, attachment="GL_DEPTH_ATTACHMENT",
+                      renderbuffertarget="GL_RENDERBUFFER", renderbuffer=6)
+            c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=5)
+        c.add("glEnable", cap="GL_DEPTH_TEST")
+        c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+        c.add("glEnableVertexAttribArray", index=0)
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        c.add("glPopDebugGroup")
+        return c.swap()
+
+    want = convert(tmp_path, made(shader_calls(VS_MOVED % (0, 0)), False), "window")
+    assert want.count(b"\nf ") > 100
+    assert convert(tmp_path, made(shader_calls(VS_MOVED % (0, 0)), True), "dsa") == want

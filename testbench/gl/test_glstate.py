@@ -582,6 +582,31 @@ def test_gl4_and_es3_forms_of_clears_and_buffers():
             gl.glMapBufferRange(target="GL_ARRAY_BUFFER", offset=0, length=12, access=access, ret=1 << 20)
 
 
+def test_framebuffers_cleared_and_attached_by_name():
+    """Direct state access (GL 4.5): glClearNamedFramebufferfv clears the
+    depth of the framebuffer it names, 0 the window's, a camera pass's as
+    glClear there (another pass's changes nothing the unit sees), whatever
+    is bound; a renderbuffer given storage and attached by name makes a
+    camera pass; nothing stays bound."""
+    gl = GL()
+    gl.glCreateFramebuffers(n=2, framebuffers=[5, 9])
+    gl.glCreateRenderbuffers(n=1, renderbuffers=[6])
+    gl.glNamedRenderbufferStorage(renderbuffer=6, internalformat="GL_DEPTH_COMPONENT24", width=W, height=H)
+    gl.glNamedFramebufferRenderbuffer(framebuffer=5, attachment="GL_DEPTH_ATTACHMENT",
+                                      renderbuffertarget="GL_RENDERBUFFER", renderbuffer=6)
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=9)   # no attachment: another pass
+    gl.glClearNamedFramebufferfv(framebuffer=9, buffer="GL_DEPTH", drawbuffer=0, value=[0.75])
+    gl.glClearNamedFramebufferfv(framebuffer=5, buffer="GL_DEPTH", drawbuffer=0, value=[0.5])
+    gl.glClearNamedFramebufferfi(framebuffer=0, buffer="GL_DEPTH_STENCIL", drawbuffer=0, depth=0.25, stencil=0)
+    assert [r[2] for r in gl.records("C")] == [0.5, 0.25]
+    assert (gl.conv.s.draw_fbo, gl.conv.s.renderbuffer) == (9, 0)
+    square(gl)
+    assert gl.draws() == [], "framebuffer 9 is another pass"
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+    square(gl)
+    assert len(gl.draws()) == 1, "framebuffer 5 is the camera pass"
+
+
 def test_rules_name_textures_uploaded_as_gl4_and_es3_do(tmp_path):
     """glTexStorage2D then a glTexSubImage2D of the whole level (or a
     compressed image) gives the texture a digest rules can name; an update

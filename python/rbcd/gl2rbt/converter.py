@@ -13,6 +13,7 @@ from .glstate.buffers import BufferCalls
 from .glstate.draws import DrawCalls
 from .glstate.framebuffers import FramebufferCalls
 from .glstate.textures import REDUCED_TEXTURES, TextureImageCalls
+from .glstate.dsa import DirectStateCalls
 from .glstate.objects import ObjectCalls
 from .glstate.per_fragment import PerFragmentCalls
 from .glstate.polygon import PolygonCalls
@@ -45,7 +46,7 @@ ES_VERSIONS = {(1, 0), (1, 1), (2, 0), (3, 0), (3, 1), (3, 2)}
 
 
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
-                ProgramCalls, FramebufferCalls, TextureImageCalls, DrawCalls, ObjectCalls)
+                ProgramCalls, FramebufferCalls, TextureImageCalls, DirectStateCalls, DrawCalls, ObjectCalls)
 
 
 class Converter(*STATE_GROUPS, GeometryOutput):

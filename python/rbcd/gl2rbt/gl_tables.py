@@ -54,7 +54,10 @@ IGNORED_PREFIXES = (
     # EXT form): they change no pixel a later draw or the unit sees.
     "glInvalidateFramebuffer", "glInvalidateSubFramebuffer", "glDiscardFramebuffer",
     # A query of the bound framebuffer's completeness: it changes no state.
-    "glCheckFramebufferStatus",
+    "glCheckFramebufferStatus", "glCheckNamedFramebufferStatus",
+    # Which colour buffers a framebuffer draws or reads (direct state access),
+    # hints that its contents are no longer needed.
+    "glNamedFramebufferDrawBuffer", "glNamedFramebufferReadBuffer", "glInvalidateNamedFramebuffer",
 )
 # The compatibility profile's calls (by base name): in a core profile they
 # are GL_INVALID_OPERATION in Mesa and change nothing.

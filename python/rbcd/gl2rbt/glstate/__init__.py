@@ -12,6 +12,7 @@ unit, and the handlers of the calls that change it, one module a state group:
     programs        shaders, programs, uniforms and uniform blocks
     framebuffers    which pass a draw writes; texture buffers a vertex shader reads
     textures        2D texture images and sampler objects a vertex shader reads
+    dsa             direct state access on textures, framebuffers, renderbuffers
 
 Each module holds a mixin of rbcd.gl2rbt.converter.Converter whose HANDLERS
 map GL function names (without ARB/EXT) to its handlers, called as

@@ -1,0 +1,117 @@
+"""Direct state access (GL 4.5) on textures, framebuffers and renderbuffers:
+each call is its bind-to-edit form on the object it names, run through that
+form's handler with the object bound for the call alone (buffers and vertex
+arrays have theirs in buffers.py and attributes.py).
+
+A texture call names a texture that exists, with its target: one made by
+glCreateTextures, or bound once; another name is GL_INVALID_OPERATION and
+the call does nothing, as in Mesa. A framebuffer or renderbuffer call on a
+name a core profile has not generated does nothing either."""
+from ...cli import I32, U32, integer
+from ..errors import checked, fail_call
+from . import generated_name
+from .framebuffers import FramebufferCalls
+from .per_fragment import PerFragmentCalls
+from .textures import TextureImageCalls
+
+MAX_CREATED = 1 << 16   # names one glCreate* call makes (a larger n is the capture's error)
+
+
+def on_texture(handler, as_name, target=None):
+    """The handler of `as_name` (the bind-to-edit form) run with the named
+    texture bound on the active unit at its target (`target`: only a
+    texture of that target, as for glTextureBuffer)."""
+    def h(self, no, name, a, args):
+        d = dict(args)
+        tex = checked(no, integer, d.get("texture"), f"{name}: the texture", *U32)
+        bound_target = self.s.texture_targets.get(tex)
+        if not tex or bound_target is None or target is not None and bound_target != target:
+            return   # GL_INVALID_OPERATION: no such texture (or not of the call's target)
+        key = (self.s.active_unit, bound_target)
+        saved = self.s.units.get(key)
+        self.s.units[key] = tex
+        args = [("target", bound_target)] + [(k, v) for k, v in args if k != "texture"]
+        try:
+            handler(self, no, as_name, [v for _, v in args], args)
+        finally:
+            if saved is None:
+                del self.s.units[key]
+            else:
+                self.s.units[key] = saved
+    return h
+
+
+def on_framebuffer(handler, as_name, default_allowed=False):
+    """The handler of `as_name` run with the named framebuffer bound for
+    drawing (0, the window's, only where the call takes it)."""
+    def h(self, no, name, a, args):
+        d = dict(args)
+        fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
+        if (not fb and not default_allowed) or not generated_name(self.core, self.s.framebuffer_names, fb):
+            return   # GL_INVALID_OPERATION
+        saved = self.s.draw_fbo
+        self.s.draw_fbo = fb
+        args = [("target", "GL_DRAW_FRAMEBUFFER")] + [(k, v) for k, v in args if k != "framebuffer"]
+        try:
+            handler(self, no, as_name, [v for _, v in args], args)
+        finally:
+            self.s.draw_fbo = saved
+    return h
+
+
+def on_renderbuffer(handler, as_name):
+    def h(self, no, name, a, args):
+        d = dict(args)
+        rb = checked(no, integer, d.get("renderbuffer"), f"{name}: the renderbuffer", *U32)
+        if not rb or not generated_name(self.core, self.s.renderbuffer_names, rb):
+            return   # GL_INVALID_OPERATION
+        saved = self.s.renderbuffer
+        self.s.renderbuffer = rb
+        args = [("target", "GL_RENDERBUFFER")] + [(k, v) for k, v in args if k != "renderbuffer"]
+        try:
+            handler(self, no, as_name, [v for _, v in args], args)
+        finally:
+            self.s.renderbuffer = saved
+    return h
+
+
+class DirectStateCalls:
+    def h_create_textures(self, no, name, a, args):
+        """glCreateTextures(target, n, textures): textures that exist, of
+        that target (glBindTexture's first bind makes a generated one)."""
+        d = dict(args)
+        n = checked(no, integer, d.get("n"), f"{name}: n", *I32)
+        names = d.get("textures")
+        if n < 0 or not isinstance(names, list):
+            return   # GL_INVALID_VALUE (apitrace recorded no names)
+        if len(names) != n or n > MAX_CREATED:
+            fail_call(no, f"{name}: {len(names)} names, not its count ({n})")
+        target = d.get("target")
+        if not isinstance(target, str) or not target.startswith("GL_TEXTURE"):
+            return   # GL_INVALID_ENUM
+        for tex in names:
+            tex = checked(no, integer, tex, f"{name}: a texture", *U32)
+            if tex:
+                self.s.texture_targets[tex] = target
+
+    HANDLERS = {
+        "glCreateTextures": h_create_textures,
+        "glTextureStorage2D": on_texture(FramebufferCalls.h_tex_image, "glTexStorage2D"),
+        "glTextureStorage2DMultisample": on_texture(FramebufferCalls.h_tex_image, "glTexStorage2DMultisample"),
+        "glTextureSubImage2D": on_texture(FramebufferCalls.h_tex_sub_image, "glTexSubImage2D"),
+        "glCompressedTextureSubImage2D": on_texture(FramebufferCalls.h_tex_sub_image, "glCompressedTexSubImage2D"),
+        "glGenerateTextureMipmap": on_texture(TextureImageCalls.h_generate_mipmap, "glGenerateMipmap"),
+        "glCopyTextureSubImage2D": on_texture(TextureImageCalls.h_copy_tex_image, "glCopyTexSubImage2D"),
+        "glTextureBuffer": on_texture(FramebufferCalls.h_tex_buffer, "glTexBuffer", "GL_TEXTURE_BUFFER"),
+        "glTextureBufferRange": on_texture(FramebufferCalls.h_tex_buffer, "glTexBufferRange", "GL_TEXTURE_BUFFER"),
+        "glNamedFramebufferTexture": on_framebuffer(FramebufferCalls.h_framebuffer_texture, "glFramebufferTexture"),
+        "glNamedFramebufferRenderbuffer": on_framebuffer(FramebufferCalls.h_framebuffer_texture,
+                                                         "glFramebufferRenderbuffer"),
+        "glClearNamedFramebufferfv": on_framebuffer(PerFragmentCalls.h_clear_buffer, "glClearBufferfv", True),
+        "glClearNamedFramebufferfi": on_framebuffer(PerFragmentCalls.h_clear_buffer, "glClearBufferfi", True),
+        "glNamedRenderbufferStorage": on_renderbuffer(FramebufferCalls.h_renderbuffer_storage,
+                                                      "glRenderbufferStorage"),
+        "glNamedRenderbufferStorageMultisample": on_renderbuffer(FramebufferCalls.h_renderbuffer_storage,
+                                                                 "glRenderbufferStorageMultisample"),
+    } | {f"glTextureParameter{t}": on_texture(TextureImageCalls.h_texture_parameter, f"glTexParameter{t}")
+         for t in ("i", "f", "iv", "fv", "Iiv", "Iuiv")}
