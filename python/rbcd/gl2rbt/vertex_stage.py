@@ -57,6 +57,13 @@ def feedback_varying(GL, prog, i):
     return name.value.decode("ascii", "replace")
 
 
+def block_name(GL, prog, i):
+    """The name of a linked program's active uniform block i."""
+    length, name = ctypes.c_int(), ctypes.create_string_buffer(1024)
+    GL.glGetActiveUniformBlockName(prog, i, 1024, ctypes.byref(length), name)
+    return name.value.decode("ascii", "replace")
+
+
 def es_fragment_shader(vertex_source):
     m = re.search(r"^\s*#\s*version\s+(\d+)(\s+es)?", vertex_source, re.M)
     version = m.group(1) if m else "100"
@@ -259,6 +266,12 @@ class VertexStage:
                     del mp.applied[other]
         for idx, binding in p.block_bindings.items():
             block = p.block_names.get(idx)
+            if block is None:
+                # An index the capture never had named (a program's only
+                # block is 0): the block Mesa numbers so in the whole
+                # program, as the capture's driver did.
+                names = self.full_link(p)[1]
+                block = names[idx] if idx < len(names) else None
             if block is not None:
                 mi = GL.glGetUniformBlockIndex(mp.name, block)
                 if mi != GL.GL_INVALID_INDEX:
@@ -269,6 +282,12 @@ class VertexStage:
         """Whether Mesa links the program as its last link saw it, every
         stage that draws (the capture's own link, whose failure leaves the
         executable in use as it was: ProgramCalls.program_in_use)."""
+        return self.full_link(p)[0]
+
+    def full_link(self, p):
+        """Mesa's link of the program as its last link saw it, every stage
+        that draws: whether it links, and its active uniform blocks' names
+        by index."""
         bindings = p.linked[1]
         key = (p.digest, tuple(sorted(bindings.items())))
         if key not in self.link_status:
@@ -283,9 +302,12 @@ class VertexStage:
                     for attr, index in bindings.items():
                         GL.glBindAttribLocation(prog, index, attr)
                     GL.glLinkProgram(prog)
-                    self.link_status[key] = bool(GL.glGetProgramiv(prog, GL.GL_LINK_STATUS))
+                    ok = bool(GL.glGetProgramiv(prog, GL.GL_LINK_STATUS))
+                    blocks = [block_name(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORM_BLOCKS))] \
+                        if ok else []
+                    self.link_status[key] = (ok, blocks)
             except GLError:
-                self.link_status[key] = False   # GL_INVALID_OPERATION: a binding GL refuses, no link
+                self.link_status[key] = (False, [])   # GL_INVALID_OPERATION: a binding GL refuses, no link
             finally:
                 for sh in shaders:
                     GL.glDeleteShader(sh)

@@ -237,6 +237,21 @@ class ProgramCalls:
         elif "Index" in name and interface == "GL_UNIFORM_BLOCK":
             self.h_get_uniform_block_index(no, name, a, [("program", d.get("program")), ("uniformBlockName", rname)])
 
+    def h_get_block_name(self, no, name, a, args):
+        """glGetActiveUniformBlockName and glGetProgramResourceName of a
+        uniform block (GL 4.3, ES 3.1): the name of the block at an index,
+        which glUniformBlockBinding may then bind (an engine enumerating its
+        program's blocks)."""
+        d = dict(args)
+        if "Resource" in name and d.get("programInterface") != "GL_UNIFORM_BLOCK":
+            return
+        idx = d.get("uniformBlockIndex", d.get("index"))
+        block = d.get("uniformBlockName", d.get("name"))
+        p = self.program(no, name, d.get("program"))
+        if isinstance(idx, int) and not isinstance(idx, bool) and 0 <= idx < 0xFFFFFFFF and isinstance(block, str) \
+                and block:
+            p.block_names[idx] = block
+
     def h_uniform_block_binding(self, no, name, a, args):
         d = dict(args)
         p = self.program(no, name, d.get("program"))
@@ -326,6 +341,8 @@ class ProgramCalls:
         "glDeleteProgram": h_delete_program,
         "glGetUniformLocation": h_get_uniform_location,
         "glGetUniformBlockIndex": h_get_uniform_block_index,
+        "glGetActiveUniformBlockName": h_get_block_name,
+        "glGetProgramResourceName": h_get_block_name,
         "glUniformBlockBinding": h_uniform_block_binding,
         "glGetProgramResourceLocation": h_get_program_resource,
         "glGetProgramResourceIndex": h_get_program_resource,
