@@ -275,3 +275,27 @@ def test_a_bgra_format_and_null_multi_binds(tmp_path):
     c.add("glEnableVertexAttribArray", index=0)
     c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
     assert trace(tmp_path, tagged_draw(c), "bgra") == want
+
+
+def test_depth_blits_from_no_depth_buffer_or_of_a_part(tmp_path):
+    """A read framebuffer with no depth attachment (incomplete: GL refuses
+    the blit, or with no depth buffer GL ignores the bit) changes nothing;
+    a copy between two camera-pass framebuffers of a rectangle or under the
+    scissor leaves the rest of the destination as it was, which the one
+    depth buffer the converter keeps cannot say: refused, naming it (it
+    had been taken as changing nothing: 70% against Mesa)."""
+    want = trace(tmp_path, reference(shader_calls(VS)), "reference")
+    c = with_fbo(shader_calls(VS)).add("glGenFramebuffers", n=1, framebuffers=[5])
+    got = trace(tmp_path, reference(blit(c, "GL_DEPTH_BUFFER_BIT", FULL, FULL, read=5)
+                                    .add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0)), "nodepth")
+    assert got == want
+    for tag, rect, scissor, words in (("part", (0, 0, 20, 48), False, "a rectangle of it"),
+                                      ("scissor", FULL, True, "under the scissor")):
+        c = with_fbo(shader_calls(VS))
+        if scissor:
+            c.add("glEnable", cap="GL_SCISSOR_TEST").add("glScissor", x=0, y=0, width=20, height=48)
+        c = reference(blit(c, "GL_DEPTH_BUFFER_BIT", rect, rect).add("glBindFramebuffer", target="GL_FRAMEBUFFER",
+                                                                      framebuffer=0))
+        r = gl2rbt(tmp_path, c.write(tmp_path / f"{tag}.xz"), "-o", tmp_path / f"{tag}.rbt")
+        refused(r, "glBlitFramebuffer", words, "not emulated")
+        assert not (tmp_path / f"{tag}.rbt").exists()

@@ -315,10 +315,25 @@ class FramebufferCalls:
             src, dst = self.s.read_fbo, self.s.draw_fbo
         if not self.camera_pass(dst):
             return
+        if src and self.s.fbo_depth.get(src) is None:
+            # A read framebuffer with no depth buffer copies no depth (GL
+            # ignores the bit), and one with no attachment is incomplete
+            # (GL_INVALID_FRAMEBUFFER_OPERATION): nothing changes.
+            return
         rect = [checked(no, integer, d.get(k), f"{name}: {k}", *I32)
                 for k in ("srcX0", "srcY0", "srcX1", "srcY1", "dstX0", "dstY0", "dstX1", "dstY1")]
         if self.camera_pass(src) and rect[:4] == rect[4:]:
-            return
+            # The one depth buffer kept is both: a copy of all of it changes
+            # nothing; of a part (a rectangle, or under the scissor), the
+            # rest of the destination keeps depths the converter has not.
+            w, h = self.screen
+            whole = min(rect[0], rect[2]) <= 0 and min(rect[1], rect[3]) <= 0 \
+                and max(rect[0], rect[2]) >= w and max(rect[1], rect[3]) >= h
+            if whole and self.scissor_rect() == (0, 0, w - 1, h - 1):
+                return
+            fail_call(no, f"{printable(name)}: a depth copy of part of the camera pass's depth buffer "
+                      f"({'a rectangle of it' if not whole else 'under the scissor'}) into another of its "
+                      "framebuffers is not emulated")
         fail_call(no, f"{printable(name)}: a depth copy into the camera pass's depth buffer "
                   f"{'moved or scaled' if self.camera_pass(src) else 'from another pass'} is not emulated")
 
