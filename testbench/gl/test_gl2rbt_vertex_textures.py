@@ -250,3 +250,21 @@ def test_a_camera_pass_framebuffer_made_by_direct_state_access(tmp_path, image):
     want = convert(tmp_path, made(shader_calls(VS_MOVED % (0, 0)), False), "window")
     assert want.count(b"\nf ") > 100
     assert convert(tmp_path, made(shader_calls(VS_MOVED % (0, 0)), True), "dsa") == want
+
+
+def test_multi_binds_of_null_unbind(tmp_path):
+    """glBindTextures and glBindSamplers with NULL (GL 4.4, recorded as 0)
+    unbind the units they span: the texture's own filtering again, then the
+    default texture, read as zeros (they had been refused)."""
+    def unbound(what):
+        c = texture(shader_calls(VS_TEXEL % MIDDLE), filters="GL_LINEAR")
+        c.add("glGenSamplers", count=1, samplers=[8]).add("glBindSampler", unit=0, sampler=8)
+        c.add("glSamplerParameteri", sampler=8, pname="GL_TEXTURE_MAG_FILTER", param="GL_NEAREST")
+        c.add("glSamplerParameteri", sampler=8, pname="GL_TEXTURE_MIN_FILTER", param="GL_NEAREST")
+        c.add("glBindSamplers", first=0, count=2, samplers=0)
+        if what == "textures":
+            c.add("glBindTextures", first=0, count=2, textures=0)
+        return draw(c)
+
+    assert convert(tmp_path, unbound("samplers"), "samplers") == moved(tmp_path, 3, 1)
+    assert convert(tmp_path, unbound("textures"), "textures") == moved(tmp_path, 0, 0)

@@ -234,7 +234,7 @@ class FramebufferCalls:
             first, count, texs = d.get("first"), d.get("count"), d.get("textures")
             first = checked(no, integer, first, f"{name}: first", *U32)
             count = checked(no, integer, count, f"{name}: count", *U32)
-            if texs is None:
+            if texs is None or texs == 0 and not isinstance(texs, bool):   # NULL (apitrace records it as 0)
                 texs = [0] * count
             if not isinstance(texs, list) or len(texs) < count:
                 fail_call(no, f"{name}: fewer textures than its count")

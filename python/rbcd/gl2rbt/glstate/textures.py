@@ -249,7 +249,7 @@ class TextureImageCalls:
             first = checked(no, integer, d.get("first"), f"{name}: first", *U32)
             count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
             samplers = d.get("samplers")
-            if samplers is None:
+            if samplers is None or samplers == 0 and not isinstance(samplers, bool):   # NULL, recorded as 0
                 samplers = [0] * max(count, 0)
             if not isinstance(samplers, list) or len(samplers) < count:
                 fail_call(no, f"{name}: fewer samplers than its count")
