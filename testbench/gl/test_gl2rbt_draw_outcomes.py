@@ -245,3 +245,17 @@ def test_a_reduced_capture_of_another_version_or_miscounted_names(tmp_path):
         refused(gl2rbt(tmp_path, draw(c).write(tmp_path / "n.xz"), "-o", tmp_path / "n.rbt"), fn,
                 "2 names, not its count (3)")
     assert left_behind(tmp_path, ["h.xz", "n.xz"]) == []
+
+
+def test_a_make_current_that_failed_changes_nothing(tmp_path):
+    """A MakeCurrent the capture records as failed (EGL_FALSE, False: the
+    context destroyed) leaves what was current: after a release, the
+    draws that follow reach no context, refused naming the draw (the
+    converter had taken the failed call's context as current)."""
+    c = shader_calls(VS).add("glXMakeCurrent", dpy=1, drawable=2, ctx=7, ret=True)
+    draw(c)
+    c.add("glXMakeCurrent", dpy=1, drawable=0, ctx=0, ret=True).add("glXMakeCurrent", dpy=1, drawable=2, ctx=7,
+                                                                   ret=False)
+    r = gl2rbt(tmp_path, draw(c, vao=8).write(tmp_path / "f.xz"), "-o", tmp_path / "f.rbt")
+    refused(r, "call 33: a draw with no GL context current")
+    assert left_behind(tmp_path, ["f.xz"]) == []

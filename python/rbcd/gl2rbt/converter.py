@@ -269,6 +269,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         ctx = a[-1] if a else None
         if not isinstance(ctx, int) or isinstance(ctx, bool):
             fail_call(no, f"{printable(name)}: the context {printable(ctx, 40)} is not a handle")
+        if self.ret is not None and self.ret in ("EGL_FALSE", "GL_FALSE", 0):
+            return   # it failed (a destroyed context, a bad surface): what was current stays current
         self.context = ctx
         if ctx and ctx != self.state_context:
             if self.state_context in self.destroyed_contexts and ctx in self.unshared_contexts:
