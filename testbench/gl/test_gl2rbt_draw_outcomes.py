@@ -259,3 +259,41 @@ def test_a_make_current_that_failed_changes_nothing(tmp_path):
     r = gl2rbt(tmp_path, draw(c, vao=8).write(tmp_path / "f.xz"), "-o", tmp_path / "f.rbt")
     refused(r, "call 33: a draw with no GL context current")
     assert left_behind(tmp_path, ["f.xz"]) == []
+
+
+def test_divisor_entry_points_mesa_does_not_implement_change_nothing(tmp_path):
+    """glVertexAttribDivisorEXT, ANGLE and NV are stubs in Mesa 22.3 (no
+    llvmpipe context exposes their extensions; measured here on Mesa
+    itself, the ARB form for contrast): the converter's draw is the
+    non-instanced one's (it had applied the divisor: 62-87% against Mesa)."""
+    import ctypes
+    from rbcd.gl2rbt.gl_tables import MESA_NO_OPS
+    from rbcd.gl2rbt.mesa import Mesa
+    for es in (False, True):
+        mesa = Mesa(es)
+        GL = mesa.gl
+        GL.glBindVertexArray(GL.glGenVertexArrays(1))
+        for name in sorted(MESA_NO_OPS) + ["glVertexAttribDivisorARB"]:
+            GL.glVertexAttribDivisor(1, 0)
+            ctypes.CFUNCTYPE(None, ctypes.c_uint, ctypes.c_uint)(mesa.egl.eglGetProcAddress(name.encode()))(1, 5)
+            got = ctypes.c_int()
+            GL.glGetVertexAttribiv(1, GL.GL_VERTEX_ATTRIB_ARRAY_DIVISOR, ctypes.byref(got))
+            assert got.value == (5 if name.endswith("ARB") else 0), (es, name)
+
+    def instanced(fn):
+        c = shader_calls(VS)
+        c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+        c.add("glEnableVertexAttribArray", index=0)
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=12,
+              pointer=0)
+        if fn:
+            c.add(fn, index=0, divisor=1)
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+        c.add("glDrawArraysInstanced", mode="GL_TRIANGLES", first=0, count=3, instancecount=1)
+        c.add("glPopDebugGroup")
+        return c.swap()
+
+    want = trace(tmp_path, instanced(None), "plain")
+    assert trace(tmp_path, instanced("glVertexAttribDivisorARB"), "arb") != want   # every vertex the first
+    for fn in sorted(MESA_NO_OPS):
+        assert trace(tmp_path, instanced(fn), fn) == want, fn

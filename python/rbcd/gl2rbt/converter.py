@@ -6,7 +6,7 @@ import struct
 from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
-from .gl_tables import CALL_FLAG_END_FRAME, COMPAT_ONLY, END_FRAME_CALLS, IGNORED_PREFIXES, base_name
+from .gl_tables import CALL_FLAG_END_FRAME, COMPAT_ONLY, END_FRAME_CALLS, IGNORED_PREFIXES, MESA_NO_OPS, base_name
 from .glstate import GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
@@ -221,7 +221,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 # primitive's vertices and draws them at glEnd, into the next.
                 self.end_frame(no)
             return   # any other call there is GL_INVALID_OPERATION: it does nothing
-        h = self.HANDLERS.get(base)
+        h = self.HANDLERS.get(base) if name not in MESA_NO_OPS else Converter.h_mesa_no_op
         if self.core and base in COMPAT_ONLY:
             h = Converter.h_not_in_core
         if h is not None:
@@ -239,6 +239,9 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
         if flags & CALL_FLAG_END_FRAME:
             self.end_frame(no)
+
+    def h_mesa_no_op(self, no, name, a, args):
+        pass   # an entry point Mesa answers with a stub (gl_tables.MESA_NO_OPS)
 
     def h_not_in_core(self, no, name, a, args):
         pass   # a compatibility-profile call in a core profile: GL_INVALID_OPERATION, nothing changes
