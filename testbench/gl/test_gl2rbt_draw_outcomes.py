@@ -148,6 +148,72 @@ def test_a_signal_while_mesa_works_ends_the_run_at_once(tmp_path):
     assert left_behind(tmp_path, ["b.xz"]) == []
 
 
+# A fragment shader the shading child (rbcd.gl2rbt.shading) compiles for
+# seconds (a switch of 600 cases: 7 s), while the converter waits for it.
+SWITCH_FRAGMENT = ("#version 330 core\nout vec4 c;\nvoid main() { int sw = int(gl_FragCoord.x); float t = 0.0; "
+                   "switch (sw) {" + "".join(f"case {i}: t = {i}.0; break;" for i in range(600)) + "} c = vec4(t); }\n")
+
+
+def children(pid):
+    """The processes whose parent is `pid`, by pid: their command lines."""
+    found = {}
+    for d in os.listdir("/proc"):
+        try:
+            with open(f"/proc/{d}/stat") as f:
+                if d.isdigit() and int(f.read().rsplit(")", 1)[1].split()[1]) == pid:
+                    with open(f"/proc/{d}/cmdline", "rb") as c:
+                        found[int(d)] = c.read()
+        except (OSError, ValueError):
+            pass
+    return found
+
+
+def alive(pid):
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=["term", "hup", "int"])
+def test_a_signal_while_the_shading_child_works_ends_both(tmp_path, sig):
+    """Outside Mesa's work in the converter (here: while the child measuring
+    the fragment shader's cost works) SIGTERM had ended the run with exit
+    143, SIGHUP 129, SIGINT 130, none saying a word, and the child had gone
+    on compiling for seconds: now each is one line naming the capture,
+    "interrupted", exit 130, the child stopped, nothing left (SIGTERM sent
+    twice: the second does not cut the clean-up short)."""
+    c = shader_calls(VS)
+    c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+    c.add("glShaderSource", shader=3, count=1, string=[SWITCH_FRAGMENT], length=None)
+    c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
+    cap = draw(c.add("glLinkProgram", program=2).add("glUseProgram", program=2)).write(tmp_path / "s.xz")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    p = subprocess.Popen(["/usr/bin/python3", GL2RBT, cap, "-o", tmp_path / "s.rbt", "--summary", tmp_path / "s.jsonl"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        child, t = None, time.monotonic()
+        while child is None and p.poll() is None and time.monotonic() - t < 60:
+            child = next((k for k, cmd in children(p.pid).items() if b"rbcd.gl2rbt.shading" in cmd), None)
+            time.sleep(0.1)
+        assert child, "no shading child"
+        time.sleep(2)   # at work on the switch by then
+        assert alive(child)
+        p.send_signal(sig)
+        if sig == signal.SIGTERM:
+            time.sleep(0.05)
+            p.send_signal(sig)
+        out, err = p.communicate(timeout=60)
+    finally:
+        p.kill()
+        p.wait()
+    assert p.returncode == 130 and err.splitlines() == [f"rbcd-gl2rbt: {cap}: interrupted"], (p.returncode, err)
+    assert not alive(child), "the shading child outlives the converter"
+    assert left_behind(tmp_path, ["s.xz"]) == []
+
+
 def test_mesa_work_out_of_proportion_ends_the_run(tmp_path):
     """A local array of a million floats, its size spelled as a constant
     expression: Mesa's LLVM had taken minutes and 1.9 GB on it, deaf to
@@ -297,3 +363,18 @@ def test_divisor_entry_points_mesa_does_not_implement_change_nothing(tmp_path):
     assert trace(tmp_path, instanced("glVertexAttribDivisorARB"), "arb") != want   # every vertex the first
     for fn in sorted(MESA_NO_OPS):
         assert trace(tmp_path, instanced(fn), fn) == want, fn
+
+
+def test_long_expressions_compile_or_are_refused_before_mesa(tmp_path):
+    """Mesa's compiler recurses once a term: a statement of 30,000 terms
+    (which killed the converter with SIGSEGV on the default 8 MiB stack)
+    converts on the stack mesa.py gives it; one past the documented
+    operators a statement is refused naming the call, nothing left."""
+    def vs(n):
+        return ("#version 330 core\nin vec3 p;\nvoid main() { float s = 0.0 * (" + "+".join(["p.x"] * n) + ");\n"
+                "  gl_Position = vec4(p.x / 32.0 - 1.0 + s, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+    assert trace(tmp_path, draw(shader_calls(vs(30000))), "long") == trace(tmp_path, draw(shader_calls(VS)), "short")
+    r = gl2rbt(tmp_path, draw(shader_calls(vs(70000))).write(tmp_path / "x.xz"), "-o", tmp_path / "x.rbt",
+               "--geometry", tmp_path / "x.geo")
+    refused(r, "glShaderSource", "a statement of 70001 operators, more than 65536")
+    assert left_behind(tmp_path, ["long.xz", "long.rbt", "short.xz", "short.rbt", "x.xz"]) == []

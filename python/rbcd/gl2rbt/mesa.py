@@ -13,6 +13,7 @@ clip-space positions, assembled as GL assembles them (strips, fans,
 primitive restart, base vertex, instances in order)."""
 import ctypes
 import os
+import resource
 import select
 import signal
 import threading
@@ -31,7 +32,26 @@ EGL_PLATFORM_SURFACELESS_MESA = 0x31DD
 ES_ENUMS = {"GL_HALF_FLOAT_OES": 0x8D61}
 
 
+# The stack Mesa's GLSL compiler may use: it recurses once a term of an
+# expression (a sum of 20,000 terms overflowed the default 8 MiB and killed
+# the converter with SIGSEGV). The main thread's stack grows up to the soft
+# limit in force when it grows, into the gap of at least 128 MiB Linux keeps
+# below it; children (the shading measurement) inherit the limit. With this,
+# sums of 200,000 terms compile; programs.MAX_STATEMENT_OPERATORS keeps
+# every statement well below that.
+MESA_STACK_BYTES = 120 << 20
+
+
+def raise_stack_limit():
+    soft, hard = resource.getrlimit(resource.RLIMIT_STACK)
+    if soft != resource.RLIM_INFINITY and soft < MESA_STACK_BYTES:
+        want = MESA_STACK_BYTES if hard == resource.RLIM_INFINITY else min(MESA_STACK_BYTES, hard)
+        if want > soft:
+            resource.setrlimit(resource.RLIMIT_STACK, (want, hard))
+
+
 def _load():
+    raise_stack_limit()
     try:
         from OpenGL import EGL, GL
         return EGL, GL

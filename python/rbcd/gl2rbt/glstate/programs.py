@@ -20,6 +20,13 @@ STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GE
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
           "GL_COMPUTE_SHADER": "compute"}
 MAX_SOURCE_CHARS = 16 << 20   # one shader's sources (the largest game shaders are tens of kilobytes)
+# Operators and separators in one statement of a shader (between ;, { and }):
+# Mesa's compiler recurses once a term, and a sum of 20,000 terms overflowed
+# its default stack (mesa.MESA_STACK_BYTES: 200,000 compile). Game shaders'
+# longest statements have tens.
+MAX_STATEMENT_OPERATORS = 65536
+STATEMENTS = re.compile(r"[^;{}]+")
+OPERATORS = re.compile(r"[-+*/%&|^<>?:=,!~]")
 COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
 UNIFORM = re.compile(r"gl(Program)?Uniform(Matrix)?([1-4])(x[2-4])?(f|d|i|ui)(v?)$")
 
@@ -122,6 +129,12 @@ class ProgramCalls:
         if total > MAX_SOURCE_CHARS:
             fail_call(no, f"{name}: {total} characters of source, more than {MAX_SOURCE_CHARS} "
                       "(docs/gl-capture.md, limits)")
+        text = COMMENTS.sub(" ", "".join(strings))
+        if len(OPERATORS.findall(text)) > MAX_STATEMENT_OPERATORS:   # a cheap bound before the exact count
+            longest = max(len(OPERATORS.findall(m.group())) for m in STATEMENTS.finditer(text))
+            if longest > MAX_STATEMENT_OPERATORS:
+                fail_call(no, f"{name}: a statement of {longest} operators, more than {MAX_STATEMENT_OPERATORS} "
+                          "(docs/gl-capture.md, limits): Mesa's compiler would overflow its stack")
         sh.sources = strings
 
     def h_compile_shader(self, no, name, a, args):
