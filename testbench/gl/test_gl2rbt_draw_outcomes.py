@@ -378,3 +378,20 @@ def test_long_expressions_compile_or_are_refused_before_mesa(tmp_path):
                "--geometry", tmp_path / "x.geo")
     refused(r, "glShaderSource", "a statement of 70001 operators, more than 65536")
     assert left_behind(tmp_path, ["long.xz", "long.rbt", "short.xz", "short.rbt", "x.xz"]) == []
+
+
+def test_a_glx_context_made_after_the_first_was_destroyed_starts_afresh(tmp_path):
+    """glXCreateContext, draws, glXDestroyContext, a second unshared
+    context: its draws start from GL's initial state, as the same with EGL
+    (they had been refused as draws in a second context)."""
+    c = shader_calls(VS).add("glXCreateContext", dpy=1, vis=2, shareList=0, direct=1, ret=7)
+    c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=7, ret=True)
+    draw(c)
+    c.add("glXMakeCurrent", dpy=1, drawable=0, ctx=0, ret=True).add("glXDestroyContext", dpy=1, ctx=7)
+    c.add("glXCreateContext", dpy=1, vis=2, shareList=0, direct=1, ret=8)
+    c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=8, ret=True)
+    for call in shader_calls(VS).calls[5:]:   # the program and buffer again, in the new context
+        c.add(call[1], ret=call[3], **dict(call[2]))
+    got = trace(tmp_path, draw(c), "second")
+    one = trace(tmp_path, draw(shader_calls(VS)), "one")
+    assert got.count(b"\nf ") == 2 * one.count(b"\nf ") > 0

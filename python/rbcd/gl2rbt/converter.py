@@ -256,12 +256,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         # EGL's default API is OpenGL ES (eglBindAPI changes it).
         self.es = self.egl_api != "EGL_OPENGL_API"
         attrs = dict(args).get("attrib_list")
-        ctx = self.ret
-        if isinstance(ctx, int) and not isinstance(ctx, bool) and ctx:
-            self.destroyed_contexts.discard(ctx)
-            self.unshared_contexts.discard(ctx)
-            if dict(args).get("share_context") in (0, None):
-                self.unshared_contexts.add(ctx)
+        self.context_created(dict(args).get("share_context"))
         self.core = not self.es and context_is_core(attrs, "EGL_CONTEXT_MAJOR_VERSION", "EGL_CONTEXT_MINOR_VERSION",
                                                     "EGL_CONTEXT_OPENGL_PROFILE_MASK",
                                                     "EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT")
@@ -281,10 +276,27 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             self.state_context = ctx
         self.unshared_contexts.discard(ctx)
 
+    def context_created(self, share):
+        """A context the call returned (self.ret), sharing objects with
+        `share` (0 or NULL: none)."""
+        ctx = self.ret
+        if isinstance(ctx, int) and not isinstance(ctx, bool) and ctx:
+            self.destroyed_contexts.discard(ctx)
+            self.unshared_contexts.discard(ctx)
+            if share in (0, None):
+                self.unshared_contexts.add(ctx)
+
     def h_egl_destroy_context(self, no, name, a, args):
+        """eglDestroyContext and glXDestroyContext (which returns nothing)."""
         ctx = dict(args).get("ctx")
-        if self.ret in ("EGL_TRUE", 1, True) and isinstance(ctx, int) and ctx:
+        if self.ret in ("EGL_TRUE", 1, True, None) and isinstance(ctx, int) and not isinstance(ctx, bool) and ctx:
             self.destroyed_contexts.add(ctx)
+
+    def h_glx_create_old_context(self, no, name, a, args):
+        """glXCreateContext and glXCreateNewContext: a compatibility context
+        sharing the objects of shareList or share_list."""
+        d = dict(args)
+        self.context_created(d.get("shareList", d.get("share_list")))
 
     def new_context(self):
         """The state of a context made current for the first time, created
@@ -316,6 +328,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         capture's error."""
         if not self.ret:
             return
+        self.context_created(dict(args).get("share_context"))
         attrs = dict(args).get("attrib_list")
         pairs = dict(zip(attrs[0::2], attrs[1::2])) if isinstance(attrs, list) else {}
         mask = pairs.get("GLX_CONTEXT_PROFILE_MASK_ARB")
@@ -337,6 +350,9 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         "eglBindAPI": h_egl_bind_api,
         "eglCreateContext": h_egl_create_context,
         "eglDestroyContext": h_egl_destroy_context,
+        "glXDestroyContext": h_egl_destroy_context,
+        "glXCreateContext": h_glx_create_old_context,
+        "glXCreateNewContext": h_glx_create_old_context,
         "glXCreateContextAttribs": h_glx_create_context,
         "glXMakeCurrent": h_make_current,
         "glXMakeContextCurrent": h_make_current,
