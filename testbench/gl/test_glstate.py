@@ -807,3 +807,37 @@ def test_a_core_profile_binds_only_generated_buffer_names():
         gl.glDeleteBuffers(n=1, buffers=[1])
         gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=1)
         assert gl.conv.s.bound["GL_ARRAY_BUFFER"] == (0 if core else 1)
+
+
+def test_opengl_es_1_float_and_fixed_point_matrix_calls():
+    """glOrthof, glOrthox, glTranslatex, glRotatex, glScalex, glLoadMatrixx,
+    glDepthRangex, glPolygonOffsetx and glClearDepthx (16.16 fixed point)
+    are their float calls' (they had been refused as not emulated)."""
+    def run(fixed):
+        gl = GL()
+        one = 65536 if fixed else 1.0
+        gl.glMatrixMode("GL_PROJECTION")
+        (gl.glOrthox if fixed else gl.glOrthof)(0, W * one, 0, H * one, -100 * one, 100 * one)
+        gl.glMatrixMode("GL_MODELVIEW")
+        if fixed:
+            gl.glLoadMatrixx([65536 if i in (0, 5, 10, 15) else 0 for i in range(16)])
+            gl.glTranslatex(3 * 65536, 2 * 65536, 0)
+            gl.glRotatex(90 * 65536, 0, 0, 65536)
+            gl.glScalex(2 * 65536, 32768, 65536)
+            gl.glDepthRangex(16384, 49152)
+            gl.glPolygonOffsetx(65536, 2 * 65536)
+            gl.glClearDepthx(32768)
+        else:
+            gl.glLoadMatrixf([1.0 if i in (0, 5, 10, 15) else 0.0 for i in range(16)])
+            gl.glTranslatef(3.0, 2.0, 0.0)
+            gl.glRotatef(90.0, 0.0, 0.0, 1.0)
+            gl.glScalef(2.0, 0.5, 1.0)
+            gl.glDepthRangef(0.25, 0.75)
+            gl.glPolygonOffset(1.0, 2.0)
+            gl.glClearDepthf(0.5)
+        square(gl)
+        return gl
+    f, x = run(False), run(True)
+    (df,), (dx,) = f.draws(), x.draws()
+    assert np.array_equal(df["clip"], dx["clip"]) and df["depth_range"] == dx["depth_range"] == (0.25, 0.75)
+    assert f.conv.s.offset == x.conv.s.offset == (1.0, 2.0) and f.conv.s.clear_depth == x.conv.s.clear_depth == 0.5

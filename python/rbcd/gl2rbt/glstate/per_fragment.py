@@ -8,6 +8,7 @@ from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES, base_name
 from . import bitfield, clamped01, enum_arg, first_of_array, gl_boolean
+from .transform import fixed_point
 
 CLEAR_BITS = {0x100: "GL_DEPTH_BUFFER_BIT", 0x200: "GL_ACCUM_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT",
               0x4000: "GL_COLOR_BUFFER_BIT"}
@@ -139,6 +140,7 @@ class PerFragmentCalls:
         "glDepthFunc": h_depth_func,
         "glDepthMask": h_depth_mask,
         "glClearDepth": h_clear_depth,
+        "glClearDepthx": fixed_point(h_clear_depth),   # OpenGL ES 1, 16.16 fixed point
         "glClearDepthf": h_clear_depth,
         "glClear": h_clear,
         "glClearBufferfv": h_clear_buffer,

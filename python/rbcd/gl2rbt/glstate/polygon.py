@@ -2,6 +2,7 @@
 from ..errors import fail_call, printable
 from ..gl_tables import CULL
 from . import enum_arg, number
+from .transform import fixed_point
 
 class PolygonCalls:
     """Rasterization state of polygons."""
@@ -37,6 +38,7 @@ class PolygonCalls:
         "glCullFace": h_cull_face,
         "glFrontFace": h_front_face,
         "glPolygonOffset": h_polygon_offset,
+        "glPolygonOffsetx": fixed_point(h_polygon_offset),   # OpenGL ES 1, 16.16 fixed point
         "glPolygonMode": h_polygon_mode,
         "glProvokingVertex": h_provoking_vertex,
     }

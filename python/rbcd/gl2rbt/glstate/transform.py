@@ -195,6 +195,12 @@ class TransformCalls:
         except np.linalg.LinAlgError:
             fail_call(no, "glClipPlane with a singular model-view matrix")
 
+    HANDLERS_ES1 = {   # OpenGL ES 1's float and 16.16 fixed-point forms
+        "glOrthof": "glOrtho", "glFrustumf": "glFrustum", "glClipPlanef": "glClipPlane",
+        "glOrthox": "glOrtho", "glFrustumx": "glFrustum", "glTranslatex": "glTranslatef", "glRotatex": "glRotatef",
+        "glScalex": "glScalef", "glLoadMatrixx": "glLoadMatrixf", "glMultMatrixx": "glMultMatrixf",
+        "glDepthRangex": "glDepthRange", "glClipPlanex": "glClipPlane",
+    }
     HANDLERS = {
         "glMatrixMode": h_matrix_mode,
         "glLoadIdentity": h_load_identity,
@@ -225,3 +231,21 @@ class TransformCalls:
         "glDepthRangef": h_depth_range,
         "glClipPlane": h_clip_plane,
     }
+
+
+def fixed_point(handler):
+    """The handler of a float call, for its OpenGL ES 1 form of 16.16
+    fixed-point values (GLfixed: an integer, 1/65536 a unit)."""
+    def h(self, no, name, a, args):
+        def value(v):
+            if isinstance(v, list):
+                return [value(x) for x in v]
+            return v / 65536.0 if isinstance(v, int) and not isinstance(v, bool) else v
+        args = [(k, value(v)) for k, v in args]
+        handler(self, no, name, [v for _, v in args], args)
+    return h
+
+
+TransformCalls.HANDLERS |= {name: (fixed_point(TransformCalls.HANDLERS[core]) if name.endswith("x")
+                                   else TransformCalls.HANDLERS[core])
+                            for name, core in TransformCalls.HANDLERS_ES1.items()}
