@@ -85,6 +85,11 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.select = Selection(args.select) if args.select else None
         self.tracker = EntityTracker(self.select.settings) if self.select else None
         self.drawn_surfaces = set()
+        # The frame's camera-pass framebuffers whose draws wrote depth since
+        # the frame began or the last depth clear, and those whose depths a
+        # clear of another one wiped from the one buffer the converter keeps
+        # (FramebufferCalls.h_blit_framebuffer).
+        self.camera_drawn, self.camera_wiped = set(), set()
         self.geo_objects = {}            # object id -> list of (eye verts, tris)
         self.geo_view = None             # the projection of the frame's collisionable draws
         self.geo_space = None            # "eye" or "ndc": the space of the frame's geometry
@@ -174,6 +179,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.frame_records = 0
         self.active = self.in_range(self.frame)
         self.drawn_surfaces = set()
+        self.camera_drawn, self.camera_wiped = set(), set()
         self.geo_objects = {}
         self.geo_view = None
         self.geo_space = None

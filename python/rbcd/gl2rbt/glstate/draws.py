@@ -68,6 +68,8 @@ class DrawCalls:
         if not self.camera_pass():
             self.offscreen_draws += 1
             return
+        if self.s.depth_test and self.s.depth_mask:
+            self.camera_drawn.add(self.s.draw_fbo)
         if mode in PRIM_NO_AREA:
             self.ignored_prims += 1
             return
@@ -239,6 +241,8 @@ class DrawCalls:
         if not self.camera_pass():
             self.offscreen_draws += 1
             return
+        if self.s.depth_test and self.s.depth_mask:
+            self.camera_drawn.add(self.s.draw_fbo)
         per = TRIANGLES_PER_VERTICES[mode](count)   # at most, with no restart
         if per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {per * instances} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "

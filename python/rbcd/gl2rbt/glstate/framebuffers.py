@@ -330,6 +330,14 @@ class FramebufferCalls:
             whole = min(rect[0], rect[2]) <= 0 and min(rect[1], rect[3]) <= 0 \
                 and max(rect[0], rect[2]) >= w and max(rect[1], rect[3]) >= h
             if whole and self.scissor_rect() == (0, 0, w - 1, h - 1):
+                if src != dst and dst in self.camera_drawn:
+                    fail_call(no, f"{printable(name)}: a depth copy over framebuffer {dst}, drawn this frame, from "
+                              f"framebuffer {src}: the converter keeps one depth buffer for the camera pass, "
+                              "which holds both: not emulated")
+                if src in self.camera_wiped:
+                    fail_call(no, f"{printable(name)}: a depth copy from framebuffer {src}, whose depths a clear of "
+                              "another camera-pass framebuffer wiped from the one depth buffer the converter keeps: "
+                              "not emulated")
                 return
             fail_call(no, f"{printable(name)}: a depth copy of part of the camera pass's depth buffer "
                       f"({'a rectangle of it' if not whole else 'under the scissor'}) into another of its "
