@@ -64,3 +64,25 @@ def with_block(source, named):
 ], ids=["index", "active_name", "resource_name", "numbered_as_mesa", "only_block"])
 def test_a_block_bound_by_its_index(tmp_path, source, named):
     assert convert(tmp_path, with_block(source, named), "block") == moved(tmp_path, 6, 2)
+
+
+@pytest.mark.parametrize("call", ["glBindBuffersBase", "glBindBuffersRange"])
+def test_multi_bind_of_uniform_buffers(tmp_path, call):
+    """glBindBuffersBase and glBindBuffersRange (GL 4.4) bind each buffer at
+    its index, as glBindBufferBase does (they had been refused), and NULL
+    unbinds them (the block then reads zeros)."""
+    def made(null):
+        c = shader_calls(VS_ONE_BLOCK)
+        c.add("glGenBuffers", n=1, buffers=[9]).add("glBindBuffer", target="GL_UNIFORM_BUFFER", buffer=9)
+        c.add("glBufferData", target="GL_UNIFORM_BUFFER", size=512, data=struct.pack("<4f", 9, 9, 0, 0) * 16
+              + struct.pack("<4f", 6, 2, 0, 0) * 16, usage="GL_STATIC_DRAW")
+        extra = dict(offsets=[0, 256], sizes=[16, 16]) if call.endswith("Range") else {}
+        c.add(call, target="GL_UNIFORM_BUFFER", first=2, count=2, buffers=[9, 9], **extra)
+        if null:
+            c.add(call, target="GL_UNIFORM_BUFFER", first=2, count=2, buffers=0,
+                  **({"offsets": 0, "sizes": 0} if extra else {}))
+        c.add("glUniformBlockBinding", program=2, uniformBlockIndex=0, uniformBlockBinding=3)
+        return draw(c)
+    want = (6, 2) if call.endswith("Range") else (9, 9)
+    assert convert(tmp_path, made(False), "bound") == moved(tmp_path, *want)
+    assert convert(tmp_path, made(True), "unbound") == moved(tmp_path, 0, 0)

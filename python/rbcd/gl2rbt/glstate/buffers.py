@@ -6,7 +6,7 @@ version, by which the shader path's vertex stage knows what Mesa's copy
 lacks."""
 import mmap
 
-from ...cli import I64, U32, integer
+from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import MAX_BUFFER_BYTES, MAX_BUFFER_BYTES_IN_ALL, base_name
 from . import bitfield, enum_arg, generated_name
@@ -174,6 +174,38 @@ class BufferCalls:
         self.s.indexed[(target, index)] = (buf, offset, size)
         if buf:
             self.s.buffer_objects.add(buf)
+
+    def h_bind_buffers(self, no, name, a, args):
+        """glBindBuffersBase and glBindBuffersRange (GL 4.4): glBindBufferBase
+        or Range at each index from first (NULL buffers: unbind them), with
+        the generic binding left as it was; past the target's bindings the
+        whole call does nothing (GL_INVALID_OPERATION), and an entry GL
+        refuses is skipped."""
+        d = dict(args)
+        target = d.get("target")
+        first = checked(no, integer, d.get("first"), f"{name}: first", *U32)
+        count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
+        limit = SHADER_BINDINGS[target][0] if target in SHADER_BINDINGS else MAX_BINDINGS
+        if count < 0 or first + count > limit:
+            return
+        lists = {}
+        for key in ("buffers",) + (("offsets", "sizes") if "Range" in name else ()):
+            v = d.get(key)
+            if v is None or v == 0 and not isinstance(v, bool):   # NULL, as apitrace records it
+                v = [0] * count
+            if not isinstance(v, list) or len(v) < count:
+                fail_call(no, f"{name}: fewer {key} than its count")
+            lists[key] = v
+        generic = self.s.bound.get(target)
+        for i in range(count):
+            one = [("target", target), ("index", first + i), ("buffer", lists["buffers"][i])]
+            if "Range" in name and lists["buffers"][i]:
+                one += [("offset", lists["offsets"][i]), ("size", lists["sizes"][i])]
+            self.h_bind_buffer_base(no, name, [v for _, v in one], one)
+        if generic is None:
+            self.s.bound.pop(target, None)
+        else:
+            self.s.bound[target] = generic
 
     def h_buffer_data(self, no, name, a, args):
         d = dict(args)
@@ -379,6 +411,8 @@ class BufferCalls:
         "glUnmapNamedBuffer": named(h_unmap_buffer, buffer="target"),
         "glBindBufferBase": h_bind_buffer_base,
         "glBindBufferRange": h_bind_buffer_base,
+        "glBindBuffersBase": h_bind_buffers,
+        "glBindBuffersRange": h_bind_buffers,
         "glBufferData": h_buffer_data,
         "glBufferSubData": h_buffer_sub_data,
         "glBufferStorage": h_buffer_storage,
