@@ -13,7 +13,7 @@ import struct
 import pytest
 
 from gl_captures import Calls, gl2rbt_timed as gl2rbt, left_behind, refused
-from test_gl2rbt_hostile import shader_calls
+from test_gl2rbt_hostile import shader_calls, shader_draw
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
 
@@ -32,13 +32,8 @@ TEXELS = struct.pack("<8f", 0, 0, 0, 0, 6, 2, 0, 0)
 
 
 def draw(c):
-    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
-    c.add("glEnableVertexAttribArray", index=0)
-    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
-    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
-    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
-    c.add("glPopDebugGroup")
-    return c.swap()
+    """The triangle of buffer 1 through vertex array 7, object 5, a frame."""
+    return shader_draw(c, 7)
 
 
 def texture(c, name=3, unit=0, filters="GL_NEAREST", image=True):
@@ -238,14 +233,7 @@ def test_a_camera_pass_framebuffer_made_by_direct_state_access(tmp_path, image):
                 c.add("glNamedFramebufferRenderbuffer", framebuffer=5, attachment="GL_DEPTH_ATTACHMENT",
                       renderbuffertarget="GL_RENDERBUFFER", renderbuffer=6)
             c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=5)
-        c.add("glEnable", cap="GL_DEPTH_TEST")
-        c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
-        c.add("glEnableVertexAttribArray", index=0)
-        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
-        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
-        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
-        c.add("glPopDebugGroup")
-        return c.swap()
+        return draw(c.add("glEnable", cap="GL_DEPTH_TEST"))
 
     want = convert(tmp_path, made(shader_calls(VS_MOVED % (0, 0)), False), "window")
     assert want.count(b"\nf ") > 100
