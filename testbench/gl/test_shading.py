@@ -1,8 +1,16 @@
 """A draw's shading cost from its fragment shader as Mesa compiles it
 (rbcd.gl2rbt.shading; docs/gpu-model.md, "Shading cost")."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
 import pytest
 
-from rbcd.gl2rbt.shading import ShadingCosts, count_fragment_nir, shade_percent
+from rbcd.gl2rbt import shading
+from rbcd.gl2rbt.errors import ConvertError
+from rbcd.gl2rbt.shading import END_MARK, FragmentCount, ShadingCosts, count_fragment_nir, shade_percent
 
 # What Mesa prints for a linked program under MESA_GLSL=dump, cut to the
 # lines the count reads: a vertex shader, then the fragment shader.
@@ -38,6 +46,21 @@ def test_the_count_reads_the_fragment_shader_only():
     assert count_fragment_nir("shader: MESA_SHADER_VERTEX\n\tvec1 32 ssa_3 = fmul ssa_1, ssa_2\n") is None
 
 
+def test_the_count_reads_the_print_as_it_comes():
+    """The child's print is read a piece at a time (one byte here): the same
+    count, and its end seen on END_MARK's own line; a line longer than the
+    part of it read costs no more memory."""
+    count = FragmentCount()
+    data = NIR.encode() + b"\n" + END_MARK
+    for i in range(len(data)):
+        count.feed(data[i:i + 1])
+    assert count.ended and count.result() == (3, 2)
+    count = FragmentCount()
+    count.feed(b"shader: MESA_SHADER_FRAGMENT\n\tvec1 32 ssa_1 = fadd ssa_0, ssa_0 " + b"x" * 10 ** 6 + b"\n")
+    count.feed(b"\tvec1 32 ssa_2 = fmul ssa_1, ssa_1\n" + END_MARK)
+    assert count.ended and count.result() == (2, 0) and len(count.head) == 0
+
+
 def test_the_reference_fragment_is_100_and_the_range_is_bounded():
     assert shade_percent(4, 1) == 100, "four multiplies and one fetch: gpu.cycles_per_fragment"
     assert shade_percent(3, 2) == 138
@@ -67,3 +90,85 @@ def test_mesa_measures_each_program_once():
         assert costs.shade_of("one", {}) == 100, "known by its digest: not linked again"
     finally:
         costs.close()
+
+
+# A fragment shader Mesa takes seconds and hundreds of MB on (a switch of
+# 600 cases: 7 s and 210 MB in the child, printing its NIR): past either
+# bound the measure is the capture's error, naming the program, and the
+# child is stopped.
+SWITCH = ("#version 330\nin vec2 uv; out vec4 c;\nvoid main() { int sw = int(uv.x); float t = 0.0; switch (sw) {"
+          + "".join(f"case {i}: t = {i}.0; break;" for i in range(600)) + "} c = vec4(t); }\n")
+
+
+def alive(pid):
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize("bound, value, words", [("CHILD_SECONDS", 1, "Mesa worked on it for more than 1 s"),
+                                                 ("CHILD_GROWTH", 48 << 20, "Mesa took more than 48 MiB")],
+                         ids=["time", "memory"])
+def test_the_childs_work_for_a_program_is_bounded(monkeypatch, bound, value, words):
+    """The child's Mesa had no bound (a 4,000-case switch: 686 MB, and
+    more than 30 s): it has the main process's (mesa.MESA_SECONDS,
+    MESA_GROWTH), lowered here."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl installs it)")
+    costs = ShadingCosts()
+    try:
+        if costs.shade_of("one", {"vertex": VS, "fragment": ONE}) is None:
+            pytest.skip("Mesa's surfaceless EGL gives no context here (scripts/setup.sh --gl)")
+        child = costs.child.pid
+        monkeypatch.setattr(shading, bound, value)
+        t = time.monotonic()
+        with pytest.raises(ConvertError) as e:
+            costs.shade_of("5e1fc0de" * 8, {"vertex": VS, "fragment": SWITCH})
+        assert time.monotonic() - t < 5
+        assert str(e.value).startswith("program 5e1fc0de (its fragment shader's cost") and words in str(e.value) \
+            and str(e.value).endswith("(docs/gl-capture.md, limits)"), e.value
+        assert costs.child is None and not alive(child)
+    finally:
+        costs.close()
+
+
+PARENT = """import os, sys, threading
+from rbcd.gl2rbt.shading import ShadingCosts
+costs = ShadingCosts()
+costs.shade_of("one", {"vertex": sys.argv[1], "fragment": sys.argv[2]})
+print(costs.child.pid, flush=True)
+costs.shade_of("switch", {"vertex": sys.argv[1], "fragment": sys.argv[3]})
+"""
+
+
+@pytest.mark.parametrize("how", ["killed", "stop_children"])
+def test_the_child_ends_with_the_converter(how):
+    """The child went on compiling after the converter was gone (seen at
+    370 MB seconds later): killed outright, the converter takes it along
+    (PR_SET_PDEATHSIG); ending as it does, stop_children stops it."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl installs it)")
+    if how == "killed":
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+        p = subprocess.Popen([sys.executable, "-c", PARENT, VS, ONE, SWITCH], stdout=subprocess.PIPE, env=env,
+                             text=True)
+        try:
+            child = int(p.stdout.readline() or 0)
+            if not child:
+                pytest.skip("Mesa's surfaceless EGL gives no context here (scripts/setup.sh --gl)")
+            time.sleep(1)   # at work on the switch
+            assert alive(child)
+        finally:
+            p.kill()
+            p.wait()
+    else:
+        costs = ShadingCosts()
+        if costs.shade_of("one", {"vertex": VS, "fragment": ONE}) is None:
+            pytest.skip("Mesa's surfaceless EGL gives no context here (scripts/setup.sh --gl)")
+        child = costs.child.pid
+        shading.stop_children()
+        assert not shading._children
+    t = time.monotonic()
+    while alive(child) and time.monotonic() - t < 3:
+        time.sleep(0.05)
+    assert not alive(child), f"the child ({child}) outlives its converter"

@@ -4,7 +4,7 @@ import re
 import signal
 import sys
 
-from ..cli import UsageError, WriteError, to_standard_output
+from ..cli import UsageError, WriteError, remove_temporaries, to_standard_output
 from .errors import ConvertError, ToolError, printable
 
 PROG = "rbcd-gl2rbt"
@@ -147,8 +147,6 @@ def run(args):
     except (ToolError, WriteError) as e:   # WriteError: --summary, --image (rbcd.cli.write_output)
         sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
         return 1
-    except KeyboardInterrupt:
-        return 130
     except Exception as e:   # noqa: BLE001: the promise is one line, whatever failed
         sys.stderr.write(f"{PROG}: internal error: {type(e).__name__}: {printable(e, 300)}\n")
         return 1
@@ -179,15 +177,43 @@ def require_numpy():
     return numpy
 
 
+HANDLED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+def ignore_signals():
+    for sig in HANDLED:
+        signal.signal(sig, signal.SIG_IGN)
+
+
 def on_signal(signum, frame):
-    # Unwinds through the finally blocks: temporaries removed, rbcd-gl-raster stopped.
-    raise SystemExit(128 + signum)
+    """SIGINT, SIGTERM or SIGHUP: the run unwinds through its finally blocks
+    (temporaries and outputs removed, rbcd-gl-raster and the shading child
+    stopped) and main says so; another signal then changes nothing (it had
+    cut that clean-up short, or ended the process as Python finished).
+    While Mesa works the watchdog thread ends the run (mesa.py)."""
+    ignore_signals()
+    raise KeyboardInterrupt
 
 
 def main(argv=None):
-    for sig in (signal.SIGTERM, signal.SIGHUP):
-        signal.signal(sig, on_signal)
-    return run(parse_args(sys.argv[1:] if argv is None else argv))
+    for sig in HANDLED:
+        # SIGINT ignored when the program started (a shell's background
+        # job) stays ignored.
+        if sig != signal.SIGINT or signal.getsignal(sig) is signal.default_int_handler:
+            signal.signal(sig, on_signal)
+    trace = None
+    try:
+        args = parse_args(sys.argv[1:] if argv is None else argv)
+        trace = args.trace
+        return run(args)
+    except KeyboardInterrupt:
+        sys.stderr.write(f"{PROG}: {printable(trace) + ': ' if trace is not None else ''}interrupted\n")
+        return 130
+    finally:
+        ignore_signals()   # the run has ended: a signal from here changes nothing
+        from .shading import stop_children
+        stop_children()
+        remove_temporaries()
 
 
 if __name__ == "__main__":
