@@ -3,7 +3,7 @@
 captured and the checksums of what it converts into) checked, and expanded into
 the fragment traces and geometry the figures run on.
 
-    game-suite check [ENTRY...]                 the committed files against capture.toml
+    game-suite check [ENTRY...]                 the committed files against capture.toml, summary.jsonl's form
     game-suite expand -o DIR [-j N] [--frames K] [ENTRY...]
         DIR/NAME.rbt.zst, DIR/NAME.geo, DIR/NAME.summary.jsonl and
         DIR/NAME.capture (the entry's capture.toml) for each
@@ -41,6 +41,12 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__
 
 PROG = "game-suite"
 MAX_TOML = 1 << 16
+# A frame's line of the converter's summary, key by key in its order: what
+# rbcd-gl-raster writes (gl/gl_raster_main.cpp, json_line), then, for a frame
+# with draws under a program, the four counts rbcd-gl2rbt adds
+# (rbcd.gl2rbt.raster.with_fragment_effects, glstate.draws.FRAGMENT_EFFECT_KEYS).
+SUMMARY_KEYS = ("frame", "end_call", "draws", "tiles", "fragments", "culled", "other", "prims", "cprims", "objects")
+EFFECT_KEYS = ("discard_draws", "discard_collisionable", "frag_depth_draws", "frag_depth_collisionable")
 
 
 def reject_constant(name):
@@ -150,6 +156,25 @@ def capture_strings(argv):
     return 0
 
 
+def summary_line_problem(obj, line):
+    """What keeps `obj` (line, parsed) from being a frame's line as the
+    converter writes it, or None."""
+    keys = tuple(obj)
+    if keys not in (SUMMARY_KEYS, SUMMARY_KEYS + EFFECT_KEYS):
+        return "its keys are not " + ", ".join(SUMMARY_KEYS) + " and optionally " + ", ".join(EFFECT_KEYS) + \
+            ", in that order"
+    for k, v in obj.items():
+        if k == "objects":
+            if not (isinstance(v, list) and all(type(x) is int and 0 <= x < 1 << 32 for x in v)
+                    and all(a < b for a, b in zip(v, v[1:]))):
+                return "objects: not object ids (0 to 2^32 - 1) in increasing order, each once"
+        elif not (type(v) is int and 0 <= v < 1 << 64):
+            return f"{k}: not a count (an integer from 0 to 2^64 - 1)"
+    if json.dumps(obj, separators=(",", ":")) != line:
+        return "not compact JSON"
+    return None
+
+
 class Entry:
     def __init__(self, path):
         self.dir = path.rstrip("/")
@@ -253,13 +278,12 @@ class Entry:
             if not isinstance(obj, dict):
                 raise UsageError(f"{self.summary}: line {i}: not a JSON object (the converter's figures "
                                  "for a frame)")
-            # As the converter writes it: compact, its figures integers (or
-            # lists of them, the objects), frame after frame from 0.
-            whole = all((type(v) is int) or (isinstance(v, list) and all(type(x) is int for x in v))
-                        for v in obj.values())
-            if not whole or json.dumps(obj, separators=(",", ":")) != line:
+            # As the converter writes it: its keys in its order, compact,
+            # its figures counts, the objects ids in increasing order.
+            problem = summary_line_problem(obj, line)
+            if problem:
                 raise UsageError(f"{self.summary}: line {i}: not as the converter writes a frame's figures "
-                                 "(compact JSON of integers)")
+                                 f"({problem})")
             if obj.get("frame") != i - 1:
                 raise UsageError(f"{self.summary}: line {i}: not frame {i - 1}'s figures")
         return "".join(line + "\n" for line in (lines[:frames] if frames else lines))
@@ -298,8 +322,6 @@ class Entry:
     def expand_in(self, out, frames):
         if frames is not None and frames >= self.frames:
             frames = None   # the whole entry: converted and checked as without --frames
-        self.check()
-        self.committed_summary(frames)   # read before anything is written: a bad one leaves nothing
         if frames is None and self.up_to_date(out):
             self.describe(out)
             return f"{self.name}: up to date"
@@ -393,7 +415,8 @@ def run(argv):
         if args.cmd == "check":
             for e in entries:
                 e.check()
-                print(f"{e.name}: calls.xz matches capture.toml")
+                e.committed_summary()
+                print(f"{e.name}: calls.xz matches capture.toml, summary.jsonl is as the converter writes it")
             return 0
         if args.jobs < 1:
             raise UsageError("--jobs must be at least 1")
@@ -402,6 +425,11 @@ def run(argv):
         if os.path.exists(args.out) and not os.path.isdir(args.out):
             raise UsageError(f"-o {args.out}: not a directory")
         check_expand_outputs(entries, args.out)
+        for e in entries:
+            # Every entry's inputs, summary.jsonl whole (--frames or not),
+            # before any conversion: a bad one leaves nothing.
+            e.check()
+            e.committed_summary()
         try:
             os.makedirs(args.out, exist_ok=True)
         except OSError as e:

@@ -194,8 +194,31 @@ def test_frames_past_the_entry_expand_the_whole_entry(tmp_path):
     (lambda t: t.replace(b'"draws":', b'"draws":NaN,"x":', 1), "line 1: not a JSON object"),
     (lambda t: t.replace(b'"draws":', b'"draws":"1","x":', 1), "line 1: not as the converter writes"),
     (lambda t: t[:t.index(b"\n") + 1] * 2 + t[t.index(b"\n", t.index(b"\n") + 1) + 1:], "line 2: not frame 1"),
+    # Compact JSON of integers, but not the converter's line (these had
+    # passed, then converted: exit 1 'the regenerated summary differs').
+    (lambda t: t.replace(b'"frame":0,"end_call":70077,', b'"end_call":70077,"frame":0,', 1),
+     "line 1: not as the converter writes a frame's figures (its keys are not frame, end_call"),
+    (lambda t: t.replace(b',"cprims":', b',"x":2,"cprims":', 1), "line 1: not as the converter writes"),
+    (lambda t: t.replace(b'}\n', b',"x":2}\n', 1), "line 1: not as the converter writes"),
+    (lambda t: t.replace(b',"tiles":1500', b'', 1), "line 1: not as the converter writes"),
+    (lambda t: t.replace(b'"objects":[11,13,', b'"objects":[13,11,', 1), "line 1: not as the converter writes a "
+     "frame's figures (objects: not object ids (0 to 2^32 - 1) in increasing order, each once)"),
+    (lambda t: t.replace(b'"objects":[11,13,', b'"objects":[11,11,', 1), "line 1: not as the converter writes"),
+    (lambda t: t.replace(b'"objects":[11,', b'"objects":[-1,', 1), "line 1: not as the converter writes"),
+    (lambda t: t.replace(b'"draws":136,', b'"draws":-136,', 1), "line 1: not as the converter writes a frame's "
+     "figures (draws: not a count (an integer from 0 to 2^64 - 1))"),
+    (lambda t: t.replace(b'"culled":', b'"culled":18446744073709551616,"y":', 1), "line 1: not as the converter"),
+    (lambda t: t.replace(b'"culled":237184', b'"culled":18446744073709551616', 1), "(culled: not a count"),
+    (lambda t: t.replace(b'"draws":136', b'"draws":1e2', 1), "line 1: not as the converter writes"),
+    (lambda t: t.replace(b'}\n', b',"discard_draws":0,"discard_collisionable":0}\n', 1),
+     "line 1: not as the converter writes"),
+    # Past --frames 1: the whole file is checked (it had not been: exit 0).
+    (lambda t: t.replace(b'"frame":1,', b'"frame":1,"x":2,', 1), "line 2: not as the converter writes"),
+    (lambda t: t.replace(b'"frame":149,"end_call":', b'"end_call":', 1), "line 150: not as the converter writes"),
 ], ids=["crlf", "crlf_line3", "cr", "bom", "not_json", "unterminated", "spaces", "float", "nan", "string",
-        "frame_twice"])
+        "frame_twice", "key_order", "extra_key", "extra_key_last", "missing_key", "objects_unsorted",
+        "objects_twice", "object_negative", "negative_count", "count_2_64_other_key", "count_2_64", "exponent",
+        "effects_half", "line2_extra_key", "last_line_missing_key"])
 def test_a_summary_not_as_the_converter_writes_it_is_the_entrys_error(tmp_path, entry, edit, words):
     """An entry's summary.jsonl that no conversion can match (CR LF line
     ends; a line that is not a JSON object) is bad input, one line naming
@@ -210,3 +233,32 @@ def test_a_summary_not_as_the_converter_writes_it_is_the_entrys_error(tmp_path, 
     r = game_suite(tmp_path, "expand", "-o", out, "--frames", "1", "-j", "1", entry)
     refused(r, str(summary), words)
     assert not out.exists() or os.listdir(out) == [], "something was written"
+    refused(game_suite(tmp_path, "check", entry), str(summary), words)
+
+
+def test_every_entry_is_checked_before_any_conversion(tmp_path, entry):
+    """A bad summary.jsonl in the second entry given: refused before the
+    first entry converts (it had converted, -j 1, before the second was
+    read), nothing written."""
+    other = tmp_path / "more" / "neverball-copy"
+    shutil.copytree(entry, other)
+    summary = other / "summary.jsonl"
+    summary.write_bytes(summary.read_bytes().replace(b'"frame":2,', b'"frame":2,"x":0,', 1))
+    out = tmp_path / "out"
+    r = game_suite(tmp_path, "expand", "-o", out, "--frames", "1", "-j", "1", entry, other)
+    refused(r, str(summary), "line 3: not as the converter writes")
+    assert not out.exists() or os.listdir(out) == [], "something was written"
+
+
+def test_the_committed_summaries_are_as_the_converter_writes_them():
+    """game-suite's form of a summary line is the converter's: the fragment
+    effects' keys its own, and every committed entry passes check."""
+    from rbcd import game_suite
+    from rbcd.gl2rbt.glstate.draws import FRAGMENT_EFFECT_KEYS
+    assert game_suite.EFFECT_KEYS == FRAGMENT_EFFECT_KEYS
+    entries = sorted(os.path.join(os.path.dirname(SOURCE), d) for d in os.listdir(os.path.dirname(SOURCE))
+                     if os.path.isdir(os.path.join(os.path.dirname(SOURCE), d)))
+    r = subprocess.run(["/usr/bin/python3", GAME_SUITE, "check"] + entries, capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0 and r.stderr == "" and r.stdout.count("summary.jsonl is as the converter writes it") \
+        == len(entries) > 0, (r.returncode, r.stdout, r.stderr)
