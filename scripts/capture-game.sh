@@ -25,8 +25,8 @@
 # Exit 2 with one line on a bad argument (an OUT_DIR that is empty, exists,
 # is a symlink or cannot be created, an unusable TMPDIR, a MAP whose path is
 # not UTF-8, which capture.toml cannot record: said before the game runs), on
-# a capture that holds fewer frames than asked for, or on a
-# capture the converter refuses; 1 when the game, Xvfb, apitrace or the
+# a capture that holds fewer frames than asked for, on an empty --from-trace
+# capture, or on a capture the converter refuses; 1 when the game, Xvfb, apitrace or the
 # conversion otherwise fails. OUT_DIR is written only at the end, complete.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -61,6 +61,10 @@ case "$game" in openarena|neverball|supertuxkart) ;; *) usage "unknown game '$ga
 [ ! -L "$out" ] || usage "$out is a symlink: the entry is written only into a new directory"
 [ ! -e "$out" ] || usage "$out exists: the entry is written only into a new directory"
 [ -z "$from" ] || [ -f "$from" ] || usage "--from-trace $from: not a file"
+# The given capture is the input: an empty one is said as such (no game ran,
+# so there is no game log to show).
+empty_capture() { echo "capture-game.sh: $(oneline "$from"): an empty file, not a capture" >&2; exit 2; }
+[ -z "$from" ] || [ -s "$from" ] || empty_capture
 # A capture whose name begins with '-' is passed on as ./-NAME: the tools
 # that read it (the converter, apitrace, cp) would take it for an option.
 case "$from" in -*) from=./$from ;; esac
@@ -233,6 +237,7 @@ fi
 # OpenArena and SuperTuxKart quit by themselves (0); a replay is stopped by
 # the time limit (124), after apitrace has flushed the capture on SIGTERM.
 if [ ! -s "$capture" ] || { [ $rc -ne 0 ] && [ $rc -ne 124 ]; }; then
+  [ -z "$from" ] || empty_capture
   echo "capture-game.sh: the game or its capture failed (exit $rc); its log:" >&2
   tail -n 20 "$work/game.log" >&2
   exit 1

@@ -2,7 +2,8 @@
 cannot use (empty, a symlink, dangling or not, a missing folder or a file
 in its place) or an
 unusable TMPDIR is one line, exit 2, before any game runs or any conversion
-starts; a capture holding fewer frames than asked for is one line, exit 2.
+starts; a capture holding fewer frames than asked for, or an empty one, is
+one line, exit 2.
 capture.toml records any map path and any TMPDIR as TOML reads them back;
 a map path TOML cannot hold (not UTF-8) is refused before the work.
 Run with --from-trace (no game needed); nothing is left."""
@@ -78,6 +79,23 @@ def test_more_frames_than_the_capture_holds(tmp_path):
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 2 and len(lines) == 1 and "frames asked for" in lines[0], (r.returncode, lines)
     assert os.listdir(tmp_path) == [], "something was left"
+
+
+@pytest.mark.parametrize("game, map_", [("neverball", "demo.nbr"), ("openarena", "oa_dm1"),
+                                         ("supertuxkart", "lighthouse")])
+def test_an_empty_capture_is_bad_input(tmp_path, game, map_):
+    """--from-trace of an empty file: one line naming it, exit 2 (it had
+    been 'the game or its capture failed (exit 0); its log:' and tail's
+    complaint that the game's log, never made, was missing: exit 1);
+    nothing left."""
+    cap = tmp_path / "empty.trace"
+    cap.write_bytes(b"")
+    if game == "neverball":
+        map_ = tmp_path / map_
+        map_.write_bytes(b"")
+    r = capture_game(tmp_path, game, map_, "1", tmp_path / "out", "--from-trace", cap, "--skip", "0")
+    refused(r, f"capture-game.sh: {cap}: an empty file, not a capture")
+    assert sorted(os.listdir(tmp_path)) == sorted(["empty.trace"] + (["demo.nbr"] if game == "neverball" else []))
 
 
 def test_a_capture_without_the_race_is_bad_input(tmp_path):
