@@ -187,3 +187,12 @@ def pairs_per_frame(trace, collisions):
                 k = (int(t[3]), int(t[4]))
                 hits[frame][k] = hits[frame].get(k, 0) + 1
     return hits
+
+
+def alive(pid):
+    """Whether process pid runs (a zombie does not)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False

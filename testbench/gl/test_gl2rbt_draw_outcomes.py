@@ -16,7 +16,7 @@ import time
 import pytest
 
 from conftest import program
-from gl_captures import GL2RBT, TRIANGLE, gl2rbt_timed as gl2rbt, left_behind, refused
+from gl_captures import GL2RBT, TRIANGLE, alive, gl2rbt_timed as gl2rbt, left_behind, refused
 from test_gl2rbt_hostile import ES_FRAGMENT, VS, shader_calls
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
@@ -144,7 +144,8 @@ def test_a_signal_while_mesa_works_ends_the_run_at_once(tmp_path):
     time.sleep(5)   # Mesa's LLVM is at work by then (it works for 20 s or more on this shader)
     p.send_signal(signal.SIGTERM)
     out, err = p.communicate(timeout=120)
-    assert p.returncode == 130 and err.strip().splitlines() == ["rbcd-gl2rbt: interrupted"], (p.returncode, err)
+    assert p.returncode == 130 and err.strip().splitlines() == [f"rbcd-gl2rbt: {cap}: interrupted"], \
+        (p.returncode, err)
     assert left_behind(tmp_path, ["b.xz"]) == []
 
 
@@ -167,13 +168,6 @@ def children(pid):
             pass
     return found
 
-
-def alive(pid):
-    try:
-        with open(f"/proc/{pid}/stat") as f:
-            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=["term", "hup", "int"])

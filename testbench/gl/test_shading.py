@@ -8,6 +8,7 @@ import time
 
 import pytest
 
+from gl_captures import alive
 from rbcd.gl2rbt import shading
 from rbcd.gl2rbt.errors import ConvertError
 from rbcd.gl2rbt.shading import END_MARK, FragmentCount, ShadingCosts, count_fragment_nir, shade_percent
@@ -99,13 +100,6 @@ def test_mesa_measures_each_program_once():
 SWITCH = ("#version 330\nin vec2 uv; out vec4 c;\nvoid main() { int sw = int(uv.x); float t = 0.0; switch (sw) {"
           + "".join(f"case {i}: t = {i}.0; break;" for i in range(600)) + "} c = vec4(t); }\n")
 
-
-def alive(pid):
-    try:
-        with open(f"/proc/{pid}/stat") as f:
-            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
 
 
 @pytest.mark.parametrize("bound, value, words", [("CHILD_SECONDS", 1, "Mesa worked on it for more than 1 s"),

@@ -20,7 +20,7 @@ import threading
 import time
 
 from ..cli import remove_temporaries, say
-from .errors import ToolError
+from .errors import ToolError, printable
 
 # PyOpenGL picks its platform when first imported: EGL, for a context that
 # needs no display.
@@ -113,7 +113,7 @@ class Watchdog:
             if work is None:
                 continue
             if any(n in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP) for n in got):
-                self.end("interrupted", 130)
+                self.end(f"{printable(self.conv.args.trace)}: interrupted", 130)
             what, t0, rss0 = work
             if time.monotonic() - t0 > MESA_SECONDS:
                 self.expire(what, f"Mesa worked on it for more than {MESA_SECONDS} s")
@@ -121,7 +121,7 @@ class Watchdog:
                 self.expire(what, f"Mesa took more than {MESA_GROWTH >> 20} MiB of memory for it")
 
     def expire(self, what, why):
-        self.end(f"{self.conv.args.trace}: {what}: {why} (docs/gl-capture.md, limits)", 2)
+        self.end(f"{printable(self.conv.args.trace)}: {what}: {why} (docs/gl-capture.md, limits)", 2)
 
     def end(self, message, status):
         say("rbcd-gl2rbt", message)

@@ -41,38 +41,34 @@ def on_texture(handler, as_name, target=None):
     return h
 
 
-def on_framebuffer(handler, as_name, default_allowed=False):
-    """The handler of `as_name` run with the named framebuffer bound for
-    drawing (0, the window's, only where the call takes it)."""
+def on_bound(handler, as_name, param, state, target, names, zero_allowed=False):
+    """The handler of `as_name` run with the object the call's `param`
+    names bound for the call alone (self.s.<state>, read by the handler at
+    `target`): a framebuffer for drawing (0, the window's, only where the
+    call takes it) or a renderbuffer; a name a core profile did not
+    generate (self.s.<names>) makes the call do nothing."""
     def h(self, no, name, a, args):
         d = dict(args)
-        fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
-        if (not fb and not default_allowed) or not generated_name(self.core, self.s.framebuffer_names, fb):
+        obj = checked(no, integer, d.get(param), f"{name}: the {param}", *U32)
+        if (not obj and not zero_allowed) or not generated_name(self.core, getattr(self.s, names), obj):
             return   # GL_INVALID_OPERATION
-        saved = self.s.draw_fbo
-        self.s.draw_fbo = fb
-        args = [("target", "GL_DRAW_FRAMEBUFFER")] + [(k, v) for k, v in args if k != "framebuffer"]
+        saved = getattr(self.s, state)
+        setattr(self.s, state, obj)
+        args = [("target", target)] + [(k, v) for k, v in args if k != param]
         try:
             handler(self, no, as_name, [v for _, v in args], args)
         finally:
-            self.s.draw_fbo = saved
+            setattr(self.s, state, saved)
     return h
+
+
+def on_framebuffer(handler, as_name, default_allowed=False):
+    return on_bound(handler, as_name, "framebuffer", "draw_fbo", "GL_DRAW_FRAMEBUFFER", "framebuffer_names",
+                    default_allowed)
 
 
 def on_renderbuffer(handler, as_name):
-    def h(self, no, name, a, args):
-        d = dict(args)
-        rb = checked(no, integer, d.get("renderbuffer"), f"{name}: the renderbuffer", *U32)
-        if not rb or not generated_name(self.core, self.s.renderbuffer_names, rb):
-            return   # GL_INVALID_OPERATION
-        saved = self.s.renderbuffer
-        self.s.renderbuffer = rb
-        args = [("target", "GL_RENDERBUFFER")] + [(k, v) for k, v in args if k != "renderbuffer"]
-        try:
-            handler(self, no, as_name, [v for _, v in args], args)
-        finally:
-            self.s.renderbuffer = saved
-    return h
+    return on_bound(handler, as_name, "renderbuffer", "renderbuffer", "GL_RENDERBUFFER", "renderbuffer_names")
 
 
 class DirectStateCalls:
