@@ -65,6 +65,11 @@ def test_damaged_files_are_refused_naming_where(tmp_path):
     write(bad, [CALLS[4], CALLS[0]])
     with pytest.raises(ConvertError, match=r"after call 5: .*unexpected record"):
         list(read_reduced_calls(str(bad)))
+    # An argument named twice (apitrace names each once; the emulation
+    # reads some by position and some by name).
+    write(bad, [CALLS[0], (2, "glDepthFunc", [("func", "GL_LESS"), ("func", "GL_ALWAYS")], None, 0)])
+    with pytest.raises(ConvertError, match=r"after call 1: .*unexpected record"):
+        list(read_reduced_calls(str(bad)))
 
 
 def test_an_xz_file_of_something_else(tmp_path):

@@ -283,7 +283,8 @@ def read_reduced_calls(path):
                     raise ConvertError(f"{where(last)}: the reduced capture does not decode (unexpected record)")
                 if not call_values_within(c):   # before anything walks its arguments
                     raise too_many_values(c[0])
-                if not all(isinstance(x, tuple) and len(x) == 2 and isinstance(x[0], str) for x in c[2]):
+                if not all(isinstance(x, tuple) and len(x) == 2 and isinstance(x[0], str) for x in c[2]) \
+                        or len({x[0] for x in c[2]}) != len(c[2]):   # each argument named once, as apitrace's
                     raise ConvertError(f"{where(last)}: the reduced capture does not decode (unexpected record)")
                 last = c[0]
                 if (yield c) is CHECK_REST:
