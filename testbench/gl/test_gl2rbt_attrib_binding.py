@@ -324,3 +324,56 @@ def test_whole_depth_blits_the_one_camera_buffer_cannot_follow(tmp_path, order, 
     r = gl2rbt(tmp_path, c.write(tmp_path / "w.xz"), "-o", tmp_path / "w.rbt")
     refused(r, "glBlitFramebuffer", words, "not emulated")
     assert not (tmp_path / "w.rbt").exists()
+
+
+# ---- the 64-bit L forms (GL 4.1) and the packed P current values (GL 3.3)
+
+VS_DOUBLE = ("#version 410 core\nin dvec3 p;\n"
+             "void main() { gl_Position = vec4(float(p.x) / 32.0 - 1.0, float(p.y) / 24.0 - 1.0, 0.0, 1.0); }\n")
+DOUBLES = struct.pack("<9d", *struct.unpack("<9f", TRIANGLE))
+
+
+@pytest.mark.parametrize("how", ["pointer", "format"])
+def test_double_attributes_read_as_doubles(tmp_path, how):
+    """glVertexAttribLPointer, or glVertexAttribLFormat with a binding point:
+    the triangle as doubles gives the floats' bytes (they had been refused)."""
+    want = trace(tmp_path, reference(shader_calls(VS)), "reference")
+    c = shader_calls(VS_DOUBLE)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(DOUBLES), data=DOUBLES, usage="GL_STATIC_DRAW")
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    if how == "pointer":
+        c.add("glVertexAttribLPointer", index=0, size=3, type="GL_DOUBLE", stride=0, pointer=0)
+    else:
+        c.add("glVertexAttribLFormat", attribindex=0, size=3, type="GL_DOUBLE", relativeoffset=0)
+        c.add("glVertexAttribBinding", attribindex=0, bindingindex=2)
+        c.add("glBindVertexBuffer", bindingindex=2, buffer=1, offset=0, stride=24)
+    c.add("glVertexAttribLPointer", index=0, size=3, type="GL_FLOAT", stride=0, pointer=0)   # GL_INVALID_ENUM
+    assert trace(tmp_path, tagged_draw(c), how) == want
+
+
+VS_OFFSET = ("#version 330 core\nin vec3 p;\nlayout(location = 1) in vec4 off;\n"
+             "void main() { gl_Position = vec4((p.x + off.x) / 32.0 - 1.0, (p.y + off.y) / 24.0 - 1.0, 0.0, 1.0); }\n")
+
+
+def test_packed_and_double_current_values(tmp_path):
+    """glVertexAttribP4ui(v) (2_10_10_10: x 6, y 2) gives a disabled
+    attribute its value as the float call does (it had been refused); a
+    packed type GL does not take there changes nothing."""
+    def moved(setter):
+        c = shader_calls(VS_OFFSET)
+        setter(c)
+        c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+        c.add("glEnableVertexAttribArray", index=0)
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0,
+              pointer=0)
+        return trace(tmp_path, tagged_draw(c), "t")
+    want = moved(lambda c: c.add("glVertexAttrib4f", index=1, x=6.0, y=2.0, z=0.0, w=1.0))
+    assert want != moved(lambda c: None)
+    packed = 6 | (2 << 10) | (1 << 30)
+    assert moved(lambda c: c.add("glVertexAttribP4ui", index=1, type="GL_UNSIGNED_INT_2_10_10_10_REV",
+                                 normalized="GL_FALSE", value=packed)) == want
+    assert moved(lambda c: c.add("glVertexAttribP4uiv", index=1, type="GL_INT_2_10_10_10_REV",
+                                 normalized="GL_FALSE", value=[packed])) == want
+    assert moved(lambda c: c.add("glVertexAttrib4f", index=1, x=6.0, y=2.0, z=0.0, w=1.0)
+                 .add("glVertexAttribP4ui", index=1, type="GL_FLOAT", normalized="GL_FALSE", value=0)) == want

@@ -194,6 +194,7 @@ class Mesa:
         u, i, e, b = ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_ubyte
         self.attrib_format = self.function(EGL, "glVertexAttribFormat", u, i, e, b, u)
         self.attrib_i_format = self.function(EGL, "glVertexAttribIFormat", u, i, e, u)
+        self.attrib_l_format = self.function(EGL, "glVertexAttribLFormat", u, i, e, u)
         self.attrib_binding = self.function(EGL, "glVertexAttribBinding", u, u)
         self.bind_vertex_buffer = self.function(EGL, "glBindVertexBuffer", u, u, ctypes.c_ssize_t, i)
         self.binding_divisor = self.function(EGL, "glVertexBindingDivisor", u, u)

@@ -426,7 +426,9 @@ class VertexStage:
                 fail_call(no, f"attribute {i} is enabled with no buffer and no data in the capture")
             size = self.mesa.enum(at.size) if isinstance(at.size, str) else at.size
             kind = self.mesa.enum(at.type)
-            if at.integer:
+            if at.long:
+                self.mesa.attrib_l_format(i, size, kind, 0)
+            elif at.integer:
                 self.mesa.attrib_i_format(i, size, kind, 0)
             else:
                 self.mesa.attrib_format(i, size, kind, 1 if at.normalized else 0, 0)
@@ -441,7 +443,10 @@ class VertexStage:
             GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.buffer(conv, elem) if elem else 0)
         for i, (func, vals) in conv.s.attrib_values.items():
             fn = getattr(GL, func.removesuffix("ARB"))
-            if func.endswith("v"):
+            if func.startswith("glVertexAttribP"):   # packed: (type, normalized, value)
+                kind, normalized, value = vals
+                getattr(GL, func.removesuffix("v"))(i, self.mesa.enum(kind), 1 if normalized else 0, value)
+            elif func.endswith("v"):
                 fn(i, np.array(vals[0] if len(vals) == 1 and isinstance(vals[0], list) else vals,
                                dtype=ATTRIB_VALUE_TYPES[re.search(r"(ub|us|ui|b|s|i|f|d)v$", func).group(1)]))
             else:

@@ -38,13 +38,15 @@ ATTRIB_TYPES = INTEGER_ATTRIB_TYPES | PACKED_ATTRIB_TYPES | {
     "GL_UNSIGNED_INT_10F_11F_11F_REV"}
 
 
-def attrib_format_valid(integer_form, size, kind, normalized):
+def attrib_format_valid(integer_form, size, kind, normalized, long_form=False):
     """Whether a format of this size and type (glVertexAttrib*Pointer,
     glVertexAttrib*Format; integer_form for their I forms) is one Mesa takes:
     a size of 1 to 4 or GL_BGRA (GL_INVALID_VALUE otherwise), a type and
     size of the rules above."""
     if not (size in (1, 2, 3, 4) or size == "GL_BGRA"):
         return False
+    if long_form:   # the L forms (GL 4.1): doubles read as doubles
+        return kind == "GL_DOUBLE" and size != "GL_BGRA"
     if integer_form:
         return kind in INTEGER_ATTRIB_TYPES and size != "GL_BGRA"
     if kind not in ATTRIB_TYPES:
@@ -60,10 +62,11 @@ class Attrib:
     """One generic attribute: its format (glVertexAttrib*Format, or that half
     of glVertexAttrib*Pointer; `integer` for the I forms) and the binding
     point it reads."""
-    __slots__ = ("enabled", "integer", "size", "type", "normalized", "relative", "binding")
+    __slots__ = ("enabled", "integer", "long", "size", "type", "normalized", "relative", "binding")
 
     def __init__(self, index):
         self.enabled, self.integer, self.size, self.type, self.normalized = False, False, 4, "GL_FLOAT", False
+        self.long = False   # the L forms: 64-bit doubles
         self.relative, self.binding = 0, index
 
 
@@ -260,12 +263,15 @@ class AttributeCalls:
         from . import gl_boolean   # the package imports this module before it defines gl_boolean
         normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
         integer_form = base_name(name) == "glVertexAttribIPointer"
-        if i is None or stride < 0 or not attrib_format_valid(integer_form, size, d.get("type"), normalized):
+        long_form = base_name(name) == "glVertexAttribLPointer"
+        if i is None or stride < 0 or \
+                not attrib_format_valid(integer_form, size, d.get("type"), normalized, long_form):
             return   # GL_INVALID_ENUM, GL_INVALID_VALUE or GL_INVALID_OPERATION in Mesa: the earlier pointer stays
         vao = self.current_vao()
         at = vao.attrib(i)
         at.integer, at.size, at.type, at.relative, at.binding = integer_form, size, d.get("type"), 0, i
-        at.normalized = not integer_form and normalized
+        at.long = long_form
+        at.normalized = not integer_form and not long_form and normalized
         b = vao.binding(i)
         b.stride = stride or element_bytes(size, at.type)
         p = d.get("pointer")
@@ -288,14 +294,16 @@ class AttributeCalls:
         size = attrib_size(d["size"])
         relative = checked(no, integer, d.get("relativeoffset", 0), f"{name}: the relative offset", *U32)
         integer_form = base_name(name) in ("glVertexAttribIFormat", "glVertexArrayAttribIFormat")
+        long_form = base_name(name) in ("glVertexAttribLFormat", "glVertexArrayAttribLFormat")
         from . import gl_boolean   # the package imports this module before it defines gl_boolean
         normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
         if vao is None or i is None or relative > MAX_RELATIVE_OFFSET \
-                or not attrib_format_valid(integer_form, size, d.get("type"), normalized):
+                or not attrib_format_valid(integer_form, size, d.get("type"), normalized, long_form):
             return   # GL_INVALID_OPERATION, GL_INVALID_VALUE or GL_INVALID_ENUM: the call does nothing
         at = vao.attrib(i)
         at.integer, at.size, at.type, at.relative = integer_form, size, d.get("type"), relative
-        at.normalized = not integer_form and normalized
+        at.long = long_form
+        at.normalized = not integer_form and not long_form and normalized
 
     def h_attrib_binding(self, no, name, a, args):
         """glVertexAttribBinding, glVertexArrayAttribBinding: which binding
@@ -395,6 +403,24 @@ class AttributeCalls:
         if i is not None:
             self.s.attrib_values[i] = (name, list(a[1:]))
 
+    def h_attrib_packed_value(self, no, name, a, args):
+        """glVertexAttribP{1,2,3,4}ui(v) (GL 3.3): a disabled attribute's value
+        packed in one integer, replayed as called; a type Mesa does not take
+        for it is GL_INVALID_ENUM and changes nothing."""
+        d = dict(args)
+        i = attrib_index(no, name, d.get("index"))
+        from . import gl_boolean   # the package imports this module before it defines gl_boolean
+        normalized = gl_boolean(d.get("normalized", "GL_FALSE"), no, f"{name}: normalized", nonzero=True)
+        value = d.get("value")
+        if isinstance(value, list):
+            value = value[0] if len(value) == 1 else None
+        value = checked(no, integer, value, f"{name}: the value", *U32)
+        kind = d.get("type")
+        if i is None or kind not in PACKED_ATTRIB_TYPES and not (kind == "GL_UNSIGNED_INT_10F_11F_11F_REV"
+                                                                and "P3" in name):
+            return
+        self.s.attrib_values[i] = (name, [kind, normalized, value])
+
     def h_primitive_restart_index(self, no, name, a, args):
         self.s.restart_index = checked(no, integer, a[0], f"{name}: the index", *U32)
 
@@ -409,6 +435,9 @@ class AttributeCalls:
         "glDisableVertexArrayAttrib": h_enable_attrib,
         "glVertexAttribPointer": h_attrib_pointer,
         "glVertexAttribIPointer": h_attrib_pointer,
+        "glVertexAttribLPointer": h_attrib_pointer,
+        "glVertexAttribLFormat": h_attrib_format,
+        "glVertexArrayAttribLFormat": h_attrib_format,
         "glVertexAttribDivisor": h_attrib_divisor,
         "glVertexAttribFormat": h_attrib_format,
         "glVertexAttribIFormat": h_attrib_format,
@@ -429,4 +458,6 @@ class AttributeCalls:
                      + [f"glVertexAttribI{n}{t}{v}" for n in "1234" for t in ("i", "ui") for v in ("", "v")]
                      + [f"glVertexAttribI4{t}v" for t in ("b", "s", "ub", "us")]
                      + [f"glVertexAttrib4N{t}v" for t in ("b", "s", "i", "ub", "us", "ui")] + ["glVertexAttrib4Nub"]
-                     + [f"glVertexAttrib4{t}v" for t in ("b", "i", "ub", "us", "ui")], h_attrib_value)
+                     + [f"glVertexAttrib4{t}v" for t in ("b", "i", "ub", "us", "ui")]
+                     + [f"glVertexAttribL{n}d{v}" for n in "1234" for v in ("", "v")], h_attrib_value) \
+      | dict.fromkeys([f"glVertexAttribP{n}ui{v}" for n in "1234" for v in ("", "v")], h_attrib_packed_value)
