@@ -256,3 +256,53 @@ def test_multi_binds_of_null_unbind(tmp_path):
 
     assert convert(tmp_path, unbound("samplers"), "samplers") == moved(tmp_path, 3, 1)
     assert convert(tmp_path, unbound("textures"), "textures") == moved(tmp_path, 0, 0)
+
+
+# ---- round 8: formats, modes and forms the capture's driver took
+
+def test_depth_textures_read_as_the_capture_s_profile_reads_them(tmp_path):
+    """A depth texture read through a sampler2D in a core profile is (d, 0,
+    0, 1) (Mesa's own context is of the compatibility profile, where it is
+    (d, d, d, 1): 66% against Mesa)."""
+    c = shader_calls(VS_TEXEL % "vec4(8.0, 8.0, 1.0, 1.0) * texelFetch(heights, ivec2(1, 0), 0)")
+    texture(c, image=False)
+    c.add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_DEPTH_COMPONENT32F", width=2,
+          height=1, border=0, format="GL_DEPTH_COMPONENT", type="GL_FLOAT", pixels=struct.pack("<2f", 0.25, 0.75))
+    assert convert(tmp_path, draw(c), "depth") == moved(tmp_path, 6, 0)
+
+
+def test_extension_enumerants_and_the_ext_image_call(tmp_path):
+    """GL_TEXTURE_MAX_ANISOTROPY_EXT on the texture (PyOpenGL's core names
+    lack it: the texture had been refused), and glTextureImage2DEXT
+    (EXT_direct_state_access: passed over, the texture read as zeros)."""
+    c = texture(shader_calls(VS_TEXEL % FETCH))
+    c.add("glTexParameterf", target="GL_TEXTURE_2D", pname="GL_TEXTURE_MAX_ANISOTROPY_EXT", param=8.0)
+    assert convert(tmp_path, draw(c), "aniso") == moved(tmp_path, 6, 2)
+    c = texture(shader_calls(VS_TEXEL % FETCH), image=False)
+    c.add("glTextureImage2DEXT", texture=3, target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA32F", width=2,
+          height=1, border=0, format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS)
+    assert convert(tmp_path, draw(c), "ext") == moved(tmp_path, 6, 2)
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda c: c.add("glGenTextures", n=1, textures=[4])
+     .add("glTextureView", texture=4, target="GL_TEXTURE_2D", origtexture=3, internalformat="GL_RGBA32F",
+          minlevel=0, numlevels=1, minlayer=0, numlayers=1), "glTextureView makes texture 4 a view of texture 3"),
+    (lambda c: c.add("glPixelTransferf", pname="GL_RED_SCALE", param=0.5)
+     .add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA32F", width=2, height=1, border=0,
+          format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS), "pixel transfer state (GL_RED_SCALE)"),
+    (lambda c: c.add("glGenSamplers", count=1, samplers=[8]).add("glBindSampler", unit=0, sampler=8)
+     .add("glSamplerParameterf", sampler=8, pname="GL_TEXTURE_MAX_ANISOTROPY_EXT", param=8.0),
+     "filters anisotropically: Mesa 22.3's llvmpipe crashes"),
+    (lambda c: c.add("glTexturePageCommitmentEXT", texture=3, level=0, xoffset=0, yoffset=0, zoffset=0, width=2,
+                     height=1, depth=1, commit="GL_TRUE"), "glTexturePageCommitmentEXT is not emulated"),
+], ids=["view", "pixel_transfer", "anisotropic_sampler", "unhandled_texture_dsa"])
+def test_textures_round_8_refuses(tmp_path, make, words):
+    """A texture view, pixel transfer state (compatibility profile), a
+    sampler filtering anisotropically (Mesa crashed with SIGSEGV on the
+    draw), an unhandled direct-state call on a texture: refused naming the
+    call (they had converted, reading zeros, or crashed)."""
+    c = make(texture(shader_calls(VS_TEXEL % FETCH)))
+    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt")
+    refused(r, words)
+    assert left_behind(tmp_path, ["x.xz"]) == []

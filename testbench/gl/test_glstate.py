@@ -841,3 +841,18 @@ def test_opengl_es_1_float_and_fixed_point_matrix_calls():
     (df,), (dx,) = f.draws(), x.draws()
     assert np.array_equal(df["clip"], dx["clip"]) and df["depth_range"] == dx["depth_range"] == (0.25, 0.75)
     assert f.conv.s.offset == x.conv.s.offset == (1.0, 2.0) and f.conv.s.clear_depth == x.conv.s.clear_depth == 0.5
+
+
+def test_texture_units_past_31_and_units_gl_refuses():
+    """glActiveTexture past GL_TEXTURE31, which apitrace writes as a number
+    (or another enumerant's name of that number): the unit, up to llvmpipe's
+    192 units; past them GL_INVALID_ENUM changes nothing (both had been
+    refused)."""
+    gl = GL()
+    gl.glActiveTexture(0x84C0 + 191)
+    assert gl.conv.s.active_unit == 191
+    gl.glActiveTexture(0x84C0 + 500)
+    gl.glActiveTexture("GL_SAMPLES_3DFX")
+    assert gl.conv.s.active_unit == 191
+    gl.glActiveTexture("GL_TEXTURE3")
+    assert gl.conv.s.active_unit == 3

@@ -6,7 +6,8 @@ import struct
 from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
-from .gl_tables import CALL_FLAG_END_FRAME, COMPAT_ONLY, END_FRAME_CALLS, IGNORED_PREFIXES, MESA_NO_OPS, base_name
+from .gl_tables import (CALL_FLAG_END_FRAME, COMPAT_ONLY, COMPAT_ONLY_FORMS, END_FRAME_CALLS, IGNORED_PREFIXES,
+                        MESA_NO_OPS, TEXTURE_IGNORED, base_name)
 from .glstate import GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
@@ -228,7 +229,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.end_frame(no)
             return   # any other call there is GL_INVALID_OPERATION: it does nothing
         h = self.HANDLERS.get(base) if name not in MESA_NO_OPS else Converter.h_mesa_no_op
-        if self.core and base in COMPAT_ONLY:
+        if self.core and (base in COMPAT_ONLY or name in COMPAT_ONLY_FORMS):
             h = Converter.h_not_in_core
         if h is not None:
             try:
@@ -239,8 +240,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 fail_call(no, f"{printable(name)}: malformed arguments ({type(e).__name__}: {printable(e, 80)})")
         elif base.startswith("glVertex") and not base.startswith("glVertexAttrib"):
             fail_call(no, f"{printable(name)} outside glBegin/glEnd")
-        elif base.startswith(IGNORED_PREFIXES):
-            pass
+        elif base.startswith(IGNORED_PREFIXES) and not (base.startswith("glTexture") and base not in TEXTURE_IGNORED):
+            pass   # (an unhandled glTexture* call, direct state access on a texture, may make a 2D one's image)
         else:
             fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
         if flags & CALL_FLAG_END_FRAME:

@@ -59,6 +59,13 @@ IGNORED_PREFIXES = (
     # hints that its contents are no longer needed.
     "glNamedFramebufferDrawBuffer", "glNamedFramebufferReadBuffer", "glInvalidateNamedFramebuffer",
 )
+# Direct state access on textures that cannot make a 2D texture's image
+# (synchronisation; 1D and 3D storage, GL_INVALID_OPERATION on a 2D texture);
+# every other unhandled glTexture* call is refused, not passed over.
+TEXTURE_IGNORED = {"glTextureBarrier", "glTextureStorage1D", "glTextureStorage3D", "glTextureSubImage1D",
+                   "glTextureSubImage3D", "glTextureStorage3DMultisample", "glTextureImage1D", "glTextureImage3D",
+                   "glTextureSubImage1D", "glTextureSubImage3D", "glCompressedTextureSubImage1D",
+                   "glCompressedTextureSubImage3D"}
 # The compatibility profile's calls (by base name): in a core profile they
 # are GL_INVALID_OPERATION in Mesa and change nothing.
 COMPAT_ONLY = {
@@ -98,6 +105,9 @@ MAX_BUFFER_BYTES_IN_ALL = 2 << 30
 # divisor): a capture's call of one changes nothing, as there. Measured by
 # testbench/gl/test_gl2rbt_draw_outcomes.py against Mesa itself.
 MESA_NO_OPS = {"glVertexAttribDivisorEXT", "glVertexAttribDivisorANGLE", "glVertexAttribDivisorNV"}
+# Extension forms of core calls that Mesa 22.3 keeps to the compatibility
+# profile (EXT_polygon_offset): in a core profile they change nothing.
+COMPAT_ONLY_FORMS = {"glPolygonOffsetEXT"}
 
 
 def base_name(name):

@@ -12,7 +12,9 @@ captured buffers, uniforms and textures, and hands back each primitive's
 clip-space positions, assembled as GL assembles them (strips, fans,
 primitive restart, base vertex, instances in order)."""
 import ctypes
+import glob
 import os
+import re
 import resource
 import select
 import signal
@@ -48,6 +50,32 @@ def raise_stack_limit():
         want = MESA_STACK_BYTES if hard == resource.RLIM_INFINITY else min(MESA_STACK_BYTES, hard)
         if want > soft:
             resource.setrlimit(resource.RLIMIT_STACK, (want, hard))
+
+
+_EXTENSION_ENUMS = None
+EXTENSION_ENUM = re.compile(r"^(GL_\w+)=_C\('\1',(0x[0-9A-Fa-f]+|\d+)\)", re.M)
+
+
+def extension_enums():
+    """The enumerants of every GL and GL ES extension PyOpenGL knows (its
+    registry-made modules), by name: the EXT, KHR and vendor names its core
+    namespace lacks (GL_COMPRESSED_RGB_S3TC_DXT1_EXT, GL_TEXTURE_MAX_ANISOTROPY_EXT),
+    read from its files once, on the first name the core namespace lacks."""
+    global _EXTENSION_ENUMS
+    if _EXTENSION_ENUMS is None:
+        import OpenGL
+        _EXTENSION_ENUMS = {}
+        root = os.path.join(os.path.dirname(OpenGL.__file__), "raw")
+        for api in ("GL", "GLES2", "GLES3", "GLES1"):
+            for path in glob.glob(os.path.join(root, api, "*", "*.py")):
+                try:
+                    with open(path, encoding="utf-8") as f:
+                        text = f.read()
+                except OSError:
+                    continue
+                for m in EXTENSION_ENUM.finditer(text):
+                    _EXTENSION_ENUMS.setdefault(m.group(1), int(m.group(2), 0))
+    return _EXTENSION_ENUMS
 
 
 def _load():
@@ -224,6 +252,8 @@ class Mesa:
             v = getattr(self.gl, value, None)
             if v is None:
                 v = ES_ENUMS.get(value)
+            if v is None:
+                v = extension_enums().get(value)
             if v is None and value == "GL_ZERO":
                 return 0
             if v is not None:

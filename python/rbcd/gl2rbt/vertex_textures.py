@@ -21,6 +21,8 @@ from .glstate.textures import (LEVEL_CALLS, PARAMETER_CALLS, PART_CALLS, SAMPLER
 # texel (the widest format), a third more for a mipmapped storage: Mesa
 # allocates a level's size whatever pixels a call gives.
 MAX_MESA_TEXTURE_BYTES = 1 << 30
+GL_DEPTH_TEXTURE_MODE = 0x884B   # the compatibility profile's
+ANISOTROPY = ("GL_TEXTURE_MAX_ANISOTROPY", "GL_TEXTURE_MAX_ANISOTROPY_EXT", 0x84FE)
 # Sampler types of the 2D textures a vertex shader may read.
 TEXTURE_2D_SAMPLERS = {"GL_SAMPLER_2D", "GL_INT_SAMPLER_2D", "GL_UNSIGNED_INT_SAMPLER_2D", "GL_SAMPLER_2D_SHADOW"}
 FORMAT_COMPONENTS = {"GL_RED": 1, "GL_GREEN": 1, "GL_BLUE": 1, "GL_ALPHA": 1, "GL_LUMINANCE": 1,
@@ -104,6 +106,7 @@ class VertexTextures:
         self.samplers = {}   # capture sampler -> (Mesa sampler, parameters replayed)
         self.entry = {}
         self.no = self.draw = None   # the draw's call and name, for messages
+        self.core = False            # the capture's context is of a core profile
 
     def call(self, name, *args):
         fn = self.entry.get(name)
@@ -126,6 +129,7 @@ class VertexTextures:
         is noted for the reduced capture (conv.vertex_texture_read)."""
         GL = self.gl
         self.no, self.draw = no, name
+        self.core = conv.core and not conv.es
         unit_of = np.zeros(1, np.int32)
         for loc in mp.texture_2d_locations:
             GL.glGetUniformiv(mp.name, loc, unit_of)
@@ -168,6 +172,11 @@ class VertexTextures:
         self.images[tex] = (mt, version, size)
         GL.glActiveTexture(GL.GL_TEXTURE0)
         GL.glBindTexture(GL.GL_TEXTURE_2D, mt)
+        if self.core:
+            # Mesa's context is of the compatibility profile, whose depth
+            # textures read as luminance (d, d, d, 1); a core profile's read
+            # as red (d, 0, 0, 1).
+            self.call("glTexParameteri", GL.GL_TEXTURE_2D, GL_DEPTH_TEXTURE_MODE, GL.GL_RED)
         for call_no, name, d, unpack in (tc.calls.values() if tc is not None else []):
             self.replay(f"{self.draw}: texture {tex}, which its vertex shader reads: {name} (call {call_no})", name,
                         d, unpack)
@@ -178,6 +187,12 @@ class VertexTextures:
 
     def sampler(self, sampler, params):
         GL = self.gl
+        for pname, (_, d) in params.items():
+            if pname in ANISOTROPY and not (isinstance(d.get("param"), (int, float)) and d["param"] <= 1):
+                # Measured: the draw kills Mesa's llvmpipe with SIGSEGV (the
+                # capture's own program died there too).
+                fail_call(self.no, f"{self.draw}: sampler {sampler}, bound where its vertex shader reads, filters "
+                          "anisotropically: Mesa 22.3's llvmpipe crashes on such a draw; not emulated")
         entry = self.samplers.get(sampler)
         state = list(params.values())
         if entry is not None and entry[1] == state:

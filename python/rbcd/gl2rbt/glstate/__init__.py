@@ -100,6 +100,7 @@ class GLState:
         self.texture_calls = {}    # texture name -> TextureCalls
         self.texture_bytes_kept = 0
         self.unpack = {}           # glPixelStorei's unpack state, where not GL's default
+        self.pixel_transfer = {}   # glPixelTransfer's parameters as last set
         self.samplers = {}         # sampler name -> {pname: (call name, arguments)}
         self.sampler_units = {}    # unit -> sampler name
         # --reduced-out: the version of each texture's calls written into

@@ -90,8 +90,22 @@ class DirectStateCalls:
             if tex:
                 self.s.texture_targets[tex] = target
 
+    def h_texture_image_ext(self, no, name, a, args):
+        """glTextureImage2DEXT (EXT_direct_state_access, compatibility
+        profile): glTexImage2D on the texture it names at the target it
+        gives (a name not yet bound becomes a texture of that target)."""
+        d = dict(args)
+        tex = checked(no, integer, d.get("texture"), f"{name}: the texture", *U32)
+        target = d.get("target")
+        if not tex or not isinstance(target, str):
+            return
+        self.s.texture_targets.setdefault(tex, target)
+        on_texture(FramebufferCalls.h_tex_image, "glTexImage2D")(
+            self, no, name, a, [(k, v) for k, v in args if k != "target"])
+
     HANDLERS = {
         "glCreateTextures": h_create_textures,
+        "glTextureImage2D": h_texture_image_ext,   # the EXT form's base name
         "glTextureStorage2D": on_texture(FramebufferCalls.h_tex_image, "glTexStorage2D"),
         "glTextureStorage2DMultisample": on_texture(FramebufferCalls.h_tex_image, "glTexStorage2DMultisample"),
         "glTextureSubImage2D": on_texture(FramebufferCalls.h_tex_sub_image, "glTexSubImage2D"),

@@ -16,6 +16,8 @@ from ..gl_tables import base_name
 from . import bitfield, generated_name
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
+GL_TEXTURE0 = 0x84C0
+MAX_TEXTURE_UNITS = 192   # llvmpipe's GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS
 # The internal formats glTexBuffer takes in Mesa 22.3 (GL 4.5's table 8.18);
 # a compatibility context also the legacy ones. Another is GL_INVALID_ENUM.
 TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}{t}" for c in ("R", "RG", "RGBA") for b, ts in
@@ -208,10 +210,21 @@ class FramebufferCalls:
             self.s.texture_images[tex] = texture_image_digest(d)
 
     def h_active_texture(self, no, name, a, args):
+        """glActiveTexture: GL_TEXTUREi, or past GL_TEXTURE31 the number
+        apitrace writes (or another enumerant's name of that number); a unit
+        past llvmpipe's 192 (GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS) is
+        GL_INVALID_ENUM and changes nothing."""
         unit = a[0] if a else None
-        if not isinstance(unit, str) or not unit.startswith("GL_TEXTURE") or not unit[10:].isdigit():
+        if isinstance(unit, str) and unit.startswith("GL_TEXTURE") and unit[10:].isdigit():
+            unit = int(unit[10:])
+        elif isinstance(unit, int) and not isinstance(unit, bool):
+            unit -= GL_TEXTURE0
+        elif isinstance(unit, str) and unit.startswith("GL_"):
+            return   # another enumerant: GL_INVALID_ENUM
+        else:
             fail_call(no, f"{name}: {printable(unit)} is not a texture unit")
-        self.s.active_unit = int(unit[10:])
+        if 0 <= unit < MAX_TEXTURE_UNITS:
+            self.s.active_unit = unit
 
     def h_bind_texture(self, no, name, a, args):
         d = dict(args)

@@ -36,6 +36,12 @@ UNPACK_PARAMETERS = ("GL_UNPACK_SWAP_BYTES", "GL_UNPACK_LSB_FIRST", "GL_UNPACK_R
                      "GL_UNPACK_SKIP_PIXELS", "GL_UNPACK_ALIGNMENT", "GL_UNPACK_IMAGE_HEIGHT",
                      "GL_UNPACK_SKIP_IMAGES")
 UNPACK_DEFAULTS = {"GL_UNPACK_ALIGNMENT": 4}
+
+
+def PIXEL_TRANSFER_DEFAULT(pname):
+    """GL's initial value of a glPixelTransfer parameter: scales 1, the
+    rest (biases, GL_MAP_COLOR, index shift and offset) 0."""
+    return 1 if str(pname).endswith("_SCALE") else 0
 # The calls that define a level's image (a whole one) or part of it.
 LEVEL_CALLS = ("glTexImage2D", "glCompressedTexImage2D")
 PART_CALLS = ("glTexSubImage2D", "glCompressedTexSubImage2D")
@@ -136,7 +142,11 @@ class TextureImageCalls:
         pixels = d.get("pixels", d.get("data"))
         if name in LEVEL_CALLS + PART_CALLS:
             unpack_buffer = self.s.bound.get("GL_PIXEL_UNPACK_BUFFER", 0)
-            if unpack_buffer:
+            transfer = sorted(str(k) for k, v in self.s.pixel_transfer.items() if v != PIXEL_TRANSFER_DEFAULT(k))
+            if transfer:
+                tc.refused = (no, f"{name} converted its pixels under pixel transfer state ({', '.join(transfer)}), "
+                                  "which is not emulated")
+            elif unpack_buffer:
                 tc.refused = (no, f"{name} read its pixels from pixel unpack buffer {unpack_buffer}")
             elif isinstance(pixels, int) and not isinstance(pixels, bool) and pixels:
                 tc.refused = (no, f"{name}'s pixels are not in the capture (a pointer apitrace did not follow)")
@@ -185,6 +195,29 @@ class TextureImageCalls:
             if value < 0 or pname == "GL_UNPACK_ALIGNMENT" and value not in (1, 2, 4, 8):
                 return
             self.s.unpack[pname] = value
+
+    def h_pixel_transfer(self, no, name, a, args):
+        """glPixelTransferf/i (compatibility profile): scales, biases and
+        colour maps GL applies to the pixels of a glTexImage2D; a texture
+        made under any but the default is refused if a vertex shader reads
+        it."""
+        d = dict(args)
+        pname, value = d.get("pname"), d.get("param")
+        if isinstance(pname, str) and isinstance(value, (int, float)) and not isinstance(value, bool):
+            self.s.pixel_transfer[pname] = value
+
+    def texture_view(self, no, name, a, args):
+        """glTextureView: the view and the texture it views share images,
+        which the converter does not follow: a vertex shader that reads
+        either is refused naming the call."""
+        d = dict(args)
+        view, orig = d.get("texture"), d.get("origtexture")
+        for tex, other in ((view, orig), (orig, view)):
+            if isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
+                if tex == view and isinstance(d.get("target"), str):
+                    self.s.texture_targets.setdefault(tex, d["target"])
+                self.texture_calls(tex).refused = (no, f"{name} makes texture {view} a view of texture {orig}, "
+                                                       "which is not emulated")
 
     def h_texture_parameter(self, no, name, a, args):
         self.keep_texture_call(no, base_name(name), dict(args))
@@ -278,6 +311,9 @@ class TextureImageCalls:
 
     HANDLERS = {
         "glPixelStorei": h_pixel_store,
+        "glPixelTransferf": h_pixel_transfer,
+        "glPixelTransferi": h_pixel_transfer,
+        "glTextureView": texture_view,
         "glPixelStoref": h_pixel_store,
         "glGenerateMipmap": h_generate_mipmap,
         "glCopyTexImage2D": h_copy_tex_image,
