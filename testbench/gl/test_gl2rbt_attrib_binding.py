@@ -377,3 +377,25 @@ def test_packed_and_double_current_values(tmp_path):
                                  normalized="GL_FALSE", value=[packed])) == want
     assert moved(lambda c: c.add("glVertexAttrib4f", index=1, x=6.0, y=2.0, z=0.0, w=1.0)
                  .add("glVertexAttribP4ui", index=1, type="GL_FLOAT", normalized="GL_FALSE", value=0)) == want
+
+
+@pytest.mark.parametrize("filt, fmt", [("GL_LINEAR", "GL_DEPTH_COMPONENT24"), ("GL_NEAREST", "GL_DEPTH_COMPONENT32F")])
+def test_a_depth_blit_gl_refuses_after_the_source_was_drawn(tmp_path, filt, fmt):
+    """A depth copy GL refuses (GL_LINEAR, or depth formats that differ:
+    GL_INVALID_OPERATION) leaves the window its own depths; once framebuffer
+    3 was drawn, the one buffer the converter keeps holds its depths too:
+    refused naming the call (it had been taken as the copy: 27%)."""
+    c = shader_calls(VS)
+    c.add("glGenFramebuffers", n=1, framebuffers=[3]).add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3)
+    c.add("glGenRenderbuffers", n=1, renderbuffers=[4]).add("glBindRenderbuffer", target="GL_RENDERBUFFER",
+                                                            renderbuffer=4)
+    c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat=fmt, width=64, height=48)
+    c.add("glFramebufferRenderbuffer", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+          renderbuffertarget="GL_RENDERBUFFER", renderbuffer=4)
+    c.add("glEnable", cap="GL_DEPTH_TEST").add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    c = blit(c, "GL_DEPTH_BUFFER_BIT", FULL, FULL, filt=filt).swap()
+    r = gl2rbt(tmp_path, c.write(tmp_path / "g.xz"), "-o", tmp_path / "g.rbt")
+    refused(r, "glBlitFramebuffer", "a depth copy GL refuses")

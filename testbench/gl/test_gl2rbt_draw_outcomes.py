@@ -403,3 +403,13 @@ def test_polygon_offset_ext_is_not_in_a_core_profile(tmp_path):
         return trace(tmp_path, draw(c), "o")
     assert offset(True, "glPolygonOffsetEXT") == offset(True, None)
     assert offset(False, "glPolygonOffsetEXT") == offset(False, "glPolygonOffset") != offset(False, None)
+
+
+def test_a_deep_expression_the_text_does_not_show_compiles(tmp_path):
+    """400,000 swizzles in a chain (`.` is no operator the statement limit
+    counts; macros hide sums alike): Mesa's compiler recursed past the 120
+    MiB stack raised at run time and killed the converter with SIGSEGV; on
+    the 2 GiB stack the launcher gives the main thread, it compiles."""
+    vs = ("#version 330 core\nin vec3 p;\nvoid main() { float s = 0.0 * p" + ".xyz" * 400000 + ".x;\n"
+          "  gl_Position = vec4(p.x / 32.0 - 1.0 + s, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+    assert trace(tmp_path, draw(shader_calls(vs)), "deep") == trace(tmp_path, draw(shader_calls(VS)), "plain")

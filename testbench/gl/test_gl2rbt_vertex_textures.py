@@ -306,3 +306,44 @@ def test_textures_round_8_refuses(tmp_path, make, words):
     r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt")
     refused(r, words)
     assert left_behind(tmp_path, ["x.xz"]) == []
+
+
+# ---- round 9: calls GL refuses, in the texture path
+
+@pytest.mark.parametrize("bad", [
+    dict(fn="glTexImage2D", border=1), dict(fn="glTexImage2D", internalformat=0x1234),
+    dict(fn="glTexImage2D", width=16385, pixels=bytes(16385 * 16)),
+    dict(fn="glTexSubImage2D", type="GL_UNSIGNED_SHORT_5_6_5"),
+    dict(fn="glTexParameteri", pname="GL_TEXTURE_MIN_FILTER", param="GL_REPEAT"),
+], ids=["border", "format", "too_wide", "packed_rgba", "filter"])
+def test_a_call_gl_refuses_leaves_the_texture_as_it_was(tmp_path, bad):
+    """A call GL refuses after a valid one of the same level, rectangle or
+    parameter changes nothing (it had taken the valid one's place among the
+    calls kept: 52% against Mesa)."""
+    c = texture(shader_calls(VS_TEXEL % FETCH))
+    fn = bad.pop("fn")
+    if fn == "glTexParameteri":
+        c.add(fn, target="GL_TEXTURE_2D", **bad)
+    else:
+        args = dict(target="GL_TEXTURE_2D", level=0, width=2, height=1, format="GL_RGBA", type="GL_FLOAT",
+                    pixels=TEXELS)
+        args.update(dict(internalformat="GL_RGBA32F", border=0) if fn == "glTexImage2D" else dict(xoffset=0, yoffset=0))
+        args.update(bad)
+        c.add(fn, **args)
+    assert convert(tmp_path, draw(c), "refused") == moved(tmp_path, 6, 2)
+
+
+def test_what_a_core_profile_or_desktop_gl_does_not_have_changes_nothing(tmp_path):
+    """In a core profile, a luminance image and GL_GENERATE_MIPMAP are
+    GL_INVALID_ENUM (Mesa's own compatibility context took them: 43-67%);
+    glTexStorage2DEXT is OpenGL ES's alone (Mesa made storage: 52%)."""
+    c = texture(shader_calls(VS_TEXEL % FETCH))
+    c.add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_LUMINANCE8", width=2, height=1,
+          border=0, format="GL_LUMINANCE", type="GL_UNSIGNED_BYTE", pixels=b"\x10\x20")
+    c.add("glTexParameteri", target="GL_TEXTURE_2D", pname="GL_GENERATE_MIPMAP", param=1)
+    assert convert(tmp_path, draw(c), "core") == moved(tmp_path, 6, 2)
+    c = texture(shader_calls(VS_TEXEL % FETCH), image=False)
+    c.add("glTexStorage2DEXT", target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA32F", width=2, height=1)
+    c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=2, height=1,
+          format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS)
+    assert convert(tmp_path, draw(c), "ext") == moved(tmp_path, 0, 0)

@@ -856,3 +856,16 @@ def test_texture_units_past_31_and_units_gl_refuses():
     assert gl.conv.s.active_unit == 191
     gl.glActiveTexture("GL_TEXTURE3")
     assert gl.conv.s.active_unit == 3
+
+
+def test_multi_binds_gl_refuses_in_whole_or_in_part():
+    """glBindTextures past the 192th unit binds nothing (GL_INVALID_OPERATION);
+    an entry naming no texture leaves its unit and binds the others."""
+    gl = GL()
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=5)
+    gl.glBindTextures(first=190, count=5, textures=[5, 5, 5, 5, 5])
+    assert (191, "GL_TEXTURE_2D") not in gl.conv.s.units
+    gl.glBindTextures(first=1, count=2, textures=[999, 5])
+    assert gl.conv.s.units.get((1, "GL_TEXTURE_2D")) is None and gl.conv.s.units[(2, "GL_TEXTURE_2D")] == 5
+    gl.glBindSamplers(first=190, count=3, samplers=[7, 7, 7])
+    assert gl.conv.s.sampler_units == {}

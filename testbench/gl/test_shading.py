@@ -119,7 +119,9 @@ def test_the_childs_work_for_a_program_is_bounded(monkeypatch, bound, value, wor
         t = time.monotonic()
         with pytest.raises(ConvertError) as e:
             costs.shade_of("5e1fc0de" * 8, {"vertex": VS, "fragment": SWITCH})
-        assert time.monotonic() - t < 5
+        # The bound, not the switch's own end, stopped it (the switch alone
+        # takes the child longer; a loose figure: the machine may be busy).
+        assert time.monotonic() - t < 25
         assert str(e.value).startswith("program 5e1fc0de (its fragment shader's cost") and words in str(e.value) \
             and str(e.value).endswith("(docs/gl-capture.md, limits)"), e.value
         assert costs.child is None and not alive(child)

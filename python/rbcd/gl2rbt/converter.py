@@ -7,7 +7,7 @@ from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
 from .gl_tables import (CALL_FLAG_END_FRAME, COMPAT_ONLY, COMPAT_ONLY_FORMS, END_FRAME_CALLS, IGNORED_PREFIXES,
-                        MESA_NO_OPS, TEXTURE_IGNORED, base_name)
+                        ES_ONLY_FORMS, MESA_NO_OPS, TEXTURE_IGNORED, base_name)
 from .glstate import GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
@@ -229,7 +229,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.end_frame(no)
             return   # any other call there is GL_INVALID_OPERATION: it does nothing
         h = self.HANDLERS.get(base) if name not in MESA_NO_OPS else Converter.h_mesa_no_op
-        if self.core and (base in COMPAT_ONLY or name in COMPAT_ONLY_FORMS):
+        if self.core and (base in COMPAT_ONLY or name in COMPAT_ONLY_FORMS) or not self.es and name in ES_ONLY_FORMS:
             h = Converter.h_not_in_core
         if h is not None:
             try:

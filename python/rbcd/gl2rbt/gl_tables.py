@@ -108,6 +108,9 @@ MESA_NO_OPS = {"glVertexAttribDivisorEXT", "glVertexAttribDivisorANGLE", "glVert
 # Extension forms of core calls that Mesa 22.3 keeps to the compatibility
 # profile (EXT_polygon_offset): in a core profile they change nothing.
 COMPAT_ONLY_FORMS = {"glPolygonOffsetEXT"}
+# Extension forms of core calls Mesa 22.3 exposes in OpenGL ES alone
+# (EXT_texture_storage): GL_INVALID_OPERATION in desktop contexts.
+ES_ONLY_FORMS = {"glTexStorage2DEXT"}
 
 
 def base_name(name):

@@ -36,11 +36,10 @@ ES_ENUMS = {"GL_HALF_FLOAT_OES": 0x8D61}
 
 # The stack Mesa's GLSL compiler may use: it recurses once a term of an
 # expression (a sum of 20,000 terms overflowed the default 8 MiB and killed
-# the converter with SIGSEGV). The main thread's stack grows up to the soft
-# limit in force when it grows, into the gap of at least 128 MiB Linux keeps
-# below it; children (the shading measurement) inherit the limit. With this,
-# sums of 200,000 terms compile; programs.MAX_STATEMENT_OPERATORS keeps
-# every statement well below that.
+# the converter with SIGSEGV). scripts/rbcd-gl2rbt runs itself again with 2
+# GiB; a converter imported otherwise raises the soft limit here, and the
+# main thread's stack grows up to it into the gap of at least 128 MiB Linux
+# keeps below it (sums of 200,000 terms compile there).
 MESA_STACK_BYTES = 120 << 20
 
 

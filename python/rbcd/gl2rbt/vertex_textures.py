@@ -187,14 +187,15 @@ class VertexTextures:
 
     def sampler(self, sampler, params):
         GL = self.gl
-        for pname, (_, d) in params.items():
+        state = [call for calls in params.values() for call in calls]
+        for _, d in state:
+            pname = d.get("pname")
             if pname in ANISOTROPY and not (isinstance(d.get("param"), (int, float)) and d["param"] <= 1):
                 # Measured: the draw kills Mesa's llvmpipe with SIGSEGV (the
                 # capture's own program died there too).
                 fail_call(self.no, f"{self.draw}: sampler {sampler}, bound where its vertex shader reads, filters "
                           "anisotropically: Mesa 22.3's llvmpipe crashes on such a draw; not emulated")
         entry = self.samplers.get(sampler)
-        state = list(params.values())
         if entry is not None and entry[1] == state:
             return entry[0]
         if entry is not None:

@@ -86,6 +86,7 @@ class GLState:
         self.read_fbo = 0
         self.fbo_depth = {}
         self.sizes = {}
+        self.formats = {}   # ("texture" | "renderbuffer", name) -> internal format of level 0
         self.renderbuffer = 0
         self.framebuffer_names = None    # names glGen/glCreateFramebuffers returned (None: the capture showed none)
         self.renderbuffer_names = None   # the same for renderbuffers

@@ -115,6 +115,7 @@ class FramebufferCalls:
         if not self.s.renderbuffer:
             return   # no renderbuffer bound: GL_INVALID_OPERATION
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
+        self.s.formats[("renderbuffer", self.s.renderbuffer)] = d.get("internalformat")
 
     def h_bind_renderbuffer(self, no, name, a, args):
         rb = checked(no, integer, dict(args).get("renderbuffer"), f"{name}: the renderbuffer", *U32)
@@ -187,6 +188,7 @@ class FramebufferCalls:
         if level == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
             self.s.sizes[("texture", tex)] = (w, h)
+            self.s.formats[("texture", tex)] = d.get("internalformat")
             self.s.texture_images[tex] = texture_image_digest(d)
             levels = d.get("levels")
             if isinstance(levels, int) and not isinstance(levels, bool):   # glTexStorage2D: the levels below
@@ -239,7 +241,10 @@ class FramebufferCalls:
     def h_bind_texture_unit(self, no, name, a, args):
         """glBindTextureUnit(unit, texture) and glBindTextures(first, count,
         textures): each texture bound to its unit at the target it was
-        first bound to (0 unbinds every target of the unit)."""
+        first bound to (0 unbinds every target of the unit). GL 4.5, 8.1:
+        units past llvmpipe's 192 make the whole call do nothing; an entry
+        that names no texture (never bound nor created, or deleted) is
+        skipped, the others bound."""
         d = dict(args)
         if "Unit" in name:
             pairs = [(d.get("unit"), d.get("texture"))]
@@ -252,6 +257,8 @@ class FramebufferCalls:
             if not isinstance(texs, list) or len(texs) < count:
                 fail_call(no, f"{name}: fewer textures than its count")
             pairs = [(first + i, t) for i, t in enumerate(texs[:count])]
+        if any(not isinstance(u, int) or isinstance(u, bool) or u >= MAX_TEXTURE_UNITS for u, _ in pairs):
+            return   # GL_INVALID_OPERATION (GL_INVALID_VALUE for glBindTextureUnit): nothing is bound
         for unit, tex in pairs:
             unit = checked(no, integer, unit, f"{name}: the unit", *U32)
             tex = checked(no, integer, tex, f"{name}: the texture", *U32)
@@ -261,7 +268,7 @@ class FramebufferCalls:
                 continue
             target = self.s.texture_targets.get(tex)
             if target is None:
-                return   # a texture never bound has no target: GL_INVALID_OPERATION
+                continue   # no such texture: GL_INVALID_OPERATION, this unit keeps its binding
             self.s.units[(unit, target)] = tex
             if unit == self.s.active_unit and target == "GL_TEXTURE_2D":
                 self.s.texture = tex
@@ -318,8 +325,7 @@ class FramebufferCalls:
         d = dict(args)
         bits = {0x100: "GL_DEPTH_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT", 0x4000: "GL_COLOR_BUFFER_BIT"}
         mask, unknown = bitfield(d.get("mask", 0), no, f"{name}: the mask", bits)
-        if "GL_DEPTH_BUFFER_BIT" not in mask or unknown or not mask <= set(bits.values()) \
-                or d.get("filter") not in ("GL_NEAREST", 0x2600):
+        if "GL_DEPTH_BUFFER_BIT" not in mask or unknown or not mask <= set(bits.values()):
             return
         if "drawFramebuffer" in d:
             src = checked(no, integer, d["readFramebuffer"], f"{name}: the read framebuffer", *U32)
@@ -332,6 +338,15 @@ class FramebufferCalls:
             # A read framebuffer with no depth buffer copies no depth (GL
             # ignores the bit), and one with no attachment is incomplete
             # (GL_INVALID_FRAMEBUFFER_OPERATION): nothing changes.
+            return
+        if d.get("filter") not in ("GL_NEAREST", 0x2600) or self.depth_class(src) != self.depth_class(dst):
+            # GL_INVALID_OPERATION (or GL_INVALID_ENUM): nothing is copied,
+            # and the destination keeps its own depths; the one buffer the
+            # converter keeps holds the source's too once it was drawn.
+            if self.camera_pass(src) and src != dst and src in self.camera_drawn:
+                fail_call(no, f"{printable(name)}: a depth copy GL refuses (a filter other than GL_NEAREST, or "
+                          f"depth formats that differ) leaves framebuffer {dst} its own depths, which the one "
+                          "camera-pass depth buffer the converter keeps does not hold apart: not emulated")
             return
         rect = [checked(no, integer, d.get(k), f"{name}: {k}", *I32)
                 for k in ("srcX0", "srcY0", "srcX1", "srcY1", "dstX0", "dstY0", "dstX1", "dstY1")]
@@ -357,6 +372,19 @@ class FramebufferCalls:
                       "framebuffers is not emulated")
         fail_call(no, f"{printable(name)}: a depth copy into the camera pass's depth buffer "
                   f"{'moved or scaled' if self.camera_pass(src) else 'from another pass'} is not emulated")
+
+    def depth_class(self, fb):
+        """A framebuffer's depth format as glBlitFramebuffer compares them:
+        bits and float or not (the window's: 24 bits)."""
+        att = self.s.fbo_depth.get(fb) if fb else None
+        fmt = self.s.formats.get(att[:2]) if att else "GL_DEPTH_COMPONENT24"
+        fmt = str(fmt)
+        if "32F" in fmt:
+            return "32F"
+        for bits in ("16", "32"):
+            if f"COMPONENT{bits}" in fmt:
+                return bits
+        return "24"
 
     def camera_pass(self, fb=None):
         """Whether a draw now writes the frame's camera pass (or would,

@@ -23,6 +23,7 @@ import math
 from ...cli import I32, U32, U63, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
+from .framebuffers import MAX_TEXTURE_UNITS
 
 VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
 # The argument a reduced capture adds to a draw whose vertex shader reads
@@ -50,6 +51,65 @@ PARAMETER_CALLS = ("glTexParameteri", "glTexParameterf", "glTexParameteriv", "gl
 KEPT_CALLS = LEVEL_CALLS + PART_CALLS + PARAMETER_CALLS + ("glTexStorage2D", "glGenerateMipmap")
 SAMPLER_PARAMETER_CALLS = ("glSamplerParameteri", "glSamplerParameterf", "glSamplerParameteriv",
                            "glSamplerParameterfv", "glSamplerParameterIiv", "glSamplerParameterIuiv")
+
+
+# What GL takes, for the checks below: a call that passes them replaces the
+# calls of the same key (a level, a rectangle, a parameter); one that does
+# not is kept beside them, and Mesa decides (a call GL refuses must not
+# take a valid one's place).
+FILTERS = {"GL_NEAREST", "GL_LINEAR"}
+MIN_FILTERS = FILTERS | {f"GL_{a}_MIPMAP_{b}" for a in ("NEAREST", "LINEAR") for b in ("NEAREST", "LINEAR")}
+WRAPS = {"GL_REPEAT", "GL_CLAMP_TO_EDGE", "GL_CLAMP_TO_BORDER", "GL_MIRRORED_REPEAT", "GL_MIRROR_CLAMP_TO_EDGE"}
+COMPARE_FUNCS = {"GL_NEVER", "GL_LESS", "GL_EQUAL", "GL_LEQUAL", "GL_GREATER", "GL_NOTEQUAL", "GL_GEQUAL", "GL_ALWAYS"}
+PARAMETER_VALUES = {"GL_TEXTURE_MIN_FILTER": MIN_FILTERS, "GL_TEXTURE_MAG_FILTER": FILTERS,
+                    "GL_TEXTURE_WRAP_S": WRAPS, "GL_TEXTURE_WRAP_T": WRAPS, "GL_TEXTURE_WRAP_R": WRAPS,
+                    "GL_TEXTURE_COMPARE_MODE": {"GL_NONE", "GL_COMPARE_REF_TO_TEXTURE"},
+                    "GL_TEXTURE_COMPARE_FUNC": COMPARE_FUNCS}
+# Formats, types and parameters of the compatibility profile alone: in a
+# core profile's capture the call was GL_INVALID_ENUM or GL_INVALID_VALUE
+# and changed nothing (Mesa's own context, of the compatibility profile,
+# would take it).
+COMPAT_TEXTURE_WORDS = ("LUMINANCE", "INTENSITY")
+COMPAT_TEXTURE_PARAMETERS = {"GL_GENERATE_MIPMAP", "GL_DEPTH_TEXTURE_MODE", "GL_TEXTURE_PRIORITY"}
+
+
+def compat_only(d):
+    """Whether a texture or sampler call takes something a core profile
+    does not have."""
+    for key in ("internalformat", "format"):
+        v = d.get(key)
+        if isinstance(v, str) and (any(w in v for w in COMPAT_TEXTURE_WORDS) or v.startswith("GL_ALPHA")):
+            return True
+    return d.get("pname") in COMPAT_TEXTURE_PARAMETERS or d.get("param") == "GL_CLAMP" or \
+        isinstance(d.get("params"), list) and "GL_CLAMP" in d["params"]
+
+
+def plausible(name, d):
+    """Whether a call passes GL's plain checks (sizes, border, a named
+    internal format, a format and type of the tables, a known parameter's
+    value): only then may it replace earlier calls."""
+    from ..vertex_textures import FORMAT_COMPONENTS, PACKED_BYTES, TYPE_BYTES
+    if name in PARAMETER_CALLS or name in SAMPLER_PARAMETER_CALLS:
+        return d.get("param", (d.get("params") or [None])[0]) in PARAMETER_VALUES.get(d.get("pname"), ())
+    ints = [d.get(k, 0) for k in ("level", "xoffset", "yoffset", "width", "height")]
+    if not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 16384 for v in ints) or ints[0] > 14:
+        return False
+    if name in LEVEL_CALLS and (d.get("border") != 0 or not isinstance(d.get("internalformat"), str)):
+        return False
+    if name.startswith("glCompressed"):
+        return True
+    return d.get("format") in FORMAT_COMPONENTS and (d.get("type") in TYPE_BYTES or d.get("type") in PACKED_BYTES
+                                                     and packed_fits(d.get("type"), d.get("format")))
+
+
+def packed_fits(kind, fmt):
+    """A packed type's format (GL 4.5, table 8.5)."""
+    if kind in ("GL_UNSIGNED_BYTE_3_3_2", "GL_UNSIGNED_BYTE_2_3_3_REV", "GL_UNSIGNED_SHORT_5_6_5",
+                "GL_UNSIGNED_SHORT_5_6_5_REV", "GL_UNSIGNED_INT_10F_11F_11F_REV", "GL_UNSIGNED_INT_5_9_9_9_REV"):
+        return fmt in ("GL_RGB", "GL_RGB_INTEGER")
+    if kind in ("GL_UNSIGNED_INT_24_8", "GL_FLOAT_32_UNSIGNED_INT_24_8_REV"):
+        return fmt == "GL_DEPTH_STENCIL"
+    return fmt in ("GL_RGBA", "GL_BGRA", "GL_RGBA_INTEGER", "GL_BGRA_INTEGER")
 
 
 class TextureCalls:
@@ -88,7 +148,8 @@ def replaced_by(name, d):
 class TextureImageCalls:
     """self.s.texture_calls[texture] = TextureCalls of the 2D textures;
     self.s.unpack: the pixel unpack state; self.s.samplers[sampler] = {pname:
-    (name, arguments)}, self.s.sampler_units[unit] = sampler."""
+    [(name, arguments)]} (the calls that set it, in order), and
+    self.s.sampler_units[unit] = sampler."""
 
     # ---- textures
     def bound_texture(self, target):
@@ -102,7 +163,7 @@ class TextureImageCalls:
 
     def add_texture_call(self, tc, call):
         size = len(pixels_of(call[2])) if pixels_of(call[2]) is not None else 0
-        key = replaced_by(call[1], call[2])
+        key = replaced_by(call[1], call[2]) if plausible(call[1], call[2]) else None
         if key is not None and key in tc.keyed:
             self.drop_texture_call(tc, tc.keyed[key])
         tc.seq += 1
@@ -136,6 +197,8 @@ class TextureImageCalls:
         if d.get("target") != VERTEX_TEXTURE_TARGET:
             return
         tex = self.bound_texture(VERTEX_TEXTURE_TARGET)
+        if self.core and compat_only(d):
+            return   # GL_INVALID_ENUM or GL_INVALID_VALUE in the capture's core profile: nothing changes
         tc = self.texture_calls(tex)
         if tc.over:
             return
@@ -150,7 +213,7 @@ class TextureImageCalls:
                 tc.refused = (no, f"{name} read its pixels from pixel unpack buffer {unpack_buffer}")
             elif isinstance(pixels, int) and not isinstance(pixels, bool) and pixels:
                 tc.refused = (no, f"{name}'s pixels are not in the capture (a pointer apitrace did not follow)")
-            if name in LEVEL_CALLS and not tc.storage:
+            if name in LEVEL_CALLS and not tc.storage and plausible(name, d):
                 # A level defined again: its earlier image and parts go.
                 level = d.get("level")
                 self.drop_texture_calls(tc, lambda c: c[1] in LEVEL_CALLS + PART_CALLS and c[2].get("level") == level)
@@ -287,6 +350,8 @@ class TextureImageCalls:
             if not isinstance(samplers, list) or len(samplers) < count:
                 fail_call(no, f"{name}: fewer samplers than its count")
             pairs = [(first + i, s) for i, s in enumerate(samplers[:max(count, 0)])]
+            if first + max(count, 0) > MAX_TEXTURE_UNITS:
+                return   # GL_INVALID_OPERATION: nothing is bound
         for unit, sampler in pairs:
             unit = checked(no, integer, unit, f"{name}: the unit", *U32)
             sampler = checked(no, integer, sampler, f"{name}: the sampler", *U32)
@@ -297,9 +362,13 @@ class TextureImageCalls:
         sampler = checked(no, integer, d.get("sampler"), f"{name}: the sampler", *U32)
         if not isinstance(d.get("pname"), (str, int)) or isinstance(d.get("pname"), bool):
             fail_call(no, f"{name}: a parameter name that is no enumerant")
+        if self.core and compat_only(d):
+            return   # not in the capture's core profile: the call changed nothing
+        # A call GL may refuse is kept beside the earlier ones of its
+        # parameter (Mesa decides), one it takes replaces them.
         params = self.s.samplers.setdefault(sampler, {})
-        params.pop(d["pname"], None)
-        params[d["pname"]] = (base_name(name), d)
+        kept = params.pop(d["pname"], [])
+        params[d["pname"]] = ([] if plausible(base_name(name), d) else kept[-15:]) + [(base_name(name), d)]
 
     def h_delete_samplers(self, no, name, a, args):
         for sampler in dict(args).get("samplers") or []:
