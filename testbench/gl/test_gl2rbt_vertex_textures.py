@@ -347,3 +347,16 @@ def test_what_a_core_profile_or_desktop_gl_does_not_have_changes_nothing(tmp_pat
     c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=2, height=1,
           format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS)
     assert convert(tmp_path, draw(c), "ext") == moved(tmp_path, 0, 0)
+
+
+def test_a_carried_unpack_state_gl_cannot_hold_is_refused(tmp_path):
+    """An alignment of 3 (or a negative skip) in the calls a reduced capture
+    carries: Mesa refuses it and reads the pixels with another stride than
+    the one checked against their length: the file's error."""
+    c = texture(shader_calls(VS_TEXEL % FETCH))
+    made = [(no, fn, list(args), [0, 0, 0, 0, 0, 3, 0, 0]) for no, fn, args, _, _ in c.calls if fn == "glTexImage2D"]
+    draw(c)
+    r = Calls()
+    r.calls = [(no, fn, args + ([("rbcd-vertex-textures", [(3, made)])] if fn == "glDrawArrays" else []), ret, fl)
+               for no, fn, args, ret, fl in c.calls]
+    refused(gl2rbt(tmp_path, r.write(tmp_path / "a.xz"), "-o", tmp_path / "a.rbt"), "an unpack state GL cannot hold")

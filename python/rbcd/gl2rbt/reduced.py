@@ -44,7 +44,9 @@ REDUCED_KEEP = ("glX", "egl", "wgl")
 # texture images (a texture's size is read, and its image's digest, which
 # takes the pixels' place).
 REDUCED_DROP = {"glTexImage2D": "pixels", "glTexSubImage2D": "pixels", "glCompressedTexImage2D": "data",
-                "glCompressedTexSubImage2D": "data", "glTexImage2DMultisample": None}
+                "glCompressedTexSubImage2D": "data", "glTexImage2DMultisample": None,
+                "glTextureSubImage2D": "pixels", "glCompressedTextureSubImage2D": "data",
+                "glTextureImage2D": "pixels"}   # direct state access, and EXT_direct_state_access's image
 
 
 # Read by the emulation for the depth check alone (which replays the capture

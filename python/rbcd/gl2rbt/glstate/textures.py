@@ -330,6 +330,8 @@ class TextureImageCalls:
                     fail_call(no, f"{what}: a call's record that is not (call, name, arguments, unpack state)")
                 call_no = checked(no, integer, c[0], f"{what}: a call number", *U63)
                 unpack = tuple(checked(no, integer, v, f"{what}: an unpack parameter", *I32) for v in c[3])
+                if min(unpack) < 0 or unpack[UNPACK_PARAMETERS.index("GL_UNPACK_ALIGNMENT")] not in (1, 2, 4, 8):
+                    fail_call(no, f"{what}: an unpack state GL cannot hold")   # Mesa would read other bytes
                 d = dict(c[2])
                 size = len(pixels_of(d)) if pixels_of(d) is not None else 0
                 if self.s.texture_bytes_kept + size > MAX_TEXTURE_BYTES_KEPT:
