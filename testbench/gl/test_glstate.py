@@ -869,3 +869,33 @@ def test_multi_binds_gl_refuses_in_whole_or_in_part():
     assert gl.conv.s.units.get((1, "GL_TEXTURE_2D")) is None and gl.conv.s.units[(2, "GL_TEXTURE_2D")] == 5
     gl.glBindSamplers(first=190, count=3, samplers=[7, 7, 7])
     assert gl.conv.s.sampler_units == {}
+
+
+def test_binds_gl_refuses_change_nothing():
+    """Round 10: a texture bound at another target than its own, a deleted
+    texture's name in a core profile, a sampler name glGenSamplers did not
+    give (or deleted), glBindTextures of a negative count and a multi-bind
+    of a name that is no buffer leave the earlier bindings (they had
+    replaced them, or been refused)."""
+    gl = GL()
+    gl.glGenTextures(n=2, textures=[5, 6])
+    gl.glBindTexture(target="GL_TEXTURE_3D", texture=6)
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=5)
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=6)   # texture 6 is 3D
+    assert gl.conv.s.units[(0, "GL_TEXTURE_2D")] == 5
+    gl.conv.core = True
+    gl.glDeleteTextures(n=1, textures=[6])
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=6)   # no longer a name in a core profile
+    assert gl.conv.s.units[(0, "GL_TEXTURE_2D")] == 5
+    gl.glBindTextures(first=0, count=-1, textures=[0])
+    assert gl.conv.s.units[(0, "GL_TEXTURE_2D")] == 5
+    gl.glGenSamplers(count=2, samplers=[7, 8])
+    gl.glBindSampler(unit=0, sampler=7)
+    gl.glBindSampler(unit=0, sampler=999)
+    gl.glDeleteSamplers(count=1, samplers=[8])
+    gl.glBindSamplers(first=0, count=1, samplers=[8])
+    assert gl.conv.s.sampler_units[0] == 7
+    gl.glBindBuffer(target="GL_UNIFORM_BUFFER", buffer=3)
+    gl.glBindBufferBase(target="GL_UNIFORM_BUFFER", index=0, buffer=3)
+    gl.glBindBuffersBase(target="GL_UNIFORM_BUFFER", first=0, count=2, buffers=[999, 3])
+    assert gl.conv.s.indexed[("GL_UNIFORM_BUFFER", 0)][0] == 3 and gl.conv.s.indexed[("GL_UNIFORM_BUFFER", 1)][0] == 3

@@ -94,6 +94,8 @@ class GLState:
         self.active_unit = 0
         self.units = {}
         self.texture_targets = {}   # texture -> the target it was first bound to
+        self.texture_names = None   # names glGenTextures gave and no glDeleteTextures freed (None: none seen)
+        self.sampler_names = None   # the same for glGenSamplers and glCreateSamplers
         self.texture_buffers = {}
         self.texture = 0
         self.texture_images = {}   # texture name: digest of its level-0 image, or None

@@ -198,6 +198,9 @@ class BufferCalls:
             lists[key] = v
         generic = self.s.bound.get(target)
         for i in range(count):
+            buf = lists["buffers"][i]
+            if buf and (not isinstance(buf, int) or buf not in self.s.buffer_objects):
+                continue   # no such buffer (a multi-bind creates none): GL_INVALID_OPERATION, the binding stays
             one = [("target", target), ("index", first + i), ("buffer", lists["buffers"][i])]
             if "Range" in name and lists["buffers"][i]:
                 one += [("offset", lists["offsets"][i]), ("size", lists["sizes"][i])]

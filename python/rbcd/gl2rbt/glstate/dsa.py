@@ -89,6 +89,8 @@ class DirectStateCalls:
             tex = checked(no, integer, tex, f"{name}: a texture", *U32)
             if tex:
                 self.s.texture_targets[tex] = target
+                if self.s.texture_names is not None:
+                    self.s.texture_names.add(tex)
 
     def h_texture_image_ext(self, no, name, a, args):
         """glTextureImage2DEXT (EXT_direct_state_access, compatibility

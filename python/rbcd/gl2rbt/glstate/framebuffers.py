@@ -171,6 +171,8 @@ class FramebufferCalls:
                         self.s.units[key] = 0
                 if self.s.texture == tex:
                     self.s.texture = 0
+                if self.s.texture_names is not None:
+                    self.s.texture_names.discard(tex)
                 self.detach_deleted("texture", tex)
                 self.s.texture_targets.pop(tex, None)
                 self.s.texture_images.pop(tex, None)
@@ -232,6 +234,9 @@ class FramebufferCalls:
         d = dict(args)
         target = d["target"]
         tex = checked(no, integer, d["texture"], f"{name}: the texture", *U32)
+        if tex and (self.s.texture_targets.get(tex, target) != target
+                    or not generated_name(self.core, self.s.texture_names, tex)):
+            return   # another target's texture, or (core) a name glGenTextures did not give: GL_INVALID_OPERATION
         self.s.units[(self.s.active_unit, target)] = tex
         if tex:
             self.s.texture_targets.setdefault(tex, target)
@@ -251,7 +256,9 @@ class FramebufferCalls:
         else:
             first, count, texs = d.get("first"), d.get("count"), d.get("textures")
             first = checked(no, integer, first, f"{name}: first", *U32)
-            count = checked(no, integer, count, f"{name}: count", *U32)
+            count = checked(no, integer, count, f"{name}: count", *I32)
+            if count < 0:
+                return   # GL_INVALID_VALUE: nothing is bound
             if texs is None or texs == 0 and not isinstance(texs, bool):   # NULL (apitrace records it as 0)
                 texs = [0] * count
             if not isinstance(texs, list) or len(texs) < count:
@@ -267,7 +274,7 @@ class FramebufferCalls:
                     self.s.units[key] = 0
                 continue
             target = self.s.texture_targets.get(tex)
-            if target is None:
+            if target is None or not generated_name(self.core, self.s.texture_names, tex):
                 continue   # no such texture: GL_INVALID_OPERATION, this unit keeps its binding
             self.s.units[(unit, target)] = tex
             if unit == self.s.active_unit and target == "GL_TEXTURE_2D":
@@ -325,8 +332,9 @@ class FramebufferCalls:
         d = dict(args)
         bits = {0x100: "GL_DEPTH_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT", 0x4000: "GL_COLOR_BUFFER_BIT"}
         mask, unknown = bitfield(d.get("mask", 0), no, f"{name}: the mask", bits)
-        if "GL_DEPTH_BUFFER_BIT" not in mask or unknown or not mask <= set(bits.values()):
+        if "GL_DEPTH_BUFFER_BIT" not in mask:
             return
+        refused = unknown or not mask <= set(bits.values())   # GL_INVALID_VALUE
         if "drawFramebuffer" in d:
             src = checked(no, integer, d["readFramebuffer"], f"{name}: the read framebuffer", *U32)
             dst = checked(no, integer, d["drawFramebuffer"], f"{name}: the draw framebuffer", *U32)
@@ -339,13 +347,16 @@ class FramebufferCalls:
             # ignores the bit), and one with no attachment is incomplete
             # (GL_INVALID_FRAMEBUFFER_OPERATION): nothing changes.
             return
-        if d.get("filter") not in ("GL_NEAREST", 0x2600) or self.depth_class(src) != self.depth_class(dst):
+        names = self.s.framebuffer_names
+        refused = refused or "drawFramebuffer" in d and any(
+            fb and (names is not None and fb not in names) for fb in (src, dst))   # no such framebuffer
+        if refused or d.get("filter") not in ("GL_NEAREST", 0x2600) or self.depth_class(src) != self.depth_class(dst):
             # GL_INVALID_OPERATION (or GL_INVALID_ENUM): nothing is copied,
             # and the destination keeps its own depths; the one buffer the
             # converter keeps holds the source's too once it was drawn.
             if self.camera_pass(src) and src != dst and src in self.camera_drawn:
-                fail_call(no, f"{printable(name)}: a depth copy GL refuses (a filter other than GL_NEAREST, or "
-                          f"depth formats that differ) leaves framebuffer {dst} its own depths, which the one "
+                fail_call(no, f"{printable(name)}: a depth copy GL refuses (a mask, filter or framebuffer GL does not "
+                          f"take, or depth formats that differ) leaves framebuffer {dst} its own depths, which the one "
                           "camera-pass depth buffer the converter keeps does not hold apart: not emulated")
             return
         rect = [checked(no, integer, d.get(k), f"{name}: {k}", *I32)

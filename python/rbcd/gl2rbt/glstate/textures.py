@@ -76,10 +76,10 @@ COMPAT_TEXTURE_PARAMETERS = {"GL_GENERATE_MIPMAP", "GL_DEPTH_TEXTURE_MODE", "GL_
 def compat_only(d):
     """Whether a texture or sampler call takes something a core profile
     does not have."""
-    for key in ("internalformat", "format"):
-        v = d.get(key)
-        if isinstance(v, str) and (any(w in v for w in COMPAT_TEXTURE_WORDS) or v.startswith("GL_ALPHA")):
-            return True
+    v = d.get("internalformat")   # (core Mesa takes luminance pixels: a format of the upload, not of the texture)
+    if isinstance(v, str) and (any(w in v for w in COMPAT_TEXTURE_WORDS) or v.startswith("GL_ALPHA")) \
+            or isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= 4:   # the legacy component counts
+        return True
     return d.get("pname") in COMPAT_TEXTURE_PARAMETERS or d.get("param") == "GL_CLAMP" or \
         isinstance(d.get("params"), list) and "GL_CLAMP" in d["params"]
 
@@ -357,6 +357,8 @@ class TextureImageCalls:
         for unit, sampler in pairs:
             unit = checked(no, integer, unit, f"{name}: the unit", *U32)
             sampler = checked(no, integer, sampler, f"{name}: the sampler", *U32)
+            if sampler and self.s.sampler_names is not None and sampler not in self.s.sampler_names:
+                continue   # no such sampler: GL_INVALID_OPERATION, the unit keeps its binding
             self.s.sampler_units[unit] = sampler
 
     def h_sampler_parameter(self, no, name, a, args):
@@ -372,9 +374,26 @@ class TextureImageCalls:
         kept = params.pop(d["pname"], [])
         params[d["pname"]] = ([] if plausible(base_name(name), d) else kept[-15:]) + [(base_name(name), d)]
 
+    def h_gen_names(self, no, name, a, args):
+        """glGenTextures, glGenSamplers, glCreateSamplers: the names a bind
+        takes (a core profile binds only generated textures; samplers must
+        be generated in every profile)."""
+        d = dict(args)
+        kind = "sampler" if "Sampler" in name else "texture"
+        names = d.get(f"{kind}s")
+        if not isinstance(names, list):
+            return   # apitrace recorded no names (a negative count: GL_INVALID_VALUE)
+        attr = f"{kind}_names"
+        if getattr(self.s, attr) is None:
+            setattr(self.s, attr, set())
+        for n in names:
+            getattr(self.s, attr).add(checked(no, integer, n, f"{name}: a {kind} name", *U32))
+
     def h_delete_samplers(self, no, name, a, args):
         for sampler in dict(args).get("samplers") or []:
             if isinstance(sampler, int) and not isinstance(sampler, bool) and sampler > 0:
+                if self.s.sampler_names is not None:
+                    self.s.sampler_names.discard(sampler)
                 self.s.samplers.pop(sampler, None)
                 for unit, bound in list(self.s.sampler_units.items()):
                     if bound == sampler:
@@ -392,5 +411,8 @@ class TextureImageCalls:
         "glBindSampler": h_bind_sampler,
         "glBindSamplers": h_bind_sampler,
         "glDeleteSamplers": h_delete_samplers,
+        "glGenTextures": h_gen_names,
+        "glGenSamplers": h_gen_names,
+        "glCreateSamplers": h_gen_names,
     } | dict.fromkeys(PARAMETER_CALLS, h_texture_parameter) \
       | dict.fromkeys(SAMPLER_PARAMETER_CALLS, h_sampler_parameter)
