@@ -63,11 +63,13 @@ class FramebufferCalls:
     digests of textures' level-0 images; texture units' bindings, and the
     buffers of texture buffer objects."""
 
-    def h_gen_framebuffer_names(self, no, name, a, args):
+    def h_gen_names(self, no, name, a, args):
         """glGenFramebuffers, glCreateFramebuffers, glGenRenderbuffers,
-        glCreateRenderbuffers: names a core profile binds."""
+        glCreateRenderbuffers, glGenTextures: names a core profile binds;
+        glGenSamplers, glCreateSamplers: the names a bind takes in every
+        profile."""
         d = dict(args)
-        kind = "renderbuffer" if "Renderbuffer" in name else "framebuffer"
+        kind = next((k.lower() for k in ("Renderbuffer", "Sampler", "Texture") if k in name), "framebuffer")
         names = d.get(f"{kind}s")
         if not isinstance(names, list):
             return   # apitrace recorded no names (a negative count: GL_INVALID_VALUE)
@@ -416,10 +418,10 @@ class FramebufferCalls:
         "glFramebufferTexture2D": h_framebuffer_texture,
         "glFramebufferTexture": h_framebuffer_texture,
         "glFramebufferRenderbuffer": h_framebuffer_texture,
-        "glGenFramebuffers": h_gen_framebuffer_names,
-        "glCreateFramebuffers": h_gen_framebuffer_names,
-        "glGenRenderbuffers": h_gen_framebuffer_names,
-        "glCreateRenderbuffers": h_gen_framebuffer_names,
+        "glGenFramebuffers": h_gen_names,
+        "glCreateFramebuffers": h_gen_names,
+        "glGenRenderbuffers": h_gen_names,
+        "glCreateRenderbuffers": h_gen_names,
         "glDeleteRenderbuffers": h_delete_renderbuffers,
         "glDeleteTextures": h_delete_textures,
         "glBindRenderbuffer": h_bind_renderbuffer,

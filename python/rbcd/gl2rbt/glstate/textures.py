@@ -23,7 +23,7 @@ import math
 from ...cli import I32, U32, U63, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
-from .framebuffers import MAX_TEXTURE_UNITS
+from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
 
 VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
 # The argument a reduced capture adds to a draw whose vertex shader reads
@@ -374,21 +374,6 @@ class TextureImageCalls:
         kept = params.pop(d["pname"], [])
         params[d["pname"]] = ([] if plausible(base_name(name), d) else kept[-15:]) + [(base_name(name), d)]
 
-    def h_gen_names(self, no, name, a, args):
-        """glGenTextures, glGenSamplers, glCreateSamplers: the names a bind
-        takes (a core profile binds only generated textures; samplers must
-        be generated in every profile)."""
-        d = dict(args)
-        kind = "sampler" if "Sampler" in name else "texture"
-        names = d.get(f"{kind}s")
-        if not isinstance(names, list):
-            return   # apitrace recorded no names (a negative count: GL_INVALID_VALUE)
-        attr = f"{kind}_names"
-        if getattr(self.s, attr) is None:
-            setattr(self.s, attr, set())
-        for n in names:
-            getattr(self.s, attr).add(checked(no, integer, n, f"{name}: a {kind} name", *U32))
-
     def h_delete_samplers(self, no, name, a, args):
         for sampler in dict(args).get("samplers") or []:
             if isinstance(sampler, int) and not isinstance(sampler, bool) and sampler > 0:
@@ -411,8 +396,8 @@ class TextureImageCalls:
         "glBindSampler": h_bind_sampler,
         "glBindSamplers": h_bind_sampler,
         "glDeleteSamplers": h_delete_samplers,
-        "glGenTextures": h_gen_names,
-        "glGenSamplers": h_gen_names,
-        "glCreateSamplers": h_gen_names,
+        "glGenTextures": FramebufferCalls.h_gen_names,
+        "glGenSamplers": FramebufferCalls.h_gen_names,
+        "glCreateSamplers": FramebufferCalls.h_gen_names,
     } | dict.fromkeys(PARAMETER_CALLS, h_texture_parameter) \
       | dict.fromkeys(SAMPLER_PARAMETER_CALLS, h_sampler_parameter)
