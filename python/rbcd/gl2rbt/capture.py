@@ -4,7 +4,7 @@ import stat
 
 from .apitrace import read_apitrace_calls
 from .errors import ConvertError, printable
-from .reduced import CHECK_REST, REDUCED_HEADER, is_reduced_capture, read_reduced_calls, reduced_header
+from .reduced import CHECK_REST, header_version, is_reduced_capture, read_reduced_calls, reduced_header
 
 
 def read_calls(trace, calls=None):
@@ -27,9 +27,10 @@ def shows_every_gen(trace):
     dropped them: the names it binds are taken as it binds them."""
     if not is_reduced_capture(trace):
         return True
-    head = reduced_header(trace)
-    return isinstance(head, tuple) and len(head) == 2 and head[0] == REDUCED_HEADER[0] and type(head[1]) is int \
-        and head[1] >= 2
+    try:
+        return (header_version(reduced_header(trace)) or 0) >= 2
+    except ConvertError:
+        return False   # read_reduced_calls names the file's error
 
 
 def check_rest(calls):

@@ -102,6 +102,18 @@ def is_reduced_capture(path):
         return False
 
 
+def header_version(head):
+    """The version a reduced capture's header record names (an int: True
+    and 2.0 equal 1 and 2 in Python, and are no version), or None when the
+    record is no such header; a version this converter does not read is
+    the file's error."""
+    version = head[1] if isinstance(head, tuple) and len(head) == 2 and head[0] == REDUCED_HEADER[0] else None
+    if version is not None and (type(version) is not int or version not in REDUCED_VERSIONS):
+        raise ConvertError(f"a reduced capture of version {printable(version, 40)}: this converter reads "
+                           f"versions {', '.join(map(str, REDUCED_VERSIONS[:-1]))} and {REDUCED_VERSIONS[-1]}")
+    return version
+
+
 def reduced_header(path):
     """A reduced capture's header record, or None when it does not decode
     (read_reduced_calls then names the file's error)."""
@@ -258,14 +270,7 @@ def read_reduced_calls(path):
                 head = CallReader(RecordStream(f, None)).load()
             except EOFError:
                 head = None
-            # The header's version an int (True and 2.0 equal 1 and 2 in Python).
-            version = head[1] if isinstance(head, tuple) and len(head) == 2 and head[0] == REDUCED_HEADER[0] \
-                else None
-            if version is not None and (type(version) is not int or version not in REDUCED_VERSIONS):
-                raise ConvertError(f"a reduced capture of version {printable(version, 40)}: this converter reads "
-                                   f"versions {', '.join(map(str, REDUCED_VERSIONS[:-1]))} and "
-                                   f"{REDUCED_VERSIONS[-1]}")
-            if version is None:
+            if header_version(head) is None:
                 raise ConvertError("an xz file that is not a reduced capture (rbcd-gl2rbt --reduced-out)")
             count = 0
             while True:

@@ -14,8 +14,8 @@ import numpy as np
 
 from ..cli import I32, U32, integer
 from .errors import checked, fail_call, printable
-from .glstate.textures import (LEVEL_CALLS, PARAMETER_CALLS, PART_CALLS, SAMPLER_PARAMETER_CALLS,
-                               UNPACK_PARAMETERS, VERTEX_TEXTURE_TARGET)
+from .glstate.textures import (FORMAT_COMPONENTS, LEVEL_CALLS, PACKED_BYTES, PARAMETER_CALLS,
+                               SAMPLER_PARAMETER_CALLS, TYPE_BYTES, UNPACK_PARAMETERS, VERTEX_TEXTURE_TARGET)
 
 # The images Mesa holds for vertex shaders, in all, counted at 16 bytes a
 # texel (the widest format), a third more for a mipmapped storage: Mesa
@@ -25,23 +25,6 @@ GL_DEPTH_TEXTURE_MODE = 0x884B   # the compatibility profile's
 ANISOTROPY = ("GL_TEXTURE_MAX_ANISOTROPY", "GL_TEXTURE_MAX_ANISOTROPY_EXT", 0x84FE)
 # Sampler types of the 2D textures a vertex shader may read.
 TEXTURE_2D_SAMPLERS = {"GL_SAMPLER_2D", "GL_INT_SAMPLER_2D", "GL_UNSIGNED_INT_SAMPLER_2D", "GL_SAMPLER_2D_SHADOW"}
-FORMAT_COMPONENTS = {"GL_RED": 1, "GL_GREEN": 1, "GL_BLUE": 1, "GL_ALPHA": 1, "GL_LUMINANCE": 1,
-                     "GL_RED_INTEGER": 1, "GL_GREEN_INTEGER": 1, "GL_BLUE_INTEGER": 1, "GL_ALPHA_INTEGER": 1,
-                     "GL_DEPTH_COMPONENT": 1, "GL_STENCIL_INDEX": 1, "GL_DEPTH_STENCIL": 1,
-                     "GL_LUMINANCE_ALPHA": 2, "GL_RG": 2, "GL_RG_INTEGER": 2,
-                     "GL_RGB": 3, "GL_BGR": 3, "GL_RGB_INTEGER": 3, "GL_BGR_INTEGER": 3,
-                     "GL_RGBA": 4, "GL_BGRA": 4, "GL_RGBA_INTEGER": 4, "GL_BGRA_INTEGER": 4}
-TYPE_BYTES = {"GL_UNSIGNED_BYTE": 1, "GL_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_SHORT": 2, "GL_UNSIGNED_INT": 4,
-              "GL_INT": 4, "GL_HALF_FLOAT": 2, "GL_HALF_FLOAT_OES": 2, "GL_FLOAT": 4}
-# Packed types: one element a pixel, of this many bytes.
-PACKED_BYTES = {"GL_UNSIGNED_BYTE_3_3_2": 1, "GL_UNSIGNED_BYTE_2_3_3_REV": 1,
-                "GL_UNSIGNED_SHORT_5_6_5": 2, "GL_UNSIGNED_SHORT_5_6_5_REV": 2, "GL_UNSIGNED_SHORT_4_4_4_4": 2,
-                "GL_UNSIGNED_SHORT_4_4_4_4_REV": 2, "GL_UNSIGNED_SHORT_5_5_5_1": 2,
-                "GL_UNSIGNED_SHORT_1_5_5_5_REV": 2, "GL_UNSIGNED_INT_8_8_8_8": 4, "GL_UNSIGNED_INT_8_8_8_8_REV": 4,
-                "GL_UNSIGNED_INT_10_10_10_2": 4, "GL_UNSIGNED_INT_2_10_10_10_REV": 4, "GL_UNSIGNED_INT_24_8": 4,
-                "GL_UNSIGNED_INT_10F_11F_11F_REV": 4, "GL_UNSIGNED_INT_5_9_9_9_REV": 4,
-                "GL_FLOAT_32_UNSIGNED_INT_24_8_REV": 8}
-
 u, i, e, f, sz, p = ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_float, ctypes.c_int, ctypes.c_void_p
 # Entry points and their C arguments after the target (or sampler).
 ENTRY_POINTS = {
@@ -260,7 +243,7 @@ class VertexTextures:
         if not isinstance(v, (bytes, bytearray)):
             fail_call(no, f"{what}: its pixels are not in the reduced capture (a draw that reads the texture "
                       "carries them)")
-        if name in LEVEL_CALLS + PART_CALLS and name.startswith("glCompressed"):
+        if name.startswith("glCompressed"):
             need = checked(no, integer, d.get("imageSize"), f"{what}: imageSize", *I32)
         else:
             need = pixel_bytes(no, what, d, unpack)

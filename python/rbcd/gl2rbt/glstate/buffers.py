@@ -201,8 +201,8 @@ class BufferCalls:
             buf = lists["buffers"][i]
             if buf and (not isinstance(buf, int) or buf not in self.s.buffer_objects):
                 continue   # no such buffer (a multi-bind creates none): GL_INVALID_OPERATION, the binding stays
-            one = [("target", target), ("index", first + i), ("buffer", lists["buffers"][i])]
-            if "Range" in name and lists["buffers"][i]:
+            one = [("target", target), ("index", first + i), ("buffer", buf)]
+            if "Range" in name and buf:
                 one += [("offset", lists["offsets"][i]), ("size", lists["sizes"][i])]
             self.h_bind_buffer_base(no, name, [v for _, v in one], one)
         if generic is None:

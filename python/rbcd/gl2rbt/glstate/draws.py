@@ -65,11 +65,8 @@ class DrawCalls:
         if self.vertex_program():
             fail_call(no, f"{name} with program {self.s.program} bound: immediate-mode and glRect draws "
                       "under a vertex shader are not emulated")
-        if not self.camera_pass():
-            self.offscreen_draws += 1
+        if not self.draws_into_camera_pass():
             return
-        if self.s.depth_test and self.s.depth_mask:
-            self.camera_drawn.add(self.s.draw_fbo)
         if mode in PRIM_NO_AREA:
             self.ignored_prims += 1
             return
@@ -238,11 +235,8 @@ class DrawCalls:
             return
         if mode not in TRIANGLES_PER_VERTICES:
             fail_call(no, f"{name}: primitive mode {printable(mode)} under a program is not emulated")
-        if not self.camera_pass():
-            self.offscreen_draws += 1
+        if not self.draws_into_camera_pass():
             return
-        if self.s.depth_test and self.s.depth_mask:
-            self.camera_drawn.add(self.s.draw_fbo)
         per = TRIANGLES_PER_VERTICES[mode](count)   # at most, with no restart
         if per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {per * instances} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "
@@ -468,6 +462,18 @@ class DrawCalls:
         if self.active and self.renders() and not self.s.rasterizer_discard and self.s.depth_test \
                 and self.s.depth_mask and self.camera_pass():
             fail_call(no, f"{printable(name)} with the depth test on writes depth: not emulated")
+
+    def draws_into_camera_pass(self):
+        """Whether a draw now reaches the camera pass: one that does not is
+        counted as another pass's work; one that does, with depth writes,
+        notes its framebuffer among those the frame wrote depth into
+        (FramebufferCalls.h_blit_framebuffer)."""
+        if not self.camera_pass():
+            self.offscreen_draws += 1
+            return False
+        if self.s.depth_test and self.s.depth_mask:
+            self.camera_drawn.add(self.s.draw_fbo)
+        return True
 
     HANDLERS = {
         "glDrawArraysInstanced": h_draw_under_program,

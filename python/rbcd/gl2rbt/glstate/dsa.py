@@ -112,7 +112,7 @@ class DirectStateCalls:
         "glTextureStorage2DMultisample": on_texture(FramebufferCalls.h_tex_image, "glTexStorage2DMultisample"),
         "glTextureSubImage2D": on_texture(FramebufferCalls.h_tex_sub_image, "glTexSubImage2D"),
         "glCompressedTextureSubImage2D": on_texture(FramebufferCalls.h_tex_sub_image, "glCompressedTexSubImage2D"),
-        "glGenerateTextureMipmap": on_texture(TextureImageCalls.h_generate_mipmap, "glGenerateMipmap"),
+        "glGenerateTextureMipmap": on_texture(TextureImageCalls.h_keep, "glGenerateMipmap"),
         "glCopyTextureSubImage2D": on_texture(TextureImageCalls.h_copy_tex_image, "glCopyTexSubImage2D"),
         "glTextureBuffer": on_texture(FramebufferCalls.h_tex_buffer, "glTexBuffer", "GL_TEXTURE_BUFFER"),
         "glTextureBufferRange": on_texture(FramebufferCalls.h_tex_buffer, "glTexBufferRange", "GL_TEXTURE_BUFFER"),
@@ -125,5 +125,5 @@ class DirectStateCalls:
                                                       "glRenderbufferStorage"),
         "glNamedRenderbufferStorageMultisample": on_renderbuffer(FramebufferCalls.h_renderbuffer_storage,
                                                                  "glRenderbufferStorageMultisample"),
-    } | {f"glTextureParameter{t}": on_texture(TextureImageCalls.h_texture_parameter, f"glTexParameter{t}")
+    } | {f"glTextureParameter{t}": on_texture(TextureImageCalls.h_keep, f"glTexParameter{t}")
          for t in ("i", "f", "iv", "fv", "Iiv", "Iuiv")}

@@ -22,8 +22,8 @@ STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GE
 MAX_SOURCE_CHARS = 16 << 20   # one shader's sources (the largest game shaders are tens of kilobytes)
 # Operators and separators in one statement of a shader (between ;, { and }):
 # Mesa's compiler recurses once a term, and a sum of 20,000 terms overflowed
-# its default stack (mesa.MESA_STACK_BYTES: 200,000 compile). Game shaders'
-# longest statements have tens.
+# its default stack (scripts/rbcd-gl2rbt gives it 2 GiB, on which much
+# longer ones compile). Game shaders' longest statements have tens.
 MAX_STATEMENT_OPERATORS = 65536
 STATEMENTS = re.compile(r"[^;{}]+")
 OPERATORS = re.compile(r"[-+*/%&|^<>?:=,!~]")

@@ -12,7 +12,9 @@ their parameters the same way.
 
 Memory stays in proportion to what the textures hold now, not to the
 capture's length: an image call drops the earlier calls it replaces (a
-level defined again, a rectangle written again, a parameter set again), and
+level defined again, a rectangle written again, a parameter set again) when
+it passes GL's plain checks (plausible: one GL may refuse must not take a
+valid one's place), and
 the images kept in all textures are capped (MAX_TEXTURE_BYTES_KEPT). A
 texture that cannot be given to Mesa keeps the reason, and a draw whose
 vertex shader reads it is refused naming it: its image rendered by the GPU
@@ -37,12 +39,24 @@ UNPACK_PARAMETERS = ("GL_UNPACK_SWAP_BYTES", "GL_UNPACK_LSB_FIRST", "GL_UNPACK_R
                      "GL_UNPACK_SKIP_PIXELS", "GL_UNPACK_ALIGNMENT", "GL_UNPACK_IMAGE_HEIGHT",
                      "GL_UNPACK_SKIP_IMAGES")
 UNPACK_DEFAULTS = {"GL_UNPACK_ALIGNMENT": 4}
-
-
-def PIXEL_TRANSFER_DEFAULT(pname):
-    """GL's initial value of a glPixelTransfer parameter: scales 1, the
-    rest (biases, GL_MAP_COLOR, index shift and offset) 0."""
-    return 1 if str(pname).endswith("_SCALE") else 0
+# Pixel formats and types (GL 4.5, tables 8.3 to 8.5): components a pixel,
+# bytes a component, and the packed types' bytes a pixel.
+FORMAT_COMPONENTS = {"GL_RED": 1, "GL_GREEN": 1, "GL_BLUE": 1, "GL_ALPHA": 1, "GL_LUMINANCE": 1,
+                     "GL_RED_INTEGER": 1, "GL_GREEN_INTEGER": 1, "GL_BLUE_INTEGER": 1, "GL_ALPHA_INTEGER": 1,
+                     "GL_DEPTH_COMPONENT": 1, "GL_STENCIL_INDEX": 1, "GL_DEPTH_STENCIL": 1,
+                     "GL_LUMINANCE_ALPHA": 2, "GL_RG": 2, "GL_RG_INTEGER": 2,
+                     "GL_RGB": 3, "GL_BGR": 3, "GL_RGB_INTEGER": 3, "GL_BGR_INTEGER": 3,
+                     "GL_RGBA": 4, "GL_BGRA": 4, "GL_RGBA_INTEGER": 4, "GL_BGRA_INTEGER": 4}
+TYPE_BYTES = {"GL_UNSIGNED_BYTE": 1, "GL_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_SHORT": 2, "GL_UNSIGNED_INT": 4,
+              "GL_INT": 4, "GL_HALF_FLOAT": 2, "GL_HALF_FLOAT_OES": 2, "GL_FLOAT": 4}
+# Packed types: one element a pixel, of this many bytes.
+PACKED_BYTES = {"GL_UNSIGNED_BYTE_3_3_2": 1, "GL_UNSIGNED_BYTE_2_3_3_REV": 1,
+                "GL_UNSIGNED_SHORT_5_6_5": 2, "GL_UNSIGNED_SHORT_5_6_5_REV": 2, "GL_UNSIGNED_SHORT_4_4_4_4": 2,
+                "GL_UNSIGNED_SHORT_4_4_4_4_REV": 2, "GL_UNSIGNED_SHORT_5_5_5_1": 2,
+                "GL_UNSIGNED_SHORT_1_5_5_5_REV": 2, "GL_UNSIGNED_INT_8_8_8_8": 4, "GL_UNSIGNED_INT_8_8_8_8_REV": 4,
+                "GL_UNSIGNED_INT_10_10_10_2": 4, "GL_UNSIGNED_INT_2_10_10_10_REV": 4, "GL_UNSIGNED_INT_24_8": 4,
+                "GL_UNSIGNED_INT_10F_11F_11F_REV": 4, "GL_UNSIGNED_INT_5_9_9_9_REV": 4,
+                "GL_FLOAT_32_UNSIGNED_INT_24_8_REV": 8}
 # The calls that define a level's image (a whole one) or part of it.
 LEVEL_CALLS = ("glTexImage2D", "glCompressedTexImage2D")
 PART_CALLS = ("glTexSubImage2D", "glCompressedTexSubImage2D")
@@ -88,7 +102,6 @@ def plausible(name, d):
     """Whether a call passes GL's plain checks (sizes, border, a named
     internal format, a format and type of the tables, a known parameter's
     value): only then may it replace earlier calls."""
-    from ..vertex_textures import FORMAT_COMPONENTS, PACKED_BYTES, TYPE_BYTES
     if name in PARAMETER_CALLS or name in SAMPLER_PARAMETER_CALLS:
         return d.get("param", (d.get("params") or [None])[0]) in PARAMETER_VALUES.get(d.get("pname"), ())
     ints = [d.get(k, 0) for k in ("level", "xoffset", "yoffset", "width", "height")]
@@ -100,6 +113,12 @@ def plausible(name, d):
         return True
     return d.get("format") in FORMAT_COMPONENTS and (d.get("type") in TYPE_BYTES or d.get("type") in PACKED_BYTES
                                                      and packed_fits(d.get("type"), d.get("format")))
+
+
+def pixel_transfer_default(pname):
+    """GL's initial value of a glPixelTransfer parameter: scales 1, the
+    rest (biases, GL_MAP_COLOR, index shift and offset) 0."""
+    return 1 if str(pname).endswith("_SCALE") else 0
 
 
 def packed_fits(kind, fmt):
@@ -205,7 +224,7 @@ class TextureImageCalls:
         pixels = d.get("pixels", d.get("data"))
         if name in LEVEL_CALLS + PART_CALLS:
             unpack_buffer = self.s.bound.get("GL_PIXEL_UNPACK_BUFFER", 0)
-            transfer = sorted(str(k) for k, v in self.s.pixel_transfer.items() if v != PIXEL_TRANSFER_DEFAULT(k))
+            transfer = sorted(str(k) for k, v in self.s.pixel_transfer.items() if v != pixel_transfer_default(k))
             if transfer:
                 tc.refused = (no, f"{name} converted its pixels under pixel transfer state ({', '.join(transfer)}), "
                                   "which is not emulated")
@@ -275,17 +294,16 @@ class TextureImageCalls:
         either is refused naming the call."""
         d = dict(args)
         view, orig = d.get("texture"), d.get("origtexture")
-        for tex, other in ((view, orig), (orig, view)):
+        for tex in (view, orig):
             if isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
                 if tex == view and isinstance(d.get("target"), str):
                     self.s.texture_targets.setdefault(tex, d["target"])
                 self.texture_calls(tex).refused = (no, f"{name} makes texture {view} a view of texture {orig}, "
                                                        "which is not emulated")
 
-    def h_texture_parameter(self, no, name, a, args):
-        self.keep_texture_call(no, base_name(name), dict(args))
-
-    def h_generate_mipmap(self, no, name, a, args):
+    def h_keep(self, no, name, a, args):
+        """glTexParameter*, glGenerateMipmap: kept with the bound 2D
+        texture's calls."""
         self.keep_texture_call(no, base_name(name), dict(args))
 
     def h_copy_tex_image(self, no, name, a, args):
@@ -390,7 +408,7 @@ class TextureImageCalls:
         "glPixelTransferi": h_pixel_transfer,
         "glTextureView": texture_view,
         "glPixelStoref": h_pixel_store,
-        "glGenerateMipmap": h_generate_mipmap,
+        "glGenerateMipmap": h_keep,
         "glCopyTexImage2D": h_copy_tex_image,
         "glCopyTexSubImage2D": h_copy_tex_image,
         "glBindSampler": h_bind_sampler,
@@ -399,5 +417,5 @@ class TextureImageCalls:
         "glGenTextures": FramebufferCalls.h_gen_names,
         "glGenSamplers": FramebufferCalls.h_gen_names,
         "glCreateSamplers": FramebufferCalls.h_gen_names,
-    } | dict.fromkeys(PARAMETER_CALLS, h_texture_parameter) \
+    } | dict.fromkeys(PARAMETER_CALLS, h_keep) \
       | dict.fromkeys(SAMPLER_PARAMETER_CALLS, h_sampler_parameter)
