@@ -12,6 +12,7 @@ from .glstate import GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
 from .glstate.draws import DrawCalls
+from .glstate.camera_depth import CameraDepthCalls
 from .glstate.framebuffers import FramebufferCalls
 from .glstate.textures import REDUCED_TEXTURES, TextureImageCalls
 from .glstate.dsa import DirectStateCalls
@@ -47,7 +48,8 @@ ES_VERSIONS = {(1, 0), (1, 1), (2, 0), (3, 0), (3, 1), (3, 2)}
 
 
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
-                ProgramCalls, FramebufferCalls, TextureImageCalls, DirectStateCalls, DrawCalls, ObjectCalls)
+                ProgramCalls, FramebufferCalls, CameraDepthCalls, TextureImageCalls, DirectStateCalls, DrawCalls,
+                ObjectCalls)
 
 
 class Converter(*STATE_GROUPS, GeometryOutput):
@@ -86,11 +88,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.select = Selection(args.select) if args.select else None
         self.tracker = EntityTracker(self.select.settings) if self.select else None
         self.drawn_surfaces = set()
-        # The frame's camera-pass framebuffers whose draws wrote depth since
-        # the frame began or the last depth clear, and those whose depths a
-        # clear of another one wiped from the one buffer the converter keeps
-        # (FramebufferCalls.h_blit_framebuffer).
-        self.camera_drawn, self.camera_wiped = set(), set()
+        self.camera_depths_start()
         self.geo_objects = {}            # object id -> list of (eye verts, tris)
         self.geo_view = None             # the projection of the frame's collisionable draws
         self.geo_space = None            # "eye" or "ndc": the space of the frame's geometry
@@ -107,13 +105,16 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)
         self.egl_api = "EGL_OPENGL_ES_API"
         self.core = False                # a core-profile context: no default vertex array object
-        self.last_depth_draw = None
+        self.last_depth_draw = None      # the frame's last draw with the depth test on
+        self.last_depth_wrong = None     # why the converter's depth buffer was wrong for it (CameraDepthCalls)
         self.ignored_prims = 0
         self.partial_frame_dropped = False
         self.listing = None              # --list-draws: one dict per draw of the frame
         self.last_rule = "untagged"
         self.last_rule_table = {}        # the selection rule that decided the last draw, {} if none
-        self.last_3d_draws = []          # (output frame, capture frame, call of its last draw with depth test)
+        # (output frame, capture frame, call of its last draw with the depth
+        # test on, why the converter's depth buffer was wrong for it or None)
+        self.last_3d_draws = []
         self.last_call = None
         self.header_written = False
         self.first_frame, self.last_frame = args.frame_range
@@ -172,19 +173,20 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if self.active:
             self.open_frame(no)
             self.emit(b"E" + struct.pack("<Q", no))
-            self.last_3d_draws.append((self.out_frame, self.frame, self.last_depth_draw))
+            self.last_3d_draws.append((self.out_frame, self.frame, self.last_depth_draw, self.last_depth_wrong))
             if self.geo is not None:
                 self.write_geometry_frame()
         self.frame += 1
         self.frame_open = False
         self.frame_records = 0
         self.active = self.in_range(self.frame)
+        if self.active and self.frame == self.first_frame:
+            self.camera_depths_start()
         self.drawn_surfaces = set()
-        self.camera_drawn, self.camera_wiped = set(), set()
         self.geo_objects = {}
         self.geo_view = None
         self.geo_space = None
-        self.last_depth_draw = None
+        self.last_depth_draw = self.last_depth_wrong = None
         self.frame_view = None
         self.s.marker = ""
         if self.tracker:

@@ -306,6 +306,11 @@ def report(frames, conv, out):
         no, why = conv.rejected_draws[0]
         print(f"{len(conv.rejected_draws)} draws are GL errors as the capture set them up and draw nothing "
               f"(the first: call {no}, {why})", file=out)
+    wrong = [(c, why) for _, c, call, why in conv.last_3d_draws if why is not None]
+    if wrong:
+        print(f"{len(wrong)} frames whose camera-pass depth buffer the converter's does not follow (their "
+              f"trace is whole; --check-depth leaves them out): the first, frame {wrong[0][0]}: {wrong[0][1]}",
+              file=out)
     if conv.offscreen_draws:
         print(f"{conv.offscreen_draws} draws into other targets than the camera pass left out (docs/gl-capture.md)", file=out)
 

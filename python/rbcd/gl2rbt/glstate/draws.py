@@ -74,6 +74,8 @@ class DrawCalls:
             return   # GL_INVALID_ENUM: nothing is drawn
         if mode not in PRIM_TRIANGLES:
             fail_call(no, f"{name}: primitive mode {printable(mode)} is not emulated")
+        if self.s.depth_test and len(positions) and not self.s.rasterizer_discard:
+            self.depth_tested(no, name)
         self.open_frame(no)
         if tris is None:
             tris = triangle_indices(mode, len(positions))
@@ -177,7 +179,7 @@ class DrawCalls:
         rec += np.ascontiguousarray(tris, dtype="<u4").tobytes()
         self.emit(bytes(rec))
         if st.depth_test:
-            self.last_depth_draw = no
+            self.last_depth_draw, self.last_depth_wrong = no, self.kept_wrong
         self.note_draw(no, name, obj_id if collisionable else None, nverts, mv, proj, clip)
 
     def immediate_vertex(self, no, base, a):
@@ -255,6 +257,8 @@ class DrawCalls:
             # nothing, and neither does the converter; the report counts it.
             self.rejected_draws.append((no, str(e)))
             clips = []
+        if self.s.depth_test and clips:
+            self.depth_tested(no, name)
         for i, clip in enumerate(clips):
             # A primitive with a vertex at NaN or infinity is not drawn (GL
             # leaves its rasterization undefined; Mesa's clipper drops it).
@@ -465,14 +469,10 @@ class DrawCalls:
 
     def draws_into_camera_pass(self):
         """Whether a draw now reaches the camera pass: one that does not is
-        counted as another pass's work; one that does, with depth writes,
-        notes its framebuffer among those the frame wrote depth into
-        (FramebufferCalls.h_blit_framebuffer)."""
+        counted as another pass's work."""
         if not self.camera_pass():
             self.offscreen_draws += 1
             return False
-        if self.s.depth_test and self.s.depth_mask:
-            self.camera_drawn.add(self.s.draw_fbo)
         return True
 
     HANDLERS = {

@@ -118,6 +118,8 @@ class FramebufferCalls:
             return   # no renderbuffer bound: GL_INVALID_OPERATION
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
         self.s.formats[("renderbuffer", self.s.renderbuffer)] = d.get("internalformat")
+        self.depths_replaced(("renderbuffer", self.s.renderbuffer), f"are undefined since call {no} gave the "
+                                                                    f"renderbuffer storage ({printable(name)})")
 
     def h_bind_renderbuffer(self, no, name, a, args):
         rb = checked(no, integer, dict(args).get("renderbuffer"), f"{name}: the renderbuffer", *U32)
@@ -148,6 +150,7 @@ class FramebufferCalls:
                 self.s.sizes[(kind, kept) + k[2:]] = self.s.sizes[k]
             for fb in holders:
                 self.s.fbo_depth[fb] = (kind, kept) + self.s.fbo_depth[fb][2:]
+            self.depths_renamed((kind, obj), (kind, kept))
         for k in keys:
             del self.s.sizes[k]
 
@@ -189,6 +192,7 @@ class FramebufferCalls:
             self.keep_texture_call(no, base_name(name), d)
         w, h = d.get("width"), d.get("height", 1)
         level = d.get("level", 0)
+        self.depth_image_written(no, name, d)
         if level == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
             self.s.sizes[("texture", tex)] = (w, h)
@@ -210,10 +214,26 @@ class FramebufferCalls:
         last whole upload."""
         d = dict(args)
         self.keep_texture_call(no, base_name(name), d)
+        self.depth_image_written(no, name, d)
         tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
         if d.get("level", 0) == 0 and d.get("xoffset") == 0 and d.get("yoffset") == 0 and \
                 self.s.sizes.get(("texture", tex)) == (d.get("width"), d.get("height")):
             self.s.texture_images[tex] = texture_image_digest(d)
+
+    def depth_image_written(self, no, name, d):
+        """A texture level given storage or pixels: as a camera-pass depth
+        buffer, contents the converter does not follow."""
+        level, levels = d.get("level", 0), d.get("levels")   # glTexStorage2D: levels from 0
+        if not self.active or not isinstance(level, int) or isinstance(level, bool):
+            return
+        tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+        if isinstance(levels, int) and not isinstance(levels, bool):
+            written = range(min(levels, 32))
+        else:
+            written = (level,)
+        for lv in written:
+            self.depths_replaced(("texture", tex) if lv == 0 else ("texture", tex, lv),
+                                 f"are undefined since call {no} gave the texture an image ({printable(name)})")
 
     def h_active_texture(self, no, name, a, args):
         """glActiveTexture: GL_TEXTUREi, or past GL_TEXTURE31 the number
@@ -321,16 +341,18 @@ class FramebufferCalls:
 
     def h_blit_framebuffer(self, no, name, a, args):
         """glBlitFramebuffer, glBlitNamedFramebuffer. Only a depth copy into
-        the camera pass's framebuffer can change the unit's input. The
-        converter keeps one depth buffer for the camera pass, whichever of
-        its framebuffers a draw writes, so a copy from one of them to the
-        same rectangle of another (an MSAA resolve, a deferred renderer's
-        depth handed to its forward pass) changes nothing; a copy from
-        another pass, or moved or scaled, is refused naming the call. A
+        the camera pass's framebuffer can change the unit's input: a copy of
+        the whole of one camera-pass depth buffer into another (an MSAA
+        resolve, a deferred renderer's depth handed to its forward pass)
+        gives the destination the source's contents (CameraDepthCalls); a
+        copy of a part of it (a rectangle, or under the scissor), moved or
+        scaled, or from another pass gives it contents the converter does
+        not follow, and a draw that tests depth against them is refused. A
         colour or stencil copy, one into another pass's framebuffer, and
         one GL refuses (a bit no buffer has: GL_INVALID_VALUE; depth with
-        another filter than GL_NEAREST: GL_INVALID_OPERATION or
-        GL_INVALID_ENUM) change nothing."""
+        another filter than GL_NEAREST, depth formats that differ, a name
+        that is no framebuffer: GL_INVALID_OPERATION or GL_INVALID_ENUM)
+        change nothing."""
         d = dict(args)
         bits = {0x100: "GL_DEPTH_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT", 0x4000: "GL_COLOR_BUFFER_BIT"}
         mask, unknown = bitfield(d.get("mask", 0), no, f"{name}: the mask", bits)
@@ -342,7 +364,9 @@ class FramebufferCalls:
             dst = checked(no, integer, d["drawFramebuffer"], f"{name}: the draw framebuffer", *U32)
         else:
             src, dst = self.s.read_fbo, self.s.draw_fbo
-        if not self.camera_pass(dst):
+        rect = [checked(no, integer, d.get(k), f"{name}: {k}", *I32)
+                for k in ("srcX0", "srcY0", "srcX1", "srcY1", "dstX0", "dstY0", "dstX1", "dstY1")]
+        if not self.active or not self.camera_pass(dst):
             return
         if src and self.s.fbo_depth.get(src) is None:
             # A read framebuffer with no depth buffer copies no depth (GL
@@ -353,38 +377,21 @@ class FramebufferCalls:
         refused = refused or "drawFramebuffer" in d and any(
             fb and (names is not None and fb not in names) for fb in (src, dst))   # no such framebuffer
         if refused or d.get("filter") not in ("GL_NEAREST", 0x2600) or self.depth_class(src) != self.depth_class(dst):
-            # GL_INVALID_OPERATION (or GL_INVALID_ENUM): nothing is copied,
-            # and the destination keeps its own depths; the one buffer the
-            # converter keeps holds the source's too once it was drawn.
-            if self.camera_pass(src) and src != dst and src in self.camera_drawn:
-                fail_call(no, f"{printable(name)}: a depth copy GL refuses (a mask, filter or framebuffer GL does not "
-                          f"take, or depth formats that differ) leaves framebuffer {dst} its own depths, which the one "
-                          "camera-pass depth buffer the converter keeps does not hold apart: not emulated")
             return
-        rect = [checked(no, integer, d.get(k), f"{name}: {k}", *I32)
-                for k in ("srcX0", "srcY0", "srcX1", "srcY1", "dstX0", "dstY0", "dstX1", "dstY1")]
+        if self.depth_key(src) == self.depth_key(dst):
+            return   # one buffer: a copy onto itself changes nothing where it does not overlap (GL refuses that)
         if self.camera_pass(src) and rect[:4] == rect[4:]:
-            # The one depth buffer kept is both: a copy of all of it changes
-            # nothing; of a part (a rectangle, or under the scissor), the
-            # rest of the destination keeps depths the converter has not.
             w, h = self.screen
             whole = min(rect[0], rect[2]) <= 0 and min(rect[1], rect[3]) <= 0 \
                 and max(rect[0], rect[2]) >= w and max(rect[1], rect[3]) >= h
             if whole and self.scissor_rect() == (0, 0, w - 1, h - 1):
-                if src != dst and dst in self.camera_drawn:
-                    fail_call(no, f"{printable(name)}: a depth copy over framebuffer {dst}, drawn this frame, from "
-                              f"framebuffer {src}: the converter keeps one depth buffer for the camera pass, "
-                              "which holds both: not emulated")
-                if src in self.camera_wiped:
-                    fail_call(no, f"{printable(name)}: a depth copy from framebuffer {src}, whose depths a clear of "
-                              "another camera-pass framebuffer wiped from the one depth buffer the converter keeps: "
-                              "not emulated")
+                self.depths_copied(src, dst)
                 return
-            fail_call(no, f"{printable(name)}: a depth copy of part of the camera pass's depth buffer "
-                      f"({'a rectangle of it' if not whole else 'under the scissor'}) into another of its "
-                      "framebuffers is not emulated")
-        fail_call(no, f"{printable(name)}: a depth copy into the camera pass's depth buffer "
-                  f"{'moved or scaled' if self.camera_pass(src) else 'from another pass'} is not emulated")
+            how = f"a copy of {'a rectangle' if not whole else 'the part under the scissor'} of another's"
+        else:
+            how = f"a copy {'moved or scaled' if self.camera_pass(src) else 'from another pass'}"
+        self.depths_replaced(self.depth_key(dst), f"were last written by call {no} ({printable(name)}: {how}, "
+                                                  "which the converter does not follow)")
 
     def depth_class(self, fb):
         """A framebuffer's depth format as glBlitFramebuffer compares them:

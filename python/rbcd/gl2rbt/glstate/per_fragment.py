@@ -86,10 +86,9 @@ class PerFragmentCalls:
         while a framebuffer that is not the camera pass's is bound (its own
         depth buffer is cleared, not the frame's)."""
         if self.active and self.s.depth_mask and self.camera_pass():
-            self.camera_wiped |= self.camera_drawn - {self.s.draw_fbo}
-            self.camera_drawn = set()
             self.open_frame(no)
             self.emit(b"C" + struct.pack("<Qd4i", no, value, *self.scissor_rect()))
+            self.depth_cleared(no, value, self.scissor_rect())
 
     def h_clear_buffer(self, no, name, a, args):
         """glClearBufferfv(GL_DEPTH, 0, [d]) and glClearBufferfi(GL_DEPTH_STENCIL,
