@@ -190,6 +190,18 @@ def with_fbo(c, w=64, h=48):
 FULL = (0, 0, 64, 48)
 
 
+@pytest.mark.parametrize("core", [True, False], ids=["core", "compatibility"])
+def test_a_multi_bind_of_a_name_that_is_no_buffer_skips_that_entry(tmp_path, core):
+    """glBindVertexBuffers with a name no buffer object has (a multi-bind
+    creates none, in either profile) leaves that point as it was and binds
+    the others (round 10's R10-7: refused at the draw in a compatibility
+    profile, 'the draw reads buffer 999')."""
+    want = trace(tmp_path, shared_binding(shader_calls(VS, core)), "want")
+    c = at_point_three(shader_calls(VS, core))
+    c.add("glBindVertexBuffers", first=3, count=2, buffers=[999, 2], offsets=[0, 0], strides=[12, 12])
+    assert trace(tmp_path, tagged_draw(c), "multi") == want
+
+
 @pytest.mark.parametrize("mask, src, dst, filt, w", [
     ("GL_COLOR_BUFFER_BIT", (0, 0, 32, 24), FULL, "GL_LINEAR", 64),       # colour only, scaled
     ("GL_DEPTH_BUFFER_BIT | GL_COLOR_BUFFER_BIT", FULL, FULL, "GL_NEAREST", 64),   # a resolve of the camera pass

@@ -14,8 +14,9 @@ import numpy as np
 
 from ..cli import I32, U32, integer
 from .errors import checked, fail_call, printable
-from .glstate.textures import (FORMAT_COMPONENTS, LEVEL_CALLS, PACKED_BYTES, PARAMETER_CALLS,
-                               SAMPLER_PARAMETER_CALLS, TYPE_BYTES, UNPACK_PARAMETERS, VERTEX_TEXTURE_TARGET)
+from .glstate.texture_formats import FORMAT_COMPONENTS, PACKED_BYTES, TYPE_BYTES
+from .glstate.textures import (LEVEL_CALLS, PARAMETER_CALLS, SAMPLER_PARAMETER_CALLS, UNPACK_PARAMETERS,
+                               VERTEX_TEXTURE_TARGET)
 
 # The images Mesa holds for vertex shaders, in all, counted at 16 bytes a
 # texel (the widest format), a third more for a mipmapped storage: Mesa

@@ -340,7 +340,8 @@ class AttributeCalls:
         """glBindVertexBuffers, glVertexArrayVertexBuffers (GL 4.4/4.5
         multi-bind): points first .. first + count - 1, or none of them
         (GL_INVALID_OPERATION: past the last point); no buffers unbinds
-        them all; an entry in error is left and the others are bound."""
+        them all; an entry in error (a name that is no buffer object, in
+        every profile) is left and the others are bound."""
         d = dict(args)
         vao = self.vao_of(no, name, d)
         first = checked(no, integer, d["first"], f"{name}: the first binding", *U32)
@@ -355,8 +356,10 @@ class AttributeCalls:
         if not all(isinstance(v, list) and len(v) >= count for v in (buffers, offsets, strides)):
             fail_call(no, f"{name}: the buffers, offsets and strides are not {count} values each")
         for k in range(count):
-            self.bind_vertex_buffer(no, name, vao, first + k,
-                                    checked(no, integer, buffers[k], f"{name}: a buffer", *U32),
+            buf = checked(no, integer, buffers[k], f"{name}: a buffer", *U32)
+            if buf and buf not in self.s.buffer_objects:
+                continue   # no such buffer (a multi-bind creates none, in any profile): the point stays
+            self.bind_vertex_buffer(no, name, vao, first + k, buf,
                                     checked(no, integer, offsets[k], f"{name}: an offset", *I64),
                                     checked(no, integer, strides[k], f"{name}: a stride", *I32))
 

@@ -11,11 +11,12 @@ computes what the driver computed, errors included. Sampler objects keep
 their parameters the same way.
 
 Memory stays in proportion to what the textures hold now, not to the
-capture's length: an image call drops the earlier calls it replaces (a
-level defined again, a rectangle written again, a parameter set again) when
-it passes GL's plain checks (plausible: one GL may refuse must not take a
-valid one's place), and
-the images kept in all textures are capped (MAX_TEXTURE_BYTES_KEPT). A
+capture's length: an image call drops the earlier calls it overwrites (a
+level defined again, a rectangle written again, storage given, a parameter
+set again) when GL certainly takes it (texture_formats: one GL may refuse
+must not take a valid one's place; Mesa judges it when the calls are
+replayed), and the images kept in all textures are capped
+(MAX_TEXTURE_BYTES_KEPT). A
 texture that cannot be given to Mesa keeps the reason, and a draw whose
 vertex shader reads it is refused naming it: its image rendered by the GPU
 (a framebuffer attachment, glCopyTexImage2D), read from a pixel unpack
@@ -26,6 +27,7 @@ from ...cli import I32, U32, U63, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
+from .texture_formats import certain_level, certain_part, certain_storage, whole
 
 VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
 # The argument a reduced capture adds to a draw whose vertex shader reads
@@ -39,24 +41,6 @@ UNPACK_PARAMETERS = ("GL_UNPACK_SWAP_BYTES", "GL_UNPACK_LSB_FIRST", "GL_UNPACK_R
                      "GL_UNPACK_SKIP_PIXELS", "GL_UNPACK_ALIGNMENT", "GL_UNPACK_IMAGE_HEIGHT",
                      "GL_UNPACK_SKIP_IMAGES")
 UNPACK_DEFAULTS = {"GL_UNPACK_ALIGNMENT": 4}
-# Pixel formats and types (GL 4.5, tables 8.3 to 8.5): components a pixel,
-# bytes a component, and the packed types' bytes a pixel.
-FORMAT_COMPONENTS = {"GL_RED": 1, "GL_GREEN": 1, "GL_BLUE": 1, "GL_ALPHA": 1, "GL_LUMINANCE": 1,
-                     "GL_RED_INTEGER": 1, "GL_GREEN_INTEGER": 1, "GL_BLUE_INTEGER": 1, "GL_ALPHA_INTEGER": 1,
-                     "GL_DEPTH_COMPONENT": 1, "GL_STENCIL_INDEX": 1, "GL_DEPTH_STENCIL": 1,
-                     "GL_LUMINANCE_ALPHA": 2, "GL_RG": 2, "GL_RG_INTEGER": 2,
-                     "GL_RGB": 3, "GL_BGR": 3, "GL_RGB_INTEGER": 3, "GL_BGR_INTEGER": 3,
-                     "GL_RGBA": 4, "GL_BGRA": 4, "GL_RGBA_INTEGER": 4, "GL_BGRA_INTEGER": 4}
-TYPE_BYTES = {"GL_UNSIGNED_BYTE": 1, "GL_BYTE": 1, "GL_UNSIGNED_SHORT": 2, "GL_SHORT": 2, "GL_UNSIGNED_INT": 4,
-              "GL_INT": 4, "GL_HALF_FLOAT": 2, "GL_HALF_FLOAT_OES": 2, "GL_FLOAT": 4}
-# Packed types: one element a pixel, of this many bytes.
-PACKED_BYTES = {"GL_UNSIGNED_BYTE_3_3_2": 1, "GL_UNSIGNED_BYTE_2_3_3_REV": 1,
-                "GL_UNSIGNED_SHORT_5_6_5": 2, "GL_UNSIGNED_SHORT_5_6_5_REV": 2, "GL_UNSIGNED_SHORT_4_4_4_4": 2,
-                "GL_UNSIGNED_SHORT_4_4_4_4_REV": 2, "GL_UNSIGNED_SHORT_5_5_5_1": 2,
-                "GL_UNSIGNED_SHORT_1_5_5_5_REV": 2, "GL_UNSIGNED_INT_8_8_8_8": 4, "GL_UNSIGNED_INT_8_8_8_8_REV": 4,
-                "GL_UNSIGNED_INT_10_10_10_2": 4, "GL_UNSIGNED_INT_2_10_10_10_REV": 4, "GL_UNSIGNED_INT_24_8": 4,
-                "GL_UNSIGNED_INT_10F_11F_11F_REV": 4, "GL_UNSIGNED_INT_5_9_9_9_REV": 4,
-                "GL_FLOAT_32_UNSIGNED_INT_24_8_REV": 8}
 # The calls that define a level's image (a whole one) or part of it.
 LEVEL_CALLS = ("glTexImage2D", "glCompressedTexImage2D")
 PART_CALLS = ("glTexSubImage2D", "glCompressedTexSubImage2D")
@@ -67,10 +51,9 @@ SAMPLER_PARAMETER_CALLS = ("glSamplerParameteri", "glSamplerParameterf", "glSamp
                            "glSamplerParameterfv", "glSamplerParameterIiv", "glSamplerParameterIuiv")
 
 
-# What GL takes, for the checks below: a call that passes them replaces the
-# calls of the same key (a level, a rectangle, a parameter); one that does
-# not is kept beside them, and Mesa decides (a call GL refuses must not
-# take a valid one's place).
+# Parameter values GL takes: a call that sets one replaces the earlier
+# calls of its parameter; one GL may refuse is kept beside them, and Mesa
+# decides.
 FILTERS = {"GL_NEAREST", "GL_LINEAR"}
 MIN_FILTERS = FILTERS | {f"GL_{a}_MIPMAP_{b}" for a in ("NEAREST", "LINEAR") for b in ("NEAREST", "LINEAR")}
 WRAPS = {"GL_REPEAT", "GL_CLAMP_TO_EDGE", "GL_CLAMP_TO_BORDER", "GL_MIRRORED_REPEAT", "GL_MIRROR_CLAMP_TO_EDGE"}
@@ -98,37 +81,16 @@ def compat_only(d):
         isinstance(d.get("params"), list) and "GL_CLAMP" in d["params"]
 
 
-def plausible(name, d):
-    """Whether a call passes GL's plain checks (sizes, border, a named
-    internal format, a format and type of the tables, a known parameter's
-    value): only then may it replace earlier calls."""
-    if name in PARAMETER_CALLS or name in SAMPLER_PARAMETER_CALLS:
-        return d.get("param", (d.get("params") or [None])[0]) in PARAMETER_VALUES.get(d.get("pname"), ())
-    ints = [d.get(k, 0) for k in ("level", "xoffset", "yoffset", "width", "height")]
-    if not all(isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 16384 for v in ints) or ints[0] > 14:
-        return False
-    if name in LEVEL_CALLS and (d.get("border") != 0 or not isinstance(d.get("internalformat"), str)):
-        return False
-    if name.startswith("glCompressed"):
-        return True
-    return d.get("format") in FORMAT_COMPONENTS and (d.get("type") in TYPE_BYTES or d.get("type") in PACKED_BYTES
-                                                     and packed_fits(d.get("type"), d.get("format")))
+def parameter_certain(name, d):
+    """Whether GL certainly takes a texture or sampler parameter call (a
+    known parameter's value of the tables)."""
+    return d.get("param", (d.get("params") or [None])[0]) in PARAMETER_VALUES.get(d.get("pname"), ())
 
 
 def pixel_transfer_default(pname):
     """GL's initial value of a glPixelTransfer parameter: scales 1, the
     rest (biases, GL_MAP_COLOR, index shift and offset) 0."""
     return 1 if str(pname).endswith("_SCALE") else 0
-
-
-def packed_fits(kind, fmt):
-    """A packed type's format (GL 4.5, table 8.5)."""
-    if kind in ("GL_UNSIGNED_BYTE_3_3_2", "GL_UNSIGNED_BYTE_2_3_3_REV", "GL_UNSIGNED_SHORT_5_6_5",
-                "GL_UNSIGNED_SHORT_5_6_5_REV", "GL_UNSIGNED_INT_10F_11F_11F_REV", "GL_UNSIGNED_INT_5_9_9_9_REV"):
-        return fmt in ("GL_RGB", "GL_RGB_INTEGER")
-    if kind in ("GL_UNSIGNED_INT_24_8", "GL_FLOAT_32_UNSIGNED_INT_24_8_REV"):
-        return fmt == "GL_DEPTH_STENCIL"
-    return fmt in ("GL_RGBA", "GL_BGRA", "GL_RGBA_INTEGER", "GL_BGRA_INTEGER")
 
 
 class TextureCalls:
@@ -139,11 +101,13 @@ class TextureCalls:
     costs one lookup a call; `version` changes with every call kept;
     `refused` is (call, reason) once the texture holds an image the
     converter cannot give Mesa; `over`: past the limits, nothing more is
-    kept."""
-    __slots__ = ("calls", "keyed", "seq", "storage", "version", "bytes", "refused", "over")
+    kept; `levels`: the levels whose image is known (level -> (internal
+    format, width, height, type), texture_formats); `storage`: a
+    glTexStorage2D kept (the texture may be immutable)."""
+    __slots__ = ("calls", "keyed", "seq", "storage", "levels", "version", "bytes", "refused", "over")
 
     def __init__(self):
-        self.calls, self.keyed, self.seq, self.storage = {}, {}, 0, False
+        self.calls, self.keyed, self.seq, self.storage, self.levels = {}, {}, 0, False, {}
         self.version, self.bytes, self.refused, self.over = 0, 0, None, False
 
 
@@ -181,15 +145,41 @@ class TextureImageCalls:
         return tc
 
     def add_texture_call(self, tc, call):
-        size = len(pixels_of(call[2])) if pixels_of(call[2]) is not None else 0
-        key = replaced_by(call[1], call[2]) if plausible(call[1], call[2]) else None
+        """Keeps a call after the texture's others, dropping those it
+        certainly overwrites (texture_formats: only a call GL certainly
+        takes replaces any)."""
+        _, name, d, _ = call
+        size = len(pixels_of(d)) if pixels_of(d) is not None else 0
+        key = None
+        if name in LEVEL_CALLS:
+            level = certain_level(name, d, self.es) if not tc.storage else None
+            if level is not None:
+                lv = d["level"]   # a level defined again: its earlier image and parts go
+                self.drop_texture_calls(tc, lambda c: c[1] in LEVEL_CALLS + PART_CALLS and c[2].get("level") == lv)
+                tc.levels[lv] = level
+            elif whole(d.get("level")):
+                tc.levels.pop(d["level"], None)
+        elif name in PART_CALLS:
+            if certain_part(d, tc.levels.get(d.get("level")), self.es):
+                key = replaced_by(name, d)
+        elif name == "glTexStorage2D":
+            levels = certain_storage(d) if not tc.storage else None
+            if levels is not None:
+                self.drop_texture_calls(tc, lambda c: c[1] in LEVEL_CALLS + PART_CALLS + ("glGenerateMipmap",))
+            if not tc.storage:
+                tc.levels = levels or {}
+            tc.storage = True
+        elif name == "glGenerateMipmap":
+            if not tc.storage:   # the levels past the base one change (the base may be past 0)
+                tc.levels = {k: v for k, v in tc.levels.items() if k == 0}
+        elif parameter_certain(name, d):
+            key = replaced_by(name, d)
         if key is not None and key in tc.keyed:
             self.drop_texture_call(tc, tc.keyed[key])
         tc.seq += 1
         tc.calls[tc.seq] = call
         if key is not None:
             tc.keyed[key] = tc.seq
-        tc.storage |= call[1] == "glTexStorage2D"
         tc.bytes += size
         self.s.texture_bytes_kept += size
         self.s.next_version += 1
@@ -232,12 +222,6 @@ class TextureImageCalls:
                 tc.refused = (no, f"{name} read its pixels from pixel unpack buffer {unpack_buffer}")
             elif isinstance(pixels, int) and not isinstance(pixels, bool) and pixels:
                 tc.refused = (no, f"{name}'s pixels are not in the capture (a pointer apitrace did not follow)")
-            if name in LEVEL_CALLS and not tc.storage and plausible(name, d):
-                # A level defined again: its earlier image and parts go.
-                level = d.get("level")
-                self.drop_texture_calls(tc, lambda c: c[1] in LEVEL_CALLS + PART_CALLS and c[2].get("level") == level)
-        elif name == "glTexStorage2D" and not tc.storage:
-            self.drop_texture_calls(tc, lambda c: c[1] in LEVEL_CALLS + PART_CALLS + ("glGenerateMipmap",))
         elif name == "glGenerateMipmap" and tc.calls and next(reversed(tc.calls.values()))[1] == name:
             return
         data = pixels_of(d)
@@ -390,7 +374,7 @@ class TextureImageCalls:
         # parameter (Mesa decides), one it takes replaces them.
         params = self.s.samplers.setdefault(sampler, {})
         kept = params.pop(d["pname"], [])
-        params[d["pname"]] = ([] if plausible(base_name(name), d) else kept[-15:]) + [(base_name(name), d)]
+        params[d["pname"]] = ([] if parameter_certain(base_name(name), d) else kept[-15:]) + [(base_name(name), d)]
 
     def h_delete_samplers(self, no, name, a, args):
         for sampler in dict(args).get("samplers") or []:
