@@ -6,6 +6,7 @@
 #   P/lib/pkgconfig/rbcd.pc             the unit for pkg-config builds
 #   P/bin/rbcd-sim, P/bin/rbcd-merge, P/bin/rbcd-gl-raster
 #   P/lib/rbcd/rbcd-es-depth-readback.so  preloaded into glretrace by --check-depth
+#   P/lib/rbcd/rbcd-texture-readback.so   preloaded into glretrace for rendered textures
 #   P/bin/rbcd-sweep, rbcd-plot, rbcd-gl2rbt  launchers of the Python package
 #   P/share/rbcd/python/rbcd/               the package (docs/python.md)
 #   P/share/rbcd/configs/*.toml, P/share/doc/rbcd/ (README, docs)
@@ -30,9 +31,11 @@ foreach(program rbcd-sim rbcd-merge rbcd-gl-raster)
 endforeach()
 # Beside bin/ as lib/rbcd/ (not CMAKE_INSTALL_LIBDIR: rbcd-gl2rbt finds it
 # from rbcd-gl-raster's folder, whatever the platform's library folder).
-if(TARGET rbcd-es-depth-readback)
-  install(TARGETS rbcd-es-depth-readback LIBRARY DESTINATION lib/rbcd)
-endif()
+foreach(library rbcd-es-depth-readback rbcd-texture-readback)
+  if(TARGET ${library})
+    install(TARGETS ${library} LIBRARY DESTINATION lib/rbcd)
+  endif()
+endforeach()
 # The Python tools: the package, and the launchers of scripts/ with the path
 # from P/bin to the package in place of the source tree's. rbcd-gl2rbt finds
 # rbcd-gl-raster beside itself (docs/gl-capture.md).

@@ -6,14 +6,16 @@
  *   gl_shaders [WIDTH HEIGHT [FAULT]]   (default 128 96; the window is the screen)
  *
  * FAULT adds, in frame 1, one draw the converter must refuse, naming it:
- * geometry (a program with a geometry shader), rendered (a vertex shader
- * that samples a 2D texture the depth-only pass renders), separable (a
- * separable program); or one it must convert as Mesa draws it: compile (a
- * program whose vertex shader does not compile, used all the same:
+ * geometry (a program with a geometry shader), separable (a separable
+ * program); or one it must convert as Mesa draws it: compile (a program
+ * whose vertex shader does not compile, used all the same:
  * GL_INVALID_OPERATION, the draw runs the program in use), texture (a vertex
  * shader that samples a 2D texture uploaded with glTexImage2D: the triangle
  * (0,0,1) (1,0,1) (1,1,1) moved by texel (0, 0) to clip space (-0.75, -0.5,
- * -0.5) (0.25, -0.5, -0.5) (0.25, 0.5, -0.5), in front of every box, object 9).
+ * -0.5) (0.25, -0.5, -0.5) (0.25, 0.5, -0.5), in front of every box, object
+ * 9), rendered (the same triangle and vertex shader, its 2x2 texture
+ * rendered instead by a draw into a framebuffer object whose fragment shader
+ * writes texel (0, 0)'s value everywhere: the same fragments).
  *
  * One program: a std140 uniform block Matrices {proj, view} at binding 2, a
  * uniform mat4 model, the position attribute bound with glBindAttribLocation
@@ -72,6 +74,17 @@ static const char* texture_source =
     "uniform sampler2D heights;\n"
     "in vec3 position;\n"
     "void main() { gl_Position = vec4(position, 1.0) + textureLod(heights, position.xy, 0.0); }\n";
+/* The "rendered" fault's fill: one triangle over the whole 2x2 target from
+ * the cube's vertices 4 to 6, (0,0) (1,0) (1,1) to clip (-1,-1) (3,-1)
+ * (-1,3), every texel the "texture" fault's texel (0, 0). */
+static const char* fill_vertex_source =
+    "#version 330 core\n"
+    "in vec3 position;\n"
+    "void main() { gl_Position = vec4(4.0 * (position.x - position.y) - 1.0, 4.0 * position.y - 1.0, 0.0, 1.0); }\n";
+static const char* fill_fragment_source =
+    "#version 330 core\n"
+    "out vec4 colour;\n"
+    "void main() { colour = vec4(-0.75, -0.5, -1.5, 0.0); }\n";
 static const char* broken_source =
     "#version 330 core\n"
     "in vec3 position;\n"
@@ -116,7 +129,29 @@ static void inject_fault(GLuint main_program) {
         glAttachShader(p, compile(GL_VERTEX_SHADER, vertex_source));
         glAttachShader(p, compile(GL_GEOMETRY_SHADER, geometry_source));
     } else if (!strcmp(fault, "rendered")) {
-        glAttachShader(p, compile(GL_VERTEX_SHADER, texture_source));   /* unit 0: the depth pass's texture */
+        GLuint tex, fb, fill = glCreateProgram();
+        GLint viewport[4];
+        glGetIntegerv(GL_VIEWPORT, viewport);
+        glActiveTexture(GL_TEXTURE2);
+        glGenTextures(1, &tex);
+        glBindTexture(GL_TEXTURE_2D, tex);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, 2, 2, 0, GL_RGBA, GL_FLOAT, NULL);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glActiveTexture(GL_TEXTURE0);
+        glGenFramebuffers(1, &fb);
+        glBindFramebuffer(GL_FRAMEBUFFER, fb);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex, 0);
+        glAttachShader(fill, compile(GL_VERTEX_SHADER, fill_vertex_source));
+        glAttachShader(fill, compile(GL_FRAGMENT_SHADER, fill_fragment_source));
+        glBindAttribLocation(fill, 0, "position");
+        glLinkProgram(fill);
+        glUseProgram(fill);
+        glViewport(0, 0, 2, 2);
+        glDrawArrays(GL_TRIANGLES, 4, 3);
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+        glAttachShader(p, compile(GL_VERTEX_SHADER, texture_source));
     } else if (!strcmp(fault, "texture")) {
         static const float texels[2][2][4] = {{{-0.75f, -0.5f, -1.5f, 0}, {9, 9, 9, 0}}, {{-9, -9, 9, 0}, {5, 5, 5, 0}}};
         GLuint tex;
@@ -137,12 +172,13 @@ static void inject_fault(GLuint main_program) {
     glBindAttribLocation(p, 0, "position");
     glLinkProgram(p);
     glUseProgram(p);
-    if (!strcmp(fault, "texture")) {
+    const int textured = !strcmp(fault, "texture") || !strcmp(fault, "rendered");
+    if (textured) {
         glUniform1i(glGetUniformLocation(p, "heights"), 2);
         begin_object(9);
     }
-    glDrawArrays(GL_TRIANGLES, !strcmp(fault, "texture") ? 4 : 0, 3);   /* the cube's first face from vertex 4 */
-    if (!strcmp(fault, "texture")) end_object();
+    glDrawArrays(GL_TRIANGLES, textured ? 4 : 0, 3);   /* the cube's first face from vertex 4 */
+    if (textured) end_object();
     glUseProgram(main_program);
 }
 

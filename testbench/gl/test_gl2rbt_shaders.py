@@ -170,7 +170,6 @@ def test_select_by_shader_state(gl):
 
 @pytest.mark.parametrize("fault, words", [
     ("geometry", "has a geometry shader"),
-    ("rendered", "attaches it to framebuffer"),
     ("separable", "separable programs"),
 ])
 def test_refusals(gl, fault, words):
@@ -184,12 +183,16 @@ def test_refusals(gl, fault, words):
     assert not [f for f in os.listdir(gl.tmp) if f.startswith(".")], f"{fault}: a temporary was left"
 
 
-def test_a_vertex_shader_reading_an_uploaded_texture(gl):
+@pytest.mark.parametrize("fault", ["texture", "rendered"])
+def test_a_vertex_shader_reading_an_uploaded_or_a_rendered_texture(gl, fault):
     """The fault "texture": a vertex shader moves a triangle by a texel of
     a texture uploaded with glTexImage2D, in front of every box: Mesa runs
     it on the capture's image (the check agrees), and the reduced capture
-    carries the image and gives the same bytes."""
-    cap = capture_path("shader-fault-texture")
+    carries the image and gives the same bytes. The fault "rendered": the
+    same, its texture rendered by a draw into a framebuffer object (read
+    back from Mesa's replay of the capture; it had been refused): the same
+    fragments."""
+    cap = capture_path(f"shader-fault-{fault}")
     r = gl(cap, "--check-depth")
     assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"
     m = re.search(r"agreement: ([0-9.]+)% of (\d+) covered pixels in (\d+) frames", r.stdout)
@@ -212,6 +215,37 @@ def test_a_vertex_shader_reading_an_uploaded_texture(gl):
     assert {y for _, y in tri} == set(range(24, 72))
     assert all(abs(d - DEPTH_MAX / 4) <= 1 for ds in tri.values() for d in ds)
     assert not any(9 in [obj for _, obj, *_ in frags] for frags in frames[0].values())
+
+
+@pytest.mark.parametrize("broken", ["no glretrace", "no library", "replay ends"])
+def test_a_rendered_texture_mesa_s_replay_cannot_give(gl, broken, tmp_path):
+    """Without glretrace or the readback library beside rbcd-gl-raster (a
+    tool missing: exit 1), or with a replay that stops before the draw (a
+    glretrace that exits at once: exit 2), the draw is refused in one line
+    naming it, and nothing is left."""
+    if broken == "no library":
+        lone = tmp_path / "lone"
+        lone.mkdir()
+        shutil.copy(program("rbcd-gl-raster"), lone / "rbcd-gl-raster")
+        gl.env["RBCD_GL_RASTER"] = str(lone / "rbcd-gl-raster")
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for tool in os.listdir("/usr/bin"):   # every tool but glretrace (a PATH of /usr/bin's tools)
+        if tool != "glretrace" or broken == "no library":
+            (bin_dir / tool).symlink_to(os.path.join("/usr/bin", tool))
+    if broken == "replay ends":
+        (bin_dir / "glretrace").write_text("#!/bin/sh\necho 'glretrace: stopped early' >&2\nexit 1\n")
+        (bin_dir / "glretrace").chmod(0o755)
+    gl.env["PATH"] = str(bin_dir)
+    out = gl.path("x.rbt")
+    r = gl(capture_path("shader-fault-rendered"), "-o", out)
+    lines = r.stderr.strip().splitlines()
+    words, status = {"no glretrace": ("needs glretrace", 1), "no library": ("rbcd-texture-readback.so", 1),
+                     "replay ends": ("stopped early", 2)}[broken]
+    assert r.returncode == status and len(lines) == 1 and re.search(r": call \d+: glDrawArrays", lines[0]) \
+        and words in lines[0], lines
+    assert not os.path.exists(out)
+    assert not [f for f in os.listdir(gl.tmp) if f.startswith(("rbcd-gl2rbt", "."))], os.listdir(gl.tmp)
 
 
 def test_a_program_that_does_not_link_is_not_used(gl):

@@ -6,8 +6,9 @@ glTexSubImage2D under an odd unpack state, glGenerateMipmap, filtering set
 on the texture or overridden by a sampler object, a texture GL calls
 incomplete, a deleted one); a reduced capture carries the images and gives
 the same bytes; an image the converter cannot give Mesa (rendered into by a
-framebuffer, copied from one, read from a pixel unpack buffer, shorter than
-GL reads) is refused naming the call, nothing left."""
+framebuffer or copied from one in a reduced capture that does not carry
+it, read from a pixel unpack buffer, shorter than GL reads) is refused
+naming the call, nothing left."""
 import struct
 
 import pytest
@@ -153,17 +154,22 @@ def unpack_buffer(c):
                                                                      framebuffer=6)
      .add("glFramebufferTexture2D", target="GL_FRAMEBUFFER", attachment="GL_COLOR_ATTACHMENT0",
           textarget="GL_TEXTURE_2D", texture=3, level=0)
-     .add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0), "attaches it to framebuffer 6"),
+     .add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0),
+     ("attaches it to framebuffer 6", "a reduced capture carries only the images a conversion of the capture")),
     (lambda c: c.add("glCopyTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, x=0, y=0,
-                     width=2, height=1), "copies the framebuffer into it"),
-    (unpack_buffer, "pixel unpack buffer 9"),
+                     width=2, height=1), ("copies the framebuffer into it", "a reduced capture carries only")),
+    (unpack_buffer, ("pixel unpack buffer 9",)),
     (lambda c: c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=2, height=1,
-                     format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS[:31]), "31 bytes of pixels, 32 read by GL"),
+                     format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS[:31]), ("31 bytes of pixels, 32 read by GL",)),
 ], ids=["framebuffer", "copy", "unpack_buffer", "short_pixels"])
 def test_images_the_converter_cannot_give_mesa_are_refused(tmp_path, make, words):
+    """A texture the GPU renders, read by a vertex shader, in a reduced
+    capture that does not carry its image (a capture's conversion reads it
+    back from Mesa's replay: test_gl2rbt_shaders' "rendered" fault); pixels
+    from a pixel unpack buffer, or shorter than GL reads."""
     c = make(texture(shader_calls(VS_TEXEL % FETCH)))
     r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt", "--geometry", tmp_path / "x.geo")
-    refused(r, words)
+    refused(r, *words)
     assert left_behind(tmp_path, ["x.xz"]) == []
 
 

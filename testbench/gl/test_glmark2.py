@@ -4,12 +4,15 @@ with the shipped rules, workloads/games/glmark2-es2-select.toml
 (docs/gl-capture.md, "OpenGL ES: glmark2-es2"). Skipped, saying why, without
 glmark2-es2, apitrace or xvfb-run (scripts/setup.sh --gl installs them).
 
-Two short scenes of its default list, each a capture of its own, 800 x 480:
+Three short scenes of its default list, each a capture of its own, 800 x 480:
   build:use-vbo=true  the horse, one glDrawArrays a frame, culling on
                       (glmark2 enables GL_CULL_FACE for every scene);
   pulsar:quads=5:texture=false:light=false
                       five flat quads, one glDrawArrays each a frame in one
-                      order, culling off (the scene disables it).
+                      order, culling off (the scene disables it);
+  terrain             a grid of 393,216 vertices whose vertex shader
+                      samples a height map an earlier pass of each frame
+                      renders into a texture (read back from Mesa's replay).
 What is asserted follows from those definitions, not from the converter's
 figures: as many frames as nframes asks; the objects the rules name, every
 frame; every fragment on the screen; a closed mesh under culling gives as
@@ -28,7 +31,8 @@ from gl_captures import GL2RBT, read_trace, run
 W, H = 800, 480
 FRAMES = 8
 RULES = os.path.join(ROOT, "workloads", "games", "glmark2-es2-select.toml")
-SCENES = {"build": "build:use-vbo=true", "pulsar": "pulsar:quads=5:texture=false:light=false"}
+SCENES = {"build": "build:use-vbo=true", "pulsar": "pulsar:quads=5:texture=false:light=false",
+          "terrain": "terrain"}
 
 
 def missing_tools():
@@ -120,3 +124,21 @@ def test_pulsar_five_quads_keep_their_ids(captures):
     for frame in (1, FRAMES - 1):
         assert listed(captures, "pulsar", frame) == [(str(i), f"pulsar: quad {i}") for i in range(1, 6)], \
             f"frame {frame}: the quads by their order in the frame"
+
+
+def test_terrain_reads_the_height_map_each_frame_renders(captures):
+    """The terrain's vertex shader reads a texture the GPU renders each
+    frame (it had been refused): converted, every frame; the reduced
+    capture carries the images read back, and converting it (no replay)
+    gives the same bytes. (That the read-back image is the one Mesa
+    samples is the gl_shaders "rendered" fault's test: exact pixels.)"""
+    d, traces = captures
+    out, red, again = d / "terrain.rbt", d / "terrain.xz", d / "terrain-again.rbt"
+    r = gl2rbt(d, traces["terrain"], "-o", out, "--reduced-out", red)
+    assert r.returncode == 0, r.stderr
+    r = gl2rbt(d, red, "-o", again)
+    assert r.returncode == 0, r.stderr
+    assert out.read_bytes() == again.read_bytes()
+    trace, _ = read_trace(str(out))
+    assert sorted(trace) == list(range(FRAMES)) and on_screen(trace)
+    assert os.path.getsize(red) > 20_000, "the reduced capture carries no height map"

@@ -102,6 +102,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.vertex_data = None          # its vertex data's digest, or what computes it (draw_vertex_data)
         self.shading_costs = None        # ShadingCosts, at the first draw under a program
         self.vertex_stage_ = None        # Mesa, started at the first draw under a program
+        self.replay = None               # Mesa's replay of the capture, for rendered textures (rendered_textures.py)
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)
         self.egl_api = "EGL_OPENGL_ES_API"
         self.core = False                # a core-profile context: no default vertex array object

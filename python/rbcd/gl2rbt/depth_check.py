@@ -166,16 +166,19 @@ def check_depth(args):
     # Pass 1: the calls, from the GL state alone, and the window glretrace
     # will grow to (refused past MAX_REPLAY_PIXELS before it runs).
     probe = new_converter(args, False)
-    for call in read_calls(args.trace):
-        probe.last_call = call[0]
-        probe.handle(call)
-        grown = drawable_growth(call) if not probe.s.draw_fbo else None
-        if grown and grown[0] * grown[1] > MAX_REPLAY_PIXELS:
-            raise ConvertError(f"call {call[0]}: {printable(call[1])} would make glretrace's window "
-                               f"{grown[0]} x {grown[1]} pixels, more than the check's {MAX_REPLAY_PIXELS} "
-                               "(docs/gl-capture.md, the check against Mesa)")
-        if probe.last_frame is not None and probe.frame > probe.last_frame:
-            break
+    try:
+        for call in read_calls(args.trace):
+            probe.last_call = call[0]
+            probe.handle(call)
+            grown = drawable_growth(call) if not probe.s.draw_fbo else None
+            if grown and grown[0] * grown[1] > MAX_REPLAY_PIXELS:
+                raise ConvertError(f"call {call[0]}: {printable(call[1])} would make glretrace's window "
+                                   f"{grown[0]} x {grown[1]} pixels, more than the check's {MAX_REPLAY_PIXELS} "
+                                   "(docs/gl-capture.md, the check against Mesa)")
+            if probe.last_frame is not None and probe.frame > probe.last_frame:
+                break
+    finally:
+        probe.close_replay()
     if probe.es:
         es_readback_library()   # missing: said before the conversion, not after it
     frames = [(o, c, call) for o, c, call, wrong in probe.last_3d_draws if call is not None and wrong is None]

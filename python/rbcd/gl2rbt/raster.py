@@ -177,18 +177,21 @@ def run_calls(args, conv, reduced):
     """Every call of the capture into the converter, to the last frame asked for."""
     calls = read_calls(args.trace)
     conv.writes_reduced = reduced is not None
-    for call in calls:
-        conv.last_call = call[0]
-        conv.handle(call)
-        if reduced:
-            # After the call: a draw carries the textures its vertex shader read.
-            reduced.call(call, conv.take_reduced_textures())
-        if conv.last_frame is not None and conv.frame > conv.last_frame:
-            check_rest(calls)
-            break
-        if args.snapshots and conv.active and call[0] in args.snapshots:
-            conv.open_frame(call[0])
-            conv.emit(b"S" + struct.pack("<Q", call[0]))
+    try:
+        for call in calls:
+            conv.last_call = call[0]
+            conv.handle(call)
+            if reduced:
+                # After the call: a draw carries the textures its vertex shader read.
+                reduced.call(call, conv.take_reduced_textures())
+            if conv.last_frame is not None and conv.frame > conv.last_frame:
+                check_rest(calls)
+                break
+            if args.snapshots and conv.active and call[0] in args.snapshots:
+                conv.open_frame(call[0])
+                conv.emit(b"S" + struct.pack("<Q", call[0]))
+    finally:
+        conv.close_replay()
     if conv.s.begin_mode is not None:
         raise ConvertError("the capture ends between glBegin and glEnd")
     if conv.out_frame < 0:

@@ -109,12 +109,15 @@ class VertexTextures:
 
     def bind(self, conv, no, name, mp):
         """Binds, at every unit the program's 2D samplers name, the
-        capture's texture there and its sampler object; each texture read
-        is noted for the reduced capture (conv.vertex_texture_read)."""
+        capture's texture there and its sampler object; a texture the GPU
+        renders is read back from Mesa's replay (conv.rendered_textures);
+        each texture read is noted for the reduced capture
+        (conv.vertex_texture_read)."""
         GL = self.gl
         self.no, self.draw = no, name
         self.core = conv.core and not conv.es
         unit_of = np.zeros(1, np.int32)
+        reads = []
         for loc in mp.texture_2d_locations:
             GL.glGetUniformiv(mp.name, loc, unit_of)
             unit = int(unit_of[0])
@@ -123,6 +126,10 @@ class VertexTextures:
             if tc is not None and tc.refused is not None:
                 fail_call(no, f"{name}: its vertex shader reads texture {tex} (unit {unit}), whose image the converter "
                           f"cannot give Mesa: call {tc.refused[0]}: {printable(tc.refused[1])}")
+            reads.append((unit, tex, tc))
+        rendered = conv.rendered_textures(no, name, [r for r in reads if r[2] is not None and r[2].rendered])
+        for unit, tex, tc in reads:
+            tc = rendered.get(tex, tc)
             mt = self.image(tex, tc)   # (made on unit 0)
             sampler = conv.s.sampler_units.get(unit, 0)
             ms = self.sampler(sampler, conv.s.samplers.get(sampler, {})) if sampler else 0

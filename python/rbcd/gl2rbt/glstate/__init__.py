@@ -109,6 +109,11 @@ class GLState:
         # --reduced-out: the version of each texture's calls written into
         # the reduced capture (with a draw whose vertex shader read it).
         self.reduced_texture_versions = {}
+        # Textures the GPU renders: the draws, clears and copies that may
+        # have written one so far, and each one's image as last read back
+        # from Mesa's replay (TextureImageCalls.rendered_textures).
+        self.gpu_writes = 0
+        self.rendered_images = {}
         self.groups = []   # innermost last: object id or None
         self.group_names = []   # the same groups: (object id or None, message)
         self.marker = ""        # the last message the application inserted in the frame

@@ -470,6 +470,8 @@ class DrawCalls:
     def draws_into_camera_pass(self):
         """Whether a draw now reaches the camera pass: one that does not is
         counted as another pass's work."""
+        if self.s.draw_fbo:
+            self.gpu_wrote()
         if not self.camera_pass():
             self.offscreen_draws += 1
             return False

@@ -354,6 +354,7 @@ class FramebufferCalls:
         that is no framebuffer: GL_INVALID_OPERATION or GL_INVALID_ENUM)
         change nothing."""
         d = dict(args)
+        self.gpu_wrote()
         bits = {0x100: "GL_DEPTH_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT", 0x4000: "GL_COLOR_BUFFER_BIT"}
         mask, unknown = bitfield(d.get("mask", 0), no, f"{name}: the mask", bits)
         if "GL_DEPTH_BUFFER_BIT" not in mask:

@@ -77,6 +77,8 @@ class PerFragmentCalls:
             # or feedback mode (Mesa clears then only in GL_RENDER; glClearBuffer
             # clears in every mode): nothing is cleared.
             return
+        if self.s.draw_fbo:
+            self.gpu_wrote()
         if "GL_DEPTH_BUFFER_BIT" in bits:
             self.depth_clear(no, self.s.clear_depth)
 
@@ -95,6 +97,8 @@ class PerFragmentCalls:
         0, d, s): a depth clear as glClear's, to d clamped to [0, 1]; the
         colour and stencil forms change no depth."""
         d = dict(args)
+        if self.s.draw_fbo:
+            self.gpu_wrote()   # any buffer of a framebuffer object (a texture the GPU renders)
         buffer = enum_arg(d.get("buffer"), no, f"{name}: the buffer")
         if (buffer, base_name(name)) not in (("GL_DEPTH", "glClearBufferfv"), ("GL_DEPTH_STENCIL", "glClearBufferfi")):
             return

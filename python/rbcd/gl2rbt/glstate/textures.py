@@ -24,7 +24,7 @@ buffer, or over the cap."""
 import math
 
 from ...cli import I32, U32, U63, integer
-from ..errors import checked, fail_call, printable
+from ..errors import ToolError, checked, fail_call, printable
 from ..gl_tables import base_name
 from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
 from .texture_formats import certain_level, certain_part, certain_storage, whole
@@ -103,12 +103,14 @@ class TextureCalls:
     converter cannot give Mesa; `over`: past the limits, nothing more is
     kept; `levels`: the levels whose image is known (level -> (internal
     format, width, height, type), texture_formats); `storage`: a
-    glTexStorage2D kept (the texture may be immutable)."""
-    __slots__ = ("calls", "keyed", "seq", "storage", "levels", "version", "bytes", "refused", "over")
+    glTexStorage2D kept (the texture may be immutable); `rendered`: (call,
+    how) once the GPU renders its image (rendered_textures.py reads it back
+    from Mesa's replay)."""
+    __slots__ = ("calls", "keyed", "seq", "storage", "levels", "version", "bytes", "refused", "over", "rendered")
 
     def __init__(self):
         self.calls, self.keyed, self.seq, self.storage, self.levels = {}, {}, 0, False, {}
-        self.version, self.bytes, self.refused, self.over = 0, 0, None, False
+        self.version, self.bytes, self.refused, self.over, self.rendered = 0, 0, None, False, None
 
 
 def pixels_of(d):
@@ -237,11 +239,73 @@ class TextureImageCalls:
 
     def texture_rendered(self, tex, no, how):
         """A texture whose image the GPU writes: a vertex shader that reads
-        it is refused (the converter runs no fragment shader)."""
+        it gets it read back from Mesa's replay (rendered_textures.py)."""
+        self.gpu_wrote()
         if self.s.texture_targets.get(tex, VERTEX_TEXTURE_TARGET) == VERTEX_TEXTURE_TARGET:
-            self.texture_calls(tex).refused = (no, how)
+            self.texture_calls(tex).rendered = (no, how)
+
+    def gpu_wrote(self):
+        """The GPU may have written a texture (a draw, clear or copy into a
+        framebuffer object, an attachment): rendered textures are read back
+        again at the next draw that reads them."""
+        self.s.gpu_writes += 1
+
+    def rendered_textures(self, no, name, reads):
+        """The textures of `reads` [(unit, texture, TextureCalls)] that the
+        GPU renders, each as TextureCalls that make the image Mesa's replay
+        has at call `no` (glTexImage2D of each level read back, then the
+        texture's parameter calls): {texture: TextureCalls}, read again only
+        when the GPU may have written since."""
+        out, ask = {}, []
+        for unit, tex, tc in reads:
+            version = ("rendered", self.s.gpu_writes, tc.version)
+            cached = self.s.rendered_images.get(tex)
+            if cached is not None and cached.version == version:
+                out[tex] = cached
+            else:
+                ask.append((unit, tex, tc, version))
+        if not ask:
+            return out
+        if self.reads_reduced:
+            unit, tex, tc, _ = ask[0]
+            fail_call(no, f"{name}: its vertex shader reads texture {tex} (unit {unit}), which the GPU renders "
+                      f"(call {tc.rendered[0]}: {printable(tc.rendered[1])}): a reduced capture carries only the "
+                      "images a conversion of the capture read back (with the draws that read them)")
+        from ..rendered_textures import RenderedTextures, upload_format
+        if self.replay is None:
+            from ..raster import raster_program
+            try:
+                self.replay = RenderedTextures(self.args.trace, raster_program(),
+                                               getattr(self.args, "check_timeout", 600))
+            except ToolError as e:   # a tool missing: said with the draw that needs it
+                unit, tex, _, _ = ask[0]
+                raise ToolError(f"call {no}: {printable(name)}: its vertex shader reads texture {tex} (unit {unit}), "
+                                f"which the GPU renders: {e}")
+        images = self.replay.read(no, name, [unit for unit, _, _, _ in ask])
+        alignment_1 = tuple(1 if p == "GL_UNPACK_ALIGNMENT" else 0 for p in UNPACK_PARAMETERS)
+        for unit, tex, tc, version in ask:
+            internal, levels = images.get(unit, (0, []))
+            rt = TextureCalls()
+            for level, w, h, fmt, kind, pixels in levels:   # (format and type by name: vertex_textures checks them)
+                rt.seq += 1
+                rt.calls[rt.seq] = (no, "glTexImage2D", dict(
+                    target=VERTEX_TEXTURE_TARGET, level=level, internalformat=upload_format(internal, fmt, kind, self.es),
+                    width=w, height=h, border=0, format=fmt, type=kind, pixels=pixels), alignment_1)
+            for call in tc.calls.values():
+                if call[1] in PARAMETER_CALLS:
+                    rt.seq += 1
+                    rt.calls[rt.seq] = call
+            rt.version = version
+            self.s.rendered_images[tex] = out[tex] = rt
+        return out
+
+    def close_replay(self):
+        if self.replay is not None:
+            self.replay.close()
+            self.replay = None
 
     def forget_texture_calls(self, tex):
+        self.s.rendered_images.pop(tex, None)
         tc = self.s.texture_calls.pop(tex, None)
         if tc is not None:
             self.s.texture_bytes_kept -= tc.bytes

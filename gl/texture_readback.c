@@ -1,0 +1,420 @@
+/* Preloaded into glretrace by `rbcd-gl2rbt` when a vertex shader reads a 2D
+ * texture the GPU renders (docs/gl-capture.md, "Textures a vertex shader
+ * reads"): Mesa replays the whole capture, and this library reads the
+ * textures back at the draws the converter asks for.
+ *
+ * glretrace --markers inserts, before each GL call it replays, a debug
+ * message that begins with the call's number (glDebugMessageInsert, looked
+ * up through glXGetProcAddressARB, which glretrace looks up with dlsym).
+ * This library wraps that lookup and so sees every call number. Requests
+ * come on the FIFO $RBCD_TEXTURE_FIFOS/requests, one text line each, "CALL
+ * UNIT...", in increasing call order; when the replay reaches CALL, the 2D
+ * texture bound at each UNIT is read back, every level with an image, in a
+ * format and type that give its values back exactly when uploaded again
+ * (desktop GL: glGetTexImage; OpenGL ES, which has none: glReadPixels from
+ * a framebuffer object the level is attached to, which takes the colour
+ * formats a framebuffer can hold, not depth); the answer goes to
+ * $RBCD_TEXTURE_FIFOS/replies:
+ *
+ *   "RBTX", u32 units; per unit: u32 unit, i32 internal format, u32 levels;
+ *   per level: u32 level, width, height, format, type, u64 bytes, the bytes
+ *   (rows from the bottom, packed: alignment 1)
+ *   or "RBTE", u32 length, a message.
+ *
+ * The pixel pack state, the active unit and any pixel pack buffer are put
+ * back as the replay had them. When the requests end (the converter closed
+ * its end), the replay has nothing more to give and the process exits. */
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <errno.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <fcntl.h>
+
+#include <GL/gl.h>
+#include <GL/glext.h>
+
+typedef void *(*Dlsym)(void *, const char *);
+typedef void *(*GetProc)(const char *);
+typedef void (*DebugMessageInsert)(GLenum, GLenum, GLuint, GLenum, GLsizei, const GLchar *);
+typedef void *(*EglGetProc)(const char *);
+
+#define MAX_UNITS 192
+#define MAX_LEVELS 15
+#define MAX_REPLY_BYTES (1ull << 30)
+
+static Dlsym next_dlsym;
+static GetProc real_get_proc;   /* glXGetProcAddressARB or eglGetProcAddress, whichever glretrace looks up */
+static DebugMessageInsert real_insert, real_insert_khr;
+static int requests = -1, replies = -1;
+static long long want = -1;          /* the call asked for; -1: read the next request */
+static int want_units[MAX_UNITS], want_count;
+
+static struct {
+    void (*get_integerv)(GLenum, GLint *);
+    void (*active_texture)(GLenum);
+    void (*pixel_storei)(GLenum, GLint);
+    void (*bind_buffer)(GLenum, GLuint);
+    void (*get_tex_level_parameteriv)(GLenum, GLint, GLenum, GLint *);
+    void (*get_tex_image)(GLenum, GLint, GLenum, GLenum, void *);
+    GLenum (*get_error)(void);
+    const GLubyte *(*get_string)(GLenum);
+    void (*gen_framebuffers)(GLsizei, GLuint *);
+    void (*delete_framebuffers)(GLsizei, const GLuint *);
+    void (*bind_framebuffer)(GLenum, GLuint);
+    void (*framebuffer_texture_2d)(GLenum, GLenum, GLenum, GLuint, GLint);
+    GLenum (*check_framebuffer_status)(GLenum);
+    void (*read_pixels)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *);
+} gl;
+static int es;   /* the replay's context is OpenGL ES's */
+
+static void die(void)
+{
+    _exit(0);   /* nothing more is asked for: the replay stops here */
+}
+
+static void put(const void *p, size_t n)
+{
+    const char *c = p;
+    while (n) {
+        ssize_t k = write(replies, c, n);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            die();
+        c += k;
+        n -= (size_t)k;
+    }
+}
+
+static void put_u32(uint32_t v) { put(&v, 4); }
+
+static void refuse(const char *message)
+{
+    put("RBTE", 4);
+    put_u32((uint32_t)strlen(message));
+    put(message, strlen(message));
+}
+
+/* The next request: "CALL UNIT..." (at most MAX_UNITS units). */
+static void next_request(void)
+{
+    char line[4096];
+    size_t n = 0;
+    for (;;) {
+        char ch;
+        ssize_t k = read(requests, &ch, 1);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            die();
+        if (ch == '\n')
+            break;
+        if (n + 1 < sizeof line)
+            line[n++] = ch;
+    }
+    line[n] = 0;
+    char *p = line, *end;
+    want = strtoll(p, &end, 10);
+    want_count = 0;
+    for (p = end; want_count < MAX_UNITS; p = end) {
+        long u = strtol(p, &end, 10);
+        if (end == p)
+            break;
+        want_units[want_count++] = (int)u;
+    }
+}
+
+/* How a level reads back exactly: its values, uploaded again into the
+ * same internal format with this format and type, are the level's. */
+static void readback_format(GLint internal, GLenum *format, GLenum *type)
+{
+    GLint depth = 0, stencil = 0, red_type = 0;
+    gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_DEPTH_SIZE, &depth);
+    gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_STENCIL_SIZE, &stencil);
+    gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, depth ? GL_TEXTURE_DEPTH_TYPE : GL_TEXTURE_RED_TYPE, &red_type);
+    if (depth && stencil) {
+        *format = GL_DEPTH_STENCIL;
+        *type = internal == GL_DEPTH32F_STENCIL8 ? GL_FLOAT_32_UNSIGNED_INT_24_8_REV : GL_UNSIGNED_INT_24_8;
+    } else if (depth) {
+        *format = GL_DEPTH_COMPONENT;
+        *type = red_type == GL_FLOAT ? GL_FLOAT : GL_UNSIGNED_INT;
+    } else if (red_type == GL_INT || red_type == GL_UNSIGNED_INT) {
+        *format = GL_RGBA_INTEGER;
+        *type = red_type == GL_INT ? GL_INT : GL_UNSIGNED_INT;
+    } else if (es && red_type == GL_UNSIGNED_NORMALIZED) {
+        GLint bits[4] = {0};
+        static const GLenum sizes[4] = {GL_TEXTURE_RED_SIZE, GL_TEXTURE_GREEN_SIZE, GL_TEXTURE_BLUE_SIZE,
+                                        GL_TEXTURE_ALPHA_SIZE};
+        GLint widest = 0;
+        for (int i = 0; i < 4; i++) {
+            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, sizes[i], &bits[i]);
+            widest = bits[i] > widest ? bits[i] : widest;
+        }
+        *format = GL_RGBA;   /* what glReadPixels always takes; exact for 8 bits or fewer */
+        *type = widest <= 8 ? GL_UNSIGNED_BYTE : GL_FLOAT;
+    } else {
+        *format = GL_RGBA;   /* float32 holds every normalized and float value, rounded back exactly */
+        *type = GL_FLOAT;
+    }
+}
+
+static size_t pixel_bytes(GLenum format, GLenum type)
+{
+    if (format == GL_DEPTH_STENCIL)
+        return type == GL_UNSIGNED_INT_24_8 ? 4 : 8;
+    if (type == GL_UNSIGNED_BYTE)
+        return 4;
+    return format == GL_DEPTH_COMPONENT ? 4 : 16;
+}
+
+/* A level as OpenGL ES reads it: attached to a framebuffer object of our
+ * own, read with glReadPixels; the replay's framebuffer bindings put back.
+ * 0 if it cannot be (a depth format, an incomplete attachment). */
+static int read_level_es(GLint level, GLint w, GLint h, GLenum format, GLenum type, void *pixels)
+{
+    if (format == GL_DEPTH_COMPONENT || format == GL_DEPTH_STENCIL)
+        return 0;
+    GLint tex = 0, draw = 0, read = 0;
+    gl.get_integerv(GL_TEXTURE_BINDING_2D, &tex);
+    gl.get_integerv(GL_DRAW_FRAMEBUFFER_BINDING, &draw);
+    gl.get_integerv(GL_READ_FRAMEBUFFER_BINDING, &read);
+    GLuint fb = 0;
+    gl.gen_framebuffers(1, &fb);
+    gl.bind_framebuffer(GL_FRAMEBUFFER, fb);
+    gl.framebuffer_texture_2d(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, (GLuint)tex, level);
+    int ok = gl.check_framebuffer_status(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+    if (ok)
+        gl.read_pixels(0, 0, w, h, format, type, pixels);
+    ok = ok && gl.get_error() == GL_NO_ERROR;
+    gl.bind_framebuffer(GL_DRAW_FRAMEBUFFER, (GLuint)draw);
+    gl.bind_framebuffer(GL_READ_FRAMEBUFFER, (GLuint)read);
+    gl.delete_framebuffers(1, &fb);
+    return ok;
+}
+
+/* Whether every level asked for can be read in OpenGL ES (checked before
+ * the reply starts: a reply is whole or not sent). */
+static int es_readable(void)
+{
+    for (int k = 0; k < want_count; k++) {
+        gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
+        GLint internal = 0;
+        gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_INTERNAL_FORMAT, &internal);
+        GLenum format, type;
+        readback_format(internal, &format, &type);
+        for (GLint level = 0; level < MAX_LEVELS; level++) {
+            GLint w = 0, h = 0;
+            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_WIDTH, &w);
+            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_HEIGHT, &h);
+            if (w <= 0)
+                continue;
+            void *pixels = calloc((size_t)w * (size_t)(h > 0 ? h : 1) * pixel_bytes(format, type), 1);
+            int ok = pixels && read_level_es(level, w, h, format, type, pixels);
+            free(pixels);
+            if (!ok)
+                return 0;
+        }
+    }
+    return 1;
+}
+
+static void answer(void)
+{
+    /* OpenGL ES has the last four alone. */
+    static const GLenum pack[] = {GL_PACK_SWAP_BYTES, GL_PACK_LSB_FIRST, GL_PACK_IMAGE_HEIGHT, GL_PACK_SKIP_IMAGES,
+                                  GL_PACK_ROW_LENGTH, GL_PACK_SKIP_ROWS, GL_PACK_SKIP_PIXELS, GL_PACK_ALIGNMENT};
+    GLint saved[8] = {0}, active = GL_TEXTURE0, pack_buffer = 0;
+    const size_t first = es ? 4 : 0, npack = sizeof pack / sizeof pack[0];
+    gl.get_integerv(GL_ACTIVE_TEXTURE, &active);
+    gl.get_integerv(GL_PIXEL_PACK_BUFFER_BINDING, &pack_buffer);
+    for (size_t i = first; i < npack; i++) {
+        gl.get_integerv(pack[i], &saved[i]);
+        gl.pixel_storei(pack[i], pack[i] == GL_PACK_ALIGNMENT ? 1 : 0);
+    }
+    if (pack_buffer)
+        gl.bind_buffer(GL_PIXEL_PACK_BUFFER, 0);
+
+    /* Sizes first: a reply is whole or not sent. */
+    uint64_t total = 0;
+    for (int k = 0; k < want_count; k++) {
+        gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
+        for (GLint level = 0; level < MAX_LEVELS; level++) {
+            GLint w = 0, h = 0;
+            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_WIDTH, &w);
+            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_HEIGHT, &h);
+            total += (uint64_t)(w > 0 ? w : 0) * (uint64_t)(h > 0 ? h : 0) * 16;
+        }
+    }
+    if (total > MAX_REPLY_BYTES) {
+        refuse("the textures would take more than 1 GiB to read back");
+    } else if (es && !es_readable()) {
+        refuse("an OpenGL ES texture whose image glReadPixels cannot read (a depth format) is not read back");
+    } else {
+        put("RBTX", 4);
+        put_u32((uint32_t)want_count);
+        for (int k = 0; k < want_count; k++) {
+            gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
+            GLint internal = 0, levels = 0;
+            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_INTERNAL_FORMAT, &internal);
+            GLenum format, type;
+            readback_format(internal, &format, &type);
+            for (GLint level = 0; level < MAX_LEVELS; level++) {
+                GLint w = 0;
+                gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_WIDTH, &w);
+                levels += w > 0;
+            }
+            put_u32((uint32_t)want_units[k]);
+            put_u32((uint32_t)internal);
+            put_u32((uint32_t)levels);
+            for (GLint level = 0; level < MAX_LEVELS; level++) {
+                GLint w = 0, h = 0;
+                gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_WIDTH, &w);
+                gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_HEIGHT, &h);
+                if (w <= 0)
+                    continue;
+                if (h < 0)
+                    h = 0;
+                uint64_t n = (uint64_t)w * (uint64_t)h * pixel_bytes(format, type);
+                void *pixels = calloc(n ? n : 1, 1);
+                if (!pixels)
+                    die();
+                if (es)
+                    read_level_es(level, w, h, format, type, pixels);
+                else
+                    gl.get_tex_image(GL_TEXTURE_2D, level, format, type, pixels);
+                put_u32((uint32_t)level);
+                put_u32((uint32_t)w);
+                put_u32((uint32_t)h);
+                put_u32(format);
+                put_u32(type);
+                put(&n, 8);
+                put(pixels, n);
+                free(pixels);
+            }
+        }
+    }
+    while (gl.get_error() != GL_NO_ERROR)
+        ;   /* the reads' own errors (none expected) are not the capture's */
+    for (size_t i = first; i < npack; i++)
+        gl.pixel_storei(pack[i], saved[i]);
+    if (pack_buffer)
+        gl.bind_buffer(GL_PIXEL_PACK_BUFFER, (GLuint)pack_buffer);
+    gl.active_texture((GLenum)active);
+}
+
+static int open_fifos(void)
+{
+    if (requests >= 0)
+        return 1;
+    const char *dir = getenv("RBCD_TEXTURE_FIFOS");
+    if (!dir || !real_get_proc)
+        return 0;
+    char path[4096];
+    snprintf(path, sizeof path, "%s/requests", dir);
+    requests = open(path, O_RDONLY | O_CLOEXEC);
+    snprintf(path, sizeof path, "%s/replies", dir);
+    replies = open(path, O_WRONLY | O_CLOEXEC);
+    if (requests < 0 || replies < 0)
+        die();
+    gl.get_integerv = (void (*)(GLenum, GLint *))real_get_proc("glGetIntegerv");
+    gl.active_texture = (void (*)(GLenum))real_get_proc("glActiveTexture");
+    gl.pixel_storei = (void (*)(GLenum, GLint))real_get_proc("glPixelStorei");
+    gl.bind_buffer = (void (*)(GLenum, GLuint))real_get_proc("glBindBuffer");
+    gl.get_tex_level_parameteriv =
+        (void (*)(GLenum, GLint, GLenum, GLint *))real_get_proc("glGetTexLevelParameteriv");
+    gl.get_tex_image = (void (*)(GLenum, GLint, GLenum, GLenum, void *))real_get_proc("glGetTexImage");
+    gl.get_error = (GLenum(*)(void))real_get_proc("glGetError");
+    gl.get_string = (const GLubyte *(*)(GLenum))real_get_proc("glGetString");
+    gl.gen_framebuffers = (void (*)(GLsizei, GLuint *))real_get_proc("glGenFramebuffers");
+    gl.delete_framebuffers = (void (*)(GLsizei, const GLuint *))real_get_proc("glDeleteFramebuffers");
+    gl.bind_framebuffer = (void (*)(GLenum, GLuint))real_get_proc("glBindFramebuffer");
+    gl.framebuffer_texture_2d = (void (*)(GLenum, GLenum, GLenum, GLuint, GLint))real_get_proc("glFramebufferTexture2D");
+    gl.check_framebuffer_status = (GLenum(*)(GLenum))real_get_proc("glCheckFramebufferStatus");
+    gl.read_pixels = (void (*)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *))real_get_proc("glReadPixels");
+    if (!gl.get_integerv || !gl.active_texture || !gl.pixel_storei || !gl.bind_buffer ||
+        !gl.get_tex_level_parameteriv || !gl.get_tex_image || !gl.get_error || !gl.get_string ||
+        !gl.gen_framebuffers || !gl.delete_framebuffers || !gl.bind_framebuffer || !gl.framebuffer_texture_2d ||
+        !gl.check_framebuffer_status || !gl.read_pixels)
+        die();
+    return 1;
+}
+
+static void marker(const GLchar *message)
+{
+    if (!message || !open_fifos())
+        return;
+    char *end;
+    long long call = strtoll(message, &end, 10);
+    if (end == message)
+        return;
+    if (want < 0)
+        next_request();
+    while (want >= 0 && call > want) {   /* the call asked for was not replayed (no context current) */
+        char text[160];
+        snprintf(text, sizeof text, "Mesa's replay did not make call %lld (no GL context current there)", want);
+        refuse(text);
+        next_request();
+    }
+    if (call == want) {
+        const char *version = (const char *)gl.get_string(GL_VERSION);
+        es = version && strncmp(version, "OpenGL ES", 9) == 0;
+        answer();
+        want = -1;
+    }
+}
+
+static void insert(GLenum source, GLenum type, GLuint id, GLenum severity, GLsizei length, const GLchar *buf)
+{
+    marker(buf);
+    if (real_insert)
+        real_insert(source, type, id, severity, length, buf);
+}
+
+static void insert_khr(GLenum source, GLenum type, GLuint id, GLenum severity, GLsizei length, const GLchar *buf)
+{
+    marker(buf);
+    if (real_insert_khr)
+        real_insert_khr(source, type, id, severity, length, buf);
+}
+
+static void *get_proc(const char *name)
+{
+    void *p = real_get_proc(name);
+    if (p && strcmp(name, "glDebugMessageInsert") == 0) {
+        real_insert = (DebugMessageInsert)p;
+        return (void *)insert;
+    }
+    if (p && strcmp(name, "glDebugMessageInsertKHR") == 0) {
+        real_insert_khr = (DebugMessageInsert)p;
+        return (void *)insert_khr;
+    }
+    return p;
+}
+
+/* glibc 2.34 moved dlsym into libc under a new version; older ones have the
+ * x86-64 base version. */
+static void find_next_dlsym(void)
+{
+    next_dlsym = (Dlsym)dlvsym(RTLD_NEXT, "dlsym", "GLIBC_2.34");
+    if (!next_dlsym)
+        next_dlsym = (Dlsym)dlvsym(RTLD_NEXT, "dlsym", "GLIBC_2.2.5");
+}
+
+void *dlsym(void *handle, const char *name)
+{
+    if (!next_dlsym)
+        find_next_dlsym();
+    if (!next_dlsym)
+        return NULL;
+    void *p = next_dlsym(handle, name);
+    if (p && (strcmp(name, "glXGetProcAddressARB") == 0 || strcmp(name, "glXGetProcAddress") == 0 ||
+              strcmp(name, "eglGetProcAddress") == 0)) {
+        real_get_proc = (GetProc)p;
+        return (void *)get_proc;
+    }
+    return p;
+}

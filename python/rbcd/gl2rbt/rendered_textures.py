@@ -1,0 +1,181 @@
+"""Textures the GPU renders, read back from Mesa's replay of the capture.
+
+A vertex shader that samples a texture a framebuffer renders into (a height
+map drawn each frame, glmark2's terrain) needs the image the earlier passes
+made, which only running them gives: the converter runs no fragment shader.
+So Mesa replays the whole capture once (glretrace --markers, in the
+background, as the conversion goes), with gl/texture_readback.c preloaded:
+at each draw the converter asks for, the textures bound at the units the
+draw's vertex shader reads are read back, every level, in a format that
+gives the values back exactly (texture_readback.c), and the converter gives
+them to its own Mesa context as glTexImage2D calls (vertex_textures.py);
+the reduced capture carries those calls, so converting it needs no replay.
+
+One replay serves a conversion: requests go in call order, and the replay
+waits at each for the next. It needs glretrace, an X server (Xvfb when there
+is no DISPLAY, as --check-depth) and the library; an OpenGL ES capture (no
+glGetTexImage: glReadPixels reads a level through a framebuffer object,
+colour formats alone) and a reduced capture (nothing to replay) are refused
+when a draw needs it. Bounded: 1 GiB a reply, a level's size GL's; the replay gets
+--check-timeout seconds (600 by default) to reach each draw."""
+import os
+import select
+import shutil
+import signal
+import struct
+import subprocess
+import tempfile
+import time
+
+from ..cli import register_temporary, unregister_temporary
+from .errors import ConvertError, ToolError, printable
+from .glstate.texture_formats import ES_COMBINATIONS
+
+LIBRARY = "rbcd-texture-readback.so"
+MAX_REPLY_BYTES = 1 << 30
+# The formats and types texture_readback.c reads back in, and a pixel's
+# bytes in each.
+READBACK = {(0x1902, 0x1405): ("GL_DEPTH_COMPONENT", "GL_UNSIGNED_INT", 4),
+            (0x1902, 0x1406): ("GL_DEPTH_COMPONENT", "GL_FLOAT", 4),
+            (0x84F9, 0x84FA): ("GL_DEPTH_STENCIL", "GL_UNSIGNED_INT_24_8", 4),
+            (0x84F9, 0x8DAD): ("GL_DEPTH_STENCIL", "GL_FLOAT_32_UNSIGNED_INT_24_8_REV", 8),
+            (0x1908, 0x1401): ("GL_RGBA", "GL_UNSIGNED_BYTE", 4),
+            (0x1908, 0x1406): ("GL_RGBA", "GL_FLOAT", 16),
+            (0x8D99, 0x1404): ("GL_RGBA_INTEGER", "GL_INT", 16),
+            (0x8D99, 0x1405): ("GL_RGBA_INTEGER", "GL_UNSIGNED_INT", 16)}
+
+
+HALF_FLOAT_FORMATS = {"GL_RGBA16F", "GL_RGB16F", "GL_RG16F", "GL_R16F", "GL_R11F_G11F_B10F", "GL_RGB9_E5"}
+ES_FALLBACK = {("GL_RGBA", "GL_UNSIGNED_BYTE"): "GL_RGBA8", ("GL_RGBA_INTEGER", "GL_INT"): "GL_RGBA32I",
+               ("GL_RGBA_INTEGER", "GL_UNSIGNED_INT"): "GL_RGBA32UI"}
+
+
+def upload_format(internal, fmt, kind, es):
+    """The internal format a level read back is given to the converter's
+    Mesa context in: its own (desktop GL converts any pixels), or in OpenGL
+    ES, where the format and type must be its table's, its own when they
+    are, else the RGBA one of the same values that samples the same (a
+    missing component reads as GL's default either way)."""
+    if not es:
+        return internal
+    from OpenGL import GL
+    names = {int(getattr(GL, n)): n for n in ES_COMBINATIONS if hasattr(GL, n)}
+    name = names.get(internal)
+    if name is not None and (fmt, kind) in ES_COMBINATIONS[name]:
+        return name
+    if kind == "GL_FLOAT":
+        return "GL_RGBA16F" if name in HALF_FLOAT_FORMATS else "GL_RGBA32F"
+    return ES_FALLBACK.get((fmt, kind), internal)
+
+
+def readback_library(raster):
+    """gl/texture_readback.c's library, beside rbcd-gl-raster as
+    bin/../lib/rbcd/."""
+    lib = os.path.normpath(os.path.join(os.path.dirname(raster), "..", "lib", "rbcd", LIBRARY))
+    if not os.path.isfile(lib):
+        raise ToolError(f"reading back a texture the GPU renders needs {printable(lib)}, built with the desktop GL "
+                        "headers (scripts/setup.sh --gl installs libgl-dev; then build again)")
+    return lib
+
+
+class RenderedTextures:
+    def __init__(self, trace, raster, timeout):
+        self.trace, self.timeout = trace, timeout
+        self.lib = readback_library(raster)
+        self.exe = shutil.which("glretrace")
+        if not self.exe:
+            raise ToolError("reading back a texture the GPU renders needs glretrace (scripts/setup.sh --gl "
+                            "installs apitrace)")
+        self.proc = self.dir = None
+        self.requests = self.replies = None
+
+    def start(self):
+        self.dir = tempfile.mkdtemp(prefix="rbcd-gl2rbt-textures.")
+        register_temporary(self.dir)
+        for fifo in ("requests", "replies"):
+            os.mkfifo(os.path.join(self.dir, fifo), 0o600)
+        # O_RDWR: a FIFO opened so never waits for the other side (Linux),
+        # and the replay's library opens its ends when it first draws.
+        self.requests = os.open(os.path.join(self.dir, "requests"), os.O_RDWR | os.O_CLOEXEC)
+        self.replies = os.open(os.path.join(self.dir, "replies"), os.O_RDWR | os.O_CLOEXEC)
+        cmd = ["env", f"LD_PRELOAD={self.lib}", f"RBCD_TEXTURE_FIFOS={self.dir}", self.exe, "--markers",
+               self.trace]
+        if not os.environ.get("DISPLAY"):
+            xvfb = shutil.which("xvfb-run")
+            if not xvfb:
+                raise ToolError("no DISPLAY and no xvfb-run for glretrace (scripts/setup.sh --gl installs xvfb)")
+            cmd = [xvfb, "-a", "-s", "-screen 0 1280x1024x24"] + cmd
+        self.log = open(os.path.join(self.dir, "replay.log"), "w+b")
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=self.log,
+                                     start_new_session=True)
+
+    def read(self, no, name, units):
+        """The textures bound at `units` just before call `no` (a draw
+        `name`), as Mesa's replay has them: {unit: (internal format,
+        [(level, width, height, format, type, pixels)])}."""
+        self.what = f"call {no}: {printable(name)}"
+        if self.proc is None:
+            self.start()
+        os.write(self.requests, (f"{no} " + " ".join(str(u) for u in units) + "\n").encode())
+        deadline = time.monotonic() + self.timeout
+        magic = self.take(4, no, deadline)
+        if magic == b"RBTE":
+            n, = struct.unpack("<I", self.take(4, no, deadline))
+            raise ConvertError(f"{self.what}: reading back the textures its vertex shader reads: "
+                               f"{printable(self.take(min(n, 4096), no, deadline).decode('utf-8', 'replace'))}")
+        if magic != b"RBTX":
+            raise ConvertError(f"{self.what}: Mesa's replay answered {printable(magic)} for the textures its "
+                               "vertex shader reads")
+        count, = struct.unpack("<I", self.take(4, no, deadline))
+        out, total = {}, 0
+        for _ in range(count):
+            unit, internal, nlevels = struct.unpack("<IiI", self.take(12, no, deadline))
+            levels = []
+            for _ in range(min(nlevels, 15)):
+                level, w, h, fmt, kind, n = struct.unpack("<5IQ", self.take(28, no, deadline))
+                fmt, kind, px = READBACK.get((fmt, kind), (None, None, 0))
+                total += n
+                if not (px and level < 15 and w <= 16384 and h <= 16384 and n == w * h * px
+                        and total <= MAX_REPLY_BYTES):
+                    raise ConvertError(f"{self.what}: Mesa's replay read back a level of {w} x {h} in {n} bytes")
+                levels.append((level, w, h, fmt, kind, self.take(n, no, deadline)))
+            out[unit] = (internal, levels)
+        return out
+
+    def take(self, n, no, deadline):
+        """n bytes of the replay's answer, or why there are none."""
+        parts, left = [], n
+        while left:
+            ready, _, _ = select.select([self.replies], [], [], 1.0)
+            if ready:
+                chunk = os.read(self.replies, min(left, 1 << 20))
+                parts.append(chunk)
+                left -= len(chunk)
+                continue
+            if self.proc.poll() is not None:
+                self.log.seek(0)
+                tail = self.log.read()[-4096:].decode("utf-8", "replace").strip().splitlines()
+                raise ConvertError(f"{self.what}: Mesa's replay of the capture (glretrace) ended before it read "
+                                   f"back the textures its vertex shader reads"
+                                   f" ({printable(tail[-1] if tail else 'no message')})")
+            if time.monotonic() > deadline:
+                raise ConvertError(f"{self.what}: Mesa's replay of the capture (glretrace) did not reach the draw "
+                                   f"in {self.timeout} s (--check-timeout)")
+        return b"".join(parts)
+
+    def close(self):
+        if self.proc is not None:
+            if self.proc.poll() is None:
+                try:
+                    os.killpg(self.proc.pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+            self.proc.wait()
+            self.log.close()
+        for fd in (self.requests, self.replies):
+            if fd is not None:
+                os.close(fd)
+        if self.dir is not None:
+            shutil.rmtree(self.dir, ignore_errors=True)
+            unregister_temporary(self.dir)
+        self.proc = self.dir = self.requests = self.replies = None
