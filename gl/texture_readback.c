@@ -8,17 +8,20 @@
  * up through glXGetProcAddressARB, which glretrace looks up with dlsym).
  * This library wraps that lookup and so sees every call number. Requests
  * come on the FIFO $RBCD_TEXTURE_FIFOS/requests, one text line each, "CALL
- * UNIT...", in increasing call order; when the replay reaches CALL, the 2D
- * texture bound at each UNIT is read back, every level with an image, in a
+ * UNIT[:TARGET]...", in increasing call order; when the replay reaches CALL,
+ * the texture bound at each UNIT's TARGET (GL_TEXTURE_2D when none is given;
+ * 1D, 3D, cube map, array and rectangle ones too, OpenGL ES 2D alone) is
+ * read back with its sampling parameters, every level with an image, in a
  * format and type that give its values back exactly when uploaded again
  * (desktop GL: glGetTexImage; OpenGL ES, which has none: glReadPixels from
  * a framebuffer object the level is attached to, which takes the colour
  * formats a framebuffer can hold, not depth); the answer goes to
  * $RBCD_TEXTURE_FIFOS/replies:
  *
- *   "RBTX", u32 units; per unit: u32 unit, i32 internal format, u32 levels;
- *   per level: u32 level, width, height, format, type, u64 bytes, the bytes
- *   (rows from the bottom, packed: alignment 1)
+ *   "RBTX", u32 units; per unit: u32 unit, target, i32 internal format, u32
+ *   parameters, each u32 name and 4 f32 values; u32 levels; per level: u32
+ *   level, width, height, depth (a cube map's 6 faces, in GL's order), format,
+ *   type, u64 bytes, the bytes (rows from the bottom, packed: alignment 1)
  *   or "RBTE", u32 length, a message.
  *
  * The pixel pack state, the active unit and any pixel pack buffer are put
@@ -52,6 +55,7 @@ static DebugMessageInsert real_insert, real_insert_khr;
 static int requests = -1, replies = -1;
 static long long want = -1;          /* the call asked for; -1: read the next request */
 static int want_units[MAX_UNITS], want_count;
+static GLenum want_targets[MAX_UNITS];
 
 static struct {
     void (*get_integerv)(GLenum, GLint *);
@@ -60,6 +64,7 @@ static struct {
     void (*bind_buffer)(GLenum, GLuint);
     void (*get_tex_level_parameteriv)(GLenum, GLint, GLenum, GLint *);
     void (*get_tex_image)(GLenum, GLint, GLenum, GLenum, void *);
+    void (*get_tex_parameterfv)(GLenum, GLenum, GLfloat *);
     GLenum (*get_error)(void);
     const GLubyte *(*get_string)(GLenum);
     void (*gen_framebuffers)(GLsizei, GLuint *);
@@ -99,10 +104,11 @@ static void refuse(const char *message)
     put(message, strlen(message));
 }
 
-/* The next request: "CALL UNIT..." (at most MAX_UNITS units). */
+/* The next request: "CALL UNIT[:TARGET]..." (at most MAX_UNITS; a unit
+ * without a target is GL_TEXTURE_2D's). */
 static void next_request(void)
 {
-    char line[4096];
+    char line[8192];
     size_t n = 0;
     for (;;) {
         char ch;
@@ -124,41 +130,62 @@ static void next_request(void)
         long u = strtol(p, &end, 10);
         if (end == p)
             break;
-        want_units[want_count++] = (int)u;
+        want_units[want_count] = (int)u;
+        want_targets[want_count] = GL_TEXTURE_2D;
+        if (*end == ':') {
+            p = end + 1;
+            want_targets[want_count] = (GLenum)strtoul(p, &end, 10);
+        }
+        want_count++;
     }
+}
+
+/* What one unit's texture is read back as. */
+struct Texture {
+    GLenum target, query;        /* query: the target its levels are asked at (a cube map's first face) */
+    GLint internal;
+    GLenum format, type;
+    GLint levels, size[MAX_LEVELS][3];   /* width, height, depth (a cube map's 6 faces) */
+};
+
+static int known_target(GLenum t)
+{
+    return t == GL_TEXTURE_2D || t == GL_TEXTURE_3D || t == GL_TEXTURE_2D_ARRAY || t == GL_TEXTURE_CUBE_MAP ||
+           t == GL_TEXTURE_CUBE_MAP_ARRAY || t == GL_TEXTURE_1D || t == GL_TEXTURE_1D_ARRAY ||
+           t == GL_TEXTURE_RECTANGLE;
 }
 
 /* How a level reads back exactly: its values, uploaded again into the
  * same internal format with this format and type, are the level's. */
-static void readback_format(GLint internal, GLenum *format, GLenum *type)
+static void readback_format(struct Texture *t)
 {
     GLint depth = 0, stencil = 0, red_type = 0;
-    gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_DEPTH_SIZE, &depth);
-    gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_STENCIL_SIZE, &stencil);
-    gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, depth ? GL_TEXTURE_DEPTH_TYPE : GL_TEXTURE_RED_TYPE, &red_type);
+    gl.get_tex_level_parameteriv(t->query, 0, GL_TEXTURE_DEPTH_SIZE, &depth);
+    gl.get_tex_level_parameteriv(t->query, 0, GL_TEXTURE_STENCIL_SIZE, &stencil);
+    gl.get_tex_level_parameteriv(t->query, 0, depth ? GL_TEXTURE_DEPTH_TYPE : GL_TEXTURE_RED_TYPE, &red_type);
     if (depth && stencil) {
-        *format = GL_DEPTH_STENCIL;
-        *type = internal == GL_DEPTH32F_STENCIL8 ? GL_FLOAT_32_UNSIGNED_INT_24_8_REV : GL_UNSIGNED_INT_24_8;
+        t->format = GL_DEPTH_STENCIL;
+        t->type = t->internal == GL_DEPTH32F_STENCIL8 ? GL_FLOAT_32_UNSIGNED_INT_24_8_REV : GL_UNSIGNED_INT_24_8;
     } else if (depth) {
-        *format = GL_DEPTH_COMPONENT;
-        *type = red_type == GL_FLOAT ? GL_FLOAT : GL_UNSIGNED_INT;
+        t->format = GL_DEPTH_COMPONENT;
+        t->type = red_type == GL_FLOAT ? GL_FLOAT : GL_UNSIGNED_INT;
     } else if (red_type == GL_INT || red_type == GL_UNSIGNED_INT) {
-        *format = GL_RGBA_INTEGER;
-        *type = red_type == GL_INT ? GL_INT : GL_UNSIGNED_INT;
+        t->format = GL_RGBA_INTEGER;
+        t->type = red_type == GL_INT ? GL_INT : GL_UNSIGNED_INT;
     } else if (es && red_type == GL_UNSIGNED_NORMALIZED) {
-        GLint bits[4] = {0};
         static const GLenum sizes[4] = {GL_TEXTURE_RED_SIZE, GL_TEXTURE_GREEN_SIZE, GL_TEXTURE_BLUE_SIZE,
                                         GL_TEXTURE_ALPHA_SIZE};
         GLint widest = 0;
         for (int i = 0; i < 4; i++) {
-            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, sizes[i], &bits[i]);
-            widest = bits[i] > widest ? bits[i] : widest;
+            GLint bits = 0;
+            gl.get_tex_level_parameteriv(t->query, 0, sizes[i], &bits);
+            widest = bits > widest ? bits : widest;
         }
-        *format = GL_RGBA;   /* what glReadPixels always takes; exact for 8 bits or fewer */
-        *type = widest <= 8 ? GL_UNSIGNED_BYTE : GL_FLOAT;
+        t->format = GL_RGBA;   /* what glReadPixels always takes; exact for 8 bits or fewer */
+        t->type = widest <= 8 ? GL_UNSIGNED_BYTE : GL_FLOAT;
     } else {
-        *format = GL_RGBA;   /* float32 holds every normalized and float value, rounded back exactly */
-        *type = GL_FLOAT;
+        t->format = GL_RGBA;   /* float32 holds every normalized and float value, rounded back exactly */
+        t->type = GL_FLOAT;
     }
 }
 
@@ -171,7 +198,35 @@ static size_t pixel_bytes(GLenum format, GLenum type)
     return format == GL_DEPTH_COMPONENT ? 4 : 16;
 }
 
-/* A level as OpenGL ES reads it: attached to a framebuffer object of our
+static uint64_t level_bytes(const struct Texture *t, int i)
+{
+    return (uint64_t)t->size[i][0] * (uint64_t)t->size[i][1] * (uint64_t)t->size[i][2] *
+           pixel_bytes(t->format, t->type);
+}
+
+/* The texture bound at the active unit's target, described. */
+static void describe(struct Texture *t, GLenum target)
+{
+    memset(t, 0, sizeof *t);
+    t->target = target;
+    t->query = target == GL_TEXTURE_CUBE_MAP ? GL_TEXTURE_CUBE_MAP_POSITIVE_X : target;
+    gl.get_tex_level_parameteriv(t->query, 0, GL_TEXTURE_INTERNAL_FORMAT, &t->internal);
+    readback_format(t);
+    for (GLint level = 0; level < MAX_LEVELS; level++) {
+        GLint w = 0, h = 0, d = 0;
+        gl.get_tex_level_parameteriv(t->query, level, GL_TEXTURE_WIDTH, &w);
+        gl.get_tex_level_parameteriv(t->query, level, GL_TEXTURE_HEIGHT, &h);
+        gl.get_tex_level_parameteriv(t->query, level, GL_TEXTURE_DEPTH, &d);
+        if (target == GL_TEXTURE_CUBE_MAP)
+            d = 6;
+        t->size[level][0] = w > 0 ? w : 0;
+        t->size[level][1] = h > 0 ? h : 0;
+        t->size[level][2] = d > 0 ? d : 1;
+        t->levels += w > 0;
+    }
+}
+
+/* A 2D level as OpenGL ES reads it: attached to a framebuffer object of our
  * own, read with glReadPixels; the replay's framebuffer bindings put back.
  * 0 if it cannot be (a depth format, an incomplete attachment). */
 static int read_level_es(GLint level, GLint w, GLint h, GLenum format, GLenum type, void *pixels)
@@ -196,31 +251,30 @@ static int read_level_es(GLint level, GLint w, GLint h, GLenum format, GLenum ty
     return ok;
 }
 
-/* Whether every level asked for can be read in OpenGL ES (checked before
- * the reply starts: a reply is whole or not sent). */
-static int es_readable(void)
+/* One level's pixels into `pixels` (level_bytes of them); 0 if they cannot
+ * be read. */
+static int read_level(const struct Texture *t, GLint level, void *pixels)
 {
-    for (int k = 0; k < want_count; k++) {
-        gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
-        GLint internal = 0;
-        gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_INTERNAL_FORMAT, &internal);
-        GLenum format, type;
-        readback_format(internal, &format, &type);
-        for (GLint level = 0; level < MAX_LEVELS; level++) {
-            GLint w = 0, h = 0;
-            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_WIDTH, &w);
-            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_HEIGHT, &h);
-            if (w <= 0)
-                continue;
-            void *pixels = calloc((size_t)w * (size_t)(h > 0 ? h : 1) * pixel_bytes(format, type), 1);
-            int ok = pixels && read_level_es(level, w, h, format, type, pixels);
-            free(pixels);
-            if (!ok)
-                return 0;
-        }
+    const GLint *size = t->size[level];
+    if (es)
+        return t->target == GL_TEXTURE_2D && read_level_es(level, size[0], size[1], t->format, t->type, pixels);
+    if (t->target == GL_TEXTURE_CUBE_MAP) {
+        const size_t face = level_bytes(t, level) / 6;
+        for (GLenum f = 0; f < 6; f++)
+            gl.get_tex_image(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f, level, t->format, t->type, (char *)pixels + f * face);
+    } else {
+        gl.get_tex_image(t->target, level, t->format, t->type, pixels);
     }
     return 1;
 }
+
+/* The sampling parameters sent with a texture (those the context has). */
+static const GLenum parameters[] = {
+    GL_TEXTURE_MIN_FILTER, GL_TEXTURE_MAG_FILTER, GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R,
+    GL_TEXTURE_BASE_LEVEL, GL_TEXTURE_MAX_LEVEL, GL_TEXTURE_MIN_LOD, GL_TEXTURE_MAX_LOD, GL_TEXTURE_LOD_BIAS,
+    GL_TEXTURE_COMPARE_MODE, GL_TEXTURE_COMPARE_FUNC, GL_TEXTURE_SWIZZLE_R, GL_TEXTURE_SWIZZLE_G,
+    GL_TEXTURE_SWIZZLE_B, GL_TEXTURE_SWIZZLE_A, GL_TEXTURE_BORDER_COLOR, GL_DEPTH_STENCIL_TEXTURE_MODE};
+#define NPARAMETERS (sizeof parameters / sizeof parameters[0])
 
 static void answer(void)
 {
@@ -238,67 +292,91 @@ static void answer(void)
     if (pack_buffer)
         gl.bind_buffer(GL_PIXEL_PACK_BUFFER, 0);
 
-    /* Sizes first: a reply is whole or not sent. */
+    /* Every texture described, sized and read before the reply starts: a
+     * reply is whole or not sent. */
+    static struct Texture textures[MAX_UNITS];
+    static void *pixels[MAX_UNITS][MAX_LEVELS];
+    static GLfloat values[MAX_UNITS][NPARAMETERS][4];
+    static int has[MAX_UNITS][NPARAMETERS];
+    const char *why = NULL;
     uint64_t total = 0;
-    for (int k = 0; k < want_count; k++) {
+    for (int k = 0; k < want_count && !why; k++) {
+        if (!known_target(want_targets[k])) {
+            why = "a texture target the readback does not take";
+            break;
+        }
         gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
-        for (GLint level = 0; level < MAX_LEVELS; level++) {
-            GLint w = 0, h = 0;
-            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_WIDTH, &w);
-            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_HEIGHT, &h);
-            total += (uint64_t)(w > 0 ? w : 0) * (uint64_t)(h > 0 ? h : 0) * 16;
+        describe(&textures[k], want_targets[k]);
+        for (int i = 0; i < MAX_LEVELS; i++)
+            total += level_bytes(&textures[k], i);
+        if (es && want_targets[k] != GL_TEXTURE_2D)
+            why = "an OpenGL ES texture other than a 2D one is not read back";
+    }
+    if (!why && total > MAX_REPLY_BYTES)
+        why = "the textures would take more than 1 GiB to read back";
+    for (int k = 0; k < want_count && !why; k++) {
+        gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
+        for (int i = 0; i < MAX_LEVELS && !why; i++) {
+            pixels[k][i] = NULL;
+            if (!textures[k].size[i][0])
+                continue;
+            uint64_t n = level_bytes(&textures[k], i);
+            pixels[k][i] = calloc(n ? n : 1, 1);
+            if (!pixels[k][i])
+                die();
+            if (!read_level(&textures[k], i, pixels[k][i]))
+                why = "an OpenGL ES texture whose image glReadPixels cannot read (a depth format) is not read back";
+        }
+        for (size_t j = 0; j < NPARAMETERS; j++) {
+            while (gl.get_error() != GL_NO_ERROR)
+                ;
+            gl.get_tex_parameterfv(textures[k].target, parameters[j], values[k][j]);
+            has[k][j] = gl.get_error() == GL_NO_ERROR;   /* one the context has not (OpenGL ES's LOD bias) */
         }
     }
-    if (total > MAX_REPLY_BYTES) {
-        refuse("the textures would take more than 1 GiB to read back");
-    } else if (es && !es_readable()) {
-        refuse("an OpenGL ES texture whose image glReadPixels cannot read (a depth format) is not read back");
+    if (why) {
+        refuse(why);
     } else {
         put("RBTX", 4);
         put_u32((uint32_t)want_count);
         for (int k = 0; k < want_count; k++) {
-            gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
-            GLint internal = 0, levels = 0;
-            gl.get_tex_level_parameteriv(GL_TEXTURE_2D, 0, GL_TEXTURE_INTERNAL_FORMAT, &internal);
-            GLenum format, type;
-            readback_format(internal, &format, &type);
-            for (GLint level = 0; level < MAX_LEVELS; level++) {
-                GLint w = 0;
-                gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_WIDTH, &w);
-                levels += w > 0;
-            }
+            const struct Texture *t = &textures[k];
+            uint32_t nparams = 0;
+            for (size_t j = 0; j < NPARAMETERS; j++)
+                nparams += (uint32_t)has[k][j];
             put_u32((uint32_t)want_units[k]);
-            put_u32((uint32_t)internal);
-            put_u32((uint32_t)levels);
-            for (GLint level = 0; level < MAX_LEVELS; level++) {
-                GLint w = 0, h = 0;
-                gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_WIDTH, &w);
-                gl.get_tex_level_parameteriv(GL_TEXTURE_2D, level, GL_TEXTURE_HEIGHT, &h);
-                if (w <= 0)
+            put_u32(t->target);
+            put_u32((uint32_t)t->internal);
+            put_u32(nparams);
+            for (size_t j = 0; j < NPARAMETERS; j++) {
+                if (!has[k][j])
                     continue;
-                if (h < 0)
-                    h = 0;
-                uint64_t n = (uint64_t)w * (uint64_t)h * pixel_bytes(format, type);
-                void *pixels = calloc(n ? n : 1, 1);
-                if (!pixels)
-                    die();
-                if (es)
-                    read_level_es(level, w, h, format, type, pixels);
-                else
-                    gl.get_tex_image(GL_TEXTURE_2D, level, format, type, pixels);
-                put_u32((uint32_t)level);
-                put_u32((uint32_t)w);
-                put_u32((uint32_t)h);
-                put_u32(format);
-                put_u32(type);
+                put_u32(parameters[j]);
+                put(values[k][j], 16);
+            }
+            put_u32((uint32_t)t->levels);
+            for (GLint i = 0; i < MAX_LEVELS; i++) {
+                if (!t->size[i][0])
+                    continue;
+                uint64_t n = level_bytes(t, i);
+                put_u32((uint32_t)i);
+                put_u32((uint32_t)t->size[i][0]);
+                put_u32((uint32_t)t->size[i][1]);
+                put_u32((uint32_t)t->size[i][2]);
+                put_u32(t->format);
+                put_u32(t->type);
                 put(&n, 8);
-                put(pixels, n);
-                free(pixels);
+                put(pixels[k][i], n);
             }
         }
     }
+    for (int k = 0; k < want_count; k++)
+        for (int i = 0; i < MAX_LEVELS; i++) {
+            free(pixels[k][i]);
+            pixels[k][i] = NULL;
+        }
     while (gl.get_error() != GL_NO_ERROR)
-        ;   /* the reads' own errors (none expected) are not the capture's */
+        ;   /* the reads' own errors are not the capture's */
     for (size_t i = first; i < npack; i++)
         gl.pixel_storei(pack[i], saved[i]);
     if (pack_buffer)
@@ -328,6 +406,7 @@ static int open_fifos(void)
         (void (*)(GLenum, GLint, GLenum, GLint *))real_get_proc("glGetTexLevelParameteriv");
     gl.get_tex_image = (void (*)(GLenum, GLint, GLenum, GLenum, void *))real_get_proc("glGetTexImage");
     gl.get_error = (GLenum(*)(void))real_get_proc("glGetError");
+    gl.get_tex_parameterfv = (void (*)(GLenum, GLenum, GLfloat *))real_get_proc("glGetTexParameterfv");
     gl.get_string = (const GLubyte *(*)(GLenum))real_get_proc("glGetString");
     gl.gen_framebuffers = (void (*)(GLsizei, GLuint *))real_get_proc("glGenFramebuffers");
     gl.delete_framebuffers = (void (*)(GLsizei, const GLuint *))real_get_proc("glDeleteFramebuffers");
@@ -336,7 +415,8 @@ static int open_fifos(void)
     gl.check_framebuffer_status = (GLenum(*)(GLenum))real_get_proc("glCheckFramebufferStatus");
     gl.read_pixels = (void (*)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *))real_get_proc("glReadPixels");
     if (!gl.get_integerv || !gl.active_texture || !gl.pixel_storei || !gl.bind_buffer ||
-        !gl.get_tex_level_parameteriv || !gl.get_tex_image || !gl.get_error || !gl.get_string ||
+        !gl.get_tex_level_parameteriv || !gl.get_tex_image || !gl.get_tex_parameterfv || !gl.get_error ||
+        !gl.get_string ||
         !gl.gen_framebuffers || !gl.delete_framebuffers || !gl.bind_framebuffer || !gl.framebuffer_texture_2d ||
         !gl.check_framebuffer_status || !gl.read_pixels)
         die();

@@ -15,7 +15,9 @@
  * -0.5) (0.25, -0.5, -0.5) (0.25, 0.5, -0.5), in front of every box, object
  * 9), rendered (the same triangle and vertex shader, its 2x2 texture
  * rendered instead by a draw into a framebuffer object whose fragment shader
- * writes texel (0, 0)'s value everywhere: the same fragments).
+ * writes texel (0, 0)'s value everywhere: the same fragments), cube (the
+ * same triangle moved by a texel of a cube map, every face that texel), array
+ * (the same, by layer 1 of a 2D array texture whose layer 0 is another).
  *
  * One program: a std140 uniform block Matrices {proj, view} at binding 2, a
  * uniform mat4 model, the position attribute bound with glBindAttribLocation
@@ -74,6 +76,16 @@ static const char* texture_source =
     "uniform sampler2D heights;\n"
     "in vec3 position;\n"
     "void main() { gl_Position = vec4(position, 1.0) + textureLod(heights, position.xy, 0.0); }\n";
+static const char* cube_source =
+    "#version 330 core\n"
+    "uniform samplerCube heights;\n"
+    "in vec3 position;\n"
+    "void main() { gl_Position = vec4(position, 1.0) + textureLod(heights, vec3(1.0, 0.2, -0.3), 0.0); }\n";
+static const char* array_source =
+    "#version 330 core\n"
+    "uniform sampler2DArray heights;\n"
+    "in vec3 position;\n"
+    "void main() { gl_Position = vec4(position, 1.0) + textureLod(heights, vec3(position.xy, 1.0), 0.0); }\n";
 /* The "rendered" fault's fill: one triangle over the whole 2x2 target from
  * the cube's vertices 4 to 6, (0,0) (1,0) (1,1) to clip (-1,-1) (3,-1)
  * (-1,3), every texel the "texture" fault's texel (0, 0). */
@@ -152,6 +164,30 @@ static void inject_fault(GLuint main_program) {
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
         glAttachShader(p, compile(GL_VERTEX_SHADER, texture_source));
+    } else if (!strcmp(fault, "cube") || !strcmp(fault, "array")) {
+        static const float texel[4] = {-0.75f, -0.5f, -1.5f, 0}, other[4] = {9, 9, 9, 0};
+        const int cube = !strcmp(fault, "cube");
+        const GLenum target = cube ? GL_TEXTURE_CUBE_MAP : GL_TEXTURE_2D_ARRAY;
+        GLuint tex;
+        glActiveTexture(GL_TEXTURE2);
+        glGenTextures(1, &tex);
+        glBindTexture(target, tex);
+        if (cube) {
+            for (GLenum face = 0; face < 6; ++face)
+                glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGBA32F, 1, 1, 0, GL_RGBA, GL_FLOAT, texel);
+        } else {
+            float layers[2][2][2][4];   /* layer 0: another texel everywhere; layer 1: the texel */
+            for (int y = 0; y < 2; ++y)
+                for (int x = 0; x < 2; ++x) {
+                    memcpy(layers[0][y][x], other, sizeof other);
+                    memcpy(layers[1][y][x], texel, sizeof texel);
+                }
+            glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA32F, 2, 2, 2, 0, GL_RGBA, GL_FLOAT, layers);
+        }
+        glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(target, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glActiveTexture(GL_TEXTURE0);
+        glAttachShader(p, compile(GL_VERTEX_SHADER, cube ? cube_source : array_source));
     } else if (!strcmp(fault, "texture")) {
         static const float texels[2][2][4] = {{{-0.75f, -0.5f, -1.5f, 0}, {9, 9, 9, 0}}, {{-9, -9, 9, 0}, {5, 5, 5, 0}}};
         GLuint tex;
@@ -172,7 +208,8 @@ static void inject_fault(GLuint main_program) {
     glBindAttribLocation(p, 0, "position");
     glLinkProgram(p);
     glUseProgram(p);
-    const int textured = !strcmp(fault, "texture") || !strcmp(fault, "rendered");
+    const int textured = !strcmp(fault, "texture") || !strcmp(fault, "rendered") || !strcmp(fault, "cube") ||
+                         !strcmp(fault, "array");
     if (textured) {
         glUniform1i(glGetUniformLocation(p, "heights"), 2);
         begin_object(9);

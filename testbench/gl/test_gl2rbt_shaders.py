@@ -183,15 +183,16 @@ def test_refusals(gl, fault, words):
     assert not [f for f in os.listdir(gl.tmp) if f.startswith(".")], f"{fault}: a temporary was left"
 
 
-@pytest.mark.parametrize("fault", ["texture", "rendered"])
+@pytest.mark.parametrize("fault", ["texture", "rendered", "cube", "array"])
 def test_a_vertex_shader_reading_an_uploaded_or_a_rendered_texture(gl, fault):
     """The fault "texture": a vertex shader moves a triangle by a texel of
     a texture uploaded with glTexImage2D, in front of every box: Mesa runs
     it on the capture's image (the check agrees), and the reduced capture
-    carries the image and gives the same bytes. The fault "rendered": the
-    same, its texture rendered by a draw into a framebuffer object (read
-    back from Mesa's replay of the capture; it had been refused): the same
-    fragments."""
+    carries the image and gives the same bytes. The faults "rendered" (its
+    texture rendered by a draw into a framebuffer object), "cube" (a cube
+    map's texel) and "array" (layer 1 of a 2D array texture): the same
+    fragments, the textures read back from Mesa's replay of the capture
+    (they had been refused)."""
     cap = capture_path(f"shader-fault-{fault}")
     r = gl(cap, "--check-depth")
     assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"

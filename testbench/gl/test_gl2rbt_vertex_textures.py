@@ -392,3 +392,23 @@ def test_a_carried_unpack_state_gl_cannot_hold_is_refused(tmp_path):
     r.calls = [(no, fn, args + ([("rbcd-vertex-textures", [(3, made)])] if fn == "glDrawArrays" else []), ret, fl)
                for no, fn, args, ret, fl in c.calls]
     refused(gl2rbt(tmp_path, r.write(tmp_path / "a.xz"), "-o", tmp_path / "a.rbt"), "an unpack state GL cannot hold")
+
+
+@pytest.mark.parametrize("sampler, fetch, words", [
+    ("sampler2DMS", "texelFetch(heights, ivec2(1, 0), 0)",
+     ("program 2", "heights (GL_SAMPLER_2D_MULTISAMPLE)", "not emulated")),
+    ("samplerCube", "textureLod(heights, vec3(1.0, 0.0, 0.0), 0.0)",
+     ("glDrawArrays", "GL_TEXTURE_CUBE_MAP", "a reduced capture carries only the images")),
+], ids=["multisample", "cube_in_a_reduced_capture"])
+def test_textures_of_other_targets_refused(tmp_path, sampler, fetch, words):
+    """A multisample texture read by a vertex shader is refused naming it;
+    a cube map is read back from Mesa's replay of a capture
+    (test_gl2rbt_shaders' "cube" fault), which a reduced capture that does
+    not carry it cannot give: refused naming the draw, nothing left."""
+    vs = VS_TEXEL.replace("sampler2D", sampler) % fetch
+    c = shader_calls(vs)
+    c.add("glActiveTexture", texture="GL_TEXTURE0")
+    c.add("glGenTextures", n=1, textures=[3]).add("glBindTexture", target="GL_TEXTURE_CUBE_MAP", texture=3)
+    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt")
+    refused(r, *words)
+    assert left_behind(tmp_path, ["x.xz"]) == []

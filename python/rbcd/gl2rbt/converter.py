@@ -7,7 +7,7 @@ from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
 from .gl_tables import (CALL_FLAG_END_FRAME, COMPAT_ONLY, COMPAT_ONLY_FORMS, END_FRAME_CALLS, IGNORED_PREFIXES,
-                        ES_ONLY_FORMS, MESA_NO_OPS, TEXTURE_IGNORED, base_name)
+                        ES_ONLY_FORMS, MESA_NO_OPS, TEXTURE_CHANGING, TEXTURE_IGNORED, base_name)
 from .glstate import GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
@@ -244,7 +244,11 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         elif base.startswith("glVertex") and not base.startswith("glVertexAttrib"):
             fail_call(no, f"{printable(name)} outside glBegin/glEnd")
         elif base.startswith(IGNORED_PREFIXES) and not (base.startswith("glTexture") and base not in TEXTURE_IGNORED):
-            pass   # (an unhandled glTexture* call, direct state access on a texture, may make a 2D one's image)
+            # (an unhandled glTexture* call, direct state access on a texture,
+            # may make a 2D one's image). One that may change a texture the
+            # converter keeps no calls for has it read back again.
+            if base.startswith(TEXTURE_CHANGING):
+                self.gpu_wrote()
         else:
             fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
         if flags & CALL_FLAG_END_FRAME:

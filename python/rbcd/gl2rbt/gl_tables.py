@@ -66,6 +66,12 @@ TEXTURE_IGNORED = {"glTextureBarrier", "glTextureStorage1D", "glTextureStorage3D
                    "glTextureSubImage3D", "glTextureStorage3DMultisample", "glTextureImage1D", "glTextureImage3D",
                    "glTextureSubImage1D", "glTextureSubImage3D", "glCompressedTextureSubImage1D",
                    "glCompressedTextureSubImage3D"}
+# Passed-over calls that may change a texture's image or sampling (one of a
+# target other than 2D: read back from Mesa's replay when a vertex shader
+# reads it, again after such a call).
+TEXTURE_CHANGING = ("glTexImage", "glTexSubImage", "glTexStorage", "glTexParameter", "glCompressedTex", "glCopyTex",
+                    "glGenerateMipmap", "glTexture", "glGenerateTextureMipmap", "glCompressedTexture",
+                    "glCopyTexture", "glTexBuffer")
 # The compatibility profile's calls (by base name): in a core profile they
 # are GL_INVALID_OPERATION in Mesa and change nothing.
 COMPAT_ONLY = {

@@ -45,6 +45,35 @@ READBACK = {(0x1902, 0x1405): ("GL_DEPTH_COMPONENT", "GL_UNSIGNED_INT", 4),
             (0x8D99, 0x1405): ("GL_RGBA_INTEGER", "GL_UNSIGNED_INT", 16)}
 
 
+# The targets a texture is read back at (their GL numbers).
+TARGETS = {"GL_TEXTURE_2D": 0x0DE1, "GL_TEXTURE_3D": 0x806F, "GL_TEXTURE_2D_ARRAY": 0x8C1A,
+           "GL_TEXTURE_CUBE_MAP": 0x8513, "GL_TEXTURE_CUBE_MAP_ARRAY": 0x9009, "GL_TEXTURE_1D": 0x0DE0,
+           "GL_TEXTURE_1D_ARRAY": 0x8C18, "GL_TEXTURE_RECTANGLE": 0x84F5}
+CUBE_FACES = ("GL_TEXTURE_CUBE_MAP_POSITIVE_X", "GL_TEXTURE_CUBE_MAP_NEGATIVE_X", "GL_TEXTURE_CUBE_MAP_POSITIVE_Y",
+              "GL_TEXTURE_CUBE_MAP_NEGATIVE_Y", "GL_TEXTURE_CUBE_MAP_POSITIVE_Z", "GL_TEXTURE_CUBE_MAP_NEGATIVE_Z")
+
+
+def image_calls(no, target, internal, levels, es):
+    """The calls that give the converter's Mesa context a texture's levels
+    read back: (call, name, arguments) each, by target (a cube map's faces
+    one by one)."""
+    calls = []
+    for level, w, h, d, fmt, kind, pixels in levels:
+        base = dict(level=level, internalformat=upload_format(internal, fmt, kind, es), width=w, border=0,
+                    format=fmt, type=kind)
+        if target == "GL_TEXTURE_1D":
+            calls.append((no, "glTexImage1D", dict(base, target=target, pixels=pixels)))
+        elif target in ("GL_TEXTURE_3D", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY"):
+            calls.append((no, "glTexImage3D", dict(base, target=target, height=h, depth=d, pixels=pixels)))
+        elif target == "GL_TEXTURE_CUBE_MAP":
+            face = len(pixels) // 6
+            calls += [(no, "glTexImage2D", dict(base, target=f, height=h, pixels=pixels[i * face:(i + 1) * face]))
+                      for i, f in enumerate(CUBE_FACES)]
+        else:   # 2D, rectangle, 1D array (its layers as rows)
+            calls.append((no, "glTexImage2D", dict(base, target=target, height=h, pixels=pixels)))
+    return calls
+
+
 HALF_FLOAT_FORMATS = {"GL_RGBA16F", "GL_RGB16F", "GL_RG16F", "GL_R16F", "GL_R11F_G11F_B10F", "GL_RGB9_E5"}
 ES_FALLBACK = {("GL_RGBA", "GL_UNSIGNED_BYTE"): "GL_RGBA8", ("GL_RGBA_INTEGER", "GL_INT"): "GL_RGBA32I",
                ("GL_RGBA_INTEGER", "GL_UNSIGNED_INT"): "GL_RGBA32UI"}
@@ -110,13 +139,14 @@ class RenderedTextures:
                                      start_new_session=True)
 
     def read(self, no, name, units):
-        """The textures bound at `units` just before call `no` (a draw
-        `name`), as Mesa's replay has them: {unit: (internal format,
-        [(level, width, height, format, type, pixels)])}."""
+        """The textures bound at `units` [(unit, target name)] just before
+        call `no` (a draw `name`), as Mesa's replay has them: {(unit,
+        target): (internal format, [(parameter, [4 values])], [(level,
+        width, height, depth, format, type, pixels)])}."""
         self.what = f"call {no}: {printable(name)}"
         if self.proc is None:
             self.start()
-        os.write(self.requests, (f"{no} " + " ".join(str(u) for u in units) + "\n").encode())
+        os.write(self.requests, (f"{no} " + " ".join(f"{u}:{TARGETS[t]}" for u, t in units) + "\n").encode())
         deadline = time.monotonic() + self.timeout
         magic = self.take(4, no, deadline)
         if magic == b"RBTE":
@@ -128,18 +158,27 @@ class RenderedTextures:
                                "vertex shader reads")
         count, = struct.unpack("<I", self.take(4, no, deadline))
         out, total = {}, 0
-        for _ in range(count):
-            unit, internal, nlevels = struct.unpack("<IiI", self.take(12, no, deadline))
+        names = {v: k for k, v in TARGETS.items()}
+        for _ in range(min(count, len(units))):
+            unit, target, internal, nparams = struct.unpack("<IIiI", self.take(16, no, deadline))
+            params = []
+            for _ in range(min(nparams, 32)):
+                pname, *values = struct.unpack("<I4f", self.take(20, no, deadline))
+                params.append((pname, values))
+            nlevels, = struct.unpack("<I", self.take(4, no, deadline))
             levels = []
             for _ in range(min(nlevels, 15)):
-                level, w, h, fmt, kind, n = struct.unpack("<5IQ", self.take(28, no, deadline))
+                level, w, h, d, fmt, kind, n = struct.unpack("<6IQ", self.take(32, no, deadline))
                 fmt, kind, px = READBACK.get((fmt, kind), (None, None, 0))
                 total += n
-                if not (px and level < 15 and w <= 16384 and h <= 16384 and n == w * h * px
+                if not (px and level < 15 and w <= 16384 and h <= 16384 and d <= 16384 and n == w * h * d * px
                         and total <= MAX_REPLY_BYTES):
-                    raise ConvertError(f"{self.what}: Mesa's replay read back a level of {w} x {h} in {n} bytes")
-                levels.append((level, w, h, fmt, kind, self.take(n, no, deadline)))
-            out[unit] = (internal, levels)
+                    raise ConvertError(f"{self.what}: Mesa's replay read back a level of {w} x {h} x {d} in {n} "
+                                       "bytes")
+                levels.append((level, w, h, d, fmt, kind, self.take(n, no, deadline)))
+            if target not in names:
+                raise ConvertError(f"{self.what}: Mesa's replay read back a texture of target {target}")
+            out[(unit, names[target])] = (internal, params, levels)
         return out
 
     def take(self, n, no, deadline):

@@ -21,7 +21,7 @@ from .glstate.attributes import element_bytes
 from .glstate.buffers import merge_extents
 from .glstate.programs import COMMENTS
 from .mesa import Mesa, Watchdog
-from .vertex_textures import TEXTURE_2D_SAMPLERS, VertexTextures
+from .vertex_textures import SAMPLER_TARGETS, VertexTextures
 
 # Sampler types a vertex shader may read: texture buffers, whose contents
 # are buffer objects, and 2D textures (vertex_textures.py). Other textures'
@@ -147,7 +147,7 @@ class MesaProgram:
         self.name, self.version = name, version
         self.locations = {}   # active uniform name (and name[i]) -> Mesa location
         self.applied = {}     # Program.uniforms key -> the value last given Mesa
-        self.texture_2d_locations = []   # Mesa locations of its 2D samplers (each element of an array)
+        self.texture_locations = []   # Mesa locations of its samplers (each element of an array), with targets
 
 
 class VertexStage:
@@ -166,11 +166,12 @@ class VertexStage:
         self.no = None       # the draw call being run, for messages
         GL = self.gl
         # Mesa's values of the sampler types that are neither texture
-        # buffers nor 2D textures.
+        # buffers nor of the targets vertex_textures gives (multisample
+        # textures), and of those it gives, with their targets.
         self.texture_samplers = {int(getattr(GL, n)): n for n in dir(GL)
-                                 if SAMPLER.match(n) and n not in BUFFER_SAMPLERS | TEXTURE_2D_SAMPLERS
+                                 if SAMPLER.match(n) and n not in BUFFER_SAMPLERS | set(SAMPLER_TARGETS)
                                  and isinstance(getattr(GL, n), int)}
-        self.texture_2d_samplers = {int(getattr(GL, n)) for n in TEXTURE_2D_SAMPLERS}
+        self.sampler_targets = {int(getattr(GL, n)): t for n, t in SAMPLER_TARGETS.items() if hasattr(GL, n)}
 
     # ---- objects
     def forget_objects(self):
@@ -371,16 +372,17 @@ class VertexStage:
                           "the compatibility profile: not emulated")
             if int(utype) in self.texture_samplers:
                 fail_call(no, f"{where}: its vertex shader reads texture {printable(uname)} "
-                          f"({self.texture_samplers[int(utype)]}); only texture buffers and 2D textures are "
-                          "emulated")
+                          f"({self.texture_samplers[int(utype)]}); multisample textures are not emulated")
             base = uname[:-3] if uname.endswith("[0]") else uname
             loc = GL.glGetUniformLocation(prog, uname)
             mp.locations[uname] = loc
             mp.locations[base] = loc
             for k in range(1, size):
                 mp.locations[f"{base}[{k}]"] = GL.glGetUniformLocation(prog, f"{base}[{k}]")
-            if int(utype) in self.texture_2d_samplers:
-                mp.texture_2d_locations += [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]
+            if int(utype) in self.sampler_targets:
+                target = self.sampler_targets[int(utype)]
+                mp.texture_locations += [(loc, target)] + [(mp.locations[f"{base}[{k}]"], target)
+                                                           for k in range(1, size)]
         return mp
 
     def set_uniform(self, mp, p, loc, value):

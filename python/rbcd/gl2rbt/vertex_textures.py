@@ -15,8 +15,8 @@ import numpy as np
 from ..cli import I32, U32, integer
 from .errors import checked, fail_call, printable
 from .glstate.texture_formats import FORMAT_COMPONENTS, PACKED_BYTES, TYPE_BYTES
-from .glstate.textures import (LEVEL_CALLS, PARAMETER_CALLS, SAMPLER_PARAMETER_CALLS, UNPACK_PARAMETERS,
-                               VERTEX_TEXTURE_TARGET)
+from .glstate.textures import (LEVEL_CALLS, PARAMETER_CALLS, READ_BACK_CALLS, SAMPLER_PARAMETER_CALLS,
+                               UNPACK_PARAMETERS, VERTEX_TEXTURE_TARGET)
 
 # The images Mesa holds for vertex shaders, in all, counted at 16 bytes a
 # texel (the widest format), a third more for a mipmapped storage: Mesa
@@ -26,10 +26,20 @@ GL_DEPTH_TEXTURE_MODE = 0x884B   # the compatibility profile's
 ANISOTROPY = ("GL_TEXTURE_MAX_ANISOTROPY", "GL_TEXTURE_MAX_ANISOTROPY_EXT", 0x84FE)
 # Sampler types of the 2D textures a vertex shader may read.
 TEXTURE_2D_SAMPLERS = {"GL_SAMPLER_2D", "GL_INT_SAMPLER_2D", "GL_UNSIGNED_INT_SAMPLER_2D", "GL_SAMPLER_2D_SHADOW"}
+# Every sampler type a vertex shader may read, with its texture's target
+# (those of other targets than 2D read back from Mesa's replay).
+SAMPLER_TARGETS = {f"GL_{kind}SAMPLER_{shape}{shadow}": f"GL_TEXTURE_{target}"
+                   for shape, target in (("2D", "2D"), ("1D", "1D"), ("3D", "3D"), ("CUBE", "CUBE_MAP"),
+                                         ("1D_ARRAY", "1D_ARRAY"), ("2D_ARRAY", "2D_ARRAY"),
+                                         ("2D_RECT", "RECTANGLE"), ("CUBE_MAP_ARRAY", "CUBE_MAP_ARRAY"))
+                   for kind, shadow in (("", ""), ("INT_", ""), ("UNSIGNED_INT_", ""), ("", "_SHADOW"))
+                   if not (shadow and shape == "3D")}
 u, i, e, f, sz, p = ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_float, ctypes.c_int, ctypes.c_void_p
 # Entry points and their C arguments after the target (or sampler).
 ENTRY_POINTS = {
     "glTexImage2D": (e, i, i, sz, sz, i, e, e, p),
+    "glTexImage1D": (e, i, i, sz, i, e, e, p),
+    "glTexImage3D": (e, i, i, sz, sz, sz, i, e, e, p),
     "glTexSubImage2D": (e, i, i, i, sz, sz, e, e, p),
     "glTexStorage2D": (e, sz, e, sz, sz),
     "glCompressedTexImage2D": (e, i, e, sz, sz, i, sz, p),
@@ -43,6 +53,9 @@ ENTRY_POINTS = {
                             "glSamplerParameterIuiv")}
 ARGUMENTS = {
     "glTexImage2D": ("target", "level", "internalformat", "width", "height", "border", "format", "type", "pixels"),
+    "glTexImage1D": ("target", "level", "internalformat", "width", "border", "format", "type", "pixels"),
+    "glTexImage3D": ("target", "level", "internalformat", "width", "height", "depth", "border", "format", "type",
+                     "pixels"),
     "glTexSubImage2D": ("target", "level", "xoffset", "yoffset", "width", "height", "format", "type", "pixels"),
     "glTexStorage2D": ("target", "levels", "internalformat", "width", "height"),
     "glCompressedTexImage2D": ("target", "level", "internalformat", "width", "height", "border", "imageSize",
@@ -58,11 +71,12 @@ ENUM_ARGUMENTS = {"target", "internalformat", "format", "type", "pname"}
 
 
 def pixel_bytes(no, what, d, unpack):
-    """The bytes GL reads for a glTexImage2D's or glTexSubImage2D's pixels
-    (`what` names the call in messages)."""
+    """The bytes GL reads for a glTexImage{1,2,3}D's or glTexSubImage2D's
+    pixels (`what` names the call in messages)."""
     w = checked(no, integer, d.get("width"), f"{what}: the width", *I32)
-    h = checked(no, integer, d.get("height"), f"{what}: the height", *I32)
-    if w <= 0 or h <= 0:
+    h = checked(no, integer, d.get("height", 1), f"{what}: the height", *I32)
+    depth = checked(no, integer, d.get("depth", 1), f"{what}: the depth", *I32)
+    if w <= 0 or h <= 0 or depth <= 0:
         return 0
     fmt, kind = d.get("format"), d.get("type")
     if kind in PACKED_BYTES and fmt in FORMAT_COMPONENTS:
@@ -78,8 +92,10 @@ def pixel_bytes(no, what, d, unpack):
     stride = row_length * group
     if elem < align:
         stride = -(-stride // align) * align
-    return state["GL_UNPACK_SKIP_ROWS"] * stride + state["GL_UNPACK_SKIP_PIXELS"] * group + (h - 1) * stride \
-        + w * group
+    image = (state["GL_UNPACK_IMAGE_HEIGHT"] or h) * stride   # (3D calls alone read the image parameters)
+    skip_images = state["GL_UNPACK_SKIP_IMAGES"] if "depth" in d else 0
+    return (skip_images + depth - 1) * image + state["GL_UNPACK_SKIP_ROWS"] * stride \
+        + state["GL_UNPACK_SKIP_PIXELS"] * group + (h - 1) * stride + w * group
 
 
 class VertexTextures:
@@ -108,66 +124,75 @@ class VertexTextures:
         self.images, self.samplers = {}, {}
 
     def bind(self, conv, no, name, mp):
-        """Binds, at every unit the program's 2D samplers name, the
-        capture's texture there and its sampler object; a texture the GPU
-        renders is read back from Mesa's replay (conv.rendered_textures);
-        each texture read is noted for the reduced capture
+        """Binds, at every unit the program's samplers name, the capture's
+        texture there and its sampler object: a 2D texture from the calls
+        that made it, one the GPU renders or of another target read back
+        from Mesa's replay (conv.rendered_textures; a reduced capture
+        carries those); each texture read is noted for the reduced capture
         (conv.vertex_texture_read)."""
         GL = self.gl
         self.no, self.draw = no, name
         self.core = conv.core and not conv.es
         unit_of = np.zeros(1, np.int32)
-        reads = []
-        for loc in mp.texture_2d_locations:
+        reads, ask = [], []
+        for loc, target in mp.texture_locations:
             GL.glGetUniformiv(mp.name, loc, unit_of)
             unit = int(unit_of[0])
-            tex = conv.s.units.get((unit, VERTEX_TEXTURE_TARGET), 0)
+            tex = conv.s.units.get((unit, target), 0)
             tc = conv.s.texture_calls.get(tex)
-            if tc is not None and tc.refused is not None:
-                fail_call(no, f"{name}: its vertex shader reads texture {tex} (unit {unit}), whose image the converter "
-                          f"cannot give Mesa: call {tc.refused[0]}: {printable(tc.refused[1])}")
-            reads.append((unit, tex, tc))
-        rendered = conv.rendered_textures(no, name, [r for r in reads if r[2] is not None and r[2].rendered])
-        for unit, tex, tc in reads:
-            tc = rendered.get(tex, tc)
-            mt = self.image(tex, tc)   # (made on unit 0)
+            if target == VERTEX_TEXTURE_TARGET:
+                if tc is not None and tc.refused is not None:
+                    fail_call(no, f"{name}: its vertex shader reads texture {tex} (unit {unit}), whose image the "
+                              f"converter cannot give Mesa: call {tc.refused[0]}: {printable(tc.refused[1])}")
+                if tc is not None and tc.rendered:
+                    ask.append((unit, tex, tc, target))
+            elif tex and not (conv.reads_reduced and tc is not None):
+                # No calls are kept for other targets: Mesa's replay gives
+                # the texture (a reduced capture carries what it gave); the
+                # default texture, 0, has no image.
+                ask.append((unit, tex, None, target))
+            reads.append((unit, tex, tc if target == VERTEX_TEXTURE_TARGET or conv.reads_reduced else None, target))
+        got = conv.rendered_textures(no, name, ask) if ask else {}
+        for unit, tex, tc, target in reads:
+            tc = got.get((tex, target), tc)
+            mt = self.image(tex, tc, target)   # (made on unit 0)
             sampler = conv.s.sampler_units.get(unit, 0)
             ms = self.sampler(sampler, conv.s.samplers.get(sampler, {})) if sampler else 0
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-            GL.glBindTexture(GL.GL_TEXTURE_2D, mt)
+            GL.glBindTexture(self.mesa.enum(target), mt)
             GL.glBindSampler(unit, ms)
             conv.vertex_texture_read(tex, tc)
         GL.glActiveTexture(GL.GL_TEXTURE0)
 
-    def image(self, tex, tc):
+    def image(self, tex, tc, target=VERTEX_TEXTURE_TARGET):
         GL = self.gl
         version = tc.version if tc is not None else 0
-        entry = self.images.get(tex)
+        entry = self.images.get((tex, target))
         if entry is not None and entry[1] == version:
             return entry[0]
         if entry is not None:
             GL.glDeleteTextures(1, [entry[0]])
             self.image_bytes -= entry[2]
-            del self.images[tex]
+            del self.images[(tex, target)]
         size = 0
         for _, name, d, _ in (tc.calls.values() if tc is not None else []):
-            if name in LEVEL_CALLS + ("glTexStorage2D",):
-                w, h = d.get("width"), d.get("height")
-                if isinstance(w, int) and isinstance(h, int) and w > 0 and h > 0:
-                    size += w * h * 16 * (4 if name == "glTexStorage2D" else 3) // 3
+            if name in LEVEL_CALLS + READ_BACK_CALLS + ("glTexStorage2D",):
+                w, h, depth = d.get("width"), d.get("height", 1), d.get("depth", 1)
+                if all(isinstance(v, int) and v > 0 for v in (w, h, depth)):
+                    size += w * h * depth * 16 * (4 if name == "glTexStorage2D" else 3) // 3
         if self.image_bytes + size > MAX_MESA_TEXTURE_BYTES:
             fail_call(self.no, f"{self.draw}: texture {tex}, which its vertex shader reads: the textures given to "
                       f"Mesa would take more than {MAX_MESA_TEXTURE_BYTES >> 30} GiB (docs/gl-capture.md, limits)")
         self.image_bytes += size
         mt = int(GL.glGenTextures(1))
-        self.images[tex] = (mt, version, size)
+        self.images[(tex, target)] = (mt, version, size)
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        GL.glBindTexture(GL.GL_TEXTURE_2D, mt)
+        GL.glBindTexture(self.mesa.enum(target), mt)
         if self.core:
             # Mesa's context is of the compatibility profile, whose depth
             # textures read as luminance (d, d, d, 1); a core profile's read
             # as red (d, 0, 0, 1).
-            self.call("glTexParameteri", GL.GL_TEXTURE_2D, GL_DEPTH_TEXTURE_MODE, GL.GL_RED)
+            self.call("glTexParameteri", self.mesa.enum(target), GL_DEPTH_TEXTURE_MODE, GL.GL_RED)
         for call_no, name, d, unpack in (tc.calls.values() if tc is not None else []):
             self.replay(f"{self.draw}: texture {tex}, which its vertex shader reads: {name} (call {call_no})", name,
                         d, unpack)

@@ -47,6 +47,9 @@ PART_CALLS = ("glTexSubImage2D", "glCompressedTexSubImage2D")
 PARAMETER_CALLS = ("glTexParameteri", "glTexParameterf", "glTexParameteriv", "glTexParameterfv",
                    "glTexParameterIiv", "glTexParameterIuiv")
 KEPT_CALLS = LEVEL_CALLS + PART_CALLS + PARAMETER_CALLS + ("glTexStorage2D", "glGenerateMipmap")
+# And those that give a texture read back from Mesa's replay of another
+# target (rendered_textures.image_calls), which a reduced capture carries.
+READ_BACK_CALLS = ("glTexImage1D", "glTexImage3D")
 SAMPLER_PARAMETER_CALLS = ("glSamplerParameteri", "glSamplerParameterf", "glSamplerParameteriv",
                            "glSamplerParameterfv", "glSamplerParameterIiv", "glSamplerParameterIuiv")
 
@@ -206,6 +209,7 @@ class TextureImageCalls:
         """An image or parameter call on the bound 2D texture, kept (the
         pixels too) with the calls it does not replace."""
         if d.get("target") != VERTEX_TEXTURE_TARGET:
+            self.gpu_wrote()   # a texture of another target changed: read back again (rendered_textures)
             return
         tex = self.bound_texture(VERTEX_TEXTURE_TARGET)
         if self.core and compat_only(d):
@@ -251,52 +255,50 @@ class TextureImageCalls:
         self.s.gpu_writes += 1
 
     def rendered_textures(self, no, name, reads):
-        """The textures of `reads` [(unit, texture, TextureCalls)] that the
-        GPU renders, each as TextureCalls that make the image Mesa's replay
-        has at call `no` (glTexImage2D of each level read back, then the
-        texture's parameter calls): {texture: TextureCalls}, read again only
-        when the GPU may have written since."""
+        """The textures of `reads` [(unit, texture, TextureCalls or None,
+        target)] that Mesa's replay gives: 2D ones the GPU renders, and
+        every texture of another target (the converter keeps no calls for
+        those). Each as TextureCalls that make the image and sampling
+        parameters the replay has at call `no` (rendered_textures.py):
+        {(texture, target): TextureCalls}, read again only when the GPU or a
+        texture call may have changed them since."""
         out, ask = {}, []
-        for unit, tex, tc in reads:
-            version = ("rendered", self.s.gpu_writes, tc.version)
-            cached = self.s.rendered_images.get(tex)
+        for unit, tex, tc, target in reads:
+            version = ("read back", self.s.gpu_writes, tc.version if tc is not None else 0)
+            cached = self.s.rendered_images.get((tex, target))
             if cached is not None and cached.version == version:
-                out[tex] = cached
+                out[(tex, target)] = cached
             else:
-                ask.append((unit, tex, tc, version))
+                ask.append((unit, tex, tc, target, version))
         if not ask:
             return out
+        unit, tex, tc, target, _ = ask[0]
+        what = f"texture {tex} (unit {unit}), which the GPU renders (call {tc.rendered[0]}: " \
+               f"{printable(tc.rendered[1])})" if tc is not None else f"texture {tex} ({target}, unit {unit})"
         if self.reads_reduced:
-            unit, tex, tc, _ = ask[0]
-            fail_call(no, f"{name}: its vertex shader reads texture {tex} (unit {unit}), which the GPU renders "
-                      f"(call {tc.rendered[0]}: {printable(tc.rendered[1])}): a reduced capture carries only the "
-                      "images a conversion of the capture read back (with the draws that read them)")
-        from ..rendered_textures import RenderedTextures, upload_format
+            fail_call(no, f"{name}: its vertex shader reads {what}: a reduced capture carries only the images a "
+                      "conversion of the capture read back (with the draws that read them)")
+        from ..rendered_textures import RenderedTextures, image_calls
         if self.replay is None:
             from ..raster import raster_program
             try:
                 self.replay = RenderedTextures(self.args.trace, raster_program(),
                                                getattr(self.args, "check_timeout", 600))
             except ToolError as e:   # a tool missing: said with the draw that needs it
-                unit, tex, _, _ = ask[0]
-                raise ToolError(f"call {no}: {printable(name)}: its vertex shader reads texture {tex} (unit {unit}), "
-                                f"which the GPU renders: {e}")
-        images = self.replay.read(no, name, [unit for unit, _, _, _ in ask])
-        alignment_1 = tuple(1 if p == "GL_UNPACK_ALIGNMENT" else 0 for p in UNPACK_PARAMETERS)
-        for unit, tex, tc, version in ask:
-            internal, levels = images.get(unit, (0, []))
+                raise ToolError(f"call {no}: {printable(name)}: its vertex shader reads {what}: {e}")
+        images = self.replay.read(no, name, [(unit, target) for unit, _, _, target, _ in ask])
+        unpack = tuple(1 if p == "GL_UNPACK_ALIGNMENT" else 0 for p in UNPACK_PARAMETERS)
+        for unit, tex, tc, target, version in ask:
+            internal, params, levels = images.get((unit, target), (0, [], []))
             rt = TextureCalls()
-            for level, w, h, fmt, kind, pixels in levels:   # (format and type by name: vertex_textures checks them)
+            for call in image_calls(no, target, internal, levels, self.es):
                 rt.seq += 1
-                rt.calls[rt.seq] = (no, "glTexImage2D", dict(
-                    target=VERTEX_TEXTURE_TARGET, level=level, internalformat=upload_format(internal, fmt, kind, self.es),
-                    width=w, height=h, border=0, format=fmt, type=kind, pixels=pixels), alignment_1)
-            for call in tc.calls.values():
-                if call[1] in PARAMETER_CALLS:
-                    rt.seq += 1
-                    rt.calls[rt.seq] = call
+                rt.calls[rt.seq] = call + (unpack,)
+            for pname, values in params:
+                rt.seq += 1
+                rt.calls[rt.seq] = (no, "glTexParameterfv", dict(target=target, pname=pname, params=values), unpack)
             rt.version = version
-            self.s.rendered_images[tex] = out[tex] = rt
+            self.s.rendered_images[(tex, target)] = out[(tex, target)] = rt
         return out
 
     def close_replay(self):
@@ -305,7 +307,8 @@ class TextureImageCalls:
             self.replay = None
 
     def forget_texture_calls(self, tex):
-        self.s.rendered_images.pop(tex, None)
+        for key in [k for k in self.s.rendered_images if k[0] == tex]:
+            del self.s.rendered_images[key]
         tc = self.s.texture_calls.pop(tex, None)
         if tc is not None:
             self.s.texture_bytes_kept -= tc.bytes
@@ -390,7 +393,8 @@ class TextureImageCalls:
             self.forget_texture_calls(tex)
             tc = self.texture_calls(tex)
             for c in item[1]:
-                if not (isinstance(c, tuple) and len(c) == 4 and c[1] in KEPT_CALLS and isinstance(c[2], list)
+                if not (isinstance(c, tuple) and len(c) == 4 and c[1] in KEPT_CALLS + READ_BACK_CALLS
+                        and isinstance(c[2], list)
                         and all(isinstance(x, tuple) and len(x) == 2 and isinstance(x[0], str) for x in c[2])
                         and isinstance(c[3], list) and len(c[3]) == len(UNPACK_PARAMETERS)):
                     fail_call(no, f"{what}: a call's record that is not (call, name, arguments, unpack state)")
