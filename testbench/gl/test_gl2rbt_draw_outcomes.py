@@ -413,3 +413,67 @@ def test_a_deep_expression_the_text_does_not_show_compiles(tmp_path):
     vs = ("#version 330 core\nin vec3 p;\nvoid main() { float s = 0.0 * p" + ".xyz" * 400000 + ".x;\n"
           "  gl_Position = vec4(p.x / 32.0 - 1.0 + s, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
     assert trace(tmp_path, draw(shader_calls(vs)), "deep") == trace(tmp_path, draw(shader_calls(VS)), "plain")
+
+
+# ---- indirect draws (GL 4.0 / 4.3 / 4.6, OpenGL ES 3.1)
+
+def indirect(c, fn, commands, core=True, **kw):
+    """The triangle of buffer 1 through vertex array 7 (and element buffer
+    8 holding 0, 1, 2 after two other indices), drawn by `fn` with
+    `commands` (uint32 words) in buffer 9 bound to GL_DRAW_INDIRECT_BUFFER."""
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    indices = struct.pack("<5H", 2, 1, 0, 1, 2)
+    c.add("glBindBuffer", target="GL_ELEMENT_ARRAY_BUFFER", buffer=8)
+    c.add("glBufferData", target="GL_ELEMENT_ARRAY_BUFFER", size=len(indices), data=indices, usage="GL_STATIC_DRAW")
+    words = struct.pack(f"<{len(commands)}i", *commands)
+    c.add("glBindBuffer", target="GL_DRAW_INDIRECT_BUFFER", buffer=9)
+    c.add("glBufferData", target="GL_DRAW_INDIRECT_BUFFER", size=len(words), data=words, usage="GL_STATIC_DRAW")
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    c.add(fn, mode="GL_TRIANGLES", **kw)
+    c.add("glPopDebugGroup")
+    return c.swap()
+
+
+def trace_of(tmp_path, c, tag):
+    r = gl2rbt(tmp_path, c.write(tmp_path / f"{tag}.xz"), "-o", tmp_path / f"{tag}.rbt")
+    assert r.returncode == 0, f"{tag}: {r.stderr}"
+    return (tmp_path / f"{tag}.rbt").read_bytes()
+
+
+@pytest.mark.parametrize("fn, commands, kw", [
+    ("glDrawArraysIndirect", [3, 1, 0, 0], dict(indirect=0)),
+    ("glDrawElementsIndirect", [3, 1, 2, 0, 0], dict(type="GL_UNSIGNED_SHORT", indirect=0)),
+    # The second of two commands 24 bytes apart draws it; the first draws no vertex.
+    ("glMultiDrawArraysIndirect", [0, 1, 0, 0, 99, 99, 3, 1, 0, 0], dict(indirect=0, drawcount=2, stride=24)),
+    ("glMultiDrawElementsIndirect", [9, 0, 0, 0, 0, 3, 1, 2, 0, 0], dict(type="GL_UNSIGNED_SHORT", indirect=0,
+                                                                       drawcount=2, stride=0)),
+    ("glDrawArraysIndirect", [7, 7, 3, 1, 0, 0], dict(indirect=8)),
+], ids=["arrays", "elements", "multi_arrays_strided", "multi_elements", "at_an_offset"])
+def test_indirect_draws_draw_their_commands(tmp_path, fn, commands, kw):
+    """Each command read from the indirect buffer as GL reads it: the
+    triangle glDrawArrays draws (they had been refused)."""
+    want = trace_of(tmp_path, draw(shader_calls(VS)), "want")
+    assert want.count(b"\nf ") > 100
+    assert trace_of(tmp_path, indirect(shader_calls(VS), fn, commands, **kw), "indirect") == want
+
+
+@pytest.mark.parametrize("kw", [dict(indirect=2), dict(indirect=16)], ids=["unaligned", "past_the_end"])
+def test_indirect_draws_gl_refuses_draw_nothing(tmp_path, kw):
+    """An offset that is not a multiple of 4 (GL_INVALID_VALUE), commands
+    past the buffer's end (GL_INVALID_OPERATION): nothing is drawn."""
+    got = trace_of(tmp_path, indirect(shader_calls(VS), "glDrawArraysIndirect", [3, 1, 0, 0], **kw), "refused")
+    assert got.count(b"\nf ") == 0
+
+
+def test_indirect_commands_in_client_memory_are_refused(tmp_path):
+    """A compatibility profile with no indirect buffer reads the commands
+    from client memory, which the capture does not hold: refused naming
+    the call, nothing left."""
+    c = indirect(shader_calls(VS, core=False), "glDrawArraysIndirect", [3, 1, 0, 0], indirect=0x1000)
+    c.calls = [x for x in c.calls if not (x[1] == "glBindBuffer" and dict(x[2]).get("target") ==
+                                          "GL_DRAW_INDIRECT_BUFFER")]
+    r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    refused(r, "glDrawArraysIndirect", "client memory")
+    assert left_behind(tmp_path, ["c.xz"]) == []

@@ -358,6 +358,74 @@ class DrawCalls:
                 one.append(("type", d["type"]))
             handler(no, single, None, one)
 
+    def h_draw_indirect(self, no, name, a, args):
+        """glDrawArraysIndirect, glDrawElementsIndirect, their glMultiDraw
+        forms and GL 4.6's Count forms: each command read, as the capture's
+        buffer holds it at the call, from the buffer bound to
+        GL_DRAW_INDIRECT_BUFFER at `indirect` (GL 4.6, 10.4: count,
+        instances, first or first index, [base vertex,] base instance,
+        `stride` apart, 16 or 20 bytes when 0), and the Count forms' number
+        of draws from GL_PARAMETER_BUFFER (at most maxdrawcount); each drawn
+        as glDrawArraysInstancedBaseInstance or
+        glDrawElementsInstancedBaseVertexBaseInstance (messages name those).
+        What GL refuses draws nothing, as in Mesa: no indirect buffer in a
+        core profile or OpenGL ES, an offset or stride that is not a
+        multiple of 4 or a negative count, commands past the buffer's end;
+        commands in client memory (a compatibility profile with no indirect
+        buffer) are not in the capture: refused."""
+        d = dict(args)
+        base = base_name(name)
+        elements = "Elements" in base
+        size = 20 if elements else 16
+        counted = base.endswith("Count")
+        if base.startswith("glMultiDraw"):
+            n = checked(no, integer, d.get("maxdrawcount" if counted else "drawcount"), f"{name}: the draw count",
+                        *I32)
+            stride = checked(no, integer, d.get("stride"), f"{name}: the stride", *I32)
+        else:
+            n, stride = 1, 0
+        offset = d.get("indirect")
+        if n < 0 or stride < 0 or stride % 4 or (isinstance(offset, int) and offset % 4):
+            return   # GL_INVALID_VALUE: nothing is drawn
+        buf = self.s.bound.get("GL_DRAW_INDIRECT_BUFFER", 0)
+        if not buf:
+            if self.core or self.es or isinstance(offset, int) and not isinstance(offset, bool) and offset == 0:
+                return   # GL_INVALID_OPERATION (a NULL command in a compatibility profile: the same in Mesa)
+            fail_call(no, f"{name}: its commands are in client memory, which the capture does not hold")
+        offset = checked(no, integer, offset, f"{name}: the indirect buffer offset", *U63)
+        if counted:
+            pbuf = self.s.bound.get("GL_PARAMETER_BUFFER", 0)
+            at = checked(no, integer, d.get("drawcount"), f"{name}: the parameter buffer offset", *U63)
+            params = self.s.buffers.get(pbuf) if pbuf else None
+            if params is None or at % 4 or at + 4 > len(params):
+                return   # GL_INVALID_OPERATION or GL_INVALID_VALUE: nothing is drawn
+            n = min(n, struct.unpack_from("<I", params, at)[0])
+        if n > MAX_MULTI_DRAWS:
+            fail_call(no, f"{name}: {n} draws, more than {MAX_MULTI_DRAWS} in one multi-draw (docs/gl-capture.md, "
+                      "limits)")
+        data = self.s.buffers.get(buf)
+        stride = stride or size
+        if n and (data is None or offset + (n - 1) * stride + size > len(data)):
+            return   # GL_INVALID_OPERATION: commands past the buffer's end, nothing is drawn
+        if elements:
+            type_ = d.get("type")
+            if type_ not in INDEX_TYPES or (self.core or self.es) and not self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER"):
+                return   # GL_INVALID_ENUM, or GL_INVALID_OPERATION with no element buffer
+            item = np.dtype(INDEX_TYPES[type_]).itemsize
+        for i in range(n):
+            at = offset + i * stride
+            if elements:
+                count, instances, first, base_vertex, base_instance = struct.unpack_from("<IIIiI", data, at)
+                one = [("mode", d.get("mode")), ("count", count), ("type", type_), ("indices", first * item),
+                       ("instancecount", instances), ("basevertex", base_vertex), ("baseinstance", base_instance)]
+                single = "glDrawElementsInstancedBaseVertexBaseInstance"
+            else:
+                count, instances, first, base_instance = struct.unpack_from("<4I", data, at)
+                one = [("mode", d.get("mode")), ("first", first), ("count", count), ("instancecount", instances),
+                       ("baseinstance", base_instance)]
+                single = "glDrawArraysInstancedBaseInstance"
+            self.h_draw_under_program(no, single, None, one)
+
     def h_draw_arrays(self, no, name, a, args):
         d = self.draw_args(no, name, a, args)
         if d is None:
@@ -487,6 +555,12 @@ class DrawCalls:
         "glDrawElementsInstancedBaseInstance": h_draw_under_program,
         "glDrawElementsInstancedBaseVertexBaseInstance": h_draw_under_program,
         "glMultiDrawArrays": h_multi_draw,
+        "glDrawArraysIndirect": h_draw_indirect,
+        "glDrawElementsIndirect": h_draw_indirect,
+        "glMultiDrawArraysIndirect": h_draw_indirect,
+        "glMultiDrawElementsIndirect": h_draw_indirect,
+        "glMultiDrawArraysIndirectCount": h_draw_indirect,
+        "glMultiDrawElementsIndirectCount": h_draw_indirect,
         "glMultiDrawElements": h_multi_draw,
         "glMultiDrawElementsBaseVertex": h_multi_draw,
         "glDrawArrays": h_draw_arrays,
