@@ -412,3 +412,38 @@ def test_textures_of_other_targets_refused(tmp_path, sampler, fetch, words):
     r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt")
     refused(r, *words)
     assert left_behind(tmp_path, ["x.xz"]) == []
+
+
+def test_calls_gl_refuses_are_not_kept(tmp_path):
+    """4,200 sub-images GL refuses (integer pixels into a float image, a
+    rectangle outside the level) after a valid image: they change nothing
+    and are not kept, so the texture stays under the 4,096 calls kept
+    (round 11's R11-9: refused at the draw)."""
+    c = texture(shader_calls(VS_TEXEL % FETCH))
+    for i in range(2100):
+        c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=2, height=1,
+              format="GL_RGBA_INTEGER", type="GL_INT", pixels=bytes(32))
+        c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=1, yoffset=0, width=2, height=1,
+              format="GL_RGBA", type="GL_FLOAT", pixels=bytes(32))
+    assert convert(tmp_path, draw(c), "refused_many") == moved(tmp_path, 6, 2)
+
+
+def test_mipmaps_made_again_every_frame_replace_the_last(tmp_path):
+    """Storage of two levels, then each of 4,200 frames a new level 0 and
+    glGenerateMipmap: each regeneration replaces the one before, so the
+    calls kept stay a handful (round 11's R11-8: 81 s for 2,000 frames,
+    refused at 4,200); the last frame's level 1 moves the triangle."""
+    vs = VS_TEXEL % "textureLod(heights, vec2(0.5, 0.5), 1.0)"
+    c = texture(shader_calls(vs), image=False, filters=None)
+    c.add("glTexStorage2D", target="GL_TEXTURE_2D", levels=2, internalformat="GL_RGBA32F", width=2, height=1)
+    for pname in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER"):
+        c.add("glTexParameteri", target="GL_TEXTURE_2D", pname=pname, param="GL_NEAREST_MIPMAP_NEAREST"
+              if pname == "GL_TEXTURE_MIN_FILTER" else "GL_NEAREST")
+    for i in range(4200):
+        c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=2, height=1,
+              format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS if i == 4199 else bytes(32))
+        c.add("glGenerateMipmap", target="GL_TEXTURE_2D")
+        if i < 4199:
+            c.swap()
+    # Level 1 is the mean of texels (0, 0) and (6, 2): (3, 1).
+    assert convert(tmp_path, draw(c), "mipmaps", "--frames", "4199:4199") == moved(tmp_path, 3, 1)

@@ -899,3 +899,103 @@ def test_binds_gl_refuses_change_nothing():
     gl.glBindBufferBase(target="GL_UNIFORM_BUFFER", index=0, buffer=3)
     gl.glBindBuffersBase(target="GL_UNIFORM_BUFFER", first=0, count=2, buffers=[999, 3])
     assert gl.conv.s.indexed[("GL_UNIFORM_BUFFER", 0)][0] == 3 and gl.conv.s.indexed[("GL_UNIFORM_BUFFER", 1)][0] == 3
+
+
+def camera_fbo(gl, fb=5, rb=6, samples=0):
+    """Framebuffer `fb` with a screen-sized depth renderbuffer: the camera
+    pass's, as the window."""
+    gl.glCreateFramebuffers(n=1, framebuffers=[fb])
+    gl.glCreateRenderbuffers(n=1, renderbuffers=[rb])
+    if samples:
+        gl.glNamedRenderbufferStorageMultisample(renderbuffer=rb, samples=samples,
+                                                 internalformat="GL_DEPTH_COMPONENT24", width=W, height=H)
+    else:
+        gl.glNamedRenderbufferStorage(renderbuffer=rb, internalformat="GL_DEPTH_COMPONENT24", width=W, height=H)
+    gl.glNamedFramebufferRenderbuffer(framebuffer=fb, attachment="GL_DEPTH_ATTACHMENT",
+                                      renderbuffertarget="GL_RENDERBUFFER", renderbuffer=rb)
+
+
+def test_a_part_of_a_cleared_buffer_cleared_after_it_is_given_back():
+    """The window cleared, framebuffer 5 cleared and drawn, then a part of
+    the window cleared: the window's whole clear is given back to the one
+    kept buffer first, then the part cleared (round 11's R11-1: the part
+    had been cleared first and undone); a scissor box past the screen
+    clears all of it."""
+    gl = GL()
+    camera_fbo(gl)
+    gl.glEnable("GL_DEPTH_TEST")
+    gl.glClear(mask="GL_DEPTH_BUFFER_BIT")                       # the window: 1.0
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+    gl.glClearDepth(0.5)
+    gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
+    square(gl)
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=0)
+    gl.glEnable("GL_SCISSOR_TEST")
+    gl.glScissor(0, 0, 32, H)
+    gl.glClearDepth(0.1)
+    part = gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
+    assert [(r[1], r[2], r[3]) for r in gl.records("C")][-2:] == [(part, 1.0, (0, 0, W - 1, H - 1)),
+                                                                   (part, 0.1, (0, 0, 31, H - 1))]
+    square(gl)
+    gl.glScissor(-5, -5, 2 * W, 2 * H)
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+    gl.glClearDepth(0.3)
+    gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=0)
+    gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
+    assert gl.conv.depths_of("window").clear == 0.3, "a scissor box past the screen clears all of it"
+    gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
+    assert [w for *_, w in gl.conv.last_3d_draws] == [None], "every depth-tested draw had its buffer kept"
+
+
+@pytest.mark.parametrize("how", ["resolve", "copy"])
+def test_depths_the_converter_cannot_follow_are_reported(how):
+    """A whole depth copy from a multisampled framebuffer (Mesa resolves
+    depth by taking one sample a pixel, not the pixel centre's depth), and
+    glCopyTexSubImage2D into a camera-pass depth texture: the buffer's
+    contents are not followed, and the frame whose last depth-tested draw
+    reads them is reported (round 11's R11-7: 53%, R11-2: 53%)."""
+    gl = GL()
+    gl.glEnable("GL_DEPTH_TEST")
+    gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
+    if how == "resolve":
+        camera_fbo(gl, samples=4)
+        gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+        gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
+        square(gl)
+        gl.glBlitNamedFramebuffer(readFramebuffer=5, drawFramebuffer=0, srcX0=0, srcY0=0, srcX1=W, srcY1=H,
+                                  dstX0=0, dstY0=0, dstX1=W, dstY1=H, mask="GL_DEPTH_BUFFER_BIT",
+                                  filter="GL_NEAREST")
+        gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=0)
+    else:
+        gl.glGenTextures(n=1, textures=[4])
+        gl.glBindTexture(target="GL_TEXTURE_2D", texture=4)
+        gl.glTexImage2D(target="GL_TEXTURE_2D", level=0, internalformat="GL_DEPTH_COMPONENT24", width=W, height=H,
+                        border=0, format="GL_DEPTH_COMPONENT", type="GL_UNSIGNED_INT", pixels=None)
+        gl.glGenFramebuffers(n=1, framebuffers=[5])
+        gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+        gl.glFramebufferTexture2D(target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+                                  textarget="GL_TEXTURE_2D", texture=4, level=0)
+        gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
+        gl.glCopyTexSubImage2D(target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, x=0, y=0, width=W, height=H)
+    square(gl)
+    gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
+    (wrong,) = [w for *_, w in gl.conv.last_3d_draws]
+    assert wrong is not None and ("resolve" if how == "resolve" else "glCopyTexSubImage2D") in wrong, wrong
+
+
+@pytest.mark.parametrize("call", [
+    dict(internalformat=0x1234, width=32, height=32), dict(internalformat="GL_DEPTH_COMPONENT24", width=100000,
+                                                          height=H),
+    dict(internalformat="GL_DEPTH_COMPONENT24", width=-1, height=32)], ids=["format", "too_wide", "negative"])
+def test_storage_gl_refuses_leaves_the_camera_pass(call):
+    """Renderbuffer storage GL refuses (an enumerant that is no format, a
+    size past llvmpipe's 16384 or negative) leaves the renderbuffer its
+    image: framebuffer 5 stays the camera pass (round 11's R11-3: its draws
+    had been left out)."""
+    gl = GL()
+    camera_fbo(gl)
+    gl.glNamedRenderbufferStorage(renderbuffer=6, **call)
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+    square(gl)
+    assert len(gl.draws()) == 1

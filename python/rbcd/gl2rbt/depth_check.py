@@ -51,8 +51,12 @@ def mesa_depth_at(trace, call, timeout, es=False):
         raise ToolError(f"glretrace -D {call} did not finish in {timeout} s")
     text = r.stdout.decode("utf-8", "replace")
     # A lenient reading: the state is JSON, but the base64 text carries
-    # newlines, so the depth image is found by its keys.
-    m = re.search(r'"GL_DEPTH_COMPONENT"\s*:\s*\{(.*?)"__data__"\s*:\s*"([^"]*)"', text, re.S)
+    # newlines, so the depth image is found by its keys, in the bound draw
+    # framebuffer's section: the window's depth buffer, or a framebuffer
+    # object's depth (or depth and stencil) attachment.
+    section = text.find('"framebuffer": {')
+    m = re.search(r'"GL_DEPTH_(?:COMPONENT|ATTACHMENT|STENCIL_ATTACHMENT)"\s*:\s*\{(.*?)"__data__"\s*:\s*"([^"]*)"',
+                  text[max(section, 0):], re.S)
     if not m:
         raise ToolError(f"glretrace -D {call} dumped no depth buffer"
                         f" ({printable((r.stderr.decode('utf-8', 'replace').strip().splitlines() or ['no message'])[-1])})")

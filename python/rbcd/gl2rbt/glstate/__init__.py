@@ -87,6 +87,7 @@ class GLState:
         self.fbo_depth = {}
         self.sizes = {}
         self.formats = {}   # ("texture" | "renderbuffer", name) -> internal format of level 0
+        self.multisampled = {}   # the same -> whether its image has samples (glRenderbufferStorageMultisample ...)
         self.renderbuffer = 0
         self.framebuffer_names = None    # names glGen/glCreateFramebuffers returned (None: the capture showed none)
         self.renderbuffer_names = None   # the same for renderbuffers

@@ -69,6 +69,12 @@ class CameraDepthCalls:
         w, h = self.screen
         return (0, 0, w - 1, h - 1)
 
+    def covers_screen(self, rect):
+        """Whether an inclusive rectangle (a scissor box's, cut to one pixel
+        past the screen) covers all of it."""
+        w, h = self.screen
+        return rect[0] <= 0 and rect[1] <= 0 and rect[2] >= w - 1 and rect[3] >= h - 1
+
     def give_back(self, no, held):
         """The kept buffer takes a whole clear's value that `held` is (a `C`
         record); True if it did."""
@@ -99,9 +105,11 @@ class CameraDepthCalls:
 
     def depth_cleared(self, no, value, rect):
         """A depth clear of the bound camera-pass framebuffer to `value`, of
-        `rect` (the scissor's, inclusive), emitted to the kept buffer."""
+        `rect` (the scissor's, inclusive), about to be emitted to the kept
+        buffer (a part of a buffer whose whole clear's value the kept one
+        does not hold is given that value first)."""
         key = self.depth_key(self.s.draw_fbo)
-        if rect == self.full_screen():
+        if self.covers_screen(rect):
             self.kept_depths = self.depths[key] = Depths(value, f"were cleared to {value:g} by call {no}")
             self.kept_wrong = None
             return

@@ -14,10 +14,12 @@ from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import bitfield, generated_name
+from .texture_formats import refused_level, refused_storage
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
 GL_TEXTURE0 = 0x84C0
 MAX_TEXTURE_UNITS = 192   # llvmpipe's GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS
+MAX_RENDERBUFFER_SIZE = 16384   # llvmpipe's GL_MAX_RENDERBUFFER_SIZE
 # The internal formats glTexBuffer takes in Mesa 22.3 (GL 4.5's table 8.18);
 # a compatibility context also the legacy ones. Another is GL_INVALID_ENUM.
 TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}{t}" for c in ("R", "RG", "RGBA") for b, ts in
@@ -116,8 +118,14 @@ class FramebufferCalls:
             fail_call(no, f"{name}: impossible size")
         if not self.s.renderbuffer:
             return   # no renderbuffer bound: GL_INVALID_OPERATION
+        if not (0 <= w <= MAX_RENDERBUFFER_SIZE and 0 <= h <= MAX_RENDERBUFFER_SIZE) \
+                or not isinstance(d.get("internalformat"), str) or isinstance(d.get("samples"), int) \
+                and d["samples"] < 0:
+            return   # GL_INVALID_VALUE or GL_INVALID_ENUM: the renderbuffer keeps its image (round 11's R11-3)
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
         self.s.formats[("renderbuffer", self.s.renderbuffer)] = d.get("internalformat")
+        self.s.multisampled[("renderbuffer", self.s.renderbuffer)] = isinstance(d.get("samples"), int) and \
+            d["samples"] > 0
         self.depths_replaced(("renderbuffer", self.s.renderbuffer), f"are undefined since call {no} gave the "
                                                                     f"renderbuffer storage ({printable(name)})")
 
@@ -148,6 +156,8 @@ class FramebufferCalls:
             kept = ("deleted", obj, self.s.deleted_images)
             for k in keys:
                 self.s.sizes[(kind, kept) + k[2:]] = self.s.sizes[k]
+                if k in self.s.multisampled:
+                    self.s.multisampled[(kind, kept) + k[2:]] = self.s.multisampled[k]
             for fb in holders:
                 self.s.fbo_depth[fb] = (kind, kept) + self.s.fbo_depth[fb][2:]
             self.depths_renamed((kind, obj), (kind, kept))
@@ -190,12 +200,15 @@ class FramebufferCalls:
         d = dict(args)
         if base_name(name) in ("glTexImage2D", "glTexStorage2D", "glCompressedTexImage2D"):
             self.keep_texture_call(no, base_name(name), d)
+            if refused_storage(d) if base_name(name) == "glTexStorage2D" else refused_level(base_name(name), d):
+                return   # GL certainly refuses it: the texture keeps its size (round 11's R11-3)
         w, h = d.get("width"), d.get("height", 1)
         level = d.get("level", 0)
         self.depth_image_written(no, name, d)
         if level == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
             self.s.sizes[("texture", tex)] = (w, h)
+            self.s.multisampled[("texture", tex)] = "Multisample" in name
             self.s.formats[("texture", tex)] = d.get("internalformat")
             self.s.texture_images[tex] = texture_image_digest(d)
             levels = d.get("levels")
@@ -381,11 +394,16 @@ class FramebufferCalls:
             return
         if self.depth_key(src) == self.depth_key(dst):
             return   # one buffer: a copy onto itself changes nothing where it does not overlap (GL refuses that)
+        if src and self.s.multisampled.get(self.s.fbo_depth[src][:2]):
+            self.depths_replaced(self.depth_key(dst), f"were last written by call {no} ({printable(name)}: a "
+                                 "resolve of a multisampled depth buffer, one sample a pixel, which the converter "
+                                 "does not follow)")
+            return
         if self.camera_pass(src) and rect[:4] == rect[4:]:
             w, h = self.screen
             whole = min(rect[0], rect[2]) <= 0 and min(rect[1], rect[3]) <= 0 \
                 and max(rect[0], rect[2]) >= w and max(rect[1], rect[3]) >= h
-            if whole and self.scissor_rect() == (0, 0, w - 1, h - 1):
+            if whole and self.covers_screen(self.scissor_rect()):
                 self.depths_copied(src, dst)
                 return
             how = f"a copy of {'a rectangle' if not whole else 'the part under the scissor'} of another's"

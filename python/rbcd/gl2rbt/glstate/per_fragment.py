@@ -89,8 +89,8 @@ class PerFragmentCalls:
         depth buffer is cleared, not the frame's)."""
         if self.active and self.s.depth_mask and self.camera_pass():
             self.open_frame(no)
+            self.depth_cleared(no, value, self.scissor_rect())   # (first: it may give a buffer back)
             self.emit(b"C" + struct.pack("<Qd4i", no, value, *self.scissor_rect()))
-            self.depth_cleared(no, value, self.scissor_rect())
 
     def h_clear_buffer(self, no, name, a, args):
         """glClearBufferfv(GL_DEPTH, 0, [d]) and glClearBufferfi(GL_DEPTH_STENCIL,

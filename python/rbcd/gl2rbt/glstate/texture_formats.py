@@ -189,3 +189,75 @@ def certain_storage(d):
             and 1 <= n <= int(math.log2(max(w, h))) + 1 and kind_of(fmt) is not None and fmt not in UNSIZED):
         return None
     return {i: (fmt, max(1, w >> i), max(1, h >> i), None) for i in range(n)}
+
+
+# ---- what GL certainly refuses (a call that changes nothing: never kept)
+
+def format_kind(fmt):
+    """The kind of pixels a format carries (None: not known here)."""
+    if fmt in ("GL_LUMINANCE", "GL_LUMINANCE_ALPHA"):
+        return "colour"
+    return next((k for k, (formats, _) in KIND_PIXELS.items() if fmt in formats), None)
+
+
+def pixels_refused(internal_kind, d):
+    """Whether GL certainly refuses pixels of the call's format and type for
+    an image of `internal_kind`: a format or type that is no enumerant, a
+    packed type its format does not take, pixels of another kind (integer
+    pixels for a normalized image, colour ones for a depth image: GL 4.6,
+    8.4.4 and 8.6, GL_INVALID_OPERATION)."""
+    fmt, kind = d.get("format"), d.get("type")
+    if not isinstance(fmt, str) or not isinstance(kind, str):
+        return True
+    if kind in PACKED_BYTES and fmt in FORMAT_COMPONENTS and not packed_fits(kind, fmt):
+        return True
+    fk = format_kind(fmt)
+    return internal_kind is not None and fk is not None and fk != internal_kind
+
+
+def refused_level(name, d):
+    """Whether GL certainly refuses a glTexImage2D (sizes out of range, a
+    border past 1, an internal format that is no enumerant, pixels of
+    another kind than the internal format's)."""
+    fmt, lv, w, h, border = (d.get(k) for k in ("internalformat", "level", "width", "height", "border"))
+    if not (all(whole(v) for v in (lv, w, h)) and 0 <= lv <= MAX_LEVEL and 0 <= w <= MAX_SIZE >> lv
+            and 0 <= h <= MAX_SIZE >> lv and border in (0, 1)):
+        return True
+    if not isinstance(fmt, str) and not (whole(fmt) and 1 <= fmt <= 4):
+        return True
+    return not name.startswith("glCompressed") and pixels_refused(kind_of(fmt), d)
+
+
+def refused_part(d, level):
+    """Whether GL certainly refuses a glTexSubImage2D into a level whose
+    (internal format, width, height, type) is `level` (None: not known):
+    a rectangle outside it, pixels of another kind."""
+    x, y, w, h = (d.get(k) for k in ("xoffset", "yoffset", "width", "height"))
+    if not all(whole(v) for v in (x, y, w, h)) or min(w, h) < 0:
+        return True
+    if level is None:
+        return pixels_refused(None, d)
+    if x < 0 or y < 0 or x + w > level[1] or y + h > level[2]:
+        return True
+    return level[0] not in COMPRESSED_BLOCKS and pixels_refused(kind_of(level[0]), d)
+
+
+def refused_storage(d):
+    """Whether GL certainly refuses a glTexStorage2D: a size or number of
+    levels out of range, an internal format of no kind or unsized."""
+    fmt, n, w, h = d.get("internalformat"), d.get("levels"), d.get("width"), d.get("height")
+    if not (all(whole(v) for v in (n, w, h)) and 1 <= w <= MAX_SIZE and 1 <= h <= MAX_SIZE
+            and 1 <= n <= int(math.log2(max(w, h))) + 1):
+        return True
+    return not isinstance(fmt, str) or fmt in UNSIZED or fmt in ("GL_LUMINANCE", "GL_LUMINANCE_ALPHA", "GL_ALPHA")
+
+
+def certain_mipmaps(levels, es):
+    """Whether glGenerateMipmap certainly regenerates every level past the
+    base one (0) of a texture whose known levels are `levels`: a colour
+    base image, not compressed (in OpenGL ES one of 8 bits a component
+    that its table makes filterable)."""
+    base = levels.get(0)
+    if base is None or base[0] in COMPRESSED_BLOCKS or kind_of(base[0]) != "colour":
+        return False
+    return not es or base[0] in ES_UNSIZED | {"GL_RGBA8", "GL_RGB8", "GL_RG8", "GL_R8"}

@@ -27,7 +27,8 @@ from ...cli import I32, U32, U63, integer
 from ..errors import ToolError, checked, fail_call, printable
 from ..gl_tables import base_name
 from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
-from .texture_formats import certain_level, certain_part, certain_storage, whole
+from .texture_formats import (certain_level, certain_mipmaps, certain_part, certain_storage, refused_level,
+                              refused_part, refused_storage, whole)
 
 VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
 # The argument a reduced capture adds to a draw whose vertex shader reads
@@ -175,6 +176,11 @@ class TextureImageCalls:
                 tc.levels = levels or {}
             tc.storage = True
         elif name == "glGenerateMipmap":
+            if not any(c[1] in PARAMETER_CALLS and c[2].get("pname") in ("GL_TEXTURE_BASE_LEVEL", "GL_TEXTURE_MAX_LEVEL")
+                       for c in tc.calls.values()) and certain_mipmaps(tc.levels, self.es):
+                # Every level past 0 made again: an earlier regeneration
+                # of them is overwritten.
+                self.drop_texture_calls(tc, lambda c: c[1] == "glGenerateMipmap")
             if not tc.storage:   # the levels past the base one change (the base may be past 0)
                 tc.levels = {k: v for k, v in tc.levels.items() if k == 0}
         elif parameter_certain(name, d):
@@ -217,6 +223,9 @@ class TextureImageCalls:
         tc = self.texture_calls(tex)
         if tc.over:
             return
+        if name in LEVEL_CALLS and refused_level(name, d) or name in PART_CALLS and \
+                refused_part(d, tc.levels.get(d.get("level"))) or name == "glTexStorage2D" and refused_storage(d):
+            return   # GL certainly refuses it: it changes nothing, and is not kept (memory and time)
         pixels = d.get("pixels", d.get("data"))
         if name in LEVEL_CALLS + PART_CALLS:
             unpack_buffer = self.s.bound.get("GL_PIXEL_UNPACK_BUFFER", 0)
@@ -358,10 +367,29 @@ class TextureImageCalls:
         self.keep_texture_call(no, base_name(name), dict(args))
 
     def h_copy_tex_image(self, no, name, a, args):
+        """glCopyTexImage2D, glCopyTexSubImage2D: the GPU writes the bound 2D
+        texture (a vertex shader that reads it gets it from Mesa's replay);
+        as a camera-pass depth buffer its contents are not followed; and
+        glCopyTexImage2D gives the level its size and format, as
+        glTexImage2D does (a framebuffer it is attached to may become the
+        camera pass), unless GL certainly refuses it."""
         d = dict(args)
-        if d.get("target") == VERTEX_TEXTURE_TARGET:
-            self.texture_rendered(self.bound_texture(VERTEX_TEXTURE_TARGET), no,
-                                  f"{name} copies the framebuffer into it")
+        if d.get("target") != VERTEX_TEXTURE_TARGET:
+            return
+        tex = self.bound_texture(VERTEX_TEXTURE_TARGET)
+        self.texture_rendered(tex, no, f"{name} copies the framebuffer into it")
+        level, w, h = d.get("level", 0), d.get("width"), d.get("height")
+        if not (whole(level) and 0 <= level <= 14):
+            return   # GL_INVALID_VALUE
+        key = ("texture", tex) if level == 0 else ("texture", tex, level)
+        if base_name(name) == "glCopyTexImage2D":
+            if not (whole(w) and whole(h) and 0 <= w <= 16384 >> level and 0 <= h <= 16384 >> level
+                    and d.get("border") == 0 and isinstance(d.get("internalformat"), str)):
+                return   # GL_INVALID_VALUE or GL_INVALID_ENUM: nothing changes
+            self.s.sizes[key] = (w, h)
+            self.s.formats[key] = d["internalformat"]
+        self.depths_replaced(key, f"were written by call {no} ({printable(name)}: a copy of the read framebuffer, "
+                                  "which the converter does not follow)")
 
     def vertex_texture_read(self, tex, tc):
         """A draw's vertex shader reads texture `tex`: for --reduced-out,
