@@ -999,3 +999,27 @@ def test_storage_gl_refuses_leaves_the_camera_pass(call):
     gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
     square(gl)
     assert len(gl.draws()) == 1
+
+
+@pytest.mark.parametrize("colour", [None, (W, H), (W // 2, H), "no image"], ids=["none", "screen", "smaller",
+                                                                                "no_image"])
+def test_a_framebuffer_s_other_attachments_decide_the_camera_pass(colour):
+    """Framebuffer 5's depth has the screen's size; a colour attachment
+    with no image makes it incomplete (GL draws nothing there), and one
+    smaller than the screen the area GL draws into: neither is the camera
+    pass (round 11's R11-5 and R11-6: their draws had been converted)."""
+    gl = GL()
+    camera_fbo(gl)
+    if colour is not None:
+        gl.glCreateRenderbuffers(n=1, renderbuffers=[7])
+        if colour != "no image":
+            gl.glNamedRenderbufferStorage(renderbuffer=7, internalformat="GL_RGBA8", width=colour[0],
+                                          height=colour[1])
+        gl.glNamedFramebufferRenderbuffer(framebuffer=5, attachment="GL_COLOR_ATTACHMENT0",
+                                          renderbuffertarget="GL_RENDERBUFFER", renderbuffer=7)
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+    square(gl)
+    if colour in (None, (W, H)):
+        assert len(gl.draws()) == 1
+    else:
+        assert gl.conv.offscreen_draws == 1, "another pass's draw, left out"

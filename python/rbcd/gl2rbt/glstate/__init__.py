@@ -85,6 +85,7 @@ class GLState:
         self.draw_fbo = 0
         self.read_fbo = 0
         self.fbo_depth = {}
+        self.fbo_attachments = {}   # framebuffer -> {colour or stencil attachment point: image, as fbo_depth's}
         self.sizes = {}
         self.formats = {}   # ("texture" | "renderbuffer", name) -> internal format of level 0
         self.multisampled = {}   # the same -> whether its image has samples (glRenderbufferStorageMultisample ...)

@@ -17,6 +17,8 @@ from . import bitfield, generated_name
 from .texture_formats import refused_level, refused_storage
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
+# The other attachment points (llvmpipe's GL_MAX_COLOR_ATTACHMENTS: 8).
+OTHER_ATTACHMENTS = tuple(f"GL_COLOR_ATTACHMENT{i}" for i in range(8)) + ("GL_STENCIL_ATTACHMENT",)
 GL_TEXTURE0 = 0x84C0
 MAX_TEXTURE_UNITS = 192   # llvmpipe's GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS
 MAX_RENDERBUFFER_SIZE = 16384   # llvmpipe's GL_MAX_RENDERBUFFER_SIZE
@@ -93,8 +95,15 @@ class FramebufferCalls:
             self.s.read_fbo = fb
 
     def h_framebuffer_texture(self, no, name, a, args):
+        """glFramebufferTexture(2D), glFramebufferRenderbuffer: an image
+        attached to the framebuffer bound at the call's target, the depth
+        one (which pass the framebuffer is) and the others (each must have
+        an image, of the screen's size or larger, for the framebuffer to be
+        the camera pass: camera_pass)."""
         d = dict(args)
-        if d.get("attachment") in DEPTH_ATTACHMENTS and self.s.draw_fbo:
+        fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
+        attachment = d.get("attachment")
+        if fb and (attachment in DEPTH_ATTACHMENTS or attachment in OTHER_ATTACHMENTS):
             kind = "renderbuffer" if "Renderbuffer" in name else "texture"
             obj = d.get("renderbuffer" if kind == "renderbuffer" else "texture")
             level = checked(no, integer, d.get("level", 0), f"{name}: the level", -(1 << 31), (1 << 31) - 1) \
@@ -103,8 +112,13 @@ class FramebufferCalls:
                 return   # GL_INVALID_VALUE: the attachment stays
             # A texture's level other than 0 has that level's size (or none
             # given: the framebuffer is incomplete and draws nothing there).
-            self.s.fbo_depth[self.s.draw_fbo] = None if not obj else (kind, obj) if level == 0 else (kind, obj, level)
-        fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
+            key = None if not obj else (kind, obj) if level == 0 else (kind, obj, level)
+            if attachment in DEPTH_ATTACHMENTS:
+                self.s.fbo_depth[fb] = key
+            elif key is None:
+                self.s.fbo_attachments.get(fb, {}).pop(attachment, None)
+            else:
+                self.s.fbo_attachments.setdefault(fb, {})[attachment] = key
         tex = d.get("texture")
         if "Texture" in name and fb and isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
             # Its image is the GPU's from then on (a vertex shader that
@@ -150,8 +164,16 @@ class FramebufferCalls:
                     self.s.fbo_depth[fb] = None
                 else:
                     holders.append(fb)
+        others = []   # (framebuffer, attachment point) of the other images
+        for fb, atts in self.s.fbo_attachments.items():
+            for point, att in list(atts.items()):
+                if att[0] == kind and att[1] == obj:
+                    if fb in bound:
+                        del atts[point]
+                    else:
+                        others.append((fb, point))
         keys = [k for k in self.s.sizes if k[0] == kind and k[1] == obj]
-        if holders:
+        if holders or others:
             self.s.deleted_images += 1
             kept = ("deleted", obj, self.s.deleted_images)
             for k in keys:
@@ -160,6 +182,8 @@ class FramebufferCalls:
                     self.s.multisampled[(kind, kept) + k[2:]] = self.s.multisampled[k]
             for fb in holders:
                 self.s.fbo_depth[fb] = (kind, kept) + self.s.fbo_depth[fb][2:]
+            for fb, point in others:
+                self.s.fbo_attachments[fb][point] = (kind, kept) + self.s.fbo_attachments[fb][point][2:]
             self.depths_renamed((kind, obj), (kind, kept))
         for k in keys:
             del self.s.sizes[k]
@@ -347,6 +371,7 @@ class FramebufferCalls:
                 if self.s.framebuffer_names is not None:
                     self.s.framebuffer_names.discard(fb)
                 self.s.fbo_depth.pop(fb, None)
+                self.s.fbo_attachments.pop(fb, None)
                 if self.s.draw_fbo == fb:
                     self.s.draw_fbo = 0   # GL binds the window's framebuffer again
                 if self.s.read_fbo == fb:
@@ -434,7 +459,17 @@ class FramebufferCalls:
         if self.screen is None:
             self.write_header()   # the screen, from the window or the viewport (or the capture's error)
         depth = self.s.fbo_depth.get(fb)
-        return depth is not None and self.s.sizes.get(depth) == tuple(self.screen)
+        if depth is None or self.s.sizes.get(depth) != tuple(self.screen):
+            return False
+        # Every other attachment has an image (else the framebuffer is
+        # incomplete: GL draws and clears nothing), as large as the screen
+        # (else GL draws into the smaller area the attachments share).
+        w, h = self.screen
+        for key in self.s.fbo_attachments.get(fb, {}).values():
+            size = self.s.sizes.get(key)
+            if size is None or size[0] < w or size[1] < h:
+                return False
+        return True
 
     HANDLERS = {
         "glBindFramebuffer": h_bind_framebuffer,
