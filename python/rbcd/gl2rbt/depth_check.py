@@ -45,8 +45,14 @@ def mesa_depth_at(trace, call, timeout, es=False):
             raise ToolError("no DISPLAY and no xvfb-run for glretrace (scripts/setup.sh --gl installs xvfb)")
         cmd = [xvfb, "-a", "-s", "-screen 0 1280x1024x24"] + cmd
     try:
+        # llvmpipe rasterizes on threads, and its vertex shaders (run at the
+        # draw, on the calling thread) do not wait for them: a draw's vertex
+        # shader may read a texture level an earlier glGenerateMipmap or
+        # render to texture has not written yet (measured: the previous
+        # frame's level 1 in 7 of 15 replays). With one thread each draw is
+        # rasterized before the next starts.
         r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=timeout,
-                           stdin=subprocess.DEVNULL)
+                           stdin=subprocess.DEVNULL, env=dict(os.environ, LP_NUM_THREADS="0"))
     except subprocess.TimeoutExpired:
         raise ToolError(f"glretrace -D {call} did not finish in {timeout} s")
     text = r.stdout.decode("utf-8", "replace")

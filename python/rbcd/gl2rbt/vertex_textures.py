@@ -199,6 +199,10 @@ class VertexTextures:
         for pname in UNPACK_PARAMETERS:
             self.call("glPixelStorei", self.mesa.enum(pname), 4 if pname == "GL_UNPACK_ALIGNMENT" else 0)
         self.drain()
+        # llvmpipe's vertex shaders do not wait for its rasterizer threads:
+        # the levels glGenerateMipmap renders are finished before a draw
+        # reads them.
+        GL.glFinish()
         return mt
 
     def sampler(self, sampler, params):
