@@ -477,3 +477,18 @@ def test_indirect_commands_in_client_memory_are_refused(tmp_path):
     r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
     refused(r, "glDrawArraysIndirect", "client memory")
     assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+@pytest.mark.parametrize("fn, kw, core", [
+    ("glDrawElementsIndirect", dict(type="GL_UNSIGNED_SHORT", indirect=0), False),
+    ("glMultiDrawArraysIndirect", dict(indirect=0, drawcount=10 ** 9, stride=0), True),
+], ids=["no_element_buffer_compatibility", "a_billion_commands_past_the_end"])
+def test_more_indirect_draws_gl_refuses_draw_nothing(tmp_path, fn, kw, core):
+    """No element buffer (GL_INVALID_OPERATION in every profile), commands
+    past the buffer's end however many: nothing is drawn (the first had
+    been refused, the second refused past the multi-draw limit)."""
+    c = indirect(shader_calls(VS, core=core), fn, [3, 1, 0, 0, 0], **kw)
+    if fn == "glDrawElementsIndirect":
+        c.calls = [x for x in c.calls if not (x[1] == "glBindBuffer" and dict(x[2]).get("target") ==
+                                              "GL_ELEMENT_ARRAY_BUFFER")]
+    assert trace_of(tmp_path, c, "nothing").count(b"\nf ") == 0

@@ -1023,3 +1023,67 @@ def test_a_framebuffer_s_other_attachments_decide_the_camera_pass(colour):
         assert len(gl.draws()) == 1
     else:
         assert gl.conv.offscreen_draws == 1, "another pass's draw, left out"
+
+
+def test_texture_calls_the_review_found_dropped_or_stale():
+    """A compressed sub-image into compressed storage is kept (its pixels
+    are not checked as an uncompressed call's); depth pixels into a depth
+    and stencil image are taken (GL 4.6, 8.5), so its framebuffer is the
+    camera pass; a copy into a cube map's face has textures read back
+    again, and glCopyTexImage2D leaves its level's size unknown to later
+    sub-images."""
+    gl = GL()
+    gl.glGenTextures(n=3, textures=[3, 4, 5])
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=3)
+    gl.glTexStorage2D(target="GL_TEXTURE_2D", levels=1, internalformat="GL_COMPRESSED_RED_RGTC1", width=8, height=8)
+    gl.glCompressedTexSubImage2D(target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=8, height=8,
+                                 format="GL_COMPRESSED_RED_RGTC1", imageSize=32, data=bytes(32))
+    assert [c[1] for c in gl.conv.s.texture_calls[3].calls.values()] == ["glTexStorage2D", "glCompressedTexSubImage2D"]
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=4)
+    gl.glTexImage2D(target="GL_TEXTURE_2D", level=0, internalformat="GL_DEPTH_COMPONENT24", width=W, height=H,
+                    border=0, format="GL_DEPTH_STENCIL", type="GL_UNSIGNED_INT_24_8", pixels=None)
+    gl.glGenFramebuffers(n=1, framebuffers=[6])
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=6)
+    gl.glFramebufferTexture2D(target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT", textarget="GL_TEXTURE_2D",
+                              texture=4, level=0)
+    square(gl)
+    assert len(gl.draws()) == 1, "framebuffer 6 is the camera pass"
+    writes = gl.conv.s.gpu_writes
+    gl.glBindTexture(target="GL_TEXTURE_CUBE_MAP", texture=5)
+    gl.glCopyTexSubImage2D(target="GL_TEXTURE_CUBE_MAP_POSITIVE_X", level=0, xoffset=0, yoffset=0, x=0, y=0, width=4,
+                           height=4)
+    assert gl.conv.s.gpu_writes > writes
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=3)
+    gl.glCopyTexImage2D(target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA8", x=0, y=0, width=16, height=16,
+                        border=0)
+    assert 0 not in gl.conv.s.texture_calls[3].levels
+
+
+def test_the_draws_of_one_multi_draw_share_what_was_read_back():
+    """Mesa's replay passes each call once: the second draw of a multi-draw
+    (after the first wrote a framebuffer object) reuses the textures read
+    back at the call instead of asking again (which the replay could not
+    answer)."""
+    gl = GL()
+    asked = []
+
+    class Replay:
+        def read(self, no, name, units):
+            asked.append(no)
+            return {u: (0x8814, [], [(0, 1, 1, 1, "GL_RGBA", "GL_FLOAT", bytes(16))]) for u in units}
+
+        def close(self):
+            pass
+    gl.conv.replay = Replay()
+    gl.conv.reads_reduced = False
+    gl.glGenTextures(n=1, textures=[3])
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=3)
+    gl.conv.texture_rendered(3, 1, "attached")
+    tc = gl.conv.s.texture_calls[3]
+    for _ in range(2):
+        got = gl.conv.rendered_textures(42, "glMultiDrawArrays", [(0, 3, tc, "GL_TEXTURE_2D")])
+        assert [c[1] for c in got[(3, "GL_TEXTURE_2D")].calls.values()] == ["glTexImage2D"]
+        gl.conv.gpu_wrote()
+    assert asked == [42]
+    gl.conv.rendered_textures(43, "glDrawArrays", [(0, 3, tc, "GL_TEXTURE_2D")])
+    assert asked == [42, 43], "a later call after a GPU write reads it again"

@@ -135,8 +135,11 @@ class RenderedTextures:
                 raise ToolError("no DISPLAY and no xvfb-run for glretrace (scripts/setup.sh --gl installs xvfb)")
             cmd = [xvfb, "-a", "-s", "-screen 0 1280x1024x24"] + cmd
         self.log = open(os.path.join(self.dir, "replay.log"), "w+b")
+        # One llvmpipe rasterizer thread: its vertex shaders do not wait for
+        # the others (depth_check.mesa_depth_at), and the replay's draws
+        # must make what the capture's did.
         self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=self.log,
-                                     start_new_session=True)
+                                     start_new_session=True, env=dict(os.environ, LP_NUM_THREADS="0"))
 
     def read(self, no, name, units):
         """The textures bound at `units` [(unit, target name)] just before
@@ -203,17 +206,24 @@ class RenderedTextures:
         return b"".join(parts)
 
     def close(self):
+        """Ends the replay: the requests' end closed, the library reads their
+        end at the next call and exits, so that xvfb-run removes its X
+        server and files; killed after 5 s if it has not."""
+        if self.requests is not None:
+            os.close(self.requests)
+            self.requests = None
         if self.proc is not None:
-            if self.proc.poll() is None:
+            try:
+                self.proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
                 try:
                     os.killpg(self.proc.pid, signal.SIGKILL)
                 except ProcessLookupError:
                     pass
-            self.proc.wait()
+                self.proc.wait()
             self.log.close()
-        for fd in (self.requests, self.replies):
-            if fd is not None:
-                os.close(fd)
+        if self.replies is not None:
+            os.close(self.replies)
         if self.dir is not None:
             shutil.rmtree(self.dir, ignore_errors=True)
             unregister_temporary(self.dir)

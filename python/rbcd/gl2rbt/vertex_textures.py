@@ -141,10 +141,10 @@ class VertexTextures:
             tex = conv.s.units.get((unit, target), 0)
             tc = conv.s.texture_calls.get(tex)
             if target == VERTEX_TEXTURE_TARGET:
-                if tc is not None and tc.refused is not None:
-                    fail_call(no, f"{name}: its vertex shader reads texture {tex} (unit {unit}), whose image the "
-                              f"converter cannot give Mesa: call {tc.refused[0]}: {printable(tc.refused[1])}")
-                if tc is not None and tc.rendered:
+                if tc is not None and (tc.rendered or tc.refused is not None):
+                    # The GPU renders it, or its calls cannot be given to
+                    # Mesa (a pixel unpack buffer, over the limits): Mesa's
+                    # replay of the capture gives the image.
                     ask.append((unit, tex, tc, target))
             elif tex and not (conv.reads_reduced and tc is not None):
                 # No calls are kept for other targets: Mesa's replay gives

@@ -116,6 +116,7 @@ class GLState:
         # from Mesa's replay (TextureImageCalls.rendered_textures).
         self.gpu_writes = 0
         self.rendered_images = {}
+        self.readback_call = None   # (the last call Mesa's replay read textures back at, those textures)
         self.groups = []   # innermost last: object id or None
         self.group_names = []   # the same groups: (object id or None, message)
         self.marker = ""        # the last message the application inserted in the frame

@@ -4,7 +4,7 @@ import struct
 
 import numpy as np
 
-from ...cli import I32, U32, U63, integer
+from ...cli import I32, I64, U32, U63, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CULL, DEPTH_FUNCS, INDEX_TYPES, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
 from ..glmath import mat_mul, triangle_indices
@@ -395,22 +395,22 @@ class DrawCalls:
         offset = checked(no, integer, offset, f"{name}: the indirect buffer offset", *U63)
         if counted:
             pbuf = self.s.bound.get("GL_PARAMETER_BUFFER", 0)
-            at = checked(no, integer, d.get("drawcount"), f"{name}: the parameter buffer offset", *U63)
+            at = checked(no, integer, d.get("drawcount"), f"{name}: the parameter buffer offset", *I64)
             params = self.s.buffers.get(pbuf) if pbuf else None
-            if params is None or at % 4 or at + 4 > len(params):
+            if params is None or at < 0 or at % 4 or at + 4 > len(params):
                 return   # GL_INVALID_OPERATION or GL_INVALID_VALUE: nothing is drawn
             n = min(n, struct.unpack_from("<I", params, at)[0])
-        if n > MAX_MULTI_DRAWS:
-            fail_call(no, f"{name}: {n} draws, more than {MAX_MULTI_DRAWS} in one multi-draw (docs/gl-capture.md, "
-                      "limits)")
         data = self.s.buffers.get(buf)
         stride = stride or size
         if n and (data is None or offset + (n - 1) * stride + size > len(data)):
             return   # GL_INVALID_OPERATION: commands past the buffer's end, nothing is drawn
+        if n > MAX_MULTI_DRAWS:
+            fail_call(no, f"{name}: {n} draws, more than {MAX_MULTI_DRAWS} in one multi-draw (docs/gl-capture.md, "
+                      "limits)")
         if elements:
             type_ = d.get("type")
-            if type_ not in INDEX_TYPES or (self.core or self.es) and not self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER"):
-                return   # GL_INVALID_ENUM, or GL_INVALID_OPERATION with no element buffer
+            if type_ not in INDEX_TYPES or not self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER"):
+                return   # GL_INVALID_ENUM, or GL_INVALID_OPERATION with no element buffer (every profile)
             item = np.dtype(INDEX_TYPES[type_]).itemsize
         for i in range(n):
             at = offset + i * stride

@@ -211,8 +211,10 @@ def pixels_refused(internal_kind, d):
         return True
     if kind in PACKED_BYTES and fmt in FORMAT_COMPONENTS and not packed_fits(kind, fmt):
         return True
-    fk = format_kind(fmt)
-    return internal_kind is not None and fk is not None and fk != internal_kind
+    # Depth and depth-and-stencil pixels go into either kind of image (GL
+    # 4.6, 8.5: both formats must be depth or depth and stencil).
+    fk, ik = (("depth" if k == "depth-stencil" else k) for k in (format_kind(fmt), internal_kind))
+    return ik is not None and fk is not None and fk != ik
 
 
 def refused_level(name, d):
@@ -228,18 +230,20 @@ def refused_level(name, d):
     return not name.startswith("glCompressed") and pixels_refused(kind_of(fmt), d)
 
 
-def refused_part(d, level):
-    """Whether GL certainly refuses a glTexSubImage2D into a level whose
-    (internal format, width, height, type) is `level` (None: not known):
-    a rectangle outside it, pixels of another kind."""
+def refused_part(name, d, level):
+    """Whether GL certainly refuses a glTexSubImage2D (or its compressed
+    form, whose pixels are not checked here) into a level whose (internal
+    format, width, height, type) is `level` (None: not known): a rectangle
+    outside it, pixels of another kind."""
     x, y, w, h = (d.get(k) for k in ("xoffset", "yoffset", "width", "height"))
     if not all(whole(v) for v in (x, y, w, h)) or min(w, h) < 0:
         return True
+    compressed = name.startswith("glCompressed")
     if level is None:
-        return pixels_refused(None, d)
+        return not compressed and pixels_refused(None, d)
     if x < 0 or y < 0 or x + w > level[1] or y + h > level[2]:
         return True
-    return level[0] not in COMPRESSED_BLOCKS and pixels_refused(kind_of(level[0]), d)
+    return not compressed and level[0] not in COMPRESSED_BLOCKS and pixels_refused(kind_of(level[0]), d)
 
 
 def refused_storage(d):

@@ -224,7 +224,8 @@ class TextureImageCalls:
         if tc.over:
             return
         if name in LEVEL_CALLS and refused_level(name, d) or name in PART_CALLS and \
-                refused_part(d, tc.levels.get(d.get("level"))) or name == "glTexStorage2D" and refused_storage(d):
+                refused_part(name, d, tc.levels.get(d.get("level"))) or \
+                name == "glTexStorage2D" and refused_storage(d):
             return   # GL certainly refuses it: it changes nothing, and is not kept (memory and time)
         pixels = d.get("pixels", d.get("data"))
         if name in LEVEL_CALLS + PART_CALLS:
@@ -265,28 +266,41 @@ class TextureImageCalls:
 
     def rendered_textures(self, no, name, reads):
         """The textures of `reads` [(unit, texture, TextureCalls or None,
-        target)] that Mesa's replay gives: 2D ones the GPU renders, and
-        every texture of another target (the converter keeps no calls for
-        those). Each as TextureCalls that make the image and sampling
-        parameters the replay has at call `no` (rendered_textures.py):
-        {(texture, target): TextureCalls}, read again only when the GPU or a
-        texture call may have changed them since."""
+        target)] that Mesa's replay gives: 2D ones the GPU renders or whose
+        calls the converter cannot give Mesa, and every texture of another
+        target (the converter keeps no calls for those). Each as
+        TextureCalls that make the image and sampling parameters the replay
+        has at call `no` (rendered_textures.py): {(texture, target):
+        TextureCalls}, read again only when the GPU or a texture call may
+        have changed them since (the draws of one multi-draw share what was
+        read at their call: the replay passes each call once)."""
         out, ask = {}, []
+        read_at = self.s.readback_call   # (call, the textures read back there)
         for unit, tex, tc, target in reads:
             version = ("read back", self.s.gpu_writes, tc.version if tc is not None else 0)
             cached = self.s.rendered_images.get((tex, target))
-            if cached is not None and cached.version == version:
+            if cached is not None and (cached.version == version or read_at is not None and read_at[0] == no
+                                       and (tex, target) in read_at[1]):
                 out[(tex, target)] = cached
             else:
                 ask.append((unit, tex, tc, target, version))
         if not ask:
             return out
         unit, tex, tc, target, _ = ask[0]
-        what = f"texture {tex} (unit {unit}), which the GPU renders (call {tc.rendered[0]}: " \
-               f"{printable(tc.rendered[1])})" if tc is not None else f"texture {tex} ({target}, unit {unit})"
+        if tc is None:
+            what = f"texture {tex} ({target}, unit {unit})"
+        elif tc.refused is not None:
+            what = f"texture {tex} (unit {unit}), whose image the converter cannot give Mesa (call " \
+                   f"{tc.refused[0]}: {printable(tc.refused[1])})"
+        else:
+            what = f"texture {tex} (unit {unit}), which the GPU renders (call {tc.rendered[0]}: " \
+                   f"{printable(tc.rendered[1])})"
         if self.reads_reduced:
             fail_call(no, f"{name}: its vertex shader reads {what}: a reduced capture carries only the images a "
                       "conversion of the capture read back (with the draws that read them)")
+        if read_at is not None and read_at[0] == no:
+            fail_call(no, f"{name}: its vertex shader reads {what}, which Mesa's replay was not asked for at the "
+                      "call's first draw (a multi-draw whose draws read other textures): not emulated")
         from ..rendered_textures import RenderedTextures, image_calls
         if self.replay is None:
             from ..raster import raster_program
@@ -296,6 +310,7 @@ class TextureImageCalls:
             except ToolError as e:   # a tool missing: said with the draw that needs it
                 raise ToolError(f"call {no}: {printable(name)}: its vertex shader reads {what}: {e}")
         images = self.replay.read(no, name, [(unit, target) for unit, _, _, target, _ in ask])
+        self.s.readback_call = (no, {(tex, target) for _, tex, _, target, _ in ask})
         unpack = tuple(1 if p == "GL_UNPACK_ALIGNMENT" else 0 for p in UNPACK_PARAMETERS)
         for unit, tex, tc, target, version in ask:
             internal, params, levels = images.get((unit, target), (0, [], []))
@@ -374,6 +389,7 @@ class TextureImageCalls:
         glTexImage2D does (a framebuffer it is attached to may become the
         camera pass), unless GL certainly refuses it."""
         d = dict(args)
+        self.gpu_wrote()   # (a cube map's face too: read back again)
         if d.get("target") != VERTEX_TEXTURE_TARGET:
             return
         tex = self.bound_texture(VERTEX_TEXTURE_TARGET)
@@ -381,6 +397,8 @@ class TextureImageCalls:
         level, w, h = d.get("level", 0), d.get("width"), d.get("height")
         if not (whole(level) and 0 <= level <= 14):
             return   # GL_INVALID_VALUE
+        if tex in self.s.texture_calls:
+            self.s.texture_calls[tex].levels.pop(level, None)   # its size and format are the copy's now
         key = ("texture", tex) if level == 0 else ("texture", tex, level)
         if base_name(name) == "glCopyTexImage2D":
             if not (whole(w) and whole(h) and 0 <= w <= 16384 >> level and 0 <= h <= 16384 >> level
