@@ -19,12 +19,12 @@
 
 #include <GLES2/gl2.h>
 
+#include "next_dlsym.h"
+
 typedef void (*ReadPixels)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *);
 typedef GLenum (*GetError)(void);
 typedef void (*GetIntegerv)(GLenum, GLint *);
-typedef void *(*Dlsym)(void *, const char *);
 
-static Dlsym next_dlsym;
 static ReadPixels real_read_pixels;
 static GetError real_get_error;
 static GetIntegerv real_get_integerv;
@@ -55,26 +55,13 @@ static void read_pixels(GLint x, GLint y, GLsizei w, GLsizei h, GLenum format, G
         f[i] = (float)((double)(u[i] >> (32 - bits)) / max);
 }
 
-/* glibc 2.34 moved dlsym into libc under a new version; older ones have the
- * x86-64 base version. */
-static void find_next_dlsym(void)
-{
-    next_dlsym = (Dlsym)dlvsym(RTLD_NEXT, "dlsym", "GLIBC_2.34");
-    if (!next_dlsym)
-        next_dlsym = (Dlsym)dlvsym(RTLD_NEXT, "dlsym", "GLIBC_2.2.5");
-}
-
 void *dlsym(void *handle, const char *name)
 {
-    if (!next_dlsym)
-        find_next_dlsym();
-    if (!next_dlsym)
-        return NULL;
-    void *p = next_dlsym(handle, name);
+    void *p = next_lookup(handle, name);
     if (p && strcmp(name, "glReadPixels") == 0) {
         real_read_pixels = (ReadPixels)p;
-        real_get_error = (GetError)next_dlsym(handle, "glGetError");
-        real_get_integerv = (GetIntegerv)next_dlsym(handle, "glGetIntegerv");
+        real_get_error = (GetError)next_lookup(handle, "glGetError");
+        real_get_integerv = (GetIntegerv)next_lookup(handle, "glGetIntegerv");
         return (void *)read_pixels;
     }
     return p;

@@ -40,7 +40,8 @@
 #include <GL/gl.h>
 #include <GL/glext.h>
 
-typedef void *(*Dlsym)(void *, const char *);
+#include "next_dlsym.h"
+
 typedef void *(*GetProc)(const char *);
 typedef void (*DebugMessageInsert)(GLenum, GLenum, GLuint, GLenum, GLsizei, const GLchar *);
 typedef void *(*EglGetProc)(const char *);
@@ -49,7 +50,6 @@ typedef void *(*EglGetProc)(const char *);
 #define MAX_LEVELS 15
 #define MAX_REPLY_BYTES (1ull << 30)
 
-static Dlsym next_dlsym;
 static GetProc real_get_proc;   /* glXGetProcAddressARB or eglGetProcAddress, whichever glretrace looks up */
 static DebugMessageInsert real_insert, real_insert_khr;
 static int requests = -1, replies = -1;
@@ -475,22 +475,9 @@ static void *get_proc(const char *name)
     return p;
 }
 
-/* glibc 2.34 moved dlsym into libc under a new version; older ones have the
- * x86-64 base version. */
-static void find_next_dlsym(void)
-{
-    next_dlsym = (Dlsym)dlvsym(RTLD_NEXT, "dlsym", "GLIBC_2.34");
-    if (!next_dlsym)
-        next_dlsym = (Dlsym)dlvsym(RTLD_NEXT, "dlsym", "GLIBC_2.2.5");
-}
-
 void *dlsym(void *handle, const char *name)
 {
-    if (!next_dlsym)
-        find_next_dlsym();
-    if (!next_dlsym)
-        return NULL;
-    void *p = next_dlsym(handle, name);
+    void *p = next_lookup(handle, name);
     if (p && (strcmp(name, "glXGetProcAddressARB") == 0 || strcmp(name, "glXGetProcAddress") == 0 ||
               strcmp(name, "eglGetProcAddress") == 0)) {
         real_get_proc = (GetProc)p;

@@ -132,6 +132,20 @@ static GLuint compile(GLenum kind, const char* text) {
     return s;
 }
 
+/* A 2x2 RGBA32F texture on unit 2 (where the faults' vertex shaders read),
+ * nearest filtering, its texels `texels` (NULL: none given). */
+static GLuint texture_2x2(const void* texels) {
+    GLuint tex;
+    glActiveTexture(GL_TEXTURE2);
+    glGenTextures(1, &tex);
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, 2, 2, 0, GL_RGBA, GL_FLOAT, texels);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glActiveTexture(GL_TEXTURE0);
+    return tex;
+}
+
 /* The one fault draw of frame 1 (see the header comment): a small
  * triangle through a program of its own. */
 static void inject_fault(GLuint main_program) {
@@ -141,16 +155,9 @@ static void inject_fault(GLuint main_program) {
         glAttachShader(p, compile(GL_VERTEX_SHADER, vertex_source));
         glAttachShader(p, compile(GL_GEOMETRY_SHADER, geometry_source));
     } else if (!strcmp(fault, "rendered")) {
-        GLuint tex, fb, fill = glCreateProgram();
+        GLuint tex = texture_2x2(NULL), fb, fill = glCreateProgram();
         GLint viewport[4];
         glGetIntegerv(GL_VIEWPORT, viewport);
-        glActiveTexture(GL_TEXTURE2);
-        glGenTextures(1, &tex);
-        glBindTexture(GL_TEXTURE_2D, tex);
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, 2, 2, 0, GL_RGBA, GL_FLOAT, NULL);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-        glActiveTexture(GL_TEXTURE0);
         glGenFramebuffers(1, &fb);
         glBindFramebuffer(GL_FRAMEBUFFER, fb);
         glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex, 0);
@@ -190,14 +197,7 @@ static void inject_fault(GLuint main_program) {
         glAttachShader(p, compile(GL_VERTEX_SHADER, cube ? cube_source : array_source));
     } else if (!strcmp(fault, "texture")) {
         static const float texels[2][2][4] = {{{-0.75f, -0.5f, -1.5f, 0}, {9, 9, 9, 0}}, {{-9, -9, 9, 0}, {5, 5, 5, 0}}};
-        GLuint tex;
-        glActiveTexture(GL_TEXTURE2);
-        glGenTextures(1, &tex);
-        glBindTexture(GL_TEXTURE_2D, tex);
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, 2, 2, 0, GL_RGBA, GL_FLOAT, texels);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-        glActiveTexture(GL_TEXTURE0);
+        texture_2x2(texels);
         glAttachShader(p, compile(GL_VERTEX_SHADER, texture_source));
     } else if (!strcmp(fault, "compile")) {
         glAttachShader(p, compile(GL_VERTEX_SHADER, broken_source));
