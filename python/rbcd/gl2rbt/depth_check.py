@@ -11,20 +11,16 @@ import numpy as np
 from ..cli import register_temporary, unregister_temporary
 from .capture import check_input_file, read_calls
 from .errors import ConvertError, ToolError, printable
-from .raster import convert, new_converter, raster_program
+from .glretrace import glretrace_command, preload_library
+from .raster import convert, new_converter
 from .reduced import is_reduced_capture
 
 READBACK = "rbcd-es-depth-readback.so"
 
 
 def es_readback_library():
-    """gl/es_depth_readback.c's library, beside rbcd-gl-raster as
-    bin/../lib/rbcd/ (the build tree and an installed tree alike)."""
-    lib = os.path.normpath(os.path.join(os.path.dirname(raster_program()), "..", "lib", "rbcd", READBACK))
-    if not os.path.isfile(lib):
-        raise ToolError(f"--check-depth on an OpenGL ES capture needs {printable(lib)}, built with the OpenGL ES "
-                        "headers (scripts/setup.sh --gl installs libgles-dev; then build again)")
-    return lib
+    """gl/es_depth_readback.c's library."""
+    return preload_library(READBACK, "--check-depth on an OpenGL ES capture", "OpenGL ES", "libgles-dev")
 
 
 def mesa_depth_at(trace, call, timeout, es=False):
@@ -32,18 +28,8 @@ def mesa_depth_at(trace, call, timeout, es=False):
     from the top of float32 values in [0, 1]). An OpenGL ES capture's is
     read back through gl/es_depth_readback.c, preloaded into glretrace
     alone (not into Xvfb)."""
-    exe = shutil.which("glretrace")
-    if not exe:
-        raise ToolError("glretrace is not installed (scripts/setup.sh --gl installs apitrace)")
-    cmd = [exe, "-D", str(call), trace]
-    if es:
-        preload = ":".join(p for p in (es_readback_library(), os.environ.get("LD_PRELOAD")) if p)
-        cmd = ["env", f"LD_PRELOAD={preload}"] + cmd
-    if not os.environ.get("DISPLAY"):
-        xvfb = shutil.which("xvfb-run")
-        if not xvfb:
-            raise ToolError("no DISPLAY and no xvfb-run for glretrace (scripts/setup.sh --gl installs xvfb)")
-        cmd = [xvfb, "-a", "-s", "-screen 0 1280x1024x24"] + cmd
+    cmd = glretrace_command(["-D", str(call), trace], "--check-depth",
+                            preload=es_readback_library() if es else None)
     try:
         # llvmpipe rasterizes on threads, and its vertex shaders (run at the
         # draw, on the calling thread) do not wait for them: a draw's vertex

@@ -28,7 +28,8 @@ import tempfile
 import time
 
 from ..cli import register_temporary, unregister_temporary
-from .errors import ConvertError, ToolError, printable
+from .errors import ConvertError, printable
+from .glretrace import glretrace_command, preload_library
 from .glstate.texture_formats import ES_COMBINATIONS
 
 LIBRARY = "rbcd-texture-readback.so"
@@ -97,24 +98,14 @@ def upload_format(internal, fmt, kind, es):
     return ES_FALLBACK.get((fmt, kind), internal)
 
 
-def readback_library(raster):
-    """gl/texture_readback.c's library, beside rbcd-gl-raster as
-    bin/../lib/rbcd/."""
-    lib = os.path.normpath(os.path.join(os.path.dirname(raster), "..", "lib", "rbcd", LIBRARY))
-    if not os.path.isfile(lib):
-        raise ToolError(f"reading back a texture the GPU renders needs {printable(lib)}, built with the desktop GL "
-                        "headers (scripts/setup.sh --gl installs libgl-dev; then build again)")
-    return lib
+WHAT = "reading back a texture the GPU renders"
 
 
 class RenderedTextures:
-    def __init__(self, trace, raster, timeout):
+    def __init__(self, trace, timeout):
         self.trace, self.timeout = trace, timeout
-        self.lib = readback_library(raster)
-        self.exe = shutil.which("glretrace")
-        if not self.exe:
-            raise ToolError("reading back a texture the GPU renders needs glretrace (scripts/setup.sh --gl "
-                            "installs apitrace)")
+        self.lib = preload_library(LIBRARY, WHAT, "desktop GL", "libgl-dev")
+        glretrace_command([], WHAT)   # glretrace missing: said at once, not when the replay starts
         self.proc = self.dir = None
         self.requests = self.replies = None
 
@@ -127,13 +118,8 @@ class RenderedTextures:
         # and the replay's library opens its ends when it first draws.
         self.requests = os.open(os.path.join(self.dir, "requests"), os.O_RDWR | os.O_CLOEXEC)
         self.replies = os.open(os.path.join(self.dir, "replies"), os.O_RDWR | os.O_CLOEXEC)
-        cmd = ["env", f"LD_PRELOAD={self.lib}", f"RBCD_TEXTURE_FIFOS={self.dir}", self.exe, "--markers",
-               self.trace]
-        if not os.environ.get("DISPLAY"):
-            xvfb = shutil.which("xvfb-run")
-            if not xvfb:
-                raise ToolError("no DISPLAY and no xvfb-run for glretrace (scripts/setup.sh --gl installs xvfb)")
-            cmd = [xvfb, "-a", "-s", "-screen 0 1280x1024x24"] + cmd
+        cmd = glretrace_command(["--markers", self.trace], WHAT, preload=self.lib,
+                                env=[f"RBCD_TEXTURE_FIFOS={self.dir}"])
         self.log = open(os.path.join(self.dir, "replay.log"), "w+b")
         # One llvmpipe rasterizer thread: its vertex shaders do not wait for
         # the others (depth_check.mesa_depth_at), and the replay's draws

@@ -25,7 +25,6 @@ MAX_MESA_TEXTURE_BYTES = 1 << 30
 GL_DEPTH_TEXTURE_MODE = 0x884B   # the compatibility profile's
 ANISOTROPY = ("GL_TEXTURE_MAX_ANISOTROPY", "GL_TEXTURE_MAX_ANISOTROPY_EXT", 0x84FE)
 # Sampler types of the 2D textures a vertex shader may read.
-TEXTURE_2D_SAMPLERS = {"GL_SAMPLER_2D", "GL_INT_SAMPLER_2D", "GL_UNSIGNED_INT_SAMPLER_2D", "GL_SAMPLER_2D_SHADOW"}
 # Every sampler type a vertex shader may read, with its texture's target
 # (those of other targets than 2D read back from Mesa's replay).
 SAMPLER_TARGETS = {f"GL_{kind}SAMPLER_{shape}{shadow}": f"GL_TEXTURE_{target}"

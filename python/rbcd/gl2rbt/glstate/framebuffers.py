@@ -230,7 +230,7 @@ class FramebufferCalls:
         level = d.get("level", 0)
         self.depth_image_written(no, name, d)
         if level == 0 and isinstance(w, int) and isinstance(h, int):
-            tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+            tex = self.bound_texture(d.get("target"))
             self.s.sizes[("texture", tex)] = (w, h)
             self.s.multisampled[("texture", tex)] = "Multisample" in name
             self.s.formats[("texture", tex)] = d.get("internalformat")
@@ -240,7 +240,7 @@ class FramebufferCalls:
                 for i in range(1, min(levels, 32)):
                     self.s.sizes[("texture", tex, i)] = (max(1, w >> i), max(1, h >> i))
         elif isinstance(level, int) and isinstance(w, int) and isinstance(h, int):
-            tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+            tex = self.bound_texture(d.get("target"))
             self.s.sizes[("texture", tex, level)] = (w, h)   # a framebuffer attachment of that level
 
     def h_tex_sub_image(self, no, name, a, args):
@@ -252,7 +252,7 @@ class FramebufferCalls:
         d = dict(args)
         self.keep_texture_call(no, base_name(name), d)
         self.depth_image_written(no, name, d)
-        tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+        tex = self.bound_texture(d.get("target"))
         if d.get("level", 0) == 0 and d.get("xoffset") == 0 and d.get("yoffset") == 0 and \
                 self.s.sizes.get(("texture", tex)) == (d.get("width"), d.get("height")):
             self.s.texture_images[tex] = texture_image_digest(d)
@@ -263,7 +263,7 @@ class FramebufferCalls:
         level, levels = d.get("level", 0), d.get("levels")   # glTexStorage2D: levels from 0
         if not self.active or not isinstance(level, int) or isinstance(level, bool):
             return
-        tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+        tex = self.bound_texture(d.get("target"))
         if isinstance(levels, int) and not isinstance(levels, bool):
             written = range(min(levels, 32))
         else:
@@ -341,7 +341,7 @@ class FramebufferCalls:
 
     def h_tex_buffer(self, no, name, a, args):
         d = dict(args)
-        tex = self.s.units.get((self.s.active_unit, d.get("target")), 0)
+        tex = self.bound_texture(d.get("target"))
         buf, fmt = d.get("buffer"), d.get("internalformat")
         if not tex or not isinstance(buf, int) or isinstance(buf, bool) or buf < 0:
             fail_call(no, f"{name}: no texture bound, or an impossible buffer")

@@ -44,7 +44,7 @@ class PerFragmentCalls:
         (a box reaching past it, as GL allows, clips nothing more)."""
         w, h = self.screen
         if not (self.s.scissor_test and self.s.scissor):
-            return (0, 0, w - 1, h - 1)
+            return self.full_screen()
         sx, sy, sw, sh = self.s.scissor
         x0, y0, x1, y1 = sx, h - (sy + sh), sx + sw - 1, h - sy - 1
         return (min(max(x0, -1), w), min(max(y0, -1), h), min(max(x1, -1), w), min(max(y1, -1), h))

@@ -128,6 +128,14 @@ def whole(v):
     return isinstance(v, int) and not isinstance(v, bool)
 
 
+def level_size_fits(d):
+    """Whether a call's level, width and height are whole numbers GL takes
+    for a 2D level (llvmpipe's 16384 at level 0, halving a level)."""
+    lv, w, h = d.get("level"), d.get("width"), d.get("height")
+    return all(whole(v) for v in (lv, w, h)) and 0 <= lv <= MAX_LEVEL and 0 <= w <= MAX_SIZE >> lv \
+        and 0 <= h <= MAX_SIZE >> lv
+
+
 def pixels_fit(internalformat, fmt, kind, es, level_type=None):
     """Whether GL certainly takes pixels of format `fmt` and type `kind` for
     an image of `internalformat` (ES: its table; an unsized ES image's
@@ -152,8 +160,7 @@ def certain_level(name, d, es):
     """A glTexImage2D or glCompressedTexImage2D GL certainly takes: the
     level's (internal format, width, height, type), or None."""
     fmt, lv, w, h = d.get("internalformat"), d.get("level"), d.get("width"), d.get("height")
-    if not (all(whole(v) for v in (lv, w, h)) and 0 <= lv <= MAX_LEVEL and 0 <= w <= MAX_SIZE >> lv
-            and 0 <= h <= MAX_SIZE >> lv and d.get("border") == 0 and isinstance(fmt, str)):
+    if not (level_size_fits(d) and d.get("border") == 0 and isinstance(fmt, str)):
         return None
     if es and lv and (w & (w - 1) or h & (h - 1)):
         return None   # ES 2.0: a level past 0 of a size not a power of two (without OES_texture_npot)
@@ -221,9 +228,8 @@ def refused_level(name, d):
     """Whether GL certainly refuses a glTexImage2D (sizes out of range, a
     border past 1, an internal format that is no enumerant, pixels of
     another kind than the internal format's)."""
-    fmt, lv, w, h, border = (d.get(k) for k in ("internalformat", "level", "width", "height", "border"))
-    if not (all(whole(v) for v in (lv, w, h)) and 0 <= lv <= MAX_LEVEL and 0 <= w <= MAX_SIZE >> lv
-            and 0 <= h <= MAX_SIZE >> lv and border in (0, 1)):
+    fmt = d.get("internalformat")
+    if not (level_size_fits(d) and d.get("border") in (0, 1)):
         return True
     if not isinstance(fmt, str) and not (whole(fmt) and 1 <= fmt <= 4):
         return True

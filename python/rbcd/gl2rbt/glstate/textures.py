@@ -27,8 +27,8 @@ from ...cli import I32, U32, U63, integer
 from ..errors import ToolError, checked, fail_call, printable
 from ..gl_tables import base_name
 from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
-from .texture_formats import (certain_level, certain_mipmaps, certain_part, certain_storage, refused_level,
-                              refused_part, refused_storage, whole)
+from .texture_formats import (MAX_LEVEL, certain_level, certain_mipmaps, certain_part, certain_storage,
+                              level_size_fits, refused_level, refused_part, refused_storage, whole)
 
 VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
 # The argument a reduced capture adds to a draw whose vertex shader reads
@@ -303,10 +303,8 @@ class TextureImageCalls:
                       "call's first draw (a multi-draw whose draws read other textures): not emulated")
         from ..rendered_textures import RenderedTextures, image_calls
         if self.replay is None:
-            from ..raster import raster_program
             try:
-                self.replay = RenderedTextures(self.args.trace, raster_program(),
-                                               getattr(self.args, "check_timeout", 600))
+                self.replay = RenderedTextures(self.args.trace, getattr(self.args, "check_timeout", 600))
             except ToolError as e:   # a tool missing: said with the draw that needs it
                 raise ToolError(f"call {no}: {printable(name)}: its vertex shader reads {what}: {e}")
         images = self.replay.read(no, name, [(unit, target) for unit, _, _, target, _ in ask])
@@ -389,22 +387,21 @@ class TextureImageCalls:
         glTexImage2D does (a framebuffer it is attached to may become the
         camera pass), unless GL certainly refuses it."""
         d = dict(args)
-        self.gpu_wrote()   # (a cube map's face too: read back again)
         if d.get("target") != VERTEX_TEXTURE_TARGET:
+            self.gpu_wrote()   # a cube map's face: read back again (texture_rendered says so of a 2D texture)
             return
         tex = self.bound_texture(VERTEX_TEXTURE_TARGET)
         self.texture_rendered(tex, no, f"{name} copies the framebuffer into it")
-        level, w, h = d.get("level", 0), d.get("width"), d.get("height")
-        if not (whole(level) and 0 <= level <= 14):
+        level = d.get("level", 0)
+        if not (whole(level) and 0 <= level <= MAX_LEVEL):
             return   # GL_INVALID_VALUE
         if tex in self.s.texture_calls:
             self.s.texture_calls[tex].levels.pop(level, None)   # its size and format are the copy's now
         key = ("texture", tex) if level == 0 else ("texture", tex, level)
         if base_name(name) == "glCopyTexImage2D":
-            if not (whole(w) and whole(h) and 0 <= w <= 16384 >> level and 0 <= h <= 16384 >> level
-                    and d.get("border") == 0 and isinstance(d.get("internalformat"), str)):
+            if not (level_size_fits(d) and d.get("border") == 0 and isinstance(d.get("internalformat"), str)):
                 return   # GL_INVALID_VALUE or GL_INVALID_ENUM: nothing changes
-            self.s.sizes[key] = (w, h)
+            self.s.sizes[key] = (d["width"], d["height"])
             self.s.formats[key] = d["internalformat"]
         self.depths_replaced(key, f"were written by call {no} ({printable(name)}: a copy of the read framebuffer, "
                                   "which the converter does not follow)")
