@@ -1087,3 +1087,58 @@ def test_the_draws_of_one_multi_draw_share_what_was_read_back():
     assert asked == [42]
     gl.conv.rendered_textures(43, "glDrawArrays", [(0, 3, tc, "GL_TEXTURE_2D")])
     assert asked == [42, 43], "a later call after a GPU write reads it again"
+
+
+def test_buffer_clears_fill_elements_as_mesa_converts(monkeypatch):
+    """glClearBufferData and glClearBufferSubData (and their named forms)
+    fill whole elements of the internal format with the value Mesa
+    converts; what GL refuses changes nothing; data of another length than
+    one pixel is the capture's error; zeros into large storage take no
+    memory, and a fill past the documented limit is refused before it is
+    written."""
+    import rbcd.gl2rbt.glstate.buffers as buffers
+    gl = GL()
+    one = struct.pack("<f", 1.0)
+    gl.glBindBuffer(target="GL_ARRAY_BUFFER", buffer=3)
+    gl.glBufferData(target="GL_ARRAY_BUFFER", size=16, data=bytes(range(16)))
+    s = gl.conv.s
+    v = s.buffer_versions[3]
+    gl.glClearBufferData(target="GL_ARRAY_BUFFER", internalformat="GL_RGBA8", format="GL_RED", type="GL_FLOAT",
+                         data=one)
+    assert bytes(s.buffers[3]) == b"\xff\0\0\xff" * 4, "red 1.0 as RGBA8, alpha 1"
+    assert s.buffer_versions[3] > v, "Mesa's copy is given the new contents"
+    gl.glClearBufferSubData(target="GL_ARRAY_BUFFER", internalformat="GL_R32F", offset=4, size=8,
+                            format="GL_RED", type="GL_FLOAT", data=struct.pack("<f", 2.0))
+    assert bytes(s.buffers[3]) == b"\xff\0\0\xff" + struct.pack("<2f", 2, 2) + b"\xff\0\0\xff"
+    before = bytes(s.buffers[3])
+    for refused in (dict(internalformat="GL_RGB8", offset=0, size=16),      # not a texture buffer format
+                    dict(internalformat="GL_RG32F", offset=4, size=8),      # not a whole number of elements
+                    dict(internalformat="GL_R32F", offset=8, size=12),      # past the buffer
+                    dict(internalformat="GL_R32F", offset=-4, size=4),
+                    dict(internalformat="GL_R32UI", offset=0, size=4)):     # a float into an integer format
+        gl.glClearBufferSubData(target="GL_ARRAY_BUFFER", format="GL_RED", type="GL_FLOAT", data=one, **refused)
+    gl.glMapBufferRange(target="GL_ARRAY_BUFFER", offset=0, length=4, access=("GL_MAP_WRITE_BIT",), ret=0x1000)
+    gl.glClearBufferData(target="GL_ARRAY_BUFFER", internalformat="GL_R8", format="GL_RED", type="GL_FLOAT",
+                         data=one)   # mapped: GL_INVALID_OPERATION
+    gl.glUnmapBuffer(target="GL_ARRAY_BUFFER")
+    assert bytes(s.buffers[3]) == before, "what GL refuses changed nothing"
+    gl.glClearNamedBufferSubData(buffer=3, internalformat="GL_RG16UI", offset=0, size=8, format="GL_RG_INTEGER",
+                                 type="GL_UNSIGNED_SHORT", data=None)
+    assert bytes(s.buffers[3]) == bytes(8) + before[8:], "NULL clears to zero"
+    with pytest.raises(ConvertError, match=r"call \d+: glClearBufferData: 2 bytes of data, not one GL_RED pixel "
+                                           r"of GL_FLOAT \(4\)"):
+        gl.glClearBufferData(target="GL_ARRAY_BUFFER", internalformat="GL_R32F", format="GL_RED", type="GL_FLOAT",
+                             data=b"ab")
+    big = 256 << 20
+    gl.glBindBuffer(target="GL_COPY_WRITE_BUFFER", buffer=4)
+    gl.glBufferData(target="GL_COPY_WRITE_BUFFER", size=big, data=None)
+    gl.glBufferSubData(target="GL_COPY_WRITE_BUFFER", offset=64, size=4, data=b"abcd")
+    gl.glClearBufferData(target="GL_COPY_WRITE_BUFFER", internalformat="GL_R32F", format="GL_RED",
+                         type="GL_FLOAT", data=struct.pack("<f", 0.0))
+    assert bytes(s.buffers[4][64:68]) == bytes(4) and s.buffer_bytes_in_all < 1 << 10, \
+        "zeros cleared what was written and took no memory"
+    monkeypatch.setattr(buffers, "MAX_BUFFER_BYTES_IN_ALL", 128 << 20)
+    with pytest.raises(ConvertError, match=r"call \d+: glClearBufferData: the buffers would hold more than"):
+        gl.glClearBufferData(target="GL_COPY_WRITE_BUFFER", internalformat="GL_R32F", format="GL_RED",
+                             type="GL_FLOAT", data=one)
+    assert not any(bytes(s.buffers[4][:1 << 16])), "refused before it was written"

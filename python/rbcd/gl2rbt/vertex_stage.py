@@ -235,6 +235,31 @@ class VertexStage:
         GL.glBufferData(GL.GL_COPY_WRITE_BUFFER, len(data), bytes(data), GL.GL_STREAM_DRAW)
         return buf
 
+    def clear_element(self, internal, fmt, kind, data, n):
+        """The n bytes of one element of internal format `internal` that
+        glClearBufferData(internal, fmt, kind, data) writes (data: bytes, or
+        None for zeros), as Mesa converts the value; None if Mesa refuses
+        the call."""
+        from OpenGL.error import GLError
+        GL = self.gl
+        try:
+            enums = [self.mesa.enum(v) for v in (internal, fmt, kind)]
+        except ValueError:
+            return None   # not an enumerant: GL_INVALID_ENUM
+        # One value is at most four components of 4 bytes; room for more,
+        # zeros, if apitrace recorded fewer bytes than the format reads.
+        value = None if data is None else (ctypes.c_ubyte * 32).from_buffer_copy(bytes(data[:32]).ljust(32, b"\0"))
+        buf = int(GL.glGenBuffers(1))
+        GL.glBindBuffer(GL.GL_COPY_WRITE_BUFFER, buf)
+        try:
+            GL.glBufferData(GL.GL_COPY_WRITE_BUFFER, 48, None, GL.GL_STATIC_DRAW)   # a multiple of every size
+            GL.glClearBufferData(GL.GL_COPY_WRITE_BUFFER, *enums, value)
+            return bytes(GL.glGetBufferSubData(GL.GL_COPY_WRITE_BUFFER, 0, n))
+        except GLError:
+            return None
+        finally:
+            GL.glDeleteBuffers(1, [buf])
+
     def free_scratch(self):
         if self.scratch:
             self.gl.glDeleteBuffers(len(self.scratch), self.scratch)

@@ -10,6 +10,7 @@ from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import MAX_BUFFER_BYTES, MAX_BUFFER_BYTES_IN_ALL, base_name
 from . import bitfield, enum_arg, generated_name
+from .texture_formats import FORMAT_COMPONENTS, PACKED_BYTES, TYPE_BYTES
 
 # The bits of glBufferStorage's flags and glMapBufferRange's access the
 # converter reads.
@@ -22,6 +23,12 @@ MAX_BINDINGS = 1024   # indexed binding points kept (llvmpipe has fewer: Mesa re
 # GL_INVALID_VALUE there and changes nothing, neither the indexed binding
 # nor the generic one.
 SHADER_BINDINGS = {"GL_UNIFORM_BUFFER": (90, 16), "GL_SHADER_STORAGE_BUFFER": (80, 16)}
+# The internal formats glClearBufferData takes (those of texture buffers,
+# GL 4.6 table 8.16) and the bytes of one element of each.
+CLEAR_FORMATS = {f"GL_{c}{bits}{kind}": len(c) * bits // 8
+                 for c in ("R", "RG", "RGB", "RGBA") for bits in (8, 16, 32) for kind in ("", "F", "I", "UI")
+                 if not (kind == "" and bits == 32) and not (kind == "F" and bits == 8)
+                 and not (c == "RGB" and bits != 32)}
 
 
 def storage(size):
@@ -305,6 +312,54 @@ class BufferCalls:
         self.s.next_version += 1
         self.s.buffer_versions[wb] = self.s.next_version
 
+    def h_clear_buffer_data(self, no, name, a, args):
+        """glClearBufferData and glClearBufferSubData (GL 4.3): the range
+        filled with one element of the internal format, the value (NULL:
+        zero) converted as Mesa converts it. What GL refuses changes
+        nothing: a format or type Mesa refuses, a range outside the buffer
+        or not a whole number of elements, a mapped buffer."""
+        d = dict(args)
+        b = self.bound_buffer(no, name, d.get("target"))
+        buf = self.s.buffers.get(b)
+        whole = "SubData" not in name
+        off = 0 if whole else checked(no, integer, d.get("offset"), f"{name}: the offset", *I64)
+        size = (len(buf) if buf is not None else 0) if whole else \
+            checked(no, integer, d.get("size"), f"{name}: the size", *I64)
+        internal, data = d.get("internalformat"), d.get("data")
+        if data is not None and not isinstance(data, (bytes, bytearray)):
+            fail_call(no, f"{name}: the data is neither bytes nor NULL")
+        n = CLEAR_FORMATS.get(internal)
+        if n is None and isinstance(internal, str) and internal.startswith(("GL_ALPHA", "GL_LUMINANCE",
+                                                                            "GL_INTENSITY")):
+            fail_call(no, f"{name}: {internal}, a texture buffer format of the compatibility profile only: "
+                      "not emulated")
+        if buf is None or n is None or off < 0 or size < 0 or off + size > len(buf) or b in self.s.mappings \
+                or off % n or size % n or size == 0:
+            return   # GL_INVALID_ENUM, _VALUE or _OPERATION, or nothing to clear
+        fmt, kind = d.get("format"), d.get("type")
+        pixel = PACKED_BYTES.get(kind) or FORMAT_COMPONENTS.get(fmt, 0) * TYPE_BYTES.get(kind, 0)
+        if data is not None and pixel and len(data) != pixel:
+            # apitrace records one pixel of the format and type: another
+            # length is a capture cut or altered.
+            fail_call(no, f"{name}: {len(data)} bytes of data, not one {printable(fmt)} pixel of "
+                      f"{printable(kind)} ({pixel})")
+        value = self.vertex_stage().clear_element(internal, fmt, kind, data, n)
+        if value is None:
+            return   # Mesa refuses the format and type (GL_INVALID_ENUM or _OPERATION): nothing changes
+        if not any(value) and isinstance(buf, mmap.mmap):
+            # Zeros into storage whose pages cost nothing until written:
+            # only what was written is zeroed.
+            for s, e in self.written_extents(b):
+                if s < off + size and e > off:
+                    buf[max(s, off):min(e, off + size)] = bytes(min(e, off + size) - max(s, off))
+            self.s.next_version += 1
+            self.s.buffer_versions[b] = self.s.next_version
+            return
+        if isinstance(buf, mmap.mmap) and self.s.buffer_bytes_in_all + size > MAX_BUFFER_BYTES_IN_ALL:
+            self.held_bytes(no, name, b, self.s.buffer_held.get(b, 0) + size)   # refused before writing
+        buf[off:off + size] = value * (size // n)
+        self.changed(no, name, b, off, off + size)
+
     def h_map_buffer(self, no, name, a, args):
         d = dict(args)
         access, _ = bitfield(d.get("access", ()), no, f"{name}: the access", STORAGE_BITS)
@@ -409,6 +464,8 @@ class BufferCalls:
         "glNamedBufferSubData": named(h_buffer_sub_data, buffer="target"),
         "glNamedBufferStorage": named(h_buffer_storage, buffer="target"),
         "glCopyNamedBufferSubData": named(h_copy_buffer_sub_data, readBuffer="readTarget", writeBuffer="writeTarget"),
+        "glClearNamedBufferData": named(h_clear_buffer_data, buffer="target"),
+        "glClearNamedBufferSubData": named(h_clear_buffer_data, buffer="target"),
         "glMapNamedBuffer": named(h_map_buffer, buffer="target"),
         "glMapNamedBufferRange": named(h_map_buffer, buffer="target"),
         "glUnmapNamedBuffer": named(h_unmap_buffer, buffer="target"),
@@ -420,6 +477,8 @@ class BufferCalls:
         "glBufferSubData": h_buffer_sub_data,
         "glBufferStorage": h_buffer_storage,
         "glCopyBufferSubData": h_copy_buffer_sub_data,
+        "glClearBufferData": h_clear_buffer_data,
+        "glClearBufferSubData": h_clear_buffer_data,
         "glMapBuffer": h_map_buffer,
         "glMapBufferRange": h_map_buffer,
         "glUnmapBuffer": h_unmap_buffer,
