@@ -10,7 +10,9 @@
  * come on the FIFO $RBCD_TEXTURE_FIFOS/requests, one text line each, "CALL
  * UNIT[:TARGET]...", in increasing call order; when the replay reaches CALL,
  * the texture bound at each UNIT's TARGET (GL_TEXTURE_2D when none is given;
- * 1D, 3D, cube map, array and rectangle ones too, OpenGL ES 2D alone) is
+ * 1D, 3D, cube map, array and rectangle ones too, OpenGL ES 2D alone; a
+ * UNIT of IMAGE_UNIT_BASE and more names image unit UNIT - IMAGE_UNIT_BASE,
+ * whose texture is read as if bound at unit 0's TARGET) is
  * read back with its sampling parameters, every level with an image, in a
  * format and type that give its values back exactly when uploaded again
  * (desktop GL: glGetTexImage; OpenGL ES, which has none: glReadPixels from
@@ -19,13 +21,17 @@
  * $RBCD_TEXTURE_FIFOS/replies:
  *
  *   "RBTX", u32 units; per unit: u32 unit, target, i32 internal format, u32
- *   parameters, each u32 name and 4 f32 values; u32 levels; per level: u32
+ *   parameters, each u32 name and 4 f32 values (a multisample texture's
+ *   first GL_TEXTURE_SAMPLES: samples, fixed locations, layers; its level 0
+ *   holds layers x samples images, read by a compute shader of ours, as
+ *   four floats, the depth in the first, or four 32-bit integers); u32
+ *   levels; per level: u32
  *   level, width, height, depth (a cube map's 6 faces, in GL's order), format,
  *   type, u64 bytes, the bytes (rows from the bottom, packed: alignment 1)
  *   or "RBTE", u32 length, a message.
  *
- * The pixel pack state, the active unit and any pixel pack buffer are put
- * back as the replay had them. When the requests end (the converter closed
+ * The pixel pack state, the active unit, unit 0's binding an image's read
+ * took and any pixel pack buffer are put back as the replay had them. When the requests end (the converter closed
  * its end), the replay has nothing more to give and the process exits. */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -49,12 +55,14 @@ typedef void *(*EglGetProc)(const char *);
 #define MAX_UNITS 192
 #define MAX_LEVELS 15
 #define MAX_REPLY_BYTES (1ull << 30)
+#define IMAGE_UNIT_BASE 65536   /* (vertex_textures.IMAGE_UNIT_BASE) */
 
 static GetProc real_get_proc;   /* glXGetProcAddressARB or eglGetProcAddress, whichever glretrace looks up */
 static DebugMessageInsert real_insert, real_insert_khr;
 static int requests = -1, replies = -1;
 static long long want = -1;          /* the call asked for; -1: read the next request */
-static int want_units[MAX_UNITS], want_count;
+static long want_units[MAX_UNITS];
+static int want_count;
 static GLenum want_targets[MAX_UNITS];
 
 static struct {
@@ -73,6 +81,31 @@ static struct {
     void (*framebuffer_texture_2d)(GLenum, GLenum, GLenum, GLuint, GLint);
     GLenum (*check_framebuffer_status)(GLenum);
     void (*read_pixels)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *);
+    void (*bind_texture)(GLenum, GLuint);
+    void (*get_integeri_v)(GLenum, GLuint, GLint *);
+    /* A multisample texture's read (read_multisample). */
+    void (*get_integer64i_v)(GLenum, GLuint, GLint64 *);
+    GLuint (*create_shader)(GLenum);
+    void (*shader_source)(GLuint, GLsizei, const GLchar *const *, const GLint *);
+    void (*compile_shader)(GLuint);
+    GLuint (*create_program)(void);
+    void (*attach_shader)(GLuint, GLuint);
+    void (*link_program)(GLuint);
+    void (*get_programiv)(GLuint, GLenum, GLint *);
+    void (*use_program)(GLuint);
+    GLint (*get_uniform_location)(GLuint, const GLchar *);
+    void (*uniform1i)(GLint, GLint);
+    void (*gen_buffers)(GLsizei, GLuint *);
+    void (*buffer_data)(GLenum, GLsizeiptr, const void *, GLenum);
+    void (*bind_buffer_base)(GLenum, GLuint, GLuint);
+    void (*bind_buffer_range)(GLenum, GLuint, GLuint, GLintptr, GLsizeiptr);
+    void (*dispatch_compute)(GLuint, GLuint, GLuint);
+    void (*memory_barrier)(GLbitfield);
+    void *(*map_buffer_range)(GLenum, GLintptr, GLsizeiptr, GLbitfield);
+    GLboolean (*unmap_buffer)(GLenum);
+    void (*delete_buffers)(GLsizei, const GLuint *);
+    void (*delete_program)(GLuint);
+    void (*delete_shader)(GLuint);
 } gl;
 static int es;   /* the replay's context is OpenGL ES's */
 
@@ -130,7 +163,7 @@ static void next_request(void)
         long u = strtol(p, &end, 10);
         if (end == p)
             break;
-        want_units[want_count] = (int)u;
+        want_units[want_count] = u;
         want_targets[want_count] = GL_TEXTURE_2D;
         if (*end == ':') {
             p = end + 1;
@@ -146,13 +179,16 @@ struct Texture {
     GLint internal;
     GLenum format, type;
     GLint levels, size[MAX_LEVELS][3];   /* width, height, depth (a cube map's 6 faces) */
+    GLint samples, fixed, layers;        /* a multisample texture's; its level 0 holds layers x samples images */
 };
+
+static int multisample(GLenum t) { return t == GL_TEXTURE_2D_MULTISAMPLE || t == GL_TEXTURE_2D_MULTISAMPLE_ARRAY; }
 
 static int known_target(GLenum t)
 {
     return t == GL_TEXTURE_2D || t == GL_TEXTURE_3D || t == GL_TEXTURE_2D_ARRAY || t == GL_TEXTURE_CUBE_MAP ||
            t == GL_TEXTURE_CUBE_MAP_ARRAY || t == GL_TEXTURE_1D || t == GL_TEXTURE_1D_ARRAY ||
-           t == GL_TEXTURE_RECTANGLE;
+           t == GL_TEXTURE_RECTANGLE || multisample(t);
 }
 
 /* How a level reads back exactly: its values, uploaded again into the
@@ -212,6 +248,26 @@ static void describe(struct Texture *t, GLenum target)
     t->query = target == GL_TEXTURE_CUBE_MAP ? GL_TEXTURE_CUBE_MAP_POSITIVE_X : target;
     gl.get_tex_level_parameteriv(t->query, 0, GL_TEXTURE_INTERNAL_FORMAT, &t->internal);
     readback_format(t);
+    if (multisample(target)) {
+        /* Each sample of each layer read as an image of its own, as four
+         * floats (depth in the first) or four 32-bit integers. */
+        GLint w = 0, h = 0, d = 0;
+        gl.get_tex_level_parameteriv(target, 0, GL_TEXTURE_WIDTH, &w);
+        gl.get_tex_level_parameteriv(target, 0, GL_TEXTURE_HEIGHT, &h);
+        gl.get_tex_level_parameteriv(target, 0, GL_TEXTURE_DEPTH, &d);
+        gl.get_tex_level_parameteriv(target, 0, GL_TEXTURE_SAMPLES, &t->samples);
+        gl.get_tex_level_parameteriv(target, 0, GL_TEXTURE_FIXED_SAMPLE_LOCATIONS, &t->fixed);
+        if (t->format != GL_RGBA_INTEGER) {
+            t->format = GL_RGBA;
+            t->type = GL_FLOAT;
+        }
+        t->layers = d > 0 ? d : 1;
+        if (w > 0 && h > 0 && t->samples > 0) {
+            t->size[0][0] = w, t->size[0][1] = h, t->size[0][2] = t->layers * t->samples;
+            t->levels = 1;
+        }
+        return;
+    }
     for (GLint level = 0; level < MAX_LEVELS; level++) {
         GLint w = 0, h = 0, d = 0;
         gl.get_tex_level_parameteriv(t->query, level, GL_TEXTURE_WIDTH, &w);
@@ -251,6 +307,78 @@ static int read_level_es(GLint level, GLint w, GLint h, GLenum format, GLenum ty
     return ok;
 }
 
+/* A multisample texture bound at `unit`, read by a compute shader of our
+ * own (texelFetch of each sample into a shader storage buffer): image
+ * (layer * samples + sample) of level 0's, rows from the bottom. The
+ * program in use and shader storage binding 0 are put back as the replay
+ * had them. 0 if it cannot be read. */
+static int read_multisample(const struct Texture *t, int unit, void *pixels)
+{
+    const int array = t->target == GL_TEXTURE_2D_MULTISAMPLE_ARRAY;
+    const char *kind = t->format != GL_RGBA_INTEGER ? "" : t->type == GL_INT ? "i" : "u";
+    char source[1024];
+    snprintf(source, sizeof source,
+             "#version %s\n"
+             "layout(local_size_x = 1) in;\n"
+             "uniform highp %ssampler2DMS%s t;\n"
+             "uniform int samples;\n"
+             "layout(std430, binding = 0) writeonly buffer Out { highp %svec4 v[]; };\n"
+             "void main() {\n"
+             "    ivec3 p = ivec3(gl_GlobalInvocationID);\n"
+             "    int w = int(gl_NumWorkGroups.x), h = int(gl_NumWorkGroups.y);\n"
+             "    for (int s = 0; s < samples; s++)\n"
+             "        v[((p.z * samples + s) * h + p.y) * w + p.x] = texelFetch(t, %s, s);\n"
+             "}\n",
+             es ? (array ? "320 es" : "310 es") : "430", kind, array ? "Array" : "", kind, array ? "p" : "p.xy");
+    GLint program = 0, generic = 0, bound = 0;
+    GLint64 start = 0, size = 0;
+    gl.get_integerv(GL_CURRENT_PROGRAM, &program);
+    gl.get_integerv(GL_SHADER_STORAGE_BUFFER_BINDING, &generic);
+    gl.get_integeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, 0, &bound);
+    gl.get_integer64i_v(GL_SHADER_STORAGE_BUFFER_START, 0, &start);
+    gl.get_integer64i_v(GL_SHADER_STORAGE_BUFFER_SIZE, 0, &size);
+    const char *text = source;
+    GLuint shader = gl.create_shader(GL_COMPUTE_SHADER), prog = gl.create_program(), buf = 0;
+    gl.shader_source(shader, 1, &text, NULL);
+    gl.compile_shader(shader);
+    gl.attach_shader(prog, shader);
+    gl.link_program(prog);
+    GLint linked = 0;
+    gl.get_programiv(prog, GL_LINK_STATUS, &linked);
+    const uint64_t n = level_bytes(t, 0);
+    int ok = 0;
+    if (linked) {
+        gl.use_program(prog);
+        gl.uniform1i(gl.get_uniform_location(prog, "t"), unit);
+        gl.uniform1i(gl.get_uniform_location(prog, "samples"), t->samples);
+        gl.gen_buffers(1, &buf);
+        gl.bind_buffer(GL_SHADER_STORAGE_BUFFER, buf);
+        gl.buffer_data(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)n, NULL, GL_STREAM_READ);
+        gl.bind_buffer_base(GL_SHADER_STORAGE_BUFFER, 0, buf);
+        while (gl.get_error() != GL_NO_ERROR)
+            ;
+        gl.dispatch_compute((GLuint)t->size[0][0], (GLuint)t->size[0][1], (GLuint)t->layers);
+        gl.memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+        void *mapped = gl.map_buffer_range(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)n, GL_MAP_READ_BIT);
+        if (mapped) {
+            memcpy(pixels, mapped, n);
+            gl.unmap_buffer(GL_SHADER_STORAGE_BUFFER);
+        }
+        ok = mapped && gl.get_error() == GL_NO_ERROR;
+    }
+    gl.use_program((GLuint)program);
+    if (size > 0)
+        gl.bind_buffer_range(GL_SHADER_STORAGE_BUFFER, 0, (GLuint)bound, (GLintptr)start, (GLsizeiptr)size);
+    else
+        gl.bind_buffer_base(GL_SHADER_STORAGE_BUFFER, 0, (GLuint)bound);
+    gl.bind_buffer(GL_SHADER_STORAGE_BUFFER, (GLuint)generic);
+    if (buf)
+        gl.delete_buffers(1, &buf);
+    gl.delete_program(prog);
+    gl.delete_shader(shader);
+    return ok;
+}
+
 /* One level's pixels into `pixels` (level_bytes of them); 0 if they cannot
  * be read. */
 static int read_level(const struct Texture *t, GLint level, void *pixels)
@@ -275,6 +403,45 @@ static const GLenum parameters[] = {
     GL_TEXTURE_COMPARE_MODE, GL_TEXTURE_COMPARE_FUNC, GL_TEXTURE_SWIZZLE_R, GL_TEXTURE_SWIZZLE_G,
     GL_TEXTURE_SWIZZLE_B, GL_TEXTURE_SWIZZLE_A, GL_TEXTURE_BORDER_COLOR, GL_DEPTH_STENCIL_TEXTURE_MODE};
 #define NPARAMETERS (sizeof parameters / sizeof parameters[0])
+
+/* The binding of each target a texture is read back at. */
+static GLenum binding_of(GLenum target)
+{
+    switch (target) {
+    case GL_TEXTURE_1D: return GL_TEXTURE_BINDING_1D;
+    case GL_TEXTURE_3D: return GL_TEXTURE_BINDING_3D;
+    case GL_TEXTURE_2D_ARRAY: return GL_TEXTURE_BINDING_2D_ARRAY;
+    case GL_TEXTURE_CUBE_MAP: return GL_TEXTURE_BINDING_CUBE_MAP;
+    case GL_TEXTURE_CUBE_MAP_ARRAY: return GL_TEXTURE_BINDING_CUBE_MAP_ARRAY;
+    case GL_TEXTURE_1D_ARRAY: return GL_TEXTURE_BINDING_1D_ARRAY;
+    case GL_TEXTURE_RECTANGLE: return GL_TEXTURE_BINDING_RECTANGLE;
+    default: return GL_TEXTURE_BINDING_2D;
+    }
+}
+
+/* Makes request k's texture the active unit's: its texture unit, or, for
+ * an image unit, unit 0 with the image's texture bound at the target (the
+ * binding it replaces into *saved, for unselect). */
+static void select_unit(int k, GLint *saved)
+{
+    if (want_units[k] < IMAGE_UNIT_BASE) {
+        gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
+        return;
+    }
+    GLint tex = 0;
+    gl.get_integeri_v(GL_IMAGE_BINDING_NAME, (GLuint)(want_units[k] - IMAGE_UNIT_BASE), &tex);
+    gl.active_texture(GL_TEXTURE0);
+    gl.get_integerv(binding_of(want_targets[k]), saved);
+    gl.bind_texture(want_targets[k], (GLuint)tex);
+}
+
+static void unselect_unit(int k, GLint saved)
+{
+    if (want_units[k] >= IMAGE_UNIT_BASE) {
+        gl.active_texture(GL_TEXTURE0);
+        gl.bind_texture(want_targets[k], (GLuint)saved);
+    }
+}
 
 static void answer(void)
 {
@@ -305,17 +472,28 @@ static void answer(void)
             why = "a texture target the readback does not take";
             break;
         }
-        gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
+        GLint saved = 0;
+        select_unit(k, &saved);
         describe(&textures[k], want_targets[k]);
+        unselect_unit(k, saved);
         for (int i = 0; i < MAX_LEVELS; i++)
             total += level_bytes(&textures[k], i);
-        if (es && want_targets[k] != GL_TEXTURE_2D)
-            why = "an OpenGL ES texture other than a 2D one is not read back";
+        if (es && want_targets[k] != GL_TEXTURE_2D && !multisample(want_targets[k]))
+            why = "an OpenGL ES texture other than a 2D or multisample one is not read back";
+        if (multisample(want_targets[k]) &&
+            (!gl.get_integer64i_v || !gl.create_shader || !gl.shader_source || !gl.compile_shader ||
+             !gl.create_program || !gl.attach_shader || !gl.link_program || !gl.get_programiv || !gl.use_program ||
+             !gl.get_uniform_location || !gl.uniform1i || !gl.gen_buffers || !gl.buffer_data ||
+             !gl.bind_buffer_base || !gl.bind_buffer_range || !gl.dispatch_compute || !gl.memory_barrier ||
+             !gl.map_buffer_range || !gl.unmap_buffer || !gl.delete_buffers || !gl.delete_program ||
+             !gl.delete_shader))
+            why = "a multisample texture is read by a compute shader, which the replay's GL lacks";
     }
     if (!why && total > MAX_REPLY_BYTES)
         why = "the textures would take more than 1 GiB to read back";
     for (int k = 0; k < want_count && !why; k++) {
-        gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
+        GLint saved = 0;
+        select_unit(k, &saved);
         for (int i = 0; i < MAX_LEVELS && !why; i++) {
             pixels[k][i] = NULL;
             if (!textures[k].size[i][0])
@@ -324,8 +502,12 @@ static void answer(void)
             pixels[k][i] = calloc(n ? n : 1, 1);
             if (!pixels[k][i])
                 die();
-            if (!read_level(&textures[k], i, pixels[k][i]))
+            if (multisample(textures[k].target)) {
+                if (!read_multisample(&textures[k], (int)want_units[k], pixels[k][i]))
+                    why = "a multisample texture the replay's compute shader could not read";
+            } else if (!read_level(&textures[k], i, pixels[k][i])) {
                 why = "an OpenGL ES texture whose image glReadPixels cannot read (a depth format) is not read back";
+            }
         }
         for (size_t j = 0; j < NPARAMETERS; j++) {
             while (gl.get_error() != GL_NO_ERROR)
@@ -333,6 +515,7 @@ static void answer(void)
             gl.get_tex_parameterfv(textures[k].target, parameters[j], values[k][j]);
             has[k][j] = gl.get_error() == GL_NO_ERROR;   /* one the context has not (OpenGL ES's LOD bias) */
         }
+        unselect_unit(k, saved);
     }
     if (why) {
         refuse(why);
@@ -341,13 +524,18 @@ static void answer(void)
         put_u32((uint32_t)want_count);
         for (int k = 0; k < want_count; k++) {
             const struct Texture *t = &textures[k];
-            uint32_t nparams = 0;
+            uint32_t nparams = multisample(t->target) ? 1 : 0;   /* its samples: GL_TEXTURE_SAMPLES */
             for (size_t j = 0; j < NPARAMETERS; j++)
                 nparams += (uint32_t)has[k][j];
             put_u32((uint32_t)want_units[k]);
             put_u32(t->target);
             put_u32((uint32_t)t->internal);
             put_u32(nparams);
+            if (multisample(t->target)) {
+                const GLfloat samples[4] = {(GLfloat)t->samples, (GLfloat)t->fixed, (GLfloat)t->layers, 0};
+                put_u32(GL_TEXTURE_SAMPLES);
+                put(samples, 16);
+            }
             for (size_t j = 0; j < NPARAMETERS; j++) {
                 if (!has[k][j])
                     continue;
@@ -414,11 +602,36 @@ static int open_fifos(void)
     gl.framebuffer_texture_2d = (void (*)(GLenum, GLenum, GLenum, GLuint, GLint))real_get_proc("glFramebufferTexture2D");
     gl.check_framebuffer_status = (GLenum(*)(GLenum))real_get_proc("glCheckFramebufferStatus");
     gl.read_pixels = (void (*)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *))real_get_proc("glReadPixels");
+    gl.bind_texture = (void (*)(GLenum, GLuint))real_get_proc("glBindTexture");
+    gl.get_integeri_v = (void (*)(GLenum, GLuint, GLint *))real_get_proc("glGetIntegeri_v");
+    /* Those of a multisample texture's read: checked when one is read. */
+    gl.get_integer64i_v = (void (*)(GLenum, GLuint, GLint64 *))real_get_proc("glGetInteger64i_v");
+    gl.create_shader = (GLuint(*)(GLenum))real_get_proc("glCreateShader");
+    gl.shader_source = (void (*)(GLuint, GLsizei, const GLchar *const *, const GLint *))real_get_proc("glShaderSource");
+    gl.compile_shader = (void (*)(GLuint))real_get_proc("glCompileShader");
+    gl.create_program = (GLuint(*)(void))real_get_proc("glCreateProgram");
+    gl.attach_shader = (void (*)(GLuint, GLuint))real_get_proc("glAttachShader");
+    gl.link_program = (void (*)(GLuint))real_get_proc("glLinkProgram");
+    gl.get_programiv = (void (*)(GLuint, GLenum, GLint *))real_get_proc("glGetProgramiv");
+    gl.use_program = (void (*)(GLuint))real_get_proc("glUseProgram");
+    gl.get_uniform_location = (GLint(*)(GLuint, const GLchar *))real_get_proc("glGetUniformLocation");
+    gl.uniform1i = (void (*)(GLint, GLint))real_get_proc("glUniform1i");
+    gl.gen_buffers = (void (*)(GLsizei, GLuint *))real_get_proc("glGenBuffers");
+    gl.buffer_data = (void (*)(GLenum, GLsizeiptr, const void *, GLenum))real_get_proc("glBufferData");
+    gl.bind_buffer_base = (void (*)(GLenum, GLuint, GLuint))real_get_proc("glBindBufferBase");
+    gl.bind_buffer_range = (void (*)(GLenum, GLuint, GLuint, GLintptr, GLsizeiptr))real_get_proc("glBindBufferRange");
+    gl.dispatch_compute = (void (*)(GLuint, GLuint, GLuint))real_get_proc("glDispatchCompute");
+    gl.memory_barrier = (void (*)(GLbitfield))real_get_proc("glMemoryBarrier");
+    gl.map_buffer_range = (void *(*)(GLenum, GLintptr, GLsizeiptr, GLbitfield))real_get_proc("glMapBufferRange");
+    gl.unmap_buffer = (GLboolean(*)(GLenum))real_get_proc("glUnmapBuffer");
+    gl.delete_buffers = (void (*)(GLsizei, const GLuint *))real_get_proc("glDeleteBuffers");
+    gl.delete_program = (void (*)(GLuint))real_get_proc("glDeleteProgram");
+    gl.delete_shader = (void (*)(GLuint))real_get_proc("glDeleteShader");
     if (!gl.get_integerv || !gl.active_texture || !gl.pixel_storei || !gl.bind_buffer ||
         !gl.get_tex_level_parameteriv || !gl.get_tex_image || !gl.get_tex_parameterfv || !gl.get_error ||
         !gl.get_string ||
         !gl.gen_framebuffers || !gl.delete_framebuffers || !gl.bind_framebuffer || !gl.framebuffer_texture_2d ||
-        !gl.check_framebuffer_status || !gl.read_pixels)
+        !gl.check_framebuffer_status || !gl.read_pixels || !gl.bind_texture || !gl.get_integeri_v)
         die();
     return 1;
 }

@@ -6,8 +6,8 @@
  *   gl_shaders [WIDTH HEIGHT [FAULT]]   (default 128 96; the window is the screen)
  *
  * FAULT adds, in frame 1, one draw the converter must refuse, naming it:
- * geometry (a program with a geometry shader), separable (a separable
- * program); or one it must convert as Mesa draws it: compile (a program
+ * geometry (a program with a geometry shader); or one it must convert as
+ * Mesa draws it: compile (a program
  * whose vertex shader does not compile, used all the same:
  * GL_INVALID_OPERATION, the draw runs the program in use), texture (a vertex
  * shader that samples a 2D texture uploaded with glTexImage2D: the triangle
@@ -17,7 +17,16 @@
  * rendered instead by a draw into a framebuffer object whose fragment shader
  * writes texel (0, 0)'s value everywhere: the same fragments), cube (the
  * same triangle moved by a texel of a cube map, every face that texel), array
- * (the same, by layer 1 of a 2D array texture whose layer 0 is another).
+ * (the same, by layer 1 of a 2D array texture whose layer 0 is another),
+ * image (that layer read by imageLoad through image unit 3, bound with
+ * glBindImageTexture as a 2D image, the texture bound at no texture unit),
+ * multisample (sample 3 of a 4-sample texture, the only one a draw under
+ * a sample mask writes the texel into, the others cleared to another),
+ * default (the default 3D texture, name 0, given the texel everywhere),
+ * separable (the "texture" fault's draw through a program pipeline: its
+ * vertex shader a separable program, its fragment shader one made by
+ * glCreateShaderProgramv, no program in use, the sampler set with
+ * glProgramUniform1i: the same fragments).
  *
  * One program: a std140 uniform block Matrices {proj, view} at binding 2, a
  * uniform mat4 model, the position attribute bound with glBindAttribLocation
@@ -63,6 +72,9 @@ static const char* effects_source =
     "out vec4 colour;\n"
     "void main() { if (gl_FragCoord.z > 2.0) discard; gl_FragDepth = gl_FragCoord.z; colour = vec4(1.0); }\n";
 
+/* The "texture" and "separable" faults' texels: (0, 0) moves the triangle. */
+static const float height_texels[2][2][4] = {{{-0.75f, -0.5f, -1.5f, 0}, {9, 9, 9, 0}}, {{-9, -9, 9, 0}, {5, 5, 5, 0}}};
+
 static GLushort triangles[36], strips[29];
 static GLint model_at;
 static const char* fault = "";
@@ -86,6 +98,21 @@ static const char* array_source =
     "uniform sampler2DArray heights;\n"
     "in vec3 position;\n"
     "void main() { gl_Position = vec4(position, 1.0) + textureLod(heights, vec3(position.xy, 1.0), 0.0); }\n";
+static const char* default_source =
+    "#version 330 core\n"
+    "uniform sampler3D heights;\n"
+    "in vec3 position;\n"
+    "void main() { gl_Position = vec4(position, 1.0) + textureLod(heights, vec3(0.25), 0.0); }\n";
+static const char* multisample_source =
+    "#version 330 core\n"
+    "uniform sampler2DMS heights;\n"
+    "in vec3 position;\n"
+    "void main() { gl_Position = vec4(position, 1.0) + texelFetch(heights, ivec2(0, 0), 3); }\n";
+static const char* image_source =
+    "#version 420 core\n"
+    "layout(rgba32f) readonly uniform image2D heights;\n"
+    "in vec3 position;\n"
+    "void main() { gl_Position = vec4(position, 1.0) + imageLoad(heights, ivec2(0, 0)); }\n";
 /* The "rendered" fault's fill: one triangle over the whole 2x2 target from
  * the cube's vertices 4 to 6, (0,0) (1,0) (1,1) to clip (-1,-1) (3,-1)
  * (-1,3), every texel the "texture" fault's texel (0, 0). */
@@ -146,6 +173,34 @@ static GLuint texture_2x2(const void* texels) {
     return tex;
 }
 
+/* Texture `tex` (of `target`, 2x2) filled by a draw into a framebuffer
+ * object: every texel the "texture" fault's texel (0, 0); with `mask`, only
+ * the samples it names, the others cleared to (9, 9, 9, 0) first. */
+static void fill(GLenum target, GLuint tex, GLuint mask) {
+    static const float other[4] = {9, 9, 9, 0};
+    GLuint fb, program = glCreateProgram();
+    GLint viewport[4];
+    glGetIntegerv(GL_VIEWPORT, viewport);
+    glGenFramebuffers(1, &fb);
+    glBindFramebuffer(GL_FRAMEBUFFER, fb);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, target, tex, 0);
+    glAttachShader(program, compile(GL_VERTEX_SHADER, fill_vertex_source));
+    glAttachShader(program, compile(GL_FRAGMENT_SHADER, fill_fragment_source));
+    glBindAttribLocation(program, 0, "position");
+    glLinkProgram(program);
+    glUseProgram(program);
+    glViewport(0, 0, 2, 2);
+    if (mask) {
+        glClearBufferfv(GL_COLOR, 0, other);
+        glEnable(GL_SAMPLE_MASK);
+        glSampleMaski(0, mask);
+    }
+    glDrawArrays(GL_TRIANGLES, 4, 3);
+    glDisable(GL_SAMPLE_MASK);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+}
+
 /* The one fault draw of frame 1 (see the header comment): a small
  * triangle through a program of its own. */
 static void inject_fault(GLuint main_program) {
@@ -155,23 +210,27 @@ static void inject_fault(GLuint main_program) {
         glAttachShader(p, compile(GL_VERTEX_SHADER, vertex_source));
         glAttachShader(p, compile(GL_GEOMETRY_SHADER, geometry_source));
     } else if (!strcmp(fault, "rendered")) {
-        GLuint tex = texture_2x2(NULL), fb, fill = glCreateProgram();
-        GLint viewport[4];
-        glGetIntegerv(GL_VIEWPORT, viewport);
-        glGenFramebuffers(1, &fb);
-        glBindFramebuffer(GL_FRAMEBUFFER, fb);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex, 0);
-        glAttachShader(fill, compile(GL_VERTEX_SHADER, fill_vertex_source));
-        glAttachShader(fill, compile(GL_FRAGMENT_SHADER, fill_fragment_source));
-        glBindAttribLocation(fill, 0, "position");
-        glLinkProgram(fill);
-        glUseProgram(fill);
-        glViewport(0, 0, 2, 2);
-        glDrawArrays(GL_TRIANGLES, 4, 3);
-        glBindFramebuffer(GL_FRAMEBUFFER, 0);
-        glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+        fill(GL_TEXTURE_2D, texture_2x2(NULL), 0);
         glAttachShader(p, compile(GL_VERTEX_SHADER, texture_source));
-    } else if (!strcmp(fault, "cube") || !strcmp(fault, "array")) {
+    } else if (!strcmp(fault, "default")) {
+        float texels[2][2][2][4];   /* the default 3D texture (name 0), every texel the texel */
+        for (int i = 0; i < 8; ++i) memcpy(((float(*)[4])texels)[i], height_texels[0][0], sizeof height_texels[0][0]);
+        glActiveTexture(GL_TEXTURE2);
+        glBindTexture(GL_TEXTURE_3D, 0);
+        glTexImage3D(GL_TEXTURE_3D, 0, GL_RGBA32F, 2, 2, 2, 0, GL_RGBA, GL_FLOAT, texels);
+        glTexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glActiveTexture(GL_TEXTURE0);
+        glAttachShader(p, compile(GL_VERTEX_SHADER, default_source));
+    } else if (!strcmp(fault, "multisample")) {
+        GLuint tex;
+        glActiveTexture(GL_TEXTURE2);
+        glGenTextures(1, &tex);
+        glBindTexture(GL_TEXTURE_2D_MULTISAMPLE, tex);
+        glTexImage2DMultisample(GL_TEXTURE_2D_MULTISAMPLE, 4, GL_RGBA32F, 2, 2, GL_TRUE);
+        glActiveTexture(GL_TEXTURE0);
+        fill(GL_TEXTURE_2D_MULTISAMPLE, tex, 1u << 3);
+        glAttachShader(p, compile(GL_VERTEX_SHADER, multisample_source));
+    } else if (!strcmp(fault, "cube") || !strcmp(fault, "array") || !strcmp(fault, "image")) {
         static const float texel[4] = {-0.75f, -0.5f, -1.5f, 0}, other[4] = {9, 9, 9, 0};
         const int cube = !strcmp(fault, "cube");
         const GLenum target = cube ? GL_TEXTURE_CUBE_MAP : GL_TEXTURE_2D_ARRAY;
@@ -194,28 +253,44 @@ static void inject_fault(GLuint main_program) {
         glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
         glTexParameteri(target, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
         glActiveTexture(GL_TEXTURE0);
-        glAttachShader(p, compile(GL_VERTEX_SHADER, cube ? cube_source : array_source));
-    } else if (!strcmp(fault, "texture")) {
-        static const float texels[2][2][4] = {{{-0.75f, -0.5f, -1.5f, 0}, {9, 9, 9, 0}}, {{-9, -9, 9, 0}, {5, 5, 5, 0}}};
-        texture_2x2(texels);
+        if (!strcmp(fault, "image")) {
+            glBindTexture(target, 0);   /* read through image unit 3 alone: layer 1 as a 2D image */
+            glBindImageTexture(3, tex, 0, GL_FALSE, 1, GL_READ_ONLY, GL_RGBA32F);
+            glAttachShader(p, compile(GL_VERTEX_SHADER, image_source));
+        } else {
+            glAttachShader(p, compile(GL_VERTEX_SHADER, cube ? cube_source : array_source));
+        }
+    } else if (!strcmp(fault, "texture") || !strcmp(fault, "separable")) {
+        texture_2x2(height_texels);
+        if (!strcmp(fault, "separable")) glProgramParameteri(p, GL_PROGRAM_SEPARABLE, GL_TRUE);
         glAttachShader(p, compile(GL_VERTEX_SHADER, texture_source));
     } else if (!strcmp(fault, "compile")) {
         glAttachShader(p, compile(GL_VERTEX_SHADER, broken_source));
-    } else if (!strcmp(fault, "separable")) {
-        glProgramParameteri(p, GL_PROGRAM_SEPARABLE, GL_TRUE);
-        glAttachShader(p, compile(GL_VERTEX_SHADER, vertex_source));
     }
     glBindAttribLocation(p, 0, "position");
     glLinkProgram(p);
-    glUseProgram(p);
+    GLuint pipeline = 0;
+    if (!strcmp(fault, "separable")) {
+        GLuint fragment = glCreateShaderProgramv(GL_FRAGMENT_SHADER, 1, &fragment_source);
+        glGenProgramPipelines(1, &pipeline);
+        glUseProgramStages(pipeline, GL_VERTEX_SHADER_BIT, p);
+        glUseProgramStages(pipeline, GL_FRAGMENT_SHADER_BIT, fragment);
+        glUseProgram(0);
+        glBindProgramPipeline(pipeline);
+        glProgramUniform1i(p, glGetUniformLocation(p, "heights"), 2);
+    } else {
+        glUseProgram(p);
+    }
     const int textured = !strcmp(fault, "texture") || !strcmp(fault, "rendered") || !strcmp(fault, "cube") ||
-                         !strcmp(fault, "array");
+                         !strcmp(fault, "array") || !strcmp(fault, "image") || !strcmp(fault, "multisample") ||
+                         !strcmp(fault, "default") || pipeline;
     if (textured) {
-        glUniform1i(glGetUniformLocation(p, "heights"), 2);
+        if (!pipeline) glUniform1i(glGetUniformLocation(p, "heights"), !strcmp(fault, "image") ? 3 : 2);
         begin_object(9);
     }
     glDrawArrays(GL_TRIANGLES, textured ? 4 : 0, 3);   /* the cube's first face from vertex 4 */
     if (textured) end_object();
+    if (pipeline) glBindProgramPipeline(0);
     glUseProgram(main_program);
 }
 

@@ -10,7 +10,7 @@ import struct
 
 import pytest
 
-from gl_captures import TRIANGLE, gl2rbt_timed as gl2rbt, refused
+from gl_captures import TRIANGLE, gl2rbt_timed as gl2rbt
 from test_gl2rbt_hostile import VS, shader_calls
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")

@@ -107,6 +107,8 @@ def test_client_data_shorter_than_the_draw_reads_is_refused(tmp_path, cut, words
 VS_XFB = ("#version 440 core\nin vec3 p;\nlayout(xfb_buffer = 0, xfb_offset = 0) out vec4 tf;\n"
           "void main() { tf = vec4(9.0); gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
 VS_CLIP = VS.replace("void main() {", "void main() { gl_ClipDistance[0] = p.x - 20.0;")
+VS_VIEWPORT = VS.replace("#version 330 core\n", "#version 330 core\n#extension GL_ARB_shader_viewport_layer_array : "
+                         "require\n").replace("void main() {", "void main() { gl_ViewportIndex = 1;")
 
 
 @pytest.mark.parametrize("source, words", [
@@ -116,7 +118,9 @@ VS_CLIP = VS.replace("void main() {", "void main() { gl_ClipDistance[0] = p.x - 
     # Mesa 22.3 clips by gl_ClipDistance even with GL_CLIP_DISTANCE0
     # disabled (GL says it does not): not emulated, so refused.
     (VS_CLIP, "writes clip or cull distances"),
-], ids=["xfb_outputs", "clip_distance"])
+    # The primitive drawn in viewport 1 (round 12's R12-7: drawn in 0).
+    (VS_VIEWPORT, "chooses the viewport (gl_ViewportIndex)"),
+], ids=["xfb_outputs", "clip_distance", "viewport_index"])
 def test_vertex_shaders_whose_output_the_converter_cannot_follow_are_refused(tmp_path, source, words):
     r = gl2rbt(tmp_path, draw(shader_calls(source)).write(tmp_path / "v.xz"), "-o", tmp_path / "v.rbt")
     refused(r, "call ", "program 2", words)
@@ -492,3 +496,131 @@ def test_more_indirect_draws_gl_refuses_draw_nothing(tmp_path, fn, kw, core):
         c.calls = [x for x in c.calls if not (x[1] == "glBindBuffer" and dict(x[2]).get("target") ==
                                               "GL_ELEMENT_ARRAY_BUFFER")]
     assert trace_of(tmp_path, c, "nothing").count(b"\nf ") == 0
+
+
+def test_a_parameter_buffer_named_by_its_extension_draws(tmp_path):
+    """apitrace names 0x80EE GL_PARAMETER_BUFFER_ARB: a glMultiDraw*IndirectCount
+    reads its draw count from the buffer bound there (round 12's R12-3:
+    taken as no target, every such draw drew nothing)."""
+    want = trace_of(tmp_path, draw(shader_calls(VS)), "want")
+    c = shader_calls(VS)
+    c.add("glBindBuffer", target="GL_PARAMETER_BUFFER_ARB", buffer=10)
+    c.add("glBufferData", target="GL_PARAMETER_BUFFER_ARB", size=8, data=struct.pack("<2I", 5, 2),
+          usage="GL_STATIC_DRAW")
+    c = indirect(c, "glMultiDrawArraysIndirectCount", [3, 1, 0, 0, 3, 1, 0, 0], indirect=0, drawcount=4,
+                 maxdrawcount=1, stride=0)
+    assert trace_of(tmp_path, c, "count") == want
+
+
+@pytest.mark.parametrize("fn, commands, kw", [
+    ("glDrawArraysIndirect", [3, 1, 0, 0], dict(indirect=0)),
+    ("glDrawElementsIndirect", [3, 1, 2, 0, 0], dict(type="GL_UNSIGNED_SHORT", indirect=0)),
+], ids=["arrays", "elements"])
+def test_opengl_es_indirect_draws_draw_their_commands(tmp_path, fn, commands, kw):
+    """OpenGL ES 3.1's indirect draws (round 12's R12-5: refused, the draw
+    issued through PyOpenGL's desktop wrapper, which cannot read an ES
+    context's version): the triangle the direct draw gives."""
+    def es(c):
+        c.calls[5] = (6, "eglCreateContext", [("dpy", 1), ("config", 1), ("share_context", 0), (
+            "attrib_list", ["EGL_CONTEXT_MAJOR_VERSION", 3, "EGL_CONTEXT_MINOR_VERSION", 1, "EGL_NONE"])], 1, 0)
+        return c
+    vs = ("#version 310 es\nin vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, "
+          "0.0, 1.0); }\n")
+    fs = "#version 310 es\nprecision mediump float;\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n"
+
+    def program(c):
+        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+        c.add("glShaderSource", shader=3, count=1, string=[fs], length=None)
+        c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
+        return c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+    want = trace_of(tmp_path, draw(program(es(shader_calls(vs)))), "want")
+    assert want.count(b"\nf ") > 100
+    assert trace_of(tmp_path, indirect(program(es(shader_calls(vs))), fn, commands, **kw), "es") == want
+
+
+@pytest.mark.parametrize("write, words", [
+    (lambda c: c.add("glBindBuffer", target="GL_PIXEL_PACK_BUFFER", buffer=1).add(
+        "glReadPixels", x=0, y=0, width=3, height=1, format="GL_RGB", type="GL_FLOAT", pixels=0),
+     "glReadPixels into the pixel pack buffer"),
+    (lambda c: c.add("glBindBuffer", target="GL_QUERY_BUFFER", buffer=1).add(
+        "glGetQueryObjectuiv", id=1, pname="GL_QUERY_RESULT", params=0), "glGetQueryObjectuiv into the query buffer"),
+    (lambda c: c.add("glBindBuffer", target="GL_COPY_WRITE_BUFFER", buffer=4).add(
+        "glBufferData", target="GL_COPY_WRITE_BUFFER", size=36, data=None, usage="GL_STATIC_DRAW").add(
+        "glBindBuffer", target="GL_PIXEL_PACK_BUFFER", buffer=4).add(
+        "glGetTexImage", target="GL_TEXTURE_2D", level=0, format="GL_RGBA", type="GL_FLOAT", pixels=0).add(
+        "glBindBuffer", target="GL_COPY_READ_BUFFER", buffer=4).add(
+        "glCopyBufferSubData", readTarget="GL_COPY_READ_BUFFER", writeTarget="GL_ARRAY_BUFFER", readOffset=0,
+        writeOffset=0, size=36), "glCopyBufferSubData from buffer 4"),
+], ids=["read_pixels", "query_result", "copied"])
+def test_vertex_data_the_gpu_wrote_is_refused(tmp_path, write, words):
+    """A buffer the GPU writes (pixels read into a pack buffer, a query's
+    result, a copy of such a buffer) holds what the capture does not: a
+    draw that reads it as vertices is refused naming both calls, nothing
+    left (round 12's R12-2: the capture's old bytes were drawn); new data
+    from the capture makes it drawable again."""
+    r = gl2rbt(tmp_path, draw(write(shader_calls(VS))).write(tmp_path / "g.xz"), "-o", tmp_path / "g.rbt")
+    refused(r, "glDrawArrays reads attribute 0 from buffer 1, which the GPU wrote at call", words, "not emulated")
+    assert left_behind(tmp_path, ["g.xz"]) == []
+    c = write(shader_calls(VS)).add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE,
+                                    usage="GL_STATIC_DRAW")
+    assert trace(tmp_path, draw(c), "again") == trace(tmp_path, draw(shader_calls(VS)), "plain")
+
+
+def test_commands_a_shader_may_store_are_refused(tmp_path):
+    """A program whose fragment shader declares a shader storage block
+    draws with buffer 9 bound there; buffer 9 then holds an indirect draw's
+    commands, which the GPU may have written: refused naming the draw
+    (round 12's R12-4); a program with no storage block, or a readonly
+    one, leaves it alone."""
+    fs = ("#version 430 core\nlayout(std430, binding = 0) buffer C { uint n[]; };\nout vec4 c;\n"
+          "void main() { n[0] = 3u; c = vec4(1.0); }\n")
+
+    def capture(store, source=fs):
+        c = shader_calls(VS)
+        if store:
+            c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+            c.add("glShaderSource", shader=3, count=1, string=[source], length=None)
+            c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
+            c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+        c.add("glBindBuffer", target="GL_SHADER_STORAGE_BUFFER", buffer=9)
+        c.add("glBufferData", target="GL_SHADER_STORAGE_BUFFER", size=16, data=struct.pack("<4i", 3, 1, 0, 0),
+              usage="GL_STATIC_DRAW")
+        c.add("glBindBufferBase", target="GL_SHADER_STORAGE_BUFFER", index=0, buffer=9)
+        draw(c)
+        c.add("glBindBuffer", target="GL_DRAW_INDIRECT_BUFFER", buffer=9)
+        return c.add("glDrawArraysIndirect", mode="GL_TRIANGLES", indirect=0).swap()
+    r = gl2rbt(tmp_path, capture(True).write(tmp_path / "s.xz"), "-o", tmp_path / "s.rbt")
+    refused(r, "glDrawArraysIndirect reads its commands from buffer 9, which the GPU wrote at call",
+            "whose program may store into GL_SHADER_STORAGE_BUFFER binding 0")
+    assert left_behind(tmp_path, ["s.xz"]) == []
+    plain = trace(tmp_path, capture(False), "plain")
+    assert plain.count(b"\nframe ") == 2 and plain.count(b"\nf ") > 200, "both frames draw the triangle"
+    readonly = fs.replace("buffer C", "readonly buffer C").replace("n[0] = 3u; ", "")
+    assert trace(tmp_path, capture(True, readonly), "readonly").count(b"\nf ") == plain.count(b"\nf "), \
+        "a readonly block stores nothing"
+
+
+@pytest.mark.parametrize("share", [1, 0], ids=["shared", "unshared"])
+def test_a_second_context_s_state_is_its_own(tmp_path, share):
+    """A second context (a loader's) that binds, sets the viewport and uses
+    another program, then the first made current again and drawn in: the
+    draw runs with the first context's state (round 12's R12-8: the
+    second's had been applied); a shared context's buffer data reaches the
+    first, an unshared one's names are its own."""
+    want = trace(tmp_path, draw(shader_calls(VS)), "want")
+    c = shader_calls(VS).add("glXMakeCurrent", dpy=1, drawable=2, ctx=1, ret=True)
+    c.add("glXCreateContextAttribsARB", dpy=1, config=1, share_context=share, direct=1,
+          attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3, "GLX_CONTEXT_MINOR_VERSION_ARB", 3,
+                       "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0], ret=9)
+    c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=9, ret=True)
+    c.add("glViewport", x=0, y=0, width=8, height=8).add("glUseProgram", program=0)
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+    moved = struct.pack("<9f", *[v + 1 if i % 3 == 0 else v for i, v in enumerate(struct.unpack("<9f", TRIANGLE))])
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=moved, usage="GL_STATIC_DRAW")
+    c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=1, ret=True)
+    got = trace(tmp_path, draw(c), "back")
+    if share:
+        c = shader_calls(VS).add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=moved,
+                                 usage="GL_STATIC_DRAW")
+        want = trace(tmp_path, draw(c), "moved")
+    assert got == want

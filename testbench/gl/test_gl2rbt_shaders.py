@@ -170,7 +170,6 @@ def test_select_by_shader_state(gl):
 
 @pytest.mark.parametrize("fault, words", [
     ("geometry", "has a geometry shader"),
-    ("separable", "separable programs"),
 ])
 def test_refusals(gl, fault, words):
     assert fault in SHADER_FAULTS
@@ -183,7 +182,7 @@ def test_refusals(gl, fault, words):
     assert not [f for f in os.listdir(gl.tmp) if f.startswith(".")], f"{fault}: a temporary was left"
 
 
-@pytest.mark.parametrize("fault", ["texture", "rendered", "cube", "array"])
+@pytest.mark.parametrize("fault", ["texture", "rendered", "cube", "array", "separable", "image", "multisample", "default"])
 def test_a_vertex_shader_reading_an_uploaded_or_a_rendered_texture(gl, fault):
     """The fault "texture": a vertex shader moves a triangle by a texel of
     a texture uploaded with glTexImage2D, in front of every box: Mesa runs
@@ -192,7 +191,15 @@ def test_a_vertex_shader_reading_an_uploaded_or_a_rendered_texture(gl, fault):
     texture rendered by a draw into a framebuffer object), "cube" (a cube
     map's texel) and "array" (layer 1 of a 2D array texture): the same
     fragments, the textures read back from Mesa's replay of the capture
-    (they had been refused)."""
+    (they had been refused). The fault "separable": the "texture" fault's
+    draw through a program pipeline of separable programs (they had been
+    refused), and "image" (the array's layer 1 read by imageLoad through an
+    image unit, read back from Mesa's replay; refused until now) and
+    "multisample" (sample 3 of a multisample texture whose other samples
+    hold another texel: every sample read back, by a compute shader in the
+    replay, and drawn into Mesa's copy one by one) and "default" (the
+    default 3D texture, name 0, given an image: round 12's R12-6, read as
+    no texture): the same fragments."""
     cap = capture_path(f"shader-fault-{fault}")
     r = gl(cap, "--check-depth")
     assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"

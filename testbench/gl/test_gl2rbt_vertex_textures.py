@@ -395,17 +395,20 @@ def test_a_carried_unpack_state_gl_cannot_hold_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize("sampler, fetch, words", [
-    ("sampler2DMS", "texelFetch(heights, ivec2(1, 0), 0)",
-     ("program 2", "heights (GL_SAMPLER_2D_MULTISAMPLE)", "not emulated")),
+    ("sampler2DMS", "imageLoad(heights, ivec2(1, 0), 0)",
+     ("program 2", "heights (GL_IMAGE_2D_MULTISAMPLE)", "multisample images are not emulated")),
     ("samplerCube", "textureLod(heights, vec3(1.0, 0.0, 0.0), 0.0)",
      ("glDrawArrays", "GL_TEXTURE_CUBE_MAP", "a reduced capture carries only the images")),
-], ids=["multisample", "cube_in_a_reduced_capture"])
+], ids=["multisample_image", "cube_in_a_reduced_capture"])
 def test_textures_of_other_targets_refused(tmp_path, sampler, fetch, words):
-    """A multisample texture read by a vertex shader is refused naming it;
+    """A multisample image read by a vertex shader is refused naming it;
     a cube map is read back from Mesa's replay of a capture
     (test_gl2rbt_shaders' "cube" fault), which a reduced capture that does
     not carry it cannot give: refused naming the draw, nothing left."""
     vs = VS_TEXEL.replace("sampler2D", sampler) % fetch
+    if sampler == "sampler2DMS":
+        vs = vs.replace("#version 330 core", "#version 420 core").replace(
+            "uniform sampler2DMS", "layout(rgba32f) readonly uniform image2DMS")
     c = shader_calls(vs)
     c.add("glActiveTexture", texture="GL_TEXTURE0")
     c.add("glGenTextures", n=1, textures=[3]).add("glBindTexture", target="GL_TEXTURE_CUBE_MAP", texture=3)
@@ -447,3 +450,92 @@ def test_mipmaps_made_again_every_frame_replace_the_last(tmp_path):
             c.swap()
     # Level 1 is the mean of texels (0, 0) and (6, 2): (3, 1).
     assert convert(tmp_path, draw(c), "mipmaps", "--frames", "4199:4199") == moved(tmp_path, 3, 1)
+
+
+@pytest.mark.parametrize("target, internal, fmt, kind, layers", [
+    ("GL_TEXTURE_2D_MULTISAMPLE", "GL_RGBA32F", "GL_RGBA", "GL_FLOAT", 1),
+    ("GL_TEXTURE_2D_MULTISAMPLE", "GL_RGBA32I", "GL_RGBA_INTEGER", "GL_INT", 1),
+    ("GL_TEXTURE_2D_MULTISAMPLE", "GL_R32UI", "GL_RGBA_INTEGER", "GL_UNSIGNED_INT", 1),
+    ("GL_TEXTURE_2D_MULTISAMPLE", "GL_DEPTH_COMPONENT32F", "GL_RGBA", "GL_FLOAT", 1),
+    ("GL_TEXTURE_2D_MULTISAMPLE_ARRAY", "GL_RGBA16F", "GL_RGBA", "GL_FLOAT", 3),
+], ids=["float", "int", "uint", "depth", "array"])
+@pytest.mark.parametrize("es", [False, True], ids=["gl", "es"])
+def test_multisample_images_read_back_are_drawn_sample_by_sample(target, internal, fmt, kind, layers, es):
+    """A multisample texture read back from the replay is given to Mesa's
+    context (desktop GL's, OpenGL ES's) sample by sample: every sample of
+    every layer fetched again from Mesa's copy holds what was read (depth
+    in the first component, the components the format lacks as GL's
+    defaults)."""
+    import ctypes
+
+    import numpy as np
+
+    from rbcd.gl2rbt.mesa import Mesa
+    from rbcd.gl2rbt.vertex_textures import VertexTextures
+    m = Mesa(es)
+    GL = m.gl
+    vt = VertexTextures(m)
+    vt.no, vt.draw = 1, "glDrawArrays"
+    samples, w, h = 4, 3, 2
+    n = w * h * layers * samples
+    dtype = {"GL_FLOAT": "<f4", "GL_INT": "<i4", "GL_UNSIGNED_INT": "<u4"}[kind]
+    values = (np.arange(n * 4).reshape(n, 4) % 97).astype(dtype)
+    if "DEPTH" in internal:
+        values = (np.arange(n * 4).reshape(n, 4) % 64 / 64.0).astype(dtype)
+    mt = int(GL.glGenTextures(1))
+    GL.glBindTexture(m.enum(target), mt)
+    vt.fill_samples("test", mt, dict(target=target, samples=samples, fixedsamplelocations=1, internalformat=internal,
+                                     width=w, height=h, depth=layers * samples, format=fmt, type=kind,
+                                     pixels=values.tobytes()))
+    prefix = {"GL_FLOAT": "", "GL_INT": "i", "GL_UNSIGNED_INT": "u"}[kind]
+    array = target.endswith("ARRAY")
+    src = (("#version 320 es\n" if es else "#version 430\n") + "layout(local_size_x = 1) in;\n"
+           f"uniform highp {prefix}sampler2DMS{'Array' if array else ''} t;\n"
+           f"layout(std430, binding = 0) buffer O {{ highp {prefix}vec4 v[]; }};\n"
+           "void main() { ivec3 p = ivec3(gl_GlobalInvocationID); int w = int(gl_NumWorkGroups.x), "
+           "h = int(gl_NumWorkGroups.y);\n"
+           f"  for (int s = 0; s < {samples}; s++) v[((p.z * {samples} + s) * h + p.y) * w + p.x] = "
+           f"texelFetch(t, {'p' if array else 'p.xy'}, s); }}\n")
+    sh = GL.glCreateShader(GL.GL_COMPUTE_SHADER)
+    GL.glShaderSource(sh, src)
+    GL.glCompileShader(sh)
+    prog = GL.glCreateProgram()
+    GL.glAttachShader(prog, sh)
+    GL.glLinkProgram(prog)
+    assert GL.glGetProgramiv(prog, GL.GL_LINK_STATUS), GL.glGetProgramInfoLog(prog)
+    GL.glUseProgram(prog)
+    GL.glUniform1i(GL.glGetUniformLocation(prog, "t"), 0)
+    buf = GL.glGenBuffers(1)
+    GL.glBindBuffer(GL.GL_SHADER_STORAGE_BUFFER, buf)
+    GL.glBufferData(GL.GL_SHADER_STORAGE_BUFFER, n * 16, None, GL.GL_STREAM_READ)
+    GL.glBindBufferBase(GL.GL_SHADER_STORAGE_BUFFER, 0, buf)
+    # Mesa's entry points called directly (PyOpenGL's wrappers cannot read
+    # an OpenGL ES context's version).
+    u = ctypes.c_uint
+    m.proc("glDispatchCompute", u, u, u)(w, h, layers)
+    m.proc("glMemoryBarrier", u)(GL.GL_ALL_BARRIER_BITS)
+    map_range = ctypes.CFUNCTYPE(ctypes.c_void_p, u, ctypes.c_ssize_t, ctypes.c_ssize_t, u)(
+        m.egl.eglGetProcAddress(b"glMapBufferRange"))
+    got = np.frombuffer(ctypes.string_at(map_range(GL.GL_SHADER_STORAGE_BUFFER, 0, n * 16, GL.GL_MAP_READ_BIT),
+                                         n * 16), dtype).reshape(n, 4)
+    components = {"GL_R32UI": 1, "GL_DEPTH_COMPONENT32F": 1}.get(internal, 4)
+    assert np.array_equal(got[:, :components], values[:, :components]), (got, values)
+
+
+def test_compressed_images_read_back_are_given_back_uncompressed():
+    """Texels of a compressed texture read back (as floats) are given to
+    Mesa in a format that holds them exactly, sRGB ones in sRGB (round
+    12's R12-9: given back in the compressed format, Mesa encoded them
+    again, and BPTC, ETC2, S3TC and ASTC blocks came out other: 0%);
+    uncompressed formats are their own, and OpenGL ES's table still
+    rules there."""
+    from rbcd.gl2rbt.rendered_textures import upload_format
+    for value, want in ((0x8E8C, "GL_RGBA32F"),        # GL_COMPRESSED_RGBA_BPTC_UNORM
+                        (0x8E8D, "GL_SRGB8_ALPHA8"),   # GL_COMPRESSED_SRGB_ALPHA_BPTC_UNORM
+                        (0x8DBC, "GL_RGBA32F"),        # GL_COMPRESSED_SIGNED_RED_RGTC1
+                        (0x9274, "GL_RGBA32F"),        # GL_COMPRESSED_RGB8_ETC2
+                        (0x83F0, "GL_RGBA32F"),        # GL_COMPRESSED_RGB_S3TC_DXT1_EXT
+                        (0x93B0, "GL_RGBA32F"),        # GL_COMPRESSED_RGBA_ASTC_4x4_KHR
+                        (0x93D0, "GL_SRGB8_ALPHA8"),   # GL_COMPRESSED_SRGB8_ALPHA8_ASTC_4x4_KHR
+                        (0x8814, 0x8814)):             # GL_RGBA32F itself
+        assert upload_format(value, "GL_RGBA", "GL_FLOAT", False) == want, hex(value)

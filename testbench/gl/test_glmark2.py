@@ -50,7 +50,7 @@ def captures(tmp_path_factory):
     out = {}
     for name, bench in SCENES.items():
         path = str(d / f"{name}.trace")
-        r = run(["xvfb-run", "-a", "-s", f"-screen 0 1280x1024x24", "apitrace", "trace", "--api", "egl", "-o", path,
+        r = run(["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", "apitrace", "trace", "--api", "egl", "-o", path,
                  "glmark2-es2", "-s", f"{W}x{H}", "-b", f"{bench}:nframes={FRAMES}"], timeout=120)
         assert r.returncode == 0 and os.path.exists(path), \
             f"capturing {bench} failed ({r.returncode}): {r.stderr.strip()[-400:]}"

@@ -901,16 +901,16 @@ def test_binds_gl_refuses_change_nothing():
     assert gl.conv.s.indexed[("GL_UNIFORM_BUFFER", 0)][0] == 3 and gl.conv.s.indexed[("GL_UNIFORM_BUFFER", 1)][0] == 3
 
 
-def camera_fbo(gl, fb=5, rb=6, samples=0):
+def camera_fbo(gl, fb=5, rb=6, samples=0, fmt="GL_DEPTH_COMPONENT24"):
     """Framebuffer `fb` with a screen-sized depth renderbuffer: the camera
     pass's, as the window."""
     gl.glCreateFramebuffers(n=1, framebuffers=[fb])
     gl.glCreateRenderbuffers(n=1, renderbuffers=[rb])
     if samples:
         gl.glNamedRenderbufferStorageMultisample(renderbuffer=rb, samples=samples,
-                                                 internalformat="GL_DEPTH_COMPONENT24", width=W, height=H)
+                                                 internalformat=fmt, width=W, height=H)
     else:
-        gl.glNamedRenderbufferStorage(renderbuffer=rb, internalformat="GL_DEPTH_COMPONENT24", width=W, height=H)
+        gl.glNamedRenderbufferStorage(renderbuffer=rb, internalformat=fmt, width=W, height=H)
     gl.glNamedFramebufferRenderbuffer(framebuffer=fb, attachment="GL_DEPTH_ATTACHMENT",
                                       renderbuffertarget="GL_RENDERBUFFER", renderbuffer=rb)
 
@@ -945,7 +945,7 @@ def test_a_part_of_a_cleared_buffer_cleared_after_it_is_given_back():
     gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
     assert gl.conv.depths_of("window").clear == 0.3, "a scissor box past the screen clears all of it"
     gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
-    assert [w for *_, w in gl.conv.last_3d_draws] == [None], "every depth-tested draw had its buffer kept"
+    assert [w for *_, w, _ in gl.conv.last_3d_draws] == [None], "every depth-tested draw had its buffer kept"
 
 
 @pytest.mark.parametrize("how", ["resolve", "copy"])
@@ -980,7 +980,7 @@ def test_depths_the_converter_cannot_follow_are_reported(how):
         gl.glCopyTexSubImage2D(target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, x=0, y=0, width=W, height=H)
     square(gl)
     gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
-    (wrong,) = [w for *_, w in gl.conv.last_3d_draws]
+    (wrong,) = [w for *_, w, _ in gl.conv.last_3d_draws]
     assert wrong is not None and ("resolve" if how == "resolve" else "glCopyTexSubImage2D") in wrong, wrong
 
 
@@ -1142,3 +1142,73 @@ def test_buffer_clears_fill_elements_as_mesa_converts(monkeypatch):
         gl.glClearBufferData(target="GL_COPY_WRITE_BUFFER", internalformat="GL_R32F", format="GL_RED",
                              type="GL_FLOAT", data=one)
     assert not any(bytes(s.buffers[4][:1 << 16])), "refused before it was written"
+
+
+def test_image_units_bind_what_gl_takes():
+    """glBindImageTexture keeps what GL binds: a unit past llvmpipe's 192,
+    a texture that is none, a negative level or layer, an access or format
+    GL does not take change nothing; a texture bound for writing is one the
+    GPU may render (read back, again after every draw while it is bound);
+    glBindImageTextures binds level 0, every layer, read and write;
+    deleting a texture unbinds it from its image units."""
+    gl = GL()
+    gl.glBindTexture(target="GL_TEXTURE_2D", texture=4)
+    gl.glTexImage2D(target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA32F", width=2, height=2, border=0,
+                    format="GL_RGBA", type="GL_FLOAT", pixels=bytes(64))
+    gl.glBindTexture(target="GL_TEXTURE_2D_ARRAY", texture=5)
+    s = gl.conv.s
+    good = dict(unit=3, texture=4, level=0, layered="GL_FALSE", layer=0, access="GL_READ_ONLY", format="GL_RGBA32F")
+    for change in (dict(unit=192), dict(texture=9), dict(level=-1), dict(layer=-2), dict(access="GL_RGBA"),
+                   dict(format="GL_RGB8")):
+        gl.glBindImageTexture(**(good | change))
+    assert s.image_units == {} and s.image_writes == set()
+    gl.glBindImageTexture(**good)
+    assert s.image_units == {3: (4, 0, False, 0, "GL_READ_ONLY", "GL_RGBA32F")} and not s.image_writes
+    assert s.texture_calls[4].rendered is None, "read only: its calls make its image"
+    gl.glBindImageTexture(**(good | dict(unit=5, access="GL_READ_WRITE")))
+    assert s.image_writes == {5} and s.texture_calls[4].rendered is not None, "written by the GPU"
+    writes = s.gpu_writes
+    square(gl)
+    assert s.gpu_writes > writes, "a draw while a unit is bound for writing may change the texture"
+    gl.glBindImageTextures(first=6, count=2, textures=[5, 0])
+    assert s.image_units[6] == (5, 0, True, 0, "GL_READ_WRITE", None) and 7 not in s.image_units
+    gl.glBindImageTextures(first=191, count=2, textures=[4, 4])   # past the units: nothing bound
+    assert 191 not in s.image_units
+    gl.glDeleteTextures(n=1, textures=[4])
+    assert set(s.image_units) == {6} and s.image_writes == {6}
+
+
+@pytest.mark.parametrize("fmt, bits", [("GL_DEPTH_COMPONENT16", 16), ("GL_DEPTH_COMPONENT24", 24),
+                                       ("GL_DEPTH_COMPONENT32F", 24), (None, 24)])
+def test_the_check_compares_at_the_bits_of_the_buffer_drawn_into(fmt, bits):
+    """A frame whose last depth-tested draw goes into a 16-bit depth
+    attachment is checked at 16 bits (Mesa rounds its depths there: round
+    11 found 0.75% of such pixels out of one 24-bit step); the window and
+    wider attachments at the trace's 24."""
+    gl = GL()
+    if fmt:
+        camera_fbo(gl, fmt=fmt)
+        gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+    gl.glEnable("GL_DEPTH_TEST")
+    square(gl)
+    gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
+    assert [b for *_, b in gl.conv.last_3d_draws] == [bits]
+
+
+def test_a_call_on_a_texture_that_shares_its_images_reads_the_view_again():
+    """A texture call on a texture a view shares images with (or on the
+    view) may change what the other holds: both are read back again
+    (round 12's R12-1: the view kept the image first read back)."""
+    gl = GL()
+    for tex in (1, 2):
+        gl.glBindTexture(target="GL_TEXTURE_2D", texture=tex)
+    gl.glTexStorage2D(target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA32F", width=4, height=4)
+    gl.glTextureView(texture=3, target="GL_TEXTURE_2D", origtexture=2, internalformat="GL_RGBA32F", minlevel=0,
+                     numlevels=1, minlayer=0, numlayers=1)
+    s = gl.conv.s
+    for tex in (2, 3, 1):
+        writes = s.gpu_writes
+        gl.glBindTexture(target="GL_TEXTURE_2D", texture=tex)
+        gl.glTexSubImage2D(target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=1, height=1,
+                           format="GL_RGBA", type="GL_FLOAT", pixels=bytes(16))
+        assert (s.gpu_writes > writes) == (tex != 1), tex

@@ -1,7 +1,6 @@
 """A draw's shading cost from its fragment shader as Mesa compiles it
 (rbcd.gl2rbt.shading; docs/gpu-model.md, "Shading cost")."""
 import os
-import signal
 import subprocess
 import sys
 import time

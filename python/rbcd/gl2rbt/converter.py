@@ -8,7 +8,7 @@ from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
 from .gl_tables import (CALL_FLAG_END_FRAME, COMPAT_ONLY, COMPAT_ONLY_FORMS, END_FRAME_CALLS, IGNORED_PREFIXES,
                         ES_ONLY_FORMS, MESA_NO_OPS, TEXTURE_CHANGING, TEXTURE_IGNORED, base_name)
-from .glstate import GLState
+from .glstate import CONVERSION_STATE, SHARED_STATE, GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
 from .glstate.draws import DrawCalls
@@ -52,6 +52,12 @@ STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls
                 ObjectCalls)
 
 
+# Arguments that name a buffer target, and the suffixes of an extension's
+# name for one (GL_ARRAY_BUFFER_ARB is GL_ARRAY_BUFFER).
+BUFFER_TARGET_ARGS = {"target", "readTarget", "writeTarget"}
+TARGET_SUFFIXES = ("_BUFFER_ARB", "_BUFFER_EXT", "_BUFFER_OES")
+
+
 class Converter(*STATE_GROUPS, GeometryOutput):
     def __init__(self, args, raster_in, geometry_out):
         self.args = args
@@ -83,6 +89,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.state_context = None        # the context whose state self.s holds (the last made current)
         self.unshared_contexts = set()   # made by eglCreateContext sharing no objects, never current yet
         self.destroyed_contexts = set()  # eglDestroyContext's (a handle may be reused by a later context)
+        self.context_states = {}         # context -> its own state (GLState's fields) while another is current
+        self.context_profiles = {}       # context -> (es, core) as it was made
+        self.shares = {}                 # context -> the context whose objects it shares
+        self.group_states = {}           # share group -> its objects (SHARED_STATE) while another group's are held
         self.flags = 0                   # of the call being handled
         self.ret = None                  # its return value, as apitrace recorded it
         self.select = Selection(args.select) if args.select else None
@@ -108,6 +118,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.core = False                # a core-profile context: no default vertex array object
         self.last_depth_draw = None      # the frame's last draw with the depth test on
         self.last_depth_wrong = None     # why the converter's depth buffer was wrong for it (CameraDepthCalls)
+        self.last_depth_bits = None      # the bits of its depth buffer (CameraDepthCalls.depth_bits)
         self.ignored_prims = 0
         self.partial_frame_dropped = False
         self.listing = None              # --list-draws: one dict per draw of the frame
@@ -150,19 +161,25 @@ class Converter(*STATE_GROUPS, GeometryOutput):
     def in_range(self, frame):
         return self.first_frame <= frame and (self.last_frame is None or frame <= self.last_frame)
 
+    def check_draw_context(self, no):
+        """A draw is made in the context of the frames' earlier draws (the
+        converter keeps each context's state, but draws into one window's
+        frames from one: two are not merged), and in one at all."""
+        if self.context == 0:
+            fail_call(no, "a draw with no GL context current (released by a MakeCurrent call)")
+        if self.draw_context is not None and self.context != self.draw_context:
+            fail_call(no, f"a draw in GL context {printable(self.context)} after draws in "
+                      f"{printable(self.draw_context)}: draws of two contexts into one trace are not emulated")
+
     def open_frame(self, no):
         """Writes the frame's start record before its first record. A record
         comes from the context of the earlier ones: the converter keeps one
         context's state, and a draw with none current does nothing in GL
         (games make a first context current, release it, and draw in a
         second; a capture that draws in two is refused, not merged)."""
-        if self.context == 0:
-            fail_call(no, "a draw with no GL context current (released by a MakeCurrent call)")
+        self.check_draw_context(no)
         if self.draw_context is None:
             self.draw_context = self.context
-        elif self.context != self.draw_context:
-            fail_call(no, f"a draw in GL context {printable(self.context)} after draws in "
-                      f"{printable(self.draw_context)}: each context's state is its own, not emulated")
         if self.frame_open:
             return
         self.write_header()
@@ -174,7 +191,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if self.active:
             self.open_frame(no)
             self.emit(b"E" + struct.pack("<Q", no))
-            self.last_3d_draws.append((self.out_frame, self.frame, self.last_depth_draw, self.last_depth_wrong))
+            self.last_3d_draws.append((self.out_frame, self.frame, self.last_depth_draw, self.last_depth_wrong,
+                                       self.last_depth_bits))
             if self.geo is not None:
                 self.write_geometry_frame()
         self.frame += 1
@@ -187,7 +205,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.geo_objects = {}
         self.geo_view = None
         self.geo_space = None
-        self.last_depth_draw = self.last_depth_wrong = None
+        self.last_depth_draw = self.last_depth_wrong = self.last_depth_bits = None
         self.frame_view = None
         self.s.marker = ""
         if self.tracker:
@@ -208,6 +226,11 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 fail_call(no, f"{printable(name)}: an argument apitrace does not write ({REDUCED_TEXTURES})")
             self.restore_texture_calls(no, name, args[-1][1])
             args = args[:-1]
+        if any(k in BUFFER_TARGET_ARGS and isinstance(v, str) and v.endswith(TARGET_SUFFIXES) for k, v in args):
+            # apitrace names some buffer targets by their extension's enumerant
+            # (GL_PARAMETER_BUFFER_ARB): the same value as the core name.
+            args = [(k, v.rsplit("_", 1)[0] if k in BUFFER_TARGET_ARGS and isinstance(v, str)
+                     and v.endswith(TARGET_SUFFIXES) else v) for k, v in args]
         a = [v for _, v in args]
         base = base_name(name)
         if s.begin_mode is not None:
@@ -232,6 +255,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.end_frame(no)
             return   # any other call there is GL_INVALID_OPERATION: it does nothing
         h = self.HANDLERS.get(base) if name not in MESA_NO_OPS else Converter.h_mesa_no_op
+        if base in DrawCalls.HANDLERS and self.draw_context is not None and self.active:
+            self.check_draw_context(no)   # before the second context's own state refuses it otherwise
         if self.core and (base in COMPAT_ONLY or name in COMPAT_ONLY_FORMS) or not self.es and name in ES_ONLY_FORMS:
             h = Converter.h_not_in_core
         if h is not None:
@@ -268,12 +293,22 @@ class Converter(*STATE_GROUPS, GeometryOutput):
 
     def h_egl_create_context(self, no, name, a, args):
         # EGL's default API is OpenGL ES (eglBindAPI changes it).
-        self.es = self.egl_api != "EGL_OPENGL_API"
+        es = self.egl_api != "EGL_OPENGL_API"
         attrs = dict(args).get("attrib_list")
         self.context_created(dict(args).get("share_context"))
-        self.core = not self.es and context_is_core(attrs, "EGL_CONTEXT_MAJOR_VERSION", "EGL_CONTEXT_MINOR_VERSION",
-                                                    "EGL_CONTEXT_OPENGL_PROFILE_MASK",
-                                                    "EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT")
+        self.profile_made(es, not es and context_is_core(attrs, "EGL_CONTEXT_MAJOR_VERSION",
+                                                          "EGL_CONTEXT_MINOR_VERSION",
+                                                          "EGL_CONTEXT_OPENGL_PROFILE_MASK",
+                                                          "EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT"))
+
+    def profile_made(self, es, core):
+        """The API and profile of the context the call made (self.ret): the
+        converter's when no other context is current, else from when it is
+        made current."""
+        if isinstance(self.ret, int) and not isinstance(self.ret, bool) and self.ret:
+            self.context_profiles[self.ret] = (es, core)
+        if self.state_context is None or self.state_context == self.ret:
+            self.es, self.core = es, core
 
     def h_make_current(self, no, name, a, args):
         """glXMakeCurrent, glXMakeContextCurrent, eglMakeCurrent and
@@ -287,8 +322,48 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if ctx and ctx != self.state_context:
             if self.state_context in self.destroyed_contexts and ctx in self.unshared_contexts:
                 self.new_context()
+                if ctx in self.context_profiles:
+                    self.es, self.core = self.context_profiles[ctx]
+            else:
+                self.switch_state(ctx)
             self.state_context = ctx
         self.unshared_contexts.discard(ctx)
+
+    def switch_state(self, ctx):
+        """Context `ctx` made current after another: the state of the one
+        before kept for when it is current again, ctx's own state (GL's
+        initial one the first time) in its place, and, unless the two share
+        objects, ctx's share group's objects (round 12's R12-8: a loader
+        context's binds and viewport had changed the drawing context's)."""
+        old = self.state_context
+        if old is None or ctx not in self.context_profiles or old not in self.context_profiles:
+            # The first context: the state so far is its own; or one whose
+            # making the capture does not show: taken as the same context.
+            return
+        fields = vars(self.s)
+        self.context_states[old] = {k: v for k, v in fields.items() if k not in SHARED_STATE | CONVERSION_STATE}
+        self.context_profiles.setdefault(old, (self.es, self.core))
+        fresh = None
+        if self.share_group(ctx) != self.share_group(old):
+            self.group_states[self.share_group(old)] = {k: fields[k] for k in SHARED_STATE}
+            shared = self.group_states.get(self.share_group(ctx))
+            if shared is None:
+                fresh = vars(self.initial_state())
+                shared = {k: fresh[k] for k in SHARED_STATE}
+            fields.update(shared)
+        own = self.context_states.get(ctx)
+        if own is None:
+            fresh = fresh or vars(self.initial_state())
+            own = {k: v for k, v in fresh.items() if k not in SHARED_STATE | CONVERSION_STATE}
+        fields.update(own)
+        if ctx in self.context_profiles:
+            self.es, self.core = self.context_profiles[ctx]
+
+    def share_group(self, ctx):
+        """The context whose objects ctx shares (itself when it shares none)."""
+        while ctx in self.shares:
+            ctx = self.shares[ctx]
+        return ctx
 
     def context_created(self, share):
         """A context the call returned (self.ret), sharing objects with
@@ -297,8 +372,12 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if isinstance(ctx, int) and not isinstance(ctx, bool) and ctx:
             self.destroyed_contexts.discard(ctx)
             self.unshared_contexts.discard(ctx)
+            self.context_states.pop(ctx, None)   # a handle reused: a new context
+            self.shares.pop(ctx, None)
             if share in (0, None):
                 self.unshared_contexts.add(ctx)
+            elif isinstance(share, int) and not isinstance(share, bool) and self.share_group(share) != ctx:
+                self.shares[ctx] = share
 
     def h_egl_destroy_context(self, no, name, a, args):
         """eglDestroyContext and glXDestroyContext (which returns nothing)."""
@@ -311,6 +390,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         sharing the objects of shareList or share_list."""
         d = dict(args)
         self.context_created(d.get("shareList", d.get("share_list")))
+        self.profile_made(False, False)
 
     def new_context(self):
         """The state of a context made current for the first time, created
@@ -353,10 +433,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             fail_call(no, f"{printable(name)}: a context of {'OpenGL ES' if es else 'OpenGL'} "
                       f"{printable(version[0], 20)}.{printable(version[1], 20)}, a version that does not exist, "
                       "was made")
-        self.es = es
-        self.core = not es and context_is_core(attrs, "GLX_CONTEXT_MAJOR_VERSION_ARB",
-                                               "GLX_CONTEXT_MINOR_VERSION_ARB", "GLX_CONTEXT_PROFILE_MASK_ARB",
-                                               "GLX_CONTEXT_CORE_PROFILE_BIT_ARB")
+        self.profile_made(es, not es and context_is_core(attrs, "GLX_CONTEXT_MAJOR_VERSION_ARB",
+                                                          "GLX_CONTEXT_MINOR_VERSION_ARB",
+                                                          "GLX_CONTEXT_PROFILE_MASK_ARB",
+                                                          "GLX_CONTEXT_CORE_PROFILE_BIT_ARB"))
 
     # The window system's calls that say which API and profile the capture
     # drew with (the rest of them are passed over).

@@ -103,10 +103,11 @@ def bound_note(counts):
 
 
 def compare(ours, marks, bits, mesa, step):
-    """Counts of one frame: covered pixels (drawn in either buffer), those
+    """Counts of one frame (ours: `bits`-bit depths; step: one step of the
+    buffer Mesa drew into): covered pixels (drawn in either buffer), those
     agreeing within one step; the same outside the marked pixels; the marked
     pixels where Mesa's depth lies at or behind ours (an upper bound there)."""
-    ours01 = ours.astype(np.float64) * step
+    ours01 = ours.astype(np.float64) / ((1 << bits) - 1)
     mesa64 = mesa.astype(np.float64)
     covered = (ours < (1 << bits) - 1) | (mesa < 1.0)
     agree = np.abs(ours01 - mesa64) <= step * 1.0001 + 1e-7
@@ -177,8 +178,9 @@ def check_depth(args):
         probe.close_replay()
     if probe.es:
         es_readback_library()   # missing: said before the conversion, not after it
-    frames = [(o, c, call) for o, c, call, wrong in probe.last_3d_draws if call is not None and wrong is None]
-    unfollowed = [(c, wrong) for _, c, call, wrong in probe.last_3d_draws if call is not None and wrong is not None]
+    frames = [(o, c, call, bits) for o, c, call, wrong, bits in probe.last_3d_draws
+              if call is not None and wrong is None]
+    unfollowed = [(c, wrong) for _, c, call, wrong, _ in probe.last_3d_draws if call is not None and wrong is not None]
     if unfollowed:
         # The converter's one camera-pass depth buffer did not hold what
         # the frame's last depth-tested draw's buffer held (camera_depth.py):
@@ -207,12 +209,11 @@ def check_depth(args):
         args.geometry = args.summary = None
         args.depth_out = os.path.join(tmp, "depth")
         args.llvmpipe_depth_out = os.path.join(tmp, "llvmpipe")
-        args.snapshots = {call for _, _, call in frames}
+        args.snapshots = {call for _, _, call, _ in frames}
         convert(args)
         total = np.zeros(5, dtype=np.int64)   # covered, agreeing; the same outside marked pixels; bound holds
         total_lp = np.zeros(5, dtype=np.int64)   # the same against the llvmpipe emulation
-        step = 1.0 / ((1 << args.depth_bits) - 1)
-        for out_frame, cap_frame, call in frames:
+        for out_frame, cap_frame, call, depth_bits in frames:
             w, h, bits, ours, marks = read_depth_file(f"{args.depth_out}.{out_frame}.depth")
             _, _, _, lp, lp_marks = read_depth_file(f"{args.llvmpipe_depth_out}.{out_frame}.depth")
             cached = os.path.join(keep, f"mesa.{call}.npy") if keep else None
@@ -225,6 +226,9 @@ def check_depth(args):
             mesa = window_of(mesa, w, h, cap_frame)
             # Where a draw under a discarding fragment shader wrote our depth
             # last, ours is an upper bound: Mesa's lies at it or behind it.
+            # One step of the buffer Mesa drew into (a 16-bit attachment's
+            # values are rounded to its bits, the trace's to its own).
+            step = 1.0 / ((1 << depth_bits) - 1)
             counts = compare(ours, marks, bits, mesa, step)
             counts_lp = compare(lp, lp_marks, bits, mesa, step)
             total += counts

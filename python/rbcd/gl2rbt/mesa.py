@@ -237,6 +237,12 @@ class Mesa:
         """A GL entry point of Mesa's, called with no wrapper."""
         return self.function(self.egl, name, *argtypes)
 
+    def separable(self, program):
+        """glProgramParameteri(program, GL_PROGRAM_SEPARABLE, GL_TRUE), called
+        directly: PyOpenGL's wrapper cannot read an ES context's version."""
+        import ctypes
+        self.proc("glProgramParameteri", ctypes.c_uint, ctypes.c_uint, ctypes.c_int)(program, 0x8258, 1)
+
     def enum(self, value):
         """A GL enumerant as apitrace writes it ("GL_FLOAT", a tuple of bit
         names, or a number) as the number PyOpenGL takes."""

@@ -309,7 +309,7 @@ def report(frames, conv, out):
         no, why = conv.rejected_draws[0]
         print(f"{len(conv.rejected_draws)} draws are GL errors as the capture set them up and draw nothing "
               f"(the first: call {no}, {why})", file=out)
-    wrong = [(c, why) for _, c, call, why in conv.last_3d_draws if why is not None]
+    wrong = [(c, why) for _, c, call, why, _ in conv.last_3d_draws if why is not None]
     if wrong:
         print(f"{len(wrong)} frames whose camera-pass depth buffer the converter's does not follow (their "
               f"trace is whole; --check-depth leaves them out): the first, frame {wrong[0][0]}: {wrong[0][1]}",

@@ -49,7 +49,8 @@ READBACK = {(0x1902, 0x1405): ("GL_DEPTH_COMPONENT", "GL_UNSIGNED_INT", 4),
 # The targets a texture is read back at (their GL numbers).
 TARGETS = {"GL_TEXTURE_2D": 0x0DE1, "GL_TEXTURE_3D": 0x806F, "GL_TEXTURE_2D_ARRAY": 0x8C1A,
            "GL_TEXTURE_CUBE_MAP": 0x8513, "GL_TEXTURE_CUBE_MAP_ARRAY": 0x9009, "GL_TEXTURE_1D": 0x0DE0,
-           "GL_TEXTURE_1D_ARRAY": 0x8C18, "GL_TEXTURE_RECTANGLE": 0x84F5}
+           "GL_TEXTURE_1D_ARRAY": 0x8C18, "GL_TEXTURE_RECTANGLE": 0x84F5, "GL_TEXTURE_2D_MULTISAMPLE": 0x9100,
+           "GL_TEXTURE_2D_MULTISAMPLE_ARRAY": 0x9102}
 CUBE_FACES = ("GL_TEXTURE_CUBE_MAP_POSITIVE_X", "GL_TEXTURE_CUBE_MAP_NEGATIVE_X", "GL_TEXTURE_CUBE_MAP_POSITIVE_Y",
               "GL_TEXTURE_CUBE_MAP_NEGATIVE_Y", "GL_TEXTURE_CUBE_MAP_POSITIVE_Z", "GL_TEXTURE_CUBE_MAP_NEGATIVE_Z")
 
@@ -80,12 +81,33 @@ ES_FALLBACK = {("GL_RGBA", "GL_UNSIGNED_BYTE"): "GL_RGBA8", ("GL_RGBA_INTEGER", 
                ("GL_RGBA_INTEGER", "GL_UNSIGNED_INT"): "GL_RGBA32UI"}
 
 
+_COMPRESSED = None
+
+
+def compressed_formats():
+    """{value: name} of every compressed internal format PyOpenGL names
+    (core and extensions: S3TC, RGTC, BPTC, ETC2, ASTC)."""
+    global _COMPRESSED
+    if _COMPRESSED is None:
+        from OpenGL import GL
+        from .mesa import extension_enums
+        names = {n: getattr(GL, n) for n in dir(GL) if n.startswith("GL_COMPRESSED_")} | extension_enums()
+        _COMPRESSED = {int(v): n for n, v in names.items() if n.startswith("GL_COMPRESSED_") and isinstance(v, int)}
+    return _COMPRESSED
+
+
 def upload_format(internal, fmt, kind, es):
     """The internal format a level read back is given to the converter's
-    Mesa context in: its own (desktop GL converts any pixels), or in OpenGL
+    Mesa context in: its own (desktop GL converts any pixels), but for a
+    compressed one the uncompressed format that holds its decoded texels
+    exactly (Mesa would encode them again, and its encoders do not give
+    the blocks back: round 12's R12-9), or in OpenGL
     ES, where the format and type must be its table's, its own when they
     are, else the RGBA one of the same values that samples the same (a
     missing component reads as GL's default either way)."""
+    compressed = compressed_formats().get(internal)
+    if compressed is not None and kind == "GL_FLOAT":
+        return "GL_SRGB8_ALPHA8" if "SRGB" in compressed else "GL_RGBA32F"
     if not es:
         return internal
     from OpenGL import GL

@@ -274,7 +274,8 @@ def _serve(es, parent):
     from .glstate.programs import STAGES
     from .mesa import Mesa
     gl_stage = {stage: gl_name for gl_name, stage in STAGES.items()}
-    gl = Mesa(es=es).gl
+    mesa = Mesa(es=es)
+    gl = mesa.gl
     sys.stdout.write("ready\n")
     sys.stdout.flush()
     for line in sys.stdin.buffer:
@@ -282,12 +283,15 @@ def _serve(es, parent):
         prog, shaders = None, []
         try:
             prog = gl.glCreateProgram()
-            for stage, src in json.loads(line).items():
+            stages = json.loads(line)
+            for stage, src in stages.items():
                 sh = gl.glCreateShader(getattr(gl, gl_stage[stage]))
                 shaders.append(sh)
                 gl.glShaderSource(sh, src)
                 gl.glCompileShader(sh)
                 gl.glAttachShader(prog, sh)
+            if "vertex" not in stages:   # a pipeline's fragment program: OpenGL ES links it only separable
+                mesa.separable(prog)
             gl.glLinkProgram(prog)
             ok = bool(gl.glGetProgramiv(prog, gl.GL_LINK_STATUS))
         except Exception:   # the parent reads only the status: no cost for this program

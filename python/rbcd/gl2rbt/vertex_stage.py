@@ -21,7 +21,7 @@ from .glstate.attributes import element_bytes
 from .glstate.buffers import merge_extents
 from .glstate.programs import COMMENTS
 from .mesa import Mesa, Watchdog
-from .vertex_textures import SAMPLER_TARGETS, VertexTextures
+from .vertex_textures import IMAGE_TARGETS, SAMPLER_TARGETS, VertexTextures
 
 # Sampler types a vertex shader may read: texture buffers, whose contents
 # are buffer objects, and 2D textures (vertex_textures.py). Other textures'
@@ -40,6 +40,9 @@ MAX_MESA_BUFFER_BYTES = 2 << 30   # the declared sizes of the buffers given to M
 ATTRIB_VALUE_TYPES = {"b": np.int8, "s": np.int16, "i": np.int32, "ub": np.uint8, "us": np.uint16, "ui": np.uint32,
                       "f": np.float32, "d": np.float64}
 CLIP_DISTANCES = re.compile(r"\bgl_(Clip|Cull)Distance\b")
+# Outputs that choose the viewport a primitive is drawn in (ARB/AMD
+# shader_viewport_layer_array, NV_viewport_array2).
+VIEWPORT_OUTPUTS = re.compile(r"\bgl_(ViewportIndex|ViewportMask)\b")
 BUILTIN_INPUTS = {"gl_VertexID", "gl_InstanceID", "gl_DrawID", "gl_BaseVertex", "gl_BaseInstance",
                   "gl_VertexIndex", "gl_InstanceIndex"}
 
@@ -148,6 +151,8 @@ class MesaProgram:
         self.locations = {}   # active uniform name (and name[i]) -> Mesa location
         self.applied = {}     # Program.uniforms key -> the value last given Mesa
         self.texture_locations = []   # Mesa locations of its samplers (each element of an array), with targets
+        self.image_locations = []     # the same of its images
+        self.buffer_samplers = []     # the locations of its buffer texture samplers
 
 
 class VertexStage:
@@ -163,15 +168,17 @@ class VertexStage:
         self.vertex_textures = VertexTextures(self.mesa)   # 2D textures and samplers
         self.scratch = []    # client memory (attributes, indices) goes through these buffers
         self.mesa_bytes = 0  # the declared sizes of the buffers Mesa holds copies of
-        self.no = None       # the draw call being run, for messages
+        self.no = self.name = None   # the draw call being run and its name, for messages
         GL = self.gl
-        # Mesa's values of the sampler types that are neither texture
-        # buffers nor of the targets vertex_textures gives (multisample
-        # textures), and of those it gives, with their targets.
+        # Mesa's values of the sampler and image types that are neither
+        # texture buffers nor of the targets vertex_textures gives
+        # (multisample images), and of those it gives, with their targets.
         self.texture_samplers = {int(getattr(GL, n)): n for n in dir(GL)
-                                 if SAMPLER.match(n) and n not in BUFFER_SAMPLERS | set(SAMPLER_TARGETS)
-                                 and isinstance(getattr(GL, n), int)}
+                                 if SAMPLER.match(n) and isinstance(getattr(GL, n), int)
+                                 and n not in BUFFER_SAMPLERS | set(SAMPLER_TARGETS) | set(IMAGE_TARGETS)}
         self.sampler_targets = {int(getattr(GL, n)): t for n, t in SAMPLER_TARGETS.items() if hasattr(GL, n)}
+        self.image_targets = {int(getattr(GL, n)): n for n in IMAGE_TARGETS if hasattr(GL, n)}
+        self.buffer_sampler_types = {int(getattr(GL, n)) for n in BUFFER_SAMPLERS if hasattr(GL, n)}
 
     # ---- objects
     def forget_objects(self):
@@ -265,8 +272,7 @@ class VertexStage:
             self.gl.glDeleteBuffers(len(self.scratch), self.scratch)
             self.scratch = []
 
-    def program(self, conv, no, pname):
-        p = conv.program_in_use()
+    def program(self, no, pname, p):
         if p.linked is None:
             fail_call(no, f"a draw with program {pname}, which was never linked")
         mp = self.programs.get(pname)
@@ -315,7 +321,7 @@ class VertexStage:
         that draws: whether it links, and its active uniform blocks' names
         by index."""
         bindings = p.linked[1]
-        key = (p.digest, tuple(sorted(bindings.items())))
+        key = (p.digest, tuple(sorted(bindings.items())), p.separable)
         if key not in self.link_status:
             from OpenGL.error import GLError
             GL = self.gl
@@ -327,6 +333,8 @@ class VertexStage:
                             attach_stage(GL, prog, getattr(GL, LINKED_STAGES[stage]), texts, shaders)
                     for attr, index in bindings.items():
                         GL.glBindAttribLocation(prog, index, attr)
+                    if p.separable:   # (OpenGL ES links a program of one stage only so)
+                        self.mesa.separable(prog)
                     GL.glLinkProgram(prog)
                     ok = bool(GL.glGetProgramiv(prog, GL.GL_LINK_STATUS))
                     blocks = [block_name(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORM_BLOCKS))] \
@@ -352,6 +360,8 @@ class VertexStage:
             # Mesa 22.3 clips by them even with GL_CLIP_DISTANCEi disabled.
             fail_call(no, f"{where}: its vertex shader writes clip or cull distances (gl_ClipDistance, "
                       "gl_CullDistance): not emulated")
+        if VIEWPORT_OUTPUTS.search(COMMENTS.sub(" ", sources["vertex"])):
+            fail_call(no, f"{where}: its vertex shader chooses the viewport (gl_ViewportIndex): not emulated")
         prog = GL.glCreateProgram()
         shaders = []
         failed = attach_stage(GL, prog, GL.GL_VERTEX_SHADER, p.objects["vertex"], shaders)
@@ -396,8 +406,8 @@ class VertexStage:
                 fail_call(no, f"{where}: its vertex shader reads {printable(uname)}, fixed-function state of "
                           "the compatibility profile: not emulated")
             if int(utype) in self.texture_samplers:
-                fail_call(no, f"{where}: its vertex shader reads texture {printable(uname)} "
-                          f"({self.texture_samplers[int(utype)]}); multisample textures are not emulated")
+                fail_call(no, f"{where}: its vertex shader reads {printable(uname)} "
+                          f"({self.texture_samplers[int(utype)]}): multisample images are not emulated")
             base = uname[:-3] if uname.endswith("[0]") else uname
             loc = GL.glGetUniformLocation(prog, uname)
             mp.locations[uname] = loc
@@ -408,6 +418,14 @@ class VertexStage:
                 target = self.sampler_targets[int(utype)]
                 mp.texture_locations += [(loc, target)] + [(mp.locations[f"{base}[{k}]"], target)
                                                            for k in range(1, size)]
+            elif int(utype) in self.buffer_sampler_types:
+                mp.buffer_samplers += [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]
+            elif int(utype) in self.image_targets:
+                if self.mesa.es:
+                    fail_call(no, f"{where}: its vertex shader reads image {printable(uname)} "
+                              f"({self.image_targets[int(utype)]}): images in an OpenGL ES capture's vertex shader "
+                              "are not emulated")
+                mp.image_locations += [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]
         return mp
 
     def set_uniform(self, mp, p, loc, value):
@@ -446,6 +464,7 @@ class VertexStage:
                 GL.glDisableVertexAttribArray(i)
                 continue
             if b.buffer:
+                conv.checked_buffer(no, self.name, b.buffer, f"attribute {i}")
                 buf, offset = self.buffer(conv, b.buffer), b.offset + at.relative
             elif b.client is not None:
                 buf, offset = self.client(b.client), at.relative
@@ -467,6 +486,8 @@ class VertexStage:
         if client_indices is not None:
             GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.client(client_indices))
         else:
+            if elem:
+                conv.checked_buffer(no, self.name, elem, "indices")
             GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.buffer(conv, elem) if elem else 0)
         for i, (func, vals) in conv.s.attrib_values.items():
             fn = getattr(GL, func.removesuffix("ARB"))
@@ -479,12 +500,40 @@ class VertexStage:
             else:
                 fn(i, *vals)
 
-    def bindings(self, conv):
+    def blocks_read(self, mp):
+        """{(target, binding)} of the uniform and shader storage blocks
+        Mesa's program of the draw reads, as bound now."""
+        GL = self.gl
+        out = {("GL_UNIFORM_BUFFER", int(GL.glGetActiveUniformBlockiv(mp.name, i, GL.GL_UNIFORM_BLOCK_BINDING)))
+               for i in range(GL.glGetProgramiv(mp.name, GL.GL_ACTIVE_UNIFORM_BLOCKS))}
+        n = np.zeros(1, np.int32)
+        GL.glGetProgramInterfaceiv(mp.name, GL.GL_SHADER_STORAGE_BLOCK, GL.GL_ACTIVE_RESOURCES, n)
+        for i in range(int(n[0])):
+            binding = np.zeros(1, np.int32)
+            GL.glGetProgramResourceiv(mp.name, GL.GL_SHADER_STORAGE_BLOCK, i, 1, [GL.GL_BUFFER_BINDING], 1,
+                                      None, binding)
+            out.add(("GL_SHADER_STORAGE_BUFFER", int(binding[0])))
+        # Buffer textures its samplers and images read, by their unit.
+        unit = np.zeros(1, np.int32)
+        for loc in mp.buffer_samplers:
+            GL.glGetUniformiv(mp.name, loc, unit)
+            out.add(("GL_TEXTURE_BUFFER", int(unit[0])))
+        for loc in mp.image_locations:
+            GL.glGetUniformiv(mp.name, loc, unit)
+            out.add(("image", int(unit[0])))
+        return out
+
+    def bindings(self, conv, mp):
         from OpenGL.error import GLError
         GL = self.gl
+        # Blocks reading a buffer the GPU wrote are refused (checked_buffer);
+        # the binding points no block reads are not checked.
+        read = self.blocks_read(mp) if conv.s.gpu_buffers else set()
         for (target, index), (buf, offset, size) in conv.s.indexed.items():
             if target not in ("GL_UNIFORM_BUFFER", "GL_SHADER_STORAGE_BUFFER"):
                 continue
+            if (target, index) in read:
+                conv.checked_buffer(self.no, self.name, buf, f"its {target} binding {index}")
             if buf in conv.s.buffers and size is not None and not 0 <= offset <= len(conv.s.buffers[buf]):
                 # Mesa binds a range that starts outside its buffer and
                 # takes the lesser of its size and the buffer's size less
@@ -503,6 +552,12 @@ class VertexStage:
                     GL.glBindBufferRange(self.mesa.enum(target), index, mb, offset, size)
             except GLError:
                 pass   # past Mesa's binding points, or a range it refuses: GL ignores the capture's call
+        for kind, unit in read:
+            tex = conv.s.units.get((unit, "GL_TEXTURE_BUFFER")) if kind == "GL_TEXTURE_BUFFER" else \
+                conv.s.image_units.get(unit, (None,))[0] if kind == "image" else None
+            if tex in conv.s.texture_buffers:
+                conv.checked_buffer(self.no, self.name, conv.s.texture_buffers[tex][1],
+                                    f"the buffer texture at its {'image ' if kind == 'image' else ''}unit {unit}")
         for (unit, target), tex in conv.s.units.items():
             if target != "GL_TEXTURE_BUFFER":
                 continue
@@ -512,43 +567,51 @@ class VertexStage:
                 GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
                 GL.glBindTexture(GL.GL_TEXTURE_BUFFER, 0)
                 continue
-            mt = self.textures.get(tex)
-            if mt is None:
-                mt = self.textures[tex] = int(GL.glGenTextures(1))
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-            GL.glBindTexture(GL.GL_TEXTURE_BUFFER, mt)
-            if tex not in conv.s.texture_buffers:
-                continue   # bound with no buffer yet (GL leaves its reads undefined): Mesa's as the capture's
-            fmt, buf, offset, size = conv.s.texture_buffers[tex]
-            # A buffer of no data store yet (or 0, none) is read as none.
-            mb = self.buffer(conv, buf) if buf in conv.s.buffers else 0
-            if size is None or not mb:
-                GL.glTexBuffer(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb)
-            else:
-                GL.glTexBufferRange(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb, offset, size)
+            self.texture_buffer(conv, tex)
         GL.glActiveTexture(GL.GL_TEXTURE0)
         if not self.mesa.es:
             (GL.glEnable if conv.s.restart else GL.glDisable)(GL.GL_PRIMITIVE_RESTART)
             GL.glPrimitiveRestartIndex(conv.s.restart_index)
         (GL.glEnable if conv.s.restart_fixed else GL.glDisable)(GL.GL_PRIMITIVE_RESTART_FIXED_INDEX)
 
+    def texture_buffer(self, conv, tex):
+        """Mesa's copy of capture buffer texture `tex`, bound at the active
+        unit, its buffer up to date."""
+        GL = self.gl
+        mt = self.textures.get(tex)
+        if mt is None:
+            mt = self.textures[tex] = int(GL.glGenTextures(1))
+        GL.glBindTexture(GL.GL_TEXTURE_BUFFER, mt)
+        if tex not in conv.s.texture_buffers:
+            return mt   # bound with no buffer yet (GL leaves its reads undefined): Mesa's as the capture's
+        fmt, buf, offset, size = conv.s.texture_buffers[tex]
+        # A buffer of no data store yet (or 0, none) is read as none.
+        mb = self.buffer(conv, buf) if buf in conv.s.buffers else 0
+        if size is None or not mb:
+            GL.glTexBuffer(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb)
+        else:
+            GL.glTexBufferRange(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb, offset, size)
+        return mt
+
     # ---- the draw
-    def run(self, conv, no, name, d, instances, prims):
+    def run(self, conv, no, name, d, instances, prims, pname, p):
         """The clip-space positions of one draw call (`name` without its
-        extension suffix, `d` its arguments, room for `prims` triangles):
+        extension suffix, `d` its arguments, room for `prims` triangles) run
+        by program `pname`'s vertex stage (`p` its executable):
         (vertices, 4) float64, three a triangle, one array per instance."""
         from OpenGL.error import GLError
         GL = self.gl
-        self.no = no
+        self.no, self.name = no, name
         try:
             with self.watchdog.on(f"call {no}: {name}"):
-                mp = self.program(conv, no, conv.s.program)
+                mp = self.program(no, pname, p)
                 indices = d.get("indices")
                 client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
                 check_client_data(conv, no, name, d, instances, client_indices)
                 self.vertex_array(conv, no, client_indices)
-                self.bindings(conv)
-                self.vertex_textures.bind(conv, no, name, mp)
+                self.bindings(conv, mp)
+                self.vertex_textures.bind(conv, no, name, mp, self.texture_buffer)
                 with self.watchdog.on(f"call {no}: {name}", grows=True):
                     clip = self.mesa.feedback_positions(lambda: self.issue(name, d, client_indices is not None),
                                                         prims)
@@ -581,4 +644,14 @@ class VertexStage:
             args.append(d.get("basevertex", 0))
         if "BaseInstance" in name:
             args.append(d.get("baseinstance", 0))
+        if self.mesa.es and "BaseInstance" in name:
+            # EXT_base_instance's entry point, called directly: PyOpenGL's
+            # wrapper of the desktop one cannot read an ES context's version.
+            u, i, p = ctypes.c_uint, ctypes.c_int, ctypes.c_void_p
+            types = [u, i, u, p] + [i] * (len(args) - 5) + [u] if "Elements" in name else [u, i, i, i, u]
+            self.mesa.proc(name + "EXT", *types)(*args)
+            err = GL.glGetError()
+            if err:
+                raise DrawRejected(f"{GL_ERRORS.get(int(err), f'GL error {int(err)}')} in {name}EXT")
+            return
         getattr(GL, name)(*args)

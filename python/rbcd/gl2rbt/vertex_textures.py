@@ -14,9 +14,10 @@ import numpy as np
 
 from ..cli import I32, U32, integer
 from .errors import checked, fail_call, printable
-from .glstate.texture_formats import FORMAT_COMPONENTS, PACKED_BYTES, TYPE_BYTES
-from .glstate.textures import (LEVEL_CALLS, PARAMETER_CALLS, READ_BACK_CALLS, SAMPLER_PARAMETER_CALLS,
-                               UNPACK_PARAMETERS, VERTEX_TEXTURE_TARGET)
+from .glstate.texture_formats import FORMAT_COMPONENTS, MAX_SIZE, PACKED_BYTES, TYPE_BYTES
+from .glstate.textures import (DEFAULT_TEXTURE_BASE, IMAGE_UNIT_BASE, LEVEL_CALLS, PARAMETER_CALLS,
+                               READ_BACK_CALLS, SAMPLER_PARAMETER_CALLS, SAMPLES_CALL, UNPACK_PARAMETERS,
+                               VERTEX_TEXTURE_TARGET)
 
 # The images Mesa holds for vertex shaders, in all, counted at 16 bytes a
 # texel (the widest format), a third more for a mipmapped storage: Mesa
@@ -30,9 +31,20 @@ ANISOTROPY = ("GL_TEXTURE_MAX_ANISOTROPY", "GL_TEXTURE_MAX_ANISOTROPY_EXT", 0x84
 SAMPLER_TARGETS = {f"GL_{kind}SAMPLER_{shape}{shadow}": f"GL_TEXTURE_{target}"
                    for shape, target in (("2D", "2D"), ("1D", "1D"), ("3D", "3D"), ("CUBE", "CUBE_MAP"),
                                          ("1D_ARRAY", "1D_ARRAY"), ("2D_ARRAY", "2D_ARRAY"),
-                                         ("2D_RECT", "RECTANGLE"), ("CUBE_MAP_ARRAY", "CUBE_MAP_ARRAY"))
+                                         ("2D_RECT", "RECTANGLE"), ("CUBE_MAP_ARRAY", "CUBE_MAP_ARRAY"),
+                                         ("2D_MULTISAMPLE", "2D_MULTISAMPLE"),
+                                         ("2D_MULTISAMPLE_ARRAY", "2D_MULTISAMPLE_ARRAY"))
                    for kind, shadow in (("", ""), ("INT_", ""), ("UNSIGNED_INT_", ""), ("", "_SHADOW"))
-                   if not (shadow and shape == "3D")}
+                   if not (shadow and shape in ("3D", "2D_MULTISAMPLE", "2D_MULTISAMPLE_ARRAY"))}
+# A multisample texture's samples as read back (format, type): the sampler
+# prefix and the 2D array format that holds them exactly.
+SAMPLE_KINDS = {("GL_RGBA", "GL_FLOAT"): ("", 0x8814), ("GL_RGBA_INTEGER", "GL_INT"): ("i", 0x8D82),
+                ("GL_RGBA_INTEGER", "GL_UNSIGNED_INT"): ("u", 0x8D70)}   # GL_RGBA32F, _32I, _32UI
+# Image types a vertex shader may read (every target but the multisample
+# ones: read back from Mesa's replay, or of a buffer texture).
+IMAGE_TARGETS = {f"GL_{kind}IMAGE_{shape}" for shape in ("1D", "2D", "3D", "2D_RECT", "CUBE", "BUFFER", "1D_ARRAY",
+                                                          "2D_ARRAY", "CUBE_MAP_ARRAY")
+                 for kind in ("", "INT_", "UNSIGNED_INT_")}
 u, i, e, f, sz, p = ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_float, ctypes.c_int, ctypes.c_void_p
 # Entry points and their C arguments after the target (or sampler).
 ENTRY_POINTS = {
@@ -122,12 +134,14 @@ class VertexTextures:
             GL.glDeleteSamplers(len(self.samplers), [m for m, _ in self.samplers.values()])
         self.images, self.samplers = {}, {}
 
-    def bind(self, conv, no, name, mp):
+    def bind(self, conv, no, name, mp, buffer_texture):
         """Binds, at every unit the program's samplers name, the capture's
-        texture there and its sampler object: a 2D texture from the calls
-        that made it, one the GPU renders or of another target read back
-        from Mesa's replay (conv.rendered_textures; a reduced capture
-        carries those); each texture read is noted for the reduced capture
+        texture there and its sampler object, and at every image unit its
+        images name the texture level the capture bound there: a 2D texture
+        from the calls that made it, one the GPU renders or of another target
+        read back from Mesa's replay (conv.rendered_textures; a reduced
+        capture carries those), a buffer texture by buffer_texture(conv,
+        texture); each texture read is noted for the reduced capture
         (conv.vertex_texture_read)."""
         GL = self.gl
         self.no, self.draw = no, name
@@ -137,31 +151,83 @@ class VertexTextures:
         for loc, target in mp.texture_locations:
             GL.glGetUniformiv(mp.name, loc, unit_of)
             unit = int(unit_of[0])
-            tex = conv.s.units.get((unit, target), 0)
-            tc = conv.s.texture_calls.get(tex)
-            if target == VERTEX_TEXTURE_TARGET:
-                if tc is not None and (tc.rendered or tc.refused is not None):
-                    # The GPU renders it, or its calls cannot be given to
-                    # Mesa (a pixel unpack buffer, over the limits): Mesa's
-                    # replay of the capture gives the image.
-                    ask.append((unit, tex, tc, target))
-            elif tex and not (conv.reads_reduced and tc is not None):
-                # No calls are kept for other targets: Mesa's replay gives
-                # the texture (a reduced capture carries what it gave); the
-                # default texture, 0, has no image.
-                ask.append((unit, tex, None, target))
-            reads.append((unit, tex, tc if target == VERTEX_TEXTURE_TARGET or conv.reads_reduced else None, target))
+            self.read(conv, unit, conv.s.units.get((unit, target), 0), target, reads, ask)
+        images = []
+        for loc in mp.image_locations:
+            GL.glGetUniformiv(mp.name, loc, unit_of)
+            unit = int(unit_of[0])
+            binding = conv.s.image_units.get(unit)
+            target = conv.s.texture_targets.get(binding[0]) if binding else None
+            if binding is not None and target != "GL_TEXTURE_BUFFER":
+                self.read(conv, IMAGE_UNIT_BASE + unit, binding[0], target, reads, ask)
+            images.append((unit, binding, target))
         got = conv.rendered_textures(no, name, ask) if ask else {}
+        made = {}
         for unit, tex, tc, target in reads:
             tc = got.get((tex, target), tc)
-            mt = self.image(tex, tc, target)   # (made on unit 0)
+            made[(tex, target)] = mt = self.image(tex, tc, target)   # (made on unit 0)
+            conv.vertex_texture_read(tex, tc)
+            if unit >= IMAGE_UNIT_BASE:
+                continue
             sampler = conv.s.sampler_units.get(unit, 0)
             ms = self.sampler(sampler, conv.s.samplers.get(sampler, {})) if sampler else 0
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
             GL.glBindTexture(self.mesa.enum(target), mt)
             GL.glBindSampler(unit, ms)
-            conv.vertex_texture_read(tex, tc)
         GL.glActiveTexture(GL.GL_TEXTURE0)
+        for unit, binding, target in images:
+            self.bind_image(conv, unit, binding, target, made, buffer_texture)
+
+    def bind_image(self, conv, unit, binding, target, made, buffer_texture):
+        """Mesa's image unit `unit` bound as the capture bound it: the
+        texture level (or layer) made for the draw, in the capture's format
+        or, bound by glBindImageTextures, the texture's own; unbound when
+        the capture's unit is."""
+        GL = self.gl
+        if binding is None:
+            GL.glBindImageTexture(unit, 0, 0, GL.GL_FALSE, 0, GL.GL_READ_ONLY, GL.GL_R8)
+            return
+        tex, level, layered, layer, access, fmt = binding
+        if target == "GL_TEXTURE_BUFFER":
+            GL.glActiveTexture(GL.GL_TEXTURE0)
+            mt = buffer_texture(conv, tex)
+        else:
+            mt = made[(tex, target)]
+        if fmt is None:
+            GL.glBindTexture(self.mesa.enum(target), mt)
+            query = GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X if target == "GL_TEXTURE_CUBE_MAP" else self.mesa.enum(target)
+            fmt = int(GL.glGetTexLevelParameteriv(query, 0, GL.GL_TEXTURE_INTERNAL_FORMAT))
+        from OpenGL.error import GLError
+        try:
+            GL.glBindImageTexture(unit, mt, level, GL.GL_TRUE if layered else GL.GL_FALSE, layer,
+                                  self.mesa.enum(access), self.mesa.enum(fmt))
+        except GLError:
+            # What Mesa refuses here its replay refused too (a format the
+            # texture's image does not take): the unit reads as unbound.
+            GL.glBindImageTexture(unit, 0, 0, GL.GL_FALSE, 0, GL.GL_READ_ONLY, GL.GL_R8)
+
+    def read(self, conv, unit, tex, target, reads, ask):
+        """Notes that the draw reads texture `tex` of `target` at `unit` (a
+        texture unit, or IMAGE_UNIT_BASE + an image unit), and whether
+        Mesa's replay must give it."""
+        if not tex and target != VERTEX_TEXTURE_TARGET:
+            # The target's default texture, which may hold an image as any
+            # other (kept apart from the 2D one's calls, under a name of its
+            # own); Mesa's replay reads it at the unit as any other.
+            from .rendered_textures import TARGETS
+            tex = DEFAULT_TEXTURE_BASE + TARGETS[target]
+        tc = conv.s.texture_calls.get(tex)
+        if target == VERTEX_TEXTURE_TARGET:
+            if tc is not None and (tc.rendered or tc.refused is not None):
+                # The GPU renders it, or its calls cannot be given to
+                # Mesa (a pixel unpack buffer, over the limits): Mesa's
+                # replay of the capture gives the image.
+                ask.append((unit, tex, tc, target))
+        elif not (conv.reads_reduced and tc is not None):
+            # No calls are kept for other targets: Mesa's replay gives
+            # the texture (a reduced capture carries what it gave).
+            ask.append((unit, tex, None, target))
+        reads.append((unit, tex, tc if target == VERTEX_TEXTURE_TARGET or conv.reads_reduced else None, target))
 
     def image(self, tex, tc, target=VERTEX_TEXTURE_TARGET):
         GL = self.gl
@@ -193,8 +259,11 @@ class VertexTextures:
             # as red (d, 0, 0, 1).
             self.call("glTexParameteri", self.mesa.enum(target), GL_DEPTH_TEXTURE_MODE, GL.GL_RED)
         for call_no, name, d, unpack in (tc.calls.values() if tc is not None else []):
-            self.replay(f"{self.draw}: texture {tex}, which its vertex shader reads: {name} (call {call_no})", name,
-                        d, unpack)
+            what = f"{self.draw}: texture {tex}, which its vertex shader reads: {name} (call {call_no})"
+            if name == SAMPLES_CALL:
+                self.fill_samples(what, mt, d)
+            else:
+                self.replay(what, name, d, unpack)
         for pname in UNPACK_PARAMETERS:
             self.call("glPixelStorei", self.mesa.enum(pname), 4 if pname == "GL_UNPACK_ALIGNMENT" else 0)
         self.drain()
@@ -203,6 +272,102 @@ class VertexTextures:
         # reads them.
         GL.glFinish()
         return mt
+
+    def fill_samples(self, what, mt, d):
+        """Multisample texture `mt` (bound at unit 0) given its storage and
+        every sample of every layer as read back (d: SAMPLES_CALL's
+        arguments): the samples uploaded as the layers of a 2D array
+        texture, then drawn into mt, one sample at a time under a sample
+        mask, by a full-screen triangle whose fragment shader fetches its
+        pixel of the layer (depth formats through gl_FragDepth). Nothing is
+        filled if Mesa refuses the storage (the texture reads as zeros)."""
+        GL, no = self.gl, self.no
+        self.drain()   # (the raw calls before it leave their errors)
+        w, h, depth, samples = (checked(no, integer, d.get(k), f"{what}: {k}", 1, MAX_SIZE)
+                                for k in ("width", "height", "depth", "samples"))
+        fixed = checked(no, integer, d.get("fixedsamplelocations"), f"{what}: fixedsamplelocations", 0, 1)
+        fmt, kind, pixels = d.get("format"), d.get("type"), d.get("pixels")
+        if depth % samples or (fmt, kind) not in SAMPLE_KINDS or not isinstance(pixels, (bytes, bytearray)) \
+                or len(pixels) != w * h * depth * 16:
+            fail_call(no, f"{what}: not a multisample image as the read back gives one")
+        target = self.mesa.enum(d.get("target"))
+        layers = depth // samples
+        try:
+            internal = self.mesa.enum(d.get("internalformat"))
+        except ValueError:
+            fail_call(no, f"{what}: internal format {printable(d.get('internalformat'))} is not an enumerant")
+        # Mesa's entry points called directly (PyOpenGL's wrappers of these
+        # cannot read an OpenGL ES context's version).
+        u, i = ctypes.c_uint, ctypes.c_int
+        proc = self.mesa.proc
+        if target == GL.GL_TEXTURE_2D_MULTISAMPLE:
+            proc("glTexStorage2DMultisample", u, i, u, i, i, ctypes.c_ubyte)(target, samples, internal, w, h, fixed)
+        else:
+            proc("glTexStorage3DMultisample", u, i, u, i, i, i, ctypes.c_ubyte)(target, samples, internal, w, h,
+                                                                                 layers, fixed)
+        if GL.glGetError():
+            return   # Mesa refuses the storage (its replay did not)
+        prefix, sampler_kind = SAMPLE_KINDS[(fmt, kind)]
+        depth_format = GL.glGetTexLevelParameteriv(target, 0, GL.GL_TEXTURE_DEPTH_SIZE) > 0
+        version = "#version 300 es\nprecision highp float;\nprecision highp int;\n" if self.mesa.es \
+            else "#version 330\n"
+        vs = version + "void main() { gl_Position = vec4(vec2(gl_VertexID & 1, gl_VertexID >> 1) * 4.0 - 1.0, " \
+            "0.0, 1.0); }\n"
+        fetch = "texelFetch(src, ivec3(gl_FragCoord.xy, layer), 0)"
+        fs = version + f"uniform highp {prefix}sampler2DArray src;\nuniform int layer;\n" + (
+            f"void main() {{ gl_FragDepth = {fetch}.r; }}\n" if depth_format else
+            f"out highp {prefix}vec4 colour;\nvoid main() {{ colour = {fetch}; }}\n")
+        prog, shaders = GL.glCreateProgram(), []
+        for stage, text in ((GL.GL_VERTEX_SHADER, vs), (GL.GL_FRAGMENT_SHADER, fs)):
+            sh = GL.glCreateShader(stage)
+            GL.glShaderSource(sh, text)
+            GL.glCompileShader(sh)
+            GL.glAttachShader(prog, sh)
+            shaders.append(sh)
+        GL.glLinkProgram(prog)
+        src, fb = int(GL.glGenTextures(1)), int(GL.glGenFramebuffers(1))
+        GL.glBindTexture(GL.GL_TEXTURE_2D_ARRAY, src)
+        data = ctypes.create_string_buffer(bytes(pixels), len(pixels))
+        self.call("glTexImage3D", GL.GL_TEXTURE_2D_ARRAY, 0, sampler_kind, w, h, depth, 0, self.mesa.enum(fmt),
+                  self.mesa.enum(kind), ctypes.addressof(data))
+        # One level, nearest: complete, integer formats too.
+        GL.glTexParameteri(GL.GL_TEXTURE_2D_ARRAY, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D_ARRAY, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, fb)
+        attachment = GL.GL_DEPTH_ATTACHMENT if depth_format else GL.GL_COLOR_ATTACHMENT0
+        in_use = GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM)   # the draw's, already in use
+        GL.glUseProgram(prog)
+        GL.glUniform1i(GL.glGetUniformLocation(prog, "src"), 0)
+        GL.glViewport(0, 0, w, h)
+        GL.glEnable(GL.GL_SAMPLE_MASK)
+        sample_mask = proc("glSampleMaski", u, u)
+        if depth_format:
+            GL.glEnable(GL.GL_DEPTH_TEST)
+            GL.glDepthFunc(GL.GL_ALWAYS)
+        try:
+            for z in range(layers):
+                if target == GL.GL_TEXTURE_2D_MULTISAMPLE:
+                    GL.glFramebufferTexture2D(GL.GL_FRAMEBUFFER, attachment, target, mt, 0)
+                else:
+                    proc("glFramebufferTextureLayer", u, u, u, i, i)(GL.GL_FRAMEBUFFER, attachment, mt, 0, z)
+                if GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER) != GL.GL_FRAMEBUFFER_COMPLETE:
+                    break   # a format Mesa cannot draw into: left as zeros
+                for s in range(samples):
+                    sample_mask(0, 1 << s)
+                    GL.glUniform1i(GL.glGetUniformLocation(prog, "layer"), z * samples + s)
+                    GL.glDrawArrays(GL.GL_TRIANGLES, 0, 3)
+        finally:
+            sample_mask(0, 0xFFFFFFFF)
+            GL.glDisable(GL.GL_SAMPLE_MASK)
+            GL.glDisable(GL.GL_DEPTH_TEST)
+            GL.glUseProgram(in_use)
+            GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.mesa.fbo)   # the vertex stage's own
+            GL.glDeleteFramebuffers(1, [fb])
+            GL.glDeleteTextures(1, [src])
+            for sh in shaders:
+                GL.glDeleteShader(sh)
+            GL.glDeleteProgram(prog)
+            GL.glBindTexture(target, mt)
 
     def sampler(self, sampler, params):
         GL = self.gl

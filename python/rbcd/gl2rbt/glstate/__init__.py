@@ -69,6 +69,7 @@ class GLState:
         self.bound = {"GL_ARRAY_BUFFER": 0, "GL_ELEMENT_ARRAY_BUFFER": 0}
         self.indexed = {}
         self.mappings = {}
+        self.gpu_buffers = {}   # buffer -> (call, how) the GPU wrote it (its contents are not the capture's)
         # Generic attributes and vertex array objects (attributes.py).
         self.vaos = {0: VertexArrayObject()}
         self.vao = 0
@@ -81,6 +82,8 @@ class GLState:
         self.shaders = {}
         self.programs = {}
         self.program = 0
+        self.pipelines = {}    # program pipeline name -> Pipeline
+        self.pipeline = 0      # the bound pipeline (draws run it when no program is in use)
         # Framebuffers and textures (framebuffers.py).
         self.draw_fbo = 0
         self.read_fbo = 0
@@ -88,6 +91,7 @@ class GLState:
         self.fbo_attachments = {}   # framebuffer -> {colour or stencil attachment point: image, as fbo_depth's}
         self.sizes = {}
         self.formats = {}   # ("texture" | "renderbuffer", name) -> internal format of level 0
+        self.depth_types = {}   # ("texture", name) -> the pixels' type its level 0 was given
         self.multisampled = {}   # the same -> whether its image has samples (glRenderbufferStorageMultisample ...)
         self.renderbuffer = 0
         self.framebuffer_names = None    # names glGen/glCreateFramebuffers returned (None: the capture showed none)
@@ -108,6 +112,11 @@ class GLState:
         self.pixel_transfer = {}   # glPixelTransfer's parameters as last set
         self.samplers = {}         # sampler name -> {pname: (call name, arguments)}
         self.sampler_units = {}    # unit -> sampler name
+        # Image units (glBindImageTexture): unit -> (texture, level, layered,
+        # layer, access, format); the units bound for writing.
+        self.image_units = {}
+        self.image_writes = set()
+        self.views = set()   # textures that share images with another (glTextureView)
         # --reduced-out: the version of each texture's calls written into
         # the reduced capture (with a draw whose vertex shader read it).
         self.reduced_texture_versions = {}
@@ -143,6 +152,20 @@ class GLState:
     @vertex_array_enabled.setter
     def vertex_array_enabled(self, on):
         self.vaos[self.vao].fixed_enabled = on
+
+
+# The state contexts of one share group hold in common: the objects GL
+# shares (buffers, textures, renderbuffers, samplers, shaders and programs;
+# not vertex array objects, framebuffers or program pipelines), with what
+# the converter keeps of them; and counters of the whole conversion. Every
+# other field of GLState is a context's own (converter.Converter.h_make_current).
+SHARED_STATE = {
+    "buffers", "buffer_versions", "buffer_written", "buffer_held", "buffer_names", "buffer_objects",
+    "immutable_buffers", "buffer_bytes_in_all", "mappings", "gpu_buffers", "shaders", "programs", "sizes", "formats",
+    "depth_types", "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names",
+    "sampler_names", "texture_buffers", "texture_images", "texture_calls", "texture_bytes_kept", "samplers", "views",
+    "reduced_texture_versions", "rendered_images"}
+CONVERSION_STATE = {"next_version", "gpu_writes", "readback_call"}
 
 
 MAX_VIEWPORTS = 16   # GL_MAX_VIEWPORTS as Mesa (llvmpipe) answers it

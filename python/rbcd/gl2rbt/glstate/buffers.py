@@ -118,6 +118,41 @@ class BufferCalls:
             fail_call(no, f"{name}: the buffers would hold more than {MAX_BUFFER_BYTES_IN_ALL >> 30} GiB of data "
                       "in all (docs/gl-capture.md, limits)")
 
+    def gpu_wrote_buffer(self, no, b, how):
+        """Buffer b's contents were written by the GPU (call `no`, `how`):
+        not in the capture, so a later draw that reads them as vertex,
+        index, command or vertex-shader data is refused (checked_buffer)."""
+        if b and b in self.s.buffers:
+            self.s.gpu_buffers[b] = (no, how)
+
+    def checked_buffer(self, no, name, b, what):
+        """Buffer b's data for a draw that reads it as `what`; refused if
+        the GPU wrote it (its contents are not in the capture)."""
+        wrote = self.s.gpu_buffers.get(b)
+        if wrote is not None and wrote[0] != no:   # (a draw reads what it finds, before its own stores)
+            fail_call(no, f"{printable(name)} reads {what} from buffer {b}, which the GPU wrote at call {wrote[0]} "
+                      f"({printable(wrote[1])}): its contents are not in the capture; not emulated")
+        return self.s.buffers.get(b)
+
+    def h_pack_read(self, no, name, a, args):
+        """glReadPixels, glGetTexImage and their kin: with a pixel pack
+        buffer bound, the GPU writes the pixels into it."""
+        b = self.s.bound.get("GL_PIXEL_PACK_BUFFER", 0)
+        if b:
+            self.gpu_wrote_buffer(no, b, f"{base_name(name)} into the pixel pack buffer")
+
+    def h_query_result(self, no, name, a, args):
+        """glGetQueryObject* with a query buffer bound, glGetQueryBufferObject*:
+        the GPU writes the query's result into the buffer."""
+        if "BufferObject" in name:
+            b = dict(args).get("buffer")
+            if isinstance(b, int) and not isinstance(b, bool):
+                self.gpu_wrote_buffer(no, b, f"{base_name(name)} writes a query's result")
+        else:
+            b = self.s.bound.get("GL_QUERY_BUFFER", 0)
+            if b:
+                self.gpu_wrote_buffer(no, b, f"{base_name(name)} into the query buffer")
+
     def written_extents(self, b):
         """The [start, end) extents of buffer b that may hold non-zero bytes."""
         buf = self.s.buffers[b]
@@ -246,6 +281,7 @@ class BufferCalls:
             buf[:] = data[:size]
             written = size
         self.s.buffers[b] = buf
+        self.s.gpu_buffers.pop(b, None)   # new storage: what the capture gives
         if isinstance(buf, mmap.mmap):
             self.s.buffer_written[b] = []
         else:
@@ -306,6 +342,9 @@ class BufferCalls:
                 if lo < hi:
                     dst[lo:hi] = bytes(hi - lo)
             at = e
+        if rb in self.s.gpu_buffers:
+            self.gpu_wrote_buffer(no, wb, f"{base_name(name)} from buffer {rb}, which the GPU wrote at call "
+                                          f"{self.s.gpu_buffers[rb][0]}")
         for s, e, data in pieces:
             dst[s:e] = data
             self.changed(no, name, wb, s, e)
@@ -346,6 +385,8 @@ class BufferCalls:
         value = self.vertex_stage().clear_element(internal, fmt, kind, data, n)
         if value is None:
             return   # Mesa refuses the format and type (GL_INVALID_ENUM or _OPERATION): nothing changes
+        if off == 0 and size == len(buf):
+            self.s.gpu_buffers.pop(b, None)   # all of it is the capture's value again
         if not any(value) and isinstance(buf, mmap.mmap):
             # Zeros into storage whose pages cost nothing until written:
             # only what was written is zeroed.
@@ -449,6 +490,7 @@ class BufferCalls:
                 self.held_bytes(no, name, b, 0)
                 self.s.buffer_held.pop(b, None)
                 self.s.mappings.pop(b, None)
+                self.s.gpu_buffers.pop(b, None)
                 for t, v in self.s.bound.items():
                     if v == b:
                         self.s.bound[t] = 0
@@ -484,4 +526,9 @@ class BufferCalls:
         "glUnmapBuffer": h_unmap_buffer,
         "memcpy": h_memcpy,
         "glDeleteBuffers": h_delete_buffers,
-    }
+    } | dict.fromkeys(("glReadPixels", "glReadnPixels", "glGetTexImage", "glGetnTexImage", "glGetTextureImage",
+                       "glGetnTextureImage", "glGetTextureSubImage", "glGetCompressedTexImage",
+                       "glGetnCompressedTexImage", "glGetCompressedTextureImage", "glGetCompressedTextureSubImage"),
+                      h_pack_read) \
+      | dict.fromkeys([f"glGetQuery{o}Object{t}" for o in ("", "Buffer") for t in ("iv", "uiv", "i64v", "ui64v")],
+                      h_query_result)

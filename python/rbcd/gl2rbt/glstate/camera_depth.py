@@ -53,6 +53,18 @@ class CameraDepthCalls:
         self.depths_at_start = self.kept_depths = Depths(None, "as they were when the converted frames began")
         self.kept_wrong = None
 
+    def depth_bits(self):
+        """The bits of the bound framebuffer's depth buffer, where they are
+        fewer than the trace's: a 16-bit attachment (GL_DEPTH_COMPONENT16,
+        or an unsized depth texture of 16-bit pixels, as Mesa stores them);
+        the trace's otherwise. --check-depth compares at these."""
+        att = self.s.fbo_depth.get(self.s.draw_fbo) if self.s.draw_fbo else None
+        fmt = self.s.formats.get(att[:2]) if att else None
+        if fmt == "GL_DEPTH_COMPONENT16" or fmt == "GL_DEPTH_COMPONENT" and \
+                self.s.depth_types.get(att[:2]) == "GL_UNSIGNED_SHORT":
+            return min(16, self.args.depth_bits)
+        return self.args.depth_bits
+
     def depth_key(self, fb):
         return "window" if not fb else self.s.fbo_depth.get(fb)
 

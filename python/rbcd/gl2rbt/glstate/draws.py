@@ -55,15 +55,37 @@ class DrawCalls:
         or feedback mode."""
         return self.s.render_mode == "GL_RENDER"
 
+    def shader_stores(self, no, name):
+        """What a draw's shaders may store into: textures bound to image
+        units for writing (read back again when a vertex shader reads
+        them), and buffers: those of buffer textures bound so, and, under a
+        program that declares shader storage blocks or atomic counters, those
+        bound to their binding points (a later draw that reads them as
+        data is refused: checked_buffer)."""
+        if self.s.image_writes:
+            self.gpu_wrote()
+            for unit in self.s.image_writes:
+                tex = self.s.image_units[unit][0]
+                if tex in self.s.texture_buffers:
+                    self.gpu_wrote_buffer(no, self.s.texture_buffers[tex][1],
+                                          f"{base_name(name)} with its buffer texture {tex} bound to image unit "
+                                          f"{unit} for writing")
+        if any(p.stores for _, p in self.stage_programs().values()):
+            for (target, index), (b, _, _) in self.s.indexed.items():
+                if b and target in ("GL_SHADER_STORAGE_BUFFER", "GL_ATOMIC_COUNTER_BUFFER"):
+                    self.gpu_wrote_buffer(no, b, f"{base_name(name)}, whose program may store into {target} "
+                                                 f"binding {index}")
+
     # ---- draws
     def draw(self, no, mode, positions, name, tris=None):
         """positions: (n, 4) object-space vertices in GL order for `mode`,
         through the fixed-function transform; tris, the triangles GL
         assembles from them when primitive restart cut them into pieces."""
+        self.shader_stores(no, name)
         if not self.active or not self.renders():
             return
         if self.vertex_program():
-            fail_call(no, f"{name} with program {self.s.program} bound: immediate-mode and glRect draws "
+            fail_call(no, f"{name} with program {self.stage_programs()['vertex'][0]} bound: immediate-mode and glRect draws "
                       "under a vertex shader are not emulated")
         if not self.draws_into_camera_pass():
             return
@@ -97,9 +119,9 @@ class DrawCalls:
                                                    positions.astype("<f4").tobytes(), digest_size=8).hexdigest()
         obj_id = self.object_of(no, mv, proj, len(positions), clip)
         eye = (lambda: mat_mul(positions, mv.T)) if self.geo is not None else None
-        # A program of only a fragment shader: its discard or gl_FragDepth
-        # count as under a vertex shader.
-        p = self.s.programs.get(self.s.program) if self.s.program else None
+        # A program (or pipeline) of only a fragment shader: its discard or
+        # gl_FragDepth count as under a vertex shader.
+        p = self.stage_programs().get("fragment", (0, None))[1]
         self.draw_effects = p is not None and (p.discards or p.frag_depth)
         self.draw_record(no, name, clip, tris, obj_id, len(positions), mv, proj, eye)
         self.draw_effects = False
@@ -180,6 +202,7 @@ class DrawCalls:
         self.emit(bytes(rec))
         if st.depth_test:
             self.last_depth_draw, self.last_depth_wrong = no, self.kept_wrong
+            self.last_depth_bits = self.depth_bits()
         self.note_draw(no, name, obj_id if collisionable else None, nverts, mv, proj, clip)
 
     def immediate_vertex(self, no, base, a):
@@ -216,6 +239,7 @@ class DrawCalls:
         count = d["count"]
         if instances > MAX_INSTANCES:
             fail_call(no, f"{name}: {instances} instances, more than {MAX_INSTANCES}")
+        self.shader_stores(no, name)
         mode = d["mode"]
         if mode not in PRIM_MODES or (self.core and self.s.vao == 0) or \
                 (d.get("type", "GL_UNSIGNED_INT") not in INDEX_TYPES and "Elements" in name) or \
@@ -225,11 +249,15 @@ class DrawCalls:
             return
         if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard or not self.renders():
             return
-        p = self.program_in_use()
+        stages = self.stage_programs()
         for stage in ("geometry", "tess_control", "tess_evaluation"):
-            if stage in p.linked[0]:
-                fail_call(no, f"{name}: program {self.s.program} (linked at call {p.link_call}) has a "
+            if stage in stages:
+                v, sp = stages[stage]
+                fail_call(no, f"{name}: program {v} (linked at call {sp.link_call}) has a "
                           f"{stage.replace('_', ' ')} shader: not emulated yet")
+        # The fragment stage's program decides discard, gl_FragDepth and
+        # the shading cost (a pipeline's may not be the vertex stage's).
+        p = stages.get("fragment", stages["vertex"])[1]
         if mode == "GL_PATCHES":
             return   # GL_INVALID_OPERATION with no tessellation stage: nothing is drawn
         if mode in PRIM_NO_AREA or mode in ("GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"):
@@ -247,11 +275,12 @@ class DrawCalls:
         tagged = False
         self.draw_instances = instances
         self.vertex_data = lambda: self.vertex_data_digest(base_name(name), d)
-        self.draw_effects = p.discards or p.frag_depth
-        self.draw_shade = self.program_shade(p)
+        self.draw_effects = "fragment" in stages and (p.discards or p.frag_depth)
+        self.draw_shade = self.program_shade(p) if "fragment" in stages else 0
         from ..vertex_stage import DrawRejected
         try:
-            clips = self.vertex_stage().run(self, no, base_name(name), d, instances, per * instances)
+            clips = self.vertex_stage().run(self, no, base_name(name), d, instances, per * instances,
+                                            *stages["vertex"])
         except DrawRejected as e:
             # The draw as the capture set it up is a GL error: GL draws
             # nothing, and neither does the converter; the report counts it.
@@ -285,7 +314,8 @@ class DrawCalls:
         self.vertex_data = None
         self.draw_effects = False
         self.draw_shade = 0
-        self.note_fragment_effects(p, tagged)
+        if "fragment" in stages:
+            self.note_fragment_effects(p, tagged)
 
     def note_fragment_effects(self, p, tagged):
         fx = self.fragment_effects.setdefault(self.out_frame, dict.fromkeys(FRAGMENT_EFFECT_KEYS, 0))
@@ -396,11 +426,11 @@ class DrawCalls:
         if counted:
             pbuf = self.s.bound.get("GL_PARAMETER_BUFFER", 0)
             at = checked(no, integer, d.get("drawcount"), f"{name}: the parameter buffer offset", *I64)
-            params = self.s.buffers.get(pbuf) if pbuf else None
+            params = self.checked_buffer(no, name, pbuf, "its draw count") if pbuf else None
             if params is None or at < 0 or at % 4 or at + 4 > len(params):
                 return   # GL_INVALID_OPERATION or GL_INVALID_VALUE: nothing is drawn
             n = min(n, struct.unpack_from("<I", params, at)[0])
-        data = self.s.buffers.get(buf)
+        data = self.checked_buffer(no, name, buf, "its commands")
         stride = stride or size
         if n and (data is None or offset + (n - 1) * stride + size > len(data)):
             return   # GL_INVALID_OPERATION: commands past the buffer's end, nothing is drawn

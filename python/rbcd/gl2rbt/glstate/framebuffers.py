@@ -210,6 +210,9 @@ class FramebufferCalls:
                         self.s.units[key] = 0
                 if self.s.texture == tex:
                     self.s.texture = 0
+                for unit in [u for u, b in self.s.image_units.items() if b[0] == tex]:
+                    del self.s.image_units[unit]   # unbound from its image units too
+                    self.s.image_writes.discard(unit)
                 if self.s.texture_names is not None:
                     self.s.texture_names.discard(tex)
                 self.detach_deleted("texture", tex)
@@ -234,6 +237,7 @@ class FramebufferCalls:
             self.s.sizes[("texture", tex)] = (w, h)
             self.s.multisampled[("texture", tex)] = "Multisample" in name
             self.s.formats[("texture", tex)] = d.get("internalformat")
+            self.s.depth_types[("texture", tex)] = d.get("type")   # (an unsized depth format's bits)
             self.s.texture_images[tex] = texture_image_digest(d)
             levels = d.get("levels")
             if isinstance(levels, int) and not isinstance(levels, bool):   # glTexStorage2D: the levels below

@@ -97,7 +97,7 @@ class ObjectCalls:
 
     def program_digest(self):
         """The digest of the sources of the program a draw runs ("" without a vertex shader)."""
-        return self.program_in_use().digest if self.vertex_program() else ""
+        return self.draw_digest() if self.vertex_program() else ""
 
     def pass_name(self):
         """The innermost debug group or marker that is not an object's, else the

@@ -28,7 +28,23 @@ MAX_STATEMENT_OPERATORS = 65536
 STATEMENTS = re.compile(r"[^;{}]+")
 OPERATORS = re.compile(r"[-+*/%&|^<>?:=,!~]")
 COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
+# A shader storage block that is not readonly (its qualifiers before
+# `buffer`), or an atomic counter: a stage that may store into buffers.
+STORAGE_BLOCK = re.compile(r"((?:\b\w+\b\s*(?:\([^()]*\))?\s*)*)\bbuffer\s+\w+\s*\{")
+ATOMIC_COUNTER = re.compile(r"\batomic_uint\b")
+
+
+def may_store(source):
+    text = COMMENTS.sub(" ", source)
+    return ATOMIC_COUNTER.search(text) is not None or any(
+        not re.search(r"\breadonly\b", m.group(1)) for m in STORAGE_BLOCK.finditer(text))
 UNIFORM = re.compile(r"gl(Program)?Uniform(Matrix)?([1-4])(x[2-4])?(f|d|i|ui)(v?)$")
+# glUseProgramStages' bits (GL 4.6 table 7.1) and its "every stage".
+STAGE_BITS = {"GL_VERTEX_SHADER_BIT": "vertex", "GL_FRAGMENT_SHADER_BIT": "fragment",
+              "GL_GEOMETRY_SHADER_BIT": "geometry", "GL_TESS_CONTROL_SHADER_BIT": "tess_control",
+              "GL_TESS_EVALUATION_SHADER_BIT": "tess_evaluation", "GL_COMPUTE_SHADER_BIT": "compute"}
+STAGE_BIT_VALUES = {0x1: "vertex", 0x2: "fragment", 0x4: "geometry", 0x8: "tess_control",
+                    0x10: "tess_evaluation", 0x20: "compute"}
 
 
 class Shader:
@@ -56,12 +72,30 @@ class Program:
         self.deleted = False       # glDeleteProgram while in use
         self.block_bindings = {}   # capture block index -> binding point
         self.discards = False      # its fragment shader has a discard statement
+        self.stores = False        # a stage declares shader storage blocks or atomic counters
         self.frag_depth = False    # its fragment shader writes gl_FragDepth
         self.digest = ""           # SHA-256 of its stages' sources at the last link (selection rules)
+        self.separable = False     # GL_PROGRAM_SEPARABLE as its last link saw it
+        self.separable_next = False   # as glProgramParameteri last set it, for the next link
         # Linked again while in use: the program as it was (its executable
         # and uniforms), which stays in use if this link fails
         # (program_in_use).
         self.in_use_before = None
+
+
+class Pipeline:
+    """A program pipeline object (GL 4.1, ES 3.1): the separable program
+    of each stage, and the active one glUniform* sets."""
+    __slots__ = ("stages", "active")
+
+    def __init__(self):
+        self.stages, self.active = {}, 0   # stage -> program name
+
+
+def sources_digest(sources):
+    """The digest selection rules name a program by: its stages' sources."""
+    return hashlib.sha256("".join(f"{stage}\0{sources[stage]}\0" for stage in sorted(sources))
+                          .encode("utf-8", "surrogateescape")).hexdigest()
 
 
 def uniform_values(no, name, kind, values):
@@ -93,10 +127,11 @@ class ProgramCalls:
         return p
 
     def vertex_program(self):
-        """Whether draws now run a vertex shader: a program is in use and its
-        executable has one (a program of only a fragment shader leaves the
-        vertices to the fixed-function transform, in a compatibility context)."""
-        return self.s.program in self.s.programs and "vertex" in self.program_in_use().linked[0]
+        """Whether draws now run a vertex shader: the program in use, or
+        with none the bound pipeline, has one (a program of only a fragment
+        shader leaves the vertices to the fixed-function transform, in a
+        compatibility context)."""
+        return "vertex" in self.stage_programs()
 
     def program_in_use(self):
         """The program whose executable draws run: the one in use as its last
@@ -105,10 +140,40 @@ class ProgramCalls:
         §7.3, and Mesa: a failed relink leaves the last executable in use,
         glUniform and glUseProgram of the program are then
         GL_INVALID_OPERATION, until another program is used)."""
-        p = self.s.programs[self.s.program]
+        return self.executable(self.s.programs[self.s.program])
+
+    def executable(self, p):
         while p.in_use_before is not None and not self.vertex_stage().links(p):
             p = p.in_use_before
         return p
+
+    def stage_programs(self):
+        """{stage: (program name, Program as its executable)} of what draws
+        run: every stage of the program in use, or, with none in use, the
+        stages of the bound program pipeline (GL 4.6 §7.4)."""
+        if self.s.program in self.s.programs:
+            p = self.program_in_use()
+            return {stage: (self.s.program, p) for stage in p.linked[0]} if p.linked else {}
+        pipe = self.s.pipelines.get(self.s.pipeline)
+        if pipe is None:
+            return {}
+        out = {}
+        for stage, v in pipe.stages.items():
+            p = self.executable(self.s.programs[v]) if v in self.s.programs else None
+            if p is not None and stage in p.linked[0]:   # (a relink may have taken the stage away)
+                out[stage] = (v, p)
+        return out
+
+    def draw_digest(self):
+        """The digest of the sources of what draws run, every stage (a
+        pipeline of the stages of a program is named as the program)."""
+        programs = self.stage_programs()
+        if self.s.program in self.s.programs:
+            return self.program_in_use().digest
+        return sources_digest({stage: p.linked[0][stage] for stage, (_, p) in programs.items()})
+
+    def in_a_pipeline(self, v):
+        return any(v in pipe.stages.values() for pipe in self.s.pipelines.values())
 
     def h_create_shader(self, no, name, a, args):
         stage = STAGES.get(a[0] if a else None)
@@ -167,7 +232,7 @@ class ProgramCalls:
     def h_link_program(self, no, name, a, args):
         p = self.program(no, name, a[0] if a else None)
         before = None
-        if a[0] == self.s.program and p.linked is not None:
+        if (a[0] == self.s.program or self.in_a_pipeline(a[0])) and p.linked is not None:
             before = copy.copy(p)
             if before.in_use_before is not None and self.vertex_stage().links(before):
                 before.in_use_before = None   # that link held: what it replaced is out of use
@@ -184,16 +249,25 @@ class ProgramCalls:
                 sources[sh.stage] += "\n" + sh.compiled
             else:
                 sources[sh.stage] = sh.compiled
+        self.linked(no, p, sources, objects)
+        p.in_use_before = before
+
+    @staticmethod
+    def linked(no, p, sources, objects):
+        """Program p linked at call `no` from these stages (joined source
+        and each shader object's)."""
         p.linked, p.objects = (sources, dict(p.bindings)), objects
-        p.digest = hashlib.sha256("".join(f"{stage}\0{sources[stage]}\0" for stage in sorted(sources))
-                                  .encode("utf-8", "surrogateescape")).hexdigest()
+        p.digest = sources_digest(sources)
+        p.separable = p.separable_next
         fragment = COMMENTS.sub(" ", sources.get("fragment", ""))
+        # Whether any stage may store into buffers: shader storage blocks not
+        # readonly, or atomic counters.
+        p.stores = any(may_store(text) for text in sources.values())
         p.discards = re.search(r"\bdiscard\b", fragment) is not None
         p.frag_depth = re.search(r"\bgl_FragDepth(EXT)?\b", fragment) is not None
         p.link_call = no
         p.version += 1
         p.uniform_names, p.block_names, p.uniforms, p.block_bindings = {}, {}, {}, {}
-        p.in_use_before = before
 
     def h_use_program(self, no, name, a, args):
         v = a[0] if a else None
@@ -204,12 +278,21 @@ class ProgramCalls:
         if v and v != self.s.program and "vertex" in self.s.programs[v].linked[0] \
                 and not self.vertex_stage().links(self.s.programs[v]):
             return   # its last link failed in Mesa: GL_INVALID_OPERATION, the program in use stays
-        old = self.s.programs.get(self.s.program)
-        if old is not None and v != self.s.program:
-            old.in_use_before = None   # its executable is out of use
-            if old.deleted:
-                del self.s.programs[self.s.program]   # deleted while in use: gone once no longer used
+        old, was = self.s.programs.get(self.s.program), self.s.program
         self.s.program = v
+        if old is not None and v != was:
+            self.out_of_use(was)
+
+    def out_of_use(self, v):
+        """Program v may have gone out of use (glUseProgram of another, a
+        pipeline's stage given another): its old executable goes, and so
+        does the program if it was deleted while in use."""
+        p = self.s.programs.get(v)
+        if p is None or v == self.s.program or self.in_a_pipeline(v):
+            return
+        p.in_use_before = None
+        if p.deleted:
+            del self.s.programs[v]
 
     def h_delete_program(self, no, name, a, args):
         """glDeleteProgram: the name goes at once unless the program is in
@@ -218,8 +301,8 @@ class ProgramCalls:
         v = a[0] if a else None
         if not isinstance(v, int) or isinstance(v, bool) or v not in self.s.programs:
             return   # 0 is ignored; an unknown name is GL_INVALID_VALUE
-        if v == self.s.program:
-            self.s.programs[v].deleted = True
+        if v == self.s.program or self.in_a_pipeline(v):
+            self.s.programs[v].deleted = True   # gone once no pipeline nor the context uses it
         else:
             del self.s.programs[v]
 
@@ -282,10 +365,15 @@ class ProgramCalls:
             fail_call(no, f"{printable(name)} is not emulated")
         if m.group(1):
             p, rest = self.program(no, name, a[0] if a else None), a[1:]
-        else:
-            if not self.s.program:
-                return   # GL_INVALID_OPERATION: no program in use, the call does nothing
+        elif self.s.program:
             p, rest = self.s.programs[self.s.program], a
+        else:
+            # With no program in use, the bound pipeline's active program
+            # (GL 4.6 §7.6.1); with neither, GL_INVALID_OPERATION: nothing.
+            pipe = self.s.pipelines.get(self.s.pipeline)
+            if pipe is None or pipe.active not in self.s.programs:
+                return
+            p, rest = self.s.programs[pipe.active], a
         loc = checked(no, integer, rest[0], f"{name}: the location", *I32)
         transpose = m.group(2) is not None and gl_boolean(dict(args).get("transpose"), no, f"{name}: transpose",
                                                           nonzero=True)
@@ -318,18 +406,120 @@ class ProgramCalls:
         p.uniforms.pop(key, None)
         p.uniforms[key] = (func, values, transpose, m.group(5), count)
 
-    def h_refuse_stage(self, no, name, a, args):
-        fail_call(no, f"{printable(name)}: separable programs and pipelines are not emulated yet")
-
     def h_program_parameter(self, no, name, a, args):
-        """glProgramParameteri: a hint to keep the binary changes nothing
-        drawn, nor does a program made not separable; a separable one is refused."""
+        """glProgramParameteri: GL_PROGRAM_SEPARABLE, which the next link
+        takes; the hint to keep the binary changes nothing drawn; another
+        parameter or value is GL_INVALID_ENUM or _VALUE."""
         d = dict(args)
         pname, value = d.get("pname"), d.get("value")
-        if pname == "GL_PROGRAM_BINARY_RETRIEVABLE_HINT" or \
-                (pname == "GL_PROGRAM_SEPARABLE" and value in (0, False, "GL_FALSE")):
+        if pname == "GL_PROGRAM_SEPARABLE" and value in (0, 1, False, True, "GL_FALSE", "GL_TRUE"):
+            self.program(no, name, d.get("program")).separable_next = value in (1, True, "GL_TRUE")
+
+    def h_create_shader_program(self, no, name, a, args):
+        """glCreateShaderProgramv (GL 4.1, ES 3.1): a separable program of
+        one stage, compiled and linked at once from the sources."""
+        d = dict(args)
+        stage = STAGES.get(d.get("type"))
+        if stage is None:
+            return   # GL_INVALID_ENUM: no program made (it returns 0)
+        if not isinstance(self.ret, int) or self.ret <= 0:
+            return   # no program made (a count GL refuses)
+        sh = Shader(stage)
+        self.s.shaders[-1] = sh
+        try:
+            self.h_shader_source(no, name, a, [("shader", -1), ("count", d.get("count")),
+                                                ("string", d.get("strings")), ("length", None)])
+        finally:
+            del self.s.shaders[-1]
+        p = self.s.programs[self.ret] = Program()
+        p.separable_next = True
+        text = "".join(sh.sources)
+        self.linked(no, p, {stage: text}, {stage: [text]})
+
+    def pipeline(self, no, name, v):
+        """Pipeline v (glGenProgramPipelines makes the objects, in Mesa);
+        None for 0 or a name that is none (GL_INVALID_OPERATION)."""
+        if not isinstance(v, int) or isinstance(v, bool) or not 0 <= v <= U32[1]:
+            fail_call(no, f"{printable(name)}: impossible pipeline {printable(v)}")
+        return self.s.pipelines.get(v)
+
+    def h_gen_pipelines(self, no, name, a, args):
+        d = dict(args)
+        for v in d.get("pipelines") or []:
+            if isinstance(v, int) and not isinstance(v, bool) and v > 0:
+                self.s.pipelines.setdefault(v, Pipeline())
+
+    def h_bind_pipeline(self, no, name, a, args):
+        v = dict(args).get("pipeline", a[0] if a else None)
+        if v == 0 or self.pipeline(no, name, v) is not None:
+            self.s.pipeline = v
+
+    def h_delete_pipelines(self, no, name, a, args):
+        for v in dict(args).get("pipelines") or []:
+            pipe = self.s.pipelines.pop(v, None) if isinstance(v, int) and not isinstance(v, bool) else None
+            if pipe is None:
+                continue
+            if self.s.pipeline == v:
+                self.s.pipeline = 0
+            for prog in set(pipe.stages.values()):
+                self.out_of_use(prog)
+
+    def h_use_program_stages(self, no, name, a, args):
+        """glUseProgramStages: the stages named take the program's
+        executables of those stages (none for a stage it lacks, or for
+        program 0); bits GL does not define, a program that is not
+        separable or whose last link failed, are errors that change nothing."""
+        d = dict(args)
+        pipe = self.pipeline(no, name, d.get("pipeline"))
+        bits = d.get("stages")
+        if isinstance(bits, (list, tuple)):
+            if "GL_ALL_SHADER_BITS" in bits:
+                stages = set(STAGE_BIT_VALUES.values())
+            elif all(b in STAGE_BITS for b in bits):
+                stages = {STAGE_BITS[b] for b in bits}
+            else:
+                return   # GL_INVALID_VALUE
+        elif isinstance(bits, int) and not isinstance(bits, bool):
+            if bits & 0xFFFFFFFF == 0xFFFFFFFF:
+                stages = set(STAGE_BIT_VALUES.values())
+            elif bits & ~0x3F:
+                return   # GL_INVALID_VALUE
+            else:
+                stages = {s for bit, s in STAGE_BIT_VALUES.items() if bits & bit}
+        elif bits == "GL_ALL_SHADER_BITS" or bits in STAGE_BITS:
+            stages = set(STAGE_BIT_VALUES.values()) if bits == "GL_ALL_SHADER_BITS" else {STAGE_BITS[bits]}
+        else:
+            fail_call(no, f"{printable(name)}: stages {printable(bits)} are no bitfield")
+        if pipe is None:
+            return   # GL_INVALID_OPERATION: no such pipeline
+        v = d.get("program")
+        p = None
+        if v:
+            p = self.s.programs.get(name_arg(no, name, v, "program"))
+            if p is None or p.linked is None or not p.separable or \
+                    ("vertex" in p.linked[0] and not self.vertex_stage().links(p)):
+                return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the stages stay as they were
+        old = set(pipe.stages.values())
+        for stage in stages:
+            if p is not None and stage in p.linked[0]:
+                pipe.stages[stage] = v
+            else:
+                pipe.stages.pop(stage, None)
+        for prog in old - set(pipe.stages.values()):
+            self.out_of_use(prog)
+
+    def h_active_shader_program(self, no, name, a, args):
+        d = dict(args)
+        pipe = self.pipeline(no, name, d.get("pipeline"))
+        v = d.get("program")
+        if pipe is None:
             return
-        self.h_refuse_stage(no, name, a, args)
+        if v == 0:
+            pipe.active = 0
+            return
+        p = self.s.programs.get(name_arg(no, name, v, "program"))
+        if p is not None and p.linked is not None:
+            pipe.active = v   # (an unlinked one is GL_INVALID_OPERATION)
 
     def h_transform_feedback_varyings(self, no, name, a, args):
         fail_call(no, f"{printable(name)}: the capture's own transform feedback is not emulated")
@@ -361,9 +551,13 @@ class ProgramCalls:
         "glGetProgramResourceIndex": h_get_program_resource,
         "glUniformSubroutinesuiv": h_uniform_subroutines,
         "glProgramParameteri": h_program_parameter,
-        "glCreateShaderProgramv": h_refuse_stage,
-        "glUseProgramStages": h_refuse_stage,
-        "glBindProgramPipeline": h_refuse_stage,
+        "glCreateShaderProgramv": h_create_shader_program,
+        "glGenProgramPipelines": h_gen_pipelines,
+        "glCreateProgramPipelines": h_gen_pipelines,
+        "glBindProgramPipeline": h_bind_pipeline,
+        "glDeleteProgramPipelines": h_delete_pipelines,
+        "glUseProgramStages": h_use_program_stages,
+        "glActiveShaderProgram": h_active_shader_program,
         "glTransformFeedbackVaryings": h_transform_feedback_varyings,
     } | dict.fromkeys([f"gl{p}Uniform{n}{t}{v}" for p in ("", "Program") for n in "1234"
                       for t in ("f", "i", "ui", "d") for v in ("", "v")]

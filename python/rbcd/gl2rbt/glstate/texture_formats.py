@@ -43,6 +43,14 @@ def packed_fits(kind, fmt):
     return fmt in ("GL_RGBA", "GL_BGRA", "GL_RGBA_INTEGER", "GL_BGRA_INTEGER")
 
 
+# The formats an image unit takes (GL 4.6 table 8.26).
+IMAGE_FORMATS = {f"GL_{f}" for f in (
+    "RGBA32F", "RGBA16F", "RG32F", "RG16F", "R11F_G11F_B10F", "R32F", "R16F", "RGBA32UI", "RGBA16UI", "RGB10_A2UI",
+    "RGBA8UI", "RG32UI", "RG16UI", "RG8UI", "R32UI", "R16UI", "R8UI", "RGBA32I", "RGBA16I", "RGBA8I", "RG32I", "RG16I",
+    "RG8I", "R32I", "R16I", "R8I", "RGBA16", "RGB10_A2", "RGBA8", "RG16", "RG8", "R16", "R8", "RGBA16_SNORM",
+    "RGBA8_SNORM", "RG16_SNORM", "RG8_SNORM", "R16_SNORM", "R8_SNORM")}
+
+
 # Internal formats by what their pixels hold (GL 4.6, tables 8.11 to 8.13):
 # a format of another kind is GL_INVALID_OPERATION.
 COLOUR_FORMATS = {"GL_RED", "GL_RG", "GL_RGB", "GL_RGBA"} | {f"GL_{f}" for f in (

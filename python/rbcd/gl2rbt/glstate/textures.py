@@ -26,16 +26,26 @@ import math
 from ...cli import I32, U32, U63, integer
 from ..errors import ToolError, checked, fail_call, printable
 from ..gl_tables import base_name
+from . import gl_boolean
 from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
-from .texture_formats import (MAX_LEVEL, certain_level, certain_mipmaps, certain_part, certain_storage,
+from .texture_formats import (IMAGE_FORMATS, MAX_LEVEL, certain_level, certain_mipmaps, certain_part, certain_storage,
                               level_size_fits, refused_level, refused_part, refused_storage, whole)
 
 VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
+MULTISAMPLE_TARGETS = ("GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY")
+GL_TEXTURE_SAMPLES = 0x9106
+# The default texture (name 0) of a target other than 2D, as the converter
+# names it beside the 2D one's calls: this plus the target's value.
+DEFAULT_TEXTURE_BASE = 1 << 32
+# Image units are asked of Mesa's replay as texture units from here on.
+IMAGE_UNIT_BASE = 1 << 16
 # The argument a reduced capture adds to a draw whose vertex shader reads
 # textures: [(texture, [(call, name, arguments, unpack state)])], the calls
 # that made each texture as the converter keeps them (the reduced capture
 # keeps no texture image otherwise).
 REDUCED_TEXTURES = "rbcd-vertex-textures"
+MAX_IMAGE_UNITS = 192                # llvmpipe's GL_MAX_IMAGE_UNITS
+IMAGE_ACCESS = ("GL_READ_ONLY", "GL_WRITE_ONLY", "GL_READ_WRITE")
 MAX_TEXTURE_BYTES_KEPT = 1 << 30     # pixels kept in all textures (docs/gl-capture.md, limits)
 MAX_TEXTURE_CALLS_KEPT = 4096        # calls kept for one texture
 UNPACK_PARAMETERS = ("GL_UNPACK_SWAP_BYTES", "GL_UNPACK_LSB_FIRST", "GL_UNPACK_ROW_LENGTH", "GL_UNPACK_SKIP_ROWS",
@@ -50,7 +60,12 @@ PARAMETER_CALLS = ("glTexParameteri", "glTexParameterf", "glTexParameteriv", "gl
 KEPT_CALLS = LEVEL_CALLS + PART_CALLS + PARAMETER_CALLS + ("glTexStorage2D", "glGenerateMipmap")
 # And those that give a texture read back from Mesa's replay of another
 # target (rendered_textures.image_calls), which a reduced capture carries.
-READ_BACK_CALLS = ("glTexImage1D", "glTexImage3D")
+# A multisample texture read back: every sample of every layer, filled
+# into Mesa's copy by vertex_textures.fill_samples (its arguments: target,
+# samples, fixedsamplelocations, internalformat, width, height, depth =
+# layers x samples, format, type, pixels).
+SAMPLES_CALL = "rbcd-multisample-image"
+READ_BACK_CALLS = ("glTexImage1D", "glTexImage3D", SAMPLES_CALL)
 SAMPLER_PARAMETER_CALLS = ("glSamplerParameteri", "glSamplerParameterf", "glSamplerParameteriv",
                            "glSamplerParameterfv", "glSamplerParameterIiv", "glSamplerParameterIuiv")
 
@@ -220,6 +235,10 @@ class TextureImageCalls:
         tex = self.bound_texture(VERTEX_TEXTURE_TARGET)
         if self.core and compat_only(d):
             return   # GL_INVALID_ENUM or GL_INVALID_VALUE in the capture's core profile: nothing changes
+        if tex in self.s.views:
+            # A texture that shares its images with a view (or is one): the
+            # others are read back again too (round 12's R12-1).
+            self.gpu_wrote()
         tc = self.texture_calls(tex)
         if tc.over:
             return
@@ -287,13 +306,15 @@ class TextureImageCalls:
         if not ask:
             return out
         unit, tex, tc, target, _ = ask[0]
+        tex = tex if tex < DEFAULT_TEXTURE_BASE else 0
+        unit = f"unit {unit}" if unit < IMAGE_UNIT_BASE else f"image unit {unit - IMAGE_UNIT_BASE}"
         if tc is None:
-            what = f"texture {tex} ({target}, unit {unit})"
+            what = f"texture {tex} ({target}, {unit})"
         elif tc.refused is not None:
-            what = f"texture {tex} (unit {unit}), whose image the converter cannot give Mesa (call " \
+            what = f"texture {tex} ({unit}), whose image the converter cannot give Mesa (call " \
                    f"{tc.refused[0]}: {printable(tc.refused[1])})"
         else:
-            what = f"texture {tex} (unit {unit}), which the GPU renders (call {tc.rendered[0]}: " \
+            what = f"texture {tex} ({unit}), which the GPU renders (call {tc.rendered[0]}: " \
                    f"{printable(tc.rendered[1])})"
         if self.reads_reduced:
             fail_call(no, f"{name}: its vertex shader reads {what}: a reduced capture carries only the images a "
@@ -313,7 +334,19 @@ class TextureImageCalls:
         for unit, tex, tc, target, version in ask:
             internal, params, levels = images.get((unit, target), (0, [], []))
             rt = TextureCalls()
-            for call in image_calls(no, target, internal, levels, self.es):
+            if target in MULTISAMPLE_TARGETS:
+                # Its samples as read (swizzle and depth mode applied: no
+                # parameter is given again).
+                samples = next((v for p, v in params if p == GL_TEXTURE_SAMPLES), None)
+                calls = [(no, SAMPLES_CALL, dict(target=target, samples=int(samples[0]),
+                                                 fixedsamplelocations=int(samples[1]), internalformat=internal,
+                                                 width=w, height=h, depth=depth, format=fmt, type=kind,
+                                                 pixels=pixels))
+                         for level, w, h, depth, fmt, kind, pixels in levels if samples and level == 0]
+                params = []
+            else:
+                calls = image_calls(no, target, internal, levels, self.es)
+            for call in calls:
                 rt.seq += 1
                 rt.calls[rt.seq] = call + (unpack,)
             for pname, values in params:
@@ -363,12 +396,14 @@ class TextureImageCalls:
 
     def texture_view(self, no, name, a, args):
         """glTextureView: the view and the texture it views share images,
-        which the converter does not follow: a vertex shader that reads
-        either is refused naming the call."""
+        which the converter's calls do not follow: both are read back from
+        Mesa's replay when a vertex shader reads them, again after any
+        texture call on either (keep_texture_call)."""
         d = dict(args)
         view, orig = d.get("texture"), d.get("origtexture")
         for tex in (view, orig):
             if isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
+                self.s.views.add(tex)
                 if tex == view and isinstance(d.get("target"), str):
                     self.s.texture_targets.setdefault(tex, d["target"])
                 self.texture_calls(tex).refused = (no, f"{name} makes texture {view} a view of texture {orig}, "
@@ -432,7 +467,9 @@ class TextureImageCalls:
             if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[1], list)
                     and len(item[1]) <= MAX_TEXTURE_CALLS_KEPT):
                 fail_call(no, f"{what}: a texture's record that is not (texture, calls)")
-            tex = checked(no, integer, item[0], f"{what}: a texture", *U32)
+            tex = checked(no, integer, item[0], f"{what}: a texture", 0, DEFAULT_TEXTURE_BASE + 0xFFFF)
+            if U32[1] < tex < DEFAULT_TEXTURE_BASE:
+                fail_call(no, f"{what}: a texture name past 32 bits that names no target's default texture")
             self.forget_texture_calls(tex)
             tc = self.texture_calls(tex)
             for c in item[1]:
@@ -450,6 +487,59 @@ class TextureImageCalls:
                 if self.s.texture_bytes_kept + size > MAX_TEXTURE_BYTES_KEPT:
                     fail_call(no, f"{what}: more than {MAX_TEXTURE_BYTES_KEPT >> 20} MiB of texture images")
                 self.add_texture_call(tc, (call_no, c[1], d, unpack))
+
+    # ---- image units
+    def h_bind_image_texture(self, no, name, a, args):
+        """glBindImageTexture (GL 4.2, ES 3.1) and glBindImageTextures (GL
+        4.4: level 0, every layer, read and write, the texture's own
+        format): what a vertex shader's image uniforms read. What GL
+        refuses binds nothing (a unit past llvmpipe's 192, no such texture,
+        a negative level or layer, an access or format GL does not take). A
+        texture bound for writing is one the GPU may render: read back from
+        Mesa's replay when a vertex shader reads it, again after each draw
+        while it is bound so."""
+        d = dict(args)
+        if base_name(name) == "glBindImageTexture":
+            unit = checked(no, integer, d.get("unit"), f"{name}: the unit", *U32)
+            tex = checked(no, integer, d.get("texture"), f"{name}: the texture", *U32)
+            level = checked(no, integer, d.get("level"), f"{name}: the level", *I32)
+            layer = checked(no, integer, d.get("layer"), f"{name}: the layer", *I32)
+            layered = gl_boolean(d.get("layered"), no, f"{name}: layered", nonzero=True)
+            access, fmt = d.get("access"), d.get("format")
+            if unit >= MAX_IMAGE_UNITS or level < 0 or layer < 0 or access not in IMAGE_ACCESS \
+                    or fmt not in IMAGE_FORMATS or tex and tex not in self.s.texture_targets:
+                return   # GL_INVALID_VALUE or GL_INVALID_ENUM: the unit keeps its binding
+            binds = [(unit, tex, (tex, level, layered, layer, access, fmt))]
+        else:
+            first = checked(no, integer, d.get("first"), f"{name}: first", *U32)
+            count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
+            texs = d.get("textures")
+            if count < 0 or first + count > MAX_IMAGE_UNITS:
+                return   # GL_INVALID_VALUE or _OPERATION: nothing is bound
+            if texs is None or texs == 0 and not isinstance(texs, bool):   # NULL: every unit unbound
+                texs = [0] * count
+            if not isinstance(texs, list) or len(texs) < count:
+                fail_call(no, f"{name}: fewer textures than its count")
+            binds = []
+            for i, tex in enumerate(texs[:count]):
+                tex = checked(no, integer, tex, f"{name}: a texture", *U32)
+                fmt = self.s.formats.get(("texture", tex))
+                if tex and (tex not in self.s.texture_targets or fmt is not None and fmt not in IMAGE_FORMATS):
+                    continue   # no such texture or no image format: GL_INVALID_OPERATION, the unit is skipped
+                layered = self.s.texture_targets.get(tex) not in ("GL_TEXTURE_1D", "GL_TEXTURE_2D",
+                                                                  "GL_TEXTURE_RECTANGLE", "GL_TEXTURE_BUFFER")
+                binds.append((first + i, tex, (tex, 0, layered, 0, "GL_READ_WRITE", fmt)))   # (None: Mesa's)
+        for unit, tex, binding in binds:
+            if not tex:
+                self.s.image_units.pop(unit, None)
+                self.s.image_writes.discard(unit)
+                continue
+            self.s.image_units[unit] = binding
+            if binding[4] == "GL_READ_ONLY":
+                self.s.image_writes.discard(unit)
+            else:
+                self.s.image_writes.add(unit)
+                self.texture_rendered(tex, no, f"{name} binds it to image unit {unit} for writing")
 
     # ---- sampler objects
     def h_bind_sampler(self, no, name, a, args):
@@ -506,6 +596,8 @@ class TextureImageCalls:
         "glGenerateMipmap": h_keep,
         "glCopyTexImage2D": h_copy_tex_image,
         "glCopyTexSubImage2D": h_copy_tex_image,
+        "glBindImageTexture": h_bind_image_texture,
+        "glBindImageTextures": h_bind_image_texture,
         "glBindSampler": h_bind_sampler,
         "glBindSamplers": h_bind_sampler,
         "glDeleteSamplers": h_delete_samplers,

@@ -27,7 +27,7 @@ class VertexArrayCalls:
         elem = dt.itemsize * arr.size
         stride = arr.stride or elem
         if arr.buffer:
-            buf = self.s.buffers.get(arr.buffer)
+            buf = self.checked_buffer(no, "the draw", arr.buffer, "vertices")
             if buf is None:
                 fail_call(no, f"the vertex array names buffer {arr.buffer}, which holds no data")
             data, base = buf, arr.offset
@@ -59,7 +59,7 @@ class VertexArrayCalls:
         dt = np.dtype(INDEX_TYPES[type_])
         eb = self.s.bound["GL_ELEMENT_ARRAY_BUFFER"]
         if eb:
-            buf = self.s.buffers.get(eb)
+            buf = self.checked_buffer(no, "the draw", eb, "indices")
             if buf is None:
                 fail_call(no, f"the element array buffer {eb} holds no data")
             # An offset into the element buffer: what a pointer holds.

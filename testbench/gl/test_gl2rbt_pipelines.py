@@ -1,0 +1,142 @@
+"""Separable programs and program pipelines (GL 4.1, ES 3.1), in captures
+the tests write: a pipeline's vertex stage is drawn as the same shader in a
+whole program is; its fragment stage decides discard and gl_FragDepth;
+glUniform reaches the pipeline's active program; what GL refuses changes
+nothing; a program in use wins over the bound pipeline."""
+import json
+
+import pytest
+
+from gl_captures import END_FRAME, TRIANGLE, Calls, gl2rbt_timed as gl2rbt
+from test_gl2rbt_draw_outcomes import ES2_VS, draw, trace
+from test_gl2rbt_hostile import es_triangle, shader_calls
+
+pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+
+# The triangle moved by a uniform (0 leaves it where VS draws it).
+MOVED_VS = ("#version 410 core\nin vec3 p;\nuniform float dx;\nout gl_PerVertex { vec4 gl_Position; };\n"
+            "void main() { gl_Position = vec4(p.x / 32.0 - 1.0 + dx, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+DISCARD_FS = ("#version 410 core\nout vec4 c;\n"
+              "void main() { if (gl_FragCoord.x > 10.0) discard; c = vec4(1.0); }\n")
+
+
+def context(c, major=4, minor=5):
+    no, fn, _, ret, flags = c.calls[5]
+    assert fn == "glXCreateContextAttribsARB"
+    c.calls[5] = (no, fn, [("attrib_list", ["GLX_CONTEXT_MAJOR_VERSION_ARB", major, "GLX_CONTEXT_MINOR_VERSION_ARB",
+                                            minor, "GLX_CONTEXT_PROFILE_MASK_ARB",
+                                            "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0])], ret, flags)
+    return c
+
+
+def separable(vs=MOVED_VS, use=False):
+    """shader_calls' program 2 made separable before its link, in pipeline
+    5's vertex stage (and not in use, unless `use`)."""
+    c = context(shader_calls(vs))
+    at = next(i for i, call in enumerate(c.calls) if call[1] == "glLinkProgram")
+    c.calls.insert(at, (0, "glProgramParameteri", [("program", 2), ("pname", "GL_PROGRAM_SEPARABLE"),
+                                                   ("value", 1)], None, 0))
+    c.calls = [call for call in c.calls if use or call[1] != "glUseProgram"]
+    c.calls = [(i + 1,) + call[1:] for i, call in enumerate(c.calls)]
+    c.add("glGenProgramPipelines", n=1, pipelines=[5]).add("glBindProgramPipeline", pipeline=5)
+    return c.add("glUseProgramStages", pipeline=5, stages=["GL_VERTEX_SHADER_BIT"], program=2)
+
+
+def frames(tmp_path, c, tag):
+    r = gl2rbt(tmp_path, c.write(tmp_path / f"{tag}.xz"), "-o", tmp_path / f"{tag}.rbt",
+               "--summary", tmp_path / f"{tag}.jsonl")
+    assert r.returncode == 0, f"{tag}: {r.stderr}"
+    return [json.loads(line) for line in (tmp_path / f"{tag}.jsonl").read_text().splitlines()]
+
+
+def test_a_pipeline_s_vertex_stage_draws_as_the_program_would(tmp_path):
+    whole = trace(tmp_path, draw(context(shader_calls(MOVED_VS))), "whole")
+    assert whole.count(b"\nf ") > 100
+    assert trace(tmp_path, draw(separable()), "pipeline") == whole
+    # A program in use wins over the bound pipeline; glUseProgram(0) gives
+    # the draws back to it.
+    def other_in_use():
+        c = separable()
+        c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=8)
+        c.add("glShaderSource", shader=8, count=1, string=[MOVED_VS.replace("+ dx", "+ 1.0")], length=None)
+        c.add("glCompileShader", shader=8).add("glCreateProgram", ret=9).add("glAttachShader", program=9, shader=8)
+        c.add("glBindAttribLocation", program=9, index=0, name="p").add("glLinkProgram", program=9)
+        return c.add("glUseProgram", program=9)
+    moved = trace(tmp_path, draw(other_in_use()), "in-use")
+    assert moved != whole and moved.count(b"\nf ") > 0
+    assert trace(tmp_path, draw(other_in_use().add("glUseProgram", program=0)), "back") == whole
+
+
+def test_uniforms_reach_the_pipeline_s_active_program(tmp_path):
+    """glUniform with no program in use sets the bound pipeline's active
+    program (glActiveShaderProgram); with none active it does nothing;
+    glProgramUniform names the program."""
+    base = trace(tmp_path, draw(separable()), "base")
+    c = separable().add("glGetUniformLocation", program=2, name="dx", ret=0)
+    c.add("glActiveShaderProgram", pipeline=5, program=2).add("glUniform1f", location=0, v0=1.0)
+    active = trace(tmp_path, draw(c), "active")
+    assert active != base
+    c = separable().add("glGetUniformLocation", program=2, name="dx", ret=0)
+    assert trace(tmp_path, draw(c.add("glUniform1f", location=0, v0=1.0)), "no-active") == base
+    c = separable().add("glGetUniformLocation", program=2, name="dx", ret=0)
+    assert trace(tmp_path, draw(c.add("glProgramUniform1f", program=2, location=0, v0=1.0)), "named") == active
+
+
+def test_what_gl_refuses_in_a_pipeline_changes_nothing(tmp_path):
+    """A program not made separable, stage bits GL does not define, a
+    pipeline name never generated: the stages stay as they were (here: no
+    vertex stage, so a core profile draws nothing); a program deleted while
+    a pipeline holds it is drawn until the pipeline lets it go."""
+    base = trace(tmp_path, draw(separable()), "base")
+    c = context(shader_calls(MOVED_VS))
+    c.calls = [(i + 1,) + call[1:] for i, call in enumerate(call for call in c.calls if call[1] != "glUseProgram")]
+    c.add("glGenProgramPipelines", n=1, pipelines=[5]).add("glBindProgramPipeline", pipeline=5)
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_VERTEX_SHADER_BIT"], program=2)
+    assert trace(tmp_path, draw(c), "not-separable").count(b"\nf ") == 0
+    c = separable().add("glUseProgramStages", pipeline=5, stages=0x40, program=0)
+    c.add("glUseProgramStages", pipeline=6, stages=["GL_VERTEX_SHADER_BIT"], program=0)
+    c.add("glBindProgramPipeline", pipeline=6)
+    assert trace(tmp_path, draw(c), "refused") == base
+    c = separable().add("glDeleteProgram", program=2)
+    assert trace(tmp_path, draw(c), "deleted") == base
+    c.add("glUseProgramStages", pipeline=5, stages="GL_ALL_SHADER_BITS", program=0)
+    kept, gone = [f["fragments"] for f in frames(tmp_path, draw(c), "let-go")]
+    assert kept > 100 and gone == 0
+
+
+def test_the_fragment_stage_s_program_counts_discards(tmp_path):
+    """A fragment program made with glCreateShaderProgramv that can discard:
+    the draw counts as one that discards, and as collisionable."""
+    c = separable(MOVED_VS.replace("+ dx", ""))
+    c.add("glCreateShaderProgramv", type="GL_FRAGMENT_SHADER", count=1, strings=[DISCARD_FS], ret=11)
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_FRAGMENT_SHADER_BIT"], program=11)
+    s = frames(tmp_path, draw(c), "discard")[0]
+    assert (s["discard_draws"], s["discard_collisionable"]) == (1, 1), s
+    plain = frames(tmp_path, draw(separable(MOVED_VS.replace("+ dx", ""))), "plain")[0]
+    assert plain.get("discard_draws", 0) == 0 and s["fragments"] == plain["fragments"]
+
+
+def test_an_opengl_es_pipeline_of_programs_of_one_stage(tmp_path):
+    """OpenGL ES 3.1 links a program of one stage only separable: both
+    stages from glCreateShaderProgramv draw the triangle the ES 2 whole
+    program draws."""
+    es_vs = ("#version 310 es\nin vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, "
+             "p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+    es_fs = "#version 310 es\nprecision mediump float;\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n"
+    whole = Calls().add("eglCreateContext", dpy=1, config=1, share_context=0,
+                        attrib_list=["EGL_CONTEXT_CLIENT_VERSION", 2, "EGL_NONE"], ret=1)
+    whole = frames(tmp_path, es_triangle(whole, ES2_VS, TRIANGLE), "whole")
+    c = Calls().add("eglCreateContext", dpy=1, config=1, share_context=0,
+                    attrib_list=["EGL_CONTEXT_MAJOR_VERSION", 3, "EGL_CONTEXT_MINOR_VERSION", 1, "EGL_NONE"], ret=1)
+    c.add("glCreateShaderProgramv", type="GL_VERTEX_SHADER", count=1, strings=[es_vs], ret=3)
+    c.add("glCreateShaderProgramv", type="GL_FRAGMENT_SHADER", count=1, strings=[es_fs], ret=4)
+    c.add("glGenProgramPipelines", n=1, pipelines=[5]).add("glBindProgramPipeline", pipeline=5)
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_VERTEX_SHADER_BIT"], program=3)
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_FRAGMENT_SHADER_BIT"], program=4)
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE, usage="GL_STATIC_DRAW")
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    got = frames(tmp_path, c.add("eglSwapBuffers", dpy=1, surface=1, flags=END_FRAME), "es")
+    assert got[0]["other"] > 100 and got[0]["other"] == whole[0]["other"], (got, whole)
