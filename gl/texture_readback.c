@@ -217,8 +217,16 @@ static void readback_format(struct Texture *t)
             gl.get_tex_level_parameteriv(t->query, 0, sizes[i], &bits);
             widest = bits > widest ? bits : widest;
         }
-        t->format = GL_RGBA;   /* what glReadPixels always takes; exact for 8 bits or fewer */
-        t->type = widest <= 8 ? GL_UNSIGNED_BYTE : GL_FLOAT;
+        /* RGBA bytes, which glReadPixels always takes: uploaded again into
+         * the texture's own format, a channel of 8 bits or fewer gets its
+         * value back; RGB565, which OpenGL ES gives no RGBA bytes, and
+         * RGB10_A2 in their packed types, the implementation's format. */
+        t->format = GL_RGBA;
+        t->type = widest <= 8 ? GL_UNSIGNED_BYTE : 0;   /* 0: none gives its values back (read_level_es) */
+        if (t->internal == GL_RGB565)
+            t->format = GL_RGB, t->type = GL_UNSIGNED_SHORT_5_6_5;
+        else if (t->internal == GL_RGB10_A2)
+            t->type = GL_UNSIGNED_INT_2_10_10_10_REV;
     } else {
         t->format = GL_RGBA;   /* float32 holds every normalized and float value, rounded back exactly */
         t->type = GL_FLOAT;
@@ -229,8 +237,10 @@ static size_t pixel_bytes(GLenum format, GLenum type)
 {
     if (format == GL_DEPTH_STENCIL)
         return type == GL_UNSIGNED_INT_24_8 ? 4 : 8;
-    if (type == GL_UNSIGNED_BYTE)
+    if (type == GL_UNSIGNED_BYTE || type == GL_UNSIGNED_INT_2_10_10_10_REV)
         return 4;
+    if (type == GL_UNSIGNED_SHORT_5_6_5)
+        return 2;
     return format == GL_DEPTH_COMPONENT ? 4 : 16;
 }
 
@@ -287,7 +297,7 @@ static void describe(struct Texture *t, GLenum target)
  * 0 if it cannot be (a depth format, an incomplete attachment). */
 static int read_level_es(GLint level, GLint w, GLint h, GLenum format, GLenum type, void *pixels)
 {
-    if (format == GL_DEPTH_COMPONENT || format == GL_DEPTH_STENCIL)
+    if (format == GL_DEPTH_COMPONENT || format == GL_DEPTH_STENCIL || !type)
         return 0;
     GLint tex = 0, draw = 0, read = 0;
     gl.get_integerv(GL_TEXTURE_BINDING_2D, &tex);
@@ -386,6 +396,8 @@ static int read_level(const struct Texture *t, GLint level, void *pixels)
     const GLint *size = t->size[level];
     if (es)
         return t->target == GL_TEXTURE_2D && read_level_es(level, size[0], size[1], t->format, t->type, pixels);
+    while (gl.get_error() != GL_NO_ERROR)
+        ;
     if (t->target == GL_TEXTURE_CUBE_MAP) {
         const size_t face = level_bytes(t, level) / 6;
         for (GLenum f = 0; f < 6; f++)
@@ -393,7 +405,7 @@ static int read_level(const struct Texture *t, GLint level, void *pixels)
     } else {
         gl.get_tex_image(t->target, level, t->format, t->type, pixels);
     }
-    return 1;
+    return gl.get_error() == GL_NO_ERROR;   /* (a format glGetTexImage refuses: not zeros in its place) */
 }
 
 /* The sampling parameters sent with a texture (those the context has). */
@@ -506,7 +518,11 @@ static void answer(void)
                 if (!read_multisample(&textures[k], (int)want_units[k], pixels[k][i]))
                     why = "a multisample texture the replay's compute shader could not read";
             } else if (!read_level(&textures[k], i, pixels[k][i])) {
-                why = "an OpenGL ES texture whose image glReadPixels cannot read (a depth format) is not read back";
+                why = es ? "an OpenGL ES texture whose image glReadPixels cannot read in a format that gives its "
+                           "values back (a depth format, a normalized one of channels wider than 8 bits but "
+                           "RGB10_A2, one a framebuffer cannot hold) is not read back"
+                         : "a texture whose image glGetTexImage does not read (a stencil-only format) is not read "
+                           "back";
             }
         }
         for (size_t j = 0; j < NPARAMETERS; j++) {

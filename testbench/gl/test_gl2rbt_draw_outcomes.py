@@ -624,3 +624,47 @@ def test_a_second_context_s_state_is_its_own(tmp_path, share):
                                  usage="GL_STATIC_DRAW")
         want = trace(tmp_path, draw(c), "moved")
     assert got == want
+
+
+def test_a_multi_draw_past_the_frame_s_records_is_refused_before_it_runs(tmp_path):
+    """Three indirect commands of 50,000 instances each: 150,000 draw
+    records, past the frame's 2^17, refused naming the call before Mesa
+    runs any (round 12's R12-10: a minute of work first), nothing left."""
+    c = indirect(shader_calls(VS), "glMultiDrawArraysIndirect", [3, 50000, 0, 0] * 3, indirect=0, drawcount=3,
+                 stride=0)
+    r = gl2rbt(tmp_path, c.write(tmp_path / "m.xz"), "-o", tmp_path / "m.rbt")
+    refused(r, "glMultiDrawArraysIndirect: its 3 commands would make 150000 draw records, more than 131072")
+    assert left_behind(tmp_path, ["m.xz"]) == []
+
+
+@pytest.mark.parametrize("status", [130, 143])
+def test_a_rasterizer_a_signal_ended_means_the_run_was_interrupted(tmp_path, status):
+    """Ctrl-C reaches the whole process group: rbcd-gl-raster, ended by it,
+    exits 128 + the signal; the converter says "interrupted", exit 130, as
+    when the signal reaches it first (round 12's R12-12: "rbcd-gl-raster
+    exited 130", exit 1), and leaves nothing."""
+    fake = tmp_path / "bin" / "rbcd-gl-raster"
+    fake.parent.mkdir()
+    fake.write_text(f"#!/bin/sh\ncat >/dev/null\nexit {status}\n")
+    fake.chmod(0o755)
+    cap = draw(shader_calls(VS)).write(tmp_path / "i.xz")
+    env = dict(os.environ, RBCD_GL_RASTER=str(fake), TMPDIR=str(tmp_path))
+    r = subprocess.run(["/usr/bin/python3", GL2RBT, cap, "-o", tmp_path / "i.rbt"], stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, text=True, env=env, timeout=120)
+    assert r.returncode == 130 and r.stderr.splitlines() == [f"rbcd-gl2rbt: {cap}: interrupted"], \
+        (r.returncode, r.stderr)
+    assert left_behind(tmp_path, ["bin", "i.xz"]) == []
+
+
+def test_one_thread_says_how_the_run_ended(capsys):
+    """A signal taken by the main thread and by the watchdog at once (while
+    Mesa finished a draw): whichever holds the last word says it, the other
+    stays silent (round 12's R12-12: "interrupted" twice)."""
+    from rbcd.gl2rbt.errors import LAST_WORD
+    from rbcd.gl2rbt.mesa import Watchdog
+    assert LAST_WORD.acquire(blocking=False)
+    try:
+        assert Watchdog.end(object(), "x.trace: interrupted", 130) is None   # neither says it nor exits
+    finally:
+        LAST_WORD.release()
+    assert capsys.readouterr().err == ""

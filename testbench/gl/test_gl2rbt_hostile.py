@@ -149,6 +149,8 @@ def test_standard_output_holds_only_the_trace(tmp_path):
 
 @pytest.mark.parametrize("args, words", [
     (["--check-depth", "--check-timeout", "-1"], "--check-timeout"),
+    # It bounds a conversion's read-back replay too (round 12: taken silently).
+    (["-o", "a.rbt", "--check-timeout", "0"], "--check-timeout"),
     (["--check-depth", "--min-agreement", "nan"], "--min-agreement"),
     (["--check-depth", "--min-agreement", "101"], "--min-agreement"),
     (["--check-depth", "--check-frames", "0"], "--check-frames"),
@@ -159,7 +161,8 @@ def test_standard_output_holds_only_the_trace(tmp_path):
     (["--check-depth", "--check-frame", "3"], "unrecognized arguments: --check-frame"),
     (["-o", "a.rbt", "--output", "b.rbt"], "--output is given twice"),
     (["-o", "a.rbt", "--select", "x.toml", "--select", "y.toml"], "--select is given twice"),
-], ids=["timeout", "nan", "101", "frames0", "fullwidth", "arabic", "abbreviated", "o_twice", "select_twice"])
+], ids=["timeout", "timeout_conversion", "nan", "101", "frames0", "fullwidth", "arabic", "abbreviated", "o_twice",
+        "select_twice"])
 def test_bad_check_options(tmp_path, args, words):
     cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
     refused(gl2rbt(tmp_path, cap, *args), words)

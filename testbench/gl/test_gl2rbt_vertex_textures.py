@@ -539,3 +539,16 @@ def test_compressed_images_read_back_are_given_back_uncompressed():
                         (0x93D0, "GL_SRGB8_ALPHA8"),   # GL_COMPRESSED_SRGB8_ALPHA8_ASTC_4x4_KHR
                         (0x8814, 0x8814)):             # GL_RGBA32F itself
         assert upload_format(value, "GL_RGBA", "GL_FLOAT", False) == want, hex(value)
+
+
+def test_opengl_es_packed_images_read_back_in_their_own_types():
+    """OpenGL ES reads an RGB565 or RGB10_A2 level back in its own packed
+    type (RGBA bytes rounded RGB565's 5 and 6-bit values, and RGB10_A2's
+    were refused as a depth format: round 12's R12-11); the converter takes
+    those replies and gives them back in the texture's own format."""
+    from rbcd.gl2rbt.rendered_textures import READBACK, upload_format
+    assert READBACK[(0x1907, 0x8363)] == ("GL_RGB", "GL_UNSIGNED_SHORT_5_6_5", 2)
+    assert READBACK[(0x1908, 0x8368)] == ("GL_RGBA", "GL_UNSIGNED_INT_2_10_10_10_REV", 4)
+    assert upload_format(0x8D62, "GL_RGB", "GL_UNSIGNED_SHORT_5_6_5", True) == "GL_RGB565"
+    assert upload_format(0x8059, "GL_RGBA", "GL_UNSIGNED_INT_2_10_10_10_REV", True) == "GL_RGB10_A2"
+    assert upload_format(0x8057, "GL_RGBA", "GL_UNSIGNED_BYTE", True) == "GL_RGB5_A1"   # bytes, rounded back

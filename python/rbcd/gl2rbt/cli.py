@@ -3,9 +3,10 @@ import argparse
 import re
 import signal
 import sys
+import threading
 
 from ..cli import UsageError, WriteError, remove_temporaries, to_standard_output
-from .errors import ConvertError, ToolError, printable
+from .errors import LAST_WORD, ConvertError, ToolError, printable
 
 PROG = "rbcd-gl2rbt"
 
@@ -113,13 +114,14 @@ def run(args):
             return listing.list_draws(args)
         if args.image:
             raise ConvertError("--image goes with --list-draws")
+        # (It bounds the read-back replay of a conversion too.)
+        if not 1 <= args.check_timeout <= 1 << 31:
+            raise ConvertError("--check-timeout must be from 1 to 2^31 (seconds)")
         if args.check_depth:
             args.frame_range = parse_frames(args.frames)
             args.snapshots = set()
             if args.check_frames < 1:
                 raise ConvertError("--check-frames must be at least 1")
-            if not 1 <= args.check_timeout <= 1 << 31:
-                raise ConvertError("--check-timeout must be from 1 to 2^31 (seconds)")
             if not 0.0 <= args.min_agreement <= 100.0:   # NaN fails both
                 raise ConvertError("--min-agreement must be a percentage, 0 to 100")
             return depth_check.check_depth(args)
@@ -207,6 +209,8 @@ def main(argv=None):
         trace = args.trace
         return run(args)
     except KeyboardInterrupt:
+        if not LAST_WORD.acquire(blocking=False):
+            threading.Event().wait(60)   # the watchdog says it and ends the process
         sys.stderr.write(f"{PROG}: {printable(trace) + ': ' if trace is not None else ''}interrupted\n")
         return 130
     finally:

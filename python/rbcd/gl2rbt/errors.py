@@ -1,5 +1,11 @@
 """The converter's errors and how it names what it read."""
+import threading
+
 from ..cli import UsageError, describe, escape, exception_text
+
+# Held by whichever thread says the run's last line (the main thread, or
+# the watchdog that ends the run while Mesa works): one line, never two.
+LAST_WORD = threading.Lock()
 
 
 class ConvertError(UsageError):

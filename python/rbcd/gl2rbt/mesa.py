@@ -22,7 +22,7 @@ import threading
 import time
 
 from ..cli import remove_temporaries, say
-from .errors import ToolError, printable
+from .errors import LAST_WORD, ToolError, printable
 
 # PyOpenGL picks its platform when first imported: EGL, for a context that
 # needs no display.
@@ -151,6 +151,8 @@ class Watchdog:
         self.end(f"{printable(self.conv.args.trace)}: {what}: {why} (docs/gl-capture.md, limits)", 2)
 
     def end(self, message, status):
+        if not LAST_WORD.acquire(blocking=False):
+            return   # the main thread is saying how the run ended (a signal it took first)
         say("rbcd-gl2rbt", message)
         remove_temporaries()
         proc = getattr(self.conv, "raster_proc", None)

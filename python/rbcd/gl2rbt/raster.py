@@ -5,6 +5,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import struct
 import subprocess
 import tempfile
@@ -269,6 +270,10 @@ def with_fragment_effects(line, effects):
     return line[:-1] + "," + extra + "}"
 
 
+# rbcd-gl-raster's exit status when a signal ended it: 128 + the signal.
+INTERRUPTED = {128 + signal.SIGINT, 128 + signal.SIGTERM, 128 + signal.SIGHUP}
+
+
 def raster_result(proc, trace):
     """Raises rbcd-gl-raster's own message once it has exited non-zero: bad
     input (exit 2) as ConvertError, anything else as ToolError."""
@@ -276,6 +281,10 @@ def raster_result(proc, trace):
     rc = proc.wait()
     if rc == 0:
         return
+    if rc in INTERRUPTED or -rc in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        # A signal to the process group (Ctrl-C) ended it first: the run
+        # was interrupted, not the rasterizer broken (round 12's R12-12).
+        raise KeyboardInterrupt
     # Its one message whole: a path it names may hold a newline (escaped
     # when the message is printed; its first line alone had cut the path).
     line = err.strip()[:4096] or f"rbcd-gl-raster exited {rc}"

@@ -43,7 +43,10 @@ READBACK = {(0x1902, 0x1405): ("GL_DEPTH_COMPONENT", "GL_UNSIGNED_INT", 4),
             (0x1908, 0x1401): ("GL_RGBA", "GL_UNSIGNED_BYTE", 4),
             (0x1908, 0x1406): ("GL_RGBA", "GL_FLOAT", 16),
             (0x8D99, 0x1404): ("GL_RGBA_INTEGER", "GL_INT", 16),
-            (0x8D99, 0x1405): ("GL_RGBA_INTEGER", "GL_UNSIGNED_INT", 16)}
+            (0x8D99, 0x1405): ("GL_RGBA_INTEGER", "GL_UNSIGNED_INT", 16),
+            # OpenGL ES's RGB565 and RGB10_A2, in their own packed types.
+            (0x1907, 0x8363): ("GL_RGB", "GL_UNSIGNED_SHORT_5_6_5", 2),
+            (0x1908, 0x8368): ("GL_RGBA", "GL_UNSIGNED_INT_2_10_10_10_REV", 4)}
 
 
 # The targets a texture is read back at (their GL numbers).

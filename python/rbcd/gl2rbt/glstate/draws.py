@@ -442,6 +442,17 @@ class DrawCalls:
             if type_ not in INDEX_TYPES or not self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER"):
                 return   # GL_INVALID_ENUM, or GL_INVALID_OPERATION with no element buffer (every profile)
             item = np.dtype(INDEX_TYPES[type_]).itemsize
+        if n > 1 and self.active and self.renders() and self.camera_pass():
+            # The draw records its commands would make at most (one an
+            # instance), against the frame's limit before any is run: a
+            # multi-draw past it had taken a minute of Mesa's work first
+            # (round 12's R12-10).
+            records = sum(instances for count, instances in (struct.unpack_from("<II", data, offset + i * stride)
+                                                             for i in range(n)) if count)
+            if self.frame_records + records > MAX_FRAME_RECORDS:
+                fail_call(no, f"{name}: its {n} commands would make {records} draw records, more than "
+                          f"{MAX_FRAME_RECORDS} in one frame with the frame's {self.frame_records} "
+                          "(docs/gl-capture.md, limits)")
         for i in range(n):
             at = offset + i * stride
             if elements:
