@@ -552,3 +552,34 @@ def test_opengl_es_packed_images_read_back_in_their_own_types():
     assert upload_format(0x8D62, "GL_RGB", "GL_UNSIGNED_SHORT_5_6_5", True) == "GL_RGB565"
     assert upload_format(0x8059, "GL_RGBA", "GL_UNSIGNED_INT_2_10_10_10_REV", True) == "GL_RGB10_A2"
     assert upload_format(0x8057, "GL_RGBA", "GL_UNSIGNED_BYTE", True) == "GL_RGB5_A1"   # bytes, rounded back
+
+
+@pytest.mark.parametrize("es", [False, True], ids=["gl", "es"])
+def test_a_vertex_shader_reads_an_image_as_the_texture_holds_it(tmp_path, es):
+    """imageLoad of texel 1 of an immutable 2D texture bound to image unit 2
+    (desktop GL 4.2, OpenGL ES 3.1, where images in a vertex shader had been
+    refused): the triangle moved by the texel."""
+    want = moved(tmp_path, 6, 2)
+    version = "#version 310 es\nprecision highp float;\n" if es else "#version 420 core\n"
+    vs = (version + "in vec3 p;\nlayout(rgba32f, binding = 2) readonly uniform highp image2D heights;\n"
+          "void main() { vec4 t = imageLoad(heights, ivec2(1, 0));\n"
+          "  gl_Position = vec4((p.x + t.r) / 32.0 - 1.0, (p.y + t.g) / 24.0 - 1.0, 0.0, 1.0); }\n")
+    c = shader_calls(vs)
+    if es:
+        fs = "#version 310 es\nprecision mediump float;\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n"
+        c.calls[5] = (6, "eglCreateContext", [("dpy", 1), ("config", 1), ("share_context", 0), (
+            "attrib_list", ["EGL_CONTEXT_MAJOR_VERSION", 3, "EGL_CONTEXT_MINOR_VERSION", 1, "EGL_NONE"])], 1, 0)
+        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+        c.add("glShaderSource", shader=3, count=1, string=[fs], length=None)
+        c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
+        c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+    c.add("glGenTextures", n=1, textures=[3]).add("glBindTexture", target="GL_TEXTURE_2D", texture=3)
+    c.add("glTexStorage2D", target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA32F", width=2, height=1)
+    c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=2, height=1,
+          format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS)
+    c.add("glBindTexture", target="GL_TEXTURE_2D", texture=0)
+    c.add("glBindImageTexture", unit=2, texture=3, level=0, layered="GL_FALSE", layer=0, access="GL_READ_ONLY",
+          format="GL_RGBA32F")
+    got = convert(tmp_path, draw(c), "image")
+    fragments = [[line for line in t.split(b"\n") if line.startswith(b"f ")] for t in (got, want)]
+    assert fragments[0] == fragments[1] and len(fragments[0]) > 100   # (ES: a fragment shader's cost beside)

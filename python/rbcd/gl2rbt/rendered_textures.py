@@ -61,8 +61,18 @@ CUBE_FACES = ("GL_TEXTURE_CUBE_MAP_POSITIVE_X", "GL_TEXTURE_CUBE_MAP_NEGATIVE_X"
 def image_calls(no, target, internal, levels, es):
     """The calls that give the converter's Mesa context a texture's levels
     read back: (call, name, arguments) each, by target (a cube map's faces
-    one by one)."""
+    one by one; in OpenGL ES a 2D texture's as storage and sub-images)."""
     calls = []
+    if es and target == "GL_TEXTURE_2D" and levels and levels[0][0] == 0:
+        # Immutable storage, then each level: OpenGL ES binds only such a
+        # texture to an image unit (and samples it as the same).
+        _, w, h, _, fmt, kind, _ = levels[0]
+        calls.append((no, "glTexStorage2D", dict(target=target, levels=max(lv[0] for lv in levels) + 1,
+                                                 internalformat=upload_format(internal, fmt, kind, es), width=w,
+                                                 height=h)))
+        return calls + [(no, "glTexSubImage2D", dict(target=target, level=level, xoffset=0, yoffset=0, width=lw,
+                                                     height=lh, format=lfmt, type=lkind, pixels=pixels))
+                        for level, lw, lh, _, lfmt, lkind, pixels in levels]
     for level, w, h, d, fmt, kind, pixels in levels:
         base = dict(level=level, internalformat=upload_format(internal, fmt, kind, es), width=w, border=0,
                     format=fmt, type=kind)

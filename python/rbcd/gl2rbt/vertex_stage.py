@@ -421,10 +421,6 @@ class VertexStage:
             elif int(utype) in self.buffer_sampler_types:
                 mp.buffer_samplers += [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]
             elif int(utype) in self.image_targets:
-                if self.mesa.es:
-                    fail_call(no, f"{where}: its vertex shader reads image {printable(uname)} "
-                              f"({self.image_targets[int(utype)]}): images in an OpenGL ES capture's vertex shader "
-                              "are not emulated")
                 mp.image_locations += [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]
         return mp
 

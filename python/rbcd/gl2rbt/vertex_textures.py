@@ -184,8 +184,14 @@ class VertexTextures:
         or, bound by glBindImageTextures, the texture's own; unbound when
         the capture's unit is."""
         GL = self.gl
+        u, i = ctypes.c_uint, ctypes.c_int
+        # Mesa's entry point called directly (PyOpenGL's wrapper cannot read
+        # an OpenGL ES context's version); what it refuses, the replay's
+        # refused too (a format the texture's image does not take): the
+        # unit reads as unbound.
+        bind = self.mesa.proc("glBindImageTexture", u, u, i, ctypes.c_ubyte, i, u, u)
         if binding is None:
-            GL.glBindImageTexture(unit, 0, 0, GL.GL_FALSE, 0, GL.GL_READ_ONLY, GL.GL_R8)
+            bind(unit, 0, 0, 0, 0, GL.GL_READ_ONLY, GL.GL_R8)
             return
         tex, level, layered, layer, access, fmt = binding
         if target == "GL_TEXTURE_BUFFER":
@@ -197,14 +203,10 @@ class VertexTextures:
             GL.glBindTexture(self.mesa.enum(target), mt)
             query = GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X if target == "GL_TEXTURE_CUBE_MAP" else self.mesa.enum(target)
             fmt = int(GL.glGetTexLevelParameteriv(query, 0, GL.GL_TEXTURE_INTERNAL_FORMAT))
-        from OpenGL.error import GLError
-        try:
-            GL.glBindImageTexture(unit, mt, level, GL.GL_TRUE if layered else GL.GL_FALSE, layer,
-                                  self.mesa.enum(access), self.mesa.enum(fmt))
-        except GLError:
-            # What Mesa refuses here its replay refused too (a format the
-            # texture's image does not take): the unit reads as unbound.
-            GL.glBindImageTexture(unit, 0, 0, GL.GL_FALSE, 0, GL.GL_READ_ONLY, GL.GL_R8)
+        self.drain()
+        bind(unit, mt, level, 1 if layered else 0, layer, self.mesa.enum(access), self.mesa.enum(fmt))
+        if GL.glGetError():
+            bind(unit, 0, 0, 0, 0, GL.GL_READ_ONLY, GL.GL_R8)
 
     def read(self, conv, unit, tex, target, reads, ask):
         """Notes that the draw reads texture `tex` of `target` at `unit` (a
