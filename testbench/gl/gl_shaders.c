@@ -23,6 +23,8 @@
  * multisample (sample 3 of a 4-sample texture, the only one a draw under
  * a sample mask writes the texel into, the others cleared to another),
  * default (the default 3D texture, name 0, given the texel everywhere),
+ * msimage (the multisample fault's sample 3 read by imageLoad through
+ * image unit 3),
  * separable (the "texture" fault's draw through a program pipeline: its
  * vertex shader a separable program, its fragment shader one made by
  * glCreateShaderProgramv, no program in use, the sampler set with
@@ -108,6 +110,11 @@ static const char* multisample_source =
     "uniform sampler2DMS heights;\n"
     "in vec3 position;\n"
     "void main() { gl_Position = vec4(position, 1.0) + texelFetch(heights, ivec2(0, 0), 3); }\n";
+static const char* msimage_source =
+    "#version 420 core\n"
+    "layout(rgba32f) readonly uniform image2DMS heights;\n"
+    "in vec3 position;\n"
+    "void main() { gl_Position = vec4(position, 1.0) + imageLoad(heights, ivec2(0, 0), 3); }\n";
 static const char* image_source =
     "#version 420 core\n"
     "layout(rgba32f) readonly uniform image2D heights;\n"
@@ -230,6 +237,15 @@ static void inject_fault(GLuint main_program) {
         glActiveTexture(GL_TEXTURE0);
         fill(GL_TEXTURE_2D_MULTISAMPLE, tex, 1u << 3);
         glAttachShader(p, compile(GL_VERTEX_SHADER, multisample_source));
+    } else if (!strcmp(fault, "msimage")) {
+        GLuint tex;
+        glGenTextures(1, &tex);
+        glBindTexture(GL_TEXTURE_2D_MULTISAMPLE, tex);
+        glTexImage2DMultisample(GL_TEXTURE_2D_MULTISAMPLE, 4, GL_RGBA32F, 2, 2, GL_TRUE);
+        glBindTexture(GL_TEXTURE_2D_MULTISAMPLE, 0);
+        fill(GL_TEXTURE_2D_MULTISAMPLE, tex, 1u << 3);
+        glBindImageTexture(3, tex, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
+        glAttachShader(p, compile(GL_VERTEX_SHADER, msimage_source));
     } else if (!strcmp(fault, "cube") || !strcmp(fault, "array") || !strcmp(fault, "image")) {
         static const float texel[4] = {-0.75f, -0.5f, -1.5f, 0}, other[4] = {9, 9, 9, 0};
         const int cube = !strcmp(fault, "cube");
@@ -283,9 +299,10 @@ static void inject_fault(GLuint main_program) {
     }
     const int textured = !strcmp(fault, "texture") || !strcmp(fault, "rendered") || !strcmp(fault, "cube") ||
                          !strcmp(fault, "array") || !strcmp(fault, "image") || !strcmp(fault, "multisample") ||
-                         !strcmp(fault, "default") || pipeline;
+                         !strcmp(fault, "default") || !strcmp(fault, "msimage") || pipeline;
     if (textured) {
-        if (!pipeline) glUniform1i(glGetUniformLocation(p, "heights"), !strcmp(fault, "image") ? 3 : 2);
+        if (!pipeline)
+            glUniform1i(glGetUniformLocation(p, "heights"), !strcmp(fault, "image") || !strcmp(fault, "msimage") ? 3 : 2);
         begin_object(9);
     }
     glDrawArrays(GL_TRIANGLES, textured ? 4 : 0, 3);   /* the cube's first face from vertex 4 */

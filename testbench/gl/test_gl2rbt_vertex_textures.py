@@ -396,22 +396,27 @@ def test_a_carried_unpack_state_gl_cannot_hold_is_refused(tmp_path):
 
 @pytest.mark.parametrize("sampler, fetch, words", [
     ("sampler2DMS", "imageLoad(heights, ivec2(1, 0), 0)",
-     ("program 2", "heights (GL_IMAGE_2D_MULTISAMPLE)", "multisample images are not emulated")),
+     ("glDrawArrays", "GL_TEXTURE_2D_MULTISAMPLE, image unit 0", "a reduced capture carries only the images")),
     ("samplerCube", "textureLod(heights, vec3(1.0, 0.0, 0.0), 0.0)",
      ("glDrawArrays", "GL_TEXTURE_CUBE_MAP", "a reduced capture carries only the images")),
-], ids=["multisample_image", "cube_in_a_reduced_capture"])
+], ids=["multisample_image_in_a_reduced_capture", "cube_in_a_reduced_capture"])
 def test_textures_of_other_targets_refused(tmp_path, sampler, fetch, words):
-    """A multisample image read by a vertex shader is refused naming it;
-    a cube map is read back from Mesa's replay of a capture
-    (test_gl2rbt_shaders' "cube" fault), which a reduced capture that does
-    not carry it cannot give: refused naming the draw, nothing left."""
+    """A cube map, and a multisample texture read as an image, are read
+    back from Mesa's replay of a capture (test_gl2rbt_shaders' "cube" and
+    "msimage" faults), which a reduced capture that does not carry them
+    cannot give: refused naming the draw, nothing left."""
     vs = VS_TEXEL.replace("sampler2D", sampler) % fetch
     if sampler == "sampler2DMS":
         vs = vs.replace("#version 330 core", "#version 420 core").replace(
             "uniform sampler2DMS", "layout(rgba32f) readonly uniform image2DMS")
     c = shader_calls(vs)
     c.add("glActiveTexture", texture="GL_TEXTURE0")
-    c.add("glGenTextures", n=1, textures=[3]).add("glBindTexture", target="GL_TEXTURE_CUBE_MAP", texture=3)
+    image = sampler == "sampler2DMS"
+    c.add("glGenTextures", n=1, textures=[3]).add("glBindTexture", target="GL_TEXTURE_2D_MULTISAMPLE" if image
+                                                  else "GL_TEXTURE_CUBE_MAP", texture=3)
+    if image:
+        c.add("glBindImageTexture", unit=0, texture=3, level=0, layered="GL_FALSE", layer=0,
+              access="GL_READ_ONLY", format="GL_RGBA32F")
     r = gl2rbt(tmp_path, draw(c).write(tmp_path / "x.xz", images=True), "-o", tmp_path / "x.rbt")
     refused(r, *words)
     assert left_behind(tmp_path, ["x.xz"]) == []

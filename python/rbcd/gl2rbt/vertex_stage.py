@@ -171,8 +171,9 @@ class VertexStage:
         self.no = self.name = None   # the draw call being run and its name, for messages
         GL = self.gl
         # Mesa's values of the sampler and image types that are neither
-        # texture buffers nor of the targets vertex_textures gives
-        # (multisample images), and of those it gives, with their targets.
+        # texture buffers nor of the targets vertex_textures gives (an
+        # external image's samplerExternalOES), and of those it gives, with
+        # their targets.
         self.texture_samplers = {int(getattr(GL, n)): n for n in dir(GL)
                                  if SAMPLER.match(n) and isinstance(getattr(GL, n), int)
                                  and n not in BUFFER_SAMPLERS | set(SAMPLER_TARGETS) | set(IMAGE_TARGETS)}
@@ -407,7 +408,7 @@ class VertexStage:
                           "the compatibility profile: not emulated")
             if int(utype) in self.texture_samplers:
                 fail_call(no, f"{where}: its vertex shader reads {printable(uname)} "
-                          f"({self.texture_samplers[int(utype)]}): multisample images are not emulated")
+                          f"({self.texture_samplers[int(utype)]}), a kind of texture not emulated")
             base = uname[:-3] if uname.endswith("[0]") else uname
             loc = GL.glGetUniformLocation(prog, uname)
             mp.locations[uname] = loc

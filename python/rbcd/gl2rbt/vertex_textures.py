@@ -40,10 +40,11 @@ SAMPLER_TARGETS = {f"GL_{kind}SAMPLER_{shape}{shadow}": f"GL_TEXTURE_{target}"
 # prefix and the 2D array format that holds them exactly.
 SAMPLE_KINDS = {("GL_RGBA", "GL_FLOAT"): ("", 0x8814), ("GL_RGBA_INTEGER", "GL_INT"): ("i", 0x8D82),
                 ("GL_RGBA_INTEGER", "GL_UNSIGNED_INT"): ("u", 0x8D70)}   # GL_RGBA32F, _32I, _32UI
-# Image types a vertex shader may read (every target but the multisample
-# ones: read back from Mesa's replay, or of a buffer texture).
+# Image types a vertex shader may read (every target: read back from
+# Mesa's replay, or of a buffer texture).
 IMAGE_TARGETS = {f"GL_{kind}IMAGE_{shape}" for shape in ("1D", "2D", "3D", "2D_RECT", "CUBE", "BUFFER", "1D_ARRAY",
-                                                          "2D_ARRAY", "CUBE_MAP_ARRAY")
+                                                          "2D_ARRAY", "CUBE_MAP_ARRAY", "2D_MULTISAMPLE",
+                                                          "2D_MULTISAMPLE_ARRAY")
                  for kind in ("", "INT_", "UNSIGNED_INT_")}
 u, i, e, f, sz, p = ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_float, ctypes.c_int, ctypes.c_void_p
 # Entry points and their C arguments after the target (or sampler).
