@@ -219,8 +219,9 @@ static void readback_format(struct Texture *t)
         }
         /* RGBA bytes, which glReadPixels always takes: uploaded again into
          * the texture's own format, a channel of 8 bits or fewer gets its
-         * value back; RGB565, which OpenGL ES gives no RGBA bytes, and
-         * RGB10_A2 in their packed types, the implementation's format. */
+         * value back. RGB565 (whose OpenGL ES upload table takes no RGBA
+         * bytes) and RGB10_A2 in their packed types, the implementation's
+         * read format for them. */
         t->format = GL_RGBA;
         t->type = widest <= 8 ? GL_UNSIGNED_BYTE : 0;   /* 0: none gives its values back (read_level_es) */
         if (t->internal == GL_RGB565)
@@ -321,7 +322,8 @@ static int read_level_es(GLint level, GLint w, GLint h, GLenum format, GLenum ty
  * own (texelFetch of each sample into a shader storage buffer): image
  * (layer * samples + sample) of level 0's, rows from the bottom. The
  * program in use and shader storage binding 0 are put back as the replay
- * had them. 0 if it cannot be read. */
+ * had them. 0 if it cannot be read, -1 if the program in use is deleted
+ * (in use, it lives on; once another is used, it is gone). */
 static int read_multisample(const struct Texture *t, int unit, void *pixels)
 {
     const int array = t->target == GL_TEXTURE_2D_MULTISAMPLE_ARRAY;
@@ -340,9 +342,13 @@ static int read_multisample(const struct Texture *t, int unit, void *pixels)
              "        v[((p.z * samples + s) * h + p.y) * w + p.x] = texelFetch(t, %s, s);\n"
              "}\n",
              es ? (array ? "320 es" : "310 es") : "430", kind, array ? "Array" : "", kind, array ? "p" : "p.xy");
-    GLint program = 0, generic = 0, bound = 0;
+    GLint program = 0, generic = 0, bound = 0, deleted = 0;
     GLint64 start = 0, size = 0;
     gl.get_integerv(GL_CURRENT_PROGRAM, &program);
+    if (program)
+        gl.get_programiv((GLuint)program, GL_DELETE_STATUS, &deleted);
+    if (deleted)
+        return -1;   /* switching to ours would free it: the replay's draws need it */
     gl.get_integerv(GL_SHADER_STORAGE_BUFFER_BINDING, &generic);
     gl.get_integeri_v(GL_SHADER_STORAGE_BUFFER_BINDING, 0, &bound);
     gl.get_integer64i_v(GL_SHADER_STORAGE_BUFFER_START, 0, &start);
@@ -413,7 +419,8 @@ static const GLenum parameters[] = {
     GL_TEXTURE_MIN_FILTER, GL_TEXTURE_MAG_FILTER, GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R,
     GL_TEXTURE_BASE_LEVEL, GL_TEXTURE_MAX_LEVEL, GL_TEXTURE_MIN_LOD, GL_TEXTURE_MAX_LOD, GL_TEXTURE_LOD_BIAS,
     GL_TEXTURE_COMPARE_MODE, GL_TEXTURE_COMPARE_FUNC, GL_TEXTURE_SWIZZLE_R, GL_TEXTURE_SWIZZLE_G,
-    GL_TEXTURE_SWIZZLE_B, GL_TEXTURE_SWIZZLE_A, GL_TEXTURE_BORDER_COLOR, GL_DEPTH_STENCIL_TEXTURE_MODE};
+    GL_TEXTURE_SWIZZLE_B, GL_TEXTURE_SWIZZLE_A, GL_TEXTURE_BORDER_COLOR, GL_DEPTH_STENCIL_TEXTURE_MODE,
+    GL_TEXTURE_IMMUTABLE_LEVELS};   /* (a query: the converter makes an immutable texture immutable) */
 #define NPARAMETERS (sizeof parameters / sizeof parameters[0])
 
 /* The binding of each target a texture is read back at. */
@@ -427,25 +434,34 @@ static GLenum binding_of(GLenum target)
     case GL_TEXTURE_CUBE_MAP_ARRAY: return GL_TEXTURE_BINDING_CUBE_MAP_ARRAY;
     case GL_TEXTURE_1D_ARRAY: return GL_TEXTURE_BINDING_1D_ARRAY;
     case GL_TEXTURE_RECTANGLE: return GL_TEXTURE_BINDING_RECTANGLE;
+    case GL_TEXTURE_2D_MULTISAMPLE: return GL_TEXTURE_BINDING_2D_MULTISAMPLE;
+    case GL_TEXTURE_2D_MULTISAMPLE_ARRAY: return GL_TEXTURE_BINDING_2D_MULTISAMPLE_ARRAY;
     default: return GL_TEXTURE_BINDING_2D;
     }
 }
 
 /* Makes request k's texture the active unit's: its texture unit, or, for
  * an image unit, unit 0 with the image's texture bound at the target (the
- * binding it replaces into *saved, for unselect). */
-static void select_unit(int k, GLint *saved)
+ * binding it replaces into *saved, for unselect). 0 if the image's texture
+ * is not of the target asked for. */
+static int select_unit(int k, GLint *saved)
 {
     if (want_units[k] < IMAGE_UNIT_BASE) {
         gl.active_texture(GL_TEXTURE0 + (GLenum)want_units[k]);
-        return;
+        return 1;
     }
     GLint tex = 0;
     gl.get_integeri_v(GL_IMAGE_BINDING_NAME, (GLuint)(want_units[k] - IMAGE_UNIT_BASE), &tex);
     gl.active_texture(GL_TEXTURE0);
     gl.get_integerv(binding_of(want_targets[k]), saved);
+    while (gl.get_error() != GL_NO_ERROR)
+        ;
     gl.bind_texture(want_targets[k], (GLuint)tex);
+    return gl.get_error() == GL_NO_ERROR;
 }
+
+/* The texture unit request k's texture is read at (select_unit's). */
+static int unit_of(int k) { return want_units[k] < IMAGE_UNIT_BASE ? (int)want_units[k] : 0; }
 
 static void unselect_unit(int k, GLint saved)
 {
@@ -485,7 +501,8 @@ static void answer(void)
             break;
         }
         GLint saved = 0;
-        select_unit(k, &saved);
+        if (!select_unit(k, &saved))
+            why = "the texture an image unit holds is not of the target the converter asked for";
         describe(&textures[k], want_targets[k]);
         unselect_unit(k, saved);
         for (int i = 0; i < MAX_LEVELS; i++)
@@ -505,7 +522,7 @@ static void answer(void)
         why = "the textures would take more than 1 GiB to read back";
     for (int k = 0; k < want_count && !why; k++) {
         GLint saved = 0;
-        select_unit(k, &saved);
+        select_unit(k, &saved);   /* (its target checked above) */
         for (int i = 0; i < MAX_LEVELS && !why; i++) {
             pixels[k][i] = NULL;
             if (!textures[k].size[i][0])
@@ -515,7 +532,11 @@ static void answer(void)
             if (!pixels[k][i])
                 die();
             if (multisample(textures[k].target)) {
-                if (!read_multisample(&textures[k], (int)want_units[k], pixels[k][i]))
+                int read = read_multisample(&textures[k], unit_of(k), pixels[k][i]);
+                if (read < 0)
+                    why = "a multisample texture read while the replay's program in use is deleted (its own "
+                          "compute shader would free that program)";
+                else if (!read)
                     why = "a multisample texture the replay's compute shader could not read";
             } else if (!read_level(&textures[k], i, pixels[k][i])) {
                 why = es ? "an OpenGL ES texture whose image glReadPixels cannot read in a format that gives its "

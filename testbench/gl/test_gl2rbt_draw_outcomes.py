@@ -668,3 +668,25 @@ def test_one_thread_says_how_the_run_ended(capsys):
     finally:
         LAST_WORD.release()
     assert capsys.readouterr().err == ""
+
+
+def test_a_signal_ctypes_wraps_is_an_interruption(tmp_path, monkeypatch, capsys):
+    """A signal taken while ctypes converts a PyOpenGL call's arguments
+    reaches the converter as ctypes' ArgumentError around the handler's
+    KeyboardInterrupt: "interrupted", exit 130 (round 13's R13-7: an
+    internal error, exit 1)."""
+    import ctypes
+
+    from rbcd.gl2rbt import cli, raster
+
+    def convert(args, report=None):
+        raise ctypes.ArgumentError("argument 2: KeyboardInterrupt: ")
+    monkeypatch.setattr(raster, "convert", convert)
+    handlers = {sig: signal.getsignal(sig) for sig in cli.HANDLED}   # main leaves them ignored
+    cap = draw(shader_calls(VS)).write(tmp_path / "k.xz")
+    try:
+        assert cli.main([str(cap), "-o", str(tmp_path / "k.rbt")]) == 130
+    finally:
+        for sig, handler in handlers.items():
+            signal.signal(sig, handler)
+    assert capsys.readouterr().err.splitlines() == [f"rbcd-gl2rbt: {cap}: interrupted"]

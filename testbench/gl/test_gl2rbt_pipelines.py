@@ -140,3 +140,20 @@ def test_an_opengl_es_pipeline_of_programs_of_one_stage(tmp_path):
     c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
     got = frames(tmp_path, c.add("eglSwapBuffers", dpy=1, surface=1, flags=END_FRAME), "es")
     assert got[0]["other"] > 100 and got[0]["other"] == whole[0]["other"], (got, whole)
+
+
+def test_a_program_in_some_of_its_stages_makes_the_pipeline_draw_nothing(tmp_path):
+    """A separable program of a vertex and a fragment shader in the
+    pipeline's vertex stage alone, another program in its fragment stage:
+    GL_INVALID_OPERATION at the draw, nothing drawn (round 13's R13-3: drawn)."""
+    fs = "#version 410 core\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n"
+    c = separable()
+    c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=8)
+    c.add("glShaderSource", shader=8, count=1, string=[fs], length=None)
+    c.add("glCompileShader", shader=8).add("glAttachShader", program=2, shader=8).add("glLinkProgram", program=2)
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_VERTEX_SHADER_BIT"], program=2)
+    c.add("glCreateShaderProgramv", type="GL_FRAGMENT_SHADER", count=1, strings=[fs], ret=11)
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_FRAGMENT_SHADER_BIT"], program=11)
+    assert trace(tmp_path, draw(c), "invalid").count(b"\nf ") == 0
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_VERTEX_SHADER_BIT", "GL_FRAGMENT_SHADER_BIT"], program=2)
+    assert trace(tmp_path, draw(c), "valid").count(b"\nf ") > 100, "the pipeline's second frame draws"

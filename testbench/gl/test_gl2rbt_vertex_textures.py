@@ -542,6 +542,9 @@ def test_compressed_images_read_back_are_given_back_uncompressed():
                         (0x83F0, "GL_RGBA32F"),        # GL_COMPRESSED_RGB_S3TC_DXT1_EXT
                         (0x93B0, "GL_RGBA32F"),        # GL_COMPRESSED_RGBA_ASTC_4x4_KHR
                         (0x93D0, "GL_SRGB8_ALPHA8"),   # GL_COMPRESSED_SRGB8_ALPHA8_ASTC_4x4_KHR
+                        (0x84EA, "GL_LUMINANCE32F_ARB"),   # GL_COMPRESSED_LUMINANCE (read back as (L, 0, 0, 1))
+                        (0x8C4B, "GL_SLUMINANCE8_ALPHA8"),   # GL_COMPRESSED_SLUMINANCE_ALPHA
+                        (0x84EC, "GL_INTENSITY32F_ARB"),   # GL_COMPRESSED_INTENSITY
                         (0x8814, 0x8814)):             # GL_RGBA32F itself
         assert upload_format(value, "GL_RGBA", "GL_FLOAT", False) == want, hex(value)
 
@@ -588,3 +591,57 @@ def test_a_vertex_shader_reads_an_image_as_the_texture_holds_it(tmp_path, es):
     got = convert(tmp_path, draw(c), "image")
     fragments = [[line for line in t.split(b"\n") if line.startswith(b"f ")] for t in (got, want)]
     assert fragments[0] == fragments[1] and len(fragments[0]) > 100   # (ES: a fragment shader's cost beside)
+
+
+def test_two_textures_made_for_one_draw_stay_each_on_its_unit(tmp_path):
+    """A vertex shader reading texture 3 on unit 0 and texture 5 on unit 1,
+    both given to Mesa for the same draw: making the second must not take
+    the first's place on unit 0 (it had: the triangle moved by texture 5's
+    texel twice)."""
+    vs = ("#version 330 core\nin vec3 p;\nuniform sampler2D a;\nuniform sampler2D b;\n"
+          "void main() { vec4 t = texelFetch(a, ivec2(1, 0), 0) + texelFetch(b, ivec2(1, 0), 0);\n"
+          "  gl_Position = vec4((p.x + t.r) / 32.0 - 1.0, (p.y + t.g) / 24.0 - 1.0, 0.0, 1.0); }\n")
+    c = texture(shader_calls(vs), name=3, unit=0)
+    c = texture(c, name=5, unit=1, image=False)
+    c.add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA32F", width=2, height=1,
+          border=0, format="GL_RGBA", type="GL_FLOAT", pixels=struct.pack("<8f", 0, 0, 0, 0, 4, 1, 0, 0))
+    for loc, (uname, unit) in enumerate((("a", 0), ("b", 1))):
+        c.add("glGetUniformLocation", program=2, name=uname, ret=loc + 4).add("glUniform1i", location=loc + 4, v0=unit)
+    assert convert(tmp_path, draw(c), "two") == moved(tmp_path, 10, 3)
+
+
+def test_a_core_profile_depth_texture_reads_as_red(tmp_path):
+    """A depth texture in a core profile's capture reads (d, 0, 0, 1), its
+    swizzle too: Mesa's compatibility context reads (d, d, d, 1) whatever
+    GL_DEPTH_TEXTURE_MODE says (round 13's R13-8: the triangle moved by d
+    in y as well)."""
+    vs = VS_TEXEL % FETCH.replace("ivec2(1, 0)", "ivec2(0, 0)")
+    vs = vs.replace("(p.x + t.r)", "(p.x + 8.0 * t.r)").replace("(p.y + t.g)", "(p.y + 8.0 * t.g + 2.0 * t.a)")
+    c = shader_calls(vs)
+    c.add("glGenTextures", n=1, textures=[3]).add("glBindTexture", target="GL_TEXTURE_2D", texture=3)
+    c.add("glTexStorage2D", target="GL_TEXTURE_2D", levels=1, internalformat="GL_DEPTH_COMPONENT32F", width=1,
+          height=1)
+    c.add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=1, height=1,
+          format="GL_DEPTH_COMPONENT", type="GL_FLOAT", pixels=struct.pack("<f", 0.5))
+    for pname in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER"):
+        c.add("glTexParameteri", target="GL_TEXTURE_2D", pname=pname, param="GL_NEAREST")
+    assert convert(tmp_path, draw(c), "depth") == moved(tmp_path, 4, 2)   # (d, 0, 0, 1): 8 d in x, 2 in y
+
+
+def test_an_immutable_texture_read_back_is_immutable():
+    """A texture the replay made with storage (its levels' completeness is
+    the storage's: an image unit reads level 1 of it) is given to Mesa as
+    storage and sub-images (round 13's R13-1: as glTexImage3D levels, level
+    1 read as zeros); a mutable one as its levels."""
+    from rbcd.gl2rbt.rendered_textures import image_calls
+    levels = [(0, 4, 4, 3, "GL_RGBA", "GL_FLOAT", bytes(4 * 4 * 3 * 16)),
+              (1, 2, 2, 3, "GL_RGBA", "GL_FLOAT", bytes(2 * 2 * 3 * 16))]
+    calls = image_calls(7, "GL_TEXTURE_2D_ARRAY", 0x8814, levels, False, immutable=2)
+    assert [c[1] for c in calls] == ["glTexStorage3D", "glTexSubImage3D", "glTexSubImage3D"]
+    assert calls[0][2] == dict(target="GL_TEXTURE_2D_ARRAY", levels=2, internalformat=0x8814, width=4, height=4,
+                               depth=3)
+    assert [c[1] for c in image_calls(7, "GL_TEXTURE_2D_ARRAY", 0x8814, levels, False)] == ["glTexImage3D"] * 2
+    cube = [(0, 2, 2, 6, "GL_RGBA", "GL_FLOAT", bytes(2 * 2 * 6 * 16))]
+    faces = image_calls(7, "GL_TEXTURE_CUBE_MAP", 0x8814, cube, False, immutable=1)
+    assert [c[1] for c in faces] == ["glTexStorage2D"] + ["glTexSubImage2D"] * 6
+    assert [len(c[2]["pixels"]) for c in faces[1:]] == [64] * 6

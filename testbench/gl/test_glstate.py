@@ -1142,6 +1142,16 @@ def test_buffer_clears_fill_elements_as_mesa_converts(monkeypatch):
         gl.glClearBufferData(target="GL_COPY_WRITE_BUFFER", internalformat="GL_R32F", format="GL_RED",
                              type="GL_FLOAT", data=one)
     assert not any(bytes(s.buffers[4][:1 << 16])), "refused before it was written"
+    # A buffer filled again holds what it held (round 13's R13-4: the new
+    # fill was counted before the old one was let go); NULL (apitrace's 0)
+    # fills with zeros (R13-6: refused).
+    gl.glBufferData(target="GL_COPY_WRITE_BUFFER", size=100 << 20, data=None)
+    for _ in range(3):
+        gl.glClearBufferData(target="GL_COPY_WRITE_BUFFER", internalformat="GL_R32F", format="GL_RED",
+                             type="GL_FLOAT", data=one)
+    gl.glClearBufferData(target="GL_COPY_WRITE_BUFFER", internalformat="GL_R32F", format="GL_RED",
+                         type="GL_FLOAT", data=0)
+    assert not any(bytes(s.buffers[4][:1 << 16]))
 
 
 def test_image_units_bind_what_gl_takes():
@@ -1212,3 +1222,18 @@ def test_a_call_on_a_texture_that_shares_its_images_reads_the_view_again():
         gl.glTexSubImage2D(target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=1, height=1,
                            format="GL_RGBA", type="GL_FLOAT", pixels=bytes(16))
         assert (s.gpu_writes > writes) == (tex != 1), tex
+
+
+def test_calls_on_a_deleted_program_change_nothing():
+    """glProgramUniform and glGetUniformLocation on a program glDeleteProgram
+    freed are GL_INVALID_VALUE: nothing changes (round 13's R13-5: refused
+    as a program never created); a name never created is the capture's
+    error."""
+    gl = GL()
+    gl.glCreateProgram(ret=2)
+    gl.glDeleteProgram(2)
+    gl.glProgramUniform1f(2, 0, 1.0)
+    gl.glGetUniformLocation(program=2, name="x", ret=0)
+    assert 2 not in gl.conv.s.programs
+    with pytest.raises(ConvertError, match="program 3 was never created"):
+        gl.glProgramUniform1f(3, 0, 1.0)

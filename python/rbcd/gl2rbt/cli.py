@@ -150,6 +150,10 @@ def run(args):
         sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
         return 1
     except Exception as e:   # noqa: BLE001: the promise is one line, whatever failed
+        if type(e).__name__ == "ArgumentError" and "KeyboardInterrupt" in str(e):
+            # A signal taken while ctypes converted a PyOpenGL call's
+            # arguments: ctypes wraps the handler's KeyboardInterrupt.
+            raise KeyboardInterrupt
         sys.stderr.write(f"{PROG}: internal error: {type(e).__name__}: {printable(e, 300)}\n")
         return 1
 

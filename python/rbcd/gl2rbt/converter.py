@@ -333,8 +333,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         """Context `ctx` made current after another: the state of the one
         before kept for when it is current again, ctx's own state (GL's
         initial one the first time) in its place, and, unless the two share
-        objects, ctx's share group's objects (round 12's R12-8: a loader
-        context's binds and viewport had changed the drawing context's)."""
+        objects, ctx's share group's objects (a loader context's binds and
+        viewport leave the drawing context's as they were)."""
         old = self.state_context
         if old is None or ctx not in self.context_profiles or old not in self.context_profiles:
             # The first context: the state so far is its own; or one whose
@@ -342,7 +342,6 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             return
         fields = vars(self.s)
         self.context_states[old] = {k: v for k, v in fields.items() if k not in SHARED_STATE | CONVERSION_STATE}
-        self.context_profiles.setdefault(old, (self.es, self.core))
         fresh = None
         if self.share_group(ctx) != self.share_group(old):
             self.group_states[self.share_group(old)] = {k: fields[k] for k in SHARED_STATE}
@@ -399,7 +398,16 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         destroys it, and draws in a second): GL's initial state, with no
         objects; the window's contents stay. That context's draws are no
         longer those of another context."""
+        old = vars(self.s)
+        group = self.share_group(self.state_context) if self.state_context is not None else None
+        if any(c != self.state_context and c not in self.destroyed_contexts and self.share_group(c) == group
+               for c in self.context_profiles):
+            self.group_states[group] = {k: old[k] for k in SHARED_STATE}   # a live context shares them
+        else:   # gone with the context: no longer held
+            old["buffer_bytes_in_all"] -= sum(old["buffer_held"].values())
+            old["texture_bytes_kept"] -= sum(tc.bytes for tc in old["texture_calls"].values())
         self.s = self.initial_state()
+        vars(self.s).update({k: old[k] for k in CONVERSION_STATE})
         if self.vertex_stage_ is not None:
             self.vertex_stage_.forget_objects()
         self.draw_context = None

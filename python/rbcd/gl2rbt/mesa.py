@@ -186,6 +186,7 @@ class Mesa:
     def __init__(self, es=False):
         EGL, GL = _load()
         self.gl, self.egl, self.es = GL, EGL, es
+        self.procs = {}   # (name, argument types) -> the entry point (proc)
         try:
             dpy = EGL.eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL.EGL_DEFAULT_DISPLAY, None)
             major, minor = EGL.EGLint(), EGL.EGLint()
@@ -236,13 +237,16 @@ class Mesa:
         return ctypes.CFUNCTYPE(None, *argtypes)(address)
 
     def proc(self, name, *argtypes):
-        """A GL entry point of Mesa's, called with no wrapper."""
-        return self.function(self.egl, name, *argtypes)
+        """A GL entry point of Mesa's, called with no wrapper (made once)."""
+        key = (name,) + argtypes
+        fn = self.procs.get(key)
+        if fn is None:
+            fn = self.procs[key] = self.function(self.egl, name, *argtypes)
+        return fn
 
     def separable(self, program):
         """glProgramParameteri(program, GL_PROGRAM_SEPARABLE, GL_TRUE), called
         directly: PyOpenGL's wrapper cannot read an ES context's version."""
-        import ctypes
         self.proc("glProgramParameteri", ctypes.c_uint, ctypes.c_uint, ctypes.c_int)(program, 0x8258, 1)
 
     def enum(self, value):

@@ -283,7 +283,7 @@ def raster_result(proc, trace):
         return
     if rc in INTERRUPTED or -rc in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         # A signal to the process group (Ctrl-C) ended it first: the run
-        # was interrupted, not the rasterizer broken (round 12's R12-12).
+        # was interrupted, not the rasterizer broken.
         raise KeyboardInterrupt
     # Its one message whole: a path it names may hold a newline (escaped
     # when the message is printed; its first line alone had cut the path).

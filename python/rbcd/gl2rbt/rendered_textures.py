@@ -58,21 +58,48 @@ CUBE_FACES = ("GL_TEXTURE_CUBE_MAP_POSITIVE_X", "GL_TEXTURE_CUBE_MAP_NEGATIVE_X"
               "GL_TEXTURE_CUBE_MAP_NEGATIVE_Y", "GL_TEXTURE_CUBE_MAP_POSITIVE_Z", "GL_TEXTURE_CUBE_MAP_NEGATIVE_Z")
 
 
-def image_calls(no, target, internal, levels, es):
+STORAGE = {"GL_TEXTURE_1D": ("glTexStorage1D", "glTexSubImage1D"), "GL_TEXTURE_3D": ("glTexStorage3D", "glTexSubImage3D"),
+           "GL_TEXTURE_2D_ARRAY": ("glTexStorage3D", "glTexSubImage3D"),
+           "GL_TEXTURE_CUBE_MAP_ARRAY": ("glTexStorage3D", "glTexSubImage3D")}
+
+
+def storage_calls(no, target, internal, levels, es, count):
+    """An immutable texture's calls: storage of `count` levels, then each
+    level read back (a cube map's faces one by one)."""
+    storage, part = STORAGE.get(target, ("glTexStorage2D", "glTexSubImage2D"))
+    _, w, h, d, fmt, kind, _ = levels[0]
+    size = dict(width=w) if storage == "glTexStorage1D" else dict(width=w, height=h, depth=d) \
+        if storage == "glTexStorage3D" else dict(width=w, height=h)
+    calls = [(no, storage, dict(target=target, levels=count, internalformat=upload_format(internal, fmt, kind, es),
+                                **size))]
+    for level, lw, lh, ld, lfmt, lkind, pixels in levels:
+        one = dict(level=level, xoffset=0, width=lw, format=lfmt, type=lkind)
+        if part == "glTexSubImage3D":
+            calls.append((no, part, dict(one, target=target, yoffset=0, zoffset=0, height=lh, depth=ld,
+                                         pixels=pixels)))
+        elif part == "glTexSubImage1D":
+            calls.append((no, part, dict(one, target=target, pixels=pixels)))
+        elif target == "GL_TEXTURE_CUBE_MAP":
+            face = len(pixels) // 6
+            calls += [(no, part, dict(one, target=f, yoffset=0, height=lh, pixels=pixels[i * face:(i + 1) * face]))
+                      for i, f in enumerate(CUBE_FACES)]
+        else:   # 2D, rectangle, 1D array
+            calls.append((no, part, dict(one, target=target, yoffset=0, height=lh, pixels=pixels)))
+    return calls
+
+
+def image_calls(no, target, internal, levels, es, immutable=0):
     """The calls that give the converter's Mesa context a texture's levels
     read back: (call, name, arguments) each, by target (a cube map's faces
     one by one; in OpenGL ES a 2D texture's as storage and sub-images)."""
     calls = []
-    if es and target == "GL_TEXTURE_2D" and levels and levels[0][0] == 0:
-        # Immutable storage, then each level: OpenGL ES binds only such a
-        # texture to an image unit (and samples it as the same).
-        _, w, h, _, fmt, kind, _ = levels[0]
-        calls.append((no, "glTexStorage2D", dict(target=target, levels=max(lv[0] for lv in levels) + 1,
-                                                 internalformat=upload_format(internal, fmt, kind, es), width=w,
-                                                 height=h)))
-        return calls + [(no, "glTexSubImage2D", dict(target=target, level=level, xoffset=0, yoffset=0, width=lw,
-                                                     height=lh, format=lfmt, type=lkind, pixels=pixels))
-                        for level, lw, lh, _, lfmt, lkind, pixels in levels]
+    if levels and levels[0][0] == 0 and (immutable or es and target == "GL_TEXTURE_2D"):
+        # Immutable storage, as the replay's texture has (its levels'
+        # completeness is the storage's: an image unit reads a level past
+        # the first of a mutable one filtered without mipmaps as nothing);
+        # OpenGL ES binds only such a texture to an image unit.
+        count = immutable or max(lv[0] for lv in levels) + 1
+        return storage_calls(no, target, internal, levels, es, count)
     for level, w, h, d, fmt, kind, pixels in levels:
         base = dict(level=level, internalformat=upload_format(internal, fmt, kind, es), width=w, border=0,
                     format=fmt, type=kind)
@@ -95,6 +122,11 @@ ES_FALLBACK = {("GL_RGBA", "GL_UNSIGNED_BYTE"): "GL_RGBA8", ("GL_RGBA_INTEGER", 
 
 
 _COMPRESSED = None
+# Parts of a compressed format's name and the uncompressed format that
+# holds its decoded texels exactly, the first that matches.
+COMPRESSED_BASES = (("SLUMINANCE_ALPHA", "GL_SLUMINANCE8_ALPHA8"), ("SLUMINANCE", "GL_SLUMINANCE8"),
+                    ("LUMINANCE_ALPHA", "GL_LUMINANCE_ALPHA32F_ARB"), ("LUMINANCE", "GL_LUMINANCE32F_ARB"),
+                    ("INTENSITY", "GL_INTENSITY32F_ARB"), ("SRGB", "GL_SRGB8_ALPHA8"))
 
 
 def compressed_formats():
@@ -114,13 +146,19 @@ def upload_format(internal, fmt, kind, es):
     Mesa context in: its own (desktop GL converts any pixels), but for a
     compressed one the uncompressed format that holds its decoded texels
     exactly (Mesa would encode them again, and its encoders do not give
-    the blocks back: round 12's R12-9), or in OpenGL
+    the blocks back), or in OpenGL
     ES, where the format and type must be its table's, its own when they
     are, else the RGBA one of the same values that samples the same (a
     missing component reads as GL's default either way)."""
     compressed = compressed_formats().get(internal)
     if compressed is not None and kind == "GL_FLOAT":
-        return "GL_SRGB8_ALPHA8" if "SRGB" in compressed else "GL_RGBA32F"
+        # The uncompressed format of the same base (the compatibility
+        # profile's luminance, intensity and alpha ones too: read back as
+        # RGBA, they take their own components of it again).
+        for part, plain in COMPRESSED_BASES:
+            if part in compressed:
+                return plain
+        return "GL_RGBA32F"
     if not es:
         return internal
     from OpenGL import GL

@@ -23,9 +23,11 @@ from .glstate.textures import (DEFAULT_TEXTURE_BASE, IMAGE_UNIT_BASE, LEVEL_CALL
 # texel (the widest format), a third more for a mipmapped storage: Mesa
 # allocates a level's size whatever pixels a call gives.
 MAX_MESA_TEXTURE_BYTES = 1 << 30
+# The texture unit Mesa's copies are made on, before each is bound where a
+# draw reads it (llvmpipe's last of 192).
+SCRATCH_UNIT = 0x84C0 + 191
 GL_DEPTH_TEXTURE_MODE = 0x884B   # the compatibility profile's
 ANISOTROPY = ("GL_TEXTURE_MAX_ANISOTROPY", "GL_TEXTURE_MAX_ANISOTROPY_EXT", 0x84FE)
-# Sampler types of the 2D textures a vertex shader may read.
 # Every sampler type a vertex shader may read, with its texture's target
 # (those of other targets than 2D read back from Mesa's replay).
 SAMPLER_TARGETS = {f"GL_{kind}SAMPLER_{shape}{shadow}": f"GL_TEXTURE_{target}"
@@ -54,6 +56,10 @@ ENTRY_POINTS = {
     "glTexImage3D": (e, i, i, sz, sz, sz, i, e, e, p),
     "glTexSubImage2D": (e, i, i, i, sz, sz, e, e, p),
     "glTexStorage2D": (e, sz, e, sz, sz),
+    "glTexStorage1D": (e, sz, e, sz),
+    "glTexStorage3D": (e, sz, e, sz, sz, sz),
+    "glTexSubImage1D": (e, i, i, sz, e, e, p),
+    "glTexSubImage3D": (e, i, i, i, i, sz, sz, sz, e, e, p),
     "glCompressedTexImage2D": (e, i, e, sz, sz, i, sz, p),
     "glCompressedTexSubImage2D": (e, i, i, i, sz, sz, e, sz, p),
     "glGenerateMipmap": (e,),
@@ -70,6 +76,11 @@ ARGUMENTS = {
                      "pixels"),
     "glTexSubImage2D": ("target", "level", "xoffset", "yoffset", "width", "height", "format", "type", "pixels"),
     "glTexStorage2D": ("target", "levels", "internalformat", "width", "height"),
+    "glTexStorage1D": ("target", "levels", "internalformat", "width"),
+    "glTexStorage3D": ("target", "levels", "internalformat", "width", "height", "depth"),
+    "glTexSubImage1D": ("target", "level", "xoffset", "width", "format", "type", "pixels"),
+    "glTexSubImage3D": ("target", "level", "xoffset", "yoffset", "zoffset", "width", "height", "depth", "format",
+                        "type", "pixels"),
     "glCompressedTexImage2D": ("target", "level", "internalformat", "width", "height", "border", "imageSize",
                                "data"),
     "glCompressedTexSubImage2D": ("target", "level", "xoffset", "yoffset", "width", "height", "format",
@@ -163,40 +174,38 @@ class VertexTextures:
                 self.read(conv, IMAGE_UNIT_BASE + unit, binding[0], target, reads, ask)
             images.append((unit, binding, target))
         got = conv.rendered_textures(no, name, ask) if ask else {}
+        # Every texture made first (on the scratch unit), then each bound
+        # where the draw reads it: making one must not replace another
+        # already bound.
         made = {}
         for unit, tex, tc, target in reads:
             tc = got.get((tex, target), tc)
-            made[(tex, target)] = mt = self.image(tex, tc, target)   # (made on unit 0)
+            made[(tex, target)] = self.image(tex, tc, target)
             conv.vertex_texture_read(tex, tc)
+        images = [self.image_binding(conv, unit, binding, target, made, buffer_texture)
+                  for unit, binding, target in images]
+        for unit, tex, _, target in reads:
             if unit >= IMAGE_UNIT_BASE:
                 continue
             sampler = conv.s.sampler_units.get(unit, 0)
             ms = self.sampler(sampler, conv.s.samplers.get(sampler, {})) if sampler else 0
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-            GL.glBindTexture(self.mesa.enum(target), mt)
+            GL.glBindTexture(self.mesa.enum(target), made[(tex, target)])
             GL.glBindSampler(unit, ms)
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        for unit, binding, target in images:
-            self.bind_image(conv, unit, binding, target, made, buffer_texture)
+        self.bind_images(images)
 
-    def bind_image(self, conv, unit, binding, target, made, buffer_texture):
-        """Mesa's image unit `unit` bound as the capture bound it: the
-        texture level (or layer) made for the draw, in the capture's format
-        or, bound by glBindImageTextures, the texture's own; unbound when
-        the capture's unit is."""
+    def image_binding(self, conv, unit, binding, target, made, buffer_texture):
+        """(unit, Mesa texture, level, layered, layer, access, format) of
+        image unit `unit` as the capture bound it (texture 0: unbound): the
+        texture made for the draw, in the capture's format or, bound by
+        glBindImageTextures, the texture's own."""
         GL = self.gl
-        u, i = ctypes.c_uint, ctypes.c_int
-        # Mesa's entry point called directly (PyOpenGL's wrapper cannot read
-        # an OpenGL ES context's version); what it refuses, the replay's
-        # refused too (a format the texture's image does not take): the
-        # unit reads as unbound.
-        bind = self.mesa.proc("glBindImageTexture", u, u, i, ctypes.c_ubyte, i, u, u)
         if binding is None:
-            bind(unit, 0, 0, 0, 0, GL.GL_READ_ONLY, GL.GL_R8)
-            return
+            return unit, 0, 0, 0, 0, GL.GL_READ_ONLY, GL.GL_R8
         tex, level, layered, layer, access, fmt = binding
+        GL.glActiveTexture(SCRATCH_UNIT)
         if target == "GL_TEXTURE_BUFFER":
-            GL.glActiveTexture(GL.GL_TEXTURE0)
             mt = buffer_texture(conv, tex)
         else:
             mt = made[(tex, target)]
@@ -204,10 +213,23 @@ class VertexTextures:
             GL.glBindTexture(self.mesa.enum(target), mt)
             query = GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X if target == "GL_TEXTURE_CUBE_MAP" else self.mesa.enum(target)
             fmt = int(GL.glGetTexLevelParameteriv(query, 0, GL.GL_TEXTURE_INTERNAL_FORMAT))
-        self.drain()
-        bind(unit, mt, level, 1 if layered else 0, layer, self.mesa.enum(access), self.mesa.enum(fmt))
-        if GL.glGetError():
-            bind(unit, 0, 0, 0, 0, GL.GL_READ_ONLY, GL.GL_R8)
+        GL.glActiveTexture(GL.GL_TEXTURE0)
+        return unit, mt, level, 1 if layered else 0, layer, self.mesa.enum(access), self.mesa.enum(fmt)
+
+    def bind_images(self, images):
+        """Mesa's image units bound (image_binding's tuples), through Mesa's
+        entry point called directly (PyOpenGL's wrapper cannot read an OpenGL
+        ES context's version); what Mesa refuses, the replay's refused too
+        (a format the texture's image does not take): that unit reads as
+        unbound."""
+        GL = self.gl
+        u, i = ctypes.c_uint, ctypes.c_int
+        bind = self.mesa.proc("glBindImageTexture", u, u, i, ctypes.c_ubyte, i, u, u)
+        for args in images:
+            self.drain()
+            bind(*args)
+            if GL.glGetError():
+                bind(args[0], 0, 0, 0, 0, GL.GL_READ_ONLY, GL.GL_R8)
 
     def read(self, conv, unit, tex, target, reads, ask):
         """Notes that the draw reads texture `tex` of `target` at `unit` (a
@@ -254,7 +276,7 @@ class VertexTextures:
         self.image_bytes += size
         mt = int(GL.glGenTextures(1))
         self.images[(tex, target)] = (mt, version, size)
-        GL.glActiveTexture(GL.GL_TEXTURE0)
+        GL.glActiveTexture(SCRATCH_UNIT)
         GL.glBindTexture(self.mesa.enum(target), mt)
         if self.core:
             # Mesa's context is of the compatibility profile, whose depth
@@ -270,14 +292,17 @@ class VertexTextures:
         for pname in UNPACK_PARAMETERS:
             self.call("glPixelStorei", self.mesa.enum(pname), 4 if pname == "GL_UNPACK_ALIGNMENT" else 0)
         self.drain()
+        if self.core:
+            self.core_depth(target)
         # llvmpipe's vertex shaders do not wait for its rasterizer threads:
         # the levels glGenerateMipmap renders are finished before a draw
         # reads them.
         GL.glFinish()
+        GL.glActiveTexture(GL.GL_TEXTURE0)
         return mt
 
     def fill_samples(self, what, mt, d):
-        """Multisample texture `mt` (bound at unit 0) given its storage and
+        """Multisample texture `mt` (bound on the scratch unit) given its storage and
         every sample of every layer as read back (d: SAMPLES_CALL's
         arguments): the samples uploaded as the layers of a 2D array
         texture, then drawn into mt, one sample at a time under a sample
@@ -295,6 +320,8 @@ class VertexTextures:
             fail_call(no, f"{what}: not a multisample image as the read back gives one")
         target = self.mesa.enum(d.get("target"))
         layers = depth // samples
+        GL.glActiveTexture(SCRATCH_UNIT)
+        GL.glBindTexture(target, mt)
         try:
             internal = self.mesa.enum(d.get("internalformat"))
         except ValueError:
@@ -340,7 +367,11 @@ class VertexTextures:
         attachment = GL.GL_DEPTH_ATTACHMENT if depth_format else GL.GL_COLOR_ATTACHMENT0
         in_use = GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM)   # the draw's, already in use
         GL.glUseProgram(prog)
-        GL.glUniform1i(GL.glGetUniformLocation(prog, "src"), 0)
+        GL.glUniform1i(GL.glGetUniformLocation(prog, "src"), SCRATCH_UNIT - GL.GL_TEXTURE0)
+        sampler = GL.glGetIntegerv(GL.GL_SAMPLER_BINDING)   # (of the scratch unit, active)
+        GL.glBindSampler(SCRATCH_UNIT - GL.GL_TEXTURE0, 0)   # the array's own nearest filtering
+        if not self.mesa.es:
+            GL.glEnable(GL.GL_FRAMEBUFFER_SRGB)   # an sRGB texture's samples, read decoded, encoded again
         GL.glViewport(0, 0, w, h)
         GL.glEnable(GL.GL_SAMPLE_MASK)
         sample_mask = proc("glSampleMaski", u, u)
@@ -362,6 +393,9 @@ class VertexTextures:
         finally:
             sample_mask(0, 0xFFFFFFFF)
             GL.glDisable(GL.GL_SAMPLE_MASK)
+            GL.glBindSampler(SCRATCH_UNIT - GL.GL_TEXTURE0, int(sampler))
+            if not self.mesa.es:
+                GL.glDisable(GL.GL_FRAMEBUFFER_SRGB)
             GL.glDisable(GL.GL_DEPTH_TEST)
             GL.glUseProgram(in_use)
             GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.mesa.fbo)   # the vertex stage's own
@@ -371,6 +405,22 @@ class VertexTextures:
                 GL.glDeleteShader(sh)
             GL.glDeleteProgram(prog)
             GL.glBindTexture(target, mt)
+
+    def core_depth(self, target):
+        """A depth texture of a core profile's capture reads as (d, 0, 0,
+        1) there; Mesa's compatibility context (GLSL 1.30 and later) reads
+        it as (d, d, d, 1) whatever GL_DEPTH_TEXTURE_MODE says: the
+        texture's swizzle (the capture's own, made after it) is given the
+        core profile's components."""
+        GL = self.gl
+        t = self.mesa.enum(target)
+        query = GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X if t == GL.GL_TEXTURE_CUBE_MAP else t
+        if not GL.glGetTexLevelParameteriv(query, 0, GL.GL_TEXTURE_DEPTH_SIZE) or \
+                GL.glGetTexParameteriv(t, GL.GL_DEPTH_STENCIL_TEXTURE_MODE) == GL.GL_STENCIL_INDEX:
+            return
+        core = {GL.GL_GREEN: GL.GL_ZERO, GL.GL_BLUE: GL.GL_ZERO, GL.GL_ALPHA: GL.GL_ONE}
+        swizzle = [int(v) for v in GL.glGetTexParameteriv(t, GL.GL_TEXTURE_SWIZZLE_RGBA)]
+        GL.glTexParameteriv(t, GL.GL_TEXTURE_SWIZZLE_RGBA, np.array([core.get(v, v) for v in swizzle], np.int32))
 
     def sampler(self, sampler, params):
         GL = self.gl

@@ -365,6 +365,8 @@ class BufferCalls:
         size = (len(buf) if buf is not None else 0) if whole else \
             checked(no, integer, d.get("size"), f"{name}: the size", *I64)
         internal, data = d.get("internalformat"), d.get("data")
+        if isinstance(data, int) and not isinstance(data, bool) and data == 0:
+            data = None   # NULL, as apitrace records it: zeros
         if data is not None and not isinstance(data, (bytes, bytearray)):
             fail_call(no, f"{name}: the data is neither bytes nor NULL")
         n = CLEAR_FORMATS.get(internal)
@@ -396,8 +398,10 @@ class BufferCalls:
             self.s.next_version += 1
             self.s.buffer_versions[b] = self.s.next_version
             return
-        if isinstance(buf, mmap.mmap) and self.s.buffer_bytes_in_all + size > MAX_BUFFER_BYTES_IN_ALL:
-            self.held_bytes(no, name, b, self.s.buffer_held.get(b, 0) + size)   # refused before writing
+        held = self.s.buffer_held.get(b, 0)
+        if isinstance(buf, mmap.mmap) and self.s.buffer_bytes_in_all - held + min(len(buf), held + size) > \
+                MAX_BUFFER_BYTES_IN_ALL:
+            self.held_bytes(no, name, b, min(len(buf), held + size))   # refused before writing
         buf[off:off + size] = value * (size // n)
         self.changed(no, name, b, off, off + size)
 

@@ -249,6 +249,10 @@ class DrawCalls:
             return
         if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard or not self.renders():
             return
+        invalid = self.pipeline_invalid()
+        if invalid is not None:
+            self.rejected_draws.append((no, f"GL_INVALID_OPERATION: {invalid}"))
+            return
         stages = self.stage_programs()
         for stage in ("geometry", "tess_control", "tess_evaluation"):
             if stage in stages:
@@ -444,11 +448,16 @@ class DrawCalls:
             item = np.dtype(INDEX_TYPES[type_]).itemsize
         if n > 1 and self.active and self.renders() and self.camera_pass():
             # The draw records its commands would make at most (one an
-            # instance), against the frame's limit before any is run: a
-            # multi-draw past it had taken a minute of Mesa's work first
-            # (round 12's R12-10).
-            records = sum(instances for count, instances in (struct.unpack_from("<II", data, offset + i * stride)
-                                                             for i in range(n)) if count)
+            # instance), against the frame's limit before any is run (each
+            # costs Mesa about 0.4 ms: past it, a minute of work first).
+            records = 0
+            for i in range(n):
+                count, instances = struct.unpack_from("<II", data, offset + i * stride)
+                records += instances if count else 0
+                if self.frame_records + records > MAX_FRAME_RECORDS:
+                    records = sum(instances for count, instances in (struct.unpack_from("<II", data, offset + j * stride)
+                                                                     for j in range(n)) if count)
+                    break
             if self.frame_records + records > MAX_FRAME_RECORDS:
                 fail_call(no, f"{name}: its {n} commands would make {records} draw records, more than "
                           f"{MAX_FRAME_RECORDS} in one frame with the frame's {self.frame_records} "

@@ -135,7 +135,7 @@ class FramebufferCalls:
         if not (0 <= w <= MAX_RENDERBUFFER_SIZE and 0 <= h <= MAX_RENDERBUFFER_SIZE) \
                 or not isinstance(d.get("internalformat"), str) or isinstance(d.get("samples"), int) \
                 and d["samples"] < 0:
-            return   # GL_INVALID_VALUE or GL_INVALID_ENUM: the renderbuffer keeps its image (round 11's R11-3)
+            return   # GL_INVALID_VALUE or GL_INVALID_ENUM: the renderbuffer keeps its image
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
         self.s.formats[("renderbuffer", self.s.renderbuffer)] = d.get("internalformat")
         self.s.multisampled[("renderbuffer", self.s.renderbuffer)] = isinstance(d.get("samples"), int) and \
@@ -228,7 +228,7 @@ class FramebufferCalls:
         if base_name(name) in ("glTexImage2D", "glTexStorage2D", "glCompressedTexImage2D"):
             self.keep_texture_call(no, base_name(name), d)
             if refused_storage(d) if base_name(name) == "glTexStorage2D" else refused_level(base_name(name), d):
-                return   # GL certainly refuses it: the texture keeps its size (round 11's R11-3)
+                return   # GL certainly refuses it: the texture keeps its size
         w, h = d.get("width"), d.get("height", 1)
         level = d.get("level", 0)
         self.depth_image_written(no, name, d)

@@ -28,16 +28,23 @@ MAX_STATEMENT_OPERATORS = 65536
 STATEMENTS = re.compile(r"[^;{}]+")
 OPERATORS = re.compile(r"[-+*/%&|^<>?:=,!~]")
 COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
-# A shader storage block that is not readonly (its qualifiers before
-# `buffer`), or an atomic counter: a stage that may store into buffers.
-STORAGE_BLOCK = re.compile(r"((?:\b\w+\b\s*(?:\([^()]*\))?\s*)*)\bbuffer\s+\w+\s*\{")
+# A shader storage block that is not readonly (the qualifiers of its
+# declaration, back to the statement before), or an atomic counter: a
+# stage that may store into buffers.
+STORAGE_BLOCK = re.compile(r"\bbuffer\s+\w+\s*\{")
 ATOMIC_COUNTER = re.compile(r"\batomic_uint\b")
+READONLY = re.compile(r"\breadonly\b")
 
 
 def may_store(source):
     text = COMMENTS.sub(" ", source)
-    return ATOMIC_COUNTER.search(text) is not None or any(
-        not re.search(r"\breadonly\b", m.group(1)) for m in STORAGE_BLOCK.finditer(text))
+    if ATOMIC_COUNTER.search(text):
+        return True
+    for m in STORAGE_BLOCK.finditer(text):
+        start = max(text.rfind(c, 0, m.start()) for c in ";{}") + 1
+        if not READONLY.search(text, start, m.start()):
+            return True
+    return False
 UNIFORM = re.compile(r"gl(Program)?Uniform(Matrix)?([1-4])(x[2-4])?(f|d|i|ui)(v?)$")
 # glUseProgramStages' bits (GL 4.6 table 7.1) and its "every stage".
 STAGE_BITS = {"GL_VERTEX_SHADER_BIT": "vertex", "GL_FRAGMENT_SHADER_BIT": "fragment",
@@ -123,6 +130,10 @@ class ProgramCalls:
     def program(self, no, name, v):
         p = self.s.programs.get(name_arg(no, name, v, "program"))
         if p is None:
+            if v in self.s.deleted_programs:
+                # GL_INVALID_VALUE: the call changes nothing (it changes a
+                # program no one holds).
+                return Program()
             fail_call(no, f"{name}: program {v} was never created")
         return p
 
@@ -163,6 +174,25 @@ class ProgramCalls:
             if p is not None and stage in p.linked[0]:   # (a relink may have taken the stage away)
                 out[stage] = (v, p)
         return out
+
+    def pipeline_invalid(self):
+        """Why the bound pipeline draws nothing, when no program is in use
+        (GL 4.6 §11.1.3.11: GL_INVALID_OPERATION at the draw): a program
+        active for some of the stages it links and not others; None when
+        it draws."""
+        if self.s.program in self.s.programs:
+            return None
+        pipe = self.s.pipelines.get(self.s.pipeline)
+        if pipe is None:
+            return None
+        for v in set(pipe.stages.values()):
+            p = self.s.programs.get(v)
+            if p is None or not p.linked:
+                continue
+            linked = {stage for stage in p.linked[0] if stage != "compute"}
+            if {stage for stage, w in pipe.stages.items() if w == v} != linked:
+                return f"program {v} is in pipeline {self.s.pipeline}'s stages for some of its stages, not all"
+        return None
 
     def draw_digest(self):
         """The digest of the sources of what draws run, every stage (a
@@ -212,6 +242,7 @@ class ProgramCalls:
         if not isinstance(self.ret, int):
             fail_call(no, f"{name}: no program name recorded")
         self.s.programs[self.ret] = Program()
+        self.s.deleted_programs.discard(self.ret)
 
     def h_attach_shader(self, no, name, a, args):
         d = dict(args)
@@ -301,6 +332,7 @@ class ProgramCalls:
         v = a[0] if a else None
         if not isinstance(v, int) or isinstance(v, bool) or v not in self.s.programs:
             return   # 0 is ignored; an unknown name is GL_INVALID_VALUE
+        self.s.deleted_programs.add(v)
         if v == self.s.program or self.in_a_pipeline(v):
             self.s.programs[v].deleted = True   # gone once no pipeline nor the context uses it
         else:

@@ -34,6 +34,7 @@ from .texture_formats import (IMAGE_FORMATS, MAX_LEVEL, certain_level, certain_m
 VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
 MULTISAMPLE_TARGETS = ("GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY")
 GL_TEXTURE_SAMPLES = 0x9106
+GL_TEXTURE_IMMUTABLE_LEVELS = 0x82DF
 # The default texture (name 0) of a target other than 2D, as the converter
 # names it beside the 2D one's calls: this plus the target's value.
 DEFAULT_TEXTURE_BASE = 1 << 32
@@ -65,7 +66,8 @@ KEPT_CALLS = LEVEL_CALLS + PART_CALLS + PARAMETER_CALLS + ("glTexStorage2D", "gl
 # samples, fixedsamplelocations, internalformat, width, height, depth =
 # layers x samples, format, type, pixels).
 SAMPLES_CALL = "rbcd-multisample-image"
-READ_BACK_CALLS = ("glTexImage1D", "glTexImage3D", SAMPLES_CALL)
+READ_BACK_CALLS = ("glTexImage1D", "glTexImage3D", SAMPLES_CALL, "glTexStorage1D", "glTexStorage3D",
+                   "glTexSubImage1D", "glTexSubImage3D")
 SAMPLER_PARAMETER_CALLS = ("glSamplerParameteri", "glSamplerParameterf", "glSamplerParameteriv",
                            "glSamplerParameterfv", "glSamplerParameterIiv", "glSamplerParameterIuiv")
 
@@ -237,7 +239,7 @@ class TextureImageCalls:
             return   # GL_INVALID_ENUM or GL_INVALID_VALUE in the capture's core profile: nothing changes
         if tex in self.s.views:
             # A texture that shares its images with a view (or is one): the
-            # others are read back again too (round 12's R12-1).
+            # others are read back again too.
             self.gpu_wrote()
         tc = self.texture_calls(tex)
         if tc.over:
@@ -345,7 +347,9 @@ class TextureImageCalls:
                          for level, w, h, depth, fmt, kind, pixels in levels if samples and level == 0]
                 params = []
             else:
-                calls = image_calls(no, target, internal, levels, self.es)
+                immutable = next((int(v[0]) for p, v in params if p == GL_TEXTURE_IMMUTABLE_LEVELS), 0)
+                params = [(p, v) for p, v in params if p != GL_TEXTURE_IMMUTABLE_LEVELS]
+                calls = image_calls(no, target, internal, levels, self.es, immutable)
             for call in calls:
                 rt.seq += 1
                 rt.calls[rt.seq] = call + (unpack,)
