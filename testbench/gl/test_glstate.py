@@ -1237,3 +1237,24 @@ def test_calls_on_a_deleted_program_change_nothing():
     assert 2 not in gl.conv.s.programs
     with pytest.raises(ConvertError, match="program 3 was never created"):
         gl.glProgramUniform1f(3, 0, 1.0)
+
+
+def test_a_layer_attached_is_another_pass():
+    """glFramebufferTextureLayer (a shadow map cascade's layer of a depth
+    array): the framebuffer is another pass than the camera's, its draws
+    left out (it was refused as not emulated); a negative layer changes
+    nothing; GL_SAMPLE_SHADING, which changes no pixel's fragment, is taken."""
+    gl = GL()
+    gl.glEnable("GL_SAMPLE_SHADING")
+    gl.glMinSampleShading(value=1.0)
+    gl.glGenFramebuffers(n=1, framebuffers=[5])
+    gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+    gl.glBindTexture(target="GL_TEXTURE_2D_ARRAY", texture=3)
+    gl.glFramebufferTextureLayer(target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT", texture=3, level=0,
+                                 layer=2)
+    assert gl.conv.s.fbo_depth[5] == ("texture", 3, "layer", 2)
+    gl.glFramebufferTextureLayer(target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT", texture=4, level=0,
+                                 layer=-1)
+    assert gl.conv.s.fbo_depth[5] == ("texture", 3, "layer", 2), "GL_INVALID_VALUE: the attachment stays"
+    square(gl)
+    assert gl.conv.offscreen_draws == 1 and gl.conv.frame_records == 0, "left out, as another pass"

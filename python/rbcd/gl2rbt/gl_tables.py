@@ -38,7 +38,7 @@ IGNORED_PREFIXES = (
     "glFogCoordPointer", "glEdgeFlagPointer", "glIndexPointer", "glMultiTexCoord", "glTexCoord", "glFogCoord",
     "glEdgeFlag", "glIndex", "glAccum", "glSampleCoverage", "glGenQueries", "glBeginQuery", "glEndQuery",
     "glDeleteQueries", "glQueryCounter", "glStringMarker", "glFrameTerminator", "glInsertEventMarker",
-    "glDebugMessageInsert", "glSampleMask",
+    "glDebugMessageInsert", "glSampleMask", "glMinSampleShading",
     "glDepthBounds",
     "glRasterPos", "glLoadName", "glPushName", "glPopName", "glInitNames",
     "glGenLists", "glDeleteLists", "glListBase", "glCompileShader", "glShaderSource", "glCreateShader",
@@ -94,7 +94,7 @@ CAPS_IGNORED = {
     "GL_NORMALIZE", "GL_RESCALE_NORMAL", "GL_DITHER", "GL_MULTISAMPLE", "GL_LINE_SMOOTH", "GL_POINT_SMOOTH",
     "GL_POLYGON_SMOOTH", "GL_LINE_STIPPLE", "GL_POLYGON_STIPPLE", "GL_TEXTURE_GEN_S", "GL_TEXTURE_GEN_T",
     "GL_TEXTURE_GEN_R", "GL_TEXTURE_GEN_Q", "GL_COLOR_LOGIC_OP", "GL_SAMPLE_ALPHA_TO_COVERAGE",
-    "GL_SAMPLE_COVERAGE", "GL_SAMPLE_MASK", "GL_POLYGON_OFFSET_LINE", "GL_POLYGON_OFFSET_POINT", "GL_FRAMEBUFFER_SRGB",
+    "GL_SAMPLE_COVERAGE", "GL_SAMPLE_MASK", "GL_SAMPLE_SHADING", "GL_POLYGON_OFFSET_LINE", "GL_POLYGON_OFFSET_POINT", "GL_FRAMEBUFFER_SRGB",
     "GL_DEBUG_OUTPUT", "GL_DEBUG_OUTPUT_SYNCHRONOUS", "GL_VERTEX_PROGRAM_POINT_SIZE", "GL_POINT_SPRITE",
     "GL_COLOR_SUM", "GL_AUTO_NORMAL", "GL_INDEX_LOGIC_OP", "GL_PROGRAM_POINT_SIZE", "GL_TEXTURE_CUBE_MAP_SEAMLESS",
 } | {f"GL_LIGHT{i}" for i in range(8)}

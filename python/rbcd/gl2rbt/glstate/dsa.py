@@ -117,6 +117,8 @@ class DirectStateCalls:
         "glTextureBuffer": on_texture(FramebufferCalls.h_tex_buffer, "glTexBuffer", "GL_TEXTURE_BUFFER"),
         "glTextureBufferRange": on_texture(FramebufferCalls.h_tex_buffer, "glTexBufferRange", "GL_TEXTURE_BUFFER"),
         "glNamedFramebufferTexture": on_framebuffer(FramebufferCalls.h_framebuffer_texture, "glFramebufferTexture"),
+        "glNamedFramebufferTextureLayer": on_framebuffer(FramebufferCalls.h_framebuffer_texture_layer,
+                                                         "glFramebufferTextureLayer"),
         "glNamedFramebufferRenderbuffer": on_framebuffer(FramebufferCalls.h_framebuffer_texture,
                                                          "glFramebufferRenderbuffer"),
         "glClearNamedFramebufferfv": on_framebuffer(PerFragmentCalls.h_clear_buffer, "glClearBufferfv", True),

@@ -125,6 +125,26 @@ class FramebufferCalls:
             # reads it is refused: the converter runs no fragment shader).
             self.texture_rendered(tex, no, f"{name} attaches it to framebuffer {fb}")
 
+    def h_framebuffer_texture_layer(self, no, name, a, args):
+        """glFramebufferTextureLayer: a layer of an array, 3D or cube map
+        texture attached, as glFramebufferTexture's image, named with its
+        layer (a size the converter knows for no such image: a framebuffer
+        it is attached to is another pass than the camera's, as a shadow
+        map cascade's is); a negative layer is GL_INVALID_VALUE."""
+        d = dict(args)
+        layer = checked(no, integer, d.get("layer", 0), f"{name}: the layer", *I32)
+        if layer < 0:
+            return
+        self.h_framebuffer_texture(no, name, a, args)
+        fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
+        attachment = d.get("attachment")
+        if not fb or not d.get("texture"):
+            return
+        if attachment in DEPTH_ATTACHMENTS and self.s.fbo_depth.get(fb):
+            self.s.fbo_depth[fb] = self.s.fbo_depth[fb] + ("layer", layer)
+        elif attachment in OTHER_ATTACHMENTS and attachment in self.s.fbo_attachments.get(fb, {}):
+            self.s.fbo_attachments[fb][attachment] = self.s.fbo_attachments[fb][attachment] + ("layer", layer)
+
     def h_renderbuffer_storage(self, no, name, a, args):
         d = dict(args)
         w, h = d.get("width"), d.get("height")
@@ -481,6 +501,7 @@ class FramebufferCalls:
         "glBlitFramebuffer": h_blit_framebuffer,
         "glBlitNamedFramebuffer": h_blit_framebuffer,
         "glFramebufferTexture2D": h_framebuffer_texture,
+        "glFramebufferTextureLayer": h_framebuffer_texture_layer,
         "glFramebufferTexture": h_framebuffer_texture,
         "glFramebufferRenderbuffer": h_framebuffer_texture,
         "glGenFramebuffers": h_gen_names,
