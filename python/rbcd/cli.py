@@ -11,7 +11,7 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
   stated limit, with the same wording as rbcd-sim: "PATH: cannot read WHAT:
   REASON".
 - Outputs are written as rbcd-sim writes them: a path that is absent or a
-  regular file through an unpredictable temporary beside it (mkstemp, never a
+  regular file through an unpredictable temporary beside it (O_EXCL, never a
   planted symlink followed), renamed over it when complete, also through a
   symlink to one (the temporary beside the link's target, which a failed run
   leaves as it was); anything else (a device, a FIFO) written in place and
@@ -21,10 +21,12 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
   is removed on failure and on SIGINT/SIGTERM/SIGHUP (main_wrapper turns them
   into KeyboardInterrupt, so that cleanup code runs).
 """
+import errno
 import gzip
 import io
 import os
 import re
+import secrets
 import shutil
 import signal
 import stat
@@ -335,6 +337,36 @@ def unregister_temporary(path):
     _temporaries.discard(path)
 
 
+def _new_temporary(directory, prefix, make):
+    """A new file or folder (`make(path)`) of an unpredictable name in
+    `directory`, registered before it exists: a signal at any point of its
+    making leaves nothing behind (one registered after it is made could be
+    left, the signal taken in between)."""
+    for _ in range(100):
+        path = os.path.join(directory, prefix + secrets.token_hex(4))
+        register_temporary(path)
+        try:
+            return make(path), path
+        except FileExistsError:
+            unregister_temporary(path)   # another's: not ours to remove
+        except OSError:
+            unregister_temporary(path)   # not made
+            raise
+    raise FileExistsError(errno.EEXIST, "no unused temporary name", directory)
+
+
+def temporary_file(directory, prefix):
+    """(fd, path) of a new file of the run's (temporaries, _new_temporary)."""
+    return _new_temporary(directory, prefix,
+                          lambda p: os.open(p, os.O_RDWR | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC | os.O_NOCTTY, 0o600))
+
+
+def temporary_folder(prefix):
+    """The path of a new folder of the run's in the temporary folder
+    (TMPDIR), as tempfile.mkdtemp's (temporaries, _new_temporary)."""
+    return _new_temporary(tempfile.gettempdir(), prefix, lambda p: os.mkdir(p, 0o700))[1]
+
+
 def remove_temporaries():
     """Removes every registered temporary (files and folders); safe to call
     from another thread than the one running the tool."""
@@ -370,10 +402,9 @@ def write_output(path, data, what="output"):
         return
     d, base = os.path.split(target)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{base}.", dir=d or ".")
+        fd, tmp = temporary_file(d or ".", f".{base}.")
     except OSError as e:
         raise UsageError(f"{path}: cannot create: {e.strerror}")
-    _temporaries.add(tmp)
     try:
         mask = os.umask(0)
         os.umask(mask)

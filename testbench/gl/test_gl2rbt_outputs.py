@@ -383,3 +383,26 @@ def test_an_output_path_with_a_newline_is_named_whole(tmp_path):
     cap = Calls().frame().write(tmp_path / "c.xz")
     refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "missing" / "a\nb.rbt"), "a\\x0ab.rbt: cannot create")
     assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+def test_a_temporary_is_the_run_s_from_the_moment_it_exists(tmp_path):
+    """A temporary is registered before it is made: a signal taken as soon
+    as it exists (an interrupted game-suite expand had left a converter's
+    `.NAME.geo.*` behind under load) leaves it to the run's clean-up."""
+    from rbcd import cli
+
+    def made_then_interrupted(path):
+        open(path, "w").close()
+        raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        cli._new_temporary(str(tmp_path), ".out.geo.", made_then_interrupted)
+    left = os.listdir(tmp_path)
+    assert len(left) == 1 and left[0].startswith(".out.geo.")
+    cli.remove_temporaries()
+    assert os.listdir(tmp_path) == []
+    fd, path = cli.temporary_file(str(tmp_path), ".x.")
+    os.close(fd)
+    with pytest.raises(OSError):
+        cli.temporary_file(str(tmp_path / "absent"), ".x.")
+    cli.remove_temporaries()
+    assert os.listdir(tmp_path) == []

@@ -4,11 +4,10 @@ import os
 import re
 import shutil
 import subprocess
-import tempfile
 
 import numpy as np
 
-from ..cli import register_temporary, unregister_temporary
+from ..cli import temporary_folder, unregister_temporary
 from .capture import check_input_file, read_calls
 from .errors import ConvertError, ToolError, printable
 from .glretrace import glretrace_command, preload_library
@@ -201,9 +200,7 @@ def check_depth(args):
     keep = getattr(args, "check_keep", None)
     if keep:
         os.makedirs(keep, exist_ok=True)
-    tmp = keep or tempfile.mkdtemp(prefix="rbcd-gl2rbt-check.")
-    if not keep:
-        register_temporary(tmp)
+    tmp = keep or temporary_folder("rbcd-gl2rbt-check.")
     try:
         args.output = os.path.join(tmp, "check.rbt")
         args.geometry = args.summary = None

@@ -3,11 +3,10 @@ import io
 import os
 import shutil
 import sys
-import tempfile
 
 import numpy as np
 
-from ..cli import register_temporary, to_standard_output, unregister_temporary, write_output
+from ..cli import temporary_folder, to_standard_output, unregister_temporary, write_output
 from .errors import ToolError, printable
 from .raster import convert
 
@@ -25,8 +24,7 @@ def list_draws(args):
         args.image = "/dev/stdout"
     stream = sys.stderr if args.image and to_standard_output([args.image]) else sys.stdout
     out = io.StringIO()   # written whole before the image: a listing that cannot be written leaves no image
-    tmp = tempfile.mkdtemp(prefix="rbcd-gl2rbt-list.")
-    register_temporary(tmp)
+    tmp = temporary_folder("rbcd-gl2rbt-list.")
     try:
         args.output = os.path.join(tmp, "list.rbt")
         args.geometry = args.summary = args.depth_out = None

@@ -1,8 +1,7 @@
 """Streamed outputs by the project's rules (docs/limits.md)."""
 import os
-import tempfile
 
-from ..cli import output_target, register_temporary, unregister_temporary
+from ..cli import output_target, temporary_file, unregister_temporary
 from .errors import ConvertError, ToolError, printable
 
 class SafeText:
@@ -23,8 +22,7 @@ class SafeText:
                 fd = os.open(path, os.O_WRONLY | os.O_NOCTTY | os.O_CLOEXEC)
             else:
                 d = os.path.dirname(os.path.abspath(self.target))
-                fd, self.tmp = tempfile.mkstemp(prefix="." + os.path.basename(self.target) + ".", dir=d)
-                register_temporary(self.tmp)
+                fd, self.tmp = temporary_file(d, "." + os.path.basename(self.target) + ".")
         except OSError as e:
             raise ConvertError(f"{printable(path)}: cannot create: {printable(e.strerror)}")
         self.f = os.fdopen(fd, "wb" if binary else "w", buffering=1 << 20)

@@ -8,9 +8,8 @@ import shutil
 import signal
 import struct
 import subprocess
-import tempfile
 
-from ..cli import check_outputs, register_temporary, unregister_temporary, write_output
+from ..cli import check_outputs, temporary_folder, unregister_temporary, write_output
 from .capture import check_input_file, check_rest, read_calls
 from .converter import Converter
 from .errors import ConvertError, RasterStopped, ToolError, printable
@@ -48,8 +47,7 @@ def convert(args, listing=False, ids=None, report=None):
     the run, and no output is left."""
     # The temporary directory goes whatever fails, before or after the
     # rasterizer starts (the test suite's refusals used to leave them).
-    tmpdir = tempfile.mkdtemp(prefix="rbcd-gl2rbt.")
-    register_temporary(tmpdir)
+    tmpdir = temporary_folder("rbcd-gl2rbt.")
     try:
         return convert_in(args, tmpdir, listing, ids, report)
     finally:

@@ -24,10 +24,9 @@ import shutil
 import signal
 import struct
 import subprocess
-import tempfile
 import time
 
-from ..cli import register_temporary, unregister_temporary
+from ..cli import temporary_folder, unregister_temporary
 from .errors import ConvertError, printable
 from .glretrace import glretrace_command, preload_library
 from .glstate.texture_formats import ES_COMBINATIONS
@@ -183,8 +182,7 @@ class RenderedTextures:
         self.requests = self.replies = None
 
     def start(self):
-        self.dir = tempfile.mkdtemp(prefix="rbcd-gl2rbt-textures.")
-        register_temporary(self.dir)
+        self.dir = temporary_folder("rbcd-gl2rbt-textures.")
         for fifo in ("requests", "replies"):
             os.mkfifo(os.path.join(self.dir, fifo), 0o600)
         # O_RDWR: a FIFO opened so never waits for the other side (Linux),
