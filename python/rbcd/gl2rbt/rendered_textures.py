@@ -57,62 +57,46 @@ CUBE_FACES = ("GL_TEXTURE_CUBE_MAP_POSITIVE_X", "GL_TEXTURE_CUBE_MAP_NEGATIVE_X"
               "GL_TEXTURE_CUBE_MAP_NEGATIVE_Y", "GL_TEXTURE_CUBE_MAP_POSITIVE_Z", "GL_TEXTURE_CUBE_MAP_NEGATIVE_Z")
 
 
-STORAGE = {"GL_TEXTURE_1D": ("glTexStorage1D", "glTexSubImage1D"), "GL_TEXTURE_3D": ("glTexStorage3D", "glTexSubImage3D"),
-           "GL_TEXTURE_2D_ARRAY": ("glTexStorage3D", "glTexSubImage3D"),
-           "GL_TEXTURE_CUBE_MAP_ARRAY": ("glTexStorage3D", "glTexSubImage3D")}
+# A target's dimensions as glTexImage*D, glTexSubImage*D and glTexStorage*D
+# count them (a cube map's faces 2D images each, a 1D array's layers rows).
+DIMENSIONS = {"GL_TEXTURE_1D": 1, "GL_TEXTURE_3D": 3, "GL_TEXTURE_2D_ARRAY": 3, "GL_TEXTURE_CUBE_MAP_ARRAY": 3}
+SIZES, OFFSETS = ("width", "height", "depth"), ("xoffset", "yoffset", "zoffset")
 
 
-def storage_calls(no, target, internal, levels, es, count):
-    """An immutable texture's calls: storage of `count` levels, then each
-    level read back (a cube map's faces one by one)."""
-    storage, part = STORAGE.get(target, ("glTexStorage2D", "glTexSubImage2D"))
-    _, w, h, d, fmt, kind, _ = levels[0]
-    size = dict(width=w) if storage == "glTexStorage1D" else dict(width=w, height=h, depth=d) \
-        if storage == "glTexStorage3D" else dict(width=w, height=h)
-    calls = [(no, storage, dict(target=target, levels=count, internalformat=upload_format(internal, fmt, kind, es),
-                                **size))]
-    for level, lw, lh, ld, lfmt, lkind, pixels in levels:
-        one = dict(level=level, xoffset=0, width=lw, format=lfmt, type=lkind)
-        if part == "glTexSubImage3D":
-            calls.append((no, part, dict(one, target=target, yoffset=0, zoffset=0, height=lh, depth=ld,
-                                         pixels=pixels)))
-        elif part == "glTexSubImage1D":
-            calls.append((no, part, dict(one, target=target, pixels=pixels)))
-        elif target == "GL_TEXTURE_CUBE_MAP":
-            face = len(pixels) // 6
-            calls += [(no, part, dict(one, target=f, yoffset=0, height=lh, pixels=pixels[i * face:(i + 1) * face]))
-                      for i, f in enumerate(CUBE_FACES)]
-        else:   # 2D, rectangle, 1D array
-            calls.append((no, part, dict(one, target=target, yoffset=0, height=lh, pixels=pixels)))
-    return calls
+def level_calls(no, call, target, base, level):
+    """A level read back given as `call` (glTexImage or glTexSubImage, of
+    the target's dimensions) with `base`'s arguments beside its own: one
+    call (a cube map's, one a face)."""
+    lv, w, h, d, fmt, kind, pixels = level
+    dims = DIMENSIONS.get(target, 2)
+    args = dict(base, level=lv, format=fmt, type=kind, **dict(zip(SIZES[:dims], (w, h, d))))
+    if call == "glTexSubImage":
+        args.update(dict.fromkeys(OFFSETS[:dims], 0))
+    if target == "GL_TEXTURE_CUBE_MAP":
+        face = len(pixels) // 6
+        return [(no, f"{call}2D", dict(args, target=f, pixels=pixels[i * face:(i + 1) * face]))
+                for i, f in enumerate(CUBE_FACES)]
+    return [(no, f"{call}{dims}D", dict(args, target=target, pixels=pixels))]
 
 
 def image_calls(no, target, internal, levels, es, immutable=0):
     """The calls that give the converter's Mesa context a texture's levels
     read back: (call, name, arguments) each, by target (a cube map's faces
     one by one; in OpenGL ES a 2D texture's as storage and sub-images)."""
-    calls = []
     if levels and levels[0][0] == 0 and (immutable or es and target == "GL_TEXTURE_2D"):
         # Immutable storage, as the replay's texture has (its levels'
         # completeness is the storage's: an image unit reads a level past
         # the first of a mutable one filtered without mipmaps as nothing);
         # OpenGL ES binds only such a texture to an image unit.
-        count = immutable or max(lv[0] for lv in levels) + 1
-        return storage_calls(no, target, internal, levels, es, count)
-    for level, w, h, d, fmt, kind, pixels in levels:
-        base = dict(level=level, internalformat=upload_format(internal, fmt, kind, es), width=w, border=0,
-                    format=fmt, type=kind)
-        if target == "GL_TEXTURE_1D":
-            calls.append((no, "glTexImage1D", dict(base, target=target, pixels=pixels)))
-        elif target in ("GL_TEXTURE_3D", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY"):
-            calls.append((no, "glTexImage3D", dict(base, target=target, height=h, depth=d, pixels=pixels)))
-        elif target == "GL_TEXTURE_CUBE_MAP":
-            face = len(pixels) // 6
-            calls += [(no, "glTexImage2D", dict(base, target=f, height=h, pixels=pixels[i * face:(i + 1) * face]))
-                      for i, f in enumerate(CUBE_FACES)]
-        else:   # 2D, rectangle, 1D array (its layers as rows)
-            calls.append((no, "glTexImage2D", dict(base, target=target, height=h, pixels=pixels)))
-    return calls
+        _, w, h, d, fmt, kind, _ = levels[0]
+        dims = DIMENSIONS.get(target, 2)
+        storage = dict(target=target, levels=immutable or max(lv[0] for lv in levels) + 1,
+                       internalformat=upload_format(internal, fmt, kind, es), **dict(zip(SIZES[:dims], (w, h, d))))
+        return [(no, f"glTexStorage{dims}D", storage)] + \
+            [c for level in levels for c in level_calls(no, "glTexSubImage", target, {}, level)]
+    return [c for level in levels
+            for c in level_calls(no, "glTexImage", target,
+                                 dict(internalformat=upload_format(internal, level[4], level[5], es), border=0), level)]
 
 
 HALF_FLOAT_FORMATS = {"GL_RGBA16F", "GL_RGB16F", "GL_RG16F", "GL_R16F", "GL_R11F_G11F_B10F", "GL_RGB9_E5"}

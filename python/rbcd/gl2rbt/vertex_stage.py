@@ -415,14 +415,13 @@ class VertexStage:
             mp.locations[base] = loc
             for k in range(1, size):
                 mp.locations[f"{base}[{k}]"] = GL.glGetUniformLocation(prog, f"{base}[{k}]")
+            elements = [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]   # (an array's each)
             if int(utype) in self.sampler_targets:
-                target = self.sampler_targets[int(utype)]
-                mp.texture_locations += [(loc, target)] + [(mp.locations[f"{base}[{k}]"], target)
-                                                           for k in range(1, size)]
+                mp.texture_locations += [(at, self.sampler_targets[int(utype)]) for at in elements]
             elif int(utype) in self.buffer_sampler_types:
-                mp.buffer_samplers += [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]
+                mp.buffer_samplers += elements
             elif int(utype) in self.image_targets:
-                mp.image_locations += [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]
+                mp.image_locations += elements
         return mp
 
     def set_uniform(self, mp, p, loc, value):

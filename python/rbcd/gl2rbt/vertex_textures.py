@@ -26,7 +26,6 @@ MAX_MESA_TEXTURE_BYTES = 1 << 30
 # The texture unit Mesa's copies are made on, before each is bound where a
 # draw reads it (llvmpipe's last of 192).
 SCRATCH_UNIT = 0x84C0 + 191
-GL_DEPTH_TEXTURE_MODE = 0x884B   # the compatibility profile's
 ANISOTROPY = ("GL_TEXTURE_MAX_ANISOTROPY", "GL_TEXTURE_MAX_ANISOTROPY_EXT", 0x84FE)
 # Every sampler type a vertex shader may read, with its texture's target
 # (those of other targets than 2D read back from Mesa's replay).
@@ -211,8 +210,7 @@ class VertexTextures:
             mt = made[(tex, target)]
         if fmt is None:
             GL.glBindTexture(self.mesa.enum(target), mt)
-            query = GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X if target == "GL_TEXTURE_CUBE_MAP" else self.mesa.enum(target)
-            fmt = int(GL.glGetTexLevelParameteriv(query, 0, GL.GL_TEXTURE_INTERNAL_FORMAT))
+            fmt = int(GL.glGetTexLevelParameteriv(self.level_target(target), 0, GL.GL_TEXTURE_INTERNAL_FORMAT))
         GL.glActiveTexture(GL.GL_TEXTURE0)
         return unit, mt, level, 1 if layered else 0, layer, self.mesa.enum(access), self.mesa.enum(fmt)
 
@@ -278,11 +276,6 @@ class VertexTextures:
         self.images[(tex, target)] = (mt, version, size)
         GL.glActiveTexture(SCRATCH_UNIT)
         GL.glBindTexture(self.mesa.enum(target), mt)
-        if self.core:
-            # Mesa's context is of the compatibility profile, whose depth
-            # textures read as luminance (d, d, d, 1); a core profile's read
-            # as red (d, 0, 0, 1).
-            self.call("glTexParameteri", self.mesa.enum(target), GL_DEPTH_TEXTURE_MODE, GL.GL_RED)
         for call_no, name, d, unpack in (tc.calls.values() if tc is not None else []):
             what = f"{self.draw}: texture {tex}, which its vertex shader reads: {name} (call {call_no})"
             if name == SAMPLES_CALL:
@@ -378,6 +371,7 @@ class VertexTextures:
         if depth_format:
             GL.glEnable(GL.GL_DEPTH_TEST)
             GL.glDepthFunc(GL.GL_ALWAYS)
+        layer_at = GL.glGetUniformLocation(prog, "layer")
         try:
             for z in range(layers):
                 if target == GL.GL_TEXTURE_2D_MULTISAMPLE:
@@ -388,7 +382,7 @@ class VertexTextures:
                     break   # a format Mesa cannot draw into: left as zeros
                 for s in range(samples):
                     sample_mask(0, 1 << s)
-                    GL.glUniform1i(GL.glGetUniformLocation(prog, "layer"), z * samples + s)
+                    GL.glUniform1i(layer_at, z * samples + s)
                     GL.glDrawArrays(GL.GL_TRIANGLES, 0, 3)
         finally:
             sample_mask(0, 0xFFFFFFFF)
@@ -406,6 +400,11 @@ class VertexTextures:
             GL.glDeleteProgram(prog)
             GL.glBindTexture(target, mt)
 
+    def level_target(self, target):
+        """The target a texture's level is asked about at (a cube map's
+        first face)."""
+        return self.gl.GL_TEXTURE_CUBE_MAP_POSITIVE_X if target == "GL_TEXTURE_CUBE_MAP" else self.mesa.enum(target)
+
     def core_depth(self, target):
         """A depth texture of a core profile's capture reads as (d, 0, 0,
         1) there; Mesa's compatibility context (GLSL 1.30 and later) reads
@@ -414,8 +413,7 @@ class VertexTextures:
         core profile's components."""
         GL = self.gl
         t = self.mesa.enum(target)
-        query = GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X if t == GL.GL_TEXTURE_CUBE_MAP else t
-        if not GL.glGetTexLevelParameteriv(query, 0, GL.GL_TEXTURE_DEPTH_SIZE) or \
+        if not GL.glGetTexLevelParameteriv(self.level_target(target), 0, GL.GL_TEXTURE_DEPTH_SIZE) or \
                 GL.glGetTexParameteriv(t, GL.GL_DEPTH_STENCIL_TEXTURE_MODE) == GL.GL_STENCIL_INDEX:
             return
         core = {GL.GL_GREEN: GL.GL_ZERO, GL.GL_BLUE: GL.GL_ZERO, GL.GL_ALPHA: GL.GL_ONE}

@@ -89,13 +89,17 @@ class BufferCalls:
             fail_call(no, f"{name}: {printable(target)} is not a buffer target")
         return self.s.bound.get(target, 0)
 
+    def new_version(self, b):
+        """Buffer b's contents changed: Mesa's copy is given them again."""
+        self.s.next_version += 1
+        self.s.buffer_versions[b] = self.s.next_version
+
     def changed(self, no, name, b, start=0, end=None):
         """Buffer b changed in bytes [start, end) (all of it by default): a
         new version, and the extent added to those ever written (for a
         large buffer: what Mesa's copy is given; the rest stays zero). The
         bytes held in all buffers stay within MAX_BUFFER_BYTES_IN_ALL."""
-        self.s.next_version += 1
-        self.s.buffer_versions[b] = self.s.next_version
+        self.new_version(b)
         buf = self.s.buffers[b]
         end = len(buf) if end is None else end
         if isinstance(buf, mmap.mmap) and end > start:
@@ -348,8 +352,7 @@ class BufferCalls:
         for s, e, data in pieces:
             dst[s:e] = data
             self.changed(no, name, wb, s, e)
-        self.s.next_version += 1
-        self.s.buffer_versions[wb] = self.s.next_version
+        self.new_version(wb)
 
     def h_clear_buffer_data(self, no, name, a, args):
         """glClearBufferData and glClearBufferSubData (GL 4.3): the range
@@ -395,8 +398,7 @@ class BufferCalls:
             for s, e in self.written_extents(b):
                 if s < off + size and e > off:
                     buf[max(s, off):min(e, off + size)] = bytes(min(e, off + size) - max(s, off))
-            self.s.next_version += 1
-            self.s.buffer_versions[b] = self.s.next_version
+            self.new_version(b)
             return
         held = self.s.buffer_held.get(b, 0)
         if isinstance(buf, mmap.mmap) and self.s.buffer_bytes_in_all - held + min(len(buf), held + size) > \

@@ -50,8 +50,7 @@ UNIFORM = re.compile(r"gl(Program)?Uniform(Matrix)?([1-4])(x[2-4])?(f|d|i|ui)(v?
 STAGE_BITS = {"GL_VERTEX_SHADER_BIT": "vertex", "GL_FRAGMENT_SHADER_BIT": "fragment",
               "GL_GEOMETRY_SHADER_BIT": "geometry", "GL_TESS_CONTROL_SHADER_BIT": "tess_control",
               "GL_TESS_EVALUATION_SHADER_BIT": "tess_evaluation", "GL_COMPUTE_SHADER_BIT": "compute"}
-STAGE_BIT_VALUES = {0x1: "vertex", 0x2: "fragment", 0x4: "geometry", 0x8: "tess_control",
-                    0x10: "tess_evaluation", 0x20: "compute"}
+STAGE_BIT_VALUES = {1 << i: stage for i, stage in enumerate(STAGE_BITS.values())}   # (in the bits' order)
 
 
 class Shader:
@@ -197,10 +196,9 @@ class ProgramCalls:
     def draw_digest(self):
         """The digest of the sources of what draws run, every stage (a
         pipeline of the stages of a program is named as the program)."""
-        programs = self.stage_programs()
         if self.s.program in self.s.programs:
             return self.program_in_use().digest
-        return sources_digest({stage: p.linked[0][stage] for stage, (_, p) in programs.items()})
+        return sources_digest({stage: p.linked[0][stage] for stage, (_, p) in self.stage_programs().items()})
 
     def in_a_pipeline(self, v):
         return any(v in pipe.stages.values() for pipe in self.s.pipelines.values())
