@@ -10,8 +10,15 @@
  * GL_INVALID_OPERATION is made again as GL_UNSIGNED_INT and each value is
  * converted as Mesa converts a d-bit fixed-point depth to float on desktop
  * GL, (value >> (32 - d)) / (2^d - 1), so the check reads an ES capture's
- * depth as it reads a desktop one's. Every other call passes through
- * unchanged. */
+ * depth as it reads a desktop one's.
+ *
+ * The state dump also describes every texture bound at every unit, which
+ * glretrace does on OpenGL ES by probing with glTexSubImage and asserts on
+ * the targets it has no probe for (2D arrays, cube map arrays,
+ * multisample and buffer textures): a capture that leaves one bound at
+ * the dumped call would abort the dump. The check needs no texture, so
+ * glGetIntegerv answers 0 for each texture binding (glretrace asks for
+ * them only to dump state). Every other call passes through unchanged. */
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <stdint.h>
@@ -28,6 +35,18 @@ typedef void (*GetIntegerv)(GLenum, GLint *);
 static ReadPixels real_read_pixels;
 static GetError real_get_error;
 static GetIntegerv real_get_integerv;
+
+/* GL_TEXTURE_BINDING_2D, _3D, _CUBE_MAP, _2D_ARRAY, _CUBE_MAP_ARRAY,
+ * _2D_MULTISAMPLE, _2D_MULTISAMPLE_ARRAY and _BUFFER. */
+static const GLenum texture_bindings[] = {0x8069, 0x806A, 0x8514, 0x8C1D, 0x900A, 0x9104, 0x9105, 0x8C2C};
+
+static void get_integerv(GLenum pname, GLint *params)
+{
+    real_get_integerv(pname, params);
+    for (size_t i = 0; i < sizeof texture_bindings / sizeof texture_bindings[0]; i++)
+        if (pname == texture_bindings[i] && params)
+            *params = 0;
+}
 
 static void read_pixels(GLint x, GLint y, GLsizei w, GLsizei h, GLenum format, GLenum type, void *pixels)
 {
@@ -63,6 +82,10 @@ void *dlsym(void *handle, const char *name)
         real_get_error = (GetError)next_lookup(handle, "glGetError");
         real_get_integerv = (GetIntegerv)next_lookup(handle, "glGetIntegerv");
         return (void *)read_pixels;
+    }
+    if (p && strcmp(name, "glGetIntegerv") == 0) {
+        real_get_integerv = (GetIntegerv)p;
+        return (void *)get_integerv;
     }
     return p;
 }

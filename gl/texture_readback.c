@@ -10,14 +10,15 @@
  * come on the FIFO $RBCD_TEXTURE_FIFOS/requests, one text line each, "CALL
  * UNIT[:TARGET]...", in increasing call order; when the replay reaches CALL,
  * the texture bound at each UNIT's TARGET (GL_TEXTURE_2D when none is given;
- * 1D, 3D, cube map, array and rectangle ones too, OpenGL ES 2D alone; a
+ * 1D, 3D, cube map, array, rectangle and multisample ones too; a
  * UNIT of IMAGE_UNIT_BASE and more names image unit UNIT - IMAGE_UNIT_BASE,
  * whose texture is read as if bound at unit 0's TARGET) is
  * read back with its sampling parameters, every level with an image, in a
  * format and type that give its values back exactly when uploaded again
  * (desktop GL: glGetTexImage; OpenGL ES, which has none: glReadPixels from
- * a framebuffer object the level is attached to, which takes the colour
- * formats a framebuffer can hold, not depth); the answer goes to
+ * a framebuffer object each of the level's images is attached to in turn,
+ * which takes the formats a framebuffer can hold, depth too); the answer
+ * goes to
  * $RBCD_TEXTURE_FIFOS/replies:
  *
  *   "RBTX", u32 units; per unit: u32 unit, target, i32 internal format, u32
@@ -79,6 +80,7 @@ static struct {
     void (*delete_framebuffers)(GLsizei, const GLuint *);
     void (*bind_framebuffer)(GLenum, GLuint);
     void (*framebuffer_texture_2d)(GLenum, GLenum, GLenum, GLuint, GLint);
+    void (*framebuffer_texture_layer)(GLenum, GLenum, GLuint, GLint, GLint);
     GLenum (*check_framebuffer_status)(GLenum);
     void (*read_pixels)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *);
     void (*bind_texture)(GLenum, GLuint);
@@ -293,25 +295,62 @@ static void describe(struct Texture *t, GLenum target)
     }
 }
 
-/* A 2D level as OpenGL ES reads it: attached to a framebuffer object of our
- * own, read with glReadPixels; the replay's framebuffer bindings put back.
- * 0 if it cannot be (a depth format, an incomplete attachment). */
-static int read_level_es(GLint level, GLint w, GLint h, GLenum format, GLenum type, void *pixels)
+/* The binding of each target a texture is read back at. */
+static GLenum binding_of(GLenum target)
 {
-    if (format == GL_DEPTH_COMPONENT || format == GL_DEPTH_STENCIL || !type)
+    switch (target) {
+    case GL_TEXTURE_1D: return GL_TEXTURE_BINDING_1D;
+    case GL_TEXTURE_3D: return GL_TEXTURE_BINDING_3D;
+    case GL_TEXTURE_2D_ARRAY: return GL_TEXTURE_BINDING_2D_ARRAY;
+    case GL_TEXTURE_CUBE_MAP: return GL_TEXTURE_BINDING_CUBE_MAP;
+    case GL_TEXTURE_CUBE_MAP_ARRAY: return GL_TEXTURE_BINDING_CUBE_MAP_ARRAY;
+    case GL_TEXTURE_1D_ARRAY: return GL_TEXTURE_BINDING_1D_ARRAY;
+    case GL_TEXTURE_RECTANGLE: return GL_TEXTURE_BINDING_RECTANGLE;
+    case GL_TEXTURE_2D_MULTISAMPLE: return GL_TEXTURE_BINDING_2D_MULTISAMPLE;
+    case GL_TEXTURE_2D_MULTISAMPLE_ARRAY: return GL_TEXTURE_BINDING_2D_MULTISAMPLE_ARRAY;
+    default: return GL_TEXTURE_BINDING_2D;
+    }
+}
+
+/* A level as OpenGL ES reads it: each of its images (a 2D texture's one, a
+ * cube map's 6 faces, a 3D texture's slices, an array's layers, a cube map
+ * array's layer-faces) attached in turn to a framebuffer object of our own
+ * and read with glReadPixels, colour at GL_COLOR_ATTACHMENT0, depth (and
+ * stencil) at its own attachment, which NV_read_depth and
+ * NV_read_depth_stencil read in the texture's own type; the replay's
+ * framebuffer bindings put back. 0 if it cannot be (a colour format no
+ * type gives back, one a framebuffer cannot hold). */
+static int read_level_es(const struct Texture *t, GLint level, void *pixels)
+{
+    const GLint w = t->size[level][0], h = t->size[level][1], images = t->size[level][2];
+    if (!t->type || !gl.framebuffer_texture_layer)
         return 0;
+    const GLenum attachment = t->format == GL_DEPTH_STENCIL     ? GL_DEPTH_STENCIL_ATTACHMENT
+                              : t->format == GL_DEPTH_COMPONENT ? GL_DEPTH_ATTACHMENT
+                                                                : GL_COLOR_ATTACHMENT0;
+    const size_t image = level_bytes(t, level) / (size_t)images;
     GLint tex = 0, draw = 0, read = 0;
-    gl.get_integerv(GL_TEXTURE_BINDING_2D, &tex);
+    gl.get_integerv(binding_of(t->target), &tex);
     gl.get_integerv(GL_DRAW_FRAMEBUFFER_BINDING, &draw);
     gl.get_integerv(GL_READ_FRAMEBUFFER_BINDING, &read);
     GLuint fb = 0;
     gl.gen_framebuffers(1, &fb);
     gl.bind_framebuffer(GL_FRAMEBUFFER, fb);
-    gl.framebuffer_texture_2d(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, (GLuint)tex, level);
-    int ok = gl.check_framebuffer_status(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
-    if (ok)
-        gl.read_pixels(0, 0, w, h, format, type, pixels);
-    ok = ok && gl.get_error() == GL_NO_ERROR;
+    int ok = 1;
+    for (GLint i = 0; i < images && ok; i++) {
+        if (t->target == GL_TEXTURE_2D)
+            gl.framebuffer_texture_2d(GL_FRAMEBUFFER, attachment, GL_TEXTURE_2D, (GLuint)tex, level);
+        else if (t->target == GL_TEXTURE_CUBE_MAP)
+            gl.framebuffer_texture_2d(GL_FRAMEBUFFER, attachment, GL_TEXTURE_CUBE_MAP_POSITIVE_X + (GLenum)i,
+                                      (GLuint)tex, level);
+        else
+            gl.framebuffer_texture_layer(GL_FRAMEBUFFER, attachment, (GLuint)tex, level, i);
+        ok = gl.check_framebuffer_status(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+        if (ok)
+            gl.read_pixels(0, 0, w, h, t->format, t->type, (char *)pixels + (size_t)i * image);
+        ok = ok && gl.get_error() == GL_NO_ERROR;
+        gl.framebuffer_texture_2d(GL_FRAMEBUFFER, attachment, GL_TEXTURE_2D, 0, 0);
+    }
     gl.bind_framebuffer(GL_DRAW_FRAMEBUFFER, (GLuint)draw);
     gl.bind_framebuffer(GL_READ_FRAMEBUFFER, (GLuint)read);
     gl.delete_framebuffers(1, &fb);
@@ -399,11 +438,10 @@ static int read_multisample(const struct Texture *t, int unit, void *pixels)
  * be read. */
 static int read_level(const struct Texture *t, GLint level, void *pixels)
 {
-    const GLint *size = t->size[level];
-    if (es)
-        return t->target == GL_TEXTURE_2D && read_level_es(level, size[0], size[1], t->format, t->type, pixels);
     while (gl.get_error() != GL_NO_ERROR)
         ;
+    if (es)
+        return read_level_es(t, level, pixels);
     if (t->target == GL_TEXTURE_CUBE_MAP) {
         const size_t face = level_bytes(t, level) / 6;
         for (GLenum f = 0; f < 6; f++)
@@ -422,23 +460,6 @@ static const GLenum parameters[] = {
     GL_TEXTURE_SWIZZLE_B, GL_TEXTURE_SWIZZLE_A, GL_TEXTURE_BORDER_COLOR, GL_DEPTH_STENCIL_TEXTURE_MODE,
     GL_TEXTURE_IMMUTABLE_LEVELS};   /* (a query: the converter makes an immutable texture immutable) */
 #define NPARAMETERS (sizeof parameters / sizeof parameters[0])
-
-/* The binding of each target a texture is read back at. */
-static GLenum binding_of(GLenum target)
-{
-    switch (target) {
-    case GL_TEXTURE_1D: return GL_TEXTURE_BINDING_1D;
-    case GL_TEXTURE_3D: return GL_TEXTURE_BINDING_3D;
-    case GL_TEXTURE_2D_ARRAY: return GL_TEXTURE_BINDING_2D_ARRAY;
-    case GL_TEXTURE_CUBE_MAP: return GL_TEXTURE_BINDING_CUBE_MAP;
-    case GL_TEXTURE_CUBE_MAP_ARRAY: return GL_TEXTURE_BINDING_CUBE_MAP_ARRAY;
-    case GL_TEXTURE_1D_ARRAY: return GL_TEXTURE_BINDING_1D_ARRAY;
-    case GL_TEXTURE_RECTANGLE: return GL_TEXTURE_BINDING_RECTANGLE;
-    case GL_TEXTURE_2D_MULTISAMPLE: return GL_TEXTURE_BINDING_2D_MULTISAMPLE;
-    case GL_TEXTURE_2D_MULTISAMPLE_ARRAY: return GL_TEXTURE_BINDING_2D_MULTISAMPLE_ARRAY;
-    default: return GL_TEXTURE_BINDING_2D;
-    }
-}
 
 /* Makes request k's texture the active unit's: its texture unit, or, for
  * an image unit, unit 0 with the image's texture bound at the target (the
@@ -507,8 +528,6 @@ static void answer(void)
         unselect_unit(k, saved);
         for (int i = 0; i < MAX_LEVELS; i++)
             total += level_bytes(&textures[k], i);
-        if (es && want_targets[k] != GL_TEXTURE_2D && !multisample(want_targets[k]))
-            why = "an OpenGL ES texture other than a 2D or multisample one is not read back";
         if (multisample(want_targets[k]) &&
             (!gl.get_integer64i_v || !gl.create_shader || !gl.shader_source || !gl.compile_shader ||
              !gl.create_program || !gl.attach_shader || !gl.link_program || !gl.get_programiv || !gl.use_program ||
@@ -539,9 +558,9 @@ static void answer(void)
                 else if (!read)
                     why = "a multisample texture the replay's compute shader could not read";
             } else if (!read_level(&textures[k], i, pixels[k][i])) {
-                why = es ? "an OpenGL ES texture whose image glReadPixels cannot read in a format that gives its "
-                           "values back (a depth format, a normalized one of channels wider than 8 bits but "
-                           "RGB10_A2, one a framebuffer cannot hold) is not read back"
+                why = es ? "an OpenGL ES texture whose images glReadPixels cannot read in a format that gives "
+                           "their values back (a normalized one of channels wider than 8 bits but RGB10_A2, one a "
+                           "framebuffer cannot hold) is not read back"
                          : "a texture whose image glGetTexImage does not read (a stencil-only format) is not read "
                            "back";
             }
@@ -637,6 +656,8 @@ static int open_fifos(void)
     gl.delete_framebuffers = (void (*)(GLsizei, const GLuint *))real_get_proc("glDeleteFramebuffers");
     gl.bind_framebuffer = (void (*)(GLenum, GLuint))real_get_proc("glBindFramebuffer");
     gl.framebuffer_texture_2d = (void (*)(GLenum, GLenum, GLenum, GLuint, GLint))real_get_proc("glFramebufferTexture2D");
+    gl.framebuffer_texture_layer =
+        (void (*)(GLenum, GLenum, GLuint, GLint, GLint))real_get_proc("glFramebufferTextureLayer");
     gl.check_framebuffer_status = (GLenum(*)(GLenum))real_get_proc("glCheckFramebufferStatus");
     gl.read_pixels = (void (*)(GLint, GLint, GLsizei, GLsizei, GLenum, GLenum, void *))real_get_proc("glReadPixels");
     gl.bind_texture = (void (*)(GLenum, GLuint))real_get_proc("glBindTexture");

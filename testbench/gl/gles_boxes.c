@@ -3,16 +3,25 @@
  * rbcd-gl2rbt in the tests (testbench/gl/test_gl2rbt_shaders.py, whose
  * docstring gives what each frame must become).
  *
- *   gles_boxes [WIDTH HEIGHT]   (default 128 96; the window is the screen)
+ *   gles_boxes [WIDTH HEIGHT [layers]]   (default 128 96; the window is the screen)
  *
  * ES 2.0 as phones ran it: a "#version 100" vertex shader with one uniform
  * mat4, attributes from client memory (glVertexAttribPointer with a
  * pointer, no buffer bound) and indices from client memory, a box from a
  * buffer object, attribute locations chosen by glBindAttribLocation.
  * Collisionable objects are tagged with KHR_debug groups "rbcd-object"
- * (glPushDebugGroupKHR, as ES names it). */
+ * (glPushDebugGroupKHR, as ES names it).
+ *
+ * With "layers" (an OpenGL ES 3.2 context), frame 1 ends with one more draw,
+ * object 9: the unit cube's first triangle (z = 1) moved by what a "#version 320
+ * es" vertex shader reads from three textures framebuffer objects cleared
+ * (so the converter must read them back from Mesa's replay): face +X of an
+ * RGBA32F cube map, slice 1 of an RGBA32F 3D texture, layer 1 of a
+ * DEPTH_COMPONENT24 2D array (each other face, slice and layer another
+ * value); together they move the triangle by (-0.75, -0.5, -1.5), as
+ * gl_shaders' faults do. */
 #include <EGL/egl.h>
-#include <GLES2/gl2.h>
+#include <GLES3/gl32.h>
 #include <GLES2/gl2ext.h>
 #include <X11/Xlib.h>
 #include <stdio.h>
@@ -30,6 +39,24 @@ static const char* fragment_source =
     "#version 100\n"
     "precision mediump float;\n"
     "void main() { gl_FragColor = vec4(1.0); }\n";
+
+/* The "layers" draw's shaders. */
+static const char* layers_vertex_source =
+    "#version 320 es\n"
+    "uniform highp samplerCube cube;\n"
+    "uniform highp sampler3D volume;\n"
+    "uniform highp sampler2DArray depths;\n"
+    "in vec3 position;\n"
+    "void main() {\n"
+    "    float d = texelFetch(depths, ivec3(0, 0, 1), 0).r;\n"
+    "    gl_Position = vec4(position, 1.0) + textureLod(cube, vec3(1.0, 0.2, -0.3), 0.0) +\n"
+    "                  texelFetch(volume, ivec3(1, 0, 1), 0) + vec4(-2.0, -1.0, -2.0, 0.0) * d;\n"
+    "}\n";
+static const char* layers_fragment_source =
+    "#version 320 es\n"
+    "precision mediump float;\n"
+    "out vec4 colour;\n"
+    "void main() { colour = vec4(1.0); }\n";
 
 static GLushort triangles[36];
 static GLint mvp_at;
@@ -58,8 +85,70 @@ static GLuint compile(GLenum kind, const char* text) {
     return s;
 }
 
+/* A texture of `target` on texture unit `unit`, immutable storage of one
+ * level, nearest filtering. */
+static GLuint layered_texture(GLenum unit, GLenum target, GLenum format, GLsizei w, GLsizei h, GLsizei d) {
+    GLuint tex;
+    glActiveTexture(unit);
+    glGenTextures(1, &tex);
+    glBindTexture(target, tex);
+    if (target == GL_TEXTURE_CUBE_MAP)
+        glTexStorage2D(target, 1, format, w, h);
+    else
+        glTexStorage3D(target, 1, format, w, h, d);
+    glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(target, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glActiveTexture(GL_TEXTURE0);
+    return tex;
+}
+
+/* The "layers" draw (see the header comment): the textures cleared through
+ * a framebuffer object, image by image, then the triangle. */
+static void layers_draw(void) {
+    static const GLfloat other[4] = {9, 9, 9, 0}, face[4] = {-0.25f, 0, -0.5f, 0}, slice[4] = {0, -0.25f, -0.5f, 0};
+    static const GLfloat far_depth = 1.0f, depth = 0.25f;
+    GLuint cube_map = layered_texture(GL_TEXTURE2, GL_TEXTURE_CUBE_MAP, GL_RGBA32F, 1, 1, 1);
+    GLuint volume = layered_texture(GL_TEXTURE3, GL_TEXTURE_3D, GL_RGBA32F, 2, 2, 2);
+    GLuint depths = layered_texture(GL_TEXTURE4, GL_TEXTURE_2D_ARRAY, GL_DEPTH_COMPONENT24, 2, 2, 2);
+    GLuint fb;
+    glGenFramebuffers(1, &fb);
+    glBindFramebuffer(GL_FRAMEBUFFER, fb);
+    for (GLenum f = 0; f < 6; ++f) {
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_CUBE_MAP_POSITIVE_X + f, cube_map, 0);
+        glClearBufferfv(GL_COLOR, 0, f == 0 ? face : other);
+    }
+    for (GLint layer = 0; layer < 2; ++layer) {
+        glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, volume, 0, layer);
+        glClearBufferfv(GL_COLOR, 0, layer == 1 ? slice : other);
+    }
+    glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, 0, 0, 0);
+    for (GLint layer = 0; layer < 2; ++layer) {
+        glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, depths, 0, layer);
+        glClearBufferfv(GL_DEPTH, 0, layer == 1 ? &depth : &far_depth);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    GLuint p = glCreateProgram();
+    glAttachShader(p, compile(GL_VERTEX_SHADER, layers_vertex_source));
+    glAttachShader(p, compile(GL_FRAGMENT_SHADER, layers_fragment_source));
+    glBindAttribLocation(p, 1, "position");
+    glLinkProgram(p);
+    glUseProgram(p);
+    glUniform1i(glGetUniformLocation(p, "cube"), 2);
+    glUniform1i(glGetUniformLocation(p, "volume"), 3);
+    glUniform1i(glGetUniformLocation(p, "depths"), 4);
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, cube);
+    push_group(GL_DEBUG_SOURCE_APPLICATION_KHR, 9, -1, "rbcd-object");
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    pop_group();
+}
+
 int main(int argc, char** argv) {
     width = argc > 2 ? atoi(argv[1]) : 128, height = argc > 2 ? atoi(argv[2]) : 96;
+    const int layers = argc > 3 && !strcmp(argv[3], "layers");
+    if (argc > 3 && !layers) {
+        fprintf(stderr, "gles_boxes: no fault %s (layers is the one)\n", argv[3]);
+        return 1;
+    }
     Display* x = XOpenDisplay(NULL);
     if (!x) {
         fprintf(stderr, "gles_boxes: cannot open display (run under Xvfb)\n");
@@ -82,7 +171,7 @@ int main(int argc, char** argv) {
         return 1;
     }
     EGLSurface surface = eglCreateWindowSurface(dpy, config, (EGLNativeWindowType)win, NULL);
-    const EGLint ctx_attrs[] = {EGL_CONTEXT_CLIENT_VERSION, 2, EGL_NONE};
+    const EGLint ctx_attrs[] = {EGL_CONTEXT_CLIENT_VERSION, layers ? 3 : 2, EGL_NONE};
     EGLContext ctx = eglCreateContext(dpy, config, EGL_NO_CONTEXT, ctx_attrs);
     if (surface == EGL_NO_SURFACE || ctx == EGL_NO_CONTEXT || !eglMakeCurrent(dpy, surface, surface, ctx)) {
         fprintf(stderr, "gles_boxes: no OpenGL ES 2 context\n");
@@ -142,6 +231,8 @@ int main(int argc, char** argv) {
         glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, floor_quad);
         box_matrix(0, 0, 0, 1, 1, 1);
         glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
+        if (layers && frame == 1)
+            layers_draw();
         eglSwapBuffers(dpy, surface);
     }
     eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);

@@ -320,6 +320,38 @@ def test_gles_reduced_and_check(gl):
     assert m and float(m.group(1)) >= 99.0 and int(m.group(2)) >= 1600 + 400, r.stdout
 
 
+def test_gles_textures_of_every_kind_read_back(gl):
+    """gles_boxes' "layers" draw (frame 1, object 9): a "#version 320 es"
+    vertex shader moves the cube's first triangle by what it reads from
+    three textures framebuffer objects cleared, face +X of a cube map,
+    slice 1 of a 3D texture and layer 1 of a DEPTH_COMPONENT24 2D array:
+    each read back from Mesa's replay a layer or face at a time (OpenGL ES
+    has no glGetTexImage; depth through NV_read_depth), where they had been
+    refused; the triangle lands where the desktop faults' does, the check
+    agrees (its state dump no longer aborts on the array left bound), and
+    the reduced capture, which carries the six faces, converts to the same
+    bytes (its faces had replaced one another)."""
+    cap = capture_path("gles-layers")
+    r = gl(cap, "--check-depth")
+    assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"
+    m = re.search(r"^agreement: ([0-9.]+)% of (\d+) covered pixels in 1 frames", r.stdout, re.M)
+    assert m and float(m.group(1)) >= 99.0 and int(m.group(2)) >= 3700, r.stdout
+    a, b, red = gl.path("layers.rbt"), gl.path("layers2.rbt"), gl.path("layers.xz")
+    r = gl(cap, "-o", a, "--reduced-out", red)
+    assert r.returncode == 0, r.stderr
+    r = gl(red, "-o", b)
+    assert r.returncode == 0, r.stderr
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        assert fa.read() == fb.read(), "the reduced capture converts differently"
+    frames, _ = read_trace(a)
+    tri = {xy: [d for d, obj, *_ in frags if obj == 9] for xy, frags in frames[1].items()}
+    tri = {xy: ds for xy, ds in tri.items() if ds}
+    assert len(tri) == 32 * 48 and min(x for x, _ in tri) == 17 and max(x for x, _ in tri) == 79, len(tri)
+    assert {y for _, y in tri} == set(range(24, 72))
+    assert all(abs(d - DEPTH_MAX / 4) <= 1 for ds in tri.values() for d in ds)
+    assert not any(9 in [obj for _, obj, *_ in frags] for frags in frames[0].values())
+
+
 def test_gles_check_without_readback(gl, tmp_path):
     """Without the readback library beside rbcd-gl-raster (built only with
     the OpenGL ES headers) the ES check says what is missing, in one line,

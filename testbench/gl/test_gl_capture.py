@@ -30,6 +30,8 @@ def test_capture():
     gles = os.environ.get("RBCD_GLES_BOXES")
     if gles:
         capture("gles", ["--api", "egl", "-o", os.path.join(CAPTURES, "gles.trace"), gles])
+        capture("gles-layers", ["--api", "egl", "-o", os.path.join(CAPTURES, "gles-layers.trace"), gles,
+                                "128", "96", "layers"])
 
 
 def capture(name, args):

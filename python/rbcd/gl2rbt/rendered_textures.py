@@ -13,10 +13,10 @@ the reduced capture carries those calls, so converting it needs no replay.
 
 One replay serves a conversion: requests go in call order, and the replay
 waits at each for the next. It needs glretrace, an X server (Xvfb when there
-is no DISPLAY, as --check-depth) and the library; an OpenGL ES capture (no
-glGetTexImage: glReadPixels reads a level through a framebuffer object,
-colour formats alone) and a reduced capture (nothing to replay) are refused
-when a draw needs it. Bounded: 1 GiB a reply, a level's size GL's; the replay gets
+is no DISPLAY, as --check-depth) and the library (an OpenGL ES capture has
+no glGetTexImage: glReadPixels reads each image of a level through a
+framebuffer object); a reduced capture (nothing to replay) is refused when
+a draw needs it. Bounded: 1 GiB a reply, a level's size GL's; the replay gets
 --check-timeout seconds (600 by default) to reach each draw."""
 import os
 import select

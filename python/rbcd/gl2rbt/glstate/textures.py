@@ -174,7 +174,9 @@ class TextureImageCalls:
         _, name, d, _ = call
         size = len(pixels_of(d)) if pixels_of(d) is not None else 0
         key = None
-        if name in LEVEL_CALLS:
+        if name in LEVEL_CALLS + PART_CALLS and d.get("target") != "GL_TEXTURE_2D":
+            pass   # a cube map's face (read back): each face a level of its own, none replaced
+        elif name in LEVEL_CALLS:
             level = certain_level(name, d, self.es) if not tc.storage else None
             if level is not None:
                 lv = d["level"]   # a level defined again: its earlier image and parts go
