@@ -70,6 +70,18 @@ def test_texel_fetch_from_an_image_of_glteximage2d(tmp_path):
     assert convert(tmp_path, draw(texture(shader_calls(VS_TEXEL % FETCH))), "teximage") == want
 
 
+def test_memory_barriers_change_nothing_drawn(tmp_path):
+    """glMemoryBarrier (and its ByRegion form) and glTextureBarrier order
+    the GPU's own writes; what those make the converter reads back from
+    Mesa's replay, which makes the barriers: passed over (round 13 saw
+    every correct image-write-then-sample capture refused at its
+    barrier)."""
+    c = texture(shader_calls(VS_TEXEL % FETCH))
+    c.add("glMemoryBarrier", barriers=["GL_SHADER_IMAGE_ACCESS_BARRIER_BIT", "GL_TEXTURE_FETCH_BARRIER_BIT"])
+    c.add("glMemoryBarrierByRegion", barriers="GL_ALL_BARRIER_BITS").add("glTextureBarrier")
+    assert convert(tmp_path, draw(c), "barriers") == moved(tmp_path, 6, 2)
+
+
 def test_storage_and_sub_image_under_an_unpack_state_on_another_unit(tmp_path):
     """glTexStorage2D, then glTexSubImage2D of rows 3 texels long after a
     skipped texel, packed to 1-byte alignment, on unit 5 named by the

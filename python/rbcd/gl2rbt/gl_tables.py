@@ -50,6 +50,10 @@ IGNORED_PREFIXES = (
     # vertex shaders that read 2D textures: glstate/textures.py), fences.
     "glGenSamplers", "glCreateSamplers", "glFenceSync",
     "glClientWaitSync", "glWaitSync", "glDeleteSync",
+    # Ordering of the GPU's own writes (images, storage buffers) before
+    # later reads: what those writes make, the converter reads back from
+    # Mesa's replay, which makes the barriers, or refuses.
+    "glMemoryBarrier", "glTextureBarrier",
     # Hints that a framebuffer's contents are no longer needed (ES 3 and its
     # EXT form): they change no pixel a later draw or the unit sees.
     "glInvalidateFramebuffer", "glInvalidateSubFramebuffer", "glDiscardFramebuffer",
