@@ -204,6 +204,24 @@ def test_a_buffer_texture_deleted_while_bound_is_read_as_texture_0(tmp_path):
     assert unbound == zeroed
 
 
+def test_the_default_buffer_texture_takes_a_buffer(tmp_path):
+    """glTexBuffer with no texture bound at GL_TEXTURE_BUFFER gives the
+    default one (name 0) the buffer, and a vertex shader reads it as a
+    named one's (Mesa, core profile: no error; round 13 saw it refused);
+    glTexBuffer at another target is GL_INVALID_ENUM and sets nothing."""
+    moved = trace(tmp_path, two_frames(lambda c: None), "moved")
+    default = reference(buffer_texture(shader_calls(VS_TB), tex=0))
+    default.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    default.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup").swap()
+    assert trace(tmp_path, default, "default") == moved and fragments(moved) > 100
+    zeroed = trace(tmp_path, two_frames(lambda c: c.add("glBufferSubData", target="GL_TEXTURE_BUFFER", offset=0,
+                                                          size=16, data=bytes(16))), "zeroed")
+    # The named texture unbound, another target's glTexBuffer: the default
+    # texture has no buffer, and frame 1 reads zeros.
+    assert trace(tmp_path, two_frames(lambda c: c.add("glBindTexture", target="GL_TEXTURE_BUFFER", texture=0).add(
+        "glTexBuffer", target="GL_TEXTURE_2D", internalformat="GL_RGBA32F", buffer=9)), "other") == zeroed
+
+
 def test_a_buffer_deleted_while_a_buffer_texture_holds_it_lives_on(tmp_path):
     """GL frees the name, but the texture keeps the data (GL 4.5, 5.1.2;
     Mesa draws with it): frame 1 is moved as frame 0, also after a new

@@ -20,6 +20,7 @@ from .gl_tables import INDEX_TYPES
 from .glstate.attributes import element_bytes
 from .glstate.buffers import merge_extents
 from .glstate.programs import COMMENTS
+from .glstate.textures import DEFAULT_BUFFER_TEXTURE
 from .mesa import Mesa, Watchdog
 from .vertex_textures import IMAGE_TARGETS, SAMPLER_TARGETS, VertexTextures
 
@@ -549,14 +550,20 @@ class VertexStage:
             except GLError:
                 pass   # past Mesa's binding points, or a range it refuses: GL ignores the capture's call
         for kind, unit in read:
-            tex = conv.s.units.get((unit, "GL_TEXTURE_BUFFER")) if kind == "GL_TEXTURE_BUFFER" else \
-                conv.s.image_units.get(unit, (None,))[0] if kind == "image" else None
+            tex = (conv.s.units.get((unit, "GL_TEXTURE_BUFFER")) or DEFAULT_BUFFER_TEXTURE) \
+                if kind == "GL_TEXTURE_BUFFER" else conv.s.image_units.get(unit, (None,))[0] if kind == "image" \
+                else None
             if tex in conv.s.texture_buffers:
                 conv.checked_buffer(self.no, self.name, conv.s.texture_buffers[tex][1],
                                     f"the buffer texture at its {'image ' if kind == 'image' else ''}unit {unit}")
-        for (unit, target), tex in conv.s.units.items():
-            if target != "GL_TEXTURE_BUFFER":
-                continue
+        # Every unit the draw reads a buffer texture at, and every one an
+        # earlier draw may have bound in Mesa's copy: the capture's texture,
+        # or the default one (its buffer set by glTexBuffer, or none).
+        units = {unit: tex for (unit, target), tex in conv.s.units.items() if target == "GL_TEXTURE_BUFFER"}
+        units.update({unit: 0 for kind, unit in read if kind == "GL_TEXTURE_BUFFER" and unit not in units})
+        for unit, tex in units.items():
+            if not tex and DEFAULT_BUFFER_TEXTURE in conv.s.texture_buffers:
+                tex = DEFAULT_BUFFER_TEXTURE
             if not tex:
                 # Unbound (or its texture deleted) since an earlier draw
                 # bound it in Mesa's copy: texture 0, read as zeros.

@@ -364,11 +364,14 @@ class FramebufferCalls:
                 self.s.texture = tex
 
     def h_tex_buffer(self, no, name, a, args):
+        from .textures import DEFAULT_BUFFER_TEXTURE
         d = dict(args)
-        tex = self.bound_texture(d.get("target"))
+        if d.get("target") != "GL_TEXTURE_BUFFER":
+            return   # GL_INVALID_ENUM: the call changes nothing
+        tex = self.bound_texture("GL_TEXTURE_BUFFER") or DEFAULT_BUFFER_TEXTURE   # (none bound: the default one)
         buf, fmt = d.get("buffer"), d.get("internalformat")
-        if not tex or not isinstance(buf, int) or isinstance(buf, bool) or buf < 0:
-            fail_call(no, f"{name}: no texture bound, or an impossible buffer")
+        if not isinstance(buf, int) or isinstance(buf, bool) or buf < 0:
+            fail_call(no, f"{name}: an impossible buffer")
         buf = checked(no, integer, buf, f"{name}: the buffer", *U32)
         offset, size = d.get("offset", 0), d.get("size")
         if name == "glTexBufferRange":

@@ -38,6 +38,9 @@ GL_TEXTURE_IMMUTABLE_LEVELS = 0x82DF
 # The default texture (name 0) of a target other than 2D, as the converter
 # names it beside the 2D one's calls: this plus the target's value.
 DEFAULT_TEXTURE_BASE = 1 << 32
+# The default buffer texture's (name 0 at GL_TEXTURE_BUFFER), whose buffer
+# glTexBuffer may set as any other's.
+DEFAULT_BUFFER_TEXTURE = DEFAULT_TEXTURE_BASE + 0x8C2A
 # Image units are asked of Mesa's replay as texture units from here on.
 IMAGE_UNIT_BASE = 1 << 16
 # The argument a reduced capture adds to a draw whose vertex shader reads
