@@ -557,13 +557,30 @@ def test_vertex_data_the_gpu_wrote_is_refused(tmp_path, write, words):
     result, a copy of such a buffer) holds what the capture does not: a
     draw that reads it as vertices is refused naming both calls, nothing
     left (round 12's R12-2: the capture's old bytes were drawn); new data
-    from the capture makes it drawable again."""
+    from the capture, all of the buffer written again (glBufferData,
+    glBufferSubData of every byte, a mapping that invalidates the buffer:
+    round 14's R14-2 saw the last two refused), makes it drawable again;
+    a part written again does not."""
     r = gl2rbt(tmp_path, draw(write(shader_calls(VS))).write(tmp_path / "g.xz"), "-o", tmp_path / "g.rbt")
     refused(r, "glDrawArrays reads attribute 0 from buffer 1, which the GPU wrote at call", words, "not emulated")
     assert left_behind(tmp_path, ["g.xz"]) == []
-    c = write(shader_calls(VS)).add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE,
-                                    usage="GL_STATIC_DRAW")
-    assert trace(tmp_path, draw(c), "again") == trace(tmp_path, draw(shader_calls(VS)), "plain")
+    plain = trace(tmp_path, draw(shader_calls(VS)), "plain")
+    for tag, again in [
+            ("data", lambda c: c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE,
+                                     usage="GL_STATIC_DRAW")),
+            ("sub", lambda c: c.add("glBufferSubData", target="GL_ARRAY_BUFFER", offset=0, size=36, data=TRIANGLE))]:
+        assert trace(tmp_path, draw(again(write(shader_calls(VS)))), tag) == plain, tag
+    # A mapping that invalidates the buffer leaves the bytes it does not
+    # write undefined (GL 4.5, 6.3): the draw converts.
+    c = write(shader_calls(VS)).add("glMapBufferRange", target="GL_ARRAY_BUFFER", offset=12, length=24,
+                                    access=["GL_MAP_WRITE_BIT", "GL_MAP_INVALIDATE_BUFFER_BIT"], ret=0x10000)
+    c.add("memcpy", dest=0x10000, src=TRIANGLE[12:], n=24).add("glUnmapBuffer", target="GL_ARRAY_BUFFER")
+    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "m.xz"), "-o", tmp_path / "m.rbt")
+    assert r.returncode == 0, r.stderr
+    part = write(shader_calls(VS)).add("glBufferSubData", target="GL_ARRAY_BUFFER", offset=12, size=24,
+                                        data=TRIANGLE[12:])
+    r = gl2rbt(tmp_path, draw(part).write(tmp_path / "p.xz"), "-o", tmp_path / "p.rbt")
+    refused(r, "glDrawArrays reads attribute 0 from buffer 1, which the GPU wrote at call", words)
 
 
 def test_commands_a_shader_may_store_are_refused(tmp_path):

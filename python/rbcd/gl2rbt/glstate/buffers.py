@@ -98,10 +98,14 @@ class BufferCalls:
         """Buffer b changed in bytes [start, end) (all of it by default): a
         new version, and the extent added to those ever written (for a
         large buffer: what Mesa's copy is given; the rest stays zero). The
-        bytes held in all buffers stay within MAX_BUFFER_BYTES_IN_ALL."""
+        bytes held in all buffers stay within MAX_BUFFER_BYTES_IN_ALL.
+        Written whole, its bytes are the capture's again, whatever the GPU
+        wrote into it before."""
         self.new_version(b)
         buf = self.s.buffers[b]
         end = len(buf) if end is None else end
+        if start <= 0 and end >= len(buf):
+            self.s.gpu_buffers.pop(b, None)
         if isinstance(buf, mmap.mmap) and end > start:
             ext = self.s.buffer_written.setdefault(b, [])
             ext.append((start, end))
@@ -346,13 +350,16 @@ class BufferCalls:
                 if lo < hi:
                     dst[lo:hi] = bytes(hi - lo)
             at = e
-        if rb in self.s.gpu_buffers:
-            self.gpu_wrote_buffer(no, wb, f"{base_name(name)} from buffer {rb}, which the GPU wrote at call "
-                                          f"{self.s.gpu_buffers[rb][0]}")
+        gpu = self.s.gpu_buffers.get(rb)
         for s, e, data in pieces:
             dst[s:e] = data
             self.changed(no, name, wb, s, e)
         self.new_version(wb)
+        if gpu is not None:
+            self.gpu_wrote_buffer(no, wb, f"{base_name(name)} from buffer {rb}, which the GPU wrote at call "
+                                          f"{gpu[0]}")
+        elif wo == 0 and size == len(dst):
+            self.s.gpu_buffers.pop(wb, None)   # all of it the capture's bytes again
 
     def h_clear_buffer_data(self, no, name, a, args):
         """glClearBufferData and glClearBufferSubData (GL 4.3): the range
@@ -426,6 +433,11 @@ class BufferCalls:
             fail_call(no, f"{name}: the range is outside the buffer's data")
         if isinstance(ptr, int) and ptr:
             self.s.mappings[b] = (ptr, offset, length)
+            if "GL_MAP_INVALIDATE_BUFFER_BIT" in access or "GL_MAP_INVALIDATE_RANGE_BIT" in access and \
+                    offset == 0 and length == len(buf):
+                # Every byte the GPU wrote is undefined now: what the
+                # capture writes through the mapping, or nothing GL defines.
+                self.s.gpu_buffers.pop(b, None)
 
     def h_unmap_buffer(self, no, name, a, args):
         self.s.mappings.pop(self.bound_buffer(no, name, dict(args).get("target")), None)
