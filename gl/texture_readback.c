@@ -24,8 +24,9 @@
  *   "RBTX", u32 units; per unit: u32 unit, target, i32 internal format, u32
  *   parameters, each u32 name and 4 f32 values (a multisample texture's
  *   first GL_TEXTURE_SAMPLES: samples, fixed locations, layers; its level 0
- *   holds layers x samples images, read by a compute shader of ours, as
- *   four floats, the depth in the first, or four 32-bit integers); u32
+ *   holds layers x samples images, read by a compute shader of ours
+ *   without the texture's swizzle, as four floats, the depth in the first,
+ *   or four 32-bit integers); u32
  *   levels; per level: u32
  *   level, width, height, depth (a cube map's 6 faces, in GL's order), format,
  *   type, u64 bytes, the bytes (rows from the bottom, packed: alignment 1)
@@ -74,6 +75,7 @@ static struct {
     void (*get_tex_level_parameteriv)(GLenum, GLint, GLenum, GLint *);
     void (*get_tex_image)(GLenum, GLint, GLenum, GLenum, void *);
     void (*get_tex_parameterfv)(GLenum, GLenum, GLfloat *);
+    void (*tex_parameteri)(GLenum, GLenum, GLint);
     GLenum (*get_error)(void);
     const GLubyte *(*get_string)(GLenum);
     void (*gen_framebuffers)(GLsizei, GLuint *);
@@ -401,6 +403,16 @@ static int read_multisample(const struct Texture *t, int unit, void *pixels)
     GLint linked = 0;
     gl.get_programiv(prog, GL_LINK_STATUS, &linked);
     const uint64_t n = level_bytes(t, 0);
+    /* Read without the texture's swizzle (texelFetch applies it): the
+     * converter gives its copy the swizzle again, and a depth format's
+     * first component must be the depth. */
+    static const GLenum swizzle[4] = {GL_TEXTURE_SWIZZLE_R, GL_TEXTURE_SWIZZLE_G, GL_TEXTURE_SWIZZLE_B,
+                                      GL_TEXTURE_SWIZZLE_A};
+    GLfloat saved[4][4] = {{0}};
+    for (int i = 0; i < 4; i++) {
+        gl.get_tex_parameterfv(t->target, swizzle[i], saved[i]);
+        gl.tex_parameteri(t->target, swizzle[i], (GLint)(GL_RED + (GLenum)i));
+    }
     int ok = 0;
     if (linked) {
         gl.use_program(prog);
@@ -421,6 +433,8 @@ static int read_multisample(const struct Texture *t, int unit, void *pixels)
         }
         ok = mapped && gl.get_error() == GL_NO_ERROR;
     }
+    for (int i = 0; i < 4; i++)
+        gl.tex_parameteri(t->target, swizzle[i], (GLint)saved[i][0]);
     gl.use_program((GLuint)program);
     if (size > 0)
         gl.bind_buffer_range(GL_SHADER_STORAGE_BUFFER, 0, (GLuint)bound, (GLintptr)start, (GLsizeiptr)size);
@@ -651,6 +665,7 @@ static int open_fifos(void)
     gl.get_tex_image = (void (*)(GLenum, GLint, GLenum, GLenum, void *))real_get_proc("glGetTexImage");
     gl.get_error = (GLenum(*)(void))real_get_proc("glGetError");
     gl.get_tex_parameterfv = (void (*)(GLenum, GLenum, GLfloat *))real_get_proc("glGetTexParameterfv");
+    gl.tex_parameteri = (void (*)(GLenum, GLenum, GLint))real_get_proc("glTexParameteri");
     gl.get_string = (const GLubyte *(*)(GLenum))real_get_proc("glGetString");
     gl.gen_framebuffers = (void (*)(GLsizei, GLuint *))real_get_proc("glGenFramebuffers");
     gl.delete_framebuffers = (void (*)(GLsizei, const GLuint *))real_get_proc("glDeleteFramebuffers");
@@ -686,7 +701,8 @@ static int open_fifos(void)
     gl.delete_program = (void (*)(GLuint))real_get_proc("glDeleteProgram");
     gl.delete_shader = (void (*)(GLuint))real_get_proc("glDeleteShader");
     if (!gl.get_integerv || !gl.active_texture || !gl.pixel_storei || !gl.bind_buffer ||
-        !gl.get_tex_level_parameteriv || !gl.get_tex_image || !gl.get_tex_parameterfv || !gl.get_error ||
+        !gl.get_tex_level_parameteriv || !gl.get_tex_image || !gl.get_tex_parameterfv || !gl.tex_parameteri ||
+        !gl.get_error ||
         !gl.get_string ||
         !gl.gen_framebuffers || !gl.delete_framebuffers || !gl.bind_framebuffer || !gl.framebuffer_texture_2d ||
         !gl.check_framebuffer_status || !gl.read_pixels || !gl.bind_texture || !gl.get_integeri_v)

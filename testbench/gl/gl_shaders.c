@@ -24,7 +24,9 @@
  * a sample mask writes the texel into, the others cleared to another),
  * default (the default 3D texture, name 0, given the texel everywhere),
  * msimage (the multisample fault's sample 3 read by imageLoad through
- * image unit 3),
+ * image unit 3), msdepth (sample 3 of a 4-sample DEPTH_COMPONENT32F
+ * texture a draw fills with depth 0.5, swizzled so that green reads the
+ * depth and red zero: the triangle moved by the texel times green),
  * separable (the "texture" fault's draw through a program pipeline: its
  * vertex shader a separable program, its fragment shader one made by
  * glCreateShaderProgramv, no program in use, the sampler set with
@@ -115,6 +117,14 @@ static const char* msimage_source =
     "layout(rgba32f) readonly uniform image2DMS heights;\n"
     "in vec3 position;\n"
     "void main() { gl_Position = vec4(position, 1.0) + imageLoad(heights, ivec2(0, 0), 3); }\n";
+static const char* msdepth_source =
+    "#version 330 core\n"
+    "uniform sampler2DMS heights;\n"
+    "in vec3 position;\n"
+    "void main() {\n"
+    "    float d = texelFetch(heights, ivec2(0, 0), 3).g;\n"
+    "    gl_Position = vec4(position, 1.0) + vec4(-1.5, -1.0, -3.0, 0.0) * d;\n"
+    "}\n";
 static const char* image_source =
     "#version 420 core\n"
     "layout(rgba32f) readonly uniform image2D heights;\n"
@@ -184,13 +194,22 @@ static GLuint texture_2x2(const void* texels) {
  * object: every texel the "texture" fault's texel (0, 0); with `mask`, only
  * the samples it names, the others cleared to (9, 9, 9, 0) first. */
 static void fill(GLenum target, GLuint tex, GLuint mask) {
-    static const float other[4] = {9, 9, 9, 0};
+    static const float other[4] = {9, 9, 9, 0}, far_depth = 1.0f;
     GLuint fb, program = glCreateProgram();
-    GLint viewport[4];
+    GLint viewport[4], depth_size = 0;
     glGetIntegerv(GL_VIEWPORT, viewport);
     glGenFramebuffers(1, &fb);
     glBindFramebuffer(GL_FRAMEBUFFER, fb);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, target, tex, 0);
+    glBindTexture(target, tex);
+    glGetTexLevelParameteriv(target, 0, GL_TEXTURE_DEPTH_SIZE, &depth_size);
+    glBindTexture(target, 0);
+    if (depth_size) {   /* a depth texture: the triangle's depth, 0.5 */
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, target, tex, 0);
+        glDrawBuffer(GL_NONE);
+        glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    } else {
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, target, tex, 0);
+    }
     glAttachShader(program, compile(GL_VERTEX_SHADER, fill_vertex_source));
     glAttachShader(program, compile(GL_FRAGMENT_SHADER, fill_fragment_source));
     glBindAttribLocation(program, 0, "position");
@@ -237,6 +256,17 @@ static void inject_fault(GLuint main_program) {
         glActiveTexture(GL_TEXTURE0);
         fill(GL_TEXTURE_2D_MULTISAMPLE, tex, 1u << 3);
         glAttachShader(p, compile(GL_VERTEX_SHADER, multisample_source));
+    } else if (!strcmp(fault, "msdepth")) {
+        GLuint tex;
+        glActiveTexture(GL_TEXTURE2);
+        glGenTextures(1, &tex);
+        glBindTexture(GL_TEXTURE_2D_MULTISAMPLE, tex);
+        glTexImage2DMultisample(GL_TEXTURE_2D_MULTISAMPLE, 4, GL_DEPTH_COMPONENT32F, 2, 2, GL_TRUE);
+        glTexParameteri(GL_TEXTURE_2D_MULTISAMPLE, GL_TEXTURE_SWIZZLE_R, GL_ZERO);
+        glTexParameteri(GL_TEXTURE_2D_MULTISAMPLE, GL_TEXTURE_SWIZZLE_G, GL_RED);
+        glActiveTexture(GL_TEXTURE0);
+        fill(GL_TEXTURE_2D_MULTISAMPLE, tex, 0);
+        glAttachShader(p, compile(GL_VERTEX_SHADER, msdepth_source));
     } else if (!strcmp(fault, "msimage")) {
         GLuint tex;
         glGenTextures(1, &tex);
@@ -299,7 +329,8 @@ static void inject_fault(GLuint main_program) {
     }
     const int textured = !strcmp(fault, "texture") || !strcmp(fault, "rendered") || !strcmp(fault, "cube") ||
                          !strcmp(fault, "array") || !strcmp(fault, "image") || !strcmp(fault, "multisample") ||
-                         !strcmp(fault, "default") || !strcmp(fault, "msimage") || pipeline;
+                         !strcmp(fault, "default") || !strcmp(fault, "msimage") || !strcmp(fault, "msdepth") ||
+                         pipeline;
     if (textured) {
         if (!pipeline)
             glUniform1i(glGetUniformLocation(p, "heights"), !strcmp(fault, "image") || !strcmp(fault, "msimage") ? 3 : 2);

@@ -182,7 +182,8 @@ def test_refusals(gl, fault, words):
     assert not [f for f in os.listdir(gl.tmp) if f.startswith(".")], f"{fault}: a temporary was left"
 
 
-@pytest.mark.parametrize("fault", ["texture", "rendered", "cube", "array", "separable", "image", "multisample", "default", "msimage"])
+@pytest.mark.parametrize("fault", ["texture", "rendered", "cube", "array", "separable", "image", "multisample", "default",
+                                   "msimage", "msdepth"])
 def test_a_vertex_shader_reading_an_uploaded_or_a_rendered_texture(gl, fault):
     """The fault "texture": a vertex shader moves a triangle by a texel of
     a texture uploaded with glTexImage2D, in front of every box: Mesa runs
@@ -200,7 +201,10 @@ def test_a_vertex_shader_reading_an_uploaded_or_a_rendered_texture(gl, fault):
     replay, and drawn into Mesa's copy one by one) and "default" (the
     default 3D texture, name 0, given an image: round 12's R12-6, read as
     no texture) and "msimage" (the multisample texture's sample 3 read by
-    imageLoad through an image unit): the same fragments."""
+    imageLoad through an image unit) and "msdepth" (a multisample depth
+    texture's sample 3 through a swizzle that moves the depth to green:
+    read back without the swizzle and given it again; round 14's R14-1
+    stored the swizzled red as the depth): the same fragments."""
     cap = capture_path(f"shader-fault-{fault}")
     r = gl(cap, "--check-depth")
     assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"

@@ -38,6 +38,8 @@ GL_TEXTURE_IMMUTABLE_LEVELS = 0x82DF
 # The default texture (name 0) of a target other than 2D, as the converter
 # names it beside the 2D one's calls: this plus the target's value.
 DEFAULT_TEXTURE_BASE = 1 << 32
+# GL_TEXTURE_SWIZZLE_R, _G, _B and _A.
+SWIZZLE_PARAMETERS = (0x8E42, 0x8E43, 0x8E44, 0x8E45)
 # The default buffer texture's (name 0 at GL_TEXTURE_BUFFER), whose buffer
 # glTexBuffer may set as any other's.
 DEFAULT_BUFFER_TEXTURE = DEFAULT_TEXTURE_BASE + 0x8C2A
@@ -342,15 +344,17 @@ class TextureImageCalls:
             internal, params, levels = images.get((unit, target), (0, [], []))
             rt = TextureCalls()
             if target in MULTISAMPLE_TARGETS:
-                # Its samples as read (swizzle and depth mode applied: no
-                # parameter is given again).
+                # Its samples as read (without its swizzle: a depth
+                # format's first component is the depth), the swizzle
+                # given again (the other parameters do not apply to a
+                # multisample texture).
                 samples = next((v for p, v in params if p == GL_TEXTURE_SAMPLES), None)
                 calls = [(no, SAMPLES_CALL, dict(target=target, samples=int(samples[0]),
                                                  fixedsamplelocations=int(samples[1]), internalformat=internal,
                                                  width=w, height=h, depth=depth, format=fmt, type=kind,
                                                  pixels=pixels))
                          for level, w, h, depth, fmt, kind, pixels in levels if samples and level == 0]
-                params = []
+                params = [(p, v) for p, v in params if p in SWIZZLE_PARAMETERS]
             else:
                 immutable = next((int(v[0]) for p, v in params if p == GL_TEXTURE_IMMUTABLE_LEVELS), 0)
                 params = [(p, v) for p, v in params if p != GL_TEXTURE_IMMUTABLE_LEVELS]
