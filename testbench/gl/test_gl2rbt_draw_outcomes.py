@@ -697,6 +697,7 @@ def test_a_signal_ctypes_wraps_is_an_interruption(tmp_path, monkeypatch, capsys)
     from rbcd.gl2rbt import cli, raster
 
     def convert(args, report=None):
+        cli.INTERRUPTED.set()   # as the handler sets it before raising KeyboardInterrupt
         raise ctypes.ArgumentError("argument 2: KeyboardInterrupt: ")
     monkeypatch.setattr(raster, "convert", convert)
     handlers = {sig: signal.getsignal(sig) for sig in cli.HANDLED}   # main leaves them ignored
@@ -704,6 +705,48 @@ def test_a_signal_ctypes_wraps_is_an_interruption(tmp_path, monkeypatch, capsys)
     try:
         assert cli.main([str(cap), "-o", str(tmp_path / "k.rbt")]) == 130
     finally:
+        cli.INTERRUPTED.clear()
         for sig, handler in handlers.items():
             signal.signal(sig, handler)
     assert capsys.readouterr().err.splitlines() == [f"rbcd-gl2rbt: {cap}: interrupted"]
+
+
+def test_a_signal_while_numpy_loads_is_an_interruption(monkeypatch):
+    """numpy's import turns a KeyboardInterrupt raised inside it into an
+    ImportError: after a signal that is an interruption, not "numpy is not
+    installed" (round 14's R14-3)."""
+    import builtins
+
+    from rbcd.gl2rbt import cli
+    real_import = builtins.__import__
+
+    def failing(name, *args, **kw):
+        if name == "numpy":
+            raise ImportError("Error importing numpy: KeyboardInterrupt")
+        return real_import(name, *args, **kw)
+    monkeypatch.setattr(builtins, "__import__", failing)
+    with pytest.raises(cli.ToolError, match="numpy is not installed"):
+        cli.require_numpy()
+    cli.INTERRUPTED.set()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            cli.require_numpy()
+    finally:
+        cli.INTERRUPTED.clear()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=["int", "term", "hup"])
+def test_a_signal_at_start_up_is_an_interruption(tmp_path, sig):
+    """A signal before the converter's handlers are in place (Python still
+    loading its modules) ends the run in one line, "interrupted", exit 130
+    (round 14's R14-3: a traceback for SIGINT, a silent death for SIGTERM).
+    The signal is sent while the child still blocks it (its mask taken from
+    here), so it arrives at the first moment the launcher lets it."""
+    cap = draw(shader_calls(VS)).write(tmp_path / "s.xz")
+    p = subprocess.Popen(["/usr/bin/python3", GL2RBT, str(cap), "-o", str(tmp_path / "s.rbt")],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.pthread_sigmask(signal.SIG_BLOCK, [sig]))
+    os.kill(p.pid, sig)
+    out, err = p.communicate(timeout=60)
+    assert p.returncode == 130 and err.splitlines() == ["rbcd-gl2rbt: interrupted"] and out == "", (p.returncode, err)
+    assert left_behind(tmp_path, ["s.xz"]) == []

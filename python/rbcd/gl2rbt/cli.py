@@ -150,9 +150,9 @@ def run(args):
         sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
         return 1
     except Exception as e:   # noqa: BLE001: the promise is one line, whatever failed
-        if type(e).__name__ == "ArgumentError" and "KeyboardInterrupt" in str(e):
-            # A signal taken while ctypes converted a PyOpenGL call's
-            # arguments: ctypes wraps the handler's KeyboardInterrupt.
+        if INTERRUPTED.is_set():
+            # A signal's KeyboardInterrupt wrapped by what it was raised in
+            # (ctypes converting a PyOpenGL call's arguments: ArgumentError).
             raise KeyboardInterrupt
         sys.stderr.write(f"{PROG}: internal error: {type(e).__name__}: {printable(e, 300)}\n")
         return 1
@@ -179,11 +179,14 @@ def require_numpy():
     try:
         import numpy
     except ImportError:
+        if INTERRUPTED.is_set():   # numpy's import turns a signal's KeyboardInterrupt into ImportError
+            raise KeyboardInterrupt
         raise ToolError("numpy is not installed (Debian: python3-numpy)")
     return numpy
 
 
 HANDLED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+INTERRUPTED = threading.Event()   # a handled signal came
 
 
 def ignore_signals():
@@ -198,6 +201,7 @@ def on_signal(signum, frame):
     cut that clean-up short, or ended the process as Python finished).
     While Mesa works the watchdog thread ends the run (mesa.py)."""
     ignore_signals()
+    INTERRUPTED.set()
     raise KeyboardInterrupt
 
 
@@ -205,7 +209,7 @@ def main(argv=None):
     for sig in HANDLED:
         # SIGINT ignored when the program started (a shell's background
         # job) stays ignored.
-        if sig != signal.SIGINT or signal.getsignal(sig) is signal.default_int_handler:
+        if sig != signal.SIGINT or signal.getsignal(sig) is not signal.SIG_IGN:
             signal.signal(sig, on_signal)
     trace = None
     try:
