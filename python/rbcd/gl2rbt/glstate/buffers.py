@@ -79,6 +79,18 @@ def named(handler, **targets):
     return h
 
 
+def fill_range(buf, start, end, value):
+    """buf[start:end] = `value` repeated (the range a whole number of it),
+    a piece of 16 MiB at most at a time: a clear of a large buffer makes
+    no copy of its size."""
+    piece = memoryview(value * max(1, (16 << 20) // len(value)))
+    at = start
+    while at < end:
+        k = min(len(piece), end - at)
+        buf[at:at + k] = piece[:k]
+        at += k
+
+
 class BufferCalls:
     """Buffer objects, bound by target (self.s.bound; the element array
     buffer is the bound vertex array object's) and by index
@@ -404,14 +416,14 @@ class BufferCalls:
             # only what was written is zeroed.
             for s, e in self.written_extents(b):
                 if s < off + size and e > off:
-                    buf[max(s, off):min(e, off + size)] = bytes(min(e, off + size) - max(s, off))
+                    fill_range(buf, max(s, off), min(e, off + size), b"\0")
             self.new_version(b)
             return
         held = self.s.buffer_held.get(b, 0)
         if isinstance(buf, mmap.mmap) and self.s.buffer_bytes_in_all - held + min(len(buf), held + size) > \
                 MAX_BUFFER_BYTES_IN_ALL:
             self.held_bytes(no, name, b, min(len(buf), held + size))   # refused before writing
-        buf[off:off + size] = value * (size // n)
+        fill_range(buf, off, off + size, value)
         self.changed(no, name, b, off, off + size)
 
     def h_map_buffer(self, no, name, a, args):
