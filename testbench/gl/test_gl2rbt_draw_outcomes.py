@@ -52,6 +52,31 @@ def trace(tmp_path, c, tag):
     return (tmp_path / f"{tag}.rbt").read_bytes()
 
 
+def test_draw_parameters_of_arb_shader_draw_parameters(tmp_path):
+    """gl_DrawIDARB, gl_BaseVertexARB and gl_BaseInstanceARB (llvmpipe has
+    ARB_shader_draw_parameters) are the draw's, not fixed-function arrays
+    (they had been refused as those): a draw alone, or the first of a
+    multi-draw, gives gl_DrawID 0 as Mesa; a later draw of a multi-draw,
+    which the converter runs in Mesa alone, is refused naming the call."""
+    vs = ("#version 330 core\n#extension GL_ARB_shader_draw_parameters : require\nin vec3 p;\n"
+          "void main() { float o = 20.0 * float(gl_DrawIDARB + gl_BaseVertexARB + gl_BaseInstanceARB);\n"
+          "  gl_Position = vec4((p.x + o) / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+    want = trace(tmp_path, draw(shader_calls(VS)), "want")
+    assert trace(tmp_path, draw(shader_calls(vs)), "alone") == want
+
+    def multi(n):
+        c = shader_calls(vs).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+        c.add("glEnableVertexAttribArray", index=0)
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+        c.add("glMultiDrawArrays", mode="GL_TRIANGLES", first=[0] * n, count=[3] * n, drawcount=n)
+        return c.add("glPopDebugGroup").swap()
+    assert trace(tmp_path, multi(1), "first") == want
+    r = gl2rbt(tmp_path, multi(2).write(tmp_path / "m.xz"), "-o", tmp_path / "m.rbt")
+    refused(r, "call ", "draw 1 of a multi-draw, whose vertex shader reads gl_DrawID: not emulated")
+    assert not os.path.exists(tmp_path / "m.rbt")
+
+
 def test_adjacency_modes_draw_their_triangles(tmp_path):
     """With no geometry shader GL draws the triangles of the adjacency modes
     and passes over the adjacent vertices (Mesa 22.3 too): the bytes of the

@@ -45,7 +45,9 @@ CLIP_DISTANCES = re.compile(r"\bgl_(Clip|Cull)Distance\b")
 # shader_viewport_layer_array, NV_viewport_array2).
 VIEWPORT_OUTPUTS = re.compile(r"\bgl_(ViewportIndex|ViewportMask)\b")
 BUILTIN_INPUTS = {"gl_VertexID", "gl_InstanceID", "gl_DrawID", "gl_BaseVertex", "gl_BaseInstance",
-                  "gl_VertexIndex", "gl_InstanceIndex"}
+                  "gl_VertexIndex", "gl_InstanceIndex", "gl_DrawIDARB", "gl_BaseVertexARB", "gl_BaseInstanceARB"}
+# The index of a draw within its multi-draw (GLSL 4.60, ARB_shader_draw_parameters).
+DRAW_ID_INPUTS = {"gl_DrawID", "gl_DrawIDARB"}
 
 
 def name_str(name):
@@ -154,6 +156,7 @@ class MesaProgram:
         self.texture_locations = []   # Mesa locations of its samplers (each element of an array), with targets
         self.image_locations = []     # the same of its images
         self.buffer_samplers = []     # the locations of its buffer texture samplers
+        self.reads_draw_id = False    # its vertex shader reads gl_DrawID
 
 
 class VertexStage:
@@ -398,6 +401,7 @@ class VertexStage:
         mp = MesaProgram(prog, p.version)
         for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_ATTRIBUTES)):
             aname = name_str(GL.glGetActiveAttrib(prog, i)[0])
+            mp.reads_draw_id |= aname in DRAW_ID_INPUTS
             if aname.startswith("gl_") and aname not in BUILTIN_INPUTS:
                 fail_call(no, f"{where}: its vertex shader reads {printable(aname)}, a fixed-function vertex "
                           "array of the compatibility profile: not emulated")
@@ -609,6 +613,11 @@ class VertexStage:
         try:
             with self.watchdog.on(f"call {no}: {name}"):
                 mp = self.program(no, pname, p)
+                if mp.reads_draw_id and conv.multi_draw_index:
+                    # Each draw of a multi-draw runs in Mesa alone, where
+                    # gl_DrawID is 0.
+                    fail_call(no, f"{name}: draw {conv.multi_draw_index} of a multi-draw, whose vertex shader reads "
+                              "gl_DrawID: not emulated")
                 indices = d.get("indices")
                 client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
                 check_client_data(conv, no, name, d, instances, client_indices)

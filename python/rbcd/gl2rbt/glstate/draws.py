@@ -386,11 +386,15 @@ class DrawCalls:
         single, handler = ("glDrawArrays", self.h_draw_arrays) if "Arrays" in name else \
             ("glDrawElementsBaseVertex", self.h_draw_under_program) if "BaseVertex" in name else \
             ("glDrawElements", self.h_draw_elements)
-        for i in range(n):
-            one = [("mode", d.get("mode"))] + [(k, v[i]) for k, v in lists.items()]
-            if "type" in d:
-                one.append(("type", d["type"]))
-            handler(no, single, None, one)
+        try:
+            for i in range(n):
+                one = [("mode", d.get("mode"))] + [(k, v[i]) for k, v in lists.items()]
+                if "type" in d:
+                    one.append(("type", d["type"]))
+                self.multi_draw_index = i
+                handler(no, single, None, one)
+        finally:
+            self.multi_draw_index = 0
 
     def h_draw_indirect(self, no, name, a, args):
         """glDrawArraysIndirect, glDrawElementsIndirect, their glMultiDraw
@@ -462,19 +466,24 @@ class DrawCalls:
                 fail_call(no, f"{name}: its {n} commands would make {records} draw records, more than "
                           f"{MAX_FRAME_RECORDS} in one frame with the frame's {self.frame_records} "
                           "(docs/gl-capture.md, limits)")
-        for i in range(n):
-            at = offset + i * stride
-            if elements:
-                count, instances, first, base_vertex, base_instance = struct.unpack_from("<IIIiI", data, at)
-                one = [("mode", d.get("mode")), ("count", count), ("type", type_), ("indices", first * item),
-                       ("instancecount", instances), ("basevertex", base_vertex), ("baseinstance", base_instance)]
-                single = "glDrawElementsInstancedBaseVertexBaseInstance"
-            else:
-                count, instances, first, base_instance = struct.unpack_from("<4I", data, at)
-                one = [("mode", d.get("mode")), ("first", first), ("count", count), ("instancecount", instances),
-                       ("baseinstance", base_instance)]
-                single = "glDrawArraysInstancedBaseInstance"
-            self.h_draw_under_program(no, single, None, one)
+        try:
+            for i in range(n):
+                at = offset + i * stride
+                if elements:
+                    count, instances, first, base_vertex, base_instance = struct.unpack_from("<IIIiI", data, at)
+                    one = [("mode", d.get("mode")), ("count", count), ("type", type_), ("indices", first * item),
+                           ("instancecount", instances), ("basevertex", base_vertex),
+                           ("baseinstance", base_instance)]
+                    single = "glDrawElementsInstancedBaseVertexBaseInstance"
+                else:
+                    count, instances, first, base_instance = struct.unpack_from("<4I", data, at)
+                    one = [("mode", d.get("mode")), ("first", first), ("count", count), ("instancecount", instances),
+                           ("baseinstance", base_instance)]
+                    single = "glDrawArraysInstancedBaseInstance"
+                self.multi_draw_index = i
+                self.h_draw_under_program(no, single, None, one)
+        finally:
+            self.multi_draw_index = 0
 
     def h_draw_arrays(self, no, name, a, args):
         d = self.draw_args(no, name, a, args)
