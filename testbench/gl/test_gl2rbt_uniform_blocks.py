@@ -86,3 +86,27 @@ def test_multi_bind_of_uniform_buffers(tmp_path, call):
     want = (6, 2) if call.endswith("Range") else (9, 9)
     assert convert(tmp_path, made(False), "bound") == moved(tmp_path, *want)
     assert convert(tmp_path, made(True), "unbound") == moved(tmp_path, 0, 0)
+
+
+def test_a_block_beside_a_buffer_the_gpu_wrote(tmp_path):
+    """Once any buffer holds what the GPU wrote, each draw's blocks are
+    checked against it: a program with a uniform block whose own buffer the
+    GPU never wrote draws as before (round 14's R14-10: every such draw was
+    refused, a PyOpenGL call made with an argument short), and one whose
+    block reads the written buffer is refused naming the write."""
+    def written(buffer):
+        c = shader_calls(VS_ONE_BLOCK)
+        c.add("glGenBuffers", n=2, buffers=[9, 10]).add("glBindBuffer", target="GL_UNIFORM_BUFFER", buffer=9)
+        c.add("glBufferData", target="GL_UNIFORM_BUFFER", size=16, data=struct.pack("<4f", 6, 2, 0, 0),
+              usage="GL_STATIC_DRAW")
+        c.add("glBindBufferBase", target="GL_UNIFORM_BUFFER", index=0, buffer=9)
+        c.add("glBindBuffer", target="GL_PIXEL_PACK_BUFFER", buffer=buffer)
+        if buffer == 10:
+            c.add("glBufferData", target="GL_PIXEL_PACK_BUFFER", size=16, data=None, usage="GL_STREAM_READ")
+        c.add("glReadPixels", x=0, y=0, width=1, height=1, format="GL_RGBA", type="GL_FLOAT", pixels=0)
+        c.add("glBindBuffer", target="GL_PIXEL_PACK_BUFFER", buffer=0)
+        return draw(c)
+    assert convert(tmp_path, written(10), "other") == moved(tmp_path, 6, 2)
+    from gl_captures import gl2rbt_timed, refused
+    r = gl2rbt_timed(tmp_path, written(9).write(tmp_path / "own.xz", images=True), "-o", tmp_path / "own.rbt")
+    refused(r, "reads its GL_UNIFORM_BUFFER binding 0 from buffer 9, which the GPU wrote at call", "glReadPixels")

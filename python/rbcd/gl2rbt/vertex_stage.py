@@ -505,8 +505,10 @@ class VertexStage:
         """{(target, binding)} of the uniform and shader storage blocks
         Mesa's program of the draw reads, as bound now."""
         GL = self.gl
-        out = {("GL_UNIFORM_BUFFER", int(GL.glGetActiveUniformBlockiv(mp.name, i, GL.GL_UNIFORM_BLOCK_BINDING)))
-               for i in range(GL.glGetProgramiv(mp.name, GL.GL_ACTIVE_UNIFORM_BLOCKS))}
+        out, binding = set(), np.zeros(1, np.int32)
+        for i in range(GL.glGetProgramiv(mp.name, GL.GL_ACTIVE_UNIFORM_BLOCKS)):
+            GL.glGetActiveUniformBlockiv(mp.name, i, GL.GL_UNIFORM_BLOCK_BINDING, binding)
+            out.add(("GL_UNIFORM_BUFFER", int(binding[0])))
         n = np.zeros(1, np.int32)
         GL.glGetProgramInterfaceiv(mp.name, GL.GL_SHADER_STORAGE_BLOCK, GL.GL_ACTIVE_RESOURCES, n)
         for i in range(int(n[0])):
