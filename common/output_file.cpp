@@ -137,7 +137,14 @@ void remove_on_interrupt(const std::string& path) {
         struct sigaction sa {};
         sa.sa_handler = on_fatal_signal;
         sigemptyset(&sa.sa_mask);
-        for (int sig : kInterrupts) ::sigaction(sig, &sa, nullptr);
+        for (int sig : kInterrupts) {
+            // SIGINT or SIGHUP ignored when the program started (a script's
+            // background job, nohup) stays ignored, as in every Unix tool.
+            struct sigaction old {};
+            if ((sig == SIGINT || sig == SIGHUP) && ::sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN)
+                continue;
+            ::sigaction(sig, &sa, nullptr);
+        }
         return true;
     }();
     (void)installed;

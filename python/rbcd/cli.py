@@ -451,7 +451,10 @@ def main_wrapper(prog, fn, argv):
     UsageError; 1 and one line for WriteError and any other error; 130 when
     interrupted. Never a traceback."""
     for s in (signal.SIGTERM, signal.SIGHUP):
-        signal.signal(s, _interrupt)
+        # SIGHUP ignored when the program started (nohup) stays ignored, as
+        # Python keeps an ignored SIGINT.
+        if s == signal.SIGTERM or signal.getsignal(s) is not signal.SIG_IGN:
+            signal.signal(s, _interrupt)
     try:
         return fn(argv)
     except UsageError as e:

@@ -822,7 +822,10 @@ def execute(out, plan, runs, workers, quiet, resume="rerun the same command to r
     than workers: the spare cores go to each run's frames (rbcd-sim --jobs), the
     same bytes as one process (docs/sweeps.md, "Speed")."""
     runner = Runner(workers // len(runs) if 0 < len(runs) < workers else 1)
-    old = {s: signal.signal(s, runner.stop) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    # SIGINT or SIGHUP ignored when the program started (a script's
+    # background job, nohup) stays ignored.
+    old = {s: signal.signal(s, runner.stop) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+           if s == signal.SIGTERM or signal.getsignal(s) is not signal.SIG_IGN}
     prog = Progress(len(runs), quiet)
     prog.tick(None)
     ex = concurrent.futures.ThreadPoolExecutor(max_workers=max(1, workers))

@@ -760,6 +760,37 @@ def test_a_signal_while_numpy_loads_is_an_interruption(monkeypatch):
         cli.INTERRUPTED.clear()
 
 
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGHUP], ids=["int", "hup"])
+def test_a_signal_ignored_when_the_run_started_stays_ignored(tmp_path, sig):
+    """SIGINT ignored at start (a script's background job, `cmd &`) or
+    SIGHUP (nohup) stays ignored by the converter and by rbcd-gl-raster,
+    its child: sent to the whole group again and again while 300 frames
+    convert, the run ends as without it (round 14's R14-9: the
+    rasterizer took it, and the run was interrupted from about 0.8 s)."""
+    c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    for _ in range(300):
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup").swap()
+    cap = c.write(tmp_path / "n.xz")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    p = subprocess.Popen(["/usr/bin/python3", GL2RBT, cap, "-o", tmp_path / "n.rbt"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, env=env, start_new_session=True,
+                         preexec_fn=lambda: signal.signal(sig, signal.SIG_IGN))
+    sent = 0
+    while p.poll() is None:
+        time.sleep(0.1)
+        try:
+            os.killpg(p.pid, sig)
+            sent += 1
+        except ProcessLookupError:
+            break
+    out, err = p.communicate(timeout=120)
+    assert p.returncode == 0 and err == "", (p.returncode, err)
+    assert sent >= 5 and (tmp_path / "n.rbt").read_bytes().count(b"\nframe ") == 300
+
+
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=["int", "term", "hup"])
 def test_a_signal_at_start_up_is_an_interruption(tmp_path, sig):
     """A signal before the converter's handlers are in place (Python still

@@ -207,9 +207,10 @@ def on_signal(signum, frame):
 
 def main(argv=None):
     for sig in HANDLED:
-        # SIGINT ignored when the program started (a shell's background
-        # job) stays ignored.
-        if sig != signal.SIGINT or signal.getsignal(sig) is not signal.SIG_IGN:
+        # SIGINT or SIGHUP ignored when the program started (a script's
+        # background job, nohup) stays ignored, here and in the children
+        # (rbcd-gl-raster keeps it so too).
+        if sig == signal.SIGTERM or signal.getsignal(sig) is not signal.SIG_IGN:
             signal.signal(sig, on_signal)
     trace = None
     try:
