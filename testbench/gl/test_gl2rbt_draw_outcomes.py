@@ -801,7 +801,8 @@ def test_a_signal_at_start_up_is_an_interruption(tmp_path, sig):
     cap = draw(shader_calls(VS)).write(tmp_path / "s.xz")
     p = subprocess.Popen(["/usr/bin/python3", GL2RBT, str(cap), "-o", str(tmp_path / "s.rbt")],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         preexec_fn=lambda: signal.pthread_sigmask(signal.SIG_BLOCK, [sig]))
+                         preexec_fn=lambda: (signal.signal(sig, signal.SIG_DFL),   # (were the tests' ignored)
+                                             signal.pthread_sigmask(signal.SIG_BLOCK, [sig])))
     os.kill(p.pid, sig)
     out, err = p.communicate(timeout=60)
     assert p.returncode == 130 and err.splitlines() == ["rbcd-gl2rbt: interrupted"] and out == "", (p.returncode, err)
