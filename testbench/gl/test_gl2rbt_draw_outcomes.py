@@ -642,6 +642,33 @@ def test_commands_a_shader_may_store_are_refused(tmp_path):
         "a readonly block stores nothing"
 
 
+def test_a_program_another_context_deletes_lives_while_in_use(tmp_path):
+    """A loader context sharing the drawing context's objects deletes the
+    program the drawing context uses: GL only flags it, and the drawing
+    context draws with it, its uniforms still set (round 14's R14-5:
+    "malformed arguments (KeyError)"); once the drawing context uses
+    another, the name is gone."""
+    moved_vs = VS.replace("uniform", "").replace("void main() {", "uniform vec2 d;\nvoid main() {").replace(
+        "p.x / 32.0", "(p.x + d.x) / 32.0")
+
+    def capture(delete):
+        c = shader_calls(moved_vs).add("glXMakeCurrent", dpy=1, drawable=2, ctx=1, ret=True)
+        c.add("glGetUniformLocation", program=2, name="d", ret=0).add("glUniform2f", location=0, v0=6.0, v1=0.0)
+        c.add("glXCreateContextAttribsARB", dpy=1, config=1, share_context=1, direct=1,
+              attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3, "GLX_CONTEXT_MINOR_VERSION_ARB", 3,
+                           "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0], ret=9)
+        c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=9, ret=True)
+        if delete:
+            c.add("glDeleteProgram", program=2)
+        c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=1, ret=True)
+        return draw(c.add("glUniform2f", location=0, v0=12.0, v1=0.0))
+    assert trace(tmp_path, capture(True), "deleted") == trace(tmp_path, capture(False), "kept")
+    c = capture(True).add("glUseProgram", program=0).add("glUseProgram", program=2)
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap()
+    r = gl2rbt(tmp_path, c.write(tmp_path / "g.xz"), "-o", tmp_path / "g.rbt")
+    assert r.returncode == 0, r.stderr   # (glUseProgram of the name gone: GL_INVALID_VALUE, nothing drawn)
+
+
 @pytest.mark.parametrize("share", [1, 0], ids=["shared", "unshared"])
 def test_a_second_context_s_state_is_its_own(tmp_path, share):
     """A second context (a loader's) that binds, sets the viewport and uses

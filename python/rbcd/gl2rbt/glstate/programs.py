@@ -203,6 +203,22 @@ class ProgramCalls:
     def in_a_pipeline(self, v):
         return any(v in pipe.stages.values() for pipe in self.s.pipelines.values())
 
+    def in_use_elsewhere(self, v):
+        """Program v is in use in another live context of the current one's
+        share group (its program, or a stage of one of its pipelines): a
+        deletion waits for it too."""
+        here = getattr(self, "state_context", None)
+        if here is None:
+            return False
+        group = self.share_group(here)
+        for ctx, state in self.context_states.items():
+            if ctx == here or ctx in self.destroyed_contexts or self.share_group(ctx) != group:
+                continue
+            if state.get("program") == v or any(v in pipe.stages.values()
+                                               for pipe in state.get("pipelines", {}).values()):
+                return True
+        return False
+
     def h_create_shader(self, no, name, a, args):
         stage = STAGES.get(a[0] if a else None)
         if stage is None or not isinstance(self.ret, int):
@@ -317,7 +333,7 @@ class ProgramCalls:
         pipeline's stage given another): its old executable goes, and so
         does the program if it was deleted while in use."""
         p = self.s.programs.get(v)
-        if p is None or v == self.s.program or self.in_a_pipeline(v):
+        if p is None or v == self.s.program or self.in_a_pipeline(v) or self.in_use_elsewhere(v):
             return
         p.in_use_before = None
         if p.deleted:
@@ -331,8 +347,8 @@ class ProgramCalls:
         if not isinstance(v, int) or isinstance(v, bool) or v not in self.s.programs:
             return   # 0 is ignored; an unknown name is GL_INVALID_VALUE
         self.s.deleted_programs.add(v)
-        if v == self.s.program or self.in_a_pipeline(v):
-            self.s.programs[v].deleted = True   # gone once no pipeline nor the context uses it
+        if v == self.s.program or self.in_a_pipeline(v) or self.in_use_elsewhere(v):
+            self.s.programs[v].deleted = True   # gone once no pipeline nor context uses it
         else:
             del self.s.programs[v]
 
