@@ -58,6 +58,34 @@ def fbo(c, fb=3, rb=4, w=64, h=48, texture=False, gen=True):
                  renderbuffertarget="GL_RENDERBUFFER", renderbuffer=rb)
 
 
+@pytest.mark.parametrize("attach", ["face", "layered", "slice"])
+def test_a_cube_face_or_a_slice_of_the_screen_s_size_is_another_pass(tmp_path, attach):
+    """A depth cube map of 64 x 64 (the screen's width, taller than it) with
+    a face attached by glFramebufferTexture2D, the whole cube map by
+    glFramebufferTexture (layered), or a 3D texture's slice by
+    glFramebufferTexture3D (GL 3.0 core; it had been refused): a point
+    light's shadow, not the camera pass, so the triangle drawn there is
+    left out (round 14's R14-7: a face was taken as the camera pass)."""
+    c = shader_calls(VS).add("glGenTextures", n=1, textures=[4])
+    target = "GL_TEXTURE_3D" if attach == "slice" else "GL_TEXTURE_CUBE_MAP"
+    c.add("glBindTexture", target=target, texture=4)
+    if attach == "slice":
+        c.add("glTexStorage3D", target=target, levels=1, internalformat="GL_DEPTH_COMPONENT24", width=64, height=64,
+              depth=4)
+    else:
+        c.add("glTexStorage2D", target=target, levels=1, internalformat="GL_DEPTH_COMPONENT24", width=64, height=64)
+    c.add("glGenFramebuffers", n=1, framebuffers=[3]).add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3)
+    if attach == "face":
+        c.add("glFramebufferTexture2D", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+              textarget="GL_TEXTURE_CUBE_MAP_POSITIVE_Y", texture=4, level=0)
+    elif attach == "layered":
+        c.add("glFramebufferTexture", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT", texture=4, level=0)
+    else:
+        c.add("glFramebufferTexture3D", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+              textarget="GL_TEXTURE_3D", texture=4, level=0, zoffset=2)
+    assert fragments(trace(tmp_path, reference(c), attach)) == 0
+
+
 @pytest.mark.parametrize("how", ["never generated", "deleted"])
 def test_a_core_profile_binds_only_generated_framebuffers(tmp_path, how):
     """glBindFramebuffer of a name glGenFramebuffers did not give (the

@@ -58,6 +58,12 @@ def texture_image_digest(d):
     return h.hexdigest()
 
 
+# Textures whose attached image is one of several (a face, a layer, a
+# slice) or all of them (layered rendering).
+LAYERED_TARGETS = {"GL_TEXTURE_CUBE_MAP", "GL_TEXTURE_CUBE_MAP_ARRAY", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_3D",
+                   "GL_TEXTURE_1D_ARRAY", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"}
+
+
 class FramebufferCalls:
     """self.s.draw_fbo: the bound draw framebuffer; self.s.fbo_depth[fbo] =
     ("texture" | "renderbuffer", name) of its depth attachment (a deleted
@@ -113,6 +119,11 @@ class FramebufferCalls:
             # A texture's level other than 0 has that level's size (or none
             # given: the framebuffer is incomplete and draws nothing there).
             key = None if not obj else (kind, obj) if level == 0 else (kind, obj, level)
+            if key and kind == "texture" and self.s.texture_targets.get(obj) in LAYERED_TARGETS:
+                # A cube map's face or all of a layered texture (a
+                # point light's shadow, a reflection): named so, of no
+                # size the converter knows, another pass than the camera's.
+                key += ("layer", d.get("textarget", "all"))
             if attachment in DEPTH_ATTACHMENTS:
                 self.s.fbo_depth[fb] = key
             elif key is None:
@@ -144,6 +155,13 @@ class FramebufferCalls:
             self.s.fbo_depth[fb] = self.s.fbo_depth[fb] + ("layer", layer)
         elif attachment in OTHER_ATTACHMENTS and attachment in self.s.fbo_attachments.get(fb, {}):
             self.s.fbo_attachments[fb][attachment] = self.s.fbo_attachments[fb][attachment] + ("layer", layer)
+
+    def h_framebuffer_texture_3d(self, no, name, a, args):
+        """glFramebufferTexture3D: slice `zoffset` of a 3D texture, as
+        glFramebufferTextureLayer attaches it."""
+        d = dict(args)
+        self.h_framebuffer_texture_layer(no, name, a, [(k, v) for k, v in args if k != "zoffset"]
+                                         + [("layer", d.get("zoffset", 0))])
 
     def h_renderbuffer_storage(self, no, name, a, args):
         d = dict(args)
@@ -503,7 +521,9 @@ class FramebufferCalls:
         "glDeleteFramebuffers": h_delete_framebuffers,
         "glBlitFramebuffer": h_blit_framebuffer,
         "glBlitNamedFramebuffer": h_blit_framebuffer,
+        "glFramebufferTexture1D": h_framebuffer_texture,
         "glFramebufferTexture2D": h_framebuffer_texture,
+        "glFramebufferTexture3D": h_framebuffer_texture_3d,
         "glFramebufferTextureLayer": h_framebuffer_texture_layer,
         "glFramebufferTexture": h_framebuffer_texture,
         "glFramebufferRenderbuffer": h_framebuffer_texture,
