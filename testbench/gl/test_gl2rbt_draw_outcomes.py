@@ -608,6 +608,18 @@ def test_vertex_data_the_gpu_wrote_is_refused(tmp_path, write, words):
     refused(r, "glDrawArrays reads attribute 0 from buffer 1, which the GPU wrote at call", words)
 
 
+def test_a_pack_read_gl_refuses_writes_nothing(tmp_path):
+    """glReadPixels into a pack buffer too small for its pixels (8 x 8 RGBA
+    floats into the 36 bytes of the vertex buffer: GL_INVALID_OPERATION in
+    Mesa) or of no pixel writes nothing: the buffer is still the
+    capture's, and the draw converts (round 14's R14-11: refused)."""
+    plain = trace(tmp_path, draw(shader_calls(VS)), "plain")
+    for tag, w in (("large", 8), ("empty", 0)):
+        c = shader_calls(VS).add("glBindBuffer", target="GL_PIXEL_PACK_BUFFER", buffer=1)
+        c.add("glReadPixels", x=0, y=0, width=w, height=8, format="GL_RGBA", type="GL_FLOAT", pixels=0)
+        assert trace(tmp_path, draw(c), tag) == plain, tag
+
+
 def test_commands_a_shader_may_store_are_refused(tmp_path):
     """A program whose fragment shader declares a shader storage block
     draws with buffer 9 bound there; buffer 9 then holds an indirect draw's

@@ -158,8 +158,20 @@ class BufferCalls:
         """glReadPixels, glGetTexImage and their kin: with a pixel pack
         buffer bound, the GPU writes the pixels into it."""
         b = self.s.bound.get("GL_PIXEL_PACK_BUFFER", 0)
-        if b:
-            self.gpu_wrote_buffer(no, b, f"{base_name(name)} into the pixel pack buffer")
+        if not b:
+            return
+        d = dict(args)
+        if base_name(name) in ("glReadPixels", "glReadnPixels"):
+            # What GL refuses writes nothing: no pixel (a size of 0 or
+            # less), or fewer bytes past the offset than the pixels take
+            # packed as tightly as any pack state packs them.
+            w, h, at = d.get("width"), d.get("height"), d.get("pixels", d.get("data"))
+            fmt, kind = d.get("format"), d.get("type")
+            pixel = PACKED_BYTES.get(kind) or FORMAT_COMPONENTS.get(fmt, 0) * TYPE_BYTES.get(kind, 0)
+            if all(isinstance(v, int) and not isinstance(v, bool) for v in (w, h, at)) and pixel and \
+                    (w <= 0 or h <= 0 or at < 0 or at + w * h * pixel > len(self.s.buffers.get(b, b""))):
+                return
+        self.gpu_wrote_buffer(no, b, f"{base_name(name)} into the pixel pack buffer")
 
     def h_query_result(self, no, name, a, args):
         """glGetQueryObject* with a query buffer bound, glGetQueryBufferObject*:
