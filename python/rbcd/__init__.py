@@ -1,6 +1,7 @@
 """rbcd: the Python tools of rbcd-tlm (docs/python.md).
 
     rbcd.cli          the project's rules for inputs, outputs and messages
+    rbcd.startup      signals while a launcher loads its tool (before the tool's own handlers)
     rbcd.sweep        rbcd-sweep: design-space sweeps, local or on SLURM
     rbcd.plot         rbcd-plot: plots of sweep results and tile databases
     rbcd.evaluate     the paper's figures and tables (scripts/reproduce.sh)

@@ -450,10 +450,10 @@ def main_wrapper(prog, fn, argv):
     """fn(argv) with the project's exit statuses: its return value; 2 and one line for
     UsageError; 1 and one line for WriteError and any other error; 130 when
     interrupted. Never a traceback."""
+    from .startup import kept, release_signals
+    release_signals()
     for s in (signal.SIGTERM, signal.SIGHUP):
-        # SIGHUP ignored when the program started (nohup) stays ignored, as
-        # Python keeps an ignored SIGINT.
-        if s == signal.SIGTERM or signal.getsignal(s) is not signal.SIG_IGN:
+        if kept(s):   # (SIGHUP ignored when the program started, nohup, stays ignored)
             signal.signal(s, _interrupt)
     try:
         return fn(argv)

@@ -32,6 +32,7 @@ import time
 import tomllib
 
 from rbcd.cli import UsageError, escape, main_wrapper, open_trace, read_input_text, say, trace_errors, write_output
+from rbcd.startup import kept
 
 PROG = "rbcd-sweep"
 # Where the package is: REPO/python/rbcd in the source tree, P/share/rbcd/python/rbcd
@@ -824,8 +825,7 @@ def execute(out, plan, runs, workers, quiet, resume="rerun the same command to r
     runner = Runner(workers // len(runs) if 0 < len(runs) < workers else 1)
     # SIGINT or SIGHUP ignored when the program started (a script's
     # background job, nohup) stays ignored.
-    old = {s: signal.signal(s, runner.stop) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-           if s == signal.SIGTERM or signal.getsignal(s) is not signal.SIG_IGN}
+    old = {s: signal.signal(s, runner.stop) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP) if kept(s)}
     prog = Progress(len(runs), quiet)
     prog.tick(None)
     ex = concurrent.futures.ThreadPoolExecutor(max_workers=max(1, workers))

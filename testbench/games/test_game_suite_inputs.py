@@ -262,3 +262,20 @@ def test_the_committed_summaries_are_as_the_converter_writes_them():
                        timeout=600)
     assert r.returncode == 0 and r.stderr == "" and r.stdout.count("summary.jsonl is as the converter writes it") \
         == len(entries) > 0, (r.returncode, r.stdout, r.stderr)
+
+
+@pytest.mark.parametrize("tool", ["game-suite", "rbcd-sweep", "rbcd-plot"])
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["int", "term"])
+def test_a_signal_at_start_up_is_an_interruption(tmp_path, tool, sig):
+    """A signal before the tool's own handlers are in place (Python still
+    loading its modules) ends it in one line, "interrupted", exit 130
+    (round 14's R14-3: a traceback, or a silent death by SIGTERM). Sent
+    while the child still blocks it (its mask taken from here), it arrives
+    at the launcher's first moment (rbcd.startup)."""
+    p = subprocess.Popen(["/usr/bin/python3", os.path.join(ROOT, "scripts", tool), "--help"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: (signal.signal(sig, signal.SIG_DFL),
+                                             signal.pthread_sigmask(signal.SIG_BLOCK, [sig])))
+    os.kill(p.pid, sig)
+    out, err = p.communicate(timeout=60)
+    assert p.returncode == 130 and err.splitlines() == [f"{tool}: interrupted"] and out == "", (p.returncode, err)

@@ -775,6 +775,29 @@ def test_a_signal_ctypes_wraps_is_an_interruption(tmp_path, monkeypatch, capsys)
     assert capsys.readouterr().err.splitlines() == [f"rbcd-gl2rbt: {cap}: interrupted"]
 
 
+@pytest.mark.parametrize("failure", [MemoryError, lambda: OSError(12, "Cannot allocate memory"),
+                                     lambda: MemoryError("GL_OUT_OF_MEMORY in glBufferData")],
+                         ids=["python", "mapping", "mesa"])
+def test_out_of_memory_is_one_line(tmp_path, monkeypatch, capsys, failure):
+    """Past the process's memory limit (ulimit -v) before the documented
+    bounds refuse the capture, an allocation, a mapping or Mesa's copy
+    (GL_OUT_OF_MEMORY, which the vertex stage raises as MemoryError) fails:
+    one line saying so, exit 1, no output (round 14's R14-4: "internal
+    error: MemoryError"; Mesa's GL_OUT_OF_MEMORY had made the draws GL
+    errors of the capture's, exit 0)."""
+    from rbcd.gl2rbt import cli, raster
+
+    def convert(args, report=None):
+        raise failure()
+    monkeypatch.setattr(raster, "convert", convert)
+    cap = draw(shader_calls(VS)).write(tmp_path / "m.xz")
+    assert cli.run(cli.parse_args([str(cap), "-o", str(tmp_path / "m.rbt")])) == 1
+    assert capsys.readouterr().err.splitlines() == [
+        f"rbcd-gl2rbt: {cap}: out of memory (the process's memory limit is below what the capture needs within the "
+        "documented limits); no output written"]
+    assert left_behind(tmp_path, ["m.xz"]) == []
+
+
 def test_a_signal_while_numpy_loads_is_an_interruption(monkeypatch):
     """numpy's import turns a KeyboardInterrupt raised inside it into an
     ImportError: after a signal that is an interruption, not "numpy is not

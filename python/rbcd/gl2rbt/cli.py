@@ -1,11 +1,13 @@
 """rbcd-gl2rbt's command line."""
 import argparse
+import errno
 import re
 import signal
 import sys
 import threading
 
 from ..cli import UsageError, WriteError, remove_temporaries, to_standard_output
+from ..startup import kept
 from .errors import LAST_WORD, ConvertError, ToolError, printable
 
 PROG = "rbcd-gl2rbt"
@@ -150,6 +152,13 @@ def run(args):
         sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
         return 1
     except Exception as e:   # noqa: BLE001: the promise is one line, whatever failed
+        if isinstance(e, MemoryError) or isinstance(e, OSError) and e.errno == errno.ENOMEM:
+            # Past the process's memory limit (ulimit -v) before any of the
+            # documented bounds (docs/gl-capture.md, limits) refused the
+            # input: an allocation or a mapping failed.
+            sys.stderr.write(f"{PROG}: {printable(args.trace)}: out of memory (the process's memory limit is below "
+                             "what the capture needs within the documented limits); no output written\n")
+            return 1
         if INTERRUPTED.is_set():
             # A signal's KeyboardInterrupt wrapped by what it was raised in
             # (ctypes converting a PyOpenGL call's arguments: ArgumentError).
@@ -210,7 +219,7 @@ def main(argv=None):
         # SIGINT or SIGHUP ignored when the program started (a script's
         # background job, nohup) stays ignored, here and in the children
         # (rbcd-gl-raster keeps it so too).
-        if sig == signal.SIGTERM or signal.getsignal(sig) is not signal.SIG_IGN:
+        if kept(sig):
             signal.signal(sig, on_signal)
     trace = None
     try:

@@ -29,6 +29,7 @@ from .vertex_textures import IMAGE_TARGETS, SAMPLER_TARGETS, VertexTextures
 # images are not kept (docs/gl-capture.md).
 BUFFER_SAMPLERS = {"GL_SAMPLER_BUFFER", "GL_INT_SAMPLER_BUFFER", "GL_UNSIGNED_INT_SAMPLER_BUFFER"}
 SAMPLER = re.compile(r"GL_(INT_|UNSIGNED_INT_)?(SAMPLER|IMAGE)_")
+GL_OUT_OF_MEMORY = 0x505
 GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INVALID_OPERATION",
              0x505: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
 UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
@@ -631,6 +632,10 @@ class VertexStage:
                                                         prims)
         except GLError as e:
             op = getattr(getattr(e, "baseOperation", None), "__name__", "a call")
+            if getattr(e, "err", None) == GL_OUT_OF_MEMORY:
+                # Mesa's copy could not be given the capture's data: the
+                # converter's memory, not the capture's error.
+                raise MemoryError(f"GL_OUT_OF_MEMORY in {op}")
             code = GL_ERRORS.get(getattr(e, "err", None), f"GL error {getattr(e, 'err', '?')}")
             raise DrawRejected(f"{code} in {op}")
         finally:
@@ -665,6 +670,8 @@ class VertexStage:
             types = [u, i, u, p] + [i] * (len(args) - 5) + [u] if "Elements" in name else [u, i, i, i, u]
             self.mesa.proc(name + "EXT", *types)(*args)
             err = GL.glGetError()
+            if err == GL_OUT_OF_MEMORY:
+                raise MemoryError(f"GL_OUT_OF_MEMORY in {name}EXT")
             if err:
                 raise DrawRejected(f"{GL_ERRORS.get(int(err), f'GL error {int(err)}')} in {name}EXT")
             return
