@@ -100,7 +100,7 @@ class FramebufferCalls:
         if target in ("GL_FRAMEBUFFER", "GL_READ_FRAMEBUFFER"):
             self.s.read_fbo = fb
 
-    def h_framebuffer_texture(self, no, name, a, args):
+    def h_framebuffer_texture(self, no, name, a, args, layer=None):
         """glFramebufferTexture(2D), glFramebufferRenderbuffer: an image
         attached to the framebuffer bound at the call's target, the depth
         one (which pass the framebuffer is) and the others (each must have
@@ -119,7 +119,9 @@ class FramebufferCalls:
             # A texture's level other than 0 has that level's size (or none
             # given: the framebuffer is incomplete and draws nothing there).
             key = None if not obj else (kind, obj) if level == 0 else (kind, obj, level)
-            if key and kind == "texture" and self.s.texture_targets.get(obj) in LAYERED_TARGETS:
+            if key and layer is not None:
+                key += ("layer", layer)   # (glFramebufferTextureLayer's)
+            elif key and kind == "texture" and self.s.texture_targets.get(obj) in LAYERED_TARGETS:
                 # A cube map's face or all of a layered texture (a
                 # point light's shadow, a reflection): named so, of no
                 # size the converter knows, another pass than the camera's.
@@ -146,15 +148,7 @@ class FramebufferCalls:
         layer = checked(no, integer, d.get("layer", 0), f"{name}: the layer", *I32)
         if layer < 0:
             return
-        self.h_framebuffer_texture(no, name, a, args)
-        fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
-        attachment = d.get("attachment")
-        if not fb or not d.get("texture"):
-            return
-        if attachment in DEPTH_ATTACHMENTS and self.s.fbo_depth.get(fb):
-            self.s.fbo_depth[fb] = self.s.fbo_depth[fb] + ("layer", layer)
-        elif attachment in OTHER_ATTACHMENTS and attachment in self.s.fbo_attachments.get(fb, {}):
-            self.s.fbo_attachments[fb][attachment] = self.s.fbo_attachments[fb][attachment] + ("layer", layer)
+        self.h_framebuffer_texture(no, name, a, args, layer=layer)
 
     def h_framebuffer_texture_3d(self, no, name, a, args):
         """glFramebufferTexture3D: slice `zoffset` of a 3D texture, as
