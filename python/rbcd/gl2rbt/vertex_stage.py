@@ -19,7 +19,6 @@ from .errors import fail_call, printable
 from .gl_tables import INDEX_TYPES
 from .glstate.attributes import element_bytes
 from .glstate.buffers import merge_extents
-from .glstate.programs import COMMENTS
 from .glstate.textures import DEFAULT_BUFFER_TEXTURE
 from .mesa import Mesa, Watchdog
 from .vertex_textures import IMAGE_TARGETS, SAMPLER_TARGETS, VertexTextures
@@ -362,11 +361,12 @@ class VertexStage:
         where = f"program {pname} (linked at call {p.link_call})"
         if "vertex" not in sources:
             fail_call(no, f"{where} has no vertex shader")
-        if CLIP_DISTANCES.search(COMMENTS.sub(" ", sources["vertex"])):
+        vertex = p.scanned["vertex"]   # (as the compiler reads it: glstate.glsl_text)
+        if CLIP_DISTANCES.search(vertex):
             # Mesa 22.3 clips by them even with GL_CLIP_DISTANCEi disabled.
             fail_call(no, f"{where}: its vertex shader writes clip or cull distances (gl_ClipDistance, "
                       "gl_CullDistance): not emulated")
-        if VIEWPORT_OUTPUTS.search(COMMENTS.sub(" ", sources["vertex"])):
+        if VIEWPORT_OUTPUTS.search(vertex):
             fail_call(no, f"{where}: its vertex shader chooses the viewport (gl_ViewportIndex): not emulated")
         prog = GL.glCreateProgram()
         shaders = []

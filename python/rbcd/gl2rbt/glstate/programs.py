@@ -15,6 +15,7 @@ from ...cli import I32, U32, integer, real
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import gl_boolean
+from .glsl_text import MAX_DEPTH, MAX_TOKENS, ExpansionTooLarge, expanded
 
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
@@ -79,6 +80,7 @@ class Program:
         self.block_bindings = {}   # capture block index -> binding point
         self.discards = False      # its fragment shader has a discard statement
         self.stores = False        # a stage declares shader storage blocks or atomic counters
+        self.scanned = {}          # {stage: its source as the compiler reads it} at the last link (glsl_text)
         self.frag_depth = False    # its fragment shader writes gl_FragDepth
         self.digest = ""           # SHA-256 of its stages' sources at the last link (selection rules)
         self.separable = False     # GL_PROGRAM_SEPARABLE as its last link saw it
@@ -304,10 +306,18 @@ class ProgramCalls:
         p.linked, p.objects = (sources, dict(p.bindings)), objects
         p.digest = sources_digest(sources)
         p.separable = p.separable_next
-        fragment = COMMENTS.sub(" ", sources.get("fragment", ""))
+        # Each stage's text as the compiler reads it (macros expanded, every
+        # branch kept: glsl_text), for the scans below and the vertex
+        # stage's refusals.
+        try:
+            p.scanned = {stage: expanded(text) for stage, text in sources.items()}
+        except ExpansionTooLarge:
+            fail_call(no, f"program linked at call {no}: its shaders' macros expand past {MAX_TOKENS} tokens or "
+                      f"{MAX_DEPTH} macros deep (docs/gl-capture.md, limits)")
+        fragment = p.scanned.get("fragment", "")
         # Whether any stage may store into buffers: shader storage blocks not
         # readonly, or atomic counters.
-        p.stores = any(may_store(text) for text in sources.values())
+        p.stores = any(may_store(text) for text in p.scanned.values())
         p.discards = re.search(r"\bdiscard\b", fragment) is not None
         p.frag_depth = re.search(r"\bgl_FragDepth(EXT)?\b", fragment) is not None
         p.link_call = no

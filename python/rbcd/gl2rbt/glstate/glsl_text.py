@@ -1,0 +1,145 @@
+"""GLSL source as the converter's scans read it: what the compiler's
+preprocessor leaves of the text, so that a word the scans look for
+(`discard`, `gl_FragDepth`, `gl_ClipDistance`, `buffer`, `readonly`,
+`atomic_uint`) is found however the source spells it: lines joined where a
+backslash ends them, comments gone, macros expanded (object-like and
+function-like, `##` pasting, `#undef`), directives dropped.
+
+Conditionals are not evaluated: every branch is kept, so a word in any
+branch counts. The scans only ever widen (a fragment shader that may
+discard, a stage that may store, a vertex shader that may write clip
+distances), which is what the converter needs of them: a word in a branch
+the compiler drops costs a draw counted as an upper bound or a refusal,
+never a silent wrong answer. A macro defined twice takes its last
+definition from there on, as the compiler does.
+
+Bounded: macro expansion stops past MAX_TOKENS tokens more than the
+source's or MAX_DEPTH macros inside one another (a macro that doubles itself twenty
+times over); expanded() then raises ExpansionTooLarge."""
+import re
+
+MAX_TOKENS = 1 << 18    # tokens the expansion may add to the source's (game shaders' add hundreds)
+MAX_DEPTH = 64          # macros expanded inside one another
+MAX_PASSES = 8          # a line expanded again, until nothing changes
+
+COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
+CONTINUATION = re.compile(r"\\\r?\n")
+TOKEN = re.compile(r"[A-Za-z_]\w*|\d[\w.]*|##|\S")
+DEFINE = re.compile(r"#\s*define\s+([A-Za-z_]\w*)(\(([^)]*)\))?(.*)", re.S)
+UNDEF = re.compile(r"#\s*undef\s+([A-Za-z_]\w*)")
+
+
+class ExpansionTooLarge(Exception):
+    pass
+
+
+def expanded(source):
+    """The source's text as the scans read it (tokens apart by spaces,
+    lines kept)."""
+    if "define" not in source and "\\" not in source:
+        return COMMENTS.sub(" ", source)   # nothing to join or expand
+    text = COMMENTS.sub(" ", CONTINUATION.sub("", source))
+    macros, lines, budget = {}, [], [MAX_TOKENS + len(TOKEN.findall(text))]
+    for line in text.split("\n"):
+        stripped = line.strip()
+        if stripped.startswith("#"):
+            m = DEFINE.match(stripped)
+            if m:
+                params = None if m.group(2) is None else [p.strip() for p in m.group(3).split(",") if p.strip()]
+                macros[m.group(1)] = (params, TOKEN.findall(m.group(4)))
+            else:
+                m = UNDEF.match(stripped)
+                if m:
+                    macros.pop(m.group(1), None)
+            lines.append("")
+            continue
+        # Expanded again until nothing changes (a macro's expansion naming
+        # a function-like macro whose arguments follow it on the line).
+        tokens = TOKEN.findall(line)
+        for _ in range(MAX_PASSES):
+            again = expand(tokens, macros, frozenset(), 0, budget)
+            if again == tokens:
+                break
+            tokens = again
+        budget[0] -= len(tokens)
+        if budget[0] < 0:
+            raise ExpansionTooLarge()
+        lines.append(" ".join(tokens))
+    return "\n".join(lines)
+
+
+def expand(tokens, macros, hidden, depth, budget):
+    """`tokens` with every macro not in `hidden` expanded, rescanned."""
+    if depth > MAX_DEPTH:
+        raise ExpansionTooLarge()
+    out, i = [], 0
+    while i < len(tokens):
+        tok = tokens[i]
+        i += 1
+        macro = macros.get(tok) if tok not in hidden else None
+        if macro is None:
+            out.append(tok)
+        else:
+            params, body = macro
+            if params is None:
+                out += expand(paste(body), macros, hidden | {tok}, depth + 1, budget)
+            elif i < len(tokens) and tokens[i] == "(":
+                args, i = arguments(tokens, i + 1)
+                out += expand(substitute(body, params, args, macros, hidden, depth, budget), macros,
+                              hidden | {tok}, depth + 1, budget)
+            else:
+                out.append(tok)   # a function-like macro's name without arguments: itself
+        if len(out) > budget[0]:
+            raise ExpansionTooLarge()
+    return out
+
+
+def arguments(tokens, i):
+    """The comma-separated arguments from tokens[i] (just past "(") to the
+    matching ")", and the index past it (the line's end if it has none)."""
+    args, current, level = [], [], 0
+    while i < len(tokens):
+        tok = tokens[i]
+        i += 1
+        if tok == ")" and level == 0:
+            args.append(current)
+            return args, i
+        if tok == "," and level == 0:
+            args.append(current)
+            current = []
+            continue
+        level += tok == "("
+        level -= tok == ")"
+        current.append(tok)
+    args.append(current)
+    return args, i
+
+
+def substitute(body, params, args, macros, hidden, depth, budget):
+    """A function-like macro's body with its parameters replaced: an
+    argument beside `##` as written, any other expanded first; then pasted."""
+    out = []
+    for k, tok in enumerate(body):
+        if tok in params:
+            arg = args[params.index(tok)] if params.index(tok) < len(args) else []
+            beside = k > 0 and body[k - 1] == "##" or k + 1 < len(body) and body[k + 1] == "##"
+            out += arg if beside else expand(arg, macros, hidden, depth + 1, budget)
+        else:
+            out.append(tok)
+    return paste(out)
+
+
+def paste(tokens):
+    """`a ## b` made one token `ab`."""
+    out = []
+    k = 0
+    while k < len(tokens):
+        if tokens[k] == "##" and out and k + 1 < len(tokens):
+            out[-1] += tokens[k + 1]
+            k += 2
+        elif tokens[k] == "##":
+            k += 1
+        else:
+            out.append(tokens[k])
+            k += 1
+    return out
