@@ -869,3 +869,14 @@ def test_a_signal_at_start_up_is_an_interruption(tmp_path, sig):
     out, err = p.communicate(timeout=60)
     assert p.returncode == 130 and err.splitlines() == ["rbcd-gl2rbt: interrupted"] and out == "", (p.returncode, err)
     assert left_behind(tmp_path, ["s.xz"]) == []
+
+
+def test_an_es_vertex_shader_with_a_comment_before_its_version():
+    """OpenGL ES lets comments come before #version (GLSL ES 3.20, 3.4):
+    the empty fragment shader the vertex stage links with it is of its
+    version (round 14's R14-19: of 1.00, and Mesa refused the link)."""
+    from rbcd.gl2rbt.vertex_stage import es_fragment_shader
+    assert es_fragment_shader("/* a header\n comment */ #version 320 es\nvoid main() {}\n").startswith(
+        "#version 320 es\n")
+    assert es_fragment_shader("// note\n#version 300 es\n").startswith("#version 300 es\n")
+    assert es_fragment_shader("void main() {}\n").startswith("#version 100\n")

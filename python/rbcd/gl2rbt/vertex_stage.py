@@ -19,6 +19,7 @@ from .errors import fail_call, printable
 from .gl_tables import INDEX_TYPES
 from .glstate.attributes import element_bytes
 from .glstate.buffers import merge_extents
+from .glstate.programs import COMMENTS
 from .glstate.textures import DEFAULT_BUFFER_TEXTURE
 from .mesa import Mesa, Watchdog
 from .vertex_textures import IMAGE_TARGETS, SAMPLER_TARGETS, VertexTextures
@@ -71,7 +72,9 @@ def block_name(GL, prog, i):
 
 
 def es_fragment_shader(vertex_source):
-    m = re.search(r"^\s*#\s*version\s+(\d+)(\s+es)?", vertex_source, re.M)
+    """An empty fragment shader of the vertex shader's language version
+    (comments may come before its #version: GLSL ES 3.20, 3.4)."""
+    m = re.search(r"^\s*#\s*version\s+(\d+)(\s+es)?", COMMENTS.sub(" ", vertex_source), re.M)
     version = m.group(1) if m else "100"
     if version == "100":
         return "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(0.0); }\n"
