@@ -26,6 +26,7 @@ import json
 import os
 import re
 import shutil
+import signal
 
 import pytest
 
@@ -259,6 +260,26 @@ def test_a_rendered_texture_mesa_s_replay_cannot_give(gl, broken, tmp_path):
         and words in lines[0], lines
     assert not os.path.exists(out)
     assert not [f for f in os.listdir(gl.tmp) if f.startswith(("rbcd-gl2rbt", "."))], os.listdir(gl.tmp)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGSEGV], ids=["kill", "segv"])
+def test_apitrace_ended_by_a_signal_is_not_the_capture_s_fault(gl, tmp_path, sig):
+    """apitrace's reader ended by a signal from outside (killed, out of
+    memory) part way through the capture: a tool's failure in one line,
+    exit 1, no output, not "the capture does not decode", exit 2 (round
+    14's R14-14); it had been taken for a truncated capture. The fake
+    apitrace gives the first 4 KB of the real one's output, then dies."""
+    real = shutil.which("apitrace")
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    (bin_dir / "apitrace").write_text(f"#!/bin/sh\n{real} \"$@\" | head -c 4096\nkill -{int(sig)} $$\n")
+    (bin_dir / "apitrace").chmod(0o755)
+    gl.env["PATH"] = f"{bin_dir}:{gl.env['PATH']}"
+    out = gl.path("k.rbt")
+    r = gl(capture_path("shaders"), "-o", out)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 1 and len(lines) == 1 and f"was ended by signal {int(sig)}" in lines[0], lines
+    assert not os.path.exists(out)
 
 
 def test_a_program_that_does_not_link_is_not_used(gl):

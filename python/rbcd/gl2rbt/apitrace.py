@@ -5,7 +5,7 @@ import signal
 import subprocess
 import tempfile
 
-from .errors import ConvertError, printable
+from .errors import ConvertError, ToolError, printable
 
 
 def where(last):
@@ -91,19 +91,23 @@ def read_apitrace_calls(trace, calls=None):
     err = tempfile.TemporaryFile()
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=err, stdin=subprocess.DEVNULL)
     last = None
-    stopped = False
+    stopped = ended = False
+    undecoded = None
     try:
         reader = CallReader(p.stdout)
         while True:
             try:
                 c = reader.load()
             except EOFError:
+                ended = True
                 break
             except (pickle.UnpicklingError, ValueError, TypeError, AttributeError, IndexError, MemoryError) as e:
-                raise ConvertError(f"{where(last)}: the capture does not decode ({printable(e, 80)})")
+                undecoded = f"the capture does not decode ({printable(e, 80)})"
+                break
             if not (isinstance(c, tuple) and len(c) == 5 and isinstance(c[0], int) and isinstance(c[1], str)
                     and isinstance(c[2], list) and 0 <= c[0] <= (1 << 63) - 1):
-                raise ConvertError(f"{where(last)}: the capture does not decode (unexpected record)")
+                undecoded = "the capture does not decode (unexpected record)"
+                break
             if not call_values_within(c):
                 raise too_many_values(c[0])
             last = c[0]
@@ -113,17 +117,34 @@ def read_apitrace_calls(trace, calls=None):
                 stopped = True
                 break
     finally:
-        if p.poll() is None:
+        # apitrace has ended its output, or will once it is read to the
+        # end: a moment to exit before it is stopped (then by us).
+        if (ended or undecoded is not None) and p.poll() is None:
+            try:
+                p.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                pass
+        ours = p.poll() is None
+        if ours:
             p.kill()
         p.stdout.close()
         rc = p.wait()
     if stopped:
         return
+    if rc < 0 and not ours:
+        if -rc in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            raise KeyboardInterrupt   # the run's group was signalled: interrupted (rbcd.gl2rbt.cli)
+        # Ended by a signal from outside (killed, out of memory): what it
+        # gave is not the whole capture, and the capture is not to blame.
+        raise ToolError(f"{where(last)}: apitrace pickle, reading the capture, was ended by signal {-rc}; "
+                        "no output written")
+    if undecoded is not None:
+        raise ConvertError(f"{where(last)}: {undecoded}")
     err.seek(0)
     msg = err.read(4096).decode("utf-8", "replace")
     bad = [l for l in msg.splitlines() if "error" in l.lower() or "warning: unexpected end" in l.lower()
            or "truncated" in l.lower() or "unsupported" in l.lower() or "failed" in l.lower()]
-    if rc != 0 and rc != -signal.SIGKILL:
+    if rc != 0 and not ours:
         raise ConvertError(f"{where(last)}: apitrace cannot read the capture: "
                            f"{printable((bad or msg.splitlines() or ['exit %d' % rc])[0])}")
     if bad:
