@@ -16,7 +16,7 @@ import time
 import pytest
 
 from conftest import program
-from gl_captures import GL2RBT, TRIANGLE, alive, gl2rbt_timed as gl2rbt, left_behind, refused
+from gl_captures import END_FRAME, GL2RBT, TRIANGLE, alive, gl2rbt_timed as gl2rbt, left_behind, refused
 from test_gl2rbt_hostile import ES_FRAGMENT, VS, shader_calls
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
@@ -652,6 +652,28 @@ def test_commands_a_shader_may_store_are_refused(tmp_path):
     readonly = fs.replace("buffer C", "readonly buffer C").replace("n[0] = 3u; ", "")
     assert trace(tmp_path, capture(True, readonly), "readonly").count(b"\nf ") == plain.count(b"\nf "), \
         "a readonly block stores nothing"
+
+
+def test_a_second_window_is_another_target(tmp_path):
+    """One context draws into the main window (drawable 2), then into a
+    second (drawable 3): a clear and a draw there, and its swap: they are
+    another target's, left out, and its swap ends no frame (round 14's
+    R14-20: drawn and cleared into the main window's camera pass, and every
+    swap ended a frame); the trace is the main window's alone."""
+    want = trace(tmp_path, draw(shader_calls(VS)), "want")
+    c = shader_calls(VS).add("glXMakeCurrent", dpy=1, drawable=2, ctx=1, ret=True)
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+    c.add("glXMakeCurrent", dpy=1, drawable=3, ctx=1, ret=True)
+    c.add("glClear", mask=["GL_DEPTH_BUFFER_BIT"])
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=6, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+    c.add("glXSwapBuffers", dpy=1, drawable=3, flags=END_FRAME)
+    c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=1, ret=True)
+    assert trace(tmp_path, c.swap(), "two") == want
 
 
 def test_a_program_another_context_deletes_lives_while_in_use(tmp_path):

@@ -85,6 +85,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.frame_view = None           # the frame's view matrix (the first perspective draw's model-view)
         self.screen = tuple(args.screen) if args.screen else None
         self.drawable = None             # the window's size, as apitrace records it at each MakeCurrent
+        self.current_drawable = None     # the window or surface MakeCurrent named (its handle)
+        self.main_drawable = None        # the one current at the first draw into a window (on_main_drawable)
         self.context = None              # the context made current last (None: none named yet; 0: released)
         self.draw_context = None         # the context the frames' draws were made in
         self.state_context = None        # the context whose state self.s holds (the last made current)
@@ -250,7 +252,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 return
             if base.startswith(("glCallList", "glArrayElement", "glEvalCoord", "glEvalPoint", "glVertexAttrib")):
                 fail_call(no, f"{printable(name)} between glBegin and glEnd is not emulated")
-            if flags & CALL_FLAG_END_FRAME:
+            if flags & CALL_FLAG_END_FRAME and self.swaps_main_drawable(args):
                 # A buffer swap there ends the frame; Mesa keeps the
                 # primitive's vertices and draws them at glEnd, into the next.
                 self.end_frame(no)
@@ -277,8 +279,15 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.gpu_wrote()
         else:
             fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
-        if flags & CALL_FLAG_END_FRAME:
+        if flags & CALL_FLAG_END_FRAME and self.swaps_main_drawable(args):
             self.end_frame(no)
+
+    def swaps_main_drawable(self, args):
+        """Whether a buffer swap is the main window's (another window's or
+        surface's ends no frame: on_main_drawable)."""
+        d = dict(args)
+        swapped = d.get("drawable", d.get("surface", d.get("hdc")))
+        return self.main_drawable is None or swapped is None or swapped == self.main_drawable
 
     def h_mesa_no_op(self, no, name, a, args):
         pass   # an entry point Mesa answers with a stub (gl_tables.MESA_NO_OPS)
@@ -319,6 +328,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             fail_call(no, f"{printable(name)}: the context {printable(ctx, 40)} is not a handle")
         if self.ret is not None and self.ret in ("EGL_FALSE", "GL_FALSE", 0):
             return   # it failed (a destroyed context, a bad surface): what was current stays current
+        d = dict(args)
+        self.current_drawable = d.get("drawable", d.get("draw", d.get("hdc")))
         self.context = ctx
         if ctx and ctx != self.state_context:
             if self.state_context in self.destroyed_contexts and ctx in self.unshared_contexts:

@@ -599,6 +599,8 @@ class DrawCalls:
         counted as another pass's work."""
         if self.s.draw_fbo:
             self.gpu_wrote()
+        elif self.main_drawable is None:
+            self.main_drawable = self.current_drawable   # the first draw into a window: the main one
         if not self.camera_pass():
             self.offscreen_draws += 1
             return False

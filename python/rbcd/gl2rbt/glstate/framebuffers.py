@@ -489,12 +489,20 @@ class FramebufferCalls:
                 return bits
         return "24"
 
+    def on_main_drawable(self):
+        """Whether the window-system framebuffer now bound is the main
+        window's: the drawable current at the capture's first draw into a
+        window (a second window or surface is another target, as a
+        framebuffer object of another size is: its draws and clears left
+        out, its swaps ending no frame). Before that first draw, any."""
+        return self.main_drawable is None or self.current_drawable == self.main_drawable
+
     def camera_pass(self, fb=None):
         """Whether a draw now writes the frame's camera pass (or would,
         into framebuffer `fb`)."""
         fb = self.s.draw_fbo if fb is None else fb
         if not fb:
-            return True
+            return self.on_main_drawable()
         if self.screen is None:
             self.write_header()   # the screen, from the window or the viewport (or the capture's error)
         depth = self.s.fbo_depth.get(fb)
