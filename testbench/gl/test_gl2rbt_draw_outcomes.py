@@ -875,6 +875,38 @@ def test_a_signal_ignored_when_the_run_started_stays_ignored(tmp_path, sig):
     assert sent >= 5 and (tmp_path / "n.rbt").read_bytes().count(b"\nframe ") == 300
 
 
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGSEGV], ids=["kill", "segv"])
+def test_a_rasterizer_killed_outright_leaves_nothing(tmp_path, sig):
+    """rbcd-gl-raster ended by a signal it has no handler for (SIGKILL, a
+    crash) while it writes -o: the converter says so (exit 1) and removes
+    the temporary the rasterizer was writing -o through, which it could not
+    (round 14's R14-13: a 9 MB `.o.rbt.XXXXXX` stayed)."""
+    c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    for _ in range(2000):
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup").swap()
+    cap = c.write(tmp_path / "k.xz")
+    out = tmp_path / "out"
+    out.mkdir()
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    p = subprocess.Popen(["/usr/bin/python3", GL2RBT, cap, "-o", out / "o.rbt"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, env=env)
+    raster = None
+    while p.poll() is None and raster is None:
+        time.sleep(0.05)
+        kids = subprocess.run(["pgrep", "-P", str(p.pid), "-f", "rbcd-gl-raster"], stdout=subprocess.PIPE,
+                              text=True).stdout.split()
+        if kids and os.listdir(out):   # writing -o's temporary
+            raster = int(kids[0])
+    assert raster is not None, "the rasterizer was not seen writing"
+    os.kill(raster, sig)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 1 and len(err.strip().splitlines()) == 1, (p.returncode, err)
+    assert os.listdir(out) == []
+
+
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=["int", "term", "hup"])
 def test_a_signal_at_start_up_is_an_interruption(tmp_path, sig):
     """A signal before the converter's handlers are in place (Python still
