@@ -226,7 +226,8 @@ class Entry:
 
     def check(self):
         if not os.path.isfile(self.calls):
-            raise UsageError(f"{self.calls}: cannot read the reduced capture: missing")
+            raise UsageError(f"{self.calls}: cannot read the reduced capture: "
+                             + ("not a regular file" if os.path.lexists(self.calls) else "missing"))
         if not os.path.isfile(self.selection):
             raise UsageError(f"{self.toml}: selection: {self.selection}: "
                              + ("not a regular file" if os.path.exists(self.selection) else "missing"))

@@ -68,6 +68,21 @@ def test_check_refuses_an_entry_without_its_selection_file(tmp_path, entry, sele
     refused(game_suite(tmp_path, "check", entry), str(toml), "selection", words)
 
 
+@pytest.mark.parametrize("make", ["fifo", "directory", "device"])
+def test_a_reduced_capture_that_is_not_a_file_is_said_to_be_so(tmp_path, entry, make):
+    """calls.xz a FIFO, a directory or a symlink to a device: "not a
+    regular file", not "missing" (round 14's R14-12), and not opened."""
+    calls = entry / "calls.xz"
+    calls.unlink()
+    if make == "fifo":
+        os.mkfifo(calls)
+    elif make == "directory":
+        calls.mkdir()
+    else:
+        calls.symlink_to("/dev/zero")
+    refused(game_suite(tmp_path, "check", entry), str(calls), "cannot read the reduced capture: not a regular file")
+
+
 @pytest.mark.parametrize("output, target", [
     (f"{NAME}.summary.jsonl", "summary.jsonl"),
     (f"{NAME}.geo", "capture.toml"),
