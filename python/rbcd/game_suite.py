@@ -25,13 +25,16 @@ import hashlib
 import json
 import os
 import re
+import shutil
+import stat
 import subprocess
 import sys
 import threading
+import time
 import tomllib
 
 from rbcd.cli import (UsageError, check_outputs, escape, main_wrapper, open_trace, read_input_text, say,
-                      trace_errors, write_output)
+                      temporary_folder, trace_errors, unregister_temporary, write_output)
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter
@@ -69,12 +72,12 @@ class Conversions:
         self.running = set()
         self.stopped = False
 
-    def run(self, cmd):
+    def run(self, cmd, env=None):
         with self.lock:
             if self.stopped:
                 raise Stopped()
             p = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                 text=True, errors="replace")
+                                 text=True, errors="replace", env=env)
             self.running.add(p)
         try:
             _, err = p.communicate()
@@ -91,6 +94,27 @@ class Conversions:
                     p.terminate()
                 except OSError:
                     pass
+
+
+def remove_temporaries_of(path, since):
+    """The temporaries a process killed outright left beside `path`:
+    `.NAME.` and a random tail (rbcd.cli's and common/output_file.cpp's
+    temporaries), regular files of ours made since `since`."""
+    d, base = os.path.dirname(path) or ".", os.path.basename(path)
+    pattern = re.compile(re.escape(f".{base}.") + r"[A-Za-z0-9]{6,16}")
+    try:
+        names = os.listdir(d)
+    except OSError:
+        return
+    for name in names:
+        if pattern.fullmatch(name):
+            p = os.path.join(d, name)
+            try:
+                st = os.lstat(p)
+                if stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid() and st.st_mtime >= since - 1:
+                    os.unlink(p)
+            except OSError:
+                pass
 
 
 class Stopped(Exception):
@@ -333,7 +357,20 @@ class Entry:
         cmd = [os.path.join(ROOT, "scripts", "rbcd-gl2rbt"), self.calls, "-o", trace, "--geometry", geo,
                "--summary", summary, "--frames", f"{self.first}:{last}",
                "--screen", str(self.screen[0]), str(self.screen[1]), "--select", self.selection, "-q"]
-        returncode, stderr = CONVERSIONS.run(cmd)
+        # The converter's temporary folders in one of expand's own, removed
+        # whatever becomes of it; if it is killed outright (SIGKILL, no
+        # handler of its own ran), the temporaries it wrote its outputs
+        # through beside them are removed too.
+        tmp = temporary_folder("game-suite-convert.")
+        started = time.time()
+        try:
+            returncode, stderr = CONVERSIONS.run(cmd, env=dict(os.environ, TMPDIR=tmp))
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+            unregister_temporary(tmp)
+        if returncode < 0:
+            for path in (trace, geo, summary):
+                remove_temporaries_of(path, started)
         if CONVERSIONS.stopped:
             raise Stopped()
         if returncode != 0:

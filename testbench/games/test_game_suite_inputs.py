@@ -186,6 +186,35 @@ def test_an_interrupted_expand_leaves_nothing(tmp_path, sig):
     assert os.listdir(out) == [], "an interrupted expand left files"
 
 
+def test_a_converter_killed_outright_leaves_nothing(tmp_path):
+    """The converter SIGKILLed while it writes an entry (no handler of its
+    own runs): expand says the conversion failed (exit 1) and removes what
+    it had begun, the temporaries beside the outputs and the converter's
+    temporary folders (round 14's R14-13: `.NAME.geo.XXXXXXXX` and a folder
+    in TMPDIR stayed)."""
+    program("rbcd-gl-raster")
+    out, tmp = tmp_path / "out", tmp_path / "tmp"
+    tmp.mkdir()
+    env = dict(os.environ, TMPDIR=str(tmp), RBCD_GL_RASTER=program("rbcd-gl-raster"))
+    p = subprocess.Popen(["/usr/bin/python3", GAME_SUITE, "expand", "-o", out, "--frames", "40", SOURCE],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                         stdin=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    converter = None
+    while time.monotonic() < deadline and converter is None:
+        time.sleep(0.05)
+        kids = subprocess.run(["pgrep", "-P", str(p.pid), "-f", "rbcd-gl2rbt"], stdout=subprocess.PIPE,
+                              text=True).stdout.split()
+        if kids and out.is_dir() and os.listdir(out):   # its temporaries are there
+            converter = int(kids[0])
+    assert converter is not None, "no converter seen writing"
+    os.kill(converter, signal.SIGKILL)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 1 and "conversion failed" in err, (p.returncode, err)
+    time.sleep(1)   # (its rasterizer, left without input, ends and removes its own)
+    assert os.listdir(out) == [] and os.listdir(tmp) == [], (os.listdir(out), os.listdir(tmp))
+
+
 def test_frames_past_the_entry_expand_the_whole_entry(tmp_path):
     """--frames K of more frames than the entry has: the entry's frames,
     checked against its checksums, and said as many (it reported K frames,
