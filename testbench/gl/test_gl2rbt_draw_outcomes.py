@@ -654,6 +654,35 @@ def test_commands_a_shader_may_store_are_refused(tmp_path):
         "a readonly block stores nothing"
 
 
+@pytest.mark.parametrize("share", [1, 0], ids=["shared", "unshared"])
+def test_a_framebuffer_a_sharing_context_made_is_mesa_s_shared_one(tmp_path, share):
+    """A loader context makes framebuffer 3 (a 16 x 16 depth buffer); the
+    drawing context binds 3 and draws. GL shares no framebuffer objects, but
+    Mesa 22.3 keeps them with the other shared objects: sharing, the draw
+    goes into the loader's framebuffer, another pass, as in Mesa's replay
+    (round 14: drawn into the window, the check 0%); not sharing, 3 is no
+    name of the drawing context's, and the draw stays in the window."""
+    c = shader_calls(VS).add("glXMakeCurrent", dpy=1, drawable=2, ctx=1, ret=True)
+    c.add("glXCreateContextAttribsARB", dpy=1, config=1, share_context=share, direct=1,
+          attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3, "GLX_CONTEXT_MINOR_VERSION_ARB", 3,
+                       "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0], ret=9)
+    c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=9, ret=True)
+    c.add("glGenFramebuffers", n=1, framebuffers=[3]).add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3)
+    c.add("glGenRenderbuffers", n=1, renderbuffers=[4]).add("glBindRenderbuffer", target="GL_RENDERBUFFER",
+                                                            renderbuffer=4)
+    c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_DEPTH_COMPONENT24", width=16,
+          height=16)
+    c.add("glFramebufferRenderbuffer", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+          renderbuffertarget="GL_RENDERBUFFER", renderbuffer=4)
+    c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=1, ret=True)
+    c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3)
+    got = trace(tmp_path, draw(c), "bound")
+    if share:
+        assert got.count(b"\nf ") == 0
+    else:
+        assert got == trace(tmp_path, draw(shader_calls(VS)), "window")
+
+
 def test_a_second_window_is_another_target(tmp_path):
     """One context draws into the main window (drawable 2), then into a
     second (drawable 3): a clear and a draw there, and its swap: they are

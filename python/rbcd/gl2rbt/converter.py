@@ -87,6 +87,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.drawable = None             # the window's size, as apitrace records it at each MakeCurrent
         self.current_drawable = None     # the window or surface MakeCurrent named (its handle)
         self.main_drawable = None        # the one current at the first draw into a window (on_main_drawable)
+        self.drawables = set()           # every one MakeCurrent named
         self.context = None              # the context made current last (None: none named yet; 0: released)
         self.draw_context = None         # the context the frames' draws were made in
         self.state_context = None        # the context whose state self.s holds (the last made current)
@@ -284,10 +285,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
 
     def swaps_main_drawable(self, args):
         """Whether a buffer swap is the main window's (another window's or
-        surface's ends no frame: on_main_drawable)."""
+        surface's, one MakeCurrent named, ends no frame: on_main_drawable)."""
         d = dict(args)
         swapped = d.get("drawable", d.get("surface", d.get("hdc")))
-        return self.main_drawable is None or swapped is None or swapped == self.main_drawable
+        return self.main_drawable is None or swapped == self.main_drawable or swapped not in self.drawables
 
     def h_mesa_no_op(self, no, name, a, args):
         pass   # an entry point Mesa answers with a stub (gl_tables.MESA_NO_OPS)
@@ -330,6 +331,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             return   # it failed (a destroyed context, a bad surface): what was current stays current
         d = dict(args)
         self.current_drawable = d.get("drawable", d.get("draw", d.get("hdc")))
+        self.drawables.add(self.current_drawable)
         self.context = ctx
         if ctx and ctx != self.state_context:
             if self.state_context in self.destroyed_contexts and ctx in self.unshared_contexts:

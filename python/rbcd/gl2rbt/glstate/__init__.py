@@ -155,18 +155,21 @@ class GLState:
         self.vaos[self.vao].fixed_enabled = on
 
 
-# The state contexts of one share group hold in common: the objects GL
-# shares (buffers, textures, renderbuffers, samplers, shaders and programs;
-# not vertex array objects, framebuffers or program pipelines), with what
-# the converter keeps of them; and counters of the whole conversion. Every
-# other field of GLState is a context's own (converter.Converter.h_make_current).
+# The state contexts of one share group hold in common: the objects Mesa
+# shares (buffers, textures, renderbuffers, samplers, shaders and programs,
+# and framebuffer objects, which GL does not share but Mesa 22.3 keeps
+# with the others, so that a framebuffer a loader context made is the
+# drawing context's in Mesa's replay; not vertex array objects or program
+# pipelines), with what the converter keeps of them; and counters of the
+# whole conversion. Every other field of GLState, the bindings included, is
+# a context's own (converter.Converter.h_make_current).
 SHARED_STATE = {
     "buffers", "buffer_versions", "buffer_written", "buffer_held", "buffer_names", "buffer_objects",
     "immutable_buffers", "mappings", "gpu_buffers", "shaders", "programs", "deleted_programs", "sizes", "formats",
     "depth_types",
     "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names", "sampler_names",
     "texture_buffers", "texture_images", "texture_calls", "samplers", "views", "reduced_texture_versions",
-    "rendered_images"}
+    "rendered_images", "fbo_depth", "fbo_attachments", "framebuffer_names"}
 # The memory limits are of all groups together.
 CONVERSION_STATE = {"next_version", "gpu_writes", "readback_call", "buffer_bytes_in_all", "texture_bytes_kept"}
 
