@@ -367,6 +367,30 @@ def temporary_folder(prefix):
     return _new_temporary(tempfile.gettempdir(), prefix, lambda p: os.mkdir(p, 0o700))[1]
 
 
+def remove_left_temporaries(path, since):
+    """The temporaries a process killed outright (SIGKILL, a crash: no
+    handler of its own ran) left beside `path`: `.NAME.` and a random tail
+    (this module's temporaries and common/output_file.cpp's), regular files
+    of ours made since `since` (time.time())."""
+    if not path or path == "-":
+        return
+    d, base = os.path.dirname(path) or ".", os.path.basename(path)
+    pattern = re.compile(re.escape(f".{base}.") + r"[A-Za-z0-9]{6,16}")
+    try:
+        names = os.listdir(d)
+    except OSError:
+        return
+    for name in names:
+        if pattern.fullmatch(name):
+            p = os.path.join(d, name)
+            try:
+                st = os.lstat(p)
+                if stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid() and st.st_mtime >= since - 1:
+                    os.unlink(p)
+            except OSError:
+                pass
+
+
 def remove_temporaries():
     """Removes every registered temporary (files and folders); safe to call
     from another thread than the one running the tool."""

@@ -26,7 +26,6 @@ import json
 import os
 import re
 import shutil
-import stat
 import subprocess
 import sys
 import threading
@@ -34,7 +33,8 @@ import time
 import tomllib
 
 from rbcd.cli import (UsageError, check_outputs, escape, main_wrapper, open_trace, read_input_text, say,
-                      temporary_folder, trace_errors, unregister_temporary, write_output)
+                      remove_left_temporaries, temporary_folder, trace_errors, unregister_temporary,
+                      write_output)
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter
@@ -94,27 +94,6 @@ class Conversions:
                     p.terminate()
                 except OSError:
                     pass
-
-
-def remove_temporaries_of(path, since):
-    """The temporaries a process killed outright left beside `path`:
-    `.NAME.` and a random tail (rbcd.cli's and common/output_file.cpp's
-    temporaries), regular files of ours made since `since`."""
-    d, base = os.path.dirname(path) or ".", os.path.basename(path)
-    pattern = re.compile(re.escape(f".{base}.") + r"[A-Za-z0-9]{6,16}")
-    try:
-        names = os.listdir(d)
-    except OSError:
-        return
-    for name in names:
-        if pattern.fullmatch(name):
-            p = os.path.join(d, name)
-            try:
-                st = os.lstat(p)
-                if stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid() and st.st_mtime >= since - 1:
-                    os.unlink(p)
-            except OSError:
-                pass
 
 
 class Stopped(Exception):
@@ -370,7 +349,7 @@ class Entry:
             unregister_temporary(tmp)
         if returncode < 0:
             for path in (trace, geo, summary):
-                remove_temporaries_of(path, started)
+                remove_left_temporaries(path, started)
         if CONVERSIONS.stopped:
             raise Stopped()
         if returncode != 0:

@@ -85,6 +85,17 @@ static GLuint compile(GLenum kind, const char* text) {
     return s;
 }
 
+/* A program of the two stages, "position" at attribute 1, in use. */
+static GLuint use_program(const char* vertex, const char* fragment) {
+    GLuint p = glCreateProgram();
+    glAttachShader(p, compile(GL_VERTEX_SHADER, vertex));
+    glAttachShader(p, compile(GL_FRAGMENT_SHADER, fragment));
+    glBindAttribLocation(p, 1, "position");
+    glLinkProgram(p);
+    glUseProgram(p);
+    return p;
+}
+
 /* A texture of `target` on texture unit `unit`, immutable storage of one
  * level, nearest filtering. */
 static GLuint layered_texture(GLenum unit, GLenum target, GLenum format, GLsizei w, GLsizei h, GLsizei d) {
@@ -127,12 +138,7 @@ static void layers_draw(void) {
         glClearBufferfv(GL_DEPTH, 0, layer == 1 ? &depth : &far_depth);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    GLuint p = glCreateProgram();
-    glAttachShader(p, compile(GL_VERTEX_SHADER, layers_vertex_source));
-    glAttachShader(p, compile(GL_FRAGMENT_SHADER, layers_fragment_source));
-    glBindAttribLocation(p, 1, "position");
-    glLinkProgram(p);
-    glUseProgram(p);
+    GLuint p = use_program(layers_vertex_source, layers_fragment_source);
     glUniform1i(glGetUniformLocation(p, "cube"), 2);
     glUniform1i(glGetUniformLocation(p, "volume"), 3);
     glUniform1i(glGetUniformLocation(p, "depths"), 4);
@@ -184,12 +190,7 @@ int main(int argc, char** argv) {
         return 1;
     }
 
-    GLuint prog = glCreateProgram();
-    glAttachShader(prog, compile(GL_VERTEX_SHADER, vertex_source));
-    glAttachShader(prog, compile(GL_FRAGMENT_SHADER, fragment_source));
-    glBindAttribLocation(prog, 1, "position");
-    glLinkProgram(prog);
-    glUseProgram(prog);
+    GLuint prog = use_program(vertex_source, fragment_source);
     mvp_at = glGetUniformLocation(prog, "mvp");
     for (int f = 0; f < 6; ++f) {
         const GLushort b = (GLushort)(4 * f);

@@ -873,6 +873,17 @@ def test_a_signal_while_numpy_loads_is_an_interruption(monkeypatch):
         cli.INTERRUPTED.clear()
 
 
+def frames_of_the_triangle(n):
+    """A capture of n frames of the triangle, object 5 (a run of seconds)."""
+    c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    for _ in range(n):
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup").swap()
+    return c
+
+
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGHUP], ids=["int", "hup"])
 def test_a_signal_ignored_when_the_run_started_stays_ignored(tmp_path, sig):
     """SIGINT ignored at start (a script's background job, `cmd &`) or
@@ -880,13 +891,7 @@ def test_a_signal_ignored_when_the_run_started_stays_ignored(tmp_path, sig):
     its child: sent to the whole group again and again while 300 frames
     convert, the run ends as without it (round 14's R14-9: the
     rasterizer took it, and the run was interrupted from about 0.8 s)."""
-    c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
-    c.add("glEnableVertexAttribArray", index=0)
-    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
-    for _ in range(300):
-        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
-        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup").swap()
-    cap = c.write(tmp_path / "n.xz")
+    cap = frames_of_the_triangle(300).write(tmp_path / "n.xz")
     env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
     p = subprocess.Popen(["/usr/bin/python3", GL2RBT, cap, "-o", tmp_path / "n.rbt"], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True, env=env, start_new_session=True,
@@ -910,13 +915,7 @@ def test_a_rasterizer_killed_outright_leaves_nothing(tmp_path, sig):
     crash) while it writes -o: the converter says so (exit 1) and removes
     the temporary the rasterizer was writing -o through, which it could not
     (round 14's R14-13: a 9 MB `.o.rbt.XXXXXX` stayed)."""
-    c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
-    c.add("glEnableVertexAttribArray", index=0)
-    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
-    for _ in range(2000):
-        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
-        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup").swap()
-    cap = c.write(tmp_path / "k.xz")
+    cap = frames_of_the_triangle(2000).write(tmp_path / "k.xz")
     out = tmp_path / "out"
     out.mkdir()
     env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))

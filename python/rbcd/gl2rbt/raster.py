@@ -6,12 +6,11 @@ import os
 import re
 import shutil
 import signal
-import stat
 import struct
 import subprocess
 import time
 
-from ..cli import check_outputs, temporary_folder, unregister_temporary, write_output
+from ..cli import check_outputs, remove_left_temporaries, temporary_folder, unregister_temporary, write_output
 from .capture import check_input_file, check_rest, read_calls
 from .converter import Converter
 from .errors import ConvertError, RasterStopped, ToolError, printable
@@ -276,30 +275,6 @@ def with_fragment_effects(line, effects):
 INTERRUPTED = {128 + signal.SIGINT, 128 + signal.SIGTERM, 128 + signal.SIGHUP}
 
 
-def remove_raster_temporaries(path, since):
-    """What a rasterizer killed outright (SIGKILL, a crash: no handler of
-    its own ran) leaves: the temporary it writes -o through, `.NAME.XXXXXX`
-    beside it (common/output_file.cpp), a regular file of ours made since
-    the run began."""
-    if not path or path == "-":
-        return
-    d, base = os.path.dirname(path) or ".", os.path.basename(path)
-    pattern = re.compile(re.escape(f".{base}.") + r"[A-Za-z0-9]{6}")
-    try:
-        names = os.listdir(d)
-    except OSError:
-        return
-    for name in names:
-        if pattern.fullmatch(name):
-            p = os.path.join(d, name)
-            try:
-                st = os.lstat(p)
-                if stat.S_ISREG(st.st_mode) and st.st_uid == os.getuid() and st.st_mtime >= since - 1:
-                    os.unlink(p)
-            except OSError:
-                pass
-
-
 def raster_result(proc, trace):
     """Raises rbcd-gl-raster's own message once it has exited non-zero: bad
     input (exit 2) as ConvertError, anything else as ToolError."""
@@ -312,7 +287,7 @@ def raster_result(proc, trace):
         # was interrupted, not the rasterizer broken.
         raise KeyboardInterrupt
     if rc < 0 and getattr(proc, "rbcd_outputs", None):
-        remove_raster_temporaries(*proc.rbcd_outputs)
+        remove_left_temporaries(*proc.rbcd_outputs)   # (the one it wrote -o through)
     # Its one message whole: a path it names may hold a newline (escaped
     # when the message is printed; its first line alone had cut the path).
     line = err.strip()[:4096] or f"rbcd-gl-raster exited {rc}"
