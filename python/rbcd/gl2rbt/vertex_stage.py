@@ -513,12 +513,15 @@ class VertexStage:
         for i in range(GL.glGetProgramiv(mp.name, GL.GL_ACTIVE_UNIFORM_BLOCKS)):
             GL.glGetActiveUniformBlockiv(mp.name, i, GL.GL_UNIFORM_BLOCK_BINDING, binding)
             out.add(("GL_UNIFORM_BUFFER", int(binding[0])))
-        n = np.zeros(1, np.int32)
-        GL.glGetProgramInterfaceiv(mp.name, GL.GL_SHADER_STORAGE_BLOCK, GL.GL_ACTIVE_RESOURCES, n)
+        # Mesa's entry points called directly (PyOpenGL's wrappers of these
+        # cannot read an OpenGL ES context's version).
+        u, p = ctypes.c_uint, ctypes.c_void_p
+        n, prop = np.zeros(1, np.int32), np.array([GL.GL_BUFFER_BINDING], np.uint32)
+        self.mesa.proc("glGetProgramInterfaceiv", u, u, u, p)(mp.name, GL.GL_SHADER_STORAGE_BLOCK,
+                                                             GL.GL_ACTIVE_RESOURCES, n.ctypes.data)
+        resource = self.mesa.proc("glGetProgramResourceiv", u, u, u, ctypes.c_int, p, ctypes.c_int, p, p)
         for i in range(int(n[0])):
-            binding = np.zeros(1, np.int32)
-            GL.glGetProgramResourceiv(mp.name, GL.GL_SHADER_STORAGE_BLOCK, i, 1, [GL.GL_BUFFER_BINDING], 1,
-                                      None, binding)
+            resource(mp.name, GL.GL_SHADER_STORAGE_BLOCK, i, 1, prop.ctypes.data, 1, None, binding.ctypes.data)
             out.add(("GL_SHADER_STORAGE_BUFFER", int(binding[0])))
         # Buffer textures its samplers and images read, by their unit.
         unit = np.zeros(1, np.int32)
@@ -604,7 +607,9 @@ class VertexStage:
         if size is None or not mb:
             GL.glTexBuffer(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb)
         else:
-            GL.glTexBufferRange(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb, offset, size)
+            # (called directly: PyOpenGL's wrapper cannot read an ES context's version)
+            self.mesa.proc("glTexBufferRange", ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_ssize_t,
+                           ctypes.c_ssize_t)(GL.GL_TEXTURE_BUFFER, self.mesa.enum(fmt), mb, offset, size)
         return mt
 
     # ---- the draw
