@@ -1,29 +1,35 @@
 """GLSL source as the converter's scans read it: what the compiler's
 preprocessor leaves of the text, so that a word the scans look for
 (`discard`, `gl_FragDepth`, `gl_ClipDistance`, `buffer`, `readonly`,
-`atomic_uint`) is found however the source spells it: lines joined where a
+`atomic_uint`) is found however the source spells it: every line end Mesa's
+preprocessor takes (LF, CR, CR LF, LF CR) a new line, lines joined where a
 backslash ends them, comments gone, macros expanded (object-like and
-function-like, `##` pasting, `#undef`), directives dropped.
+function-like, `##` pasting, arguments over several lines), directives
+dropped.
 
-Conditionals are not evaluated: every branch is kept, so a word in any
-branch counts. The scans only ever widen (a fragment shader that may
+Conditionals are not evaluated: every branch is kept, and so is every
+definition a macro has in any of them (an #undef removes none): the text
+is read once for each choice, the first definition of every macro, the
+second of every macro that has one, and so on (a branch's definitions
+together), the readings one after another. The scans only ever widen (a fragment shader that may
 discard, a stage that may store, a vertex shader that may write clip
 distances), which is what the converter needs of them: a word in a branch
-the compiler drops costs a draw counted as an upper bound or a refusal,
-never a silent wrong answer. A macro defined twice takes its last
-definition from there on, as the compiler does.
+or definition the compiler drops costs a draw counted as an upper bound
+or a refusal, never a silent wrong answer.
 
 Bounded: macro expansion stops past MAX_TOKENS tokens more than the
-source's or MAX_DEPTH macros inside one another (a macro that doubles itself twenty
-times over); expanded() then raises ExpansionTooLarge."""
+source's or MAX_DEPTH macros inside one another (a macro that doubles
+itself twenty times over); expanded() then raises ExpansionTooLarge."""
 import re
 
 MAX_TOKENS = 1 << 18    # tokens the expansion may add to the source's (game shaders' add hundreds)
 MAX_DEPTH = 64          # macros expanded inside one another
-MAX_PASSES = 8          # a line expanded again, until nothing changes
+MAX_PASSES = 8          # a text expanded again, until nothing changes
+MAX_CHOICES = 64        # definitions of one macro (each a reading of the source)
 
 COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
-CONTINUATION = re.compile(r"\\\r?\n")
+CONTINUATION = re.compile(r"\\\n")
+LINE_ENDS = re.compile(r"\r\n|\n\r|\r")   # each a new line, as Mesa's preprocessor takes them
 TOKEN = re.compile(r"[A-Za-z_]\w*|\d[\w.]*|##|\S")
 DEFINE = re.compile(r"#\s*define\s+([A-Za-z_]\w*)(\(([^)]*)\))?(.*)", re.S)
 UNDEF = re.compile(r"#\s*undef\s+([A-Za-z_]\w*)")
@@ -34,28 +40,31 @@ class ExpansionTooLarge(Exception):
 
 
 def expanded(source):
-    """The source's text as the scans read it (tokens apart by spaces,
-    lines kept)."""
+    """The source's text as the scans read it (tokens apart by spaces): one
+    reading for each choice of definition, apart by `;`."""
+    source = LINE_ENDS.sub("\n", source)
     if "define" not in source and "\\" not in source:
         return COMMENTS.sub(" ", source)   # nothing to join or expand
     text = COMMENTS.sub(" ", CONTINUATION.sub("", source))
-    macros, lines, budget = {}, [], [MAX_TOKENS + len(TOKEN.findall(text))]
-    for line in text.split("\n"):
-        stripped = line.strip()
-        if stripped.startswith("#"):
-            m = DEFINE.match(stripped)
-            if m:
-                params = None if m.group(2) is None else [p.strip() for p in m.group(3).split(",") if p.strip()]
-                macros[m.group(1)] = (params, TOKEN.findall(m.group(4)))
-            else:
-                m = UNDEF.match(stripped)
-                if m:
-                    macros.pop(m.group(1), None)
-            lines.append("")
-            continue
-        # Expanded again until nothing changes (a macro's expansion naming
-        # a function-like macro whose arguments follow it on the line).
-        tokens = TOKEN.findall(line)
+    lines = text.split("\n")
+    names = [m.group(1) for m in (DEFINE.match(line.strip()) for line in lines) if m]
+    choices = max([names.count(n) for n in set(names)] + [1])
+    budget = [MAX_TOKENS + len(TOKEN.findall(text))]
+    if choices > MAX_CHOICES:
+        raise ExpansionTooLarge()
+    return "\n;\n".join(reading(lines, choice, budget) for choice in range(choices))
+
+
+def reading(lines, choice, budget):
+    """The lines with each macro's definition number `choice` (its last if
+    it has fewer) wherever it is defined."""
+    macros, out, segment = {}, [], []
+
+    def flush():
+        # The lines between two directives expanded as one text (a macro's
+        # arguments may run over lines), again until nothing changes (an
+        # expansion naming a function-like macro whose arguments follow).
+        tokens = TOKEN.findall("\n".join(segment))
         for _ in range(MAX_PASSES):
             again = expand(tokens, macros, frozenset(), 0, budget)
             if again == tokens:
@@ -64,8 +73,27 @@ def expanded(source):
         budget[0] -= len(tokens)
         if budget[0] < 0:
             raise ExpansionTooLarge()
-        lines.append(" ".join(tokens))
-    return "\n".join(lines)
+        out.append(" ".join(tokens))
+        segment.clear()
+
+    seen = {}
+    for line in lines:
+        stripped = line.strip()
+        if not stripped.startswith("#"):
+            segment.append(line)
+            continue
+        flush()
+        m = DEFINE.match(stripped)
+        if m:
+            # (#undef and conditionals change nothing: every definition is
+            # some reading's)
+            name = m.group(1)
+            seen[name] = seen.get(name, -1) + 1
+            if seen[name] <= choice or name not in macros:
+                params = None if m.group(2) is None else [p.strip() for p in m.group(3).split(",") if p.strip()]
+                macros[name] = (params, TOKEN.findall(m.group(4)))
+    flush()
+    return "\n".join(out)
 
 
 def expand(tokens, macros, hidden, depth, budget):

@@ -15,7 +15,7 @@ from ...cli import I32, U32, integer, real
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import gl_boolean
-from .glsl_text import MAX_DEPTH, MAX_TOKENS, ExpansionTooLarge, expanded
+from .glsl_text import MAX_CHOICES, MAX_DEPTH, MAX_TOKENS, ExpansionTooLarge, expanded
 
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
@@ -312,8 +312,8 @@ class ProgramCalls:
         try:
             p.scanned = {stage: expanded(text) for stage, text in sources.items()}
         except ExpansionTooLarge:
-            fail_call(no, f"program linked at call {no}: its shaders' macros expand past {MAX_TOKENS} tokens or "
-                      f"{MAX_DEPTH} macros deep (docs/gl-capture.md, limits)")
+            fail_call(no, f"program linked at call {no}: its shaders' macros expand past {MAX_TOKENS} tokens, "
+                      f"{MAX_DEPTH} macros deep or {MAX_CHOICES} definitions of one (docs/gl-capture.md, limits)")
         fragment = p.scanned.get("fragment", "")
         # Whether any stage may store into buffers: shader storage blocks not
         # readonly, or atomic counters.
