@@ -136,8 +136,8 @@ def read_apitrace_calls(trace, calls=None):
             raise KeyboardInterrupt   # the run's group was signalled: interrupted (rbcd.gl2rbt.cli)
         # Ended by a signal from outside (killed, out of memory): what it
         # gave is not the whole capture, and the capture is not to blame.
-        raise ToolError(f"{where(last)}: apitrace pickle, reading the capture, was ended by signal {-rc}; "
-                        "no output written")
+        raise ToolError(f"{printable(trace)}: {where(last)}: apitrace pickle, reading the capture, was ended by "
+                        f"signal {-rc}; no output written")
     if undecoded is not None:
         raise ConvertError(f"{where(last)}: {undecoded}")
     err.seek(0)

@@ -286,8 +286,10 @@ def raster_result(proc, trace):
         # A signal to the process group (Ctrl-C) ended it first: the run
         # was interrupted, not the rasterizer broken.
         raise KeyboardInterrupt
-    if rc < 0 and getattr(proc, "rbcd_outputs", None):
-        remove_left_temporaries(*proc.rbcd_outputs)   # (the one it wrote -o through)
+    if rc < 0:
+        if getattr(proc, "rbcd_outputs", None):
+            remove_left_temporaries(*proc.rbcd_outputs)   # (the one it wrote -o through)
+        raise ToolError(f"{printable(trace)}: rbcd-gl-raster was ended by signal {-rc}; no output written")
     # Its one message whole: a path it names may hold a newline (escaped
     # when the message is printed; its first line alone had cut the path).
     line = err.strip()[:4096] or f"rbcd-gl-raster exited {rc}"

@@ -627,8 +627,8 @@ class VertexStage:
                 if mp.reads_draw_id and conv.multi_draw_index:
                     # Each draw of a multi-draw runs in Mesa alone, where
                     # gl_DrawID is 0.
-                    fail_call(no, f"{name}: draw {conv.multi_draw_index} of a multi-draw, whose vertex shader reads "
-                              "gl_DrawID: not emulated")
+                    fail_call(no, f"{printable(conv.multi_draw_name)}: its draw {conv.multi_draw_index}, whose vertex "
+                              "shader reads gl_DrawID: not emulated")
                 indices = d.get("indices")
                 client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
                 check_client_data(conv, no, name, d, instances, client_indices)

@@ -391,7 +391,7 @@ class DrawCalls:
                 one = [("mode", d.get("mode"))] + [(k, v[i]) for k, v in lists.items()]
                 if "type" in d:
                     one.append(("type", d["type"]))
-                self.multi_draw_index = i
+                self.multi_draw_index, self.multi_draw_name = i, name
                 handler(no, single, None, one)
         finally:
             self.multi_draw_index = 0
@@ -480,7 +480,7 @@ class DrawCalls:
                     one = [("mode", d.get("mode")), ("first", first), ("count", count), ("instancecount", instances),
                            ("baseinstance", base_instance)]
                     single = "glDrawArraysInstancedBaseInstance"
-                self.multi_draw_index = i
+                self.multi_draw_index, self.multi_draw_name = i, name
                 self.h_draw_under_program(no, single, None, one)
         finally:
             self.multi_draw_index = 0
