@@ -827,8 +827,9 @@ def test_a_signal_ctypes_wraps_is_an_interruption(tmp_path, monkeypatch, capsys)
 
 
 @pytest.mark.parametrize("failure", [MemoryError, lambda: OSError(12, "Cannot allocate memory"),
-                                     lambda: MemoryError("GL_OUT_OF_MEMORY in glBufferData")],
-                         ids=["python", "mapping", "mesa"])
+                                     lambda: MemoryError("GL_OUT_OF_MEMORY in glBufferData"),
+                                     lambda: RuntimeError("can't start new thread")],
+                         ids=["python", "mapping", "mesa", "thread"])
 def test_out_of_memory_is_one_line(tmp_path, monkeypatch, capsys, failure):
     """Past the process's memory limit (ulimit -v) before the documented
     bounds refuse the capture, an allocation, a mapping or Mesa's copy

@@ -152,7 +152,8 @@ def run(args):
         sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
         return 1
     except Exception as e:   # noqa: BLE001: the promise is one line, whatever failed
-        if isinstance(e, MemoryError) or isinstance(e, OSError) and e.errno == errno.ENOMEM:
+        if isinstance(e, MemoryError) or isinstance(e, OSError) and e.errno == errno.ENOMEM or \
+                isinstance(e, RuntimeError) and "can't start new thread" in str(e):
             # Past the process's memory limit (ulimit -v) before any of the
             # documented bounds (docs/gl-capture.md, limits) refused the
             # input: an allocation or a mapping failed.

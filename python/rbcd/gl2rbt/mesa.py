@@ -79,6 +79,9 @@ def extension_enums():
 
 def _load():
     raise_stack_limit()
+    # Mesa's EGL says why it failed on stderr beside the converter's one
+    # line (a driver it cannot load, out of memory): the line says it.
+    os.environ.setdefault("EGL_LOG_LEVEL", "fatal")
     try:
         from OpenGL import EGL, GL
         return EGL, GL
@@ -204,8 +207,13 @@ class Mesa:
             if not ctx or not EGL.eglMakeCurrent(dpy, EGL.EGL_NO_SURFACE, EGL.EGL_NO_SURFACE, ctx):
                 raise ToolError("Mesa gives no " + ("OpenGL ES 3.2" if es else "OpenGL 4.5 compatibility")
                                 + " context on the surfaceless platform")
-        except (AttributeError, TypeError, EGL.EGLError) as e:
-            raise ToolError(f"Mesa's EGL: {e}")
+        except EGL.EGLError as e:
+            # (the error's name alone: PyOpenGL's text of it runs over lines)
+            err = getattr(e, "err", None)
+            raise ToolError(f"Mesa's EGL could not start: {getattr(err, 'name', None) or type(e).__name__} (out "
+                            "of memory, or no llvmpipe: scripts/setup.sh --gl)")
+        except (AttributeError, TypeError) as e:
+            raise ToolError(f"Mesa's EGL: {printable(e, 200)}")
         self.version = GL.glGetString(GL.GL_VERSION).decode("ascii", "replace")
         # The draws run into a framebuffer of our own (a surfaceless context
         # has no default one), with the rasterizer discarded all the same.
