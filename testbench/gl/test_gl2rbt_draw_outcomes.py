@@ -602,6 +602,14 @@ def test_vertex_data_the_gpu_wrote_is_refused(tmp_path, write, words):
     c.add("memcpy", dest=0x10000, src=TRIANGLE[12:], n=24).add("glUnmapBuffer", target="GL_ARRAY_BUFFER")
     r = gl2rbt(tmp_path, draw(c).write(tmp_path / "m.xz"), "-o", tmp_path / "m.rbt")
     assert r.returncode == 0, r.stderr
+    # So does glInvalidateBufferData (and glInvalidateBufferSubData of all
+    # of it; round 15's R15-5: refused as not emulated).
+    for tag, call in (("inv", dict(name="glInvalidateBufferData", buffer=1)),
+                      ("invsub", dict(name="glInvalidateBufferSubData", buffer=1, offset=0, length=36))):
+        c = write(shader_calls(VS)).add(call.pop("name"), **call)
+        c.add("glBufferSubData", target="GL_ARRAY_BUFFER", offset=12, size=24, data=TRIANGLE[12:])
+        r = gl2rbt(tmp_path, draw(c).write(tmp_path / f"{tag}.xz"), "-o", tmp_path / f"{tag}.rbt")
+        assert r.returncode == 0, (tag, r.stderr)
     part = write(shader_calls(VS)).add("glBufferSubData", target="GL_ARRAY_BUFFER", offset=12, size=24,
                                         data=TRIANGLE[12:])
     r = gl2rbt(tmp_path, draw(part).write(tmp_path / "p.xz"), "-o", tmp_path / "p.rbt")

@@ -134,7 +134,11 @@ def read_apitrace_calls(trace, calls=None):
     if rc < 0 and not ours:
         if -rc in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
             raise KeyboardInterrupt   # the run's group was signalled: interrupted (rbcd.gl2rbt.cli)
-        # Ended by a signal from outside (killed, out of memory): what it
+        if -rc != signal.SIGKILL:
+            # apitrace's reader crashed (SIGSEGV on bytes overwritten): the
+            # capture does not decode.
+            raise ConvertError(f"{where(last)}: the capture does not decode (apitrace crashed on it: signal {-rc})")
+        # Killed from outside (SIGKILL, the kernel out of memory): what it
         # gave is not the whole capture, and the capture is not to blame.
         raise ToolError(f"{printable(trace)}: {where(last)}: apitrace pickle, reading the capture, was ended by "
                         f"signal {-rc}; no output written")

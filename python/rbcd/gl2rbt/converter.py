@@ -85,10 +85,13 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.multi_draw_name = None      # that multi-draw's call
         self.frame_view = None           # the frame's view matrix (the first perspective draw's model-view)
         self.screen = tuple(args.screen) if args.screen else None
-        self.drawable = None             # the window's size, as apitrace records it at each MakeCurrent
         self.current_drawable = None     # the window or surface MakeCurrent named (its handle)
         self.main_drawable = None        # the one current at the first draw into a window (on_main_drawable)
         self.drawables = set()           # every one MakeCurrent named
+        self.drawable_sizes = {}         # drawable -> its size, as apitrace records it at a first MakeCurrent
+        self.pbuffers = set()            # off-screen surfaces (never the main window)
+        self.drawn_since_swap = set()    # drawables drawn into since their last swap
+        self.main_idle = {}              # another window: its swaps with draws since the main one's last
         self.context = None              # the context made current last (None: none named yet; 0: released)
         self.draw_context = None         # the context the frames' draws were made in
         self.state_context = None        # the context whose state self.s holds (the last made current)
@@ -151,7 +154,13 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if self.header_written:
             return
         if self.screen is None:
-            self.screen = self.drawable or (self.s.viewport[2:4] if self.s.viewport else None)
+            # The main window's size as apitrace recorded it (at the first
+            # MakeCurrent of a context only: another drawable's, a
+            # pbuffer's, may be the one recorded; then the viewport of the
+            # window's first draw or clear).
+            viewport = self.s.viewport[2:4] if self.s.viewport else None
+            window = self.main_drawable if self.main_drawable is not None else self.current_drawable
+            self.screen = self.drawable_sizes.get(window) or viewport
         if self.screen is None or min(self.screen) < 1:
             raise ConvertError("the capture sets no viewport before its first draw: give --screen W H")
         w, h = self.screen
@@ -286,10 +295,28 @@ class Converter(*STATE_GROUPS, GeometryOutput):
 
     def swaps_main_drawable(self, args):
         """Whether a buffer swap is the main window's (another window's or
-        surface's, one MakeCurrent named, ends no frame: on_main_drawable)."""
+        surface's, one MakeCurrent named, ends no frame: on_main_drawable).
+        A window drawn into and swapped twice while the main one had
+        neither takes its place (the game moved to a window made anew:
+        a resolution change)."""
         d = dict(args)
         swapped = d.get("drawable", d.get("surface", d.get("hdc")))
-        return self.main_drawable is None or swapped == self.main_drawable or swapped not in self.drawables
+        if self.main_drawable is None or swapped == self.main_drawable or swapped not in self.drawables:
+            self.main_idle = {}
+            return True
+        if swapped in self.drawn_since_swap and swapped not in self.pbuffers:
+            self.main_idle[swapped] = self.main_idle.get(swapped, 0) + 1
+            if self.main_idle[swapped] >= 2:
+                self.main_drawable, self.main_idle = swapped, {}
+        self.drawn_since_swap.discard(swapped)
+        return False
+
+    def h_pbuffer_created(self, no, name, a, args):
+        """glXCreatePbuffer, eglCreatePbufferSurface: an off-screen surface,
+        never the main window (a shader warm-up's draws there are another
+        target's)."""
+        if self.ret:
+            self.pbuffers.add(self.ret)
 
     def h_mesa_no_op(self, no, name, a, args):
         pass   # an entry point Mesa answers with a stub (gl_tables.MESA_NO_OPS)
@@ -475,6 +502,9 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         "glXMakeContextCurrent": h_make_current,
         "eglMakeCurrent": h_make_current,
         "wglMakeCurrent": h_make_current,
+        "glXCreatePbuffer": h_pbuffer_created,
+        "glXCreateGLXPbufferSGIX": h_pbuffer_created,
+        "eglCreatePbufferSurface": h_pbuffer_created,
     }
     # Calls that can change geometry or visibility in ways not emulated.
     REFUSED = {

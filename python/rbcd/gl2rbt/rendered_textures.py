@@ -27,7 +27,7 @@ import subprocess
 import time
 
 from ..cli import temporary_folder, unregister_temporary
-from .errors import ConvertError, printable
+from .errors import ConvertError, ToolError, printable
 from .glretrace import glretrace_command, preload_library
 from .glstate.texture_formats import ES_COMBINATIONS
 
@@ -238,6 +238,14 @@ class RenderedTextures:
             if self.proc.poll() is not None:
                 self.log.seek(0)
                 tail = self.log.read()[-4096:].decode("utf-8", "replace").strip().splitlines()
+                rc = self.proc.returncode
+                if signal.SIGKILL in (-rc, rc - 128):
+                    # Killed from outside (SIGKILL, the kernel out of memory;
+                    # through xvfb-run, 128 + it): the tool failed, not the
+                    # capture (a crash on the capture's calls is the capture's).
+                    raise ToolError(f"{self.what}: Mesa's replay of the capture (glretrace), reading back the "
+                                    f"textures its vertex shader reads, was killed (signal {signal.SIGKILL}); no "
+                                    "output written")
                 raise ConvertError(f"{self.what}: Mesa's replay of the capture (glretrace) ended before it read "
                                    f"back the textures its vertex shader reads"
                                    f" ({printable(tail[-1] if tail else 'no message')})")

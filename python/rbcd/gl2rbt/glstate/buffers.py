@@ -438,6 +438,24 @@ class BufferCalls:
         fill_range(buf, off, off + size, value)
         self.changed(no, name, b, off, off + size)
 
+    def h_invalidate_buffer(self, no, name, a, args):
+        """glInvalidateBufferData and glInvalidateBufferSubData (GL 4.3):
+        the bytes are undefined from then on; all of them invalidated, what
+        the GPU wrote there is gone, and the buffer is the capture's again
+        (the bytes the converter holds are as good as any). What GL refuses
+        (no such buffer, a range outside it) changes nothing."""
+        d = dict(args)
+        b = checked(no, integer, d.get("buffer"), f"{name}: the buffer", *U32)
+        buf = self.s.buffers.get(b)
+        if buf is None:
+            return
+        if "SubData" in name:
+            off = checked(no, integer, d.get("offset"), f"{name}: the offset", *I64)
+            length = checked(no, integer, d.get("length"), f"{name}: the length", *I64)
+            if off < 0 or length < 0 or off + length > len(buf) or off or length != len(buf):
+                return   # GL_INVALID_VALUE, or a part: what the GPU wrote beside it stays
+        self.s.gpu_buffers.pop(b, None)
+
     def h_map_buffer(self, no, name, a, args):
         d = dict(args)
         access, _ = bitfield(d.get("access", ()), no, f"{name}: the access", STORAGE_BITS)
@@ -559,6 +577,8 @@ class BufferCalls:
         "glBindBuffersRange": h_bind_buffers,
         "glBufferData": h_buffer_data,
         "glBufferSubData": h_buffer_sub_data,
+        "glInvalidateBufferData": h_invalidate_buffer,
+        "glInvalidateBufferSubData": h_invalidate_buffer,
         "glBufferStorage": h_buffer_storage,
         "glCopyBufferSubData": h_copy_buffer_sub_data,
         "glClearBufferData": h_clear_buffer_data,

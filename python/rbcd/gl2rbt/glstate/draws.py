@@ -599,8 +599,12 @@ class DrawCalls:
         counted as another pass's work."""
         if self.s.draw_fbo:
             self.gpu_wrote()
-        elif self.main_drawable is None:
-            self.main_drawable = self.current_drawable   # the first draw into a window: the main one
+        else:
+            if self.main_drawable is None and self.current_drawable not in self.pbuffers:
+                self.main_drawable = self.current_drawable   # the first draw into a window: the main one
+            if self.current_drawable == self.main_drawable:
+                self.main_idle = {}
+            self.drawn_since_swap.add(self.current_drawable)
         if not self.camera_pass():
             self.offscreen_draws += 1
             return False

@@ -495,6 +495,8 @@ class FramebufferCalls:
         window (a second window or surface is another target, as a
         framebuffer object of another size is: its draws and clears left
         out, its swaps ending no frame). Before that first draw, any."""
+        if self.current_drawable in self.pbuffers:
+            return False
         return self.main_drawable is None or self.current_drawable == self.main_drawable
 
     def camera_pass(self, fb=None):

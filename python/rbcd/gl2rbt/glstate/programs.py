@@ -307,10 +307,12 @@ class ProgramCalls:
         p.digest = sources_digest(sources)
         p.separable = p.separable_next
         # Each stage's text as the compiler reads it (macros expanded, every
-        # branch kept: glsl_text), for the scans below and the vertex
-        # stage's refusals.
+        # branch kept: glsl_text), shader object by shader object (each is
+        # preprocessed alone: one's macros are not another's), for the scans
+        # below and the vertex stage's refusals.
         try:
-            p.scanned = {stage: expanded(text) for stage, text in sources.items()}
+            p.scanned = {stage: "\n;\n".join(expanded(text) for text in objects.get(stage, [sources[stage]]))
+                         for stage in sources}
         except ExpansionTooLarge:
             fail_call(no, f"program linked at call {no}: its shaders' macros expand past {MAX_TOKENS} tokens, "
                       f"{MAX_DEPTH} macros deep or {MAX_CHOICES} definitions of one (docs/gl-capture.md, limits)")

@@ -140,7 +140,7 @@ class TransformCalls:
         x, y = (min(max(v, VIEWPORT_BOUNDS[0]), VIEWPORT_BOUNDS[1]) for v in (x, y))
         self.s.viewport = (x, y, w, h)
         if self.flags & CALL_FLAG_FAKE and w > 0 and h > 0:
-            self.drawable = (w, h)   # apitrace's record of the window size at MakeCurrent
+            self.drawable_sizes[self.current_drawable] = (w, h)   # apitrace's record of its size at MakeCurrent
 
     def h_viewport_indexed(self, no, name, a, args):
         """glViewportIndexedf(v) and glViewportArrayv: viewport 0 is glViewport's
