@@ -713,6 +713,42 @@ def test_a_second_window_is_another_target(tmp_path):
     assert trace(tmp_path, c.swap(), "two") == want
 
 
+def test_a_pbuffer_warm_up_and_a_window_made_anew(tmp_path):
+    """A warm-up draw into a pbuffer (apitrace's record of its 16 x 16 the
+    only size it gives) before the window's frames: the pbuffer is never
+    the main window, and the screen is the window's first viewport (round
+    15's R15-2: the capture refused as never swapping, or its frames
+    clipped to 16 x 16). A window made anew (drawable 4) and drawn and
+    swapped twice while the first idles becomes the main one."""
+    def window_frame(c, drawable, obj=5):
+        c.add("glXMakeContextCurrent", dpy=1, draw=drawable, read=drawable, ctx=1, ret=True)
+        c.add("glViewport", x=0, y=0, width=64, height=48)
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=obj, length=-1, message="rbcd-object")
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+        return c.add("glXSwapBuffers", dpy=1, drawable=drawable, flags=END_FRAME)
+
+    def capture(warm, windows):
+        c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+        c.add("glEnableVertexAttribArray", index=0)
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+        if warm:
+            c.add("glXCreatePbuffer", dpy=1, config=1, attribList=["GLX_PBUFFER_WIDTH", 16, "GLX_PBUFFER_HEIGHT", 16, 0],
+                  ret=50)
+            c.add("glXMakeContextCurrent", dpy=1, draw=50, read=50, ctx=1, ret=True)
+            c.add("glViewport", x=0, y=0, width=16, height=16, flags=1)   # apitrace's record of the drawable
+            c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        for drawable in windows:
+            window_frame(c, drawable)
+        return c
+    want = trace(tmp_path, capture(False, [2, 2, 2]), "want")
+    assert want.count(b"\nframe ") == 3 and want.count(b"\nf ") > 300
+    assert trace(tmp_path, capture(True, [2, 2, 2]), "warm") == want
+    # The first window's frame, then the new one's: its second swap makes it
+    # the main window, its third frame the next kept.
+    moved = trace(tmp_path, capture(False, [2, 4, 4, 4]), "moved")
+    assert moved.count(b"\nframe ") == 2 and moved.count(b"\nf ") == 2 * want.count(b"\nf ") // 3
+
+
 def test_a_program_another_context_deletes_lives_while_in_use(tmp_path):
     """A loader context sharing the drawing context's objects deletes the
     program the drawing context uses: GL only flags it, and the drawing
