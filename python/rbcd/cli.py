@@ -33,6 +33,8 @@ import stat
 import sys
 import tempfile
 
+from .startup import kept, release_signals
+
 MAX_TOKEN = 1024
 
 
@@ -474,7 +476,6 @@ def main_wrapper(prog, fn, argv):
     """fn(argv) with the project's exit statuses: its return value; 2 and one line for
     UsageError; 1 and one line for WriteError and any other error; 130 when
     interrupted. Never a traceback."""
-    from .startup import kept, release_signals
     release_signals()
     for s in (signal.SIGTERM, signal.SIGHUP):
         if kept(s):   # (SIGHUP ignored when the program started, nohup, stays ignored)

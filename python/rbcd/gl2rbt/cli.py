@@ -7,7 +7,7 @@ import sys
 import threading
 
 from ..cli import UsageError, WriteError, remove_temporaries, to_standard_output
-from ..startup import kept
+from ..startup import HANDLED, kept
 from .errors import LAST_WORD, ConvertError, ToolError, printable
 
 PROG = "rbcd-gl2rbt"
@@ -195,7 +195,6 @@ def require_numpy():
     return numpy
 
 
-HANDLED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 INTERRUPTED = threading.Event()   # a handled signal came
 
 

@@ -31,7 +31,7 @@ BUFFER_SAMPLERS = {"GL_SAMPLER_BUFFER", "GL_INT_SAMPLER_BUFFER", "GL_UNSIGNED_IN
 SAMPLER = re.compile(r"GL_(INT_|UNSIGNED_INT_)?(SAMPLER|IMAGE)_")
 GL_OUT_OF_MEMORY = 0x505
 GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INVALID_OPERATION",
-             0x505: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
+             GL_OUT_OF_MEMORY: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
 UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
 MAX_MESA_BUFFER_BYTES = 2 << 30   # the declared sizes of the buffers given to Mesa, in all
 # Built-in inputs a vertex shader may read that the draw call itself gives;

@@ -452,7 +452,7 @@ class BufferCalls:
         if "SubData" in name:
             off = checked(no, integer, d.get("offset"), f"{name}: the offset", *I64)
             length = checked(no, integer, d.get("length"), f"{name}: the length", *I64)
-            if off < 0 or length < 0 or off + length > len(buf) or off or length != len(buf):
+            if off != 0 or length != len(buf):
                 return   # GL_INVALID_VALUE, or a part: what the GPU wrote beside it stays
         self.s.gpu_buffers.pop(b, None)
 

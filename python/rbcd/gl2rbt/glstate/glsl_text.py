@@ -11,16 +11,17 @@ Conditionals are not evaluated: every branch is kept, and so is every
 definition a macro has in any of them (an #undef removes none): the text
 is read once for each choice, the first definition of every macro, the
 second of every macro that has one, and so on (a branch's definitions
-together), the readings one after another. The scans only ever widen (a fragment shader that may
-discard, a stage that may store, a vertex shader that may write clip
-distances), which is what the converter needs of them: a word in a branch
-or definition the compiler drops costs a draw counted as an upper bound
-or a refusal, never a silent wrong answer.
+together), the readings one after another. The scans only ever widen (a
+fragment shader that may discard, a stage that may store, a vertex shader
+that may write clip distances), which is what the converter needs of
+them: a word in a branch or definition the compiler drops costs a draw
+counted as an upper bound or a refusal, never a silent wrong answer.
 
 Bounded: macro expansion stops past MAX_TOKENS tokens more than the
 source's or MAX_DEPTH macros inside one another (a macro that doubles
 itself twenty times over); expanded() then raises ExpansionTooLarge."""
 import re
+from collections import Counter
 
 MAX_TOKENS = 1 << 18    # tokens the expansion may add to the source's (game shaders' add hundreds)
 MAX_DEPTH = 64          # macros expanded inside one another
@@ -32,7 +33,6 @@ CONTINUATION = re.compile(r"\\\n")
 LINE_ENDS = re.compile(r"\r\n|\n\r|\r")   # each a new line, as Mesa's preprocessor takes them
 TOKEN = re.compile(r"[A-Za-z_]\w*|\d[\w.]*|##|\S")
 DEFINE = re.compile(r"#\s*define\s+([A-Za-z_]\w*)(\(([^)]*)\))?(.*)", re.S)
-UNDEF = re.compile(r"#\s*undef\s+([A-Za-z_]\w*)")
 
 
 class ExpansionTooLarge(Exception):
@@ -47,8 +47,8 @@ def expanded(source):
         return COMMENTS.sub(" ", source)   # nothing to join or expand
     text = COMMENTS.sub(" ", CONTINUATION.sub("", source))
     lines = text.split("\n")
-    names = [m.group(1) for m in (DEFINE.match(line.strip()) for line in lines) if m]
-    choices = max([names.count(n) for n in set(names)] + [1])
+    definitions = Counter(m.group(1) for m in (DEFINE.match(line.strip()) for line in lines) if m)
+    choices = max(definitions.values(), default=1)
     budget = [MAX_TOKENS + len(TOKEN.findall(text))]
     if choices > MAX_CHOICES:
         raise ExpansionTooLarge()

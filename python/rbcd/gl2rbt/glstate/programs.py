@@ -15,7 +15,7 @@ from ...cli import I32, U32, integer, real
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import gl_boolean
-from .glsl_text import MAX_CHOICES, MAX_DEPTH, MAX_TOKENS, ExpansionTooLarge, expanded
+from .glsl_text import COMMENTS, MAX_CHOICES, MAX_DEPTH, MAX_TOKENS, ExpansionTooLarge, expanded
 
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
           "GL_TESS_CONTROL_SHADER": "tess_control", "GL_TESS_EVALUATION_SHADER": "tess_evaluation",
@@ -28,7 +28,6 @@ MAX_SOURCE_CHARS = 16 << 20   # one shader's sources (the largest game shaders a
 MAX_STATEMENT_OPERATORS = 65536
 STATEMENTS = re.compile(r"[^;{}]+")
 OPERATORS = re.compile(r"[-+*/%&|^<>?:=,!~]")
-COMMENTS = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
 # A shader storage block that is not readonly (the qualifiers of its
 # declaration, back to the statement before), or an atomic counter: a
 # stage that may store into buffers.
@@ -37,8 +36,8 @@ ATOMIC_COUNTER = re.compile(r"\batomic_uint\b")
 READONLY = re.compile(r"\breadonly\b")
 
 
-def may_store(source):
-    text = COMMENTS.sub(" ", source)
+def may_store(text):
+    """Whether a stage's text as glsl_text.expanded reads it stores."""
     if ATOMIC_COUNTER.search(text):
         return True
     for m in STORAGE_BLOCK.finditer(text):
