@@ -11,6 +11,9 @@
  * empty glOrtho volume), list (a display list), shader (a draw under a
  * program), line (glPolygonMode GL_LINE), underflow (glPopMatrix on an
  * empty stack). FAULT point is no fault: an object scaled to a point.
+ * FAULT readother is no fault either: frames 0 and 1 drawn with a second,
+ * 16 x 16 window as the context's read drawable (glXMakeContextCurrent),
+ * frame 2 reading the window it draws into.
  *
  * Collisionable objects are tagged as rbcd-gl2rbt reads them: a KHR_debug
  * group "rbcd-object" whose id is the object id, or an EXT_debug_marker group
@@ -290,7 +293,20 @@ int main(int argc, char** argv) {
         if (ev.type == MapNotify) break;
     }
     GLXContext ctx = glXCreateContext(dpy, vi, NULL, True);
-    glXMakeCurrent(dpy, win, ctx);
+    const int read_other = !strcmp(fault, "readother");
+    Window other = 0;
+    if (read_other) {
+        other = XCreateWindow(dpy, RootWindow(dpy, vi->screen), 0, 0, 16, 16, 0, vi->depth, InputOutput,
+                              vi->visual, CWColormap | CWEventMask, &swa);
+        XMapWindow(dpy, other);
+        for (XEvent ev;;) {
+            XNextEvent(dpy, &ev);
+            if (ev.type == MapNotify) break;
+        }
+        glXMakeContextCurrent(dpy, win, other, ctx);
+    } else {
+        glXMakeCurrent(dpy, win, ctx);
+    }
     push_group = (PFNGLPUSHDEBUGGROUPPROC)glXGetProcAddress((const GLubyte*)"glPushDebugGroup");
     pop_group = (PFNGLPOPDEBUGGROUPPROC)glXGetProcAddress((const GLubyte*)"glPopDebugGroup");
     push_marker = (PFNGLPUSHGROUPMARKEREXTPROC)glXGetProcAddress((const GLubyte*)"glPushGroupMarkerEXT");
@@ -316,8 +332,12 @@ int main(int argc, char** argv) {
     glCullFace(GL_BACK);
     glFrontFace(GL_CCW);
     for (int frame = 0; frame < 3; ++frame) {
-        if (frame < 2) frame_ortho(w, h, frame);
-        else frame_perspective(w, h);
+        if (frame < 2) {
+            frame_ortho(w, h, frame);
+        } else {
+            if (read_other) glXMakeContextCurrent(dpy, win, win, ctx);
+            frame_perspective(w, h);
+        }
         glXSwapBuffers(dpy, win);
     }
     glXMakeCurrent(dpy, None, NULL);

@@ -86,6 +86,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.frame_view = None           # the frame's view matrix (the first perspective draw's model-view)
         self.screen = tuple(args.screen) if args.screen else None
         self.current_drawable = None     # the window or surface MakeCurrent named (its handle)
+        self.read_drawable = None        # the one it named to read from (glXMakeContextCurrent, eglMakeCurrent)
+        self.read_elsewhere = set()      # depth-tested draws into a window read through another (--check-depth)
         self.main_drawable = None        # the one current at the first draw into a window (on_main_drawable)
         self.drawables = set()           # every one MakeCurrent named
         self.drawable_sizes = {}         # drawable -> its size, as apitrace records it at a first MakeCurrent
@@ -359,6 +361,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             return   # it failed (a destroyed context, a bad surface): what was current stays current
         d = dict(args)
         self.current_drawable = d.get("drawable", d.get("draw", d.get("hdc")))
+        self.read_drawable = d.get("read", self.current_drawable)
         self.drawables.add(self.current_drawable)
         self.context = ctx
         if ctx and ctx != self.state_context:

@@ -178,7 +178,15 @@ def check_depth(args):
     if probe.es:
         es_readback_library()   # missing: said before the conversion, not after it
     frames = [(o, c, call, bits) for o, c, call, wrong, bits in probe.last_3d_draws
-              if call is not None and wrong is None]
+              if call is not None and wrong is None and call not in probe.read_elsewhere]
+    elsewhere = [c for _, c, call, wrong, _ in probe.last_3d_draws if call in probe.read_elsewhere and wrong is None]
+    if elsewhere:
+        # Mesa's depth of such a frame is not to be had: glretrace reads a
+        # window's depth through the context's read drawable, which
+        # glXMakeContextCurrent or eglMakeCurrent made another window.
+        print(f"{len(elsewhere)} frames not checked: their last depth-tested draw's context reads from another "
+              f"window than it draws into, and Mesa's replay reads the depth through it (the first, frame "
+              f"{elsewhere[0]})")
     unfollowed = [(c, wrong) for _, c, call, wrong, _ in probe.last_3d_draws if call is not None and wrong is not None]
     if unfollowed:
         # The converter's one camera-pass depth buffer did not hold what
@@ -193,7 +201,7 @@ def check_depth(args):
         frames = frames[1:]
     if not frames:
         raise ConvertError("no selected frame draws with the depth test on into a depth buffer the converter "
-                           "follows: nothing to check")
+                           "follows and Mesa's replay reads back: nothing to check")
     if len(frames) > args.check_frames:
         step = len(frames) / args.check_frames
         frames = [frames[int(i * step)] for i in range(args.check_frames)]

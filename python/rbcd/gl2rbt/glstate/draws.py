@@ -203,6 +203,10 @@ class DrawCalls:
         if st.depth_test:
             self.last_depth_draw, self.last_depth_wrong = no, self.kept_wrong
             self.last_depth_bits = self.depth_bits()
+            if not self.s.draw_fbo and self.read_drawable != self.current_drawable:
+                # Mesa's replay dumps a window's depth with glReadPixels,
+                # which reads the read drawable: another window's here.
+                self.read_elsewhere.add(no)
         self.note_draw(no, name, obj_id if collisionable else None, nverts, mv, proj, clip)
 
     def immediate_vertex(self, no, base, a):
