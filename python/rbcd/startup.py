@@ -1,6 +1,8 @@
 """Signals while a program starts: its launcher's first lines (scripts/),
 before Python loads the program's modules and its own handlers are in
-place (rbcd.cli.main_wrapper, rbcd.gl2rbt.cli.main). Nothing exists yet
+place (rbcd.cli.main_wrapper, rbcd.gl2rbt.cli.main). The launcher's first
+statement blocks SIGINT, SIGTERM and SIGHUP (with the builtin _signal, at
+once), and hold_signals takes one that came meanwhile. Nothing exists yet
 to remove, so a signal then ends the start-up in the program's one line,
 "interrupted", exit 130, not in a traceback or a silent death. SIGINT or
 SIGHUP ignored when the program started (a script's background job,

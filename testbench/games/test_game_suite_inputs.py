@@ -323,3 +323,31 @@ def test_a_signal_at_start_up_is_an_interruption(tmp_path, tool, sig):
     os.kill(p.pid, sig)
     out, err = p.communicate(timeout=60)
     assert p.returncode == 130 and err.splitlines() == [f"{tool}: interrupted"] and out == "", (p.returncode, err)
+
+
+@pytest.mark.parametrize("tool", ["game-suite", "rbcd-sweep", "rbcd-plot", "rbcd-gl2rbt"])
+def test_a_signal_at_any_moment_of_start_up_names_no_launcher_line(tool):
+    """SIGINT at 0 to 46 ms after the start: the run ends in "interrupted",
+    exit 130, or finishes, or (before any line of the launcher runs) in
+    Python's own start-up; never in a traceback through a line of the
+    launcher (round 15's R15-8: `import signal`, the launcher's line 4, in
+    a KeyboardInterrupt traceback, between Python's start-up and the
+    launcher's handlers). The launcher's first statement blocks the signals
+    (the builtin _signal, at once), and its start-up handler takes them."""
+    launcher = os.path.join(ROOT, "scripts", tool)
+    seen = set()
+    for ms in range(0, 47, 2):
+        p = subprocess.Popen(["/usr/bin/python3", launcher, "--help"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        time.sleep(ms / 1000)
+        try:
+            p.send_signal(signal.SIGINT)
+        except ProcessLookupError:
+            pass
+        out, err = p.communicate(timeout=60)
+        assert launcher not in err and f"scripts/{tool}" not in err, (ms, p.returncode, err)
+        if p.returncode == 130:
+            assert err.splitlines() == [f"{tool}: interrupted"], (ms, err)
+        seen.add(p.returncode)
+    assert 130 in seen, seen

@@ -16,7 +16,7 @@ import time
 import pytest
 
 from conftest import program
-from gl_captures import END_FRAME, GL2RBT, TRIANGLE, alive, gl2rbt_timed as gl2rbt, left_behind, refused
+from gl_captures import END_FRAME, GL2RBT, TRIANGLE, Calls, alive, gl2rbt_timed as gl2rbt, left_behind, refused
 from test_gl2rbt_hostile import ES_FRAGMENT, VS, shader_calls
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
@@ -749,6 +749,40 @@ def test_a_pbuffer_warm_up_and_a_window_made_anew(tmp_path):
     assert moved.count(b"\nframe ") == 2 and moved.count(b"\nf ") == 2 * want.count(b"\nf ") // 3
 
 
+@pytest.mark.parametrize("first", ["splash", "warm"], ids=["splash", "warm"])
+def test_a_splash_or_a_warm_up_window_before_the_first_frame(tmp_path, first):
+    """A second window (drawable 3, 16 x 16 as apitrace records it at the
+    context's first MakeCurrent) before the main window's frames: a splash
+    (a clear and two swaps, no draw) or a warm-up draw never swapped. Its
+    swaps end no frame and its size is not the screen: the trace is the
+    main window's three frames alone (round 15's R15-3: two empty frames
+    more and a 16 x 16 screen that lost draw B; the warm-up made the 16 x
+    16 window the main one)."""
+    def capture(before):
+        c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+        c.add("glEnableVertexAttribArray", index=0)
+        c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+        if before:
+            c.add("glXMakeContextCurrent", dpy=1, draw=3, read=3, ctx=1, ret=True)
+            c.add("glViewport", x=0, y=0, width=16, height=16, flags=1)   # apitrace's record of the drawable
+            if first == "splash":
+                c.add("glClear", mask=["GL_COLOR_BUFFER_BIT", "GL_DEPTH_BUFFER_BIT"])
+                c.add("glXSwapBuffers", dpy=1, drawable=3, flags=END_FRAME)
+                c.add("glXSwapBuffers", dpy=1, drawable=3, flags=END_FRAME)
+            else:
+                c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        for _ in range(3):
+            c.add("glXMakeContextCurrent", dpy=1, draw=2, read=2, ctx=1, ret=True)
+            c.add("glViewport", x=0, y=0, width=64, height=48)
+            c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+            c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+            c.add("glXSwapBuffers", dpy=1, drawable=2, flags=END_FRAME)
+        return c
+    want = trace(tmp_path, capture(False), "want")
+    assert want.count(b"\nframe ") == 3 and want.count(b"\nf ") > 300
+    assert trace(tmp_path, capture(True), first) == want
+
+
 def test_a_program_another_context_deletes_lives_while_in_use(tmp_path):
     """A loader context sharing the drawing context's objects deletes the
     program the drawing context uses: GL only flags it, and the drawing
@@ -892,6 +926,28 @@ def test_out_of_memory_is_one_line(tmp_path, monkeypatch, capsys, failure):
         f"rbcd-gl2rbt: {cap}: out of memory (the process's memory limit is below what the capture needs within the "
         "documented limits); no output written"]
     assert left_behind(tmp_path, ["m.xz"]) == []
+
+
+@pytest.mark.parametrize("limit_mb", [300, 340], ids=["300", "340"])
+def test_an_address_space_too_small_for_mesa_is_said_before_it_starts(tmp_path, limit_mb):
+    """Under an address-space limit of 300 or 340 MB Mesa's llvmpipe
+    crashed at its first compile (SIGSEGV, "double free"), with no message
+    and the run's temporary folder left (round 15's R15-7): the limit is
+    said before Mesa starts, one line, exit 1, nothing left; a GL 1.x
+    capture, which runs no shader, converts under it."""
+    cap = draw(shader_calls(VS)).write(tmp_path / "m.xz")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    limit = ["prlimit", f"--as={limit_mb * 1000000}"]
+    r = subprocess.run(limit + ["/usr/bin/python3", GL2RBT, cap, "-o", tmp_path / "m.rbt"], capture_output=True,
+                       text=True, env=env, timeout=120)
+    assert r.returncode == 1 and r.stderr.splitlines() == [
+        f"rbcd-gl2rbt: {cap}: out of memory (the address-space limit of {limit_mb * 1000000 >> 20} MiB is below "
+        "the 512 MiB Mesa's llvmpipe needs to start); no output written"], (r.returncode, r.stderr)
+    assert left_behind(tmp_path, ["m.xz"]) == []
+    fixed = Calls().triangle(5).swap().write(tmp_path / "f.xz")
+    r = subprocess.run(limit + ["/usr/bin/python3", GL2RBT, fixed, "-o", tmp_path / "f.rbt"], capture_output=True,
+                       text=True, env=env, timeout=120)
+    assert r.returncode == 0 and r.stderr == "" and (tmp_path / "f.rbt").read_bytes().count(b"\nframe ") == 1, r
 
 
 def test_a_signal_while_numpy_loads_is_an_interruption(monkeypatch):

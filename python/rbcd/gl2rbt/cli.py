@@ -157,8 +157,9 @@ def run(args):
             # Past the process's memory limit (ulimit -v) before any of the
             # documented bounds (docs/gl-capture.md, limits) refused the
             # input: an allocation or a mapping failed.
-            sys.stderr.write(f"{PROG}: {printable(args.trace)}: out of memory (the process's memory limit is below "
-                             "what the capture needs within the documented limits); no output written\n")
+            why = printable(e, 200) if str(e).startswith("the address-space limit") else \
+                "the process's memory limit is below what the capture needs within the documented limits"
+            sys.stderr.write(f"{PROG}: {printable(args.trace)}: out of memory ({why}); no output written\n")
             return 1
         if INTERRUPTED.is_set():
             # A signal's KeyboardInterrupt wrapped by what it was raised in
@@ -215,6 +216,7 @@ def on_signal(signum, frame):
 
 
 def main(argv=None):
+    from .shading import stop_children   # here, not in the clean-up, where memory may have run out
     for sig in HANDLED:
         # SIGINT or SIGHUP ignored when the program started (a script's
         # background job, nohup) stays ignored, here and in the children
@@ -233,7 +235,6 @@ def main(argv=None):
         return 130
     finally:
         ignore_signals()   # the run has ended: a signal from here changes nothing
-        from .shading import stop_children
         stop_children()
         remove_temporaries()
 

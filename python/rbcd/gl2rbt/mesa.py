@@ -183,10 +183,28 @@ class _Work:
             self.dog.work = self.outer
 
 
+# The address space Mesa's llvmpipe needs to start and compile a first
+# shader (Mesa 22.3, measured: below about 320 MB it fails at its first
+# compile with SIGSEGV or "double free", past anything the converter can
+# say; each llvmpipe thread adds its stack and malloc arena).
+MESA_MIN_ADDRESS_SPACE = 512 << 20
+
+
+def check_address_space():
+    """An address-space limit (ulimit -v) too small for Mesa to start is
+    said before Mesa runs: one line, out of memory, exit 1 (round 15's
+    R15-7: a crash, and the run's temporary folder left)."""
+    soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    if soft != resource.RLIM_INFINITY and soft < MESA_MIN_ADDRESS_SPACE:
+        raise MemoryError(f"the address-space limit of {soft >> 20} MiB is below the "
+                          f"{MESA_MIN_ADDRESS_SPACE >> 20} MiB Mesa's llvmpipe needs to start")
+
+
 class Mesa:
     """One headless context; `gl` is PyOpenGL's GL module, current on it."""
 
     def __init__(self, es=False):
+        check_address_space()
         EGL, GL = _load()
         self.gl, self.egl, self.es = GL, EGL, es
         self.procs = {}   # (name, argument types) -> the entry point (proc)

@@ -13,6 +13,8 @@ import time
 from ..cli import check_outputs, remove_left_temporaries, temporary_folder, unregister_temporary, write_output
 from .capture import check_input_file, check_rest, read_calls
 from .converter import Converter
+from .gl_tables import CALL_FLAG_END_FRAME, base_name
+from .glstate.draws import DrawCalls
 from .errors import ConvertError, RasterStopped, ToolError, printable
 from .glstate.draws import FRAGMENT_EFFECT_KEYS
 from .outputs import SafeText
@@ -105,15 +107,63 @@ def check_depth_prefix(prefix, paths):
                                "an input or another output")
 
 
+# The calls that draw (a glBegin's primitive is drawn at its glEnd).
+DRAWING = frozenset(DrawCalls.HANDLERS) - {"glPrimitiveRestartNV", "glRenderMode"}
+
+
 def new_converter(args, raster_in):
     """The Converter, its --stream-out opened here as every other output
     (SafeText: a temporary, renamed into place at the end, removed on
-    failure), not by the Converter (which would open it in place at once)."""
+    failure), not by the Converter (which would open it in place at once).
+    Its main window is known from the start (first_window): a splash
+    window's clears and swaps before the first draw are another target's,
+    not frames, and the screen is the main window's."""
     stream_out, args.stream_out = getattr(args, "stream_out", None), None
     try:
-        return Converter(args, raster_in, None)
+        main = first_window(args)
+        conv = Converter(args, raster_in, None)
+        conv.main_drawable = main
+        return conv
     finally:
         args.stream_out = stream_out
+
+
+def first_window(args):
+    """The main window or surface: the first one drawn into (with no
+    framebuffer object bound, not a pbuffer) once it swaps, unless another
+    drawn into swaps twice first (a warm-up window never shown); None when
+    a draw comes before any MakeCurrent, or no window is drawn and swapped.
+    The GL state alone, up to there, its draws not run. A game's frames are
+    that window's; another's draws (a warm-up) and swaps and clears (a
+    splash) before it end no frame and set no screen size (round 15's
+    R15-3). The converter keeps the rule after that (swaps_main_drawable)."""
+    probe = Converter(args, False, None)
+    drawn, swaps, in_begin = [], {}, False
+    try:
+        for call in read_calls(args.trace):
+            name, flags = base_name(call[1]), call[4]
+            if in_begin or name in DRAWING:
+                if probe.current_drawable is None:
+                    return None
+                if not probe.s.draw_fbo and probe.current_drawable not in probe.pbuffers \
+                        and probe.current_drawable not in drawn:
+                    drawn.append(probe.current_drawable)
+                in_begin = name != "glEnd" and (in_begin or name == "glBegin")
+            else:
+                probe.last_call = call[0]
+                probe.handle(call)
+            if isinstance(flags, int) and flags & CALL_FLAG_END_FRAME:
+                d = dict(call[2])
+                swapped = d.get("drawable", d.get("surface", d.get("hdc")))
+                if drawn and swapped == drawn[0]:
+                    return swapped
+                if swapped in drawn:
+                    swaps[swapped] = swaps.get(swapped, 0) + 1
+                    if swaps[swapped] >= 2:
+                        return swapped
+    finally:
+        probe.close_replay()
+    return None
 
 
 def convert_in(args, tmpdir, listing, ids, report):
