@@ -4,8 +4,9 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
     from rbcd.cli import UsageError, read_input, write_output, main_wrapper
 
 - Messages are one line: bytes that are not printable are written as \\xNN (as
-  rbcd-sim's escape_for_message does) and a token longer than 1024 characters
-  is cut. Errors are exit 2 (UsageError) or 1 (anything else, "internal
+  rbcd-sim's escape_for_message does; also Unicode's format, bidirectional
+  and other invisible characters, U+202E say) and a token longer than 1024
+  characters is cut. Errors are exit 2 (UsageError) or 1 (anything else, "internal
   error"), never a traceback.
 - Inputs are regular files, opened without waiting on a FIFO, read up to a
   stated limit, with the same wording as rbcd-sim: "PATH: cannot read WHAT:
@@ -32,6 +33,7 @@ import signal
 import stat
 import sys
 import tempfile
+import unicodedata
 
 from .startup import kept, release_signals
 
@@ -133,22 +135,31 @@ def exception_text(e, limit=200):
 
 
 def _escape_char(ch):
+    """ch itself when it prints as itself: not a character of category Cc
+    (controls: LF, CR, ESC, DEL, C1), Cf (format: U+202E RIGHT-TO-LEFT
+    OVERRIDE, which makes a terminal show the rest of a line reversed, the
+    other bidirectional controls, U+200B), Cs (surrogates), Co (private
+    use), Cn (unassigned), Zl or Zp (U+2028, U+2029); else its UTF-8 bytes as
+    \\xNN. str.isprintable() is False exactly for those categories and Zs
+    (spaces, kept: they print as a space)."""
+    if ch.isprintable() or unicodedata.category(ch) == "Zs":
+        return ch
     cp = ord(ch)
-    if 0x20 <= cp < 0x7f:
-        return ch
-    if cp >= 0xa0 and cp not in (0x2028, 0x2029) and not 0xd800 <= cp <= 0xdfff:
-        return ch
     if 0xdc80 <= cp <= 0xdcff:   # a byte that was not UTF-8 (surrogateescape)
         return f"\\x{cp - 0xdc00:02x}"
     return "".join(f"\\x{b:02x}" for b in ch.encode("utf-8", "surrogatepass"))
 
 
 def escape(text):
-    """One printable line: control characters (LF, CR, ESC, ...), DEL, C1 controls and
-    invalid UTF-8 as \\xNN; tokens longer than MAX_TOKEN characters cut."""
+    """One printable line: control characters (LF, CR, ESC, ...), DEL, C1 controls,
+    format and bidirectional controls (U+202E), line and paragraph separators,
+    private-use and unassigned characters and invalid UTF-8 as \\xNN; tokens
+    longer than MAX_TOKEN characters cut."""
     if isinstance(text, bytes):
         text = text.decode("utf-8", "surrogateescape")
-    out = "".join(_escape_char(c) for c in str(text))
+    out = str(text)
+    if not out.isprintable():   # (the common case, a printable line, checked in C)
+        out = "".join(c if c.isprintable() else _escape_char(c) for c in out)
     return re.sub(r"\S{%d,}" % (MAX_TOKEN + 1),
                   lambda m: m.group(0)[:MAX_TOKEN] + f"...({len(m.group(0))} characters)", out)
 
@@ -250,6 +261,41 @@ def read_input_text(path, what, max_bytes, limit_key=""):
         return data.decode("utf-8")
     except UnicodeDecodeError as e:
         raise UsageError(f"{path}: {what}: not UTF-8 text (byte {e.start})")
+
+
+# ---- TOML: what Python's tomllib does not bound. Its work and memory for a
+# dotted key grow with the square of its parts (a key of 40,000 parts, an
+# 80 KB file, took 6.3 GB), so a key of more than TOML_KEY_PARTS parts, in a
+# key/value line, a [table] or [[array]] header or an inline table, is
+# refused before tomllib sees the text. (Nesting too deep is tomllib's
+# RecursionError, which each reader turns into its own one line.)
+TOML_KEY_PARTS = 64
+_TOML_PART = r"""[A-Za-z0-9_-]+|"(?:[^"\\\n]|\\.)*"?|'[^'\n]*'?"""
+# One pass over the text, linear: multi-line strings (to their end, or the
+# text's when unterminated) and comments are skipped; every run of key parts
+# joined by dots (a single-line string is one part) is a match of its own,
+# its parts counted only when it holds more dots than the limit allows.
+# Outside strings and comments a TOML document's only such runs are keys,
+# floats and times' fractional seconds (2 parts).
+_TOML_KEYS = re.compile(r'"""[\s\S]*?(?:"""|\Z)|' + r"'''[\s\S]*?(?:'''|\Z)|#[^\n]*|"
+                        + r"(?P<key>(?:%s)(?:[ \t]*\.[ \t]*(?:%s))*)" % (_TOML_PART, _TOML_PART))
+_TOML_PARTS = re.compile(_TOML_PART)
+
+
+def check_toml_keys(path, text):
+    """UsageError "PATH:LINE: a key of N dotted parts, more than
+    TOML_KEY_PARTS" for the first such key of a TOML text, before tomllib
+    parses it. Linear in the text; a text that is not TOML may be refused
+    here rather than by tomllib, never a TOML document whose keys are all
+    within the limit."""
+    for m in _TOML_KEYS.finditer(text):
+        key = m.group("key")
+        if key is not None and key.count(".") >= TOML_KEY_PARTS:
+            parts = len(_TOML_PARTS.findall(key))
+            if parts > TOML_KEY_PARTS:
+                line = text.count("\n", 0, m.start()) + 1
+                raise UsageError(f"{path}:{line}: a key of {parts} dotted parts, more than {TOML_KEY_PARTS}")
+    return text
 
 
 def output_target(path):

@@ -23,7 +23,7 @@ import subprocess
 import sys
 import tomllib
 
-from rbcd.cli import main_wrapper, say  # (one-line messages, no tracebacks)
+from rbcd.cli import check_toml_keys, main_wrapper, say  # (one-line messages, no tracebacks)
 
 # The CPU model of Figure 8 (instructions to time and energy, each constant
 # with its source) is rbcd/cpu_model.py.
@@ -50,6 +50,15 @@ def need(path):
     if not os.path.exists(path):
         raise InputMissing(f"{path}: missing (run scripts/reproduce.sh for this target)")
     return path
+
+
+def load_toml(path):
+    """A TOML file (a scene, a sweep template, a capture's description), its
+    keys of at most 64 dotted parts (rbcd.cli.check_toml_keys: tomllib's
+    memory grows with the square of a key's parts)."""
+    with open(path, "rb") as f:
+        text = f.read().decode()
+    return tomllib.loads(check_toml_keys(path, text))
 
 
 def read_collisions(path):
@@ -171,8 +180,7 @@ def scene_objects(name):
         with open(need(summary)) as f:
             frames = [json.loads(line) for line in f if line.strip()]
         return fmt(sum(len(fr["objects"]) for fr in frames) / max(1, len(frames)), 1), "-"
-    with open(need(path), "rb") as f:
-        sc = tomllib.load(f)
+    sc = load_toml(need(path))
     objs = sc.get("object", [])
     return len({o["id"] for o in objs if "id" in o}), sum(1 for o in objs if "id" not in o)
 
@@ -251,8 +259,7 @@ def id_bits(scene_path):
     (a game capture's: 7, its selection rules' max_entity_id = 127)."""
     if is_trace(scene_path):
         return 7
-    with open(need(scene_path), "rb") as f:
-        objs = tomllib.load(f).get("object", [])
+    objs = load_toml(need(scene_path)).get("object", [])
     top = max([o["id"] for o in objs if isinstance(o.get("id"), int)] or [0])
     b = 7
     while top >= 1 << b:
@@ -294,8 +301,7 @@ def toml_text(doc):
 def sweep_file(template, suite, dest):
     """TEMPLATE (a sweep of workloads/sweeps/) with its inputs replaced by SUITE's scenes, each
     with the id bits it needs, and its paths made absolute: what reproduce.sh --workloads runs."""
-    with open(template, "rb") as f:
-        doc = tomllib.load(f)
+    doc = load_toml(template)
     base = doc.setdefault("base", {})
     if "config" in base:
         base["config"] = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(template)), base["config"]))
@@ -420,8 +426,7 @@ def game_of(s):
     game = None
     desc = trace_base(path) + ".capture"
     if os.path.isfile(desc):
-        with open(desc, "rb") as f:
-            game = tomllib.load(f).get("game")
+        game = load_toml(desc).get("game")
     if game not in GAME_CLASSES:
         game = next((g for g in GAME_CLASSES if s.startswith(g + "-")), None)
     return game

@@ -32,9 +32,9 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import (UsageError, check_outputs, escape, main_wrapper, open_trace, read_input_text, say,
-                      remove_left_temporaries, temporary_folder, trace_errors, unregister_temporary,
-                      write_output)
+from rbcd.cli import (UsageError, check_outputs, check_toml_keys, escape, main_wrapper, open_trace,
+                      read_input_text, say, remove_left_temporaries, temporary_folder, trace_errors,
+                      unregister_temporary, write_output)
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter
@@ -189,7 +189,7 @@ class Entry:
                              "_.+- (its outputs are named after it)")
         self.toml = os.path.join(self.dir, "capture.toml")
         self.calls = os.path.join(self.dir, "calls.xz")
-        text = read_input_text(self.toml, "the capture description", MAX_TOML)
+        text = check_toml_keys(self.toml, read_input_text(self.toml, "the capture description", MAX_TOML))
         try:
             doc = tomllib.loads(text)
         except tomllib.TOMLDecodeError as e:

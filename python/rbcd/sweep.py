@@ -31,7 +31,8 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import UsageError, escape, main_wrapper, open_trace, read_input_text, say, trace_errors, write_output
+from rbcd.cli import (UsageError, check_toml_keys, escape, main_wrapper, open_trace, read_input_text, say,
+                      trace_errors, write_output)
 from rbcd.startup import kept
 
 PROG = "rbcd-sweep"
@@ -168,6 +169,8 @@ def count_frames(kind, path):
         return _count_frames(kind, path)
     except tomllib.TOMLDecodeError as e:
         raise SweepError(f"{path}: {e}")
+    except UsageError as e:   # (a key of too many dotted parts)
+        raise SweepError(str(e)) from None
     except (OSError, EOFError) + trace_errors() as e:
         raise SweepError(f"{path}: cannot count its frames: {e}")
 
@@ -178,7 +181,8 @@ def _count_frames(kind, path):
         kind = "scene"
     if kind == "scene":
         with open(path, "rb") as f:
-            n = tomllib.load(f).get("frames")
+            text = f.read().decode()
+        n = tomllib.loads(check_toml_keys(path, text)).get("frames")
         if not isinstance(n, int) or n < 1:
             raise SweepError(f"{path}: frames: needs a positive integer to split the scene")
         return n
@@ -215,9 +219,11 @@ class Sweep:
 
     def _read(self, path, text):
         try:
-            doc = tomllib.loads(text)
+            doc = tomllib.loads(check_toml_keys(path, text))
         except tomllib.TOMLDecodeError as e:
             raise SweepError(f"{path}: {e}")
+        except UsageError as e:   # a key of more than 64 dotted parts (rbcd.cli)
+            raise SweepError(str(e)) from None
         self.name = path
         for k in doc:
             if k not in SWEEP_TABLES:

@@ -34,7 +34,7 @@ from rbcd.gl2rbt.reduced import ReducedWriter
 GL2RBT = os.path.join(ROOT, "scripts", "rbcd-gl2rbt")
 CAPTURES = os.environ.get("RBCD_GL_CAPTURES") or os.path.join(ROOT, "build", "testbench", "gl", "captures")
 FAULTS = ["nan", "index", "ortho", "list", "shader", "line", "underflow"]
-SHADER_FAULTS = ["geometry", "rendered", "texture", "cube", "array", "compile", "separable", "image", "multisample", "default", "msimage", "msdepth"]
+SHADER_FAULTS = ["geometry", "rendered", "texture", "cube", "array", "compile", "separable", "image", "multisample", "default", "msimage", "msdepth", "cubeseam"]
 DEPTH_MAX = (1 << 24) - 1
 
 

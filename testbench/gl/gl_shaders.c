@@ -16,7 +16,9 @@
  * 9), rendered (the same triangle and vertex shader, its 2x2 texture
  * rendered instead by a draw into a framebuffer object whose fragment shader
  * writes texel (0, 0)'s value everywhere: the same fragments), cube (the
- * same triangle moved by a texel of a cube map, every face that texel), array
+ * same triangle moved by a texel of a cube map, every face that texel),
+ * cubeseam (the cube map filtered linearly near the +X face's edge with +Y,
+ * whose texel differs, GL_TEXTURE_CUBE_MAP_SEAMLESS enabled), array
  * (the same, by layer 1 of a 2D array texture whose layer 0 is another),
  * image (that layer read by imageLoad through image unit 3, bound with
  * glBindImageTexture as a 2D image, the texture bound at no texture unit),
@@ -97,6 +99,13 @@ static const char* cube_source =
     "uniform samplerCube heights;\n"
     "in vec3 position;\n"
     "void main() { gl_Position = vec4(position, 1.0) + textureLod(heights, vec3(1.0, 0.2, -0.3), 0.0); }\n";
+/* Near the +X face's edge with +Y (face coordinates s 0.5, t 0.25): with
+ * GL_LINEAR and seamless cube maps a quarter of +Y's texel. */
+static const char* cubeseam_source =
+    "#version 330 core\n"
+    "uniform samplerCube heights;\n"
+    "in vec3 position;\n"
+    "void main() { gl_Position = vec4(position, 1.0) + textureLod(heights, vec3(1.0, 0.5, 0.0), 0.0); }\n";
 static const char* array_source =
     "#version 330 core\n"
     "uniform sampler2DArray heights;\n"
@@ -276,9 +285,12 @@ static void inject_fault(GLuint main_program) {
         fill(GL_TEXTURE_2D_MULTISAMPLE, tex, 1u << 3);
         glBindImageTexture(3, tex, 0, GL_FALSE, 0, GL_READ_ONLY, GL_RGBA32F);
         glAttachShader(p, compile(GL_VERTEX_SHADER, msimage_source));
-    } else if (!strcmp(fault, "cube") || !strcmp(fault, "array") || !strcmp(fault, "image")) {
+    } else if (!strcmp(fault, "cube") || !strcmp(fault, "array") || !strcmp(fault, "image") ||
+               !strcmp(fault, "cubeseam")) {
         static const float texel[4] = {-0.75f, -0.5f, -1.5f, 0}, other[4] = {9, 9, 9, 0};
-        const int cube = !strcmp(fault, "cube");
+        static const float above[4] = {-0.25f, -0.5f, -1.5f, 0};   /* cubeseam's +Y face */
+        const int seam = !strcmp(fault, "cubeseam");
+        const int cube = !strcmp(fault, "cube") || seam;
         const GLenum target = cube ? GL_TEXTURE_CUBE_MAP : GL_TEXTURE_2D_ARRAY;
         GLuint tex;
         glActiveTexture(GL_TEXTURE2);
@@ -286,7 +298,8 @@ static void inject_fault(GLuint main_program) {
         glBindTexture(target, tex);
         if (cube) {
             for (GLenum face = 0; face < 6; ++face)
-                glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGBA32F, 1, 1, 0, GL_RGBA, GL_FLOAT, texel);
+                glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGBA32F, 1, 1, 0, GL_RGBA, GL_FLOAT,
+                             seam && face == 2 ? above : texel);
         } else {
             float layers[2][2][2][4];   /* layer 0: another texel everywhere; layer 1: the texel */
             for (int y = 0; y < 2; ++y)
@@ -296,15 +309,16 @@ static void inject_fault(GLuint main_program) {
                 }
             glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_RGBA32F, 2, 2, 2, 0, GL_RGBA, GL_FLOAT, layers);
         }
-        glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(target, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glTexParameteri(target, GL_TEXTURE_MIN_FILTER, seam ? GL_LINEAR : GL_NEAREST);
+        glTexParameteri(target, GL_TEXTURE_MAG_FILTER, seam ? GL_LINEAR : GL_NEAREST);
+        if (seam) glEnable(GL_TEXTURE_CUBE_MAP_SEAMLESS);
         glActiveTexture(GL_TEXTURE0);
         if (!strcmp(fault, "image")) {
             glBindTexture(target, 0);   /* read through image unit 3 alone: layer 1 as a 2D image */
             glBindImageTexture(3, tex, 0, GL_FALSE, 1, GL_READ_ONLY, GL_RGBA32F);
             glAttachShader(p, compile(GL_VERTEX_SHADER, image_source));
         } else {
-            glAttachShader(p, compile(GL_VERTEX_SHADER, cube ? cube_source : array_source));
+            glAttachShader(p, compile(GL_VERTEX_SHADER, seam ? cubeseam_source : cube ? cube_source : array_source));
         }
     } else if (!strcmp(fault, "texture") || !strcmp(fault, "separable")) {
         texture_2x2(height_texels);
@@ -328,6 +342,7 @@ static void inject_fault(GLuint main_program) {
         glUseProgram(p);
     }
     const int textured = !strcmp(fault, "texture") || !strcmp(fault, "rendered") || !strcmp(fault, "cube") ||
+                         !strcmp(fault, "cubeseam") ||
                          !strcmp(fault, "array") || !strcmp(fault, "image") || !strcmp(fault, "multisample") ||
                          !strcmp(fault, "default") || !strcmp(fault, "msimage") || !strcmp(fault, "msdepth") ||
                          pipeline;

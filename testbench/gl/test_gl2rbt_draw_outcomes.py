@@ -16,7 +16,8 @@ import time
 import pytest
 
 from conftest import program
-from gl_captures import END_FRAME, GL2RBT, TRIANGLE, Calls, alive, gl2rbt_timed as gl2rbt, left_behind, refused
+from gl_captures import (END_FRAME, GL2RBT, TRIANGLE, Calls, alive, gl2rbt_timed as gl2rbt, left_behind, peak_mb,
+                         refused)
 from test_gl2rbt_hostile import ES_FRAGMENT, VS, shader_calls
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
@@ -56,8 +57,11 @@ def test_draw_parameters_of_arb_shader_draw_parameters(tmp_path):
     """gl_DrawIDARB, gl_BaseVertexARB and gl_BaseInstanceARB (llvmpipe has
     ARB_shader_draw_parameters) are the draw's, not fixed-function arrays
     (they had been refused as those): a draw alone, or the first of a
-    multi-draw, gives gl_DrawID 0 as Mesa; a later draw of a multi-draw,
-    which the converter runs in Mesa alone, is refused naming the call."""
+    multi-draw, gives gl_DrawID 0 as Mesa; a later draw of a direct
+    multi-draw, which the converter runs in Mesa alone, is refused naming
+    the call, while an indirect multi-draw runs in Mesa whole (round 12's
+    R12-10: one Mesa run a command, a minute for 131,072 of them), each
+    command's gl_DrawID its own."""
     vs = ("#version 330 core\n#extension GL_ARB_shader_draw_parameters : require\nin vec3 p;\n"
           "void main() { float o = 20.0 * float(gl_DrawIDARB + gl_BaseVertexARB + gl_BaseInstanceARB);\n"
           "  gl_Position = vec4((p.x + o) / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
@@ -75,6 +79,103 @@ def test_draw_parameters_of_arb_shader_draw_parameters(tmp_path):
     r = gl2rbt(tmp_path, multi(2).write(tmp_path / "m.xz"), "-o", tmp_path / "m.rbt")
     refused(r, "call ", "glMultiDrawArrays: its draw 1, whose vertex shader reads gl_DrawID: not emulated")
     assert not os.path.exists(tmp_path / "m.rbt")
+    # An indirect multi-draw runs in Mesa whole, as the capture called it:
+    # its second command's gl_DrawID is 1, as a base instance of 1 gives.
+    moved = draw(shader_calls(vs)).calls[:-2]   # (its glDrawArrays kept, then another)
+    c = shader_calls(vs)
+    c.calls = moved
+    c.add("glDrawArraysInstancedBaseInstance", mode="GL_TRIANGLES", first=0, count=3, instancecount=1,
+          baseinstance=1).add("glPopDebugGroup").swap()
+    both = trace(tmp_path, c, "both")
+    assert both != want and both.count(b"\nf ") == 2 * want.count(b"\nf ")
+    for fn, words, kw in [("glMultiDrawArraysIndirect", [3, 1, 0, 0, 3, 1, 0, 0], dict(drawcount=2, stride=0)),
+                          ("glMultiDrawElementsIndirect", [3, 1, 2, 0, 0, 3, 1, 2, 0, 0],
+                           dict(type="GL_UNSIGNED_SHORT", drawcount=2, stride=0))]:
+        assert trace(tmp_path, indirect(shader_calls(vs), fn, words, indirect=0, **kw), fn) == both, fn
+
+
+def test_an_indirect_multi_draw_past_one_mesa_run_is_run_in_several(tmp_path, monkeypatch, capsys):
+    """An indirect multi-draw runs in Mesa a run of commands at a time, as
+    many as MAX_DRAW_PRIMITIVES triangles hold (here 2: runs of 2, 2 and 1
+    commands): the same bytes as its commands drawn one by one; a vertex
+    shader reading gl_DrawID there, whose later runs would number their
+    commands from 0, has its commands run alone, and the second refused."""
+    from rbcd.gl2rbt import cli
+    from rbcd.gl2rbt.glstate import draws
+    vs = ("#version 330 core\n#extension GL_ARB_shader_draw_parameters : require\nin vec3 p;\n"
+          "void main() { float o = 10.0 * float(gl_BaseInstanceARB);\n"
+          "  gl_Position = vec4((p.x + o) / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+    c = draw(shader_calls(vs))
+    c.calls = c.calls[:-2]
+    for i in range(1, 5):
+        c.add("glDrawArraysInstancedBaseInstance", mode="GL_TRIANGLES", first=0, count=3, instancecount=1,
+              baseinstance=i)
+    want = trace(tmp_path, c.add("glPopDebugGroup").swap(), "want")
+    assert want.count(b"\nf ") > 5 * 300
+    monkeypatch.setenv("RBCD_GL_RASTER", program("rbcd-gl-raster"))
+    monkeypatch.setattr(draws, "MAX_DRAW_PRIMITIVES", 2)
+    words = [w for i in range(5) for w in (3, 1, 0, i)]
+    for tag, source in (("runs", vs), ("id", vs.replace("gl_BaseInstanceARB", "gl_DrawIDARB"))):
+        cap = indirect(shader_calls(source), "glMultiDrawArraysIndirect", words, indirect=0, drawcount=5,
+                       stride=0).write(tmp_path / f"{tag}.xz")
+        status = cli.run(cli.parse_args([cap, "-o", str(tmp_path / f"{tag}.rbt")]))
+        err = capsys.readouterr().err
+        if tag == "runs":
+            assert status == 0 and err == "" and (tmp_path / "runs.rbt").read_bytes() == want, err
+        else:
+            assert status == 2 and "glMultiDrawArraysIndirect: its draw 1, whose vertex shader reads gl_DrawID" \
+                in err, err
+
+
+@pytest.mark.parametrize("cap", ["GL_POLYGON_OFFSET_LINE", "GL_POLYGON_OFFSET_POINT"], ids=["line", "point"])
+def test_polygon_offset_of_lines_or_points_on_filled_triangles(tmp_path, cap):
+    """GL offsets filled triangles by GL_POLYGON_OFFSET_FILL alone, but
+    llvmpipe offsets them when GL_POLYGON_OFFSET_LINE or _POINT is enabled
+    too, by another amount: with an offset set, refused naming the draw
+    (round 16's R16-4: no offset in the trace, Mesa's depth moved); with
+    none, the plain triangle."""
+    want = trace(tmp_path, draw(shader_calls(VS)), "want")
+    c = shader_calls(VS).add("glEnable", cap=cap)
+    assert trace(tmp_path, draw(c), "no_offset") == want
+    c = shader_calls(VS).add("glEnable", cap=cap).add("glPolygonOffset", factor=0.0, units=-100000.0)
+    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "o.xz"), "-o", tmp_path / "o.rbt")
+    refused(r, "call ", f"glDrawArrays: {cap} enabled with a polygon offset: llvmpipe offsets filled triangles")
+    assert not os.path.exists(tmp_path / "o.rbt")
+    c = shader_calls(VS).add("glEnable", cap=cap).add("glPolygonOffset", factor=0.0, units=-100000.0)
+    assert trace(tmp_path, draw(c.add("glDisable", cap=cap)), "disabled") == want
+
+
+def test_indices_past_the_element_buffer_are_refused_in_bounded_memory(tmp_path):
+    """2^22 indices read from a 6-byte element buffer (GL leaves what they
+    read undefined): refused naming the draw, at once, in the memory of a
+    small capture (round 16's R16-8: converted, 1.9 GB and 73 s)."""
+    c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glBindBuffer", target="GL_ELEMENT_ARRAY_BUFFER", buffer=8)
+    c.add("glBufferData", target="GL_ELEMENT_ARRAY_BUFFER", size=6, data=struct.pack("<3H", 0, 1, 2),
+          usage="GL_STATIC_DRAW")
+    c.add("glDrawElementsInstanced", mode="GL_TRIANGLES", count=1 << 22, type="GL_UNSIGNED_SHORT", indices=0,
+          instancecount=2)
+    r = gl2rbt(tmp_path, c.swap().write(tmp_path / "i.xz"), "-o", tmp_path / "i.rbt")
+    refused(r, "call ", "glDrawElementsInstanced: 4194304 indices from byte 0 reach past element buffer 8's 6 bytes")
+    assert peak_mb(r) < 400 and r.seconds < 30, (peak_mb(r), r.seconds)
+    assert left_behind(tmp_path, ["i.xz"]) == []
+
+
+def test_a_base_instance_past_the_vertex_limits_and_an_extension_mesa_lacks(tmp_path):
+    """A base instance of 2^32 - 16 (a GLuint Mesa takes whole; with no
+    instanced attribute it moves nothing) draws the plain triangle (round
+    16's R16-12: refused as outside [-2^24, 2^24]); so does a draw under
+    glEnable(GL_DEPTH_BOUNDS_TEST_EXT) and glDepthBoundsEXT, an extension
+    llvmpipe lacks (GL_INVALID_ENUM: nothing changes; had been refused)."""
+    want = trace(tmp_path, draw(shader_calls(VS)), "want")
+    c = draw(shader_calls(VS))
+    c.calls = [(n, "glDrawArraysInstancedBaseInstance", a + [("instancecount", 1), ("baseinstance", (1 << 32) - 16)],
+                r, fl) if f == "glDrawArrays" else (n, f, a, r, fl) for n, f, a, r, fl in c.calls]
+    assert trace(tmp_path, c, "base") == want
+    c = shader_calls(VS).add("glEnable", cap="GL_DEPTH_BOUNDS_TEST_EXT").add("glDepthBoundsEXT", zmin=0.1, zmax=0.2)
+    assert trace(tmp_path, draw(c), "bounds") == want
 
 
 def test_adjacency_modes_draw_their_triangles(tmp_path):
@@ -362,7 +463,7 @@ def test_divisor_entry_points_mesa_does_not_implement_change_nothing(tmp_path):
         mesa = Mesa(es)
         GL = mesa.gl
         GL.glBindVertexArray(GL.glGenVertexArrays(1))
-        for name in sorted(MESA_NO_OPS) + ["glVertexAttribDivisorARB"]:
+        for name in sorted(n for n in MESA_NO_OPS if "Divisor" in n) + ["glVertexAttribDivisorARB"]:
             GL.glVertexAttribDivisor(1, 0)
             ctypes.CFUNCTYPE(None, ctypes.c_uint, ctypes.c_uint)(mesa.egl.eglGetProcAddress(name.encode()))(1, 5)
             got = ctypes.c_int()
@@ -535,6 +636,16 @@ def test_a_parameter_buffer_named_by_its_extension_draws(tmp_path):
     c = indirect(c, "glMultiDrawArraysIndirectCount", [3, 1, 0, 0, 3, 1, 0, 0], indirect=0, drawcount=4,
                  maxdrawcount=1, stride=0)
     assert trace_of(tmp_path, c, "count") == want
+    # maxdrawcount 3 past the two commands the buffer holds: Mesa refuses
+    # the call (GL_INVALID_OPERATION), whatever count the parameter buffer
+    # gives (round 16's R16-5: drawn, two commands).
+    c = shader_calls(VS)
+    c.add("glBindBuffer", target="GL_PARAMETER_BUFFER_ARB", buffer=10)
+    c.add("glBufferData", target="GL_PARAMETER_BUFFER_ARB", size=8, data=struct.pack("<2I", 2, 2),
+          usage="GL_STATIC_DRAW")
+    c = indirect(c, "glMultiDrawArraysIndirectCount", [3, 1, 0, 0, 3, 1, 0, 0], indirect=0, drawcount=0,
+                 maxdrawcount=3, stride=0)
+    assert trace_of(tmp_path, c, "past").count(b"\nf ") == 0
 
 
 @pytest.mark.parametrize("fn, commands, kw", [
@@ -561,6 +672,31 @@ def test_opengl_es_indirect_draws_draw_their_commands(tmp_path, fn, commands, kw
     want = trace_of(tmp_path, draw(program(es(shader_calls(vs)))), "want")
     assert want.count(b"\nf ") > 100
     assert trace_of(tmp_path, indirect(program(es(shader_calls(vs))), fn, commands, **kw), "es") == want
+
+
+def test_opengl_es_fixed_point_attributes(tmp_path):
+    """OpenGL ES takes GL_FIXED (16.16) vertex attributes: from a buffer,
+    the float triangle's bytes (round 16's R16-3: every such
+    draw a GL error, "GL_INVALID_ENUM in glEnableVertexAttribArray", as
+    Mesa refuses GL_FIXED in glVertexAttribFormat)."""
+    def es(c):
+        c.calls[5] = (6, "eglCreateContext", [("dpy", 1), ("config", 1), ("share_context", 0), (
+            "attrib_list", ["EGL_CONTEXT_MAJOR_VERSION", 3, "EGL_CONTEXT_MINOR_VERSION", 0, "EGL_NONE"])], 1, 0)
+        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+        c.add("glShaderSource", shader=3, count=1, string=[fs], length=None)
+        c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
+        return c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+    vs = "#version 300 es\nin vec3 p;\nvoid main() { gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n"
+    fs = "#version 300 es\nprecision mediump float;\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n"
+    want = trace_of(tmp_path, draw(es(shader_calls(vs))), "want")
+    assert want.count(b"\nf ") > 100
+    fixed = struct.pack("<9i", *(int(v * 65536) for v in struct.unpack("<9f", TRIANGLE)))
+    c = es(shader_calls(vs)).add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=fixed,
+                                 usage="GL_STATIC_DRAW")
+    c = draw(c)
+    c.calls = [(n, f, [(k, "GL_FIXED" if k == "type" and f == "glVertexAttribPointer" else v) for k, v in a], r, fl)
+               for n, f, a, r, fl in c.calls]
+    assert trace_of(tmp_path, c, "buffer") == want
 
 
 @pytest.mark.parametrize("write, words", [

@@ -210,6 +210,21 @@ def test_a_vertex_shader_reading_an_uploaded_or_a_rendered_texture(gl, fault):
     assert_moved_triangle(checked_and_reduced(gl, cap, 2000))
 
 
+def test_a_seamless_cube_map_read_by_a_vertex_shader(gl):
+    """The fault "cubeseam": a cube map filtered linearly near the +X face's
+    edge with +Y under GL_TEXTURE_CUBE_MAP_SEAMLESS, so a quarter of +Y's
+    texel moves the triangle too: Mesa's context is given the enable (round
+    16's R16-1: ignored, +X's texel alone, the check 0.00%); the check
+    agrees and the reduced capture gives the same bytes, which differ from
+    the "cube" fault's (+X's texel alone)."""
+    seam = checked_and_reduced(gl, capture_path("shader-fault-cubeseam"), 2000)
+    plain = gl.path("plain.rbt")
+    r = gl(capture_path("shader-fault-cube"), "-o", plain)
+    assert r.returncode == 0, r.stderr
+    with open(seam, "rb") as a, open(plain, "rb") as b:
+        assert a.read() != b.read(), "the seamless read gave +X's texel alone"
+
+
 def checked_and_reduced(gl, cap, pixels):
     """The capture's Mesa check at 99% or more of more than `pixels`
     covered pixels; its trace, the same bytes from its reduced capture."""
@@ -240,12 +255,14 @@ def assert_moved_triangle(path):
     assert not any(9 in [obj for _, obj, *_ in frags] for frags in frames[0].values())
 
 
-@pytest.mark.parametrize("broken", ["no glretrace", "no library", "replay ends", "replay killed"])
+@pytest.mark.parametrize("broken", ["no glretrace", "no library", "replay ends", "replay killed", "replay terminated",
+                                    "replay stopped"])
 def test_a_rendered_texture_mesa_s_replay_cannot_give(gl, broken, tmp_path):
     """Without glretrace or the readback library beside rbcd-gl-raster (a
     tool missing: exit 1), or with a replay that stops before the draw (a
-    glretrace that exits at once: exit 2), the draw is refused in one line
-    naming it, and nothing is left."""
+    glretrace that exits at once: exit 2; one killed, terminated or stopped
+    from outside: the tool's failure, exit 1, the capture named), the draw
+    is refused in one line naming it, and nothing is left."""
     if broken == "no library":
         lone = tmp_path / "lone"
         lone.mkdir()
@@ -259,17 +276,24 @@ def test_a_rendered_texture_mesa_s_replay_cannot_give(gl, broken, tmp_path):
     if broken == "replay ends":
         (bin_dir / "glretrace").write_text("#!/bin/sh\necho 'glretrace: stopped early' >&2\nexit 1\n")
         (bin_dir / "glretrace").chmod(0o755)
-    if broken == "replay killed":   # (round 15's R15-10: blamed on the capture, exit 2)
-        (bin_dir / "glretrace").write_text("#!/bin/sh\nkill -9 $$\n")
+    # (Killed, terminated or stopped from outside: round 15's R15-10 and
+    # round 16's R16-9, blamed on the capture, exit 2.)
+    signals = {"replay killed": "9", "replay terminated": "15", "replay stopped": "STOP"}
+    if broken in signals:
+        (bin_dir / "glretrace").write_text(f"#!/bin/sh\nkill -{signals[broken]} $$\n")
         (bin_dir / "glretrace").chmod(0o755)
     gl.env["PATH"] = str(bin_dir)
     out = gl.path("x.rbt")
     r = gl(capture_path("shader-fault-rendered"), "-o", out)
     lines = r.stderr.strip().splitlines()
     words, status = {"no glretrace": ("needs glretrace", 1), "no library": ("rbcd-texture-readback.so", 1),
-                     "replay ends": ("stopped early", 2), "replay killed": ("was killed (signal 9)", 1)}[broken]
+                     "replay ends": ("stopped early", 2), "replay killed": ("was ended by signal 9", 1),
+                     "replay terminated": ("was ended by signal 15", 1),
+                     "replay stopped": ("was stopped (SIGSTOP) and did not go on", 1)}[broken]
     assert r.returncode == status and len(lines) == 1 and re.search(r": call \d+: glDrawArrays", lines[0]) \
         and words in lines[0], lines
+    if status == 1 and broken.startswith("replay"):
+        assert capture_path("shader-fault-rendered") in lines[0], lines
     assert not os.path.exists(out)
     assert not [f for f in os.listdir(gl.tmp) if f.startswith(("rbcd-gl2rbt", "."))], os.listdir(gl.tmp)
 

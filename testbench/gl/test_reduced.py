@@ -17,6 +17,8 @@ CALLS = [
     (4, "glBindTexture", [("target", "GL_TEXTURE_2D"), ("texture", 7)], None, 0),   # kept: rules name textures
     (5, "glVertexPointer", [("size", 3), ("pointer", PointerType(0x7F00))], None, 0),
     (6, "glXSwapBuffers", [("dpy", PointerType(1)), ("drawable", 2)], None, 32),
+    (7, "glTexEnvf", [("target", "GL_TEXTURE_FILTER_CONTROL"), ("pname", "GL_TEXTURE_LOD_BIAS"), ("param", 1.0)],
+     None, 0),   # kept: a texture unit's bias moves a vertex shader's texture() level
 ]
 
 
@@ -32,7 +34,8 @@ def test_round_trip_keeps_what_the_emulation_reads(tmp_path):
     write(p)
     assert is_reduced_capture(str(p))
     got = list(read_reduced_calls(str(p)))
-    assert [c[0] for c in got] == [1, 3, 4, 5, 6], "a texture environment call is left out, the binding kept"
+    assert [c[0] for c in got] == [1, 3, 4, 5, 6, 7], \
+        "a texture environment call is left out, the binding and a texture unit's bias kept"
     assert got[1][2] == [("width", 64), ("height", 32), ("pixels", ("rbcd-digest", texture_image_digest(
         dict(CALLS[2][2]))))], "a texture's size kept, and its image's digest in place of its pixels"
     assert got[3][2] == [("size", 3), ("pointer", 0x7F00)] and type(got[3][2][1][1]) is int, \
@@ -87,7 +90,7 @@ def test_pixel_rectangles_keep_their_size_not_their_pixels(tmp_path):
     write(p, CALLS[:1] + [
         (2, "glDrawPixels", [("width", 10), ("height", 10), ("format", "GL_RGBA"), ("pixels", b"\0" * 400)], None, 0),
         (3, "glBitmap", [("width", 0), ("height", 0), ("xmove", 5.0), ("bitmap", None)], None, 0),
-        (4, "glPrimitiveRestartNV", [], None, 0)] + CALLS[5:])
+        (4, "glPrimitiveRestartNV", [], None, 0)] + CALLS[5:6])
     got = list(read_reduced_calls(str(p)))
     assert [c[1] for c in got] == ["glViewport", "glDrawPixels", "glBitmap", "glPrimitiveRestartNV", "glXSwapBuffers"]
     assert got[1][2] == [("width", 10), ("height", 10), ("format", "GL_RGBA"), ("pixels", None)]

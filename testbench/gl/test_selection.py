@@ -93,14 +93,81 @@ def test_each_condition(tmp_path, field, value, inside, outside):
     ("[[object]]\nid = 1\ngroup_instances = 1\n", "object[0].group_instances: must be true or false"),
     ("[[object]]\nid = 1\ntexture_image = [\"89ABCDEF\"]\n", "object[0].texture_image: must be a list"),
     ("[[exclude]]\nid = \"x\"\n", "exclude[0].id: must be an integer in"),
+    # Every integer a rule takes is within what it can match (R16-12).
+    ("[[object]]\nid = 1\ntexture = [-1]\n", "object[0].texture: must be a list of texture names (integers in "
+     "[0, 4294967295])"),
+    ("[[object]]\nid = 1\ntexture = [7, 4294967296]\n", "object[0].texture: must be a list of texture names"),
+    ("[[object]]\nid = 1\ninstances = [0, 1180591620717411303424]\n",
+     "object[0].instances: must be [MIN, MAX], integers in [0, 4294967295]"),
+    ("[[object]]\nid = 1\ninstances = [0, 4294967296]\n", "object[0].instances: must be [MIN, MAX]"),
+    ("[[object]]\nid = 1\nvertex_count = [1, 4294967296]\n", "object[0].vertex_count: must be [MIN, MAX]"),
+    ("[[object]]\nid = 1\ndraw_index = [0, 4294967296]\n", "object[0].draw_index: must be [MIN, MAX]"),
+    ("[[exclude]]\ncalls = [0, 9223372036854775808]\n",
+     "exclude[0].calls: must be [MIN, MAX], integers in [0, 9223372036854775807]"),
+    ("[[exclude]]\nframes = [0, 9223372036854775808]\n", "exclude[0].frames: must be [MIN, MAX]"),
 ], ids=["vertex_count", "unknown_key", "no_id", "negative_id", "bool_id", "id_past_u32", "up_axis", "deep", "projection", "texture", "group_by",
         "screen_area", "settings_key", "settings_type", "object_type", "unknown_table", "toml_syntax",
         "program_short", "program_empty", "pass_type", "instances_order", "group_instances_type",
-        "texture_image_case", "exclude_id"])
+        "texture_image_case", "exclude_id", "texture_negative", "texture_past_u32", "instances_2_70",
+        "instances_past_u32", "vertex_count_past_u32", "draw_index_past_u32", "calls_past_u63", "frames_past_u63"])
 def test_bad_rules_are_named(tmp_path, text, words):
     with pytest.raises(ConvertError) as e:
         rules(tmp_path, text)
     assert words in str(e.value) and "rules.toml" in str(e.value)
+
+
+def test_the_largest_values_a_rule_may_name_are_taken(tmp_path):
+    s = rules(tmp_path, "[[object]]\nid = 1\ntexture = [0, 4294967295]\ninstances = [0, 4294967295]\n"
+                        "calls = [0, 9223372036854775807]\n")
+    assert s.classify(draw(texture=4294967295, instances=7)) == (1, "id 1")
+
+
+@pytest.mark.parametrize("line, parts", [
+    ("x" + ".x" * 40000 + " = 1", 40001),                       # R16-7: 6.3 GB in tomllib
+    ("[[object]]\nid = 1\ncalls" + ".c" * 64 + " = 1", 65),    # in an [[object]], on line 3
+    ("[" + ".".join(["t"] * 65) + "]", 65),                      # a table header
+    ("[[" + " . ".join(["o"] * 70) + "]]", 70),                  # an array-of-tables header, spaced
+    ("x = {" + ".".join(['"a.b"'] * 65) + " = 1}", 65),          # quoted parts in an inline table
+], ids=["key_40001", "in_object", "table_header", "array_header", "inline_table"])
+def test_a_key_of_too_many_dotted_parts_is_refused_before_tomllib(tmp_path, line, parts):
+    """tomllib's work and memory grow with the square of a dotted key's parts
+    (R16-7: 40,000 parts, an 80 KB file, took 6.3 GB and 24 s): a key of more
+    than 64 parts is refused first, naming the file and its line."""
+    with pytest.raises(ConvertError) as e:
+        rules(tmp_path, line + "\n")
+    lineno = line.count("\n") + 1
+    assert str(e.value) == f"{tmp_path / 'rules.toml'}:{lineno}: a key of {parts} dotted parts, more than 64"
+
+
+def test_dots_in_strings_comments_and_keys_within_the_limit_are_not_counted(tmp_path):
+    k = ".".join(["a"] * 100)
+    q3, a3 = '"' * 3, "'" * 3
+    s = rules(tmp_path, f"# {k}\n[[object]]\nname = \"{k}\"\nid = 1\n"
+                        f"pass = ['{k}', {a3}\n{k}{a3}, {q3}{k}\n{k}{q3}]\n[settings]\ntrack_radius = 1.5\n")
+    assert s.rules[0][1]["name"] == k and s.rules[0][1]["pass"] == [k, k, k + "\n" + k]
+    # 64 parts, the first quoted with 99 dots of its own: taken (tomllib reads it).
+    from rbcd.cli import check_toml_keys
+    text = f'"{k}".{".".join(["b"] * 63)} = 1\n'
+    assert check_toml_keys("f", text) == text
+
+
+@pytest.mark.parametrize("char", ["\u202e", "\u2066", "\u200b", "\u00ad", "\ufeff", "\U000e0001", "\ue000",
+                                  "\U0010ffff", "\u0378"],
+                         ids=["U+202E", "U+2066", "U+200B", "U+00AD", "U+FEFF", "U+E0001", "U+E000", "U+10FFFF",
+                              "U+0378"])
+def test_format_and_invisible_characters_are_escaped_in_messages(tmp_path, char):
+    """A selection key holding U+202E RIGHT-TO-LEFT OVERRIDE (which makes a
+    terminal show the rest of the line reversed: R16-11), another Unicode
+    format, bidirectional or invisible character, or a private-use or
+    unassigned one, is written as the \\xNN of its UTF-8 bytes, as controls
+    are; letters of other scripts and spaces stay as they are."""
+    p = tmp_path / "rules.toml"
+    p.write_text('"\\u001b[2J\\U%08xevil\u0130 \u00a0x" = 1\n' % ord(char), encoding="utf-8")
+    with pytest.raises(ConvertError) as e:
+        Selection(str(p))
+    msg = str(e.value)
+    assert "'\\x1b[2J" + "".join(f"\\x{b:02x}" for b in char.encode()) + "evil\u0130 \u00a0x'" in msg, msg
+    assert all(c.isprintable() or c == "\u00a0" for c in msg), msg
 
 
 def test_unreadable_and_oversized_rules(tmp_path):

@@ -83,6 +83,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.frame_records = 0           # draw records in it
         self.multi_draw_index = 0        # the draw of a multi-draw being run (gl_DrawID)
         self.multi_draw_name = None      # that multi-draw's call
+        self.batched = None              # an indirect multi-draw's positions, run whole (indirect_batch)
         self.frame_view = None           # the frame's view matrix (the first perspective draw's model-view)
         self.screen = tuple(args.screen) if args.screen else None
         self.current_drawable = None     # the window or surface MakeCurrent named (its handle)

@@ -22,7 +22,7 @@ def es_readback_library():
     return preload_library(READBACK, "--check-depth on an OpenGL ES capture", "OpenGL ES", "libgles-dev")
 
 
-def mesa_depth_at(trace, call, timeout, es=False):
+def mesa_depth_at(trace, call, timeout, es=False, tmpdir=None):
     """Mesa's depth buffer after `call` (glretrace -D), as (width, height, rows
     from the top of float32 values in [0, 1]). An OpenGL ES capture's is
     read back through gl/es_depth_readback.c, preloaded into glretrace
@@ -37,7 +37,9 @@ def mesa_depth_at(trace, call, timeout, es=False):
         # frame's level 1 in 7 of 15 replays). With one thread each draw is
         # rasterized before the next starts.
         r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=timeout,
-                           stdin=subprocess.DEVNULL, env=dict(os.environ, LP_NUM_THREADS="0"))
+                           stdin=subprocess.DEVNULL,
+                           # (xvfb-run's temporary folder in the check's: removed with it)
+                           env=dict(os.environ, LP_NUM_THREADS="0", **({"TMPDIR": tmpdir} if tmpdir else {})))
     except subprocess.TimeoutExpired:
         raise ToolError(f"glretrace -D {call} did not finish in {timeout} s")
     text = r.stdout.decode("utf-8", "replace")
@@ -225,7 +227,7 @@ def check_depth(args):
             if cached and os.path.exists(cached):
                 mesa = np.load(cached)
             else:
-                _, _, mesa = mesa_depth_at(args.trace, call, args.check_timeout, probe.es)
+                _, _, mesa = mesa_depth_at(args.trace, call, args.check_timeout, probe.es, tmp)
                 if cached:
                     np.save(cached, mesa)
             mesa = window_of(mesa, w, h, cap_frame)

@@ -100,7 +100,7 @@ CAPS_IGNORED = {
     "GL_TEXTURE_GEN_R", "GL_TEXTURE_GEN_Q", "GL_COLOR_LOGIC_OP", "GL_SAMPLE_ALPHA_TO_COVERAGE",
     "GL_SAMPLE_COVERAGE", "GL_SAMPLE_MASK", "GL_SAMPLE_SHADING", "GL_POLYGON_OFFSET_LINE", "GL_POLYGON_OFFSET_POINT", "GL_FRAMEBUFFER_SRGB",
     "GL_DEBUG_OUTPUT", "GL_DEBUG_OUTPUT_SYNCHRONOUS", "GL_VERTEX_PROGRAM_POINT_SIZE", "GL_POINT_SPRITE",
-    "GL_COLOR_SUM", "GL_AUTO_NORMAL", "GL_INDEX_LOGIC_OP", "GL_PROGRAM_POINT_SIZE", "GL_TEXTURE_CUBE_MAP_SEAMLESS",
+    "GL_COLOR_SUM", "GL_AUTO_NORMAL", "GL_INDEX_LOGIC_OP", "GL_PROGRAM_POINT_SIZE",
 } | {f"GL_LIGHT{i}" for i in range(8)}
 
 # The largest buffer object a capture may declare (bytes), and the data all
@@ -114,7 +114,11 @@ MAX_BUFFER_BYTES_IN_ALL = 2 << 30
 # ANGLE_instanced_arrays or NV_instanced_arrays; the ARB form sets the
 # divisor): a capture's call of one changes nothing, as there. Measured by
 # testbench/gl/test_gl2rbt_draw_outcomes.py against Mesa itself.
-MESA_NO_OPS = {"glVertexAttribDivisorEXT", "glVertexAttribDivisorANGLE", "glVertexAttribDivisorNV"}
+MESA_NO_OPS = {"glVertexAttribDivisorEXT", "glVertexAttribDivisorANGLE", "glVertexAttribDivisorNV",
+               "glDepthBoundsEXT"}   # (llvmpipe has no EXT_depth_bounds_test)
+# Capabilities of extensions Mesa 22.3's llvmpipe does not have: glEnable of
+# them is GL_INVALID_ENUM, nothing changes.
+CAPS_MESA_LACKS = {"GL_DEPTH_BOUNDS_TEST_EXT"}
 # Extension forms of core calls that Mesa 22.3 keeps to the compatibility
 # profile (EXT_polygon_offset): in a core profile they change nothing.
 COMPAT_ONLY_FORMS = {"glPolygonOffsetEXT"}

@@ -351,7 +351,10 @@ class ReducedWriter:
         """Call `c` as the emulation reads it; `textures`: the calls that
         made the textures its vertex shader read (REDUCED_TEXTURES), when
         the reduced capture has not carried them yet."""
-        if reduced_keeps(c[1]):
+        if reduced_keeps(c[1]) and not (base_name(c[1]).startswith("glTexEnv")
+                                        and dict(c[2]).get("target") != "GL_TEXTURE_FILTER_CONTROL"):
+            # (glTexEnv's only state the emulation reads is the texture
+            # unit's LOD bias; its shading modes, many a GL 1.x frame, not.)
             extra = [(REDUCED_TEXTURES, textures)] if textures else []
             self.put((c[0], c[1], reduced_args(c[1], c[2]) + extra, plain_value(c[3]), c[4]))
             self.count += 1

@@ -32,6 +32,10 @@ from .glretrace import glretrace_command, preload_library
 from .glstate.texture_formats import ES_COMBINATIONS
 
 LIBRARY = "rbcd-texture-readback.so"
+# Signals that end a replay from outside (a crash, SIGSEGV or SIGABRT, on
+# the capture's calls is the capture's error).
+STOPPED_SECONDS = 5
+STOPPING_SIGNALS = (signal.SIGKILL, signal.SIGTERM, signal.SIGINT, signal.SIGHUP, signal.SIGQUIT)
 MAX_REPLY_BYTES = 1 << 30
 # The formats and types texture_readback.c reads back in, and a pixel's
 # bytes in each.
@@ -180,7 +184,10 @@ class RenderedTextures:
         # the others (depth_check.mesa_depth_at), and the replay's draws
         # must make what the capture's did.
         self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=self.log,
-                                     start_new_session=True, env=dict(os.environ, LP_NUM_THREADS="0"))
+                                     start_new_session=True,
+                                     # (xvfb-run's own temporary folder in ours: removed with it
+                                     # when xvfb-run is ended before it removes it)
+                                     env=dict(os.environ, LP_NUM_THREADS="0", TMPDIR=self.dir))
 
     def read(self, no, name, units):
         """The textures bound at `units` [(unit, target name)] just before
@@ -227,7 +234,7 @@ class RenderedTextures:
 
     def take(self, n, no, deadline):
         """n bytes of the replay's answer, or why there are none."""
-        parts, left = [], n
+        parts, left, stopped = [], n, 0
         while left:
             ready, _, _ = select.select([self.replies], [], [], 1.0)
             if ready:
@@ -235,16 +242,27 @@ class RenderedTextures:
                 parts.append(chunk)
                 left -= len(chunk)
                 continue
+            # Stopped from outside (SIGSTOP: in a session of its own, the
+            # terminal's Ctrl-Z does not reach it) for STOPPED_SECONDS:
+            # the tool's failure, said before the watchdog's 30 s of Mesa
+            # work blame the capture.
+            stopped = stopped + 1 if self.stopped() else 0
+            if stopped >= STOPPED_SECONDS:
+                raise ToolError(f"{self.trace}: {self.what}: Mesa's replay of the capture (glretrace), reading "
+                                "back the textures its vertex shader reads, was stopped (SIGSTOP) and did not go "
+                                "on; no output written")
             if self.proc.poll() is not None:
                 self.log.seek(0)
                 tail = self.log.read()[-4096:].decode("utf-8", "replace").strip().splitlines()
                 rc = self.proc.returncode
-                if signal.SIGKILL in (-rc, rc - 128):
-                    # Killed from outside (SIGKILL, the kernel out of memory;
-                    # through xvfb-run, 128 + it): the tool failed, not the
-                    # capture (a crash on the capture's calls is the capture's).
-                    raise ToolError(f"{self.what}: Mesa's replay of the capture (glretrace), reading back the "
-                                    f"textures its vertex shader reads, was killed (signal {signal.SIGKILL}); no "
+                sig = next((x for x in (-rc, rc - 128) if x in STOPPING_SIGNALS), None)
+                if sig is not None:
+                    # Ended from outside (SIGKILL, the kernel out of memory,
+                    # SIGTERM, SIGINT, SIGHUP, SIGQUIT; through xvfb-run, 128
+                    # + it): the tool failed, not the capture (a crash on the
+                    # capture's calls, SIGSEGV or SIGABRT, is the capture's).
+                    raise ToolError(f"{self.trace}: {self.what}: Mesa's replay of the capture (glretrace), reading "
+                                    f"back the textures its vertex shader reads, was ended by signal {sig}; no "
                                     "output written")
                 raise ConvertError(f"{self.what}: Mesa's replay of the capture (glretrace) ended before it read "
                                    f"back the textures its vertex shader reads"
@@ -253,6 +271,21 @@ class RenderedTextures:
                 raise ConvertError(f"{self.what}: Mesa's replay of the capture (glretrace) did not reach the draw "
                                    f"in {self.timeout} s (--check-timeout)")
         return b"".join(parts)
+
+    def stopped(self):
+        """Whether a process of the replay's session (xvfb-run, glretrace)
+        is stopped by a signal (its state T in /proc)."""
+        for entry in os.listdir("/proc"):
+            if not entry.isdigit():
+                continue
+            try:
+                with open(f"/proc/{entry}/stat", "rb") as f:
+                    fields = f.read().rsplit(b")", 1)[1].split()
+            except OSError:
+                continue
+            if len(fields) > 4 and int(fields[3]) == self.proc.pid and fields[0] in (b"T", b"t"):
+                return True
+        return False
 
     def close(self):
         """Ends the replay: the requests' end closed, the library reads their

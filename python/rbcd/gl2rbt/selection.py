@@ -3,7 +3,7 @@ objects (docs/gl-capture.md, "Identified off line")."""
 import re
 import tomllib
 
-from ..cli import U32, UsageError, integer, read_input, real
+from ..cli import U32, U63, UsageError, check_toml_keys, integer, read_input, real
 from .errors import ConvertError, printable
 
 # ---------------------------------------------------------------- the selection file
@@ -19,12 +19,20 @@ class Selection:
             "projection", "modelview_differs_from_view", "min_screen_area", "max_screen_area",
             "program", "pass", "instances", "group_instances", "texture_image", "vertex_data", "draw_index"}
 
+    # [MIN, MAX] rules: each bound within what the draw's value can be. Call
+    # and frame numbers as a capture numbers them (from 0, below 2^63: a
+    # reduced capture's call numbers are checked so); vertex counts, instance
+    # counts and draw indices within GL's unsigned 32-bit values.
+    RANGES = {"calls": U63[1], "frames": U63[1], "vertex_count": U32[1], "instances": U32[1],
+              "draw_index": U32[1]}
+
     def __init__(self, path):
         self.path = path
         try:
-            # A regular file of at most 1 MiB, opened without waiting on a FIFO.
+            # A regular file of at most 1 MiB, opened without waiting on a FIFO,
+            # its keys of at most 64 dotted parts (rbcd.cli.check_toml_keys).
             data = read_input(path, "the selection file", 1 << 20)
-            doc = tomllib.loads(data.decode("utf-8"))
+            doc = tomllib.loads(check_toml_keys(path, data.decode("utf-8")))
         except UsageError as e:
             raise ConvertError(str(e)) from None
         except UnicodeDecodeError as e:
@@ -91,16 +99,16 @@ class Selection:
         if "id" in r and (not isinstance(r["id"], int) or isinstance(r["id"], bool)
                           or not U32[0] <= r["id"] <= U32[1]):
             raise ConvertError(f"{where}.id: must be an integer in [0, {U32[1]}]")
-        for k in ("calls", "frames", "vertex_count", "instances", "draw_index"):
+        for k, top in self.RANGES.items():
             if k in r:
                 v = r[k]
                 if (not isinstance(v, list) or len(v) != 2 or
-                        not all(isinstance(x, int) and not isinstance(x, bool) and x >= 0 for x in v)
+                        not all(isinstance(x, int) and not isinstance(x, bool) and 0 <= x <= top for x in v)
                         or v[0] > v[1]):
-                    raise ConvertError(f"{where}.{k}: must be [MIN, MAX], integers, MIN <= MAX")
-        if "texture" in r and not (isinstance(r["texture"], list) and
-                                   all(isinstance(x, int) and not isinstance(x, bool) for x in r["texture"])):
-            raise ConvertError(f"{where}.texture: must be a list of texture names (integers)")
+                    raise ConvertError(f"{where}.{k}: must be [MIN, MAX], integers in [0, {top}], MIN <= MAX")
+        if "texture" in r and not (isinstance(r["texture"], list) and all(
+                isinstance(x, int) and not isinstance(x, bool) and U32[0] <= x <= U32[1] for x in r["texture"])):
+            raise ConvertError(f"{where}.texture: must be a list of texture names (integers in [0, {U32[1]}])")
         if "program" in r and not (isinstance(r["program"], list) and r["program"] and all(
                 isinstance(x, str) and re.fullmatch(r"[0-9a-f]{8,64}", x) for x in r["program"])):
             raise ConvertError(f"{where}.program: must be a list of program digests (8 to 64 lower-case hex "

@@ -93,9 +93,16 @@ def check_client_data(conv, no, name, d, instances, client_indices):
     if "Elements" in name:
         kind = np.dtype(INDEX_TYPES[d["type"]])
         if client_indices is None:
-            if not conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0):
+            elem = conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
+            if not elem:
                 fail_call(no, f"{name}: no element array buffer is bound and the capture holds no indices "
                           f"(indices at address {d.get('indices') or 0})")
+            held = len(conv.s.buffers.get(elem) or b"")
+            if (d.get("indices") or 0) + d["count"] * kind.itemsize > held:
+                # GL leaves what they read undefined (round 16's R16-8: 2^22
+                # of them past a 12-byte buffer ran Mesa to 1.9 GB).
+                fail_call(no, f"{name}: {d['count']} indices from byte {d.get('indices') or 0} reach past element "
+                          f"buffer {elem}'s {held} bytes: not emulated")
         else:
             if len(client_indices) < d["count"] * kind.itemsize:
                 fail_call(no, f"{name}: the capture's indices are {len(client_indices)} bytes, the draw reads "
@@ -122,6 +129,10 @@ def check_client_data(conv, no, name, d, instances, client_indices):
         if len(b.client) < need:
             fail_call(no, f"{name}: attribute {i}'s client array in the capture is {len(b.client)} bytes, "
                       f"the draw reads {need}")
+
+
+class RunAlone(Exception):
+    """run_indirect's commands are to be run one by one."""
 
 
 class DrawRejected(Exception):
@@ -174,6 +185,7 @@ class VertexStage:
         self.textures = {}   # capture texture buffer -> Mesa texture
         self.vertex_textures = VertexTextures(self.mesa)   # 2D textures and samplers
         self.scratch = []    # client memory (attributes, indices) goes through these buffers
+        self.indirect = None  # an indirect multi-draw's commands (run_indirect)
         self.mesa_bytes = 0  # the declared sizes of the buffers Mesa holds copies of
         self.no = self.name = None   # the draw call being run and its name, for messages
         GL = self.gl
@@ -477,6 +489,18 @@ class VertexStage:
                 fail_call(no, f"attribute {i} is enabled with no buffer and no data in the capture")
             size = self.mesa.enum(at.size) if isinstance(at.size, str) else at.size
             kind = self.mesa.enum(at.type)
+            if at.type == "GL_FIXED" and self.mesa.es and b.stride:
+                # OpenGL ES takes GL_FIXED in glVertexAttribPointer, not in
+                # glVertexAttribFormat (GL_INVALID_ENUM: round 16's R16-3,
+                # every draw of such an attribute a GL error): the pointer
+                # on binding point i, as the format's path would set it.
+                GL.glBindBuffer(GL.GL_ARRAY_BUFFER, buf)
+                self.mesa.proc("glVertexAttribPointer", ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_ubyte,
+                               ctypes.c_int, ctypes.c_void_p)(i, size, kind, 1 if at.normalized else 0, b.stride,
+                                                              offset)
+                self.mesa.binding_divisor(i, b.divisor)
+                GL.glEnableVertexAttribArray(i)
+                continue
             if at.long:
                 self.mesa.attrib_l_format(i, size, kind, 0)
             elif at.integer:
@@ -617,27 +641,88 @@ class VertexStage:
         """The clip-space positions of one draw call (`name` without its
         extension suffix, `d` its arguments, room for `prims` triangles) run
         by program `pname`'s vertex stage (`p` its executable):
-        (vertices, 4) float64, three a triangle, one array per instance."""
+        (vertices, 4) float64, three a triangle, one array per instance.
+        A command of an indirect multi-draw run in batches (conv.batched,
+        glstate.draws.IndirectBatch) takes its own from there."""
+        if conv.batched is not None:
+            got = conv.batched.get(conv.multi_draw_index)
+            if isinstance(got, DrawRejected):
+                raise got
+            if got is not None:
+                return got
+        indices = d.get("indices")
+        client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
+
+        def checks(mp):
+            if mp.reads_draw_id and conv.multi_draw_index:
+                # Each draw of a multi-draw runs in Mesa alone, where
+                # gl_DrawID is 0.
+                fail_call(no, f"{printable(conv.multi_draw_name)}: its draw {conv.multi_draw_index}, whose vertex "
+                          "shader reads gl_DrawID: not emulated")
+            check_client_data(conv, no, name, d, instances, client_indices)
+        clip = self.positions(conv, no, name, checks, client_indices,
+                              lambda: self.issue(name, d, client_indices is not None), prims, pname, p)
+        # Every instance has the same primitives (primitive restart cuts them
+        # alike), written instance after instance.
+        per = len(clip) // max(instances, 1)
+        return [clip[i * per:(i + 1) * per].astype(np.float64) for i in range(instances)]
+
+    def run_indirect(self, conv, no, name, mode, index_type, commands, stride, n, draws, prims, whole, pname, p):
+        """An indirect multi-draw run whole in Mesa, as the capture called it
+        (`commands`: its `n` commands' bytes from the first, `stride` apart;
+        `draws`: the name and arguments of each that draws, as the
+        converter reads them): one Mesa call instead of one a command, each command's
+        gl_DrawID its own. The clip-space positions of all, command after
+        command and in each instance after instance, (vertices, 4)
+        float32; room for `prims` triangles. None, nothing run, when the
+        vertex shader reads gl_DrawID and the commands are not the whole
+        multi-draw's (`whole`): they would be numbered from 0."""
+        def checks(mp):
+            if mp.reads_draw_id and not whole:
+                raise RunAlone()
+            for single, d in draws:
+                check_client_data(conv, no, single, d, d["instancecount"], None)
+
+        def issue():
+            GL = self.gl
+            if self.indirect is None:
+                self.indirect = int(GL.glGenBuffers(1))
+            GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, self.indirect)
+            GL.glBufferData(GL.GL_DRAW_INDIRECT_BUFFER, len(commands), bytes(commands), GL.GL_STREAM_DRAW)
+            u, i, v = ctypes.c_uint, ctypes.c_int, ctypes.c_void_p
+            if index_type is None:
+                self.mesa.proc("glMultiDrawArraysIndirect", u, v, i, i)(
+                    self.mesa.enum(mode), None, n, stride)
+            else:
+                self.mesa.proc("glMultiDrawElementsIndirect", u, u, v, i, i)(
+                    self.mesa.enum(mode), self.mesa.enum(index_type), None, n, stride)
+            GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
+            err = GL.glGetError()
+            if err == GL_OUT_OF_MEMORY:
+                raise MemoryError(f"GL_OUT_OF_MEMORY in {name}")
+            if err:
+                raise DrawRejected(f"{GL_ERRORS.get(int(err), f'GL error {int(err)}')} in {name}")
+        try:
+            return self.positions(conv, no, name, checks, None, issue, prims, pname, p)
+        except RunAlone:
+            return None
+
+    def positions(self, conv, no, name, checks, client_indices, issue, prims, pname, p):
+        """What run and run_indirect share: the program, checks(mp) of what
+        the draw reads, the vertex array, bindings and textures, then
+        issue() under transform feedback: (vertices, 4) float32."""
         from OpenGL.error import GLError
         GL = self.gl
         self.no, self.name = no, name
         try:
             with self.watchdog.on(f"call {no}: {name}"):
                 mp = self.program(no, pname, p)
-                if mp.reads_draw_id and conv.multi_draw_index:
-                    # Each draw of a multi-draw runs in Mesa alone, where
-                    # gl_DrawID is 0.
-                    fail_call(no, f"{printable(conv.multi_draw_name)}: its draw {conv.multi_draw_index}, whose vertex "
-                              "shader reads gl_DrawID: not emulated")
-                indices = d.get("indices")
-                client_indices = indices if isinstance(indices, (bytes, bytearray)) else None
-                check_client_data(conv, no, name, d, instances, client_indices)
+                checks(mp)
                 self.vertex_array(conv, no, client_indices)
                 self.bindings(conv, mp)
                 self.vertex_textures.bind(conv, no, name, mp, self.texture_buffer)
                 with self.watchdog.on(f"call {no}: {name}", grows=True):
-                    clip = self.mesa.feedback_positions(lambda: self.issue(name, d, client_indices is not None),
-                                                        prims)
+                    return self.mesa.feedback_positions(issue, prims)
         except GLError as e:
             op = getattr(getattr(e, "baseOperation", None), "__name__", "a call")
             if getattr(e, "err", None) == GL_OUT_OF_MEMORY:
@@ -649,10 +734,6 @@ class VertexStage:
         finally:
             self.free_scratch()
             GL.glBindVertexArray(0)
-        # Every instance has the same primitives (primitive restart cuts them
-        # alike), written instance after instance.
-        per = len(clip) // max(instances, 1)
-        return [clip[i * per:(i + 1) * per].astype(np.float64) for i in range(instances)]
 
     def issue(self, name, d, client_indices):
         GL = self.gl

@@ -183,6 +183,10 @@ class VertexTextures:
             conv.vertex_texture_read(tex, tc)
         images = [self.image_binding(conv, unit, binding, target, made, buffer_texture)
                   for unit, binding, target in images]
+        if not conv.es:
+            # (OpenGL ES's cube maps are always seamless, and it has no
+            # texture unit bias: Mesa's ES context keeps its own.)
+            (GL.glEnable if conv.s.cube_seamless else GL.glDisable)(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
         for unit, tex, _, target in reads:
             if unit >= IMAGE_UNIT_BASE:
                 continue
@@ -191,6 +195,8 @@ class VertexTextures:
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
             GL.glBindTexture(self.mesa.enum(target), made[(tex, target)])
             GL.glBindSampler(unit, ms)
+            if not conv.es:
+                GL.glTexEnvf(GL.GL_TEXTURE_FILTER_CONTROL, GL.GL_TEXTURE_LOD_BIAS, conv.s.unit_lod_bias.get(unit, 0.0))
         GL.glActiveTexture(GL.GL_TEXTURE0)
         self.bind_images(images)
 

@@ -53,6 +53,7 @@ class GLState:
         self.front_face = "GL_CCW"
         self.provoking_first = False   # glProvokingVertex(GL_FIRST_VERTEX_CONVENTION)
         self.offset_fill = False
+        self.offset_other = set()      # GL_POLYGON_OFFSET_LINE, _POINT enabled (refused with an offset)
         self.offset = (0.0, 0.0)
         self.clip_planes = [None] * MAX_CLIP_PLANES
         self.clip_enabled = [False] * MAX_CLIP_PLANES
@@ -99,6 +100,8 @@ class GLState:
         self.renderbuffer_names = None   # the same for renderbuffers
         self.deleted_images = 0   # deleted textures and renderbuffers that live on for framebuffers not bound
         self.active_unit = 0
+        self.unit_lod_bias = {}        # texture unit -> its GL_TEXTURE_LOD_BIAS (glTexEnv), when not 0
+        self.cube_seamless = False     # GL_TEXTURE_CUBE_MAP_SEAMLESS
         self.units = {}
         self.texture_targets = {}   # texture -> the target it was first bound to
         self.texture_names = None   # names glGenTextures gave and no glDeleteTextures freed (None: none seen)

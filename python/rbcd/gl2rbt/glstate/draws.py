@@ -177,6 +177,13 @@ class DrawCalls:
         if cull == CULL["GL_FRONT"]:
             cull, front_ccw = CULL["GL_BACK"], not front_ccw
         depth_func = DEPTH_FUNCS.index(st.depth_func)
+        if st.offset_other and st.offset != (0.0, 0.0):
+            # GL offsets filled polygons by GL_POLYGON_OFFSET_FILL alone;
+            # llvmpipe offsets them then too, by another path and amount
+            # (measured: depth 0.2906 for 0.3025 unoffset, 0.1825 with
+            # FILL).
+            fail_call(no, f"{name}: {' and '.join(sorted(st.offset_other))} enabled with a polygon offset: llvmpipe "
+                      "offsets filled triangles then, unlike GL; not emulated")
         of, ou = st.offset if st.offset_fill else (0.0, 0.0)
         # The draw stream counts units in steps of the depth buffer; Mesa's
         # llvmpipe takes one glPolygonOffset unit as two (measured: units 1,
@@ -341,11 +348,15 @@ class DrawCalls:
         for k in ("mode", "count"):
             if k not in d:
                 fail_call(no, f"{name}: no {k}")
-        for k in ("first", "count", "instancecount", "primcount", "baseinstance", "start", "end", "basevertex"):
+        for k in ("first", "count", "instancecount", "primcount", "start", "end", "basevertex"):
             if k in d:
                 v = checked(no, integer, d[k], f"{name}: {k}", -MAX_DRAW_VERTICES, MAX_DRAW_VERTICES)
                 if v < 0 and k != "basevertex":
                     return None
+        if "baseinstance" in d:
+            # A GLuint, which Mesa takes whole (round 16's R16-12: 2^32 - 16
+            # refused); it moves only instanced attributes' reads.
+            checked(no, integer, d["baseinstance"], f"{name}: baseinstance", *U32)
         if d.get("end", 0) < d.get("start", 0):
             return None
         if not isinstance(d.get("indices"), (bytes, bytearray, type(None))):
@@ -441,11 +452,15 @@ class DrawCalls:
             params = self.checked_buffer(no, name, pbuf, "its draw count") if pbuf else None
             if params is None or at < 0 or at % 4 or at + 4 > len(params):
                 return   # GL_INVALID_OPERATION or GL_INVALID_VALUE: nothing is drawn
-            n = min(n, struct.unpack_from("<I", params, at)[0])
         data = self.checked_buffer(no, name, buf, "its commands")
         stride = stride or size
         if n and (data is None or offset + (n - 1) * stride + size > len(data)):
-            return   # GL_INVALID_OPERATION: commands past the buffer's end, nothing is drawn
+            # GL_INVALID_OPERATION: commands past the buffer's end, nothing
+            # is drawn (a Count form's bound is maxdrawcount's, whatever
+            # count the parameter buffer holds: Mesa checks it so).
+            return
+        if counted:
+            n = min(n, struct.unpack_from("<I", params, at)[0])
         if n > MAX_MULTI_DRAWS:
             fail_call(no, f"{name}: {n} draws, more than {MAX_MULTI_DRAWS} in one multi-draw (docs/gl-capture.md, "
                       "limits)")
@@ -470,6 +485,9 @@ class DrawCalls:
                 fail_call(no, f"{name}: its {n} commands would make {records} draw records, more than "
                           f"{MAX_FRAME_RECORDS} in one frame with the frame's {self.frame_records} "
                           "(docs/gl-capture.md, limits)")
+        if n > 1:
+            self.batched = self.indirect_batch(no, name, d.get("mode"), type_ if elements else None, data, offset,
+                                               stride, n)
         try:
             for i in range(n):
                 at = offset + i * stride
@@ -488,6 +506,61 @@ class DrawCalls:
                 self.h_draw_under_program(no, single, None, one)
         finally:
             self.multi_draw_index = 0
+            self.batched = None
+
+    def indirect_batch(self, no, name, mode, index_type, data, offset, stride, n):
+        """An indirect multi-draw run in Mesa as the capture called it, a
+        run for as many consecutive commands as MAX_DRAW_PRIMITIVES
+        triangles hold (IndirectBatch): a fraction of the time of one Mesa
+        call a command (about 0.4 ms each), and gl_DrawID right in every
+        command when one run holds them all. None where the commands are
+        run one by one (the draw of each then says what it refuses, as
+        before): no program, a draw that would not reach the camera pass
+        or would be refused, a command past a limit, a program that may
+        store (a later command could read what an earlier one stored),
+        primitive restart (its primitives a command are not known before),
+        geometry or tessellation stages, OpenGL ES; and (IndirectBatch) a
+        program reading gl_DrawID whose commands need more than one run."""
+        if self.es or not self.active or not self.renders() or not self.camera_pass() \
+                or not self.vertex_program() or (self.core and self.s.vao == 0) \
+                or mode not in TRIANGLES_PER_VERTICES or (index_type is not None and (self.s.restart or
+                                                                                    self.s.restart_fixed)) \
+                or self.s.rasterizer_discard or self.s.image_writes or self.pipeline_invalid() is not None:
+            return None
+        stages = self.stage_programs()
+        if set(stages) - {"vertex", "fragment"} or any(p.stores for _, p in stages.values()):
+            return None
+        size = 20 if index_type is not None else 16
+        commands, runs, total, first_cmd = [], [], 0, 0
+        for i in range(n):
+            at = offset + i * stride
+            if index_type is not None:
+                count, instances, first, base_vertex, base_instance = struct.unpack_from("<IIIiI", data, at)
+                one = {"mode": mode, "count": count, "type": index_type,
+                       "indices": first * np.dtype(INDEX_TYPES[index_type]).itemsize, "instancecount": instances,
+                       "basevertex": base_vertex, "baseinstance": base_instance}
+                single = "glDrawElementsInstancedBaseVertexBaseInstance"
+            else:
+                count, instances, first, base_instance = struct.unpack_from("<4I", data, at)
+                base_vertex = 0
+                one = {"mode": mode, "first": first, "count": count, "instancecount": instances,
+                       "baseinstance": base_instance}
+                single = "glDrawArraysInstancedBaseInstance"
+            per = TRIANGLES_PER_VERTICES[mode](count)
+            if instances > MAX_INSTANCES or per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES \
+                    or max(count, first, instances, abs(base_vertex)) > MAX_DRAW_VERTICES:
+                return None
+            if not (count and instances):
+                per = instances = 0
+            if total + per * instances > MAX_DRAW_PRIMITIVES:
+                runs.append((first_cmd, i, total))
+                first_cmd, total = i, 0
+            total += per * instances
+            commands.append((single, one, per, instances))
+        runs.append((first_cmd, n, total))
+        return IndirectBatch(self, no, base_name(name), mode, index_type, data, offset, stride, size, commands, runs,
+                             stages["vertex"])
+
 
     def h_draw_arrays(self, no, name, a, args):
         d = self.draw_args(no, name, a, args)
@@ -651,3 +724,45 @@ class DrawCalls:
         "glCopyPixels": h_pixel_rectangle,
         "glBitmap": h_pixel_rectangle,
     }
+
+
+class IndirectBatch:
+    """The positions of an indirect multi-draw's commands, run by Mesa a run
+    of consecutive commands at a time (DrawCalls.indirect_batch), as the
+    draws of the commands ask for them, in order: for command i, one
+    float64 array an instance, a DrawRejected (Mesa refused the run), or
+    None: the command is run alone, as without the batch (Mesa wrote other
+    primitives than counted, or the vertex shader reads gl_DrawID, which a
+    run of part of the commands would number from 0)."""
+
+    def __init__(self, conv, no, name, mode, index_type, data, offset, stride, size, commands, runs, vertex):
+        self.conv, self.no, self.name, self.mode, self.index_type = conv, no, name, mode, index_type
+        self.data, self.offset, self.stride, self.size = data, offset, stride, size
+        self.commands, self.runs, self.vertex = commands, runs, vertex
+        self.run_at, self.got = None, None
+
+    def get(self, i):
+        from ..vertex_stage import DrawRejected
+        k = next(k for k, (a, b, _) in enumerate(self.runs) if a <= i < b)
+        if self.run_at != k:
+            a, b, total = self.runs[k]
+            self.run_at, self.got = k, None   # (the run before freed first)
+            draws = [(single, one) for single, one, _, _ in self.commands[a:b] if one["count"] and one["instancecount"]]
+            at = self.offset + a * self.stride
+            try:
+                clip = self.conv.vertex_stage().run_indirect(
+                    self.conv, self.no, self.name, self.mode, self.index_type,
+                    self.data[at:at + (b - a - 1) * self.stride + self.size], self.stride, b - a, draws, total,
+                    len(self.runs) == 1, *self.vertex)
+            except DrawRejected as e:
+                self.got = e
+                return e
+            if clip is not None and len(clip) == 3 * total:
+                self.got, pos = {}, 0
+                for j in range(a, b):
+                    _, _, per, instances = self.commands[j]
+                    self.got[j] = [clip[pos + m * 3 * per:pos + (m + 1) * 3 * per] for m in range(instances)]
+                    pos += 3 * per * instances
+        if self.got is None or isinstance(self.got, Exception):
+            return self.got
+        return [c.astype(np.float64) for c in self.got[i]]

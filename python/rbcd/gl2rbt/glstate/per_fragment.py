@@ -6,7 +6,7 @@ import numpy as np
 
 from ...cli import I32, integer
 from ..errors import checked, fail_call, printable
-from ..gl_tables import CAPS_IGNORED, DEPTH_FUNCS, MAX_CLIP_PLANES, base_name
+from ..gl_tables import CAPS_IGNORED, CAPS_MESA_LACKS, DEPTH_FUNCS, MAX_CLIP_PLANES, base_name
 from . import bitfield, clamped01, enum_arg, first_of_array, gl_boolean
 from .transform import fixed_point
 
@@ -114,9 +114,13 @@ class PerFragmentCalls:
         s = self.s
         simple = {"GL_DEPTH_TEST": "depth_test", "GL_CULL_FACE": "cull", "GL_SCISSOR_TEST": "scissor_test",
                   "GL_POLYGON_OFFSET_FILL": "offset_fill", "GL_RASTERIZER_DISCARD": "rasterizer_discard",
-                  "GL_PRIMITIVE_RESTART": "restart", "GL_PRIMITIVE_RESTART_FIXED_INDEX": "restart_fixed"}
+                  "GL_PRIMITIVE_RESTART": "restart", "GL_PRIMITIVE_RESTART_FIXED_INDEX": "restart_fixed",
+                  "GL_TEXTURE_CUBE_MAP_SEAMLESS": "cube_seamless"}
         if cap in simple:
             setattr(s, simple[cap], on)
+            return
+        if cap in ("GL_POLYGON_OFFSET_LINE", "GL_POLYGON_OFFSET_POINT"):
+            (s.offset_other.add if on else s.offset_other.discard)(cap)
             return
         m = re.fullmatch(r"GL_CLIP_(?:PLANE|DISTANCE)(\d)", str(cap))
         if m and int(m.group(1)) < MAX_CLIP_PLANES:
@@ -127,7 +131,7 @@ class PerFragmentCalls:
             return
         # GL_PRIMITIVE_RESTART_NV is a client state (glEnableClientState):
         # glEnable of it is GL_INVALID_ENUM in Mesa.
-        if cap in CAPS_IGNORED or cap == "GL_PRIMITIVE_RESTART_NV" or not on:
+        if cap in CAPS_IGNORED or cap in CAPS_MESA_LACKS or cap == "GL_PRIMITIVE_RESTART_NV" or not on:
             return
         fail_call(no, f"glEnable({printable(cap)}) is not emulated and may change geometry or visibility")
 

@@ -26,7 +26,7 @@ import math
 from ...cli import I32, U32, U63, integer
 from ..errors import ToolError, checked, fail_call, printable
 from ..gl_tables import base_name
-from . import gl_boolean
+from . import gl_boolean, number
 from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
 from .texture_formats import (IMAGE_FORMATS, MAX_LEVEL, certain_level, certain_mipmaps, certain_part, certain_storage,
                               level_size_fits, refused_level, refused_part, refused_storage, whole)
@@ -600,7 +600,36 @@ class TextureImageCalls:
                     if bound == sampler:
                         self.s.sampler_units[unit] = 0
 
+    def h_tex_env(self, no, name, a, args):
+        """glTexEnv: of its parameters only the texture unit's level-of-detail
+        bias (GL_TEXTURE_FILTER_CONTROL, GL_TEXTURE_LOD_BIAS, a
+        compatibility profile's) changes what a vertex shader's texture()
+        reads: kept per unit, given to Mesa's context at the draw (round
+        16's R16-2: level 0 read where Mesa read level 1). The others are
+        fixed-function shading, nil on the unit's input."""
+        d = dict(args)
+        if d.get("target") != "GL_TEXTURE_FILTER_CONTROL" or d.get("pname") != "GL_TEXTURE_LOD_BIAS":
+            return
+        value = d.get("param", d.get("params"))
+        if isinstance(value, list):
+            if not value:
+                fail_call(no, f"{printable(name)}: no value")
+            value = value[0]
+        if base_name(name).endswith(("x", "xv")):
+            value = number(value, no, f"{printable(name)}: the bias") / 65536.0
+        bias = number(value, no, f"{printable(name)}: the bias")
+        if bias:
+            self.s.unit_lod_bias[self.s.active_unit] = bias
+        else:
+            self.s.unit_lod_bias.pop(self.s.active_unit, None)
+
     HANDLERS = {
+        "glTexEnvf": h_tex_env,
+        "glTexEnvi": h_tex_env,
+        "glTexEnvfv": h_tex_env,
+        "glTexEnviv": h_tex_env,
+        "glTexEnvx": h_tex_env,
+        "glTexEnvxv": h_tex_env,
         "glPixelStorei": h_pixel_store,
         "glPixelTransferf": h_pixel_transfer,
         "glPixelTransferi": h_pixel_transfer,
