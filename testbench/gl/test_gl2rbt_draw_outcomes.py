@@ -628,24 +628,19 @@ def test_a_parameter_buffer_named_by_its_extension_draws(tmp_path):
     """apitrace names 0x80EE GL_PARAMETER_BUFFER_ARB: a glMultiDraw*IndirectCount
     reads its draw count from the buffer bound there (round 12's R12-3:
     taken as no target, every such draw drew nothing)."""
+    def counted(params, drawcount, maxdrawcount):
+        c = shader_calls(VS)
+        c.add("glBindBuffer", target="GL_PARAMETER_BUFFER_ARB", buffer=10)
+        c.add("glBufferData", target="GL_PARAMETER_BUFFER_ARB", size=8, data=struct.pack("<2I", *params),
+              usage="GL_STATIC_DRAW")
+        return indirect(c, "glMultiDrawArraysIndirectCount", [3, 1, 0, 0, 3, 1, 0, 0], indirect=0,
+                        drawcount=drawcount, maxdrawcount=maxdrawcount, stride=0)
     want = trace_of(tmp_path, draw(shader_calls(VS)), "want")
-    c = shader_calls(VS)
-    c.add("glBindBuffer", target="GL_PARAMETER_BUFFER_ARB", buffer=10)
-    c.add("glBufferData", target="GL_PARAMETER_BUFFER_ARB", size=8, data=struct.pack("<2I", 5, 2),
-          usage="GL_STATIC_DRAW")
-    c = indirect(c, "glMultiDrawArraysIndirectCount", [3, 1, 0, 0, 3, 1, 0, 0], indirect=0, drawcount=4,
-                 maxdrawcount=1, stride=0)
-    assert trace_of(tmp_path, c, "count") == want
+    assert trace_of(tmp_path, counted((5, 2), 4, 1), "count") == want
     # maxdrawcount 3 past the two commands the buffer holds: Mesa refuses
     # the call (GL_INVALID_OPERATION), whatever count the parameter buffer
     # gives (round 16's R16-5: drawn, two commands).
-    c = shader_calls(VS)
-    c.add("glBindBuffer", target="GL_PARAMETER_BUFFER_ARB", buffer=10)
-    c.add("glBufferData", target="GL_PARAMETER_BUFFER_ARB", size=8, data=struct.pack("<2I", 2, 2),
-          usage="GL_STATIC_DRAW")
-    c = indirect(c, "glMultiDrawArraysIndirectCount", [3, 1, 0, 0, 3, 1, 0, 0], indirect=0, drawcount=0,
-                 maxdrawcount=3, stride=0)
-    assert trace_of(tmp_path, c, "past").count(b"\nf ") == 0
+    assert trace_of(tmp_path, counted((2, 2), 0, 3), "past").count(b"\nf ") == 0
 
 
 @pytest.mark.parametrize("fn, commands, kw", [
