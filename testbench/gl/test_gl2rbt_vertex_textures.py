@@ -109,22 +109,23 @@ def test_filtering_of_the_texture_or_of_a_sampler_object(tmp_path, sampler, want
     assert convert(tmp_path, draw(c), f"filter_{sampler}") == moved(tmp_path, *want)
 
 
-@pytest.mark.parametrize("bias, want", [(None, (0, 0)), (1.0, (3, 1)), (0.0, (0, 0))],
-                         ids=["none", "one", "zero"])
-def test_a_texture_unit_s_lod_bias_moves_a_vertex_shader_s_level(tmp_path, bias, want):
+@pytest.mark.parametrize("bias, core, want", [(None, False, (0, 0)), (1.0, False, (3, 1)), (0.0, False, (0, 0)),
+                                             (1.0, True, (0, 0))], ids=["none", "one", "zero", "core"])
+def test_a_texture_unit_s_lod_bias_moves_a_vertex_shader_s_level(tmp_path, bias, core, want):
     """A compatibility profile's texture unit bias (glTexEnvf(
     GL_TEXTURE_FILTER_CONTROL, GL_TEXTURE_LOD_BIAS, 1)) moves texture()'s
     level in a vertex shader from 0 (texel 0 magnified) to 1 (the mean of
     the two texels): given to Mesa's context (round 16's R16-2: ignored,
-    level 0 read where Mesa read level 1)."""
+    level 0 read where Mesa read level 1). A core profile has no
+    glTexEnv (GL_INVALID_OPERATION): nothing changes there."""
     vs = VS_TEXEL % "texture(heights, vec2(0.25, 0.5))"
-    c = texture(shader_calls(vs, core=False), filters=None)
+    c = texture(shader_calls(vs, core=core), filters=None)
     c.add("glTexParameteri", target="GL_TEXTURE_2D", pname="GL_TEXTURE_MIN_FILTER", param="GL_LINEAR_MIPMAP_NEAREST")
     c.add("glTexParameteri", target="GL_TEXTURE_2D", pname="GL_TEXTURE_MAG_FILTER", param="GL_NEAREST")
     c.add("glGenerateMipmap", target="GL_TEXTURE_2D")
     if bias is not None:
         c.add("glTexEnvf", target="GL_TEXTURE_FILTER_CONTROL", pname="GL_TEXTURE_LOD_BIAS", param=bias)
-    assert convert(tmp_path, draw(c), f"bias_{bias}") == moved(tmp_path, *want)
+    assert convert(tmp_path, draw(c), f"bias_{bias}_{core}") == moved(tmp_path, *want)
 
 
 def test_mipmaps_and_what_gl_reads_from_an_incomplete_or_deleted_texture(tmp_path):

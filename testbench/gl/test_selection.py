@@ -128,7 +128,8 @@ def test_the_largest_values_a_rule_may_name_are_taken(tmp_path):
     ("[" + ".".join(["t"] * 65) + "]", 65),                      # a table header
     ("[[" + " . ".join(["o"] * 70) + "]]", 70),                  # an array-of-tables header, spaced
     ("x = {" + ".".join(['"a.b"'] * 65) + " = 1}", 65),          # quoted parts in an inline table
-], ids=["key_40001", "in_object", "table_header", "array_header", "inline_table"])
+    ('x = """a\\"""b"""\n' + "k" + ".k" * 100 + " = 1", 101),  # after an escaped quote in a multi-line string
+], ids=["key_40001", "in_object", "table_header", "array_header", "inline_table", "after_escaped_quotes"])
 def test_a_key_of_too_many_dotted_parts_is_refused_before_tomllib(tmp_path, line, parts):
     """tomllib's work and memory grow with the square of a dotted key's parts
     (R16-7: 40,000 parts, an 80 KB file, took 6.3 GB and 24 s): a key of more

@@ -79,6 +79,7 @@ TEXTURE_CHANGING = ("glTexImage", "glTexSubImage", "glTexStorage", "glTexParamet
 # The compatibility profile's calls (by base name): in a core profile they
 # are GL_INVALID_OPERATION in Mesa and change nothing.
 COMPAT_ONLY = {
+    "glTexEnvf", "glTexEnvi", "glTexEnvfv", "glTexEnviv",
     "glMatrixMode", "glLoadIdentity", "glLoadMatrixf", "glLoadMatrixd", "glLoadTransposeMatrixf",
     "glLoadTransposeMatrixd", "glMultMatrixf", "glMultMatrixd", "glMultTransposeMatrixf", "glMultTransposeMatrixd",
     "glTranslatef", "glTranslated", "glRotatef", "glRotated", "glScalef", "glScaled", "glPushMatrix", "glPopMatrix",

@@ -107,6 +107,8 @@ def check_depth_prefix(prefix, paths):
                                "an input or another output")
 
 
+# The buffer swaps first_window reads at most for the main window.
+FIRST_WINDOW_SWAPS = 64
 # The calls that draw (a glBegin's primitive is drawn at its glEnd).
 DRAWING = frozenset(DrawCalls.HANDLERS) - {"glPrimitiveRestartNV", "glRenderMode"}
 
@@ -131,24 +133,31 @@ def new_converter(args, raster_in):
 def first_window(args):
     """The main window or surface: the first one drawn into (with no
     framebuffer object bound, not a pbuffer) once it swaps, unless another
-    drawn into swaps twice first (a warm-up window never shown); None when
-    a draw comes before any MakeCurrent, or no window is drawn and swapped.
-    The GL state alone, up to there, its draws not run. A game's frames are
-    that window's; another's draws (a warm-up) and swaps and clears (a
-    splash) before it end no frame and set no screen size (round 15's
-    R15-3). The converter keeps the rule after that (swaps_main_drawable)."""
+    drawn into swaps twice first (a warm-up window never shown); for a
+    capture that draws only into framebuffer objects (and blits to the
+    window), the first window swapped after a draw. None when a draw comes
+    before any MakeCurrent, after FIRST_WINDOW_SWAPS swaps with none found,
+    or where the calls up to there are refused (the conversion then says
+    so, as without this scan). The GL state alone, up to there, its draws
+    not run and no frame opened. A game's frames are that window's;
+    another's draws (a warm-up) and swaps and clears (a splash) before it
+    end no frame and set no screen size (round 15's R15-3). The converter
+    keeps the rule after that (swaps_main_drawable)."""
     probe = Converter(args, False, None)
-    drawn, swaps, in_begin = [], {}, False
+    probe.first_frame, probe.last_frame, probe.active = 1 << 62, None, False   # (no frame is converted)
+    drawn, swaps, in_begin, any_draw, seen = [], {}, False, False, 0
     try:
         for call in read_calls(args.trace):
             name, flags = base_name(call[1]), call[4]
             if in_begin or name in DRAWING:
                 if probe.current_drawable is None:
                     return None
+                any_draw = True
                 if not probe.s.draw_fbo and probe.current_drawable not in probe.pbuffers \
                         and probe.current_drawable not in drawn:
                     drawn.append(probe.current_drawable)
-                in_begin = name != "glEnd" and (in_begin or name == "glBegin")
+                if not probe.core:   # (glBegin and glEnd are nothing in a core profile)
+                    in_begin = name != "glEnd" and (in_begin or name == "glBegin")
             else:
                 probe.last_call = call[0]
                 probe.handle(call)
@@ -161,6 +170,13 @@ def first_window(args):
                     swaps[swapped] = swaps.get(swapped, 0) + 1
                     if swaps[swapped] >= 2:
                         return swapped
+                elif any_draw and not drawn and swapped not in probe.pbuffers:
+                    return swapped   # drawn into framebuffer objects alone, then shown
+                seen += 1
+                if seen >= FIRST_WINDOW_SWAPS:
+                    return None
+    except ConvertError:
+        return None
     finally:
         probe.close_replay()
     return None

@@ -696,8 +696,8 @@ class VertexStage:
             else:
                 self.mesa.proc("glMultiDrawElementsIndirect", u, u, v, i, i)(
                     self.mesa.enum(mode), self.mesa.enum(index_type), None, n, stride)
+            err = GL.glGetError()   # (before a PyOpenGL call would raise it as its own)
             GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
-            err = GL.glGetError()
             if err == GL_OUT_OF_MEMORY:
                 raise MemoryError(f"GL_OUT_OF_MEMORY in {name}")
             if err:

@@ -521,7 +521,7 @@ class DrawCalls:
         primitive restart (its primitives a command are not known before),
         geometry or tessellation stages, OpenGL ES; and (IndirectBatch) a
         program reading gl_DrawID whose commands need more than one run."""
-        if self.es or not self.active or not self.renders() or not self.camera_pass() \
+        if self.es or not self.active or not self.renders() \
                 or not self.vertex_program() or (self.core and self.s.vao == 0) \
                 or mode not in TRIANGLES_PER_VERTICES or (index_type is not None and (self.s.restart or
                                                                                     self.s.restart_fixed)) \
@@ -558,6 +558,8 @@ class DrawCalls:
             total += per * instances
             commands.append((single, one, per, instances))
         runs.append((first_cmd, n, total))
+        if not any(one["count"] and one["instancecount"] for _, one, _, _ in commands) or not self.camera_pass():
+            return None   # (the camera pass asked last, as the first command that draws asks it)
         return IndirectBatch(self, no, base_name(name), mode, index_type, data, offset, stride, size, commands, runs,
                              stages["vertex"])
 
