@@ -33,6 +33,7 @@ import signal
 import stat
 import sys
 import tempfile
+import tomllib
 import unicodedata
 
 from .startup import kept, release_signals
@@ -285,9 +286,9 @@ _TOML_PARTS = re.compile(_TOML_PART)
 def check_toml_keys(path, text):
     """UsageError "PATH:LINE: a key of N dotted parts, more than
     TOML_KEY_PARTS" for the first such key of a TOML text, before tomllib
-    parses it. Linear in the text; a text that is not TOML may be refused
-    here rather than by tomllib, never a TOML document whose keys are all
-    within the limit."""
+    parses it (parse_toml). Linear in the text; a text that is not TOML
+    may be refused here rather than by tomllib, never a TOML document whose
+    keys are all within the limit."""
     for m in _TOML_KEYS.finditer(text):
         key = m.group("key")
         if key is not None and key.count(".") >= TOML_KEY_PARTS:
@@ -296,6 +297,13 @@ def check_toml_keys(path, text):
                 line = text.count("\n", 0, m.start()) + 1
                 raise UsageError(f"{path}:{line}: a key of {parts} dotted parts, more than {TOML_KEY_PARTS}")
     return text
+
+
+def parse_toml(path, text):
+    """A TOML text as tomllib reads it, its keys bounded first
+    (check_toml_keys): every TOML reader of the Python tools reads so.
+    tomllib.TOMLDecodeError and RecursionError are the reader's to name."""
+    return tomllib.loads(check_toml_keys(path, text))
 
 
 def output_target(path):

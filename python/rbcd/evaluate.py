@@ -23,7 +23,7 @@ import subprocess
 import sys
 import tomllib
 
-from rbcd.cli import check_toml_keys, main_wrapper, say  # (one-line messages, no tracebacks)
+from rbcd.cli import main_wrapper, parse_toml, say  # (one-line messages, no tracebacks)
 
 # The CPU model of Figure 8 (instructions to time and energy, each constant
 # with its source) is rbcd/cpu_model.py.
@@ -54,11 +54,10 @@ def need(path):
 
 def load_toml(path):
     """A TOML file (a scene, a sweep template, a capture's description), its
-    keys of at most 64 dotted parts (rbcd.cli.check_toml_keys: tomllib's
+    keys of at most 64 dotted parts (rbcd.cli.parse_toml: tomllib's
     memory grows with the square of a key's parts)."""
     with open(path, "rb") as f:
-        text = f.read().decode()
-    return tomllib.loads(check_toml_keys(path, text))
+        return parse_toml(path, f.read().decode())
 
 
 def read_collisions(path):

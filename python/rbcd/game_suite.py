@@ -32,7 +32,7 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import (UsageError, check_outputs, check_toml_keys, escape, main_wrapper, open_trace,
+from rbcd.cli import (UsageError, check_outputs, escape, main_wrapper, open_trace, parse_toml,
                       read_input_text, say, remove_left_temporaries, temporary_folder, trace_errors,
                       unregister_temporary, write_output)
 
@@ -189,9 +189,9 @@ class Entry:
                              "_.+- (its outputs are named after it)")
         self.toml = os.path.join(self.dir, "capture.toml")
         self.calls = os.path.join(self.dir, "calls.xz")
-        text = check_toml_keys(self.toml, read_input_text(self.toml, "the capture description", MAX_TOML))
+        text = read_input_text(self.toml, "the capture description", MAX_TOML)
         try:
-            doc = tomllib.loads(text)
+            doc = parse_toml(self.toml, text)
         except tomllib.TOMLDecodeError as e:
             raise UsageError(f"{self.toml}: {e}")
         except RecursionError:   # tomllib parses nested arrays and tables recursively

@@ -31,8 +31,8 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import (UsageError, check_toml_keys, escape, main_wrapper, open_trace, read_input_text, say,
-                      trace_errors, write_output)
+from rbcd.cli import (UsageError, escape, main_wrapper, open_trace, parse_toml, read_input_text, say, trace_errors,
+                      write_output)
 from rbcd.startup import kept
 
 PROG = "rbcd-sweep"
@@ -182,7 +182,7 @@ def _count_frames(kind, path):
     if kind == "scene":
         with open(path, "rb") as f:
             text = f.read().decode()
-        n = tomllib.loads(check_toml_keys(path, text)).get("frames")
+        n = parse_toml(path, text).get("frames")
         if not isinstance(n, int) or n < 1:
             raise SweepError(f"{path}: frames: needs a positive integer to split the scene")
         return n
@@ -219,7 +219,7 @@ class Sweep:
 
     def _read(self, path, text):
         try:
-            doc = tomllib.loads(check_toml_keys(path, text))
+            doc = parse_toml(path, text)
         except tomllib.TOMLDecodeError as e:
             raise SweepError(f"{path}: {e}")
         except UsageError as e:   # a key of more than 64 dotted parts (rbcd.cli)

@@ -58,6 +58,13 @@ BUFFER_TARGET_ARGS = {"target", "readTarget", "writeTarget"}
 TARGET_SUFFIXES = ("_BUFFER_ARB", "_BUFFER_EXT", "_BUFFER_OES")
 
 
+def swapped_drawable(args):
+    """The window or surface a buffer swap names (glXSwapBuffers' drawable,
+    eglSwapBuffers' surface, wglSwapBuffers' device context)."""
+    d = dict(args)
+    return d.get("drawable", d.get("surface", d.get("hdc")))
+
+
 class Converter(*STATE_GROUPS, GeometryOutput):
     def __init__(self, args, raster_in, geometry_out):
         self.args = args
@@ -302,8 +309,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         A window drawn into and swapped twice while the main one had
         neither takes its place (the game moved to a window made anew:
         a resolution change)."""
-        d = dict(args)
-        swapped = d.get("drawable", d.get("surface", d.get("hdc")))
+        swapped = swapped_drawable(args)
         if self.main_drawable is None or swapped == self.main_drawable or swapped not in self.drawables:
             self.main_idle = {}
             return True

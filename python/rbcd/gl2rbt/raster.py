@@ -12,11 +12,10 @@ import time
 
 from ..cli import check_outputs, remove_left_temporaries, temporary_folder, unregister_temporary, write_output
 from .capture import check_input_file, check_rest, read_calls
-from .converter import Converter
-from .gl_tables import CALL_FLAG_END_FRAME, base_name
-from .glstate.draws import DrawCalls
+from .converter import Converter, swapped_drawable
 from .errors import ConvertError, RasterStopped, ToolError, printable
-from .glstate.draws import FRAGMENT_EFFECT_KEYS
+from .gl_tables import CALL_FLAG_END_FRAME, base_name
+from .glstate.draws import FRAGMENT_EFFECT_KEYS, DrawCalls
 from .outputs import SafeText
 from .reduced import ReducedWriter, is_reduced_capture
 
@@ -162,8 +161,7 @@ def first_window(args):
                 probe.last_call = call[0]
                 probe.handle(call)
             if isinstance(flags, int) and flags & CALL_FLAG_END_FRAME:
-                d = dict(call[2])
-                swapped = d.get("drawable", d.get("surface", d.get("hdc")))
+                swapped = swapped_drawable(call[2])
                 if drawn and swapped == drawn[0]:
                     return swapped
                 if swapped in drawn:

@@ -32,9 +32,10 @@ from .glretrace import glretrace_command, preload_library
 from .glstate.texture_formats import ES_COMBINATIONS
 
 LIBRARY = "rbcd-texture-readback.so"
+# A replay stopped this long (SIGSTOP) is the tool's failure (RenderedTextures.take).
+STOPPED_SECONDS = 5
 # Signals that end a replay from outside (a crash, SIGSEGV or SIGABRT, on
 # the capture's calls is the capture's error).
-STOPPED_SECONDS = 5
 STOPPING_SIGNALS = (signal.SIGKILL, signal.SIGTERM, signal.SIGINT, signal.SIGHUP, signal.SIGQUIT)
 MAX_REPLY_BYTES = 1 << 30
 # The formats and types texture_readback.c reads back in, and a pixel's

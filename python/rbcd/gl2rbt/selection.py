@@ -3,7 +3,7 @@ objects (docs/gl-capture.md, "Identified off line")."""
 import re
 import tomllib
 
-from ..cli import U32, U63, UsageError, check_toml_keys, integer, read_input, real
+from ..cli import U32, U63, UsageError, integer, parse_toml, read_input, real
 from .errors import ConvertError, printable
 
 # ---------------------------------------------------------------- the selection file
@@ -30,9 +30,9 @@ class Selection:
         self.path = path
         try:
             # A regular file of at most 1 MiB, opened without waiting on a FIFO,
-            # its keys of at most 64 dotted parts (rbcd.cli.check_toml_keys).
+            # its keys of at most 64 dotted parts (rbcd.cli.parse_toml).
             data = read_input(path, "the selection file", 1 << 20)
-            doc = tomllib.loads(check_toml_keys(path, data.decode("utf-8")))
+            doc = parse_toml(path, data.decode("utf-8"))
         except UsageError as e:
             raise ConvertError(str(e)) from None
         except UnicodeDecodeError as e:

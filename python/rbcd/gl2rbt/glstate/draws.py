@@ -464,11 +464,9 @@ class DrawCalls:
         if n > MAX_MULTI_DRAWS:
             fail_call(no, f"{name}: {n} draws, more than {MAX_MULTI_DRAWS} in one multi-draw (docs/gl-capture.md, "
                       "limits)")
-        if elements:
-            type_ = d.get("type")
-            if type_ not in INDEX_TYPES or not self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER"):
-                return   # GL_INVALID_ENUM, or GL_INVALID_OPERATION with no element buffer (every profile)
-            item = np.dtype(INDEX_TYPES[type_]).itemsize
+        index_type = d.get("type") if elements else None
+        if elements and (index_type not in INDEX_TYPES or not self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER")):
+            return   # GL_INVALID_ENUM, or GL_INVALID_OPERATION with no element buffer (every profile)
         if n > 1 and self.active and self.renders() and self.camera_pass():
             # The draw records its commands would make at most (one an
             # instance), against the frame's limit before any is run (each
@@ -486,22 +484,10 @@ class DrawCalls:
                           f"{MAX_FRAME_RECORDS} in one frame with the frame's {self.frame_records} "
                           "(docs/gl-capture.md, limits)")
         if n > 1:
-            self.batched = self.indirect_batch(no, name, d.get("mode"), type_ if elements else None, data, offset,
-                                               stride, n)
+            self.batched = self.indirect_batch(no, name, d.get("mode"), index_type, data, offset, stride, n)
         try:
             for i in range(n):
-                at = offset + i * stride
-                if elements:
-                    count, instances, first, base_vertex, base_instance = struct.unpack_from("<IIIiI", data, at)
-                    one = [("mode", d.get("mode")), ("count", count), ("type", type_), ("indices", first * item),
-                           ("instancecount", instances), ("basevertex", base_vertex),
-                           ("baseinstance", base_instance)]
-                    single = "glDrawElementsInstancedBaseVertexBaseInstance"
-                else:
-                    count, instances, first, base_instance = struct.unpack_from("<4I", data, at)
-                    one = [("mode", d.get("mode")), ("first", first), ("count", count), ("instancecount", instances),
-                           ("baseinstance", base_instance)]
-                    single = "glDrawArraysInstancedBaseInstance"
+                single, one = indirect_command(d.get("mode"), index_type, data, offset + i * stride)
                 self.multi_draw_index, self.multi_draw_name = i, name
                 self.h_draw_under_program(no, single, None, one)
         finally:
@@ -533,22 +519,13 @@ class DrawCalls:
         size = 20 if index_type is not None else 16
         commands, runs, total, first_cmd = [], [], 0, 0
         for i in range(n):
-            at = offset + i * stride
-            if index_type is not None:
-                count, instances, first, base_vertex, base_instance = struct.unpack_from("<IIIiI", data, at)
-                one = {"mode": mode, "count": count, "type": index_type,
-                       "indices": first * np.dtype(INDEX_TYPES[index_type]).itemsize, "instancecount": instances,
-                       "basevertex": base_vertex, "baseinstance": base_instance}
-                single = "glDrawElementsInstancedBaseVertexBaseInstance"
-            else:
-                count, instances, first, base_instance = struct.unpack_from("<4I", data, at)
-                base_vertex = 0
-                one = {"mode": mode, "first": first, "count": count, "instancecount": instances,
-                       "baseinstance": base_instance}
-                single = "glDrawArraysInstancedBaseInstance"
+            single, args = indirect_command(mode, index_type, data, offset + i * stride)
+            one = dict(args)
+            count, instances = one["count"], one["instancecount"]
+            first = one["first"] if index_type is None else one["indices"] // np.dtype(INDEX_TYPES[index_type]).itemsize
             per = TRIANGLES_PER_VERTICES[mode](count)
             if instances > MAX_INSTANCES or per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES \
-                    or max(count, first, instances, abs(base_vertex)) > MAX_DRAW_VERTICES:
+                    or max(count, first, instances, abs(one.get("basevertex", 0))) > MAX_DRAW_VERTICES:
                 return None
             if not (count and instances):
                 per = instances = 0
@@ -726,6 +703,23 @@ class DrawCalls:
         "glCopyPixels": h_pixel_rectangle,
         "glBitmap": h_pixel_rectangle,
     }
+
+
+def indirect_command(mode, index_type, data, at):
+    """The indirect command at byte `at` of `data` (GL 4.6, 10.4: count,
+    instances, first or first index, [base vertex,] base instance; an
+    indexed one when `index_type` names the indices' type) as the draw
+    it stands for: (its name, its arguments as apitrace's reader gives
+    them), its first index made the byte offset a direct draw takes."""
+    if index_type is not None:
+        count, instances, first, base_vertex, base_instance = struct.unpack_from("<IIIiI", data, at)
+        return "glDrawElementsInstancedBaseVertexBaseInstance", [
+            ("mode", mode), ("count", count), ("type", index_type),
+            ("indices", first * np.dtype(INDEX_TYPES[index_type]).itemsize), ("instancecount", instances),
+            ("basevertex", base_vertex), ("baseinstance", base_instance)]
+    count, instances, first, base_instance = struct.unpack_from("<4I", data, at)
+    return "glDrawArraysInstancedBaseInstance", [("mode", mode), ("first", first), ("count", count),
+                                                 ("instancecount", instances), ("baseinstance", base_instance)]
 
 
 class IndirectBatch:
