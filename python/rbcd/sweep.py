@@ -197,6 +197,12 @@ def _count_frames(kind, path):
 
 # ---------------------------------------------------------------- the sweep file
 
+def not_a_file(path):
+    """Why an input named as a file is not one: absent, or there but no
+    regular file (a FIFO would block the sweep's frame count)."""
+    return "not a regular file" if os.path.exists(path) else "no such file"
+
+
 SWEEP_TABLES = {"sweep", "base", "axes", "zip", "inputs", "repeats", "results", "split", "slurm"}
 SLURM_KEYS = {"partition": str, "time": str, "cpus_per_task": int, "runs_per_task": int,
               "max_parallel": int, "extra": list, "job_name": str}
@@ -259,7 +265,7 @@ class Sweep:
         self._only(base, "base", {"config", "set"})
         self.base_config = self._path(base["config"], "base.config") if "config" in base else None
         if self.base_config and not os.path.isfile(self.base_config):
-            raise SweepError(f"{path}: base.config: {base['config']}: no such file")
+            raise SweepError(f"{path}: base.config: {base['config']}: {not_a_file(self.base_config)}")
         bset = base.get("set", {})
         if not isinstance(bset, dict):
             raise SweepError(f"{path}: base.set: must be a table of configuration keys")
@@ -421,7 +427,7 @@ class Sweep:
             for p in lst:
                 full = self._path(p, f"inputs.{key}")
                 if not os.path.isfile(full):
-                    raise SweepError(f"{self.path}: inputs.{key}: {p}: no such file")
+                    raise SweepError(f"{self.path}: inputs.{key}: {p}: {not_a_file(full)}")
                 out.append((p, kind, full))
         suites = t.get("suites", [])
         if not isinstance(suites, list) or not all(isinstance(p, str) and p for p in suites):

@@ -554,6 +554,9 @@ def test_hostile(c):
     fifo = os.path.join(c.tmp, "s.fifo")
     os.mkfifo(fifo)
     one_error_line(c.sweep("list", fifo), "cannot read sweep file: is a FIFO", "FIFO sweep file")
+    # A FIFO as an input: "not a regular file" (it had been "no such file").
+    r = c.sweep("list", c.sweep_file("fifoin.toml", f'[inputs]\ntraces = ["{fifo}"]\n'))
+    one_error_line(r, "s.fifo: not a regular file", "FIFO input")
     # Nested 5,000 deep: exit 2 naming the file, not "maximum recursion depth".
     deep = c.sweep_file("deep.toml", "[axes]\nx = " + "[" * 5000 + "]" * 5000 + "\n")
     one_error_line(c.sweep("list", deep), "deep.toml: nested too deep", "5000-deep arrays")
