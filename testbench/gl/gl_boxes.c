@@ -14,6 +14,12 @@
  * FAULT readother is no fault either: frames 0 and 1 drawn with a second,
  * 16 x 16 window as the context's read drawable (glXMakeContextCurrent),
  * frame 2 reading the window it draws into.
+ * FAULT glsl is no fault: the array draws under GLSL 1.20 programs that read
+ * the compatibility profile's state (a converter without it refuses them):
+ * box 1 and the floor by gl_ModelViewProjectionMatrix * gl_Vertex, box 2 by
+ * ftransform(); in frame 2 box 1's vertices come through generic attribute
+ * 0 (glVertexAttribPointer), which gl_Vertex reads. Immediate-mode draws stay
+ * fixed-function. The same fragments as without a program.
  *
  * Collisionable objects are tagged as rbcd-gl2rbt reads them: a KHR_debug
  * group "rbcd-object" whose id is the object id, or an EXT_debug_marker group
@@ -47,6 +53,13 @@ static PFNGLCREATEPROGRAMPROC create_program;
 static PFNGLATTACHSHADERPROC attach_shader;
 static PFNGLLINKPROGRAMPROC link_program;
 static PFNGLUSEPROGRAMPROC use_program;
+static PFNGLVERTEXATTRIBPOINTERPROC attrib_pointer;
+static PFNGLENABLEVERTEXATTRIBARRAYPROC enable_attrib;
+static PFNGLDISABLEVERTEXATTRIBARRAYPROC disable_attrib;
+/* The glsl mode's programs (0 otherwise) and whether box_client gives its
+ * vertices through generic attribute 0. */
+static GLuint glsl_mvp, glsl_ftransform;
+static int generic_vertex;
 
 static void begin_object(unsigned id);
 static void end_object(void);
@@ -140,10 +153,19 @@ static void box_client(float x0, float y0, float z0, float x1, float y1, float z
     float v[8][3];
     GLushort idx[36];
     box_arrays(x0, y0, z0, x1, y1, z1, v, idx);
-    glEnableClientState(GL_VERTEX_ARRAY);
-    glVertexPointer(3, GL_FLOAT, 0, v);
-    glDrawElements(GL_TRIANGLES, 36, GL_UNSIGNED_SHORT, idx);
-    glDisableClientState(GL_VERTEX_ARRAY);
+    if (glsl_mvp) use_program(glsl_mvp);
+    if (glsl_mvp && generic_vertex) {
+        attrib_pointer(0, 3, GL_FLOAT, GL_FALSE, 0, v);
+        enable_attrib(0);
+        glDrawElements(GL_TRIANGLES, 36, GL_UNSIGNED_SHORT, idx);
+        disable_attrib(0);
+    } else {
+        glEnableClientState(GL_VERTEX_ARRAY);
+        glVertexPointer(3, GL_FLOAT, 0, v);
+        glDrawElements(GL_TRIANGLES, 36, GL_UNSIGNED_SHORT, idx);
+        glDisableClientState(GL_VERTEX_ARRAY);
+    }
+    if (glsl_mvp) use_program(0);
 }
 
 /* A buffer object for vertices and indices, glDrawRangeElements; the z1 corners
@@ -162,7 +184,9 @@ static void box_buffer(float x0, float y0, float z0, float x1, float y1, float z
     buffer_data(GL_ELEMENT_ARRAY_BUFFER, sizeof idx, idx, GL_STREAM_DRAW);
     glEnableClientState(GL_VERTEX_ARRAY);
     glVertexPointer(3, GL_FLOAT, 0, (const void*)0);
+    if (glsl_ftransform) use_program(glsl_ftransform);
     glDrawRangeElements(GL_TRIANGLES, 0, 7, 36, GL_UNSIGNED_SHORT, (const void*)0);
+    if (glsl_ftransform) use_program(0);
     glDisableClientState(GL_VERTEX_ARRAY);
     bind_buffer(GL_ARRAY_BUFFER, 0);
     bind_buffer(GL_ELEMENT_ARRAY_BUFFER, 0);
@@ -197,7 +221,9 @@ static void floor_quad(float x0, float y0, float x1, float y1, float z) {
     const float v[4][3] = {{x0, y0, z}, {x1, y0, z}, {x1, y1, z}, {x0, y1, z}};
     glEnableClientState(GL_VERTEX_ARRAY);
     glVertexPointer(3, GL_FLOAT, 0, v);
+    if (glsl_mvp) use_program(glsl_mvp);
     glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
+    if (glsl_mvp) use_program(0);
     glDisableClientState(GL_VERTEX_ARRAY);
 }
 
@@ -242,7 +268,20 @@ static void frame_ortho(int w, int h, int frame) {
     overlay(w, h);
 }
 
+/* A GLSL 1.20 program of the one vertex shader `main` (the driver's own
+ * fragment stage: fixed-function colour). */
+static GLuint glsl_program(const char* main) {
+    const GLuint sh = create_shader(GL_VERTEX_SHADER), prog = create_program();
+    const char* src[2] = {"#version 120\n", main};
+    shader_source(sh, 2, src, NULL);
+    compile_shader(sh);
+    attach_shader(prog, sh);
+    link_program(prog);
+    return prog;
+}
+
 static void frame_perspective(int w, int h) {
+    generic_vertex = 1;
     glViewport(0, 0, w, h);
     glMatrixMode(GL_PROJECTION);
     glLoadIdentity();
@@ -265,6 +304,7 @@ static void frame_perspective(int w, int h) {
     glPopMatrix();
     begin_object(2); box_buffer(2, -1, -1, 3.5f, 1, 1); end_object();
     overlay(w, h);
+    generic_vertex = 0;
 }
 
 int main(int argc, char** argv) {
@@ -322,9 +362,17 @@ int main(int argc, char** argv) {
     attach_shader = (PFNGLATTACHSHADERPROC)glXGetProcAddress((const GLubyte*)"glAttachShader");
     link_program = (PFNGLLINKPROGRAMPROC)glXGetProcAddress((const GLubyte*)"glLinkProgram");
     use_program = (PFNGLUSEPROGRAMPROC)glXGetProcAddress((const GLubyte*)"glUseProgram");
+    attrib_pointer = (PFNGLVERTEXATTRIBPOINTERPROC)glXGetProcAddress((const GLubyte*)"glVertexAttribPointer");
+    enable_attrib = (PFNGLENABLEVERTEXATTRIBARRAYPROC)glXGetProcAddress((const GLubyte*)"glEnableVertexAttribArray");
+    disable_attrib =
+        (PFNGLDISABLEVERTEXATTRIBARRAYPROC)glXGetProcAddress((const GLubyte*)"glDisableVertexAttribArray");
     if (!push_group || !pop_group || !push_marker || !pop_marker || !gen_buffers) {
         fprintf(stderr, "gl_boxes: the GL lacks KHR_debug, EXT_debug_marker or buffer objects\n");
         return 1;
+    }
+    if (!strcmp(fault, "glsl")) {
+        glsl_mvp = glsl_program("void main() { gl_Position = gl_ModelViewProjectionMatrix * gl_Vertex; }\n");
+        glsl_ftransform = glsl_program("void main() { gl_Position = ftransform(); }\n");
     }
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);

@@ -5,9 +5,10 @@
  *
  *   gl_shaders [WIDTH HEIGHT [FAULT]]   (default 128 96; the window is the screen)
  *
- * FAULT adds, in frame 1, one draw the converter must refuse, naming it:
- * geometry (a program with a geometry shader); or one it must convert as
- * Mesa draws it: compile (a program
+ * FAULT adds, in frame 1, one draw the converter must convert as Mesa
+ * draws it: geometry (a program whose geometry shader moves the triangle
+ * below by the texture fault's texel, its vertex shader passing positions
+ * through: the same fragments), compile (a program
  * whose vertex shader does not compile, used all the same:
  * GL_INVALID_OPERATION, the draw runs the program in use), texture (a vertex
  * shader that samples a 2D texture uploaded with glTexImage2D: the triangle
@@ -85,10 +86,18 @@ static GLushort triangles[36], strips[29];
 static GLint model_at;
 static const char* fault = "";
 
+/* The "geometry" fault: the triangle moved by the texel in the geometry
+ * stage, its vertex shader passing the position through. */
 static const char* geometry_source =
     "#version 330 core\n"
     "layout(triangles) in; layout(triangle_strip, max_vertices = 3) out;\n"
-    "void main() { for (int i = 0; i < 3; ++i) { gl_Position = gl_in[i].gl_Position; EmitVertex(); } }\n";
+    "void main() {\n"
+    "    for (int i = 0; i < 3; ++i) { gl_Position = gl_in[i].gl_Position + vec4(-0.75, -0.5, -1.5, 0.0); EmitVertex(); }\n"
+    "}\n";
+static const char* passing_source =
+    "#version 330 core\n"
+    "in vec3 position;\n"
+    "void main() { gl_Position = vec4(position, 1.0); }\n";
 static const char* texture_source =
     "#version 330 core\n"
     "uniform sampler2D heights;\n"
@@ -242,7 +251,7 @@ static void inject_fault(GLuint main_program) {
     if (!*fault) return;
     GLuint p = glCreateProgram();
     if (!strcmp(fault, "geometry")) {
-        glAttachShader(p, compile(GL_VERTEX_SHADER, vertex_source));
+        glAttachShader(p, compile(GL_VERTEX_SHADER, passing_source));
         glAttachShader(p, compile(GL_GEOMETRY_SHADER, geometry_source));
     } else if (!strcmp(fault, "rendered")) {
         fill(GL_TEXTURE_2D, texture_2x2(NULL), 0);
@@ -345,9 +354,9 @@ static void inject_fault(GLuint main_program) {
                          !strcmp(fault, "cubeseam") ||
                          !strcmp(fault, "array") || !strcmp(fault, "image") || !strcmp(fault, "multisample") ||
                          !strcmp(fault, "default") || !strcmp(fault, "msimage") || !strcmp(fault, "msdepth") ||
-                         pipeline;
+                         !strcmp(fault, "geometry") || pipeline;
     if (textured) {
-        if (!pipeline)
+        if (!pipeline && strcmp(fault, "geometry"))
             glUniform1i(glGetUniformLocation(p, "heights"), !strcmp(fault, "image") || !strcmp(fault, "msimage") ? 3 : 2);
         begin_object(9);
     }

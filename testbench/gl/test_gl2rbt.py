@@ -109,6 +109,26 @@ def test_mesa_check_leaves_out_frames_read_through_another_window(gl):
     assert re.search(r"^frame 2 \(call \d+\): ", r.stdout, re.M), r.stdout
 
 
+def test_glsl_programs_of_the_compatibility_profile(gl):
+    """gl_boxes' glsl capture: its array draws under GLSL 1.20 programs
+    reading gl_ModelViewProjectionMatrix, ftransform() and gl_Vertex (from
+    the vertex array, and in frame 2 from generic attribute 0) convert into
+    the plain capture's trace, byte for byte (they had been refused); its
+    reduced capture gives the same bytes; Mesa's replay agrees."""
+    path, _ = gl.convert("--reduced-out", gl.path("glsl.calls.xz"), name="glsl", out="glsl.rbt")
+    plain, _ = gl.convert()
+    with open(path, "rb") as a, open(plain, "rb") as b:
+        assert a.read() == b.read(), "the programs changed the trace"
+    r = gl(gl.path("glsl.calls.xz"), "-o", gl.path("reduced.rbt"))
+    assert r.returncode == 0, r.stderr
+    with open(path, "rb") as a, open(gl.path("reduced.rbt"), "rb") as b:
+        assert a.read() == b.read(), "the reduced capture's trace differs"
+    r = gl(capture_path("glsl"), "--check-depth")
+    assert r.returncode == 0, f"--check-depth failed ({r.returncode}): {r.stdout}{r.stderr}"
+    m = re.search(r"^agreement: ([0-9.]+)% of (\d+) covered pixels in 2 frames", r.stdout, re.M)
+    assert m and float(m.group(1)) >= 99.0 and int(m.group(2)) > 1000, r.stdout
+
+
 def test_refusals(gl):
     expect = {"nan": "not finite", "index": "reach past", "list": "glNewList",
               "shader": "program", "line": "GL_FILL"}

@@ -205,8 +205,9 @@ def test_a_record_cannot_name_an_earlier_records_blob(tmp_path):
     assert peak_mb(r) < 300, f"{peak_mb(r):.0f} MB"
 
 
-def shader_calls(vertex_source, core=True):
-    """A capture drawing one triangle from a buffer under a program (GL 3.3)."""
+def shader_calls(vertex_source, core=True, feedback=()):
+    """A capture drawing one triangle from a buffer under a program (GL 3.3),
+    which records the outputs `feedback` by transform feedback."""
     c = Calls()
     c.add("glXCreateContextAttribsARB", attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3,
           "GLX_CONTEXT_MINOR_VERSION_ARB", 3, "GLX_CONTEXT_PROFILE_MASK_ARB",
@@ -217,6 +218,9 @@ def shader_calls(vertex_source, core=True):
     c.add("glCreateProgram", ret=2)
     c.add("glAttachShader", program=2, shader=1)
     c.add("glBindAttribLocation", program=2, index=0, name="p")
+    if feedback:
+        c.add("glTransformFeedbackVaryings", program=2, count=len(feedback), varyings=list(feedback),
+              bufferMode="GL_INTERLEAVED_ATTRIBS")
     c.add("glLinkProgram", program=2)
     c.add("glUseProgram", program=2)
     c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
@@ -283,33 +287,247 @@ GS_POINTS = ("#version 330 core\nlayout(points) in;\nlayout(triangle_strip, max_
              "vec4(0.5 * float(i == 1), 0.5 * float(i == 2), 0.0, 0.0); EmitVertex(); } }\n")
 
 
+GS_TRIANGLES = ("#version 330 core\nlayout(triangles) in;\nlayout(triangle_strip, max_vertices = 3) out;\n"
+                "void main() { for (int i = 0; i < 3; ++i) { gl_Position = gl_in[i].gl_Position; EmitVertex(); } }\n")
+
+
+TES = ("#version 400 core\nlayout(triangles, equal_spacing, ccw) in;\nvoid main() { gl_Position = "
+       "gl_TessCoord.x * gl_in[0].gl_Position + gl_TessCoord.y * gl_in[1].gl_Position + "
+       "gl_TessCoord.z * gl_in[2].gl_Position; }\n")
+
+
+def points_draw(c, instances=1, mode="GL_POINTS", count=3):
+    """shader_calls' vertices (`count`) drawn as `mode` (tagged object 5)
+    from vertex array object 7."""
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    if instances > 1:
+        c.add("glDrawArraysInstanced", mode=mode, first=0, count=count, instancecount=instances)
+    else:
+        c.add("glDrawArrays", mode=mode, first=0, count=count)
+    return c.add("glPopDebugGroup").swap()
+
+
+def test_a_geometry_shader_runs_in_mesa(tmp_path):
+    """A geometry shader making a triangle of each of three points (GS_POINTS)
+    gives the trace of the three triangles drawn without it, byte for byte;
+    one making points draws nothing (they had been refused)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    corners = np.frombuffer(TRIANGLE, "<f4").reshape(3, 3)
+    # (VS: 32 x 24 units a clip-space unit; GS_POINTS: corners 0.5 apart.)
+    tris = np.concatenate([[p, p + (16, 0, 0), p + (0, 12, 0)] for p in corners]).astype("<f4").tobytes()
+    plain = shader_calls(VS)
+    plain.add("glBufferData", target="GL_ARRAY_BUFFER", size=len(tris), data=tris, usage="GL_STATIC_DRAW")
+    plain = points_draw(plain, mode="GL_TRIANGLES", count=9)
+    made = points_draw(relink_with(shader_calls(VS), "GL_GEOMETRY_SHADER", GS_POINTS))
+    assert trace_bytes(tmp_path, made, "made") == trace_bytes(tmp_path, plain, "plain")
+    gs_dots = GS_POINTS.replace("triangle_strip", "points")
+    assert fragments(tmp_path, points_draw(relink_with(shader_calls(VS), "GL_GEOMETRY_SHADER", gs_dots))
+                     .write(tmp_path / "dots.xz")) == [0]
+
+
+def test_tessellation_runs_in_mesa(tmp_path):
+    """A tessellation evaluation shader (no control shader) on a patch of
+    the triangle's three vertices: at the default levels one triangle, the
+    bytes of the triangle drawn without it; at levels of 4 (glPatchParameterfv)
+    many more triangles over the same pixels; isolines draw nothing (it had
+    been refused, and glPatchParameteri with it)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    from gl_captures import read_trace
+
+    def tessellated(tes, levels=None):
+        c = relink_with(shader_calls(VS), "GL_TESS_EVALUATION_SHADER", tes)
+        c.add("glPatchParameteri", pname="GL_PATCH_VERTICES", value=3)
+        if levels:
+            c.add("glPatchParameterfv", pname="GL_PATCH_DEFAULT_OUTER_LEVEL", values=[float(levels)] * 4)
+            c.add("glPatchParameterfv", pname="GL_PATCH_DEFAULT_INNER_LEVEL", values=[float(levels)] * 2)
+        return points_draw(c, mode="GL_PATCHES")
+    plain = trace_bytes(tmp_path, points_draw(shader_calls(VS), mode="GL_TRIANGLES"), "plain")
+    assert trace_bytes(tmp_path, tessellated(TES), "one") == plain
+    r = gl2rbt(tmp_path, tessellated(TES, 4).write(tmp_path / "four.xz"), "-o", tmp_path / "four.rbt",
+               "--summary", tmp_path / "four.jsonl")
+    assert r.returncode == 0, r.stderr
+    (tmp_path / "plain.rbt").write_bytes(plain)
+    pixels = {p: [f[:2] for f in fs] for p, fs in read_trace(str(tmp_path / "plain.rbt"))[0][0].items()}
+    assert {p: [f[:2] for f in fs] for p, fs in read_trace(str(tmp_path / "four.rbt"))[0][0].items()} == pixels
+    assert json.loads((tmp_path / "four.jsonl").read_text())["prims"] > 10
+    lines = TES.replace("triangles, equal_spacing", "isolines, equal_spacing")
+    assert fragments(tmp_path, tessellated(lines).write(tmp_path / "lines.xz")) == [0]
+
+
+@pytest.mark.parametrize("into_window", [False, True], ids=["other_pass", "camera_pass"])
+def test_a_geometry_shader_s_draw_into_another_pass_is_left_out(tmp_path, into_window):
+    """A draw under a geometry shader into another pass (a 32 x 32 depth
+    target: a layered shadow map's kind) needs no positions and is left
+    out as such draws are; into the window it draws the triangle the
+    geometry shader passes through, as without it (both had been
+    refused)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    c = relink_with(shader_calls(VS), "GL_GEOMETRY_SHADER", GS_TRIANGLES)
+    c.add("glGenFramebuffers", n=1, framebuffers=[3]).add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=3)
+    c.add("glGenRenderbuffers", n=1, renderbuffers=[4])
+    c.add("glBindRenderbuffer", target="GL_RENDERBUFFER", renderbuffer=4)
+    c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_DEPTH_COMPONENT24", width=32,
+          height=32)
+    c.add("glFramebufferRenderbuffer", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+          renderbuffertarget="GL_RENDERBUFFER", renderbuffer=4)
+    if into_window:
+        c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0)
+    cap = shader_draw(c, vao=7).write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--summary", tmp_path / "c.jsonl")
+    if into_window:
+        assert r.returncode == 0, r.stderr
+        assert (tmp_path / "c.rbt").read_bytes() == trace_bytes(tmp_path, shader_draw(shader_calls(VS), vao=7), "p")
+    else:
+        assert r.returncode == 0, r.stderr
+        assert "1 draws into other targets than the camera pass left out" in r.stdout + r.stderr, r.stdout
+        assert json.loads((tmp_path / "c.jsonl").read_text().splitlines()[0])["fragments"] == 0
+
+
+VS_FEEDBACK = ("#version 330 core\nin vec3 p;\nout vec3 q;\n"
+               "void main() { q = p + vec3(1.0); gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+
+
+def feedback_calls(varyings=("q",)):
+    """shader_calls' program recording `varyings` by transform feedback,
+    vertex array object 7 reading buffer 1, buffer 5 bound at the feedback
+    binding point 0 of the default feedback object."""
+    c = shader_calls(VS_FEEDBACK, feedback=varyings)
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=5)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE, usage="GL_STATIC_DRAW")
+    return c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=0, buffer=5)
+
+
+def record(c, draws=1):
+    """Feedback recorded by `draws` draws of the triangle, rasterizer discard on."""
+    c.add("glEnable", cap="GL_RASTERIZER_DISCARD").add("glBeginTransformFeedback", primitiveMode="GL_TRIANGLES")
+    for _ in range(draws):
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    return c.add("glEndTransformFeedback").add("glDisable", cap="GL_RASTERIZER_DISCARD")
+
+
+def read_buffer(c, b):
+    """The triangle drawn (object 5) from buffer b's vertices."""
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=b)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    return c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+
+
+def test_the_captures_own_transform_feedback(tmp_path):
+    """A program's outputs recorded by transform feedback (GPU particles):
+    the buffer at the binding point is the GPU's after a draw records into
+    it, and a later draw reading it as vertices is refused naming both
+    calls (the capture had been refused at glTransformFeedbackVaryings);
+    drawing from another buffer converts; paused, or with another feedback
+    object bound, nothing is recorded into it; a name the program does not
+    output fails its link in Mesa, as in the capture's driver: its draws
+    draw nothing."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    r = gl2rbt(tmp_path, read_buffer(record(feedback_calls()), 5).swap().write(tmp_path / "a.xz"),
+               "-o", tmp_path / "a.rbt")
+    refused(r, "reads attribute 0 from buffer 5, which the GPU wrote at call",
+            "glDrawArrays with transform feedback recording into binding 0")
+    assert left_behind(tmp_path, ["a.xz"]) == []
+    assert fragments(tmp_path, read_buffer(record(feedback_calls()), 1).swap().write(tmp_path / "b.xz"))[0] > 100
+    paused = feedback_calls().add("glBeginTransformFeedback", primitiveMode="GL_TRIANGLES")
+    paused.add("glPauseTransformFeedback").add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    paused.add("glEndTransformFeedback")
+    assert fragments(tmp_path, read_buffer(paused, 5).swap().write(tmp_path / "c.xz"))[0] > 100
+    def other_object():
+        c = feedback_calls().add("glGenTransformFeedbacks", n=1, ids=[8])
+        return record(c.add("glBindTransformFeedback", target="GL_TRANSFORM_FEEDBACK", id=8))
+    assert fragments(tmp_path, read_buffer(other_object(), 5).swap().write(tmp_path / "d.xz"))[0] > 100
+    # The default object bound again: its binding 0 is buffer 5 still.
+    back = record(other_object().add("glBindTransformFeedback", target="GL_TRANSFORM_FEEDBACK", id=0))
+    refused(gl2rbt(tmp_path, read_buffer(back, 5).swap().write(tmp_path / "e.xz"), "-o", tmp_path / "e.rbt"),
+            "which the GPU wrote")
+    assert fragments(tmp_path, read_buffer(feedback_calls(("nope",)), 1).swap().write(tmp_path / "f.xz")) == [0]
+
+
+FTRANSFORM = "#version 120\nvoid main() { gl_Position = ftransform(); }\n"
+
+
+def compat_draw(c, obj=5, client=False):
+    """shader_calls' triangle drawn by the vertex array (glVertexPointer,
+    from the buffer or client memory) in the default vertex array object,
+    generic attribute 0 disabled; tagged object `obj` (None: untagged)."""
+    if client:
+        c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=0)
+    c.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE if client else 0)
+    if obj is not None:
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=obj, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    if obj is not None:
+        c.add("glPopDebugGroup")
+    return c.swap()
+
+
+def test_compatibility_programs_read_the_captures_matrices_and_vertices(tmp_path):
+    """A GL 2.x program's gl_ModelViewProjectionMatrix, ftransform() and
+    gl_Vertex read the capture's matrices (Calls: glOrtho) and vertices,
+    from the vertex array (a buffer or client memory) or generic attribute
+    0: the same trace, byte for byte, as the fixed-function draw of the
+    triangle (they had been refused); a rule's vertex_data names the draw
+    by the vertex array's data."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    fixed = trace_bytes(tmp_path, Calls().triangle(5).swap(), "fixed")
+    mvp = "#version 120\nattribute vec3 p;\nvoid main() { gl_Position = gl_ModelViewProjectionMatrix * vec4(p, 1.0); }\n"
+    for name, c in (("mvp", shader_draw(shader_calls(mvp, core=False), vao=7)),
+                    ("generic0", shader_draw(shader_calls(FTRANSFORM, core=False), vao=7)),
+                    ("buffer", compat_draw(shader_calls(FTRANSFORM, core=False))),
+                    ("client", compat_draw(shader_calls(FTRANSFORM, core=False), client=True))):
+        assert trace_bytes(tmp_path, c, name) == fixed, f"{name}: not the fixed-function draw's trace"
+    # A rule's vertex_data names the draw by the vertex array's data as it
+    # would by generic attribute 0's.
+    import hashlib
+    arrays = hashlib.blake2b(repr(("arrays", "GL_FLOAT", 3, 12)).encode() + TRIANGLE, digest_size=8).hexdigest()
+    for client in (False, True):
+        name, c = f"untagged-{client}", compat_draw(shader_calls(FTRANSFORM, core=False), obj=None, client=client)
+        rules = tmp_path / "r.toml"
+        rules.write_text(f'[[object]]\nid = 3\nvertex_data = ["{arrays[:8]}"]\n')
+        r = gl2rbt(tmp_path, c.write(tmp_path / f"{name}.xz"), "-o", tmp_path / "v.rbt", "--select", rules,
+                   "--summary", tmp_path / "v.jsonl")
+        assert r.returncode == 0, r.stderr
+        assert json.loads((tmp_path / "v.jsonl").read_text().splitlines()[0])["objects"] == [3], name
+
+
 @pytest.mark.parametrize("build, words", [
     # Compatibility-profile state a vertex shader reads from Mesa's own
-    # context (identity matrices, no vertex array), not the capture's.
-    (lambda: shader_draw(shader_calls("#version 120\nattribute vec3 p;\nvoid main() { gl_Position = "
-                                      "gl_ModelViewProjectionMatrix * vec4(p, 1.0); }\n", core=False), vao=7),
-     "reads gl_ModelViewProjectionMatrix, fixed-function state"),
-    (lambda: shader_draw(shader_calls("#version 120\nvoid main() { gl_Position = ftransform(); }\n", core=False),
-                         vao=7), "reads gl_"),
-    # A geometry shader turning points into triangles: refused before the
-    # point draw is passed over as drawing no area.
-    (lambda: relink_with(shader_calls(VS), "GL_GEOMETRY_SHADER", GS_POINTS)
-     .add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
-     .add("glEnableVertexAttribArray", index=0)
-     .add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
-     .add("glDrawArrays", mode="GL_POINTS", first=0, count=3).swap(), "has a geometry shader"),
+    # context, not the capture's: vertex arrays other than gl_Vertex, the
+    # texture matrices; gl_Vertex with no array enabled; the state in a
+    # core-profile context, whose driver does not compile it.
+    (lambda: compat_draw(shader_calls("#version 120\nvoid main() { gl_Position = ftransform() + "
+                                      "vec4(gl_Normal, 0.0); }\n", core=False)),
+     "reads gl_Normal, a fixed-function vertex array"),
+    (lambda: compat_draw(shader_calls("#version 120\nvoid main() { gl_Position = gl_TextureMatrix[0] * "
+                                      "ftransform(); }\n", core=False)), "reads gl_TextureMatrix"),
+    (lambda: shader_calls(FTRANSFORM, core=False).add("glDisableClientState", array="GL_VERTEX_ARRAY")
+     .add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).swap(),
+     "reads gl_Vertex, with neither generic attribute 0 nor the vertex array"),
+    (lambda: shader_draw(shader_calls(FTRANSFORM), vao=7), "in a core-profile context"),
+    # A geometry shader under an instanced draw (its triangles an instance
+    # are not known); a tessellation stage.
+    (lambda: points_draw(relink_with(shader_calls(VS), "GL_GEOMETRY_SHADER", GS_POINTS), instances=2),
+     "2 instances under program 2's geometry shader: not emulated"),
+    (lambda: points_draw(relink_with(shader_calls(VS), "GL_TESS_EVALUATION_SHADER", TES), mode="GL_PATCHES",
+                         instances=3), "3 instances under program 2's tess evaluation shader: not emulated"),
     (lambda: shader_draw(shader_calls(VS).add("glClipControl", origin="GL_LOWER_LEFT", depth="GL_ZERO_TO_ONE"),
                          vao=7), "glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE) is not emulated"),
     (lambda: shader_draw(shader_calls(VS).add("glUniformSubroutinesuiv", shadertype="GL_VERTEX_SHADER", count=1,
                                               indices=[0]), vao=7), "shader subroutines"),
-    (lambda: shader_draw(shader_calls(VS).add("glTransformFeedbackVaryings", program=2, count=1, varyings=["v"],
-                                              bufferMode="GL_INTERLEAVED_ATTRIBS"), vao=7),
-     "the capture's own transform feedback"),
+    (lambda: shader_draw(shader_calls(VS), vao=7).add("glDrawTransformFeedback", mode="GL_TRIANGLES", id=0),
+     "as many vertices as transform feedback object 0 recorded"),
     (lambda: Calls().add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
      .add("glMultiDrawElementsBaseVertex", mode="GL_TRIANGLES", count=[3], type="GL_UNSIGNED_INT",
           indices=[np.array([0, 1, 2], "<u4").tobytes()], drawcount=1, basevertex=[1]).swap(),
      "without a vertex shader is not emulated"),
-], ids=["compat_matrix", "ftransform", "geometry_on_points", "clip_control", "subroutines", "feedback",
+], ids=["compat_normal", "texture_matrix", "no_vertex_array", "compat_in_core", "geometry_instanced", "tessellation", "clip_control", "subroutines", "draw_feedback",
         "multi_base_vertex_fixed_function"])
 def test_state_not_emulated_is_refused(tmp_path, build, words):
     """What would otherwise convert silently wrong is refused, naming the call."""

@@ -22,6 +22,7 @@ def test_capture():
     # glretrace grow to.
     for name, program, extra in [("boxes", boxes, []), ("point", boxes, ["128", "96", "point"]),
                                  ("readother", boxes, ["128", "96", "readother"]),
+                                 ("glsl", boxes, ["128", "96", "glsl"]),
                                  ("wide", boxes, ["4100", "4100"])] + \
             [(f"fault-{f}", boxes, ["128", "96", f]) for f in FAULTS] + [("shaders", shaders, [])] + \
             [(f"shader-fault-{f}", shaders, ["128", "96", f]) for f in SHADER_FAULTS]:

@@ -12,6 +12,7 @@ from .glstate import CONVERSION_STATE, SHARED_STATE, GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
 from .glstate.draws import DrawCalls
+from .glstate.feedback import FeedbackCalls
 from .glstate.camera_depth import CameraDepthCalls
 from .glstate.framebuffers import FramebufferCalls
 from .glstate.textures import REDUCED_TEXTURES, TextureImageCalls
@@ -49,7 +50,7 @@ ES_VERSIONS = {(1, 0), (1, 1), (2, 0), (3, 0), (3, 1), (3, 2)}
 
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
                 ProgramCalls, FramebufferCalls, CameraDepthCalls, TextureImageCalls, DirectStateCalls, DrawCalls,
-                ObjectCalls)
+                FeedbackCalls, ObjectCalls)
 
 
 # Arguments that name a buffer target, and the suffixes of an extension's

@@ -17,7 +17,7 @@ import numpy as np
 
 from .errors import fail_call, printable
 from .gl_tables import INDEX_TYPES
-from .glstate.attributes import element_bytes
+from .glstate.attributes import Attrib, Binding, element_bytes
 from .glstate.buffers import merge_extents
 from .glstate.programs import COMMENTS
 from .glstate.textures import DEFAULT_BUFFER_TEXTURE
@@ -34,10 +34,14 @@ GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INV
              GL_OUT_OF_MEMORY: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
 UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
 MAX_MESA_BUFFER_BYTES = 2 << 30   # the declared sizes of the buffers given to Mesa, in all
-# Built-in inputs a vertex shader may read that the draw call itself gives;
-# every other gl_ input or uniform is fixed-function state (gl_Vertex,
-# gl_ModelViewProjectionMatrix, ...), which Mesa's program would read from
-# its own context, not the capture's.
+# Built-in inputs a vertex shader may read that the draw call itself gives.
+# Of the compatibility profile's fixed-function state, gl_Vertex and the
+# model-view and projection matrices with what GL derives from them are
+# given to Mesa's context from the converter's (a GL 2.x program's
+# `gl_ModelViewProjectionMatrix * gl_Vertex` or `ftransform()`); every other
+# gl_ input or uniform (gl_Normal, gl_MultiTexCoord0, gl_TextureMatrix,
+# gl_LightSource, ...) Mesa's program would read from its own context, not
+# the capture's: refused.
 # The C type of a glVertexAttrib*v's values, by its suffix.
 ATTRIB_VALUE_TYPES = {"b": np.int8, "s": np.int16, "i": np.int32, "ub": np.uint8, "us": np.uint16, "ui": np.uint32,
                       "f": np.float32, "d": np.float64}
@@ -49,10 +53,19 @@ BUILTIN_INPUTS = {"gl_VertexID", "gl_InstanceID", "gl_DrawID", "gl_BaseVertex", 
                   "gl_VertexIndex", "gl_InstanceIndex", "gl_DrawIDARB", "gl_BaseVertexARB", "gl_BaseInstanceARB"}
 # The index of a draw within its multi-draw (GLSL 4.60, ARB_shader_draw_parameters).
 DRAW_ID_INPUTS = {"gl_DrawID", "gl_DrawIDARB"}
+FIXED_MATRICES = {f"gl_{m}Matrix{form}" for m in ("ModelView", "Projection", "ModelViewProjection")
+                  for form in ("", "Inverse", "Transpose", "InverseTranspose")} | {"gl_NormalMatrix"}
 
 
 def name_str(name):
     return name.decode("ascii", "replace") if isinstance(name, bytes) else str(name)
+
+
+def varying_names(names):
+    """Output names as glTransformFeedbackVaryings takes them (C strings;
+    a NUL inside a capture's name ends it, as in C)."""
+    arr = (ctypes.c_char_p * len(names))(*[n.encode("utf-8", "replace").split(b"\0")[0] for n in names])
+    return ctypes.cast(arr, ctypes.POINTER(ctypes.POINTER(ctypes.c_char)))
 
 
 def feedback_varying(GL, prog, i):
@@ -81,7 +94,7 @@ def es_fragment_shader(vertex_source):
     return f"#version {version} es\nprecision mediump float;\nout vec4 c;\nvoid main() {{ c = vec4(0.0); }}\n"
 
 
-def check_client_data(conv, no, name, d, instances, client_indices):
+def check_client_data(conv, no, name, d, instances, client_indices, mp):
     """What a draw reads from client memory must be in the capture: apitrace
     records, for each client array and for client indices, the bytes the
     draw reads. An indexed draw with no element array buffer bound and no
@@ -114,7 +127,10 @@ def check_client_data(conv, no, name, d, instances, client_indices):
                 idx = idx[idx != conv.s.restart_index]
             rows = int(idx.max()) + d.get("basevertex", 0) + 1 if len(idx) else 0
     vao = conv.current_vao()
-    for i, at, b in vao.sources():
+    sources = vao.sources()
+    if mp.reads_vertex and conv.s.vertex_array_enabled and not (0 in vao.attribs and vao.attribs[0].enabled):
+        sources.append(("0 (the vertex array)",) + fixed_source(conv.s.vertex_array))
+    for i, at, b in sources:
         if not at.enabled or b.buffer or b.client is None:
             continue
         if b.divisor:
@@ -129,6 +145,16 @@ def check_client_data(conv, no, name, d, instances, client_indices):
         if len(b.client) < need:
             fail_call(no, f"{name}: attribute {i}'s client array in the capture is {len(b.client)} bytes, "
                       f"the draw reads {need}")
+
+
+def fixed_source(arr):
+    """The fixed-function vertex array as the generic attribute and binding
+    that give it to Mesa (VertexStage.fixed_vertex_array)."""
+    at, b = Attrib(0), Binding()
+    at.enabled, at.size, at.type = True, arr.size, arr.type
+    b.buffer, b.offset, b.stride = arr.buffer, arr.offset, arr.stride or element_bytes(arr.size, arr.type)
+    b.client = None if arr.buffer else arr.data
+    return at, b
 
 
 class RunAlone(Exception):
@@ -171,6 +197,11 @@ class MesaProgram:
         self.image_locations = []     # the same of its images
         self.buffer_samplers = []     # the locations of its buffer texture samplers
         self.reads_draw_id = False    # its vertex shader reads gl_DrawID
+        self.fixed_matrices = False   # it reads the model-view or projection matrix (FIXED_MATRICES)
+        self.reads_vertex = False     # it reads gl_Vertex
+        self.amplifies = False        # it has tessellation or geometry shaders (as many primitives as they make)
+        self.tessellates = False      # it has a tessellation evaluation shader
+        self.area = True              # its last stage makes triangles (not a geometry shader's points or lines)
 
 
 class VertexStage:
@@ -341,7 +372,7 @@ class VertexStage:
         that draws: whether it links, and its active uniform blocks' names
         by index."""
         bindings = p.linked[1]
-        key = (p.digest, tuple(sorted(bindings.items())), p.separable)
+        key = (p.digest, tuple(sorted(bindings.items())), p.separable, p.feedback)
         if key not in self.link_status:
             from OpenGL.error import GLError
             GL = self.gl
@@ -355,6 +386,9 @@ class VertexStage:
                         GL.glBindAttribLocation(prog, index, attr)
                     if p.separable:   # (OpenGL ES links a program of one stage only so)
                         self.mesa.separable(prog)
+                    if p.feedback:   # the capture's own outputs, which its link may fail on
+                        names, mode = p.feedback
+                        GL.glTransformFeedbackVaryings(prog, len(names), varying_names(names), getattr(GL, mode))
                     GL.glLinkProgram(prog)
                     ok = bool(GL.glGetProgramiv(prog, GL.GL_LINK_STATUS))
                     blocks = [block_name(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORM_BLOCKS))] \
@@ -376,19 +410,24 @@ class VertexStage:
         where = f"program {pname} (linked at call {p.link_call})"
         if "vertex" not in sources:
             fail_call(no, f"{where} has no vertex shader")
-        vertex = p.scanned["vertex"]   # (as the compiler reads it: glstate.glsl_text)
-        if CLIP_DISTANCES.search(vertex):
-            # Mesa 22.3 clips by them even with GL_CLIP_DISTANCEi disabled.
-            fail_call(no, f"{where}: its vertex shader writes clip or cull distances (gl_ClipDistance, "
-                      "gl_CullDistance): not emulated")
-        if VIEWPORT_OUTPUTS.search(vertex):
-            fail_call(no, f"{where}: its vertex shader chooses the viewport (gl_ViewportIndex): not emulated")
+        # The stages before rasterization, which Mesa runs.
+        stages = [s for s in ("vertex", "tess_control", "tess_evaluation", "geometry") if s in p.objects]
+        for stage in stages:
+            text, said = p.scanned[stage], stage.replace("_", " ")   # (as the compiler reads it: glsl_text)
+            if CLIP_DISTANCES.search(text):
+                # Mesa 22.3 clips by them even with GL_CLIP_DISTANCEi disabled.
+                fail_call(no, f"{where}: its {said} shader writes clip or cull distances (gl_ClipDistance, "
+                          "gl_CullDistance): not emulated")
+            if VIEWPORT_OUTPUTS.search(text):
+                fail_call(no, f"{where}: its {said} shader chooses the viewport (gl_ViewportIndex): not emulated")
         prog = GL.glCreateProgram()
         shaders = []
-        failed = attach_stage(GL, prog, GL.GL_VERTEX_SHADER, p.objects["vertex"], shaders)
-        if failed is not None:
-            log = GL.glGetShaderInfoLog(failed).decode("utf-8", "replace").strip().splitlines()
-            fail_call(no, f"{where}: Mesa does not compile its vertex shader: {printable((log or ['no log'])[0])}")
+        for stage in stages:
+            failed = attach_stage(GL, prog, getattr(GL, LINKED_STAGES[stage]), p.objects[stage], shaders)
+            if failed is not None:
+                log = GL.glGetShaderInfoLog(failed).decode("utf-8", "replace").strip().splitlines()
+                fail_call(no, f"{where}: Mesa does not compile its {stage.replace('_', ' ')} shader: "
+                          f"{printable((log or ['no log'])[0])}")
         if self.mesa.es:
             # OpenGL ES links only whole programs: a fragment shader of the
             # vertex shader's language version that reads nothing.
@@ -399,8 +438,7 @@ class VertexStage:
             GL.glDeleteShader(fs)
         for attr, index in bindings.items():
             GL.glBindAttribLocation(prog, index, attr)
-        names = ctypes.cast((ctypes.c_char_p * 1)(b"gl_Position"), ctypes.POINTER(ctypes.POINTER(ctypes.c_char)))
-        GL.glTransformFeedbackVaryings(prog, 1, names, GL.GL_INTERLEAVED_ATTRIBS)
+        GL.glTransformFeedbackVaryings(prog, 1, varying_names(["gl_Position"]), GL.GL_INTERLEAVED_ATTRIBS)
         GL.glLinkProgram(prog)
         for sh in shaders:
             GL.glDeleteShader(sh)
@@ -415,15 +453,28 @@ class VertexStage:
             fail_call(no, f"{where}: its vertex shader declares its own transform feedback outputs (xfb_ layout "
                       "qualifiers): not emulated")
         mp = MesaProgram(prog, p.version)
+        mp.amplifies = len(stages) > 1
+        mp.tessellates = "tess_evaluation" in stages
+        if "geometry" in stages:
+            # A geometry shader that makes points or lines draws no area.
+            mp.area = GL.glGetProgramiv(prog, GL.GL_GEOMETRY_OUTPUT_TYPE) == GL.GL_TRIANGLE_STRIP
+        elif "tess_evaluation" in stages:
+            # Nor does tessellation into isolines or points.
+            mp.area = GL.glGetProgramiv(prog, GL.GL_TESS_GEN_MODE) != GL.GL_ISOLINES \
+                and not GL.glGetProgramiv(prog, GL.GL_TESS_GEN_POINT_MODE)
         for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_ATTRIBUTES)):
             aname = name_str(GL.glGetActiveAttrib(prog, i)[0])
             mp.reads_draw_id |= aname in DRAW_ID_INPUTS
-            if aname.startswith("gl_") and aname not in BUILTIN_INPUTS:
+            mp.reads_vertex |= aname == "gl_Vertex"
+            if aname.startswith("gl_") and aname not in BUILTIN_INPUTS | {"gl_Vertex"}:
                 fail_call(no, f"{where}: its vertex shader reads {printable(aname)}, a fixed-function vertex "
                           "array of the compatibility profile: not emulated")
         for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORMS)):
             uname, size, utype = GL.glGetActiveUniform(prog, i)
             uname = name_str(uname)
+            if uname in FIXED_MATRICES:
+                mp.fixed_matrices = True
+                continue
             if uname.startswith("gl_"):
                 fail_call(no, f"{where}: its vertex shader reads {printable(uname)}, fixed-function state of "
                           "the compatibility profile: not emulated")
@@ -466,7 +517,7 @@ class VertexStage:
             fn(mloc, count, arr)
 
     # ---- state a draw reads
-    def vertex_array(self, conv, no, client_indices):
+    def vertex_array(self, conv, no, client_indices, mp):
         GL = self.gl
         vao = conv.current_vao()
         mv = self.vaos.get(conv.s.vao)
@@ -511,6 +562,10 @@ class VertexStage:
             self.mesa.bind_vertex_buffer(i, buf, offset, b.stride)
             self.mesa.binding_divisor(i, b.divisor)
             GL.glEnableVertexAttribArray(i)
+        if 0 not in vao.attribs:
+            GL.glDisableVertexAttribArray(0)   # (the fixed-function array an earlier draw gave there)
+        if mp.reads_vertex and not (0 in vao.attribs and vao.attribs[0].enabled):
+            self.fixed_vertex_array(conv, no)
         elem = conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
         if client_indices is not None:
             GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.client(client_indices))
@@ -528,6 +583,50 @@ class VertexStage:
                                dtype=ATTRIB_VALUE_TYPES[re.search(r"(ub|us|ui|b|s|i|f|d)v$", func).group(1)]))
             else:
                 fn(i, *vals)
+
+    def fixed_vertex_array(self, conv, no):
+        """gl_Vertex from the fixed-function vertex array (glVertexPointer),
+        given to Mesa as generic attribute 0, which a compatibility
+        profile's gl_Vertex reads when it is enabled (GL 2.1, 2.7: generic
+        attribute 0 and the vertex position are one), as it would have read
+        the capture's generic attribute 0 had that been enabled."""
+        GL = self.gl
+        if not conv.s.vertex_array_enabled:
+            fail_call(no, f"{self.name}: its vertex shader reads gl_Vertex, with neither generic attribute 0 nor "
+                      "the vertex array (GL_VERTEX_ARRAY) enabled: not emulated")
+        arr = conv.s.vertex_array
+        if arr.buffer:
+            conv.checked_buffer(no, self.name, arr.buffer, "the vertex array")
+            buf, offset = self.buffer(conv, arr.buffer), arr.offset
+        elif arr.data is not None:
+            buf, offset = self.client(arr.data), 0
+        else:
+            fail_call(no, f"{self.name}: the vertex array (gl_Vertex) has no buffer and no data in the capture")
+        self.mesa.attrib_format(0, arr.size, self.mesa.enum(arr.type), 0, 0)
+        self.mesa.attrib_binding(0, 0)
+        self.mesa.bind_vertex_buffer(0, buf, offset, arr.stride or element_bytes(arr.size, arr.type))
+        self.mesa.binding_divisor(0, 0)
+        GL.glEnableVertexAttribArray(0)
+
+    def patch_state(self, conv):
+        """The capture's patch size and default tessellation levels (which
+        apply with no control shader) in Mesa's context."""
+        GL = self.gl
+        self.mesa.proc("glPatchParameteri", ctypes.c_uint, ctypes.c_int)(GL.GL_PATCH_VERTICES,
+                                                                        conv.s.patch_vertices)
+        if not self.mesa.es:   # (OpenGL ES has no default levels)
+            for pname, n in (("GL_PATCH_DEFAULT_OUTER_LEVEL", 4), ("GL_PATCH_DEFAULT_INNER_LEVEL", 2)):
+                GL.glPatchParameterfv(getattr(GL, pname), np.array(conv.s.patch_levels.get(pname, (1.0,) * n),
+                                                                  np.float32))
+
+    def load_fixed_matrices(self, conv):
+        """The capture's model-view and projection matrices (the tops of its
+        stacks) in Mesa's context, for a program that reads them: Mesa
+        derives the products, inverses and the normal matrix from them."""
+        GL = self.gl
+        for mode in ("GL_PROJECTION", "GL_MODELVIEW"):
+            GL.glMatrixMode(getattr(GL, mode))
+            GL.glLoadMatrixd(np.ascontiguousarray(conv.s.stacks[mode][-1].T, dtype=np.float64))
 
     def blocks_read(self, mp):
         """{(target, binding)} of the uniform and shader storage blocks
@@ -659,7 +758,7 @@ class VertexStage:
                 # gl_DrawID is 0.
                 fail_call(no, f"{printable(conv.multi_draw_name)}: its draw {conv.multi_draw_index}, whose vertex "
                           "shader reads gl_DrawID: not emulated")
-            check_client_data(conv, no, name, d, instances, client_indices)
+            check_client_data(conv, no, name, d, instances, client_indices, mp)
         clip = self.positions(conv, no, name, checks, client_indices,
                               lambda: self.issue(name, d, client_indices is not None), prims, pname, p)
         # Every instance has the same primitives (primitive restart cuts them
@@ -681,7 +780,7 @@ class VertexStage:
             if mp.reads_draw_id and not whole:
                 raise RunAlone()
             for single, d in draws:
-                check_client_data(conv, no, single, d, d["instancecount"], None)
+                check_client_data(conv, no, single, d, d["instancecount"], None, mp)
 
         def issue():
             GL = self.gl
@@ -717,12 +816,33 @@ class VertexStage:
         try:
             with self.watchdog.on(f"call {no}: {name}"):
                 mp = self.program(no, pname, p)
+                if not mp.area:
+                    return np.zeros((0, 4), np.float32)
+                if (mp.fixed_matrices or mp.reads_vertex) and conv.core:
+                    fail_call(no, f"{name}: its vertex shader reads the compatibility profile's gl_Vertex or "
+                              "matrices in a core-profile context, whose driver does not compile it: not emulated")
                 checks(mp)
-                self.vertex_array(conv, no, client_indices)
+                self.vertex_array(conv, no, client_indices, mp)
+                if mp.fixed_matrices:
+                    self.load_fixed_matrices(conv)
+                if mp.tessellates:
+                    self.patch_state(conv)
                 self.bindings(conv, mp)
                 self.vertex_textures.bind(conv, no, name, mp, self.texture_buffer)
                 with self.watchdog.on(f"call {no}: {name}", grows=True):
-                    return self.mesa.feedback_positions(issue, prims)
+                    if not mp.amplifies:
+                        return self.mesa.feedback_positions(issue, prims)
+                    # Tessellation and geometry shaders make as many
+                    # primitives as they make: Mesa's count of them sizes a
+                    # second run.
+                    from .glstate.draws import MAX_DRAW_PRIMITIVES
+                    made = self.mesa.feedback_positions(issue, prims, fits=False)
+                    if isinstance(made, int):
+                        if made > MAX_DRAW_PRIMITIVES:
+                            fail_call(no, f"{name}: its tessellation or geometry shaders make {made} triangles, "
+                                      f"more than {MAX_DRAW_PRIMITIVES} (docs/gl-capture.md)")
+                        made = self.mesa.feedback_positions(issue, made)
+                    return made
         except GLError as e:
             op = getattr(getattr(e, "baseOperation", None), "__name__", "a call")
             if getattr(e, "err", None) == GL_OUT_OF_MEMORY:

@@ -120,6 +120,13 @@ class GLState:
         # layer, access, format); the units bound for writing.
         self.image_units = {}
         self.image_writes = set()
+        # Transform feedback (feedback.py): the bound object, whether it is
+        # active and paused; the binding points of the objects not bound.
+        self.feedback = (0, False, False)
+        self.feedback_bindings = {}
+        # Tessellation (programs.py): vertices a patch, default levels set.
+        self.patch_vertices = 3
+        self.patch_levels = {}
         self.views = set()   # textures that share images with another (glTextureView)
         # --reduced-out: the version of each texture's calls written into
         # the reduced capture (with a draw whose vertex shader read it).

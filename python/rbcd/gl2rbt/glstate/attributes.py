@@ -179,17 +179,24 @@ class AttributeCalls:
             h.update(repr(("elements", kind, d.get("basevertex", 0))).encode())
             h.update(bytes(data[start:start + count * size]))
             return h.hexdigest()
-        for i, at, b in self.current_vao().sources():
-            if not at.enabled or b.divisor or not isinstance(at.size, int) or at.type not in ATTRIB_SIZES:
-                continue
-            elem = at.size * ATTRIB_SIZES[at.type]
+        vao = self.current_vao()
+        arrays = [(at.type, at.size, b.stride, b.buffer, b.client, b.offset + at.relative)
+                  for i, at, b in vao.sources() if at.enabled and not b.divisor and isinstance(at.size, int)
+                  and at.type in ATTRIB_SIZES]
+        if vao.fixed_enabled and vao.fixed is not None and vao.fixed.type in ATTRIB_SIZES:
+            # gl_Vertex from the vertex array (glVertexPointer), last: a
+            # compatibility profile's GL 2.x program.
+            f = vao.fixed
+            arrays.append((f.type, f.size, f.stride or f.size * ATTRIB_SIZES[f.type], f.buffer, f.data, f.offset))
+        for kind, size, stride, buf, client, offset in arrays[:1]:
+            elem = size * ATTRIB_SIZES[kind]
             first, count = d.get("first", 0), d["count"]
-            data = self.s.buffers.get(b.buffer) if b.buffer else b.client
-            start = (b.offset if b.buffer else 0) + at.relative + first * b.stride
-            end = start + (count - 1) * b.stride + elem
+            data = self.s.buffers.get(buf) if buf else client
+            start = offset + first * stride   # (client memory: from its start, offset 0 or relative)
+            end = start + (count - 1) * stride + elem
             if data is None or start < 0 or end > len(data):
                 return ""
-            h.update(repr(("arrays", at.type, at.size, b.stride)).encode())
+            h.update(repr(("arrays", kind, size, stride)).encode())
             h.update(bytes(data[start:end]))
             return h.hexdigest()
         return ""

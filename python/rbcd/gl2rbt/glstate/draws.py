@@ -70,6 +70,7 @@ class DrawCalls:
                     self.gpu_wrote_buffer(no, self.s.texture_buffers[tex][1],
                                           f"{base_name(name)} with its buffer texture {tex} bound to image unit "
                                           f"{unit} for writing")
+        self.feedback_writes(no, name)
         if any(p.stores for _, p in self.stage_programs().values()):
             for (target, index), (b, _, _) in self.s.indexed.items():
                 if b and target in ("GL_SHADER_STORAGE_BUFFER", "GL_ATOMIC_COUNTER_BUFFER"):
@@ -265,24 +266,42 @@ class DrawCalls:
             self.rejected_draws.append((no, f"GL_INVALID_OPERATION: {invalid}"))
             return
         stages = self.stage_programs()
-        for stage in ("geometry", "tess_control", "tess_evaluation"):
-            if stage in stages:
-                v, sp = stages[stage]
-                fail_call(no, f"{name}: program {v} (linked at call {sp.link_call}) has a "
-                          f"{stage.replace('_', ' ')} shader: not emulated yet")
+        later = [stage for stage in ("geometry", "tess_control", "tess_evaluation") if stage in stages]
         # The fragment stage's program decides discard, gl_FragDepth and
         # the shading cost (a pipeline's may not be the vertex stage's).
         p = stages.get("fragment", stages["vertex"])[1]
-        if mode == "GL_PATCHES":
-            return   # GL_INVALID_OPERATION with no tessellation stage: nothing is drawn
-        if mode in PRIM_NO_AREA or mode in ("GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"):
-            self.ignored_prims += 1
-            return
-        if mode not in TRIANGLES_PER_VERTICES:
-            fail_call(no, f"{name}: primitive mode {printable(mode)} under a program is not emulated")
-        if not self.draws_into_camera_pass():
-            return
-        per = TRIANGLES_PER_VERTICES[mode](count)   # at most, with no restart
+        if later:
+            # Tessellation and geometry shaders run in Mesa with the vertex
+            # stage (a draw into another pass, a layered shadow map's, needs
+            # none); refused: such a stage of a pipeline's other program,
+            # and an instanced draw (its primitives an instance are not
+            # known). Points, lines and patches go through: Mesa decides
+            # what they make (GL_INVALID_OPERATION: nothing).
+            if mode == "GL_PATCHES" and later == ["geometry"]:
+                return   # GL_INVALID_OPERATION with no tessellation stage: nothing is drawn
+            if not self.draws_into_camera_pass():
+                return
+            for stage in later:
+                v, sp = stages[stage]
+                if v != stages["vertex"][0]:
+                    fail_call(no, f"{name}: program {v} (linked at call {sp.link_call}) has the "
+                              f"{stage.replace('_', ' ')} shader beside program {stages['vertex'][0]}'s vertex "
+                              "shader (a pipeline): not emulated yet")
+            if instances > 1:
+                fail_call(no, f"{name}: {instances} instances under program {v}'s {later[-1].replace('_', ' ')} "
+                          "shader: not emulated (its primitives an instance are not known)")
+            per = max(count, 1)   # a first room: Mesa's count of the primitives made sizes the next
+        else:
+            if mode == "GL_PATCHES":
+                return   # GL_INVALID_OPERATION with no tessellation stage: nothing is drawn
+            if mode in PRIM_NO_AREA or mode in ("GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"):
+                self.ignored_prims += 1
+                return
+            if mode not in TRIANGLES_PER_VERTICES:
+                fail_call(no, f"{name}: primitive mode {printable(mode)} under a program is not emulated")
+            if not self.draws_into_camera_pass():
+                return
+            per = TRIANGLES_PER_VERTICES[mode](count)   # at most, with no restart
         if per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {per * instances} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "
                       f"(or {MAX_RECORD_VERTICES // 3} an instance; docs/gl-capture.md)")

@@ -60,6 +60,13 @@ class Shader:
         self.stage, self.sources, self.compiled = stage, [], None
 
 
+# GL_MAX_PATCH_VERTICES as Mesa 22.3 (llvmpipe) answers it.
+MAX_PATCH_VERTICES = 32
+# Outputs one glTransformFeedbackVaryings may name (Mesa links at most 128
+# components interleaved, each output at least one).
+MAX_FEEDBACK_VARYINGS = 128
+
+
 class Program:
     def __init__(self):
         self.shaders = set()
@@ -84,6 +91,11 @@ class Program:
         self.digest = ""           # SHA-256 of its stages' sources at the last link (selection rules)
         self.separable = False     # GL_PROGRAM_SEPARABLE as its last link saw it
         self.separable_next = False   # as glProgramParameteri last set it, for the next link
+        # The capture's own transform feedback outputs ((names, buffer mode)
+        # or None), as glTransformFeedbackVaryings last set them, for the
+        # next link, and at the last link: Mesa links with them to decide
+        # whether the capture's link succeeded.
+        self.feedback_next = self.feedback = None
         # Linked again while in use: the program as it was (its executable
         # and uniforms), which stays in use if this link fails
         # (program_in_use).
@@ -305,6 +317,7 @@ class ProgramCalls:
         p.linked, p.objects = (sources, dict(p.bindings)), objects
         p.digest = sources_digest(sources)
         p.separable = p.separable_next
+        p.feedback = p.feedback_next
         # Each stage's text as the compiler reads it (macros expanded, every
         # branch kept: glsl_text), shader object by shader object (each is
         # preprocessed alone: one's macros are not another's), for the scans
@@ -463,6 +476,25 @@ class ProgramCalls:
         p.uniforms.pop(key, None)
         p.uniforms[key] = (func, values, transpose, m.group(5), count)
 
+    def h_patch_parameter(self, no, name, a, args):
+        """glPatchParameteri(GL_PATCH_VERTICES) and glPatchParameterfv's
+        default tessellation levels, which Mesa's copy gets at a draw under
+        tessellation; a value GL refuses changes nothing."""
+        d = dict(args)
+        pname = d.get("pname")
+        if base_name(name) == "glPatchParameteri":
+            v = checked(no, integer, d.get("value"), f"{name}: the value", *I32)
+            if pname == "GL_PATCH_VERTICES" and 0 < v <= MAX_PATCH_VERTICES:
+                self.s.patch_vertices = v
+            return
+        n = {"GL_PATCH_DEFAULT_OUTER_LEVEL": 4, "GL_PATCH_DEFAULT_INNER_LEVEL": 2}.get(pname)
+        values = d.get("values")
+        if n is None or not isinstance(values, list) or len(values) < n:
+            if n is not None:
+                fail_call(no, f"{printable(name)}: the capture does not hold its {n} levels")
+            return   # GL_INVALID_ENUM
+        self.s.patch_levels[pname] = tuple(checked(no, real, v, f"{name}: a level") for v in values[:n])
+
     def h_program_parameter(self, no, name, a, args):
         """glProgramParameteri: GL_PROGRAM_SEPARABLE, which the next link
         takes; the hint to keep the binary changes nothing drawn; another
@@ -579,7 +611,21 @@ class ProgramCalls:
             pipe.active = v   # (an unlinked one is GL_INVALID_OPERATION)
 
     def h_transform_feedback_varyings(self, no, name, a, args):
-        fail_call(no, f"{printable(name)}: the capture's own transform feedback is not emulated")
+        """The outputs a program's next link records by transform feedback
+        (the capture's own, updating particles, say): what they write into
+        buffers is GPU work (glstate.feedback), and the link may fail on
+        them, as Mesa decides (vertex_stage.full_link)."""
+        d = dict(args)
+        count = checked(no, integer, d.get("count"), f"{name}: the count", *I32)
+        names, mode = d.get("varyings"), d.get("bufferMode")
+        if count < 0 or mode not in ("GL_INTERLEAVED_ATTRIBS", "GL_SEPARATE_ATTRIBS"):
+            return   # GL_INVALID_VALUE, GL_INVALID_ENUM: the call changes nothing
+        if count and not (isinstance(names, list) and len(names) >= count and
+                          all(isinstance(v, str) for v in names[:count])):
+            fail_call(no, f"{printable(name)}: the capture does not hold its {count} output names")
+        if count > MAX_FEEDBACK_VARYINGS:
+            fail_call(no, f"{printable(name)}: {count} outputs, more than {MAX_FEEDBACK_VARYINGS} (docs/gl-capture.md)")
+        self.program(no, name, d.get("program")).feedback_next = (tuple(names[:count]), mode) if count else None
 
     def h_uniform_subroutines(self, no, name, a, args):
         """Subroutine choices of a fragment shader cannot move a vertex; of a
@@ -608,6 +654,8 @@ class ProgramCalls:
         "glGetProgramResourceIndex": h_get_program_resource,
         "glUniformSubroutinesuiv": h_uniform_subroutines,
         "glProgramParameteri": h_program_parameter,
+        "glPatchParameteri": h_patch_parameter,
+        "glPatchParameterfv": h_patch_parameter,
         "glCreateShaderProgramv": h_create_shader_program,
         "glGenProgramPipelines": h_gen_pipelines,
         "glCreateProgramPipelines": h_gen_pipelines,

@@ -91,6 +91,8 @@ class VertexArrayCalls:
             return   # GL_INVALID_ENUM
         if not 2 <= size <= 4:
             return   # GL_INVALID_VALUE
+        if kind.endswith("2_10_10_10_REV") and size != 4:
+            return   # GL_INVALID_OPERATION
         if stride < 0:
             # GL_INVALID_VALUE, which Mesa 22.3 reports and yet keeps the
             # stride: its draws then fetch before the array's start.
