@@ -22,12 +22,14 @@
 #include <cstring>
 #include <exception>
 #include <iostream>
+#include <new>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "rbcd/common/errors.h"
 #include "rbcd/gl/draw_stream.h"
+#include "rbcd/io/trace_reader.h"
 #include "rbcd/io/trace_writer.h"
 #include "rbcd/common/output_file.h"
 #include "rbcd/scene/tile_rasterizer.h"
@@ -92,6 +94,12 @@ int run(const Options& o) {
     rbcd::gl::DrawStreamReader in(std::cin, o.name);
     const auto& h = in.header();
     rbcd::scene::TileRasterizer raster(h.width, h.height, h.tile_w, h.tile_h, h.depth_bits);
+    // A tile of more fragments than rbcd-sim reads at its default (its
+    // input.max_tile_fragments) is refused as it is rasterized: a few
+    // bytes of capture drawing the screen over and over would otherwise
+    // take gigabytes and minutes, for a trace rbcd-sim refuses.
+    const std::uint64_t max_tile = rbcd::TraceLimits{}.max_tile_fragments;
+    raster.limit_tile_fragments(max_tile);
     raster.keep_depth_buffer(!o.depth_out.empty());
     // The replay runs on this machine: its JIT code fuses multiply-adds when the CPU can.
     if (!o.llvmpipe_depth_out.empty()) raster.keep_llvmpipe_depth(rbcd::scene::LlvmpipeDepth::host_has_fma());
@@ -154,7 +162,16 @@ int run(const Options& o) {
                 image.height = h.height;
                 image.pixels.assign(std::size_t(h.width) * h.height, rbcd::scene::SceneSource::ImagePixel{});
             }
-            while (raster.next_tile(tile, want_ids ? &image : nullptr)) {
+            for (;;) {
+                try {
+                    if (!raster.next_tile(tile, want_ids ? &image : nullptr)) break;
+                } catch (const rbcd::scene::TileTooFull& e) {
+                    throw rbcd::InputError(o.name + ": frame " + std::to_string(in.frame()) + " (its swap, call " +
+                                           std::to_string(in.call()) + "): tile " + std::to_string(e.col) + " " +
+                                           std::to_string(e.row) + " holds more than " + std::to_string(max_tile) +
+                                           " fragments, collisionable and other (rbcd-sim reads at most as many collisionable ones a "
+                                           "tile, input.max_tile_fragments; docs/gl-capture.md, limits)");
+                }
                 trace.tile(tile);
                 ++fig.tiles;
                 fig.other += tile.other;
@@ -212,11 +229,17 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
     rbcd::report_file_size_limit_as_write_error();
     std::ios::sync_with_stdio(false);
+    Options o;
     try {
-        return run(parse(argc, argv));
+        o = parse(argc, argv);
+        return run(o);
     } catch (const rbcd::InputError& e) {
         std::fprintf(stderr, "rbcd-gl-raster: %s\n", e.what());
         return 2;
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "rbcd-gl-raster: %s%sout of memory; no output written\n", o.name.c_str(),
+                     o.name.empty() ? "" : ": ");
+        return 1;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "rbcd-gl-raster: %s\n", e.what());
         return 1;

@@ -463,6 +463,8 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
             }
             add_other(tile, n);
             shade.add(s.shade, n);
+            if (tile.other + tile.frags.size() > max_tile_fragments_)
+                throw TileTooFull(frame_, col, row, max_tile_fragments_);
             continue;
         }
         std::uint64_t other_here = 0;
@@ -477,6 +479,10 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
                     const double zc = z < 0.0 ? 0.0 : (z > zmax ? zmax : z);
                     const auto depth = static_cast<std::uint32_t>(zc + 0.5);
                     if (s.collisionable) {
+                        // (Before the vector grows past the limit: a tile's
+                        // fragments stay within it in memory.)
+                        if (tile.frags.size() + tile.other >= max_tile_fragments_)
+                            throw TileTooFull(frame_, col, row, max_tile_fragments_);
                         Fragment f;
                         f.x = std::uint32_t(x);
                         f.y = std::uint32_t(y);
@@ -513,6 +519,8 @@ void TileRasterizer::raster_tile(unsigned col, unsigned row, Tile& tile, SceneSo
         }
         add_other(tile, other_here);
         shade.add(s.shade, other_here + (t.culled ? 0 : tile.frags.size() - frags_before));
+        if (tile.other + tile.frags.size() > max_tile_fragments_)
+            throw TileTooFull(frame_, col, row, max_tile_fragments_);
     }
     shade.set(tile);
 }

@@ -24,6 +24,8 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -93,6 +95,18 @@ struct DrawState {
     static DrawState full_screen(unsigned width, unsigned height);
 };
 
+// Thrown by next_tile when a tile holds more fragments than
+// limit_tile_fragments allows.
+struct TileTooFull : std::runtime_error {
+    TileTooFull(std::uint64_t frame, unsigned col, unsigned row, std::uint64_t limit)
+        : std::runtime_error("frame " + std::to_string(frame) + ", tile " + std::to_string(col) + " " +
+                             std::to_string(row) + ": more than " + std::to_string(limit) + " fragments"),
+          frame(frame), col(col), row(row), limit(limit) {}
+    std::uint64_t frame;
+    unsigned col, row;
+    std::uint64_t limit;
+};
+
 class TileRasterizer {
 public:
     // Screen and tile sizes up to kMaxScreenSide (scene/scene_file.h);
@@ -117,6 +131,12 @@ public:
                   const std::array<std::uint32_t, 3>* tris, std::size_t ntris);
     // A depth-buffer clear at this point of the submission order.
     void add_depth_clear(double value01, PixelRect scissor);
+    // A tile's fragments, collisionable and other together, past which
+    // next_tile throws TileTooFull (collisionable ones before they are
+    // stored, other ones, only counted, after each triangle): what bounds
+    // the memory and time of a small input drawing over and over the same
+    // pixels. Unbounded by default.
+    void limit_tile_fragments(std::uint64_t n) { max_tile_fragments_ = n; }
 
     // Rasterizes tiles in row-major order from the cursor and returns the next
     // one holding at least one fragment (collisionable, or counted in `other`);
@@ -185,6 +205,7 @@ private:
     std::vector<Tri> tris_;
     std::vector<std::vector<std::uint32_t>> bins_;   // per tile, triangle indices in submission order
     std::size_t cursor_ = 0;
+    std::uint64_t max_tile_fragments_ = UINT64_MAX;
     bool keep_depth_ = false;
     std::size_t depth_limit_ = SIZE_MAX;   // entries of tris_ from here on leave the depth buffer alone
     std::vector<std::uint32_t> depth_;

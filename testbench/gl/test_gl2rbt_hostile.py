@@ -78,6 +78,28 @@ def test_declared_buffers_cost_nothing_until_written(tmp_path):
     assert peak_mb(r) < 400, f"4 GiB declared without data: {peak_mb(r):.0f} MB peak"
 
 
+@pytest.mark.parametrize("tagged", [True, False], ids=["collisionable", "other"])
+def test_a_tile_s_fragments_are_bounded(tmp_path, tagged):
+    """70,000 triangles over a 16 x 16 screen in one draw, each of its
+    256 pixels: a tile of 17.9 M fragments, past the 2^24 rbcd-sim reads,
+    refused as the tile is rasterized, in one line naming the frame, with
+    memory in bounds (a 3 KB capture of 2^22 such indices had taken 11 GB
+    and 266 s, and written 21 GB of trace rbcd-sim refuses)."""
+    big = np.array([(-100, -100, -10), (200, -100, -10), (-100, 200, -10)], "<f4").tobytes()
+    c = Calls(16, 16)
+    if tagged:
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=1, length=-1, message="rbcd-object")
+    c.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=big)
+    c.add("glDrawElements", mode="GL_TRIANGLES", count=3 * 70000, type="GL_UNSIGNED_BYTE",
+          indices=bytes([0, 1, 2]) * 70000)
+    if tagged:
+        c.add("glPopDebugGroup")
+    r = gl2rbt(tmp_path, c.swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    refused(r, "c.xz: frame 0 (its swap, call", "tile 0 0 holds more than 16777216 fragments")
+    assert peak_mb(r) < 1000, f"{peak_mb(r):.0f} MB peak"
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
 def test_reduced_capture_bombs_and_garbage(tmp_path):
     c = Calls().add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
     c.add("glBufferData", target="GL_ARRAY_BUFFER", size=300 << 20, data=bytes(300 << 20), usage="GL_STATIC_DRAW")
