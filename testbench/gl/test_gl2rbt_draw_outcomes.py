@@ -8,6 +8,7 @@ had crashed with SIGSEGV on the first)."""
 import lzma
 import os
 import pickle
+import re
 import signal
 import subprocess
 import struct
@@ -641,6 +642,27 @@ def test_a_parameter_buffer_named_by_its_extension_draws(tmp_path):
     # the call (GL_INVALID_OPERATION), whatever count the parameter buffer
     # gives (round 16's R16-5: drawn, two commands).
     assert trace_of(tmp_path, counted((2, 2), 0, 3), "past").count(b"\nf ") == 0
+
+
+@pytest.mark.parametrize("word, drawn", [(0, 0), (1, 1), (2, 2), (7, 2)], ids=["0", "1", "2", "7"])
+def test_a_bound_parameter_buffer_counts_plain_indirect_draws_as_mesa_does(tmp_path, word, drawn):
+    """Mesa 22.3 draws a plain indirect multi-draw (and a single one) with a
+    buffer bound to GL_PARAMETER_BUFFER as a Count form whose count is that
+    buffer's first word: two commands, each the triangle, draw min(2, word)
+    times (round 17's R17-1: every command drawn, the check 0.00%)."""
+    def with_params(c):
+        c.add("glBindBuffer", target="GL_PARAMETER_BUFFER_ARB", buffer=10)
+        return c.add("glBufferData", target="GL_PARAMETER_BUFFER_ARB", size=4, data=struct.pack("<I", word),
+                     usage="GL_STATIC_DRAW")
+    def triangles(trace):   # (each counted in every tile it reaches)
+        return sum(int(v) for v in re.findall(rb" prims=(\d+)", trace))
+    once = trace_of(tmp_path, draw(shader_calls(VS)), "once")
+    c = indirect(with_params(shader_calls(VS)), "glMultiDrawArraysIndirect", [3, 1, 0, 0, 3, 1, 0, 0], indirect=0,
+                 drawcount=2, stride=0)
+    assert triangles(once) > 0 and triangles(trace_of(tmp_path, c, "multi")) == drawn * triangles(once)
+    single = trace_of(tmp_path, indirect(with_params(shader_calls(VS)), "glDrawArraysIndirect", [3, 1, 0, 0],
+                                         indirect=0), "single")
+    assert single == (once if word else trace_of(tmp_path, shader_calls(VS).swap(), "none"))
 
 
 @pytest.mark.parametrize("fn, commands, kw", [

@@ -465,12 +465,24 @@ class DrawCalls:
                 return   # GL_INVALID_OPERATION (a NULL command in a compatibility profile: the same in Mesa)
             fail_call(no, f"{name}: its commands are in client memory, which the capture does not hold")
         offset = checked(no, integer, offset, f"{name}: the indirect buffer offset", *U63)
+        pbuf = self.s.bound.get("GL_PARAMETER_BUFFER", 0)
         if counted:
-            pbuf = self.s.bound.get("GL_PARAMETER_BUFFER", 0)
             at = checked(no, integer, d.get("drawcount"), f"{name}: the parameter buffer offset", *I64)
             params = self.checked_buffer(no, name, pbuf, "its draw count") if pbuf else None
             if params is None or at < 0 or at % 4 or at + 4 > len(params):
                 return   # GL_INVALID_OPERATION or GL_INVALID_VALUE: nothing is drawn
+        elif pbuf and not self.es:
+            # Mesa 22.3 draws a plain indirect draw (multi or single) as a
+            # Count form whose count is the bound parameter buffer's first
+            # word (measured: at most that many commands, none for 0): what
+            # the capture's driver drew, though GL says the buffer is read
+            # by the Count forms alone (round 17's R17-1).
+            at, params = 0, self.checked_buffer(no, name, pbuf, "its draw count (Mesa 22.3 reads the bound "
+                                                               "GL_PARAMETER_BUFFER's first word for it)")
+            if params is None or len(params) < 4:
+                fail_call(no, f"{name}: parameter buffer {pbuf} is bound with {len(params or b'')} bytes, whose "
+                          "first word Mesa 22.3 reads as the draw count: not emulated")
+            counted = True
         data = self.checked_buffer(no, name, buf, "its commands")
         stride = stride or size
         if n and (data is None or offset + (n - 1) * stride + size > len(data)):
