@@ -22,12 +22,13 @@
 # --from-trace T makes the entry from T, a capture this script kept, with the
 # same arguments, without running the game again.
 #
-# Exit 2 with one line on a bad argument (an OUT_DIR that is empty, exists,
-# is a symlink or cannot be created, an unusable TMPDIR, a MAP whose path is
-# not UTF-8, which capture.toml cannot record: said before the game runs), on
-# a capture that holds fewer frames than asked for, on an empty --from-trace
-# capture, or on a capture the converter refuses; 1 when the game, Xvfb, apitrace or the
-# conversion otherwise fails. OUT_DIR is written only at the end, complete.
+# Exit 2 with one line on a bad argument (an option given twice, an OUT_DIR
+# that is empty, exists, is a symlink or cannot be created, an unusable
+# TMPDIR, a MAP whose path is not UTF-8, which capture.toml cannot record:
+# said before the game runs), on a capture that holds fewer frames than
+# asked for, on an empty --from-trace capture, or on a capture the converter
+# refuses; 1 when the game, Xvfb, apitrace or the conversion otherwise
+# fails. OUT_DIR is written only at the end, complete.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
@@ -39,13 +40,18 @@ usage() { echo "capture-game.sh: $(oneline "$1") (usage: capture-game.sh openare
 game=$1 map=$2 frames=$3 out=$4
 shift 4
 bots=4 karts=4 skip= keep=no from=
+# Every option at most once, as the converter (rbcd-gl2rbt) takes its own:
+# a second one had silently replaced the first (--bots 2 --bots 3 captured
+# with 3 bots). Refused here, before anything is checked, started or made.
+given=" "
+once() { [[ "$given" != *" $1 "* ]] || usage "$1 is given twice"; given+="$1 "; }
 while [ $# -gt 0 ]; do
   case "$1" in
-    --bots) [ $# -ge 2 ] || usage "--bots needs a number"; bots=$2; shift 2 ;;
-    --karts) [ $# -ge 2 ] || usage "--karts needs a number"; karts=$2; shift 2 ;;
-    --skip) [ $# -ge 2 ] || usage "--skip needs a number"; skip=$2; shift 2 ;;
-    --keep-trace) keep=yes; shift ;;
-    --from-trace) [ $# -ge 2 ] || usage "--from-trace needs a capture"; from=$2; shift 2 ;;
+    --bots) once "$1"; [ $# -ge 2 ] || usage "--bots needs a number"; bots=$2; shift 2 ;;
+    --karts) once "$1"; [ $# -ge 2 ] || usage "--karts needs a number"; karts=$2; shift 2 ;;
+    --skip) once "$1"; [ $# -ge 2 ] || usage "--skip needs a number"; skip=$2; shift 2 ;;
+    --keep-trace) once "$1"; keep=yes; shift ;;
+    --from-trace) once "$1"; [ $# -ge 2 ] || usage "--from-trace needs a capture"; from=$2; shift 2 ;;
     *) usage "unknown option '$1'" ;;
   esac
 done

@@ -16,8 +16,9 @@ the fragment traces and geometry the figures run on.
         or a symlink (check_expand_outputs).
 
 Exit 2 with one line on a malformed entry or argument (naming the file and
-key), 1 when a regenerated file does not match its checksum or the converter
-fails; the outputs of a failed entry are removed.
+key; an option given twice or a number not in ASCII digits, naming the
+option), 1 when a regenerated file does not match its checksum or the
+converter fails; the outputs of a failed entry are removed.
 """
 import argparse
 import concurrent.futures
@@ -35,6 +36,10 @@ import tomllib
 from rbcd.cli import (UsageError, check_outputs, escape, main_wrapper, open_trace, parse_toml,
                       read_input_text, say, remove_left_temporaries, temporary_folder, trace_errors,
                       unregister_temporary, write_output)
+# The converter's command-line rules, shared rather than written again: an
+# option given twice is refused (Once), and a number is ASCII digits
+# (ascii_int: int() also takes other scripts' digits, '1_0' and ' 1 ').
+from rbcd.gl2rbt.cli import Once, ascii_int
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter
@@ -418,9 +423,12 @@ def run(argv):
     c = sub.add_parser("check")
     c.add_argument("entries", nargs="*")
     x = sub.add_parser("expand")
-    x.add_argument("-o", "--out", required=True)
-    x.add_argument("-j", "--jobs", type=int, default=os.cpu_count() or 1)
-    x.add_argument("--frames", type=int)
+    # Each option at most once, each number in ASCII digits, as the
+    # converter takes its own (a second -o or --frames had replaced the
+    # first; --frames ١ had converted one frame).
+    x.add_argument("-o", "--out", action=Once, required=True)
+    x.add_argument("-j", "--jobs", action=Once, type=ascii_int, default=os.cpu_count() or 1)
+    x.add_argument("--frames", action=Once, type=ascii_int)
     x.add_argument("entries", nargs="*")
 
     def error(message):

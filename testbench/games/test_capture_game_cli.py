@@ -19,8 +19,12 @@ from conftest import ROOT, program
 CAPTURE_GAME = os.path.join(ROOT, "scripts", "capture-game.sh")
 
 
-def capture_game(tmp_path, *args, tmpdir=None):
-    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmpdir or tmp_path))
+def capture_game(tmp_path, *args, tmpdir=None, raster=True):
+    """The script's run; raster=False for a refusal that comes before it
+    looks for rbcd-gl-raster (the test then needs no build)."""
+    env = dict(os.environ, TMPDIR=str(tmpdir or tmp_path))
+    if raster:
+        env["RBCD_GL_RASTER"] = program("rbcd-gl-raster")
     return subprocess.run(["bash", CAPTURE_GAME] + [str(a) for a in args], capture_output=True, text=True,
                           env=env, stdin=subprocess.DEVNULL, timeout=600)
 
@@ -61,6 +65,29 @@ def test_an_unusable_output_folder_is_refused_before_the_work(tmp_path):
     refused(capture_game(tmp_path, *base, tmp_path / "out", "--from-trace", cap, tmpdir=tmp_path / "missing"),
             "cannot create a work directory", "TMPDIR")
     assert sorted(os.listdir(tmp_path)) == ["dangling", "not-looked-at.trace", "to-a-folder"], "something was left"
+
+
+@pytest.mark.parametrize("game, map_, options, option", [
+    ("openarena", "oa_dm1", ["--bots", "2", "--bots", "3"], "--bots"),
+    ("openarena", "oa_dm1", ["--bots", "2", "--skip", "0", "--bots", "2"], "--bots"),
+    ("supertuxkart", "lighthouse", ["--karts", "2", "--karts", "3"], "--karts"),
+    ("openarena", "oa_dm1", ["--skip", "0", "--skip", "1"], "--skip"),
+    ("openarena", "oa_dm1", ["--keep-trace", "--keep-trace"], "--keep-trace"),
+    ("openarena", "oa_dm1", ["--from-trace", "other.trace"], "--from-trace"),
+], ids=["bots", "bots_same_value", "karts", "skip", "keep_trace", "from_trace"])
+def test_an_option_given_twice_is_refused_before_the_work(tmp_path, monkeypatch, game, map_, options, option):
+    """Every option at most once, as the converter takes its own (R17-8:
+    --bots 2 --bots 3 captured with 3 bots, exit 0): one line naming it,
+    exit 2, before anything is looked for, started or made. The capture
+    given (--from-trace) is no capture: had the option passed, no game ran
+    and the converter refused it, with another line."""
+    for name in ("not-a-capture.trace", "other.trace"):
+        (tmp_path / name).write_bytes(b"not a capture\n")
+    monkeypatch.chdir(tmp_path)
+    r = capture_game(tmp_path, game, map_, "2", tmp_path / "out", "--from-trace", "not-a-capture.trace", *options,
+                     raster=False)
+    refused(r, f"capture-game.sh: {option} is given twice")
+    assert sorted(os.listdir(tmp_path)) == ["not-a-capture.trace", "other.trace"], "something was made"
 
 
 def boxes_capture():

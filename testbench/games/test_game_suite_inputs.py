@@ -50,6 +50,35 @@ def snapshot(d):
     return {p: open(os.path.join(d, p), "rb").read() for p in sorted(os.listdir(d))}
 
 
+@pytest.mark.parametrize("options, words", [
+    (["--frames", "\u0661"], "argument --frames: invalid integer"),       # ARABIC-INDIC DIGIT ONE
+    (["--frames", "\uff11"], "argument --frames: invalid integer"),       # FULLWIDTH DIGIT ONE
+    (["--frames", "1_0"], "argument --frames: invalid integer"),
+    (["--frames", " 1 "], "argument --frames: invalid integer"),
+    (["--frames", "1", "-j", "\u0662"], "argument -j/--jobs: invalid integer"),
+    (["--frames", "1", "--jobs", "1_0"], "argument -j/--jobs: invalid integer"),
+    (["--frames", "1", "--jobs", " 1 "], "argument -j/--jobs: invalid integer"),
+    (["--frames", "1", "--frames", "1"], "--frames is given twice"),
+    (["--frames", "1", "-j", "1", "--jobs", "2"], "--jobs is given twice"),
+    (["--frames", "1", "-j1", "-j1"], "-j is given twice"),
+    (["--frames", "1", "-o", "OTHER"], "-o is given twice"),
+    (["--frames", "1", "--out", "OTHER"], "--out is given twice"),
+], ids=["frames_arabic_indic", "frames_fullwidth", "frames_underscore", "frames_spaces", "jobs_arabic_indic",
+        "jobs_underscore", "jobs_spaces", "frames_twice", "jobs_twice", "jobs_attached_twice", "out_twice",
+        "out_long_twice"])
+def test_expand_takes_each_option_once_and_ascii_numbers(tmp_path, options, words):
+    """expand's command line as the converter's (R17-8): a number in ASCII
+    digits (int() took '\u0661', '1_0' and ' 1 ': --frames \u0661 converted
+    a frame), each option at most once (a second -o or --frames replaced
+    the first, exit 0). One line naming the option, exit 2, before anything
+    is made or converted."""
+    out = tmp_path / "out"
+    options = [str(tmp_path / "other") if o == "OTHER" else o for o in options]
+    r = game_suite(tmp_path, "expand", "-o", out, *options, SOURCE)
+    refused(r, f"game-suite: {words}")
+    assert os.listdir(tmp_path) == [], "something was made"
+
+
 def test_a_capture_description_nested_too_deep(tmp_path, entry):
     toml = entry / "capture.toml"
     toml.write_text(toml.read_text() + "deep = " + "[" * 20000 + "]" * 20000 + "\n")
