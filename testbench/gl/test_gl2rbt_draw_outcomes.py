@@ -18,7 +18,7 @@ import pytest
 
 from conftest import program
 from gl_captures import (END_FRAME, GL2RBT, TRIANGLE, Calls, alive, gl2rbt_timed as gl2rbt, left_behind, peak_mb,
-                         refused)
+                         read_trace, refused)
 from test_gl2rbt_hostile import ES_FRAGMENT, VS, shader_calls
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
@@ -900,6 +900,44 @@ def test_a_pbuffer_warm_up_and_a_window_made_anew(tmp_path):
     # the main window, its third frame the next kept.
     moved = trace(tmp_path, capture(False, [2, 4, 4, 4]), "moved")
     assert moved.count(b"\nframe ") == 2 and moved.count(b"\nf ") == 2 * want.count(b"\nf ") // 3
+
+
+@pytest.mark.parametrize("splash", [0, 80], ids=["no_splash", "80_splash_swaps"])
+def test_a_main_window_of_another_size_is_refused(tmp_path, splash):
+    """A warm-up window (drawable 3, 32 x 24 as apitrace records it) drawn
+    and swapped twice is the main window, and the screen its size; the
+    game's window (drawable 2, 64 x 48), drawn and swapped twice, takes its
+    place: refused at that swap, naming the frame to convert from, which
+    then converts into the 64 x 48 screen (round 17's R17-3: its draws cut
+    to 32 x 24 without a word). 80 clears and swaps of the game's window
+    before any draw (a splash) do not use up the main window's scan (the
+    scan gave up, and the warm-up window's frames went into the game
+    window's screen)."""
+    def frame(c, drawable, size, draw=True):
+        c.add("glXMakeContextCurrent", dpy=1, draw=drawable, read=drawable, ctx=1, ret=True)
+        c.add("glViewport", x=0, y=0, width=size[0], height=size[1], flags=1)   # apitrace's record
+        c.add("glViewport", x=0, y=0, width=size[0], height=size[1])
+        c.add("glClear", mask=["GL_DEPTH_BUFFER_BIT"])
+        if draw:
+            c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+            c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+        return c.add("glXSwapBuffers", dpy=1, drawable=drawable, flags=END_FRAME)
+    c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    for _ in range(splash):
+        frame(c, 2, (64, 48), draw=False)
+    for drawable, size in [(3, (32, 24))] * 2 + [(2, (64, 48))] * 3:
+        frame(c, drawable, size)
+    cap = c.write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--summary", tmp_path / "s.jsonl")
+    refused(r, "window 2 (64 x 48) becomes the main window at this swap, and the trace's screen is 32 x 24",
+            "--frames 2:")
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--frames", "2:")
+    assert r.returncode == 0, r.stderr
+    frames, _ = read_trace(str(tmp_path / "c.rbt"))
+    assert b"screen 64 48" in (tmp_path / "c.rbt").read_bytes() and len(frames) == 1 and len(frames[0]) > 300
 
 
 @pytest.mark.parametrize("first", ["splash", "own", "warm"], ids=["splash", "own", "warm"])

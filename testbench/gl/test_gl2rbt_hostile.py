@@ -33,7 +33,18 @@ def test_a_good_capture_converts(tmp_path):
     (lambda c: c.add("glScalef", x=1, y=2), "malformed arguments"),
     (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 30), "count: 1073741824 is outside"),
     (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 20), "reach past"),
-], ids=["nan", "list", "group_id", "inf_angle", "missing_argument", "huge_count", "past_the_array"])
+    # Enumerants no table spells (round 17's R17-7: taken as unknown, the
+    # draw dropped without a word), a swap's drawable that is no handle.
+    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES\nGL_FAKE", first=0, count=3), "\\x0aGL_FAKE is not an enumerant"),
+    (lambda c: c.add("glDrawArrays", mode="\x1b[31mGL_TRIANGLES", first=0, count=3), "is not an enumerant"),
+    (lambda c: c.add("glDrawArrays", mode="GL_" + "A" * 5000, first=0, count=3), "is not an enumerant"),
+    (lambda c: c.add("glDrawElements", mode="GL_TRIANGLES", count=3, type="GL_UNSIGNED_SHORT\x00",
+                     indices=bytes(6)), "the index type"),
+    (lambda c: c.add("glXSwapBuffers", dpy=1, drawable=[2], flags=32), "drawable [2] is not a handle"),
+    (lambda c: c.add("glXSwapBuffers", dpy=1, drawable=float("nan"), flags=32), "drawable nan is not a handle"),
+    (lambda c: c.add("glXSwapBuffers", dpy=1, drawable=1 << 80, flags=32), "is not a handle"),
+], ids=["nan", "list", "group_id", "inf_angle", "missing_argument", "huge_count", "past_the_array", "enum_newline",
+        "enum_escape", "enum_long", "index_type_nul", "drawable_list", "drawable_nan", "drawable_huge"])
 def test_bad_calls_are_named(tmp_path, build, words):
     c = Calls().triangle(obj=1)
     build(c)

@@ -59,11 +59,16 @@ BUFFER_TARGET_ARGS = {"target", "readTarget", "writeTarget"}
 TARGET_SUFFIXES = ("_BUFFER_ARB", "_BUFFER_EXT", "_BUFFER_OES")
 
 
-def swapped_drawable(args):
-    """The window or surface a buffer swap names (glXSwapBuffers' drawable,
-    eglSwapBuffers' surface, wglSwapBuffers' device context)."""
+def swapped_drawable(args, no):
+    """The window or surface a buffer swap (call `no`) names
+    (glXSwapBuffers' drawable, eglSwapBuffers' surface, wglSwapBuffers'
+    device context): a handle, as apitrace records one, or None (a frame
+    terminator names none); anything else is the capture's error."""
     d = dict(args)
-    return d.get("drawable", d.get("surface", d.get("hdc")))
+    v = d.get("drawable", d.get("surface", d.get("hdc")))
+    if v is not None and (not isinstance(v, int) or isinstance(v, bool) or not 0 <= v < 1 << 64):
+        fail_call(no, f"the buffer swap's drawable {printable(v, 40)} is not a handle")
+    return v
 
 
 class Converter(*STATE_GROUPS, GeometryOutput):
@@ -274,7 +279,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 return
             if base.startswith(("glCallList", "glArrayElement", "glEvalCoord", "glEvalPoint", "glVertexAttrib")):
                 fail_call(no, f"{printable(name)} between glBegin and glEnd is not emulated")
-            if flags & CALL_FLAG_END_FRAME and self.swaps_main_drawable(args):
+            if flags & CALL_FLAG_END_FRAME and self.swaps_main_drawable(no, args):
                 # A buffer swap there ends the frame; Mesa keeps the
                 # primitive's vertices and draws them at glEnd, into the next.
                 self.end_frame(no)
@@ -301,25 +306,38 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.gpu_wrote()
         else:
             fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
-        if flags & CALL_FLAG_END_FRAME and self.swaps_main_drawable(args):
+        if flags & CALL_FLAG_END_FRAME and self.swaps_main_drawable(no, args):
             self.end_frame(no)
 
-    def swaps_main_drawable(self, args):
+    def swaps_main_drawable(self, no, args):
         """Whether a buffer swap is the main window's (another window's or
         surface's, one MakeCurrent named, ends no frame: on_main_drawable).
         A window drawn into and swapped twice while the main one had
         neither takes its place (the game moved to a window made anew:
         a resolution change)."""
-        swapped = swapped_drawable(args)
+        swapped = swapped_drawable(args, no)
         if self.main_drawable is None or swapped == self.main_drawable or swapped not in self.drawables:
             self.main_idle = {}
             return True
         if swapped in self.drawn_since_swap and swapped not in self.pbuffers:
             self.main_idle[swapped] = self.main_idle.get(swapped, 0) + 1
             if self.main_idle[swapped] >= 2:
+                self.check_screen(no, swapped, "becomes the main window at this swap")
                 self.main_drawable, self.main_idle = swapped, {}
         self.drawn_since_swap.discard(swapped)
         return False
+
+    def check_screen(self, no, drawable, how):
+        """A trace has one screen: a main window of another size than the
+        one chosen (an earlier window's, or --screen's) is refused, naming
+        the call, rather than its draws cut to that screen (round 17's
+        R17-3); the frames from the next one on convert alone."""
+        size = self.drawable_sizes.get(drawable)
+        if self.screen is None or size is None or tuple(size) == tuple(self.screen) or self.args.screen:
+            return
+        fail_call(no, f"window {printable(drawable)} ({size[0]} x {size[1]}) {how}, and the trace's screen is "
+                  f"{self.screen[0]} x {self.screen[1]}, an earlier window's: a trace has one screen (convert the "
+                  f"frames from {self.frame} on alone, --frames {self.frame}:, or give --screen)")
 
     def h_pbuffer_created(self, no, name, a, args):
         """glXCreatePbuffer, eglCreatePbufferSurface: an off-screen surface,

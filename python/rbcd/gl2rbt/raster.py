@@ -106,7 +106,8 @@ def check_depth_prefix(prefix, paths):
                                "an input or another output")
 
 
-# The buffer swaps first_window reads at most for the main window.
+# The buffer swaps after the first draw first_window reads at most for the
+# main window.
 FIRST_WINDOW_SWAPS = 64
 # The calls that draw (a glBegin's primitive is drawn at its glEnd).
 DRAWING = frozenset(DrawCalls.HANDLERS) - {"glPrimitiveRestartNV", "glRenderMode"}
@@ -135,7 +136,8 @@ def first_window(args):
     drawn into swaps twice first (a warm-up window never shown); for a
     capture that draws only into framebuffer objects (and blits to the
     window), the first window swapped after a draw. None when a draw comes
-    before any MakeCurrent, after FIRST_WINDOW_SWAPS swaps with none found,
+    before any MakeCurrent, after FIRST_WINDOW_SWAPS swaps since the first
+    draw with none found,
     or where the calls up to there are refused (the conversion then says
     so, as without this scan). The GL state alone, up to there, its draws
     not run and no frame opened. A game's frames are that window's;
@@ -161,7 +163,7 @@ def first_window(args):
                 probe.last_call = call[0]
                 probe.handle(call)
             if isinstance(flags, int) and flags & CALL_FLAG_END_FRAME:
-                swapped = swapped_drawable(call[2])
+                swapped = swapped_drawable(call[2], call[0])
                 if drawn and swapped == drawn[0]:
                     return swapped
                 if swapped in drawn:
@@ -170,7 +172,7 @@ def first_window(args):
                         return swapped
                 elif any_draw and not drawn and swapped not in probe.pbuffers:
                     return swapped   # drawn into framebuffer objects alone, then shown
-                seen += 1
+                seen += any_draw   # (a splash's clears and swaps, however many, before any draw)
                 if seen >= FIRST_WINDOW_SWAPS:
                     return None
     except ConvertError:

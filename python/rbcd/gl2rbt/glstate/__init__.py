@@ -17,6 +17,8 @@ unit, and the handlers of the calls that change it, one module a state group:
 Each module holds a mixin of rbcd.gl2rbt.converter.Converter whose HANDLERS
 map GL function names (without ARB/EXT) to its handlers, called as
 h(self, call_no, name, argument values, (name, value) arguments)."""
+import re
+
 import numpy as np
 
 from ...cli import I32, integer, real
@@ -230,11 +232,17 @@ def bitfield(mask, no, what, bits):
     return names, unknown
 
 
+# An enumerant's name as apitrace's tables spell them.
+ENUM_NAME = re.compile(r"(GL|GLX|EGL|WGL)_[A-Z0-9_]{1,120}")
+
+
 def enum_arg(v, no, what):
     """An enumerant as apitrace records it: its name, or a number for a
     value it has no name for (which GL answers with GL_INVALID_ENUM); any
-    other value is the capture's error."""
-    if isinstance(v, str) or (isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 1 << 32):
+    other value (a string no table spells, a line end or an escape in
+    it: a capture altered) is the capture's error."""
+    if (isinstance(v, str) and ENUM_NAME.fullmatch(v)) or \
+            (isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 1 << 32):
         return v
     fail_call(no, f"{what}: {printable(v, 40)} is not an enumerant (a name, or a 32-bit value)")
 

@@ -367,6 +367,9 @@ class DrawCalls:
         for k in ("mode", "count"):
             if k not in d:
                 fail_call(no, f"{name}: no {k}")
+        enum_arg(d["mode"], no, f"{name}: the mode")
+        if "type" in d:
+            enum_arg(d["type"], no, f"{name}: the index type")
         for k in ("first", "count", "instancecount", "primcount", "start", "end", "basevertex"):
             if k in d:
                 v = checked(no, integer, d[k], f"{name}: {k}", -MAX_DRAW_VERTICES, MAX_DRAW_VERTICES)
@@ -688,6 +691,7 @@ class DrawCalls:
             self.gpu_wrote()
         else:
             if self.main_drawable is None and self.current_drawable not in self.pbuffers:
+                self.check_screen(self.last_call, self.current_drawable, "is the first drawn into")
                 self.main_drawable = self.current_drawable   # the first draw into a window: the main one
             if self.current_drawable == self.main_drawable:
                 self.main_idle = {}
