@@ -271,31 +271,75 @@ def read_input_text(path, what, max_bytes, limit_key=""):
 # refused before tomllib sees the text. (Nesting too deep is tomllib's
 # RecursionError, which each reader turns into its own one line.)
 TOML_KEY_PARTS = 64
-_TOML_PART = r"""[A-Za-z0-9_-]+|"(?:[^"\\\n]|\\.)*"?|'[^'\n]*'?"""
+# The scan keeps its memory small: Python's re stacks a frame (about 150
+# bytes) for each repetition of a group while it matches, so a string is
+# matched by repeats of single characters only (a 4 MiB string costs no more
+# than a short one) and a run of dotted parts by at most TOML_KEY_PARTS
+# repetitions at a time (then _TOML_MORE's, 4096 at a time). For that, every
+# pair of backslashes is first replaced by two NULs (the same length, so
+# positions and lines stay): a run of backslashes starts where a string's
+# escape may start (it follows a character that is no backslash), so the
+# pairs are the escapes "\\" a string would read, and NUL is, like
+# them, nothing but a string's character; what is left of a backslash is
+# alone and escapes the one character after it. A basic string then ends at
+# the first quote (or line end, or a lone backslash before one, or the
+# text's end) that no backslash precedes.
+_TOML_BASIC = r'"[^"\\\n]*[^\n]*?(?=(?<!\\)(?:"|\\?(?:\n|\Z)))"?'
+_TOML_PART = r"[A-Za-z0-9_-]+|" + _TOML_BASIC + r"|'[^'\n]*'?"
+_TOML_DOT_PART = r"[ \t]*\.[ \t]*(?:%s)" % _TOML_PART
 # One pass over the text, linear: multi-line strings (to their end, or the
 # text's when unterminated) and comments are skipped; every run of key parts
 # joined by dots (a single-line string is one part) is a match of its own,
 # its parts counted only when it holds more dots than the limit allows.
 # Outside strings and comments a TOML document's only such runs are keys,
 # floats and times' fractional seconds (2 parts).
-_TOML_KEYS = re.compile(r'"""(?:\\[\s\S]|[^\\])*?(?:"""|\Z)|' + r"'''[\s\S]*?(?:'''|\Z)|#[^\n]*|"
-                        + r"(?P<key>(?:%s)(?:[ \t]*\.[ \t]*(?:%s))*)" % (_TOML_PART, _TOML_PART))
+_TOML_SCAN_REST = (r"'''[\s\S]*?(?:'''|\Z)|#[^\n]*|"
+                   + r"(?P<key>(?:%s)(?:%s){0,%d})" % (_TOML_PART, _TOML_DOT_PART, TOML_KEY_PARTS))
+_TOML_SCAN = re.compile(r'"""[\s\S]*?(?<!\\)(?:"""|\Z)|' + _TOML_SCAN_REST)
+# A multi-line basic string finds no end only in a text that ends with a
+# lone backslash (an escape of nothing), and only when no string end follows
+# it; every one opened after it then fails alike, each after reading to the
+# text's end again (a time that grows with the square of the text), so the
+# rest of the text is scanned without trying them (its quotes are parts of
+# keys, as they are when the string fails).
+_TOML_SCAN_OPEN = re.compile(_TOML_SCAN_REST)
+_TOML_MORE = re.compile(r"(?:%s){1,4096}" % _TOML_DOT_PART)
 _TOML_PARTS = re.compile(_TOML_PART)
+
+
+def _toml_keys(text):
+    """(start, end, parts) of every run of dotted key parts in a TOML text,
+    in order; parts is counted only for a run of at least TOML_KEY_PARTS
+    dots, else None."""
+    scan = text.replace("\\\\", "\0\0")
+    scanner = _TOML_SCAN
+    pos = 0
+    while m := scanner.search(scan, pos):
+        pos = m.end()
+        if m.start("key") < 0:
+            continue
+        start, parts = m.start(), None
+        if scan.startswith('"""', start):    # a multi-line basic string with no end
+            scanner = _TOML_SCAN_OPEN
+        if scan.count(".", start, pos) >= TOML_KEY_PARTS:
+            # Past TOML_KEY_PARTS + 1 parts the match may have stopped at
+            # its bound: the run goes on while a dotted part follows.
+            while more := _TOML_MORE.match(scan, pos):
+                pos = more.end()
+            parts = sum(1 for _ in _TOML_PARTS.finditer(scan, start, pos))
+        yield start, pos, parts
 
 
 def check_toml_keys(path, text):
     """UsageError "PATH:LINE: a key of N dotted parts, more than
     TOML_KEY_PARTS" for the first such key of a TOML text, before tomllib
-    parses it (parse_toml). Linear in the text; a text that is not TOML
-    may be refused here rather than by tomllib, never a TOML document whose
-    keys are all within the limit."""
-    for m in _TOML_KEYS.finditer(text):
-        key = m.group("key")
-        if key is not None and key.count(".") >= TOML_KEY_PARTS:
-            parts = len(_TOML_PARTS.findall(key))
-            if parts > TOML_KEY_PARTS:
-                line = text.count("\n", 0, m.start()) + 1
-                raise UsageError(f"{path}:{line}: a key of {parts} dotted parts, more than {TOML_KEY_PARTS}")
+    parses it (parse_toml). Linear in the text, in time and memory; a text
+    that is not TOML may be refused here rather than by tomllib, never a TOML
+    document whose keys are all within the limit."""
+    for start, _, parts in _toml_keys(text):
+        if parts is not None and parts > TOML_KEY_PARTS:
+            line = text.count("\n", 0, start) + 1
+            raise UsageError(f"{path}:{line}: a key of {parts} dotted parts, more than {TOML_KEY_PARTS}")
     return text
 
 

@@ -362,6 +362,38 @@ def test_a_selection_file_that_is_not_utf8_says_where(tmp_path):
             "r.toml: not UTF-8 text (byte 26)")
 
 
+@pytest.mark.parametrize("ups", [60, 550], ids=["whole", "middle_cut"])
+def test_a_long_refusal_keeps_its_end(tmp_path, ups):
+    """A refusal names what it refused at its end: one longer than 400
+    characters had lost it (R17-10: "... cannot hold) is not ..."). Up to
+    2000 characters it is written whole; past them (a selection file named
+    through 3,900 characters of path) its middle is cut, its end kept."""
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "r.toml").write_text("x = 1\n")
+    rules = str(tmp_path / "sub") + "/../sub" * ups + "/r.toml"
+    line = refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--select", rules))
+    assert line.endswith(f"{rules[-900:]}: unknown table or key 'x'")
+    if ups == 60:
+        assert line == f"rbcd-gl2rbt: {cap}: {rules}: unknown table or key 'x'"
+    else:
+        assert " ... " in line and len(line) < 2100
+    assert left_behind(tmp_path, ["c.xz", "sub"]) == []
+
+
+def test_a_long_message_is_cut_in_its_middle_and_escaped():
+    """Whole up to 2000 characters, escapes included; past them, cut in its
+    middle (before it is escaped, so that a message of 4 MB costs no more),
+    its end kept."""
+    from rbcd.gl2rbt.cli import message
+    from rbcd.gl2rbt.errors import ConvertError
+    said = message(ConvertError("call 84: glDrawArrays: " + "a texture whose images \x1b " * 20 + "GL_RGB16"))
+    assert said.startswith("call 84: glDrawArrays: a texture") and said.endswith("\\x1b GL_RGB16")
+    assert "\x1b" not in said and " ... " not in said
+    said = message(ConvertError("call 84: " + "\x1b " * 10 ** 6 + "GL_RGB16"))
+    assert said.startswith("call 84: \\x1b") and said.endswith("\\x1b GL_RGB16") and len(said) <= 2005
+
+
 def test_the_rasterizer_the_run_starts_is_never_an_output(tmp_path):
     """RBCD_GL_RASTER naming a copy of rbcd-gl-raster where -o points: the
     copy had been replaced by the trace, with exit 0."""
@@ -406,3 +438,97 @@ def test_a_temporary_is_the_run_s_from_the_moment_it_exists(tmp_path):
         cli.temporary_file(str(tmp_path / "absent"), ".x.")
     cli.remove_temporaries()
     assert os.listdir(tmp_path) == []
+
+
+# ---- a signal while numpy loads
+
+def test_a_signal_while_numpy_loads_is_taken_once_it_has_loaded(monkeypatch, capsys):
+    """numpy's C modules import its core from C (numpy's import_array),
+    which prints a KeyboardInterrupt raised there as a traceback before it
+    turns it into an ImportError (R17-6: a traceback, then "interrupted").
+    A signal while numpy loads now only marks the run interrupted; it is
+    taken when numpy has loaded. Here an import of numpy that does what
+    those modules do, the signal sent from inside it."""
+    import builtins
+    import traceback
+
+    from rbcd.gl2rbt import cli
+    real_import = builtins.__import__
+
+    def numpy_like(name, *args, **kw):
+        if name == "numpy":
+            try:
+                os.kill(os.getpid(), signal.SIGTERM)
+                sum(range(1000))   # Python code: the handler runs here
+            except BaseException:   # as import_array: PyErr_Print, then ImportError
+                traceback.print_exc()
+                raise ImportError("numpy.core.multiarray failed to import")
+        return real_import(name, *args, **kw)
+    before = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    monkeypatch.setattr(builtins, "__import__", numpy_like)
+    signal.signal(signal.SIGTERM, cli.on_signal)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            cli.require_numpy()
+    finally:
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+        cli.INTERRUPTED.clear()
+    assert capsys.readouterr().err == ""
+
+
+def test_a_signal_at_any_moment_of_numpy_s_loading_is_one_line(tmp_path):
+    """R17-6 as the probe saw it: rbcd-gl2rbt signalled with SIGTERM at
+    many moments of its first second, among them the loading of numpy's
+    linear algebra and FFT modules (the signal sent as soon as their
+    library is mapped: it is taken at the first Python they run, in
+    import_array, where 8 runs in 10 printed a traceback), says one line,
+    "interrupted", exit 130, and leaves nothing; or, signalled too late, has
+    converted (before the converter's handlers, the start-up's line names
+    no capture). The child starts with the signal blocked (the launcher
+    takes it from its first statement on), so that none lands in Python's
+    own start-up, before any line of the converter."""
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+
+    def start(i):
+        out = tmp_path / f"c{i}.rbt"
+        p = subprocess.Popen(["/usr/bin/python3", GL2RBT, cap, "-o", out, "-q"], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, text=True, env=env,
+                             preexec_fn=lambda: (signal.signal(signal.SIGTERM, signal.SIG_DFL),
+                                                 signal.pthread_sigmask(signal.SIG_BLOCK, [signal.SIGTERM])))
+        p.out = out
+        return p
+
+    def mapped(pid, name):
+        try:
+            with open(f"/proc/{pid}/maps") as f:
+                return name in f.read()
+        except OSError:   # (it has ended)
+            return True
+
+    def ended(p):
+        err = p.communicate(timeout=120)[1]
+        if p.returncode == 0 and err == "":
+            p.out.unlink()
+            return "converted"
+        assert p.returncode == 130 and err.splitlines() in ([f"rbcd-gl2rbt: {cap}: interrupted"],
+                                                            ["rbcd-gl2rbt: interrupted"]), (p.returncode, err)
+        return "interrupted"
+    said = []
+    for i, module in enumerate(["_umath_linalg"] * 5 + ["_pocketfft"] * 2):
+        p = start(i)
+        t = time.monotonic()
+        while p.poll() is None and not mapped(p.pid, module) and time.monotonic() - t < 60:
+            time.sleep(0.0005)
+        p.send_signal(signal.SIGTERM)
+        said.append(ended(p))
+    # Then at moments 0 to 0.9 s from the start, the runs side by side.
+    runs = [start(i) for i in range(10)]
+    t = time.monotonic()
+    for i, p in enumerate(runs):
+        time.sleep(max(0.0, t + 0.1 * i - time.monotonic()))
+        p.send_signal(signal.SIGTERM)
+    said += [ended(p) for p in runs]
+    assert said.count("interrupted") >= 7, said
+    assert left_behind(tmp_path, ["c.xz"]) == []

@@ -1,5 +1,10 @@
 """Selection files and the entity tracker of rbcd.gl2rbt (docs/gl-capture.md,
 "Identified off line"), without Xvfb or apitrace."""
+import os
+import re
+import subprocess
+import sys
+
 import pytest
 
 np = pytest.importorskip("numpy", reason="python3-numpy is missing (scripts/setup.sh --gl installs it)")
@@ -150,6 +155,91 @@ def test_dots_in_strings_comments_and_keys_within_the_limit_are_not_counted(tmp_
     from rbcd.cli import check_toml_keys
     text = f'"{k}".{".".join(["b"] * 63)} = 1\n'
     assert check_toml_keys("f", text) == text
+
+
+# The key guard as it was first written: one regular expression whose strings
+# and dotted runs are repetitions of a group (R17-9: 150 bytes of memory a
+# character). It finds the keys of a TOML text as the guard must.
+_PART = r"""[A-Za-z0-9_-]+|"(?:[^"\\\n]|\\.)*"?|'[^'\n]*'?"""
+_KEYS = (r'"""(?:\\[\s\S]|[^\\])*?(?:"""|\Z)|' + r"'''[\s\S]*?(?:'''|\Z)|#[^\n]*|"
+         + r"(?P<key>(?:%s)(?:[ \t]*\.[ \t]*(?:%s))*)" % (_PART, _PART))
+
+
+def reference_keys(text):
+    keys = []
+    for m in re.finditer(_KEYS, text):
+        key = m.group("key")
+        if key is not None:
+            parts = len(re.findall(_PART, key)) if key.count(".") >= 64 else None
+            keys.append((m.start(), m.end(), parts))
+    return keys
+
+
+Q3, A3 = '"' * 3, "'" * 3
+TRICKY = [
+    "", "a", "a.b.c = 1\n", "a . b\t.\tc = 1", "a. = 1", "a .\n b", '"a.b".c = 1', "'a.b'.c = 1",
+    '"a\\".b".c', '"a\\\\".b', '"a\\\\\\".b".c', '"a\\\\\\\\"."b"', '"a\\\nb".c', '"a\\', '"a\\\\', '"a', "'a",
+    '"a\n.b', 'x = "\\"" # "\na.b', "# a.b\nc.d", "#\\\na.b", '\\"a.b"', '\\\\"a.b".c', "\\'a.b'.c",
+    "'a\\'.b", f"{Q3}a.b{Q3}.c", f"{Q3}a\\{Q3}b{Q3}.c", f"{Q3}a\\\\{Q3}.b", f'{Q3}a\\\n{Q3}x.y',
+    f"{Q3}a{Q3}{Q3}.b", f'{Q3}a"""""c.d', f"{Q3}a.b", f"{Q3}a.b\\", f"{Q3}a.b\\\\", f"x{Q3}\n\\{Q3}\nc.d\\",
+    f"{Q3}\n\\{Q3}\n\\{Q3}\n\\", f'{Q3}"a.b"\\', f"{A3}a.b{A3}.c", f"{A3}a\\{A3}.c", f"{A3}a.b",
+    '"\\"\\"\\"".b', '"a\x00\\\x00".b', "\u00e9.a.\u00e9", "a" + ".a" * 63, "a" + ".a" * 64,
+    "a" + " . a" * 70 + ".", '"x.y".' * 70 + "z", f"{Q3}a\\" + "\n.b" * 70, "a" + ".a" * 5000 + ' "b"',
+]
+
+
+@pytest.mark.parametrize("text", TRICKY)
+def test_the_key_guard_finds_the_keys_its_first_regular_expression_found(text):
+    """The guard reads strings and dotted runs with little memory (R17-9)
+    and finds the same runs of dotted parts, with the same counts, as the
+    first expression did: escapes, multi-line strings closed, open or left
+    with a lone backslash at the end, comments, long and spaced keys."""
+    from rbcd.cli import _toml_keys
+    assert list(_toml_keys(text)) == reference_keys(text)
+
+
+def guard_child(texts):
+    '''What check_toml_keys says of each text (Python expressions of n, 1
+    MiB, q, a double quote, and q3, three) in a python of its own, and how
+    much that python's maximum resident set grew (KB) meanwhile.'''
+    child = (r'''
+import resource
+from rbcd.cli import check_toml_keys, UsageError
+n, q, q3 = 1 << 20, '"', '"' * 3
+texts = [%s]
+base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+for t in texts:
+    try:
+        check_toml_keys("f", t)
+    except UsageError as e:
+        print(e)
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - base)
+''' % ", ".join(texts))
+    r = subprocess.run([sys.executable, "-c", child], capture_output=True, text=True, timeout=30,
+                       env={"PATH": "/usr/bin:/bin", "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert r.returncode == 0, r.stderr
+    *said, grown_kb = r.stdout.splitlines()
+    return said, int(grown_kb)
+
+
+def test_the_key_guard_keeps_its_memory_small():
+    '''R17-9: a 1 MiB string, a 1 MiB multi-line one of escapes and a key
+    of 1 MiB of dotted parts each took the guard 80-160 MB (re's stack
+    holding a frame for each repetition of a group); they take almost
+    nothing now, and the key is still counted and refused.'''
+    said, grown_kb = guard_child([r'''"x = " + q + "a" * n + q + "\n"''',
+                                  r'''"x = " + q3 + '\\"' * (n // 2) + q3 + "\n"''',
+                                  r'''"a" + ".a" * (n // 2) + " = 1\n"'''])
+    assert said == ["f:1: a key of 524289 dotted parts, more than 64"]
+    assert grown_kb < 20 * 1024, f"the guard's memory grew by {grown_kb} KB"
+
+
+def test_a_multi_line_string_left_open_is_read_to_the_end_once():
+    '''A multi-line basic string left open, with a lone backslash at the
+    text's end, fails; reopened after a backslash on each line (1 MiB), it
+    was read to the end once a line (hours); now once.'''
+    said, _ = guard_child([r'''q3 + "\n" + ("\\" + q3 + "\n") * (n // 5) + "\\"'''])
+    assert said == []
 
 
 @pytest.mark.parametrize("char", ["\u202e", "\u2066", "\u200b", "\u00ad", "\ufeff", "\U000e0001", "\ue000",

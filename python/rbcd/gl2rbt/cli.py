@@ -6,11 +6,27 @@ import signal
 import sys
 import threading
 
-from ..cli import UsageError, WriteError, remove_temporaries, to_standard_output
+from ..cli import UsageError, WriteError, escape, exception_text, remove_temporaries, to_standard_output
 from ..startup import HANDLED, kept
 from .errors import LAST_WORD, ConvertError, ToolError, printable
 
 PROG = "rbcd-gl2rbt"
+# A refusal names what it refused last (the call, then the object, then the
+# reason): the converter's own message is written whole, its parts quoting
+# input already bounded where it was made; past MESSAGE_LIMIT characters (a
+# path may be 4 KB) its middle is cut, its head and its end kept.
+MESSAGE_LIMIT = 2000
+
+
+def message(e):
+    """The converter's own error (ConvertError, ToolError, an output's
+    UsageError or WriteError) as one escaped line of at most MESSAGE_LIMIT
+    characters (and the cut's " ... ")."""
+    text, half = exception_text(e, MESSAGE_LIMIT), MESSAGE_LIMIT // 2
+    if len(text) > MESSAGE_LIMIT:   # cut before escaping: the work stays bounded
+        text = text[:half] + " ... " + text[-half:]
+    text = escape(text)
+    return text if len(text) <= MESSAGE_LIMIT else text[:half] + " ... " + text[-half:]
 
 
 def parse_frames(text):
@@ -143,13 +159,13 @@ def run(args):
         raster.convert(args, report=None if args.quiet else write_report)
         return 0
     except ConvertError as e:
-        sys.stderr.write(f"{PROG}: {printable(args.trace)}: {printable(e, 400)}\n")
+        sys.stderr.write(f"{PROG}: {printable(args.trace)}: {message(e)}\n")
         return 2
     except UsageError as e:   # an output rbcd.cli could not write
-        sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
+        sys.stderr.write(f"{PROG}: {message(e)}\n")
         return 2
     except (ToolError, WriteError) as e:   # WriteError: --summary, --image (rbcd.cli.write_output)
-        sys.stderr.write(f"{PROG}: {printable(e, 400)}\n")
+        sys.stderr.write(f"{PROG}: {message(e)}\n")
         return 1
     except Exception as e:   # noqa: BLE001: the promise is one line, whatever failed
         if isinstance(e, MemoryError) or isinstance(e, OSError) and e.errno == errno.ENOMEM or \
@@ -186,17 +202,29 @@ def write_report(frames, conv):
 
 
 def require_numpy():
-    """The converter's stages compute with numpy: its absence is one line."""
+    """The converter's stages compute with numpy: its absence is one line.
+    A signal while it loads is taken once it has loaded (HELD)."""
+    HELD.set()
     try:
         import numpy
     except ImportError:
-        if INTERRUPTED.is_set():   # numpy's import turns a signal's KeyboardInterrupt into ImportError
-            raise KeyboardInterrupt
+        numpy = None
+    finally:
+        HELD.clear()
+    if INTERRUPTED.is_set():   # whether numpy loaded or not
+        raise KeyboardInterrupt
+    if numpy is None:
         raise ToolError("numpy is not installed (Debian: python3-numpy)")
     return numpy
 
 
 INTERRUPTED = threading.Event()   # a handled signal came
+# Set while numpy loads. Its C modules import one another from C (numpy's
+# import_array), which prints a KeyboardInterrupt raised there as a
+# traceback before it turns it into an ImportError: a signal then only
+# marks the run interrupted, and require_numpy raises it once numpy has
+# loaded (a fraction of a second).
+HELD = threading.Event()
 
 
 def ignore_signals():
@@ -209,10 +237,12 @@ def on_signal(signum, frame):
     (temporaries and outputs removed, rbcd-gl-raster and the shading child
     stopped) and main says so; another signal then changes nothing (it had
     cut that clean-up short, or ended the process as Python finished).
-    While Mesa works the watchdog thread ends the run (mesa.py)."""
+    While Mesa works the watchdog thread ends the run (mesa.py); while
+    numpy loads, require_numpy once it has loaded (HELD)."""
     ignore_signals()
     INTERRUPTED.set()
-    raise KeyboardInterrupt
+    if not HELD.is_set():
+        raise KeyboardInterrupt
 
 
 def main(argv=None):
