@@ -188,7 +188,7 @@ TRICKY = [
 ]
 
 
-@pytest.mark.parametrize("text", TRICKY)
+@pytest.mark.parametrize("text", TRICKY, ids=[f"text{i}" for i in range(len(TRICKY))])
 def test_the_key_guard_finds_the_keys_its_first_regular_expression_found(text):
     """The guard reads strings and dotted runs with little memory (R17-9)
     and finds the same runs of dotted parts, with the same counts, as the
