@@ -10,7 +10,7 @@ import numpy as np
 from ..cli import temporary_folder, unregister_temporary
 from .capture import check_input_file, read_calls
 from .errors import ConvertError, ToolError, printable
-from .glretrace import glretrace_command, preload_library
+from .glretrace import end_replay, glretrace_command, preload_library, start_replay
 from .raster import convert, new_converter
 from .reduced import is_reduced_capture
 
@@ -26,23 +26,29 @@ def mesa_depth_at(trace, call, timeout, es=False, tmpdir=None):
     """Mesa's depth buffer after `call` (glretrace -D), as (width, height, rows
     from the top of float32 values in [0, 1]). An OpenGL ES capture's is
     read back through gl/es_depth_readback.c, preloaded into glretrace
-    alone (not into Xvfb)."""
+    alone (not into Xvfb). The replay's processes (xvfb-run's Xvfb too) are
+    ended on every path, a signal's included (glretrace.end_replay)."""
+    where = f"{printable(trace)}: call {call}: Mesa's replay (glretrace -D {call})"
     cmd = glretrace_command(["-D", str(call), trace], "--check-depth",
                             preload=es_readback_library() if es else None)
+    # llvmpipe rasterizes on threads, and its vertex shaders (run at the
+    # draw, on the calling thread) do not wait for them: a draw's vertex
+    # shader may read a texture level an earlier glGenerateMipmap or render
+    # to texture has not written yet (measured: the previous frame's level 1
+    # in 7 of 15 replays). With one thread each draw is rasterized before
+    # the next starts.
+    proc = start_replay(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                        # (xvfb-run's temporary folder in the check's: removed with it)
+                        env=dict(os.environ, LP_NUM_THREADS="0", **({"TMPDIR": tmpdir} if tmpdir else {})))
     try:
-        # llvmpipe rasterizes on threads, and its vertex shaders (run at the
-        # draw, on the calling thread) do not wait for them: a draw's vertex
-        # shader may read a texture level an earlier glGenerateMipmap or
-        # render to texture has not written yet (measured: the previous
-        # frame's level 1 in 7 of 15 replays). With one thread each draw is
-        # rasterized before the next starts.
-        r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=timeout,
-                           stdin=subprocess.DEVNULL,
-                           # (xvfb-run's temporary folder in the check's: removed with it)
-                           env=dict(os.environ, LP_NUM_THREADS="0", **({"TMPDIR": tmpdir} if tmpdir else {})))
+        out, err = proc.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
-        raise ToolError(f"glretrace -D {call} did not finish in {timeout} s")
-    text = r.stdout.decode("utf-8", "replace")
+        raise ToolError(f"{where} did not finish in {timeout} s (--check-timeout)")
+    finally:
+        end_replay(proc)
+        proc.stdout.close()
+        proc.stderr.close()
+    text = out.decode("utf-8", "replace")
     # A lenient reading: the state is JSON, but the base64 text carries
     # newlines, so the depth image is found by its keys, in the bound draw
     # framebuffer's section: the window's depth buffer, or a framebuffer
@@ -51,37 +57,43 @@ def mesa_depth_at(trace, call, timeout, es=False, tmpdir=None):
     m = re.search(r'"GL_DEPTH_(?:COMPONENT|ATTACHMENT|STENCIL_ATTACHMENT)"\s*:\s*\{(.*?)"__data__"\s*:\s*"([^"]*)"',
                   text[max(section, 0):], re.S)
     if not m:
-        raise ToolError(f"glretrace -D {call} dumped no depth buffer"
-                        f" ({printable((r.stderr.decode('utf-8', 'replace').strip().splitlines() or ['no message'])[-1])})")
+        raise ToolError(f"{where} dumped no depth buffer"
+                        f" ({printable((err.decode('utf-8', 'replace').strip().splitlines() or ['no message'])[-1])})")
     data = base64.b64decode(re.sub(r"\s+", "", m.group(2)).replace("\\n", ""))
     # PFM: "Pf\nW H\nSCALE\n", then rows from the bottom; the floats are
     # little endian whatever the scale's sign says (as glretrace writes them).
     parts = data.split(b"\n", 3)
     if len(parts) < 4 or parts[0] != b"Pf":
-        raise ToolError(f"glretrace -D {call}: the depth image is not a one-channel PFM")
+        raise ToolError(f"{where}: the depth image is not a one-channel PFM")
     w, h = (int(x) for x in parts[1].split())
     vals = np.frombuffer(parts[3], dtype="<f4", count=w * h).reshape(h, w)
     return w, h, vals   # rows from the top, as glretrace writes them (not PFM's bottom-up)
 
 
-def window_of(mesa, w, h, frame):
+def named(trace):
+    """A message's start naming the capture, as the converter's others do."""
+    return f"{printable(trace)}: " if trace is not None else ""
+
+
+def window_of(mesa, w, h, frame, trace=None):
     """The screen's w x h pixels of Mesa's depth dump (rows from the top).
     glretrace grows its window to hold every viewport the capture sets
     (glViewport(-10, -20, 84, 94) on a 64x64 window gives 74x74): the
     screen is then its lower left part, GL's origin being the lower left."""
     mh, mw = mesa.shape
     if mw < w or mh < h:
-        raise ToolError(f"frame {frame}: Mesa's depth buffer is {mw}x{mh}, smaller than the screen {w}x{h}")
+        raise ToolError(f"{named(trace)}frame {frame}: Mesa's depth buffer is {mw}x{mh}, smaller than the screen "
+                        f"{w}x{h}")
     return mesa[mh - h:, :w]
 
 
-def read_depth_file(path):
+def read_depth_file(path, trace=None):
     """rbcd-gl-raster's depth dump: the depths, and where they were last
     written by a draw whose fragment shader can discard or write depth."""
     with open(path, "rb") as f:
         head = f.readline().split()
         if len(head) != 5 or head[:2] != [b"rbcd-depth", b"2"]:
-            raise ToolError(f"{path}: not a depth dump")
+            raise ToolError(f"{named(trace)}{printable(path)}: not a depth dump")
         w, h, bits = int(head[2]), int(head[3]), int(head[4])
         vals = np.frombuffer(f.read(4 * w * h), dtype="<u4", count=w * h).reshape(h, w)
         marks = np.frombuffer(f.read(w * h), dtype="u1", count=w * h).reshape(h, w).astype(bool)
@@ -147,6 +159,22 @@ def drawable_growth(call):
     return None
 
 
+def fixed_attribute(probe):
+    """The call that gave an attribute of the bound vertex array object the
+    type GL_FIXED while its binding holds a buffer, or None: glretrace's
+    state dump (apitrace 11.1, dumpVertexAttributes: desktop GL only)
+    asserts on such an attribute of the program in use, so Mesa's depth is
+    not to be had at a draw with it bound. Any such attribute counts (the
+    check's first pass does not link programs, and does not know which
+    attributes the program reads)."""
+    vao = probe.current_vao()
+    for _, at in sorted(vao.attribs.items()):
+        b = vao.bindings.get(at.binding)
+        if at.type == "GL_FIXED" and b is not None and b.buffer and at.format_call is not None:
+            return at.format_call
+    return None
+
+
 def check_depth(args):
     """Converts the selected frames with a depth snapshot at each frame's last
     draw with the depth test on, replays the capture to the same call with
@@ -164,10 +192,15 @@ def check_depth(args):
     # Pass 1: the calls, from the GL state alone, and the window glretrace
     # will grow to (refused past MAX_REPLAY_PIXELS before it runs).
     probe = new_converter(args, False)
+    fixed = {}   # a depth-tested draw -> the GL_FIXED attribute's call it has bound (fixed_attribute)
     try:
         for call in read_calls(args.trace):
             probe.last_call = call[0]
             probe.handle(call)
+            if probe.last_depth_draw == call[0] and not probe.es:
+                at = fixed_attribute(probe)
+                if at is not None:
+                    fixed[call[0]] = at
             grown = drawable_growth(call) if not probe.s.draw_fbo else None
             if grown and grown[0] * grown[1] > MAX_REPLAY_PIXELS:
                 raise ConvertError(f"call {call[0]}: {printable(call[1])} would make glretrace's window "
@@ -177,10 +210,14 @@ def check_depth(args):
                 break
     finally:
         probe.close_replay()
-    if probe.es:
-        es_readback_library()   # missing: said before the conversion, not after it
+    try:   # missing: said before the conversion, not after it
+        glretrace_command([], "--check-depth")
+        if probe.es:
+            es_readback_library()
+    except ToolError as e:
+        raise ToolError(f"{named(args.trace)}{e}") from None
     frames = [(o, c, call, bits) for o, c, call, wrong, bits in probe.last_3d_draws
-              if call is not None and wrong is None and call not in probe.read_elsewhere]
+              if call is not None and wrong is None and call not in probe.read_elsewhere and call not in fixed]
     elsewhere = [c for _, c, call, wrong, _ in probe.last_3d_draws if call in probe.read_elsewhere and wrong is None]
     if elsewhere:
         # Mesa's depth of such a frame is not to be had: glretrace reads a
@@ -189,6 +226,12 @@ def check_depth(args):
         print(f"{len(elsewhere)} frames not checked: their last depth-tested draw's context reads from another "
               f"window than it draws into, and Mesa's replay reads the depth through it (the first, frame "
               f"{elsewhere[0]})")
+    unreadable = [(c, fixed[call]) for _, c, call, wrong, _ in probe.last_3d_draws
+                  if call in fixed and wrong is None and call not in probe.read_elsewhere]
+    if unreadable:
+        print(f"{len(unreadable)} frames not checked: their last depth-tested draw has a GL_FIXED vertex attribute "
+              f"bound, on which glretrace's state dump aborts (the first, frame {unreadable[0][0]}: call "
+              f"{unreadable[0][1][0]}: {printable(unreadable[0][1][1])})")
     unfollowed = [(c, wrong) for _, c, call, wrong, _ in probe.last_3d_draws if call is not None and wrong is not None]
     if unfollowed:
         # The converter's one camera-pass depth buffer did not hold what
@@ -201,6 +244,12 @@ def check_depth(args):
     # only when it is the one frame asked for.
     if len(frames) > 1 and frames[0][1] == 0:
         frames = frames[1:]
+    if not frames and unreadable:
+        no, name = unreadable[0][1]
+        raise ConvertError(f"call {no}: {printable(name)}: a GL_FIXED vertex attribute, bound at frame "
+                           f"{unreadable[0][0]}'s last depth-tested draw: glretrace's state dump of a desktop GL "
+                           "context aborts on it, and no selected frame is left to check (docs/gl-capture.md, the "
+                           "check against Mesa)")
     if not frames:
         raise ConvertError("no selected frame draws with the depth test on into a depth buffer the converter "
                            "follows and Mesa's replay reads back: nothing to check")
@@ -221,8 +270,8 @@ def check_depth(args):
         total = np.zeros(5, dtype=np.int64)   # covered, agreeing; the same outside marked pixels; bound holds
         total_lp = np.zeros(5, dtype=np.int64)   # the same against the llvmpipe emulation
         for out_frame, cap_frame, call, depth_bits in frames:
-            w, h, bits, ours, marks = read_depth_file(f"{args.depth_out}.{out_frame}.depth")
-            _, _, _, lp, lp_marks = read_depth_file(f"{args.llvmpipe_depth_out}.{out_frame}.depth")
+            w, h, bits, ours, marks = read_depth_file(f"{args.depth_out}.{out_frame}.depth", args.trace)
+            _, _, _, lp, lp_marks = read_depth_file(f"{args.llvmpipe_depth_out}.{out_frame}.depth", args.trace)
             cached = os.path.join(keep, f"mesa.{call}.npy") if keep else None
             if cached and os.path.exists(cached):
                 mesa = np.load(cached)
@@ -230,7 +279,7 @@ def check_depth(args):
                 _, _, mesa = mesa_depth_at(args.trace, call, args.check_timeout, probe.es, tmp)
                 if cached:
                     np.save(cached, mesa)
-            mesa = window_of(mesa, w, h, cap_frame)
+            mesa = window_of(mesa, w, h, cap_frame, args.trace)
             # Where a draw under a discarding fragment shader wrote our depth
             # last, ours is an upper bound: Mesa's lies at it or behind it.
             # One step of the buffer Mesa drew into (a 16-bit attachment's

@@ -1,8 +1,12 @@
 """Mesa's replay of a capture, glretrace, as --check-depth and the read-back
 textures run it: a library of ours preloaded into glretrace alone (not into
-Xvfb), under xvfb-run when there is no DISPLAY."""
+Xvfb), under xvfb-run when there is no DISPLAY, in a session of its own that
+ends whole however the converter ends (start_replay, end_replay)."""
 import os
 import shutil
+import signal
+import subprocess
+import time
 
 from .errors import ToolError, printable
 
@@ -36,3 +40,95 @@ def glretrace_command(args, what, preload=None, env=()):
             raise ToolError("no DISPLAY and no xvfb-run for glretrace (scripts/setup.sh --gl installs xvfb)")
         cmd = [xvfb, "-a", "-s", "-screen 0 1280x1024x24"] + cmd
     return cmd
+
+
+# The shell a replay runs under (start_replay). Its standard input is the
+# read end of a pipe whose one write end the converter holds: its watcher
+# reads the end of the file when the converter ends, however it ends (the
+# watchdog's os._exit, SIGKILL), and sends SIGTERM to the session's process
+# group: the shell, xvfb-run, the Xvfb it starts in the background (a shell
+# without job control keeps it in the shell's group), glretrace. The command
+# runs in the foreground (an asynchronous list would ignore SIGINT and
+# SIGQUIT), and its status is the shell's.
+SESSION = """exec 3<&0 </dev/null
+{ read -r _ <&3; kill -TERM 0; } &
+exec 3<&-
+"$@"
+status=$?
+kill $! 2>/dev/null
+exit $status
+"""
+# The seconds the replay's processes get to end on SIGTERM (Xvfb then
+# removes its lock file and socket) before SIGKILL.
+END_SECONDS = 2
+
+
+def start_replay(cmd, **popen):
+    """Starts `cmd` (glretrace_command's) under SESSION, in a session of its
+    own: the terminal's Ctrl-C reaches the converter alone, which ends the
+    replay with end_replay on every path; `popen`: Popen's other
+    arguments."""
+    r, w = os.pipe()   # neither inherited by other children; r becomes the shell's standard input
+    try:
+        proc = subprocess.Popen(["/bin/sh", "-c", SESSION, "rbcd-replay"] + list(cmd), stdin=r,
+                                start_new_session=True, **popen)
+    except BaseException:
+        os.close(w)   # a shell started all the same ends its session at once
+        raise
+    finally:
+        os.close(r)
+    proc.rbcd_lifeline = w
+    return proc
+
+
+def session_left(sid):
+    """The processes of session `sid` still running (a zombie is not), as
+    (pid, state) with state /proc's letter (T or t: stopped)."""
+    left = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as f:
+                fields = f.read().rsplit(b")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if len(fields) > 3 and fields[3] == str(sid).encode() and fields[0] != b"Z":
+            left.append((int(entry), fields[0].decode()))
+    return left
+
+
+def end_replay(proc):
+    """Ends a replay start_replay started and every process of its session
+    (xvfb-run's Xvfb too): SIGTERM (and SIGCONT, which a stopped one needs
+    to take it), SIGKILL to those left after END_SECONDS; returns once none
+    runs, the shell reaped. A signal's KeyboardInterrupt while it works is
+    raised once the session has ended (the converter ignores the signals
+    from the first on: cli.on_signal)."""
+    try:
+        _end_session(proc)
+    except KeyboardInterrupt:
+        _end_session(proc)
+        raise
+
+
+def _end_session(proc):
+    # The group is signalled only while a process of the session runs: its
+    # id is then no other group's (a reaped shell's pid is free for reuse
+    # only once no process of its session is left).
+    for sig in (signal.SIGTERM, signal.SIGKILL):
+        if not session_left(proc.pid):
+            break
+        try:
+            os.killpg(proc.pid, sig)
+            os.killpg(proc.pid, signal.SIGCONT)
+        except ProcessLookupError:
+            break
+        deadline = time.monotonic() + END_SECONDS
+        while session_left(proc.pid) and time.monotonic() < deadline:
+            time.sleep(0.01)
+    proc.wait()
+    w = getattr(proc, "rbcd_lifeline", None)
+    if w is not None:
+        os.close(w)
+        proc.rbcd_lifeline = None

@@ -28,7 +28,7 @@ import time
 
 from ..cli import temporary_folder, unregister_temporary
 from .errors import ConvertError, ToolError, printable
-from .glretrace import glretrace_command, preload_library
+from .glretrace import end_replay, glretrace_command, preload_library, session_left, start_replay
 from .glstate.texture_formats import ES_COMBINATIONS
 
 LIBRARY = "rbcd-texture-readback.so"
@@ -184,11 +184,10 @@ class RenderedTextures:
         # One llvmpipe rasterizer thread: its vertex shaders do not wait for
         # the others (depth_check.mesa_depth_at), and the replay's draws
         # must make what the capture's did.
-        self.proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=self.log,
-                                     start_new_session=True,
-                                     # (xvfb-run's own temporary folder in ours: removed with it
-                                     # when xvfb-run is ended before it removes it)
-                                     env=dict(os.environ, LP_NUM_THREADS="0", TMPDIR=self.dir))
+        self.proc = start_replay(cmd, stdout=subprocess.DEVNULL, stderr=self.log,
+                                 # (xvfb-run's own temporary folder in ours: removed with it
+                                 # when xvfb-run is ended before it removes it)
+                                 env=dict(os.environ, LP_NUM_THREADS="0", TMPDIR=self.dir))
 
     def read(self, no, name, units):
         """The textures bound at `units` [(unit, target name)] just before
@@ -276,34 +275,17 @@ class RenderedTextures:
     def stopped(self):
         """Whether a process of the replay's session (xvfb-run, glretrace)
         is stopped by a signal (its state T in /proc)."""
-        for entry in os.listdir("/proc"):
-            if not entry.isdigit():
-                continue
-            try:
-                with open(f"/proc/{entry}/stat", "rb") as f:
-                    fields = f.read().rsplit(b")", 1)[1].split()
-            except OSError:
-                continue
-            if len(fields) > 4 and int(fields[3]) == self.proc.pid and fields[0] in (b"T", b"t"):
-                return True
-        return False
+        return any(state in ("T", "t") for _, state in session_left(self.proc.pid))
 
     def close(self):
-        """Ends the replay: the requests' end closed, the library reads their
-        end at the next call and exits, so that xvfb-run removes its X
-        server and files; killed after 5 s if it has not."""
+        """Ends the replay at once, on every path (the conversion done, a
+        refusal, a signal): its whole session ended (end_replay: Xvfb with
+        it), then the folder removed, xvfb-run's own within it."""
         if self.requests is not None:
             os.close(self.requests)
             self.requests = None
         if self.proc is not None:
-            try:
-                self.proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                try:
-                    os.killpg(self.proc.pid, signal.SIGKILL)
-                except ProcessLookupError:
-                    pass
-                self.proc.wait()
+            end_replay(self.proc)
             self.log.close()
         if self.replies is not None:
             os.close(self.replies)

@@ -60,14 +60,16 @@ def attrib_format_valid(integer_form, size, kind, normalized, long_form=False):
 
 class Attrib:
     """One generic attribute: its format (glVertexAttrib*Format, or that half
-    of glVertexAttrib*Pointer; `integer` for the I forms) and the binding
-    point it reads."""
-    __slots__ = ("enabled", "integer", "long", "size", "type", "normalized", "relative", "binding")
+    of glVertexAttrib*Pointer; `integer` for the I forms; `format_call` the
+    (call number, name) that set it, None for GL's initial one) and the
+    binding point it reads."""
+    __slots__ = ("enabled", "integer", "long", "size", "type", "normalized", "relative", "binding", "format_call")
 
     def __init__(self, index):
         self.enabled, self.integer, self.size, self.type, self.normalized = False, False, 4, "GL_FLOAT", False
         self.long = False   # the L forms: 64-bit doubles
         self.relative, self.binding = 0, index
+        self.format_call = None
 
 
 class Binding:
@@ -277,7 +279,7 @@ class AttributeCalls:
         vao = self.current_vao()
         at = vao.attrib(i)
         at.integer, at.size, at.type, at.relative, at.binding = integer_form, size, d.get("type"), 0, i
-        at.long = long_form
+        at.long, at.format_call = long_form, (no, name)
         at.normalized = not integer_form and not long_form and normalized
         b = vao.binding(i)
         b.stride = stride or element_bytes(size, at.type)
@@ -309,7 +311,7 @@ class AttributeCalls:
             return   # GL_INVALID_OPERATION, GL_INVALID_VALUE or GL_INVALID_ENUM: the call does nothing
         at = vao.attrib(i)
         at.integer, at.size, at.type, at.relative = integer_form, size, d.get("type"), relative
-        at.long = long_form
+        at.long, at.format_call = long_form, (no, name)
         at.normalized = not integer_form and not long_form and normalized
 
     def h_attrib_binding(self, no, name, a, args):
