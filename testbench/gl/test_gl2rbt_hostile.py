@@ -483,6 +483,38 @@ def test_the_captures_own_transform_feedback(tmp_path):
     assert fragments(tmp_path, read_buffer(feedback_calls(("nope",)), 1).swap().write(tmp_path / "f.xz")) == [0]
 
 
+@pytest.mark.parametrize("call", [
+    # Nothing changes while feedback is active (paused too).
+    dict(name="glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=1, buffer=6),
+    # A range's size and offset are multiples of 4, the offset not negative.
+    dict(name="glBindBufferRange", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=1, buffer=6, offset=0, size=6),
+    dict(name="glBindBufferRange", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=1, buffer=6, offset=2, size=8),
+    dict(name="glBindBufferRange", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=1, buffer=6, offset=-4, size=8),
+    # llvmpipe has 4 binding points: a multi-bind past them is refused whole.
+    dict(name="glBindBuffersBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", first=1, count=4, buffers=[6, 6, 6, 6]),
+    dict(name="glTransformFeedbackBufferRange", xfb=0, index=1, buffer=6, offset=0, size=0),
+], ids=["while_active", "size_6", "offset_2", "offset_minus_4", "multi_bind_past_4", "dsa_size_0"])
+def test_feedback_bindings_gl_ignores_record_nothing(tmp_path, call):
+    """A transform feedback binding Mesa 22.3 refuses (GL_INVALID_VALUE or
+    _OPERATION) changes nothing: the buffer named is not recorded into,
+    and a later draw from it converts as without the call (each had made
+    the buffer the GPU's, refusing the draw)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    def capture(ignored):
+        c = feedback_calls()
+        c.add("glGenBuffers", n=1, buffers=[6]).add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=6)
+        c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE, usage="GL_STATIC_DRAW")
+        if call["name"] != "glBindBufferBase" and ignored:
+            c.add(call["name"], **{k: v for k, v in call.items() if k != "name"})
+        c.add("glEnable", cap="GL_RASTERIZER_DISCARD").add("glBeginTransformFeedback", primitiveMode="GL_TRIANGLES")
+        if call["name"] == "glBindBufferBase" and ignored:
+            c.add(call["name"], **{k: v for k, v in call.items() if k != "name"})   # (while active)
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+        c.add("glEndTransformFeedback").add("glDisable", cap="GL_RASTERIZER_DISCARD")
+        return read_buffer(c, 6).swap().write(tmp_path / f"{int(ignored)}.xz")
+    assert fragments(tmp_path, capture(True)) == fragments(tmp_path, capture(False))
+    assert fragments(tmp_path, capture(False))[0] > 100
+
 FTRANSFORM = "#version 120\nvoid main() { gl_Position = ftransform(); }\n"
 
 

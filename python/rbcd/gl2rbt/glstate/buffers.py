@@ -17,12 +17,14 @@ from .texture_formats import FORMAT_COMPONENTS, PACKED_BYTES, TYPE_BYTES
 STORAGE_BITS = {0x0040: "GL_MAP_PERSISTENT_BIT", 0x0100: "GL_DYNAMIC_STORAGE_BIT"}
 BUFFER_USAGES = {f"GL_{f}_{a}" for f in ("STREAM", "STATIC", "DYNAMIC") for a in ("DRAW", "READ", "COPY")}
 MAX_BINDINGS = 1024   # indexed binding points kept (llvmpipe has fewer: Mesa refuses the rest at a draw)
-# The binding points the shader path hands Mesa, as llvmpipe (Mesa 22.3)
-# defines them: how many (GL_MAX_*_BUFFER_BINDINGS) and the alignment of a
-# range's offset (GL_*_BUFFER_OFFSET_ALIGNMENT). A call past either is
-# GL_INVALID_VALUE there and changes nothing, neither the indexed binding
-# nor the generic one.
-SHADER_BINDINGS = {"GL_UNIFORM_BUFFER": (90, 16), "GL_SHADER_STORAGE_BUFFER": (80, 16)}
+# The binding points the shader path hands Mesa or follows for it, as
+# llvmpipe (Mesa 22.3) defines them: how many (GL_MAX_*_BUFFER_BINDINGS,
+# GL_MAX_TRANSFORM_FEEDBACK_BUFFERS) and the alignment of a range's offset
+# (GL_*_BUFFER_OFFSET_ALIGNMENT; 4 for transform feedback, whose size too).
+# A call past either is GL_INVALID_VALUE there and changes nothing, neither
+# the indexed binding nor the generic one (binding_ignored).
+FEEDBACK_TARGET = "GL_TRANSFORM_FEEDBACK_BUFFER"
+SHADER_BINDINGS = {"GL_UNIFORM_BUFFER": (90, 16), "GL_SHADER_STORAGE_BUFFER": (80, 16), FEEDBACK_TARGET: (4, 4)}
 # The internal formats glClearBufferData takes (those of texture buffers,
 # GL 4.6 table 8.16) and the bytes of one element of each.
 CLEAR_FORMATS = {f"GL_{c}{bits}{kind}": len(c) * bits // 8
@@ -47,6 +49,26 @@ def merge_extents(extents):
         else:
             out.append((s, e))
     return out
+
+
+def binding_ignored(target, index, buf, offset, size, feedback_active=False, dsa=False):
+    """Whether Mesa 22.3 refuses binding buffer `buf` (0: none) at `index`
+    of a SHADER_BINDINGS target, `size` None for glBindBufferBase: past the
+    binding points, a range whose size is not positive (of a buffer, not of
+    0, which unbinds) or whose offset is not aligned (0's too). Transform
+    feedback adds its own rules (transformfeedback.c): nothing changes while
+    the bound object is active, even paused, and a range's size is a
+    multiple of 4 and its offset not negative (the direct state access form
+    wants a positive size of 0 too). A negative offset of the other targets
+    passes: a draw that would read before the buffer is refused
+    (vertex_stage)."""
+    count, align = SHADER_BINDINGS[target]
+    if index >= count:
+        return True
+    if target == FEEDBACK_TARGET:
+        return feedback_active or size is not None and bool(
+            size % 4 or offset % 4 or offset < 0 or (size <= 0 and (buf or dsa)))
+    return size is not None and bool((buf and size <= 0) or offset % align)
 
 
 def is_buffer_target(target):
@@ -233,12 +255,7 @@ class BufferCalls:
         if size is not None:
             size = checked(no, integer, size, f"{name}: the size", *I64)
         if target in SHADER_BINDINGS:
-            # Mesa's checks, in its order: the index, a range's size (of a
-            # buffer, not of 0, which unbinds), the offset's alignment (of
-            # 0 too). A negative offset passes them: a draw that would read
-            # before the buffer is refused (vertex_stage).
-            count, align = SHADER_BINDINGS[target]
-            if index >= count or (size is not None and ((buf and size <= 0) or offset % align)) \
+            if binding_ignored(target, index, buf, offset, size, feedback_active=self.s.feedback[1]) \
                     or not self.generated(buf):
                 return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the earlier binding stays
         elif not is_buffer_target(target) or index >= MAX_BINDINGS or offset < 0 or (size is not None and size <= 0) \
@@ -260,7 +277,7 @@ class BufferCalls:
         first = checked(no, integer, d.get("first"), f"{name}: first", *U32)
         count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
         limit = SHADER_BINDINGS[target][0] if target in SHADER_BINDINGS else MAX_BINDINGS
-        if count < 0 or first + count > limit:
+        if count < 0 or first + count > limit or (target == FEEDBACK_TARGET and self.s.feedback[1]):
             return
         lists = {}
         for key in ("buffers",) + (("offsets", "sizes") if "Range" in name else ()):

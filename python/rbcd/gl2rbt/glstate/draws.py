@@ -270,17 +270,24 @@ class DrawCalls:
         # The fragment stage's program decides discard, gl_FragDepth and
         # the shading cost (a pipeline's may not be the vertex stage's).
         p = stages.get("fragment", stages["vertex"])[1]
+        if mode == "GL_PATCHES" and not any(stage.startswith("tess") for stage in later):
+            return   # GL_INVALID_OPERATION with no tessellation stage: nothing is drawn
+        if not later:
+            if mode in PRIM_NO_AREA or mode in ("GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"):
+                self.ignored_prims += 1
+                return
+            if mode not in TRIANGLES_PER_VERTICES:
+                fail_call(no, f"{name}: primitive mode {printable(mode)} under a program is not emulated")
+        if not self.draws_into_camera_pass():
+            return
         if later:
             # Tessellation and geometry shaders run in Mesa with the vertex
             # stage (a draw into another pass, a layered shadow map's, needs
-            # none); refused: such a stage of a pipeline's other program,
-            # and an instanced draw (its primitives an instance are not
-            # known). Points, lines and patches go through: Mesa decides
-            # what they make (GL_INVALID_OPERATION: nothing).
-            if mode == "GL_PATCHES" and later == ["geometry"]:
-                return   # GL_INVALID_OPERATION with no tessellation stage: nothing is drawn
-            if not self.draws_into_camera_pass():
-                return
+            # none: left out above); refused: such a stage of a pipeline's
+            # other program, and an instanced draw (its primitives an
+            # instance are not known). Points, lines and patches go
+            # through: Mesa decides what they make (GL_INVALID_OPERATION:
+            # nothing).
             for stage in later:
                 v, sp = stages[stage]
                 if v != stages["vertex"][0]:
@@ -292,15 +299,6 @@ class DrawCalls:
                           "shader: not emulated (its primitives an instance are not known)")
             per = max(count, 1)   # a first room: Mesa's count of the primitives made sizes the next
         else:
-            if mode == "GL_PATCHES":
-                return   # GL_INVALID_OPERATION with no tessellation stage: nothing is drawn
-            if mode in PRIM_NO_AREA or mode in ("GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"):
-                self.ignored_prims += 1
-                return
-            if mode not in TRIANGLES_PER_VERTICES:
-                fail_call(no, f"{name}: primitive mode {printable(mode)} under a program is not emulated")
-            if not self.draws_into_camera_pass():
-                return
             per = TRIANGLES_PER_VERTICES[mode](count)   # at most, with no restart
         if per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {per * instances} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "

@@ -11,11 +11,7 @@ camera pass and left out otherwise."""
 from ...cli import I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
-
-TARGET = "GL_TRANSFORM_FEEDBACK_BUFFER"
-# GL_MAX_TRANSFORM_FEEDBACK_BUFFERS as Mesa 22.3 (llvmpipe) answers it:
-# binding points past it are GL_INVALID_VALUE.
-MAX_FEEDBACK_BUFFERS = 4
+from .buffers import FEEDBACK_TARGET as TARGET, binding_ignored
 
 
 class FeedbackCalls:
@@ -30,7 +26,7 @@ class FeedbackCalls:
         if not active or paused:
             return
         for (target, index), (b, _, _) in self.s.indexed.items():
-            if target == TARGET and b and index < MAX_FEEDBACK_BUFFERS:
+            if target == TARGET and b:
                 self.gpu_wrote_buffer(no, b, f"{base_name(name)} with transform feedback recording into "
                                              f"binding {index}")
 
@@ -85,9 +81,9 @@ class FeedbackCalls:
         size = d.get("size")
         if size is not None:
             size = checked(no, integer, size, f"{name}: the size", *I64)
-        if v is None or index >= MAX_FEEDBACK_BUFFERS or offset < 0 or offset % 4 \
-                or (size is not None and (size <= 0 or size % 4)) \
-                or (buf and buf not in self.s.buffer_objects):
+        if v is None or (buf and buf not in self.s.buffer_objects) or binding_ignored(
+                TARGET, index, buf, offset, size, feedback_active=v == self.s.feedback[0] and self.s.feedback[1],
+                dsa=True):
             return   # GL_INVALID_OPERATION or _VALUE: the call changes nothing
         if v == self.s.feedback[0]:
             self.s.indexed[(TARGET, index)] = (buf, offset, size)
