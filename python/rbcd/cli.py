@@ -22,8 +22,10 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
   is removed on failure and on SIGINT/SIGTERM/SIGHUP (main_wrapper turns them
   into KeyboardInterrupt, so that cleanup code runs).
 """
+import argparse
 import errno
 import gzip
+import math
 import io
 import os
 import re
@@ -169,6 +171,56 @@ def say(prog, text):
     """One line on stderr, escaped."""
     sys.stderr.write(f"{prog}: {escape(text)}\n")
     sys.stderr.flush()
+
+
+# ---- the command line, as every tool takes it: an option's name whole (no
+# abbreviation: --geom is not --geometry), an option that takes a value at
+# most once (a second had replaced the first), numbers in ASCII digits
+# (int() and float() also take other scripts' digits, '1_0' and ' 1 '), an
+# error one line and exit 2.
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse's parser without abbreviations; its error, unless a tool
+    sets its own, is say(prog, "MESSAGE (see --help)") and exit 2.
+    Sub-commands' parsers (add_subparsers) are of the same class."""
+
+    def __init__(self, *args, **kw):
+        kw["allow_abbrev"] = False
+        super().__init__(*args, **kw)
+
+    def add_subparsers(self, **kw):
+        kw.setdefault("parser_class", type(self))
+        return super().add_subparsers(**kw)
+
+    def error(self, message):
+        say(self.prog, f"{message} (see --help)")
+        sys.exit(2)
+
+
+class Once(argparse.Action):
+    """An option given once: a second one is the command line's error."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        given = namespace.__dict__.setdefault("_given", set())
+        if self.dest in given:
+            parser.error(f"{option_string} is given twice")
+        given.add(self.dest)
+        setattr(namespace, self.dest, values)
+
+
+def ascii_int(text):
+    """An integer in ASCII digits."""
+    if not re.fullmatch(r"[+-]?[0-9]{1,18}", text):
+        raise argparse.ArgumentTypeError(f"invalid integer: {text!r}")
+    return int(text)
+
+
+def finite_float(text):
+    """A finite decimal number in ASCII (float() also takes 'nan', 'inf' and 1e999)."""
+    if not re.fullmatch(r"[+-]?([0-9]{1,18}(\.[0-9]{0,18})?|\.[0-9]{1,18})([eE][+-]?[0-9]{1,3})?", text) \
+            or not math.isfinite(float(text)):
+        raise argparse.ArgumentTypeError(f"invalid number: {text!r}")
+    return float(text)
 
 
 def _kind(mode):

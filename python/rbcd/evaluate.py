@@ -23,7 +23,7 @@ import subprocess
 import sys
 import tomllib
 
-from rbcd.cli import main_wrapper, parse_toml, say  # (one-line messages, no tracebacks)
+from rbcd.cli import ArgumentParser, Once, main_wrapper, parse_toml, say  # (one-line messages, no tracebacks)
 
 # The CPU model of Figure 8 (instructions to time and energy, each constant
 # with its source) is rbcd/cpu_model.py.
@@ -322,7 +322,7 @@ def sweep_file(template, suite, dest):
 
 # ---------------------------------------------------------------- workloads
 def target_workloads(out, scenes):
-    rows, md_rows = [], []
+    rows = []
     plt = plot()
     fig, axes = plt.subplots(1, len(scenes), figsize=(3.2 * len(scenes), 2.6), squeeze=False)
     # The rasterizer's counts do not depend on the unit: the paper configuration's runs of Figure 9.
@@ -863,14 +863,13 @@ TARGETS = {"workloads": target_workloads, "table3": target_table3, "fig9": targe
 
 
 def run(argv):
-    ap = argparse.ArgumentParser(prog=PROG, description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", default="results")
-    ap.add_argument("--splice", nargs=2, metavar=("OUT", "DOC"))
-    ap.add_argument("--splice-prefix", default="", help="with --splice: the blocks' name prefix (games-)")
-    ap.add_argument("--thumbnail", nargs=2, metavar=("SRC", "DST"))
-    ap.add_argument("--sweep-file", nargs=3, metavar=("SWEEP", "SUITE", "DEST"))
-    ap.add_argument("--id-bits", metavar="SCENE")
+    ap = ArgumentParser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", action=Once, default="results")
+    ap.add_argument("--splice", action=Once, nargs=2, metavar=("OUT", "DOC"))
+    ap.add_argument("--splice-prefix", action=Once, default="", help="with --splice: the blocks' name prefix (games-)")
+    ap.add_argument("--thumbnail", action=Once, nargs=2, metavar=("SRC", "DST"))
+    ap.add_argument("--sweep-file", action=Once, nargs=3, metavar=("SWEEP", "SUITE", "DEST"))
+    ap.add_argument("--id-bits", action=Once, metavar="SCENE")
     ap.add_argument("targets", nargs="*")
     a = ap.parse_args(argv)
     try:

@@ -20,7 +20,6 @@ key; an option given twice or a number not in ASCII digits, naming the
 option), 1 when a regenerated file does not match its checksum or the
 converter fails; the outputs of a failed entry are removed.
 """
-import argparse
 import concurrent.futures
 import hashlib
 import json
@@ -33,13 +32,9 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import (UsageError, check_outputs, escape, main_wrapper, open_trace, parse_toml,
+from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, check_outputs, escape, main_wrapper, open_trace, parse_toml,
                       read_input_text, say, remove_left_temporaries, temporary_folder, trace_errors,
                       unregister_temporary, write_output)
-# The converter's command-line rules, shared rather than written again: an
-# option given twice is refused (Once), and a number is ASCII digits
-# (ascii_int: int() also takes other scripts' digits, '1_0' and ' 1 ').
-from rbcd.gl2rbt.cli import Once, ascii_int
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter
@@ -418,7 +413,7 @@ def entries_of(paths):
 
 
 def run(argv):
-    ap = argparse.ArgumentParser(prog=PROG)
+    ap = ArgumentParser(prog=PROG)
     sub = ap.add_subparsers(dest="cmd", required=True)
     c = sub.add_parser("check")
     c.add_argument("entries", nargs="*")

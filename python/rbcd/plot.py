@@ -31,7 +31,7 @@ import subprocess
 import sys
 import tempfile
 
-from rbcd.cli import UsageError, main_wrapper, read_input_text, say, write_output
+from rbcd.cli import ArgumentParser, Once, UsageError, ascii_int, main_wrapper, read_input_text, say, write_output
 
 PROG = "rbcd-plot"
 META = {"point", "repeat", "status", "error", "run"}
@@ -187,7 +187,7 @@ def plot_gnuplot(xs, data, args, numeric_x):
                     f.write(f"{number(x) if numeric_x else xs.index(x)} {y!r}\n")
             title = quote(f"{args.lines} = {names[ln]}") if args.lines else "notitle"
             plots.append(f"{quote(dat)} using 1:2 with linespoints {'title ' + title if args.lines else title}")
-        script = [f"set terminal png size 700,450", f"set output {quote(png)}",
+        script = ["set terminal png size 700,450", f"set output {quote(png)}",
                   f"set xlabel {quote(label(args.x))}", f"set ylabel {quote(label(args.y))}",
                   f"set title {quote(args.title or f'{args.y} vs {args.x}')}", "set grid", "set key outside right"]
         if not numeric_x:
@@ -238,13 +238,12 @@ def heat_grid(db, metric, frame):
 
 
 def heatmap_main(argv):
-    ap = argparse.ArgumentParser(prog=f"{PROG} heatmap", description="per-tile heat maps from rbcd-sim --db")
+    ap = ArgumentParser(prog=f"{PROG} heatmap", description="per-tile heat maps from rbcd-sim --db")
     ap.add_argument("db", help="the database rbcd-sim --db wrote")
-    ap.add_argument("-o", "--output", required=True, help="directory for the PNGs")
-    ap.add_argument("--frame", type=int, help="one frame (default: summed over the run)")
+    ap.add_argument("-o", "--output", action=Once, required=True, help="directory for the PNGs")
+    ap.add_argument("--frame", action=Once, type=ascii_int, help="one frame (default: summed over the run)")
     ap.add_argument("--metric", choices=sorted(HEAT_METRICS), action="append", help="default: all four")
-    ap.add_argument("--values", help="also write the grids as CSV (metric,col,row,value)")
-    ap.error = lambda m: (sys.stderr.write(f"{PROG} heatmap: {m} (see --help)\n"), sys.exit(2))
+    ap.add_argument("--values", action=Once, help="also write the grids as CSV (metric,col,row,value)")
     args = ap.parse_args(argv)
     try:
         if not os.path.isfile(args.db):
@@ -300,18 +299,17 @@ def heatmap_main(argv):
 def run(argv):
     if argv[:1] == ["heatmap"]:
         return heatmap_main(argv[1:])
-    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = ArgumentParser(prog=PROG, description=__doc__.split("\n")[0],
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("table", help="results.csv of rbcd-sweep")
-    ap.add_argument("--y", required=True, help="metric column, e.g. gpu.overhead_pct")
-    ap.add_argument("--x", required=True, help="axis column for the x axis, e.g. zeb.banks")
-    ap.add_argument("--lines", help="column whose values get one line each, e.g. input")
+    ap.add_argument("--y", action=Once, required=True, help="metric column, e.g. gpu.overhead_pct")
+    ap.add_argument("--x", action=Once, required=True, help="axis column for the x axis, e.g. zeb.banks")
+    ap.add_argument("--lines", action=Once, help="column whose values get one line each, e.g. input")
     ap.add_argument("--where", action="append", default=[], metavar="COLUMN=VALUE", help="keep only these rows")
-    ap.add_argument("-o", "--output", required=True, help="PNG file to write")
-    ap.add_argument("--title")
+    ap.add_argument("-o", "--output", action=Once, required=True, help="PNG file to write")
+    ap.add_argument("--title", action=Once)
     ap.add_argument("--logx", action="store_true", help="log2 x axis (numeric x only)")
-    ap.add_argument("--backend", choices=["auto", "matplotlib", "gnuplot"], default="auto")
-    ap.error = lambda m: (say(PROG, f"{m} (see --help)"), sys.exit(2))
+    ap.add_argument("--backend", action=Once, choices=["auto", "matplotlib", "gnuplot"], default="auto")
     args = ap.parse_args(argv)
     if same_path(args.output, args.table):
         raise PlotError(f"-o {args.output}: is the input table {args.table}")

@@ -31,7 +31,7 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import (UsageError, escape, main_wrapper, open_trace, parse_toml, read_input_text, say, trace_errors,
+from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, finite_float, escape, main_wrapper, open_trace, parse_toml, read_input_text, say, trace_errors,
                       write_output)
 from rbcd.startup import kept
 
@@ -1226,7 +1226,7 @@ def cmd_task(args):
 
 # ---------------------------------------------------------------- main
 
-class Parser(argparse.ArgumentParser):
+class Parser(ArgumentParser):
     def error(self, message):
         say(PROG, f"{message} (see --help)")
         sys.exit(2)
@@ -1241,21 +1241,21 @@ def run(argv):
         p = sub.add_parser(name, help=help_text)
         p.add_argument("sweep", help="sweep file (TOML, docs/sweeps.md)")
         if out:
-            p.add_argument("-o", "--out", required=True, help="output directory")
-        p.add_argument("--rbcd-sim", help=f"rbcd-sim executable (default: $RBCD_SIM, else {DEFAULT_SIM_HELP})")
+            p.add_argument("-o", "--out", action=Once, required=True, help="output directory")
+        p.add_argument("--rbcd-sim", action=Once, help=f"rbcd-sim executable (default: $RBCD_SIM, else {DEFAULT_SIM_HELP})")
         p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
-        p.add_argument("--max-runs", type=int, default=DEFAULT_MAX_RUNS,
+        p.add_argument("--max-runs", action=Once, type=ascii_int, default=DEFAULT_MAX_RUNS,
                        help=f"refuse a sweep of more runs (default {DEFAULT_MAX_RUNS}; docs/limits.md)")
         return p
 
     p = sweep_cmd("run", "run the sweep on local workers", True)
-    p.add_argument("-j", "--jobs", type=int, default=0, help="workers (default: the cores)")
+    p.add_argument("-j", "--jobs", action=Once, type=ascii_int, default=0, help="workers (default: the cores)")
     p.add_argument("--timing", action="store_true", help="print elapsed and summed run wall time as JSON")
     p = sweep_cmd("list", "validate and print the runs", False)
-    p.add_argument("-j", "--jobs", type=int, default=0, help="validation workers (default: the cores)")
+    p.add_argument("-j", "--jobs", action=Once, type=ascii_int, default=0, help="validation workers (default: the cores)")
     p = sweep_cmd("slurm", "submit the sweep to SLURM", True)
     p.add_argument("--wait", action="store_true", help="poll squeue until the merge job is done")
-    p.add_argument("--poll", type=float, default=5.0, help="seconds between squeue polls (default 5)")
+    p.add_argument("--poll", action=Once, type=finite_float, default=5.0, help="seconds between squeue polls (default 5)")
     for name, h in (("status", "progress of an output directory"), ("merge", "assemble results.csv")):
         p = sub.add_parser(name, help=h)
         p.add_argument("out")
@@ -1263,13 +1263,13 @@ def run(argv):
     p = sub.add_parser("task", help="(internal) one SLURM array task")
     p.add_argument("out")
     p.add_argument("chunks")
-    p.add_argument("index", type=int)
+    p.add_argument("index", type=ascii_int)
     args = ap.parse_args(argv)
     if getattr(args, "jobs", 0) < 0:
         ap.error("-j: must be at least 1")
     if getattr(args, "max_runs", 1) < 1:
         ap.error("--max-runs: must be at least 1")
-    if getattr(args, "poll", 1.0) <= 0 or not math.isfinite(getattr(args, "poll", 1.0)):
+    if getattr(args, "poll", 1.0) <= 0:
         ap.error("--poll: must be a positive number of seconds")
     try:
         return {"run": cmd_run, "list": cmd_list, "slurm": cmd_slurm, "status": cmd_status,

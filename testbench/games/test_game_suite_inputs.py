@@ -63,15 +63,16 @@ def snapshot(d):
     (["--frames", "1", "-j1", "-j1"], "-j is given twice"),
     (["--frames", "1", "-o", "OTHER"], "-o is given twice"),
     (["--frames", "1", "--out", "OTHER"], "--out is given twice"),
+    (["--fram", "1"], "unrecognized arguments: --fram"),
 ], ids=["frames_arabic_indic", "frames_fullwidth", "frames_underscore", "frames_spaces", "jobs_arabic_indic",
         "jobs_underscore", "jobs_spaces", "frames_twice", "jobs_twice", "jobs_attached_twice", "out_twice",
-        "out_long_twice"])
+        "out_long_twice", "frames_abbreviated"])
 def test_expand_takes_each_option_once_and_ascii_numbers(tmp_path, options, words):
     """expand's command line as the converter's (R17-8): a number in ASCII
     digits (int() took '\u0661', '1_0' and ' 1 ': --frames \u0661 converted
     a frame), each option at most once (a second -o or --frames replaced
-    the first, exit 0). One line naming the option, exit 2, before anything
-    is made or converted."""
+    the first, exit 0), its name whole (--fram had been --frames). One line
+    naming the option, exit 2, before anything is made or converted."""
     out = tmp_path / "out"
     options = [str(tmp_path / "other") if o == "OTHER" else o for o in options]
     r = game_suite(tmp_path, "expand", "-o", out, *options, SOURCE)

@@ -593,6 +593,36 @@ def test_hostile(c):
 
 
 @sweep_case
+def test_command_lines(c):
+    """rbcd-sweep's and rbcd-plot's command lines as the converter's
+    (rbcd.cli.ArgumentParser): an option given twice, an abbreviated one,
+    a number in other scripts' digits or with '_', a NaN number: one line,
+    exit 2, nothing made (each had been taken: the second option replacing
+    the first, --max-run as --max-runs, '١' as 1, --poll nan waiting
+    forever between polls)."""
+    ok = c.sweep_file("ok.toml", "[axes]\nzeb.banks = [1, 2]\n[inputs]\ndefault = true\n")
+    out = os.path.join(c.tmp, "out")
+    for args, needle in ((["run", ok, "-o", out, "--out", out], "--out is given twice"),
+                         (["run", ok, "-o", out, "-j", "1", "--jobs", "2"], "--jobs is given twice"),
+                         (["list", ok, "--rbcd-sim", c.sim], "--rbcd-sim is given twice"),
+                         (["list", ok, "--max-run", "3"], "unrecognized arguments: --max-run"),
+                         (["run", ok, "-o", out, "-j", "\u0661"], "-j/--jobs: invalid integer"),
+                         (["list", ok, "--max-runs", "1_0"], "--max-runs: invalid integer"),
+                         (["slurm", ok, "-o", out, "--poll", "nan"], "--poll: invalid number"),
+                         (["slurm", ok, "-o", out, "--poll", "1e999"], "--poll: invalid number")):
+        one_error_line(c.sweep(*args), needle, " ".join(args[2:]))
+        assert not os.path.exists(out), args
+    table = c.sweep_file("t.csv", "zeb.banks,gpu.cycles\n1,10\n2,20\n")
+    png = os.path.join(c.tmp, "p.png")
+    for args, needle in ((["--y", "gpu.cycles", "--x", "zeb.banks", "-o", png, "--y", "x"], "--y is given twice"),
+                         (["--y", "gpu.cycles", "--x", "zeb.banks", "-o", png, "--logx", "--tit", "t"], "unrecognized arguments: --tit"),
+                         (["heatmap", "d.db", "-o", c.tmp, "--frame", "\u0661"], "--frame: invalid integer")):
+        r = run(["/usr/bin/python3", PLOT] + ([] if args[0] == "heatmap" else [table]) + args)
+        assert r.returncode == 2 and len(r.stderr.splitlines()) == 1 and needle in r.stderr, (args, r.stderr)
+        assert not os.path.exists(png), args
+
+
+@sweep_case
 def test_parser_property(c):
     """Property of the sweep file reader: whatever the file, `list` ends with exit 0 and
     one line per run, or exit 2 and one escaped line; never a traceback or another

@@ -6,7 +6,8 @@ import signal
 import sys
 import threading
 
-from ..cli import UsageError, WriteError, escape, exception_text, remove_temporaries, to_standard_output
+from ..cli import (ArgumentParser, Once, UsageError, WriteError, ascii_int, escape, exception_text, finite_float,
+                   remove_temporaries, to_standard_output)
 from ..startup import HANDLED, kept
 from .errors import LAST_WORD, ConvertError, ToolError, printable
 
@@ -41,33 +42,10 @@ def parse_frames(text):
     return a, b
 
 
-class ArgParser(argparse.ArgumentParser):
-    def __init__(self, **kw):
-        super().__init__(allow_abbrev=False, **kw)   # --geom is not --geometry
-
+class ArgParser(ArgumentParser):
     def error(self, message):
         sys.stderr.write(f"{PROG}: {printable(message)}\n")
         sys.exit(2)
-
-
-class Once(argparse.Action):
-    """An option given once: a second one is the command line's error (it
-    had replaced the first)."""
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        given = namespace.__dict__.setdefault("_given", set())
-        if self.dest in given:
-            parser.error(f"{option_string} is given twice")
-        given.add(self.dest)
-        setattr(namespace, self.dest, values)
-
-
-def ascii_int(text):
-    """An integer in ASCII digits (int() also takes other scripts' digits
-    and underscores)."""
-    if not re.fullmatch(r"[+-]?[0-9]+", text):
-        raise argparse.ArgumentTypeError(f"invalid integer: {text!r}")
-    return int(text)
 
 
 def parse_args(argv):
@@ -97,7 +75,7 @@ def parse_args(argv):
                     help="frames to check, spread over --frames (default 5)")
     ap.add_argument("--check-timeout", action=Once, type=ascii_int, default=600,
                     help="seconds per glretrace replay (default 600)")
-    ap.add_argument("--min-agreement", action=Once, type=float, default=99.0,
+    ap.add_argument("--min-agreement", action=Once, type=finite_float, default=99.0,
                     help="with --check-depth: exit 1 below this percentage (default 99)")
     ap.add_argument("--depth-out", action=Once, help=argparse.SUPPRESS)
     # With --check-depth: keep the depth dumps and Mesa's depth buffers in DIR,
