@@ -241,7 +241,7 @@ VS_VIEWPORT = VS.replace("#version 330 core\n", "#version 330 core\n#extension G
 @pytest.mark.parametrize("source, words", [
     # The shader's own transform feedback layout took the place of the
     # converter's gl_Position: every vertex had landed at tf's (9, 9, 9, 9).
-    (VS_XFB, "declares its own transform feedback outputs"),
+    (VS_XFB, "its vertex shader declares its own transform feedback outputs"),
     # Mesa 22.3 clips by gl_ClipDistance even with GL_CLIP_DISTANCE0
     # disabled (GL says it does not): not emulated, so refused.
     (VS_CLIP, "writes clip or cull distances"),

@@ -8,6 +8,7 @@ import json
 import lzma
 import os
 import pickle
+import struct
 import subprocess
 
 import numpy as np
@@ -43,8 +44,16 @@ def test_a_good_capture_converts(tmp_path):
     (lambda c: c.add("glXSwapBuffers", dpy=1, drawable=[2], flags=32), "drawable [2] is not a handle"),
     (lambda c: c.add("glXSwapBuffers", dpy=1, drawable=float("nan"), flags=32), "drawable nan is not a handle"),
     (lambda c: c.add("glXSwapBuffers", dpy=1, drawable=1 << 80, flags=32), "is not a handle"),
+    # The same in the transform feedback and tessellation calls (R18-7).
+    (lambda c: c.add("glBeginTransformFeedback", primitiveMode="GL_TRIANGLES\nGL_FAKE"), "the primitive mode"),
+    (lambda c: c.add("glBindTransformFeedback", target="GL_TRANSFORM_FEEDBACK\x1b", id=0), "the target"),
+    (lambda c: c.add("glTransformFeedbackVaryings", program=0, count=0, varyings=[], bufferMode=["x"]),
+     "the buffer mode: ['x'] is not an enumerant"),
+    (lambda c: c.add("glPatchParameteri", pname="GL_PATCH_VERTICES\n", value=3), "the parameter"),
+    (lambda c: c.add("glPatchParameterfv", pname=1.5, values=[1.0] * 4), "the parameter: 1.5 is not an enumerant"),
 ], ids=["nan", "list", "group_id", "inf_angle", "missing_argument", "huge_count", "past_the_array", "enum_newline",
-        "enum_escape", "enum_long", "index_type_nul", "drawable_list", "drawable_nan", "drawable_huge"])
+        "enum_escape", "enum_long", "index_type_nul", "drawable_list", "drawable_nan", "drawable_huge",
+        "feedback_mode", "feedback_target", "feedback_buffer_mode", "patch_parameter", "patch_parameter_float"])
 def test_bad_calls_are_named(tmp_path, build, words):
     c = Calls().triangle(obj=1)
     build(c)
@@ -69,6 +78,24 @@ def test_a_draw_of_many_indices_is_refused_before_it_costs(tmp_path):
     r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt")
     refused(r, "call 9: glDrawElements: 16777216 indices, more than a draw record's 4194304 vertices")
     assert peak_mb(r) < 300, f"{peak_mb(r):.0f} MB to refuse it"
+
+
+def test_a_viewport_past_the_screen_is_said(tmp_path):
+    """A viewport reaching past the screen (a window resized, or made anew
+    with the same context: apitrace records no size for either) is cut as
+    GL cuts it for a window of the screen's size, and the report says so,
+    naming the first such draw (it had been cut without a word; R18-9);
+    with --screen given, the user chose the screen: nothing said."""
+    c = Calls().triangle(obj=1).swap().add("glViewport", x=0, y=0, width=128, height=96)
+    bad_call = len(c.calls) + 3   # (triangle: pointer, debug group, then the draw)
+    cap = c.triangle(obj=1).swap().write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt")
+    assert r.returncode == 0, r.stderr
+    assert f"1 draws with a viewport reaching past the 64 x 48 screen, cut to it as GL cuts them for a window of " \
+           f"that size (the first: call {bad_call}, viewport 0, 0, 128 x 96)" in r.stdout + r.stderr, r.stderr
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "s.rbt", "--screen", "64", "48")
+    assert r.returncode == 0 and "reaching past" not in r.stdout + r.stderr, r.stderr
+    assert (tmp_path / "s.rbt").read_bytes() == (tmp_path / "c.rbt").read_bytes()
 
 
 def test_draws_without_a_swap(tmp_path):
@@ -343,6 +370,40 @@ def points_draw(c, instances=1, mode="GL_POINTS", count=3):
     return c.add("glPopDebugGroup").swap()
 
 
+GS_STRIP = ("#version 330 core\nlayout(points) in;\nlayout(triangle_strip, max_vertices = 256) out;\n"
+            "void main() { for (int i = 0; i < 256; ++i) { gl_Position = gl_in[0].gl_Position + "
+            "vec4(float(i & 1) * 0.01, float(i / 2) * 0.001, 0.0, 0.0); EmitVertex(); } }\n")
+
+
+def test_a_geometry_shader_s_triangles_are_bounded_by_a_draw_record(tmp_path):
+    """5,600 points, each made a strip of 254 triangles (1,422,400: fewer
+    than a draw's 2^22 triangles, more than a draw record's 2^22 vertices
+    hold): refused when Mesa has counted them, before the second run (it
+    had run them again, 1.6 GB, then rbcd-gl-raster refused the record;
+    R18-6)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    c = relink_with(shader_calls(VS), "GL_GEOMETRY_SHADER", GS_STRIP)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=12 * 5600, data=None, usage="GL_STATIC_DRAW")
+    r = gl2rbt(tmp_path, points_draw(c, count=5600).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    refused(r, "its tessellation or geometry shaders make 1422400 triangles, more than 1398101 "
+               "(a draw record's 4194304 vertices")
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    assert peak_mb(r) < 600, f"{peak_mb(r):.0f} MB"
+
+
+def test_a_geometry_shader_s_own_feedback_outputs_are_named(tmp_path):
+    """xfb_ qualifiers in a geometry shader: refused naming that stage (the
+    message had named the vertex shader, which has none; R18-10)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    gs = GS_TRIANGLES.replace("#version 330 core", "#version 440 core").replace(
+        "out;\n", "out;\nlayout(xfb_buffer = 0, xfb_offset = 0) out vec4 tf;\n").replace(
+        "gl_Position = gl_in[i].gl_Position;", "tf = vec4(9.0); gl_Position = gl_in[i].gl_Position;")
+    c = relink_with(shader_calls(VS), "GL_GEOMETRY_SHADER", gs)
+    refused(gl2rbt(tmp_path, shader_draw(c, vao=7).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+            "its geometry shader declares its own transform feedback outputs")
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
 def test_a_geometry_shader_runs_in_mesa(tmp_path):
     """A geometry shader making a triangle of each of three points (GS_POINTS)
     gives the trace of the three triangles drawn without it, byte for byte;
@@ -388,6 +449,10 @@ def test_tessellation_runs_in_mesa(tmp_path):
     assert json.loads((tmp_path / "four.jsonl").read_text())["prims"] > 10
     lines = TES.replace("triangles, equal_spacing", "isolines, equal_spacing")
     assert fragments(tmp_path, tessellated(lines).write(tmp_path / "lines.xz")) == [0]
+    # Levels past 64 are 64, a NaN outer level drops the patch as 0 does
+    # (Mesa; they had been refused as not finite).
+    assert trace_bytes(tmp_path, tessellated(TES, float("inf")), "inf") == trace_bytes(tmp_path, tessellated(TES, 64), "l64")
+    assert fragments(tmp_path, tessellated(TES, float("nan")).write(tmp_path / "nan.xz")) == [0]
 
 
 @pytest.mark.parametrize("into_window", [False, True], ids=["other_pass", "camera_pass"])
@@ -481,6 +546,102 @@ def test_the_captures_own_transform_feedback(tmp_path):
     refused(gl2rbt(tmp_path, read_buffer(back, 5).swap().write(tmp_path / "e.xz"), "-o", tmp_path / "e.rbt"),
             "which the GPU wrote")
     assert fragments(tmp_path, read_buffer(feedback_calls(("nope",)), 1).swap().write(tmp_path / "f.xz")) == [0]
+
+
+VS_FEEDBACK_MOVED = VS_FEEDBACK.replace("p.x / 32.0 - 1.0", "p.x / 32.0 - 0.5")
+
+
+@pytest.mark.parametrize("bind", [
+    dict(name="glBindBufferBase", index=4),
+    dict(name="glBindBufferRange", index=0, offset=0, size=6),
+    dict(name="glBindBufferRange", index=0, offset=2, size=8),
+], ids=["index_4", "size_6", "offset_2"])
+def test_a_refused_feedback_binding_leaves_the_generic_binding(tmp_path, bind):
+    """A glBindBufferBase/Range of GL_TRANSFORM_FEEDBACK_BUFFER that Mesa
+    refuses leaves the generic binding too: glBufferData on the target
+    then fills the buffer bound before (it had filled the one named, and
+    the triangle drawn from the other was the stale one: 0.00% against
+    Mesa)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    moved = struct.pack("<9f", 12, 4, -10, 48, 4, -10, 12, 40, -10)   # TRIANGLE, 8 to the right
+    def capture(refused_bind):
+        c = feedback_calls().add("glGenBuffers", n=3, buffers=[1, 5, 6])   # (5 and 1 named, for a core profile)
+        c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=6)
+        if refused_bind:
+            c.add(bind["name"], target="GL_TRANSFORM_FEEDBACK_BUFFER", buffer=6,
+                  **{k: v for k, v in bind.items() if k != "name"})
+        c.add("glBufferData", target="GL_TRANSFORM_FEEDBACK_BUFFER", size=36, data=moved, usage="GL_STATIC_DRAW")
+        return read_buffer(c, 5).swap()
+    assert trace_bytes(tmp_path, capture(True), "refused") == trace_bytes(tmp_path, capture(False), "none")
+
+
+def feedback_state_case(case):
+    """feedback_calls' capture in which a call GL 4.6 (13.2) and Mesa 22.3
+    refuse, or take, while transform feedback is active decides what is
+    recorded into buffer 5 or what is drawn; then the triangle drawn from
+    buffer 5 (object 5)."""
+    c = feedback_calls()
+    c.add("glGenTransformFeedbacks", n=1, ids=[8])
+    if case == "begin_without_its_buffer":
+        # Interleaved outputs go to binding 0, which is empty: begin fails.
+        c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=0, buffer=0)
+        c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=1, buffer=5)
+    c.add("glEnable", cap="GL_RASTERIZER_DISCARD")
+    c.add("glBeginTransformFeedback", primitiveMode="GL_POINTS" if case == "points_begun" else "GL_TRIANGLES")
+    if case == "paused_switched_and_resumed":
+        # Another object bound while paused; bound back, resumed: recording.
+        c.add("glPauseTransformFeedback").add("glBindTransformFeedback", target="GL_TRANSFORM_FEEDBACK", id=8)
+        c.add("glBindTransformFeedback", target="GL_TRANSFORM_FEEDBACK", id=0).add("glResumeTransformFeedback")
+    elif case == "use_program_while_recording":
+        c.add("glUseProgram", program=0)   # GL_INVALID_OPERATION: program 2 stays, and records
+    elif case == "link_while_paused":
+        c.add("glPauseTransformFeedback")
+        c.add("glShaderSource", shader=1, count=1, string=[VS_FEEDBACK_MOVED], length=None)
+        c.add("glCompileShader", shader=1)
+        c.add("glLinkProgram", program=2)   # GL_INVALID_OPERATION: its executable stays
+        c.add("glResumeTransformFeedback")
+    elif case == "resume_under_another_program":
+        c.add("glPauseTransformFeedback").add("glUseProgram", program=0)
+        c.add("glResumeTransformFeedback").add("glUseProgram", program=2)   # paused still: nothing recorded
+    if case != "link_while_paused":
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)   # (points_begun: not drawn)
+    c.add("glEndTransformFeedback").add("glDisable", cap="GL_RASTERIZER_DISCARD")
+    return read_buffer(c, 5 if case != "link_while_paused" else 1).swap()
+
+
+@pytest.mark.parametrize("case, recorded", [
+    ("paused_switched_and_resumed", True), ("use_program_while_recording", True),
+    ("begin_without_its_buffer", False), ("points_begun", False), ("resume_under_another_program", False)],
+    ids=["paused_switched_and_resumed", "use_program_while_recording", "begin_without_its_buffer", "points_begun",
+         "resume_under_another_program"])
+def test_transform_feedback_state_as_mesa_keeps_it(tmp_path, case, recorded):
+    """Whether buffer 5 is recorded into follows Mesa's state: an object
+    keeps its active and paused state while another is bound (it had been
+    forgotten: the buffer's stale bytes drawn, 0.00% against Mesa);
+    glUseProgram while recording is refused (the draw had been dropped); a
+    begin whose binding point is empty does not begin, a triangle drawn
+    while points are recorded draws nothing, a resume under another
+    program does not resume (each had recorded)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    r = gl2rbt(tmp_path, feedback_state_case(case).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    if recorded:
+        refused(r, "reads attribute 0 from buffer 5, which the GPU wrote")
+    else:
+        assert r.returncode == 0, r.stderr
+        assert "draws are GL errors" in r.stdout + r.stderr or case != "points_begun", r.stderr
+
+
+def test_a_link_while_feedback_records_from_the_program_is_refused(tmp_path):
+    """glLinkProgram of the program a paused transform feedback object
+    records from is GL_INVALID_OPERATION: the executable stays (the new
+    shader, a moved triangle, had been taken)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    kept = trace_bytes(tmp_path, feedback_state_case("link_while_paused"), "kept")
+    plain = feedback_calls().add("glEnable", cap="GL_RASTERIZER_DISCARD").add("glDisable", cap="GL_RASTERIZER_DISCARD")
+    assert kept == trace_bytes(tmp_path, read_buffer(plain, 1).swap(), "plain")
+    moved = feedback_calls().add("glShaderSource", shader=1, count=1, string=[VS_FEEDBACK_MOVED], length=None)
+    moved.add("glCompileShader", shader=1).add("glLinkProgram", program=2)
+    assert kept != trace_bytes(tmp_path, read_buffer(moved, 1).swap(), "moved")
 
 
 @pytest.mark.parametrize("call", [

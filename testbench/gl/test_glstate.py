@@ -1258,3 +1258,22 @@ def test_a_layer_attached_is_another_pass():
     assert gl.conv.s.fbo_depth[5] == ("texture", 3, "layer", 2), "GL_INVALID_VALUE: the attachment stays"
     square(gl)
     assert gl.conv.offscreen_draws == 1 and gl.conv.frame_records == 0, "left out, as another pass"
+
+
+def test_a_frame_s_vertices_are_bounded(monkeypatch):
+    """The vertices one frame's draws set up (each draw within its own
+    bound) are counted against MAX_FRAME_VERTICES before a draw fetches
+    any, and counted again from 0 in the next frame: one buffer's 2^22
+    indices drawn 20 times in a frame of 828 bytes had taken 93 s (R18-5).
+    The bound made small here; docs/gl-capture.md has its cost at 2^24."""
+    from rbcd.gl2rbt.glstate import draws
+    monkeypatch.setattr(draws, "MAX_FRAME_VERTICES", 13)
+    gl = GL()
+    square(gl)
+    square(gl)            # 12 vertices
+    gl.glXSwapBuffers(dpy=1, drawable=2, flags=CALL_FLAG_END_FRAME)
+    square(gl)
+    square(gl)            # 12 again: the count starts anew a frame
+    with pytest.raises(ConvertError, match=r"call 16: glDrawArrays: more than 13 vertices drawn in one frame"):
+        square(gl)
+    assert len(gl.draws()) == 4, "the refused draw made no record"

@@ -94,6 +94,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.out_frame = -1              # output frame number
         self.frame_open = False          # its start record is written
         self.frame_records = 0           # draw records in it
+        self.frame_vertices = 0          # vertices its draws set up or ran (every instance's)
         self.multi_draw_index = 0        # the draw of a multi-draw being run (gl_DrawID)
         self.multi_draw_name = None      # that multi-draw's call
         self.batched = None              # an indirect multi-draw's positions, run whole (indirect_batch)
@@ -127,6 +128,9 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.geo_view = None             # the projection of the frame's collisionable draws
         self.geo_space = None            # "eye" or "ndc": the space of the frame's geometry
         self.offscreen_draws = 0         # draws left out: not the camera pass
+        # Draws whose viewport reaches past the screen's far edges: their
+        # number and the first's call and viewport (the report says so).
+        self.viewport_past = [0, None, None]
         self.rejected_draws = []         # (call, GL error): draws under a program Mesa refused, as GL does
         self.fragment_effects = {}       # output frame -> {FRAGMENT_EFFECT_KEYS: count}, frames with programs
         self.draw_instances = 1          # instances of the draw being classified
@@ -228,6 +232,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.frame += 1
         self.frame_open = False
         self.frame_records = 0
+        self.frame_vertices = 0
         self.active = self.in_range(self.frame)
         if self.active and self.frame == self.first_frame:
             self.camera_depths_start()

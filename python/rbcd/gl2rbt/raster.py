@@ -394,6 +394,13 @@ def report(frames, conv, out):
         print(f"{len(wrong)} frames whose camera-pass depth buffer the converter's does not follow (their "
               f"trace is whole; --check-depth leaves them out): the first, frame {wrong[0][0]}: {wrong[0][1]}",
               file=out)
+    if conv.viewport_past[0]:
+        n, no, (vx, vy, vw, vh) = conv.viewport_past
+        w, h = conv.screen
+        print(f"{n} draws with a viewport reaching past the {w} x {h} screen, cut to it as GL cuts them for a "
+              f"window of that size (the first: call {no}, viewport {vx}, {vy}, {vw} x {vh}); a window resized, or "
+              "made anew with the same context, keeps no size in the capture: give --screen W H if it had another",
+              file=out)
     if conv.offscreen_draws:
         print(f"{conv.offscreen_draws} draws into other targets than the camera pass left out (docs/gl-capture.md)", file=out)
 

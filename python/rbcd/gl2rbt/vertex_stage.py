@@ -450,8 +450,9 @@ class VertexStage:
         fed = [feedback_varying(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_TRANSFORM_FEEDBACK_VARYINGS))]
         if fed != ["gl_Position"]:
             GL.glDeleteProgram(prog)
-            fail_call(no, f"{where}: its vertex shader declares its own transform feedback outputs (xfb_ layout "
-                      "qualifiers): not emulated")
+            last = next(s for s in ("geometry", "tess_evaluation", "vertex") if s in stages)
+            fail_call(no, f"{where}: its {last.replace('_', ' ')} shader declares its own transform feedback outputs "
+                      "(xfb_ layout qualifiers): not emulated")
         mp = MesaProgram(prog, p.version)
         mp.amplifies = len(stages) > 1
         mp.tessellates = "tess_evaluation" in stages
@@ -834,13 +835,16 @@ class VertexStage:
                         return self.mesa.feedback_positions(issue, prims)
                     # Tessellation and geometry shaders make as many
                     # primitives as they make: Mesa's count of them sizes a
-                    # second run.
-                    from .glstate.draws import MAX_DRAW_PRIMITIVES
+                    # second run, within a draw record's vertices (3 a
+                    # triangle: such a draw is one instance).
+                    from .glstate.draws import MAX_DRAW_PRIMITIVES, MAX_RECORD_VERTICES
                     made = self.mesa.feedback_positions(issue, prims, fits=False)
                     if isinstance(made, int):
-                        if made > MAX_DRAW_PRIMITIVES:
+                        limit = min(MAX_DRAW_PRIMITIVES, MAX_RECORD_VERTICES // 3)
+                        if made > limit:
                             fail_call(no, f"{name}: its tessellation or geometry shaders make {made} triangles, "
-                                      f"more than {MAX_DRAW_PRIMITIVES} (docs/gl-capture.md)")
+                                      f"more than {limit} (a draw record's {MAX_RECORD_VERTICES} vertices; "
+                                      "docs/gl-capture.md)")
                         made = self.mesa.feedback_positions(issue, made)
                     return made
         except GLError as e:

@@ -123,9 +123,12 @@ class GLState:
         self.image_units = {}
         self.image_writes = set()
         # Transform feedback (feedback.py): the bound object, whether it is
-        # active and paused; the binding points of the objects not bound.
+        # active and paused, the program it records from; the primitive
+        # mode last begun; the objects not bound.
         self.feedback = (0, False, False)
-        self.feedback_bindings = {}
+        self.feedback_source = None
+        self.feedback_mode = None
+        self.feedback_objects = {}
         # Tessellation (programs.py): vertices a patch, default levels set.
         self.patch_vertices = 3
         self.patch_levels = {}

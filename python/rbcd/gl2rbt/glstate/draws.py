@@ -24,6 +24,7 @@ MESA_STEPS_PER_UNIT = 2.0
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
 MAX_MULTI_DRAWS = 1 << 16      # draws of one multi-draw
 MAX_FRAME_RECORDS = 1 << 17    # draw records of one frame (a game's frame has a few thousand)
+MAX_FRAME_VERTICES = 1 << 24   # vertices one frame's draws set up or run (a game's: under a million)
 # A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
 # that could need more is refused before anything is computed for it.
 MAX_RECORD_VERTICES = 1 << 22
@@ -130,6 +131,16 @@ class DrawCalls:
         if p is not None:
             self.note_fragment_effects(p, obj_id is not None)
 
+    def frame_work(self, no, name, vertices):
+        """A draw's vertices (every instance's), counted against the frame's
+        bound before they are fetched or run: each draw is bounded alone,
+        and a frame of many (one buffer's indices drawn again and again)
+        would otherwise cost hours from a kilobyte."""
+        self.frame_vertices += vertices
+        if self.frame_vertices > MAX_FRAME_VERTICES:
+            fail_call(no, f"{name}: more than {MAX_FRAME_VERTICES} vertices drawn in one frame "
+                      "(docs/gl-capture.md, limits)")
+
     def draw_record(self, no, name, clip, tris, obj_id, nverts, mv, proj, eye):
         """The draw record of clip-space vertices and their triangles, for
         object obj_id (None: other work); eye() gives the eye-space vertices
@@ -156,6 +167,14 @@ class DrawCalls:
         top = h - (vy + vh)   # the viewport's top row, screen rows down
         if vw <= 0 or vh <= 0 or vx >= w or vx + vw <= 0 or top >= h or top + vh <= 0:
             return   # the viewport (as Mesa clamps it) meets no pixel of the screen: nothing is drawn
+        if (vx + vw > w or vy + vh > h) and not self.args.screen:
+            # GL cuts it to the window; but a window resized, or made anew
+            # with the same context, keeps no size in the capture (apitrace
+            # records one at a context's first MakeCurrent): the report
+            # says so, naming the first such draw.
+            self.viewport_past[0] += 1
+            if self.viewport_past[1] is None:
+                self.viewport_past[1:] = [no, (vx, vy, vw, vh)]
         scissor = self.scissor_rect()
         planes = []
         if any(st.clip_enabled):
@@ -251,8 +270,12 @@ class DrawCalls:
         count = d["count"]
         if instances > MAX_INSTANCES:
             fail_call(no, f"{name}: {instances} instances, more than {MAX_INSTANCES}")
-        self.shader_stores(no, name)
         mode = d["mode"]
+        refused = self.feedback_kind_refused(mode, self.stage_programs())
+        if refused is not None:
+            self.rejected_draws.append((no, refused))
+            return
+        self.shader_stores(no, name)
         if mode not in PRIM_MODES or (self.core and self.s.vao == 0) or \
                 (d.get("type", "GL_UNSIGNED_INT") not in INDEX_TYPES and "Elements" in name) or \
                 ((self.core or self.es) and mode in LEGACY_MODES):
@@ -303,6 +326,7 @@ class DrawCalls:
         if per * instances > MAX_DRAW_PRIMITIVES or 3 * per > MAX_RECORD_VERTICES:
             fail_call(no, f"{name}: {per * instances} triangles in one draw, more than {MAX_DRAW_PRIMITIVES} "
                       f"(or {MAX_RECORD_VERTICES // 3} an instance; docs/gl-capture.md)")
+        self.frame_work(no, name, count * instances)
         self.open_frame(no)
         tagged = False
         self.draw_instances = instances
@@ -588,6 +612,7 @@ class DrawCalls:
             fail_call(no, f"{name}: {count} vertices, more than a draw record's {MAX_RECORD_VERTICES}")
         if not self.active or count == 0:
             return
+        self.frame_work(no, name, count)
         arr = self.vertex_source(no, name)
         self.draw(no, mode, self.array_values(arr, first, count, no), name)
 
@@ -606,6 +631,7 @@ class DrawCalls:
             fail_call(no, f"{name}: {count} indices, more than a draw record's {MAX_RECORD_VERTICES} vertices")
         if not self.active or count == 0 or type_ not in INDEX_TYPES:
             return   # nothing to draw, or GL_INVALID_ENUM
+        self.frame_work(no, name, count)
         arr = self.vertex_source(no, name)
         # Indices outside glDrawRangeElements' [start, end] are drawn (GL
         # leaves them undefined; Mesa draws them).

@@ -7,56 +7,134 @@ draw reading them as vertices is refused, naming both calls
 (BufferCalls.checked_buffer). Transform feedback objects keep their own
 binding points, as GL defines them; a draw whose vertex count a feedback
 object recorded (glDrawTransformFeedback) is refused when it reaches the
-camera pass and left out otherwise."""
+camera pass and left out otherwise.
+
+What Mesa 22.3 refuses (transformfeedback.c, draw_validate.c) changes
+nothing here either: beginning without a program that records outputs,
+in another primitive mode than points, lines or triangles, while active,
+or with a binding point the program records into left empty; pausing,
+resuming or ending out of turn, resuming under another program; binding
+another object, glUseProgram or glBindProgramPipeline while active and
+not paused; linking a program an active object (paused too) records from;
+glTransformFeedbackVaryings while the bound object is active; and a draw
+whose primitives are not of the kind begun (a geometry shader's output,
+or tessellation's, decides the kind when there is one) draws nothing."""
+import re
+
 from ...cli import I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
+from . import enum_arg
 from .buffers import FEEDBACK_TARGET as TARGET, binding_ignored
+
+
+class FeedbackObject:
+    """A transform feedback object not bound now: its binding points
+    ({index: (buffer, offset, size)}), whether it is active and paused,
+    and the program it records from (Mesa's obj->program, set at begin)."""
+
+    def __init__(self):
+        self.bindings = {}
+        self.active = self.paused = False
+        self.source = None
+
+
+# The primitives of each kind glBeginTransformFeedback takes (Mesa's
+# valid-primitive mask; every other mode is of the triangles' kind).
+KIND_OF_MODE = {"GL_POINTS": "GL_POINTS", "GL_LINES": "GL_LINES", "GL_LINE_LOOP": "GL_LINES",
+                "GL_LINE_STRIP": "GL_LINES"}
+GEOMETRY_OUTPUT_KIND = {"points": "GL_POINTS", "line_strip": "GL_LINES", "triangle_strip": "GL_TRIANGLES"}
 
 
 class FeedbackCalls:
     """self.s.feedback: the bound transform feedback object's name, whether
-    feedback is active and paused; self.s.feedback_bindings: each object
-    not bound now -> {index: (buffer, offset, size)} (the bound one's are
-    in self.s.indexed under TARGET, where glBindBufferBase puts them)."""
+    it is active and paused; self.s.feedback_source: the program it records
+    from; self.s.feedback_mode: the primitive mode of the last begin (the
+    context's, as in Mesa); self.s.feedback_objects: the objects not bound
+    now (FeedbackObject). The bound one's binding points are in
+    self.s.indexed under TARGET, where glBindBufferBase puts them."""
+
+    def recording(self):
+        """Whether the bound object records now (active, not paused)."""
+        return self.s.feedback[1] and not self.s.feedback[2]
 
     def feedback_writes(self, no, name):
         """At a draw: the buffers feedback records into now are the GPU's."""
-        active, paused = self.s.feedback[1:]
-        if not active or paused:
+        if not self.recording():
             return
         for (target, index), (b, _, _) in self.s.indexed.items():
             if target == TARGET and b:
                 self.gpu_wrote_buffer(no, b, f"{base_name(name)} with transform feedback recording into "
                                              f"binding {index}")
 
+    def feedback_kind_refused(self, mode, stages):
+        """A draw of `mode` under `stages` (stage_programs) while feedback
+        records: None when its primitives are of the kind begun, else the
+        GL_INVALID_OPERATION that makes Mesa draw nothing."""
+        if not self.recording():
+            return None
+        if "geometry" in stages:
+            out = re.findall(r"layout\s*\(([^)]*)\)\s*out\s*;", stages["geometry"][1].scanned.get("geometry", ""))
+            words = {w.strip().split("=")[0].strip() for q in out for w in q.split(",")}
+            kinds = {GEOMETRY_OUTPUT_KIND[w] for w in words if w in GEOMETRY_OUTPUT_KIND}
+            kind = kinds.pop() if len(kinds) == 1 else None
+        elif "tess_evaluation" in stages:
+            text = stages["tess_evaluation"][1].scanned.get("tess_evaluation", "")
+            kind = "GL_POINTS" if re.search(r"\bpoint_mode\b", text) else \
+                "GL_LINES" if re.search(r"\bisolines\b", text) else "GL_TRIANGLES"
+        else:
+            kind = KIND_OF_MODE.get(mode, "GL_TRIANGLES")
+        if kind is None or kind == self.s.feedback_mode:
+            return None
+        return f"GL_INVALID_OPERATION: primitives of {kind} while transform feedback records {self.s.feedback_mode}"
+
+    def feedback_source(self):
+        """The program whose outputs feedback would record (Mesa's
+        get_xfb_source: the last vertex-processing stage's), as (name,
+        Program), or None."""
+        stages = self.stage_programs()
+        for stage in ("geometry", "tess_evaluation", "vertex"):
+            if stage in stages:
+                return stages[stage]
+        return None
+
+    def records_from(self, v):
+        """Whether an active transform feedback object (paused too, bound or
+        not) records from program v: its link is GL_INVALID_OPERATION."""
+        return (self.s.feedback[1] and self.s.feedback_source == v) or \
+            any(o.active and o.source == v for o in self.s.feedback_objects.values())
+
     def feedback_object(self, no, name, v):
         """A transform feedback object's name, or None when GL ignores the
         call (a name never generated, or deleted: GL_INVALID_OPERATION)."""
         v = checked(no, integer, v, f"{name}: the transform feedback object", *U32)
-        return v if v == 0 or v in self.s.feedback_bindings or v == self.s.feedback[0] else None
+        return v if v == 0 or v in self.s.feedback_objects or v == self.s.feedback[0] else None
 
     def h_gen_feedbacks(self, no, name, a, args):
         ids = dict(args).get("ids")
         for v in ids if isinstance(ids, list) else []:
             v = checked(no, integer, v, f"{name}: a name", *U32)
             if v and v != self.s.feedback[0]:
-                self.s.feedback_bindings.setdefault(v, {})
+                self.s.feedback_objects.setdefault(v, FeedbackObject())
 
     def h_bind_feedback(self, no, name, a, args):
         d = dict(args)
+        target = enum_arg(d.get("target"), no, f"{name}: the target")
         v = self.feedback_object(no, name, d.get("id"))
         obj, active, paused = self.s.feedback
-        if v is None or d.get("target") != "GL_TRANSFORM_FEEDBACK" or (active and not paused) or v == obj:
+        if v is None or target != "GL_TRANSFORM_FEEDBACK" or self.recording() or v == obj:
             return   # GL_INVALID_OPERATION or _ENUM, or nothing to change
-        self.s.feedback_bindings[obj] = {i: bound for (t, i), bound in self.s.indexed.items() if t == TARGET}
+        old = FeedbackObject()
+        old.bindings = {i: bound for (t, i), bound in self.s.indexed.items() if t == TARGET}
+        old.active, old.paused, old.source = active, paused, self.s.feedback_source
+        self.s.feedback_objects[obj] = old
         for key in [k for k in self.s.indexed if k[0] == TARGET]:
             del self.s.indexed[key]
-        for i, bound in self.s.feedback_bindings.pop(v, {}).items():
+        new = self.s.feedback_objects.pop(v, None) or FeedbackObject()
+        for i, bound in new.bindings.items():
             self.s.indexed[(TARGET, i)] = bound
-        # (Each object's active and paused state is its own: one bound
-        # while another is active was refused above, so this one is idle.)
-        self.s.feedback = (v, False, False)
+        self.s.feedback = (v, new.active, new.paused)
+        self.s.feedback_source = new.source
 
     def h_delete_feedbacks(self, no, name, a, args):
         ids = dict(args).get("ids")
@@ -64,11 +142,12 @@ class FeedbackCalls:
             v = checked(no, integer, v, f"{name}: a name", *U32)
             if not v:
                 continue
+            if v == self.s.feedback[0] and self.s.feedback[1] or \
+                    v in self.s.feedback_objects and self.s.feedback_objects[v].active:
+                return   # GL_INVALID_OPERATION: an active object is not deleted, nor the rest of the list
             if v == self.s.feedback[0]:
-                if self.s.feedback[1]:
-                    continue   # GL_INVALID_OPERATION: an active object is not deleted
                 self.h_bind_feedback(no, name, a, [("target", "GL_TRANSFORM_FEEDBACK"), ("id", 0)])
-            self.s.feedback_bindings.pop(v, None)
+            self.s.feedback_objects.pop(v, None)
 
     def h_feedback_buffer(self, no, name, a, args):
         """glTransformFeedbackBufferBase/Range (GL 4.5): a binding point of
@@ -81,27 +160,50 @@ class FeedbackCalls:
         size = d.get("size")
         if size is not None:
             size = checked(no, integer, size, f"{name}: the size", *I64)
-        if v is None or (buf and buf not in self.s.buffer_objects) or binding_ignored(
-                TARGET, index, buf, offset, size, feedback_active=v == self.s.feedback[0] and self.s.feedback[1],
-                dsa=True):
+        if v is None or (buf and buf not in self.s.buffer_objects):
             return   # GL_INVALID_OPERATION or _VALUE: the call changes nothing
-        if v == self.s.feedback[0]:
+        bound = v == self.s.feedback[0]
+        active = self.s.feedback[1] if bound else v in self.s.feedback_objects and self.s.feedback_objects[v].active
+        if binding_ignored(TARGET, index, buf, offset, size, feedback_active=active, dsa=True):
+            return
+        if bound:
             self.s.indexed[(TARGET, index)] = (buf, offset, size)
         else:
-            self.s.feedback_bindings.setdefault(v, {})[index] = (buf, offset, size)
+            self.s.feedback_objects.setdefault(v, FeedbackObject()).bindings[index] = (buf, offset, size)
 
     def h_begin_feedback(self, no, name, a, args):
         obj, active, _ = self.s.feedback
-        if not active:
-            self.s.feedback = (obj, True, False)
+        source = self.feedback_source()
+        mode = enum_arg(dict(args).get("primitiveMode", a[0] if a else None), no, f"{name}: the primitive mode")
+        if source is None or source[1].feedback is None or mode not in ("GL_POINTS", "GL_LINES", "GL_TRIANGLES") \
+                or active:
+            return   # GL_INVALID_OPERATION (no program, none recording) or _ENUM: nothing begins
+        names, buffer_mode = source[1].feedback
+        if buffer_mode == "GL_SEPARATE_ATTRIBS":
+            used = set(range(len(names)))
+        else:
+            used, b = set(), 0
+            for n in names:
+                if n == "gl_NextBuffer":
+                    b += 1
+                elif not n.startswith("gl_SkipComponents"):
+                    used.add(b)
+        if any(not self.s.indexed.get((TARGET, i), (0,))[0] for i in used):
+            return   # GL_INVALID_OPERATION: a binding point recorded into has no buffer
+        self.s.feedback = (obj, True, False)
+        self.s.feedback_mode, self.s.feedback_source = mode, source[0]
 
     def h_end_feedback(self, no, name, a, args):
-        self.s.feedback = (self.s.feedback[0], False, False)
+        if self.s.feedback[1]:   # (else GL_INVALID_OPERATION)
+            self.s.feedback = (self.s.feedback[0], False, False)
 
     def h_pause_feedback(self, no, name, a, args):
-        obj, active, _ = self.s.feedback
-        if active:
-            self.s.feedback = (obj, True, base_name(name) == "glPauseTransformFeedback")
+        obj, active, paused = self.s.feedback
+        if base_name(name) == "glPauseTransformFeedback":
+            if active and not paused:
+                self.s.feedback = (obj, True, True)
+        elif active and paused and (self.feedback_source() or (None,))[0] == self.s.feedback_source:
+            self.s.feedback = (obj, True, False)   # (another program than begin's: GL_INVALID_OPERATION)
 
     def h_draw_feedback(self, no, name, a, args):
         """glDrawTransformFeedback*: as many vertices as a feedback object

@@ -14,7 +14,7 @@ import re
 from ...cli import I32, U32, integer, real
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
-from . import gl_boolean
+from . import enum_arg, gl_boolean
 from .glsl_text import COMMENTS, MAX_CHOICES, MAX_DEPTH, MAX_TOKENS, ExpansionTooLarge, expanded
 
 STAGES = {"GL_VERTEX_SHADER": "vertex", "GL_FRAGMENT_SHADER": "fragment", "GL_GEOMETRY_SHADER": "geometry",
@@ -289,6 +289,8 @@ class ProgramCalls:
 
     def h_link_program(self, no, name, a, args):
         p = self.program(no, name, a[0] if a else None)
+        if self.records_from(a[0]):
+            return   # GL_INVALID_OPERATION: transform feedback records from it (paused too)
         before = None
         if (a[0] == self.s.program or self.in_a_pipeline(a[0])) and p.linked is not None:
             before = copy.copy(p)
@@ -342,8 +344,8 @@ class ProgramCalls:
         v = a[0] if a else None
         if not isinstance(v, int) or v < 0:
             fail_call(no, f"{name}: impossible program {printable(v)}")
-        if v and (v not in self.s.programs or self.s.programs[v].linked is None):
-            return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the call does nothing
+        if v and (v not in self.s.programs or self.s.programs[v].linked is None) or self.recording():
+            return   # GL_INVALID_VALUE or GL_INVALID_OPERATION (also while feedback records): the call does nothing
         if v and v != self.s.program and "vertex" in self.s.programs[v].linked[0] \
                 and not self.vertex_stage().links(self.s.programs[v]):
             return   # its last link failed in Mesa: GL_INVALID_OPERATION, the program in use stays
@@ -481,7 +483,7 @@ class ProgramCalls:
         default tessellation levels, which Mesa's copy gets at a draw under
         tessellation; a value GL refuses changes nothing."""
         d = dict(args)
-        pname = d.get("pname")
+        pname = enum_arg(d.get("pname"), no, f"{name}: the parameter")
         if base_name(name) == "glPatchParameteri":
             v = checked(no, integer, d.get("value"), f"{name}: the value", *I32)
             if pname == "GL_PATCH_VERTICES" and 0 < v <= MAX_PATCH_VERTICES:
@@ -493,7 +495,10 @@ class ProgramCalls:
             if n is not None:
                 fail_call(no, f"{printable(name)}: the capture does not hold its {n} levels")
             return   # GL_INVALID_ENUM
-        self.s.patch_levels[pname] = tuple(checked(no, real, v, f"{name}: a level") for v in values[:n])
+        # Any GLfloat, infinities and NaN too: Mesa computes them (a level
+        # past 64 is 64, a NaN outer level drops the patch, as 0 does).
+        self.s.patch_levels[pname] = tuple(v if isinstance(v, float) else checked(no, real, v, f"{name}: a level")
+                                           for v in values[:n])
 
     def h_program_parameter(self, no, name, a, args):
         """glProgramParameteri: GL_PROGRAM_SEPARABLE, which the next link
@@ -540,8 +545,8 @@ class ProgramCalls:
 
     def h_bind_pipeline(self, no, name, a, args):
         v = dict(args).get("pipeline", a[0] if a else None)
-        if v == 0 or self.pipeline(no, name, v) is not None:
-            self.s.pipeline = v
+        if (v == 0 or self.pipeline(no, name, v) is not None) and not self.recording():
+            self.s.pipeline = v   # (while feedback records: GL_INVALID_OPERATION)
 
     def h_delete_pipelines(self, no, name, a, args):
         for v in dict(args).get("pipelines") or []:
@@ -617,9 +622,9 @@ class ProgramCalls:
         them, as Mesa decides (vertex_stage.full_link)."""
         d = dict(args)
         count = checked(no, integer, d.get("count"), f"{name}: the count", *I32)
-        names, mode = d.get("varyings"), d.get("bufferMode")
-        if count < 0 or mode not in ("GL_INTERLEAVED_ATTRIBS", "GL_SEPARATE_ATTRIBS"):
-            return   # GL_INVALID_VALUE, GL_INVALID_ENUM: the call changes nothing
+        names, mode = d.get("varyings"), enum_arg(d.get("bufferMode"), no, f"{name}: the buffer mode")
+        if count < 0 or mode not in ("GL_INTERLEAVED_ATTRIBS", "GL_SEPARATE_ATTRIBS") or self.s.feedback[1]:
+            return   # GL_INVALID_VALUE, GL_INVALID_ENUM, or _OPERATION while active: the call changes nothing
         if count and not (isinstance(names, list) and len(names) >= count and
                           all(isinstance(v, str) for v in names[:count])):
             fail_call(no, f"{printable(name)}: the capture does not hold its {count} output names")
