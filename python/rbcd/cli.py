@@ -18,7 +18,8 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
   leaves as it was); anything else (a device, a FIFO) written in place and
   never unlinked. check_outputs refuses, before anything is opened, an output
   that names an input or another output, or a FIFO or socket other than
-  standard output (opening one would wait for a reader). A temporary
+  standard output (opening one would wait for a reader), and standard
+  output opened onto an input (the report would go into it). A temporary
   is removed on failure and on SIGINT/SIGTERM/SIGHUP (main_wrapper turns them
   into KeyboardInterrupt, so that cleanup code runs).
 """
@@ -433,10 +434,21 @@ def check_outputs(inputs, outputs):
             return ("file", st.st_dev, st.st_ino), st
         except OSError:
             return ("path", os.path.realpath(path)), None
-    taken = {}
+    taken, named = {}, {}
     for what, path in inputs:
         if path:
             taken[ident(path)[0]] = what
+            named[ident(path)[0]] = path
+    # Standard output takes the tool's report (or listing) whatever the
+    # outputs are: opened by the shell onto an input (1<> or >>), it would
+    # be written into it, as GNU cat refuses to ("input file is output file").
+    try:
+        st = os.fstat(1)
+    except OSError:
+        st = None
+    key = ("file", st.st_dev, st.st_ino) if st is not None and stat.S_ISREG(st.st_mode) else None
+    if key in taken:
+        raise UsageError(f"{named[key]}: standard output is {taken[key]}: what goes there would be written into it")
     for option, path in outputs:
         if not path:
             continue

@@ -8,6 +8,7 @@ discipline as every other output. Captures are written here as reduced
 captures (no Xvfb, no apitrace)."""
 import lzma
 import os
+import pathlib
 import pickle
 import shutil
 import signal
@@ -194,6 +195,31 @@ def test_hidden_outputs_never_destroy_inputs(tmp_path):
         assert open(p, "rb").read() == data, f"{p} was changed"
     assert left_behind(tmp_path, ["c.xz", "rules.toml", "d"]) == []
     assert sorted(os.listdir(tmp_path / "d")) == ["x.0.depth", "y.0.depth"]
+
+
+@pytest.mark.parametrize("mode, args", [
+    ("r+b", ["-o", "c.rbt"]), ("ab", ["-o", "c.rbt"]), ("r+b", ["--list-draws", "0"]),
+    ("ab", ["-o", "c.rbt", "--select", "RULES"]),
+], ids=["read_write", "append", "listing", "selection_appended"])
+def test_standard_output_onto_an_input_is_refused(tmp_path, mode, args):
+    """Standard output opened by the shell onto an input (1<>c.xz, >>c.xz,
+    >>rules.toml) takes the report or the listing whatever the outputs
+    are: refused before anything is written, as GNU cat refuses it (the
+    report had been written over the capture's first bytes, exit 0;
+    R18-11)."""
+    cap = pathlib.Path(Calls().frame().write(tmp_path / "c.xz"))
+    rules = tmp_path / "rules.toml"
+    rules.write_text('[[object]]\nid = 3\nvertex_count = [3, 3]\n')
+    target = rules if "RULES" in args else cap
+    args = [str(rules) if a == "RULES" else str(tmp_path / a) if a.endswith(".rbt") else a for a in args]
+    before = {q: q.read_bytes() for q in (cap, rules)}
+    with open(target, mode) as out:
+        r = gl2rbt(tmp_path, cap, *args, stdout=out)
+    what = "the selection file" if target == rules else "the capture"
+    refused(r, f"{target}: standard output is {what}")
+    for q, data in before.items():
+        assert q.read_bytes() == data, f"{q} was changed"
+    assert left_behind(tmp_path, ["c.xz", "rules.toml"]) == []
 
 
 def test_a_failed_run_leaves_no_stream_copy(tmp_path):
