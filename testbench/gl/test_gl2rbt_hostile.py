@@ -551,26 +551,28 @@ def test_the_captures_own_transform_feedback(tmp_path):
 VS_FEEDBACK_MOVED = VS_FEEDBACK.replace("p.x / 32.0 - 1.0", "p.x / 32.0 - 0.5")
 
 
-@pytest.mark.parametrize("bind", [
-    dict(name="glBindBufferBase", index=4),
-    dict(name="glBindBufferRange", index=0, offset=0, size=6),
-    dict(name="glBindBufferRange", index=0, offset=2, size=8),
-], ids=["index_4", "size_6", "offset_2"])
-def test_a_refused_feedback_binding_leaves_the_generic_binding(tmp_path, bind):
-    """A glBindBufferBase/Range of GL_TRANSFORM_FEEDBACK_BUFFER that Mesa
-    refuses leaves the generic binding too: glBufferData on the target
-    then fills the buffer bound before (it had filled the one named, and
-    the triangle drawn from the other was the stale one: 0.00% against
-    Mesa)."""
+@pytest.mark.parametrize("target, bind", [
+    ("GL_TRANSFORM_FEEDBACK_BUFFER", dict(name="glBindBufferBase", index=4)),
+    ("GL_TRANSFORM_FEEDBACK_BUFFER", dict(name="glBindBufferRange", index=0, offset=0, size=6)),
+    ("GL_TRANSFORM_FEEDBACK_BUFFER", dict(name="glBindBufferRange", index=0, offset=2, size=8)),
+    # llvmpipe's 16 atomic counter binding points, offsets a counter's 4 bytes apart.
+    ("GL_ATOMIC_COUNTER_BUFFER", dict(name="glBindBufferBase", index=1000)),
+    ("GL_ATOMIC_COUNTER_BUFFER", dict(name="glBindBufferRange", index=0, offset=2, size=8)),
+], ids=["feedback_index_4", "feedback_size_6", "feedback_offset_2", "atomic_index_1000", "atomic_offset_2"])
+def test_a_refused_binding_leaves_the_generic_binding(tmp_path, target, bind):
+    """A glBindBufferBase/Range Mesa refuses leaves the generic binding
+    too: glBufferData on the target then fills the buffer bound before (it
+    had filled the one named, and the triangle drawn from the other was
+    the stale one: 0.00% against Mesa; R18-1)."""
     pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
     moved = struct.pack("<9f", 12, 4, -10, 48, 4, -10, 12, 40, -10)   # TRIANGLE, 8 to the right
     def capture(refused_bind):
         c = feedback_calls().add("glGenBuffers", n=3, buffers=[1, 5, 6])   # (5 and 1 named, for a core profile)
+        c.add("glBindBuffer", target=target, buffer=5)
         c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=6)
         if refused_bind:
-            c.add(bind["name"], target="GL_TRANSFORM_FEEDBACK_BUFFER", buffer=6,
-                  **{k: v for k, v in bind.items() if k != "name"})
-        c.add("glBufferData", target="GL_TRANSFORM_FEEDBACK_BUFFER", size=36, data=moved, usage="GL_STATIC_DRAW")
+            c.add(bind["name"], target=target, buffer=6, **{k: v for k, v in bind.items() if k != "name"})
+        c.add("glBufferData", target=target, size=36, data=moved, usage="GL_STATIC_DRAW")
         return read_buffer(c, 5).swap()
     assert trace_bytes(tmp_path, capture(True), "refused") == trace_bytes(tmp_path, capture(False), "none")
 
@@ -629,6 +631,21 @@ def test_transform_feedback_state_as_mesa_keeps_it(tmp_path, case, recorded):
     else:
         assert r.returncode == 0, r.stderr
         assert "draws are GL errors" in r.stdout + r.stderr or case != "points_begun", r.stderr
+
+
+def test_only_the_bindings_a_program_records_into_are_the_gpu_s(tmp_path):
+    """Interleaved outputs go to binding 0: a buffer at binding 1 is not
+    recorded into and converts as the capture's (it had been refused as
+    GPU-written; R18-8); the one at binding 0 is refused."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    def capture(read):
+        c = feedback_calls().add("glGenBuffers", n=3, buffers=[1, 5, 6])
+        c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=6)
+        c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE, usage="GL_STATIC_DRAW")
+        c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=1, buffer=6)
+        return read_buffer(record(c), read).swap().write(tmp_path / f"{read}.xz")
+    assert fragments(tmp_path, capture(6))[0] > 100
+    refused(gl2rbt(tmp_path, capture(5), "-o", tmp_path / "c.rbt"), "buffer 5, which the GPU wrote")
 
 
 def test_a_link_while_feedback_records_from_the_program_is_refused(tmp_path):

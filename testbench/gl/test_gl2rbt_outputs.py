@@ -558,3 +558,30 @@ def test_a_signal_at_any_moment_of_numpy_s_loading_is_one_line(tmp_path):
     said += [ended(p) for p in runs]
     assert said.count("interrupted") >= 7, said
     assert left_behind(tmp_path, ["c.xz"]) == []
+
+
+def test_a_replay_outliving_sigterm_is_killed_when_the_converter_dies():
+    """A replay whose process takes no SIGTERM (glretrace's own handler can
+    deadlock on malloc's lock) is ended with SIGKILL by the session's
+    watcher once the converter is gone (its lifeline closed, as SIGKILL
+    closes it): it had lived on under PID 1 (R18-13). The converter's own
+    end of a replay is not slowed by the watcher: under a second for one
+    that takes SIGTERM."""
+    from rbcd.gl2rbt import glretrace
+    proc = glretrace.start_replay(["/bin/sh", "-c", "trap '' TERM; sleep 60 & wait; sleep 60"],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(0.3)
+    assert len(glretrace.session_left(proc.pid)) >= 2, "the replay did not start"
+    os.close(proc.rbcd_lifeline)   # the converter gone, however it went
+    proc.rbcd_lifeline = None
+    deadline = time.monotonic() + glretrace.END_SECONDS + 3
+    while glretrace.session_left(proc.pid, watcher=True) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert glretrace.session_left(proc.pid, watcher=True) == [], "the replay outlived the converter"
+    proc.wait()
+    proc = glretrace.start_replay(["/bin/sleep", "60"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    time.sleep(0.3)
+    t = time.monotonic()
+    glretrace.end_replay(proc)
+    assert time.monotonic() - t < 1.0, f"end_replay took {time.monotonic() - t:.1f} s"
+    assert glretrace.session_left(proc.pid, watcher=True) == []

@@ -1277,3 +1277,22 @@ def test_a_frame_s_vertices_are_bounded(monkeypatch):
     with pytest.raises(ConvertError, match=r"call 16: glDrawArrays: more than 13 vertices drawn in one frame"):
         square(gl)
     assert len(gl.draws()) == 4, "the refused draw made no record"
+
+
+def test_fixed_function_adjacency_and_patch_draws_as_mesa_draws_them():
+    """Without a program, GL_TRIANGLES_ADJACENCY draws the triangle of each
+    six vertices' 1st, 3rd and 5th, GL_TRIANGLE_STRIP_ADJACENCY its
+    strip's (GL 4.6 table 10.1), line adjacency no area, GL_PATCHES nothing
+    (GL_INVALID_OPERATION with no tessellation): each had been refused as
+    not emulated (R18-12)."""
+    gl = GL()
+    v = np.array([[x, y, 0] for x, y in ((0, 0), (9, 9), (1, 0), (9, 9), (0, 1), (9, 9), (1, 1), (9, 9))], "<f4")
+    gl.glEnableClientState("GL_VERTEX_ARRAY")
+    gl.glVertexPointer(size=3, type="GL_FLOAT", stride=0, pointer=v.tobytes())
+    for mode, count in (("GL_TRIANGLES_ADJACENCY", 6), ("GL_TRIANGLE_STRIP_ADJACENCY", 8),
+                        ("GL_LINES_ADJACENCY", 8), ("GL_LINE_STRIP_ADJACENCY", 8), ("GL_PATCHES", 6)):
+        gl.glDrawArrays(mode=mode, first=0, count=count)
+    a, s = gl.draws()
+    assert a["tris"] == [[0, 2, 4]] and a["clip"][[0, 2, 4], :2].tolist() == [[0, 0], [1, 0], [0, 1]]
+    assert s["tris"] == [[0, 2, 4], [4, 2, 6]], "the second triangle's first two swapped: a strip's winding"
+    assert gl.conv.ignored_prims == 2

@@ -81,6 +81,20 @@ def triangle_indices(mode, n):
             return np.zeros((0, 3), np.uint32)
         i = np.arange(1, n - 1, dtype=np.uint32)
         return np.stack([np.zeros_like(i), i, i + 1], axis=1)
+    if mode == "GL_TRIANGLES_ADJACENCY":
+        # Each 6 vertices: a triangle of the 1st, 3rd and 5th, the others
+        # its neighbours' (GL 4.6, 10.1.12), which only a geometry shader reads.
+        k = n // 6
+        return (np.arange(k, dtype=np.uint32)[:, None] * 6 + np.array([0, 2, 4], np.uint32)).reshape(k, 3)
+    if mode == "GL_TRIANGLE_STRIP_ADJACENCY":
+        # GL 4.6 table 10.1: triangle i of vertices 2i, 2i + 2, 2i + 4, the
+        # first two swapped for odd i (a strip's winding).
+        k = max(0, (n - 4) // 2)
+        i = np.arange(k, dtype=np.uint32)
+        t = np.stack([2 * i, 2 * i + 2, 2 * i + 4], axis=1)
+        odd = (i % 2) == 1
+        t[odd, 0], t[odd, 1] = 2 * i[odd] + 2, 2 * i[odd]
+        return t
     if mode == "GL_QUADS":
         q = np.arange(n // 4, dtype=np.uint32) * 4
         return np.concatenate([np.stack([q, q + 1, q + 2], axis=1), np.stack([q, q + 2, q + 3], axis=1)]) \

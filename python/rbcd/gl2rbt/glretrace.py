@@ -42,25 +42,29 @@ def glretrace_command(args, what, preload=None, env=()):
     return cmd
 
 
-# The shell a replay runs under (start_replay). Its standard input is the
-# read end of a pipe whose one write end the converter holds: its watcher
-# reads the end of the file when the converter ends, however it ends (the
-# watchdog's os._exit, SIGKILL), and sends SIGTERM to the session's process
-# group: the shell, xvfb-run, the Xvfb it starts in the background (a shell
-# without job control keeps it in the shell's group), glretrace. The command
-# runs in the foreground (an asynchronous list would ignore SIGINT and
-# SIGQUIT), and its status is the shell's.
-SESSION = """exec 3<&0 </dev/null
-{ read -r _ <&3; kill -TERM 0; } &
-exec 3<&-
-"$@"
-status=$?
-kill $! 2>/dev/null
-exit $status
-"""
 # The seconds the replay's processes get to end on SIGTERM (Xvfb then
 # removes its lock file and socket) before SIGKILL.
 END_SECONDS = 2
+# The shell a replay runs under (start_replay). Its standard input is the
+# read end of a pipe whose one write end the converter holds: its watcher
+# (a shell named WATCHER) reads the end of the file when the converter
+# ends, however it ends (the watchdog's os._exit, SIGKILL), and sends
+# SIGTERM to the session's process group: the shell, xvfb-run, the Xvfb it
+# starts in the background (a shell without job control keeps it in the
+# shell's group), glretrace; then, ignoring SIGTERM itself, SIGKILL to what
+# is left END_SECONDS later (glretrace's own SIGTERM handler can deadlock
+# on malloc's lock, and it had lived on). The command runs in the
+# foreground (an asynchronous list would ignore SIGINT and SIGQUIT), and its
+# status is the shell's; ended, the shell ends the watcher with SIGKILL.
+WATCHER = "rbcd-replay-watcher"
+SESSION = f"""exec 3<&0 </dev/null
+sh -c 'trap "" TERM; read -r _; kill -TERM 0; sleep {END_SECONDS}; kill -KILL 0' {WATCHER} <&3 &
+exec 3<&-
+"$@"
+status=$?
+kill -KILL $! 2>/dev/null
+exit $status
+"""
 
 
 def start_replay(cmd, **popen):
@@ -81,9 +85,10 @@ def start_replay(cmd, **popen):
     return proc
 
 
-def session_left(sid):
+def session_left(sid, watcher=False):
     """The processes of session `sid` still running (a zombie is not), as
-    (pid, state) with state /proc's letter (T or t: stopped)."""
+    (pid, state) with state /proc's letter (T or t: stopped); the watcher
+    (SESSION's, which outlives SIGTERM on purpose) only when `watcher`."""
     left = []
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
@@ -91,10 +96,14 @@ def session_left(sid):
         try:
             with open(f"/proc/{entry}/stat", "rb") as f:
                 fields = f.read().rsplit(b")", 1)[1].split()
+            if len(fields) > 3 and fields[3] == str(sid).encode() and fields[0] != b"Z":
+                if not watcher:
+                    with open(f"/proc/{entry}/cmdline", "rb") as f:
+                        if WATCHER.encode() in f.read().split(b"\0"):
+                            continue
+                left.append((int(entry), fields[0].decode()))
         except (OSError, IndexError):
             continue
-        if len(fields) > 3 and fields[3] == str(sid).encode() and fields[0] != b"Z":
-            left.append((int(entry), fields[0].decode()))
     return left
 
 
@@ -127,6 +136,11 @@ def _end_session(proc):
         deadline = time.monotonic() + END_SECONDS
         while session_left(proc.pid) and time.monotonic() < deadline:
             time.sleep(0.01)
+    for pid, _ in session_left(proc.pid, watcher=True):
+        try:
+            os.kill(pid, signal.SIGKILL)   # the watcher, the session's last
+        except ProcessLookupError:
+            pass
     proc.wait()
     w = getattr(proc, "rbcd_lifeline", None)
     if w is not None:

@@ -20,11 +20,13 @@ MAX_BINDINGS = 1024   # indexed binding points kept (llvmpipe has fewer: Mesa re
 # The binding points the shader path hands Mesa or follows for it, as
 # llvmpipe (Mesa 22.3) defines them: how many (GL_MAX_*_BUFFER_BINDINGS,
 # GL_MAX_TRANSFORM_FEEDBACK_BUFFERS) and the alignment of a range's offset
-# (GL_*_BUFFER_OFFSET_ALIGNMENT; 4 for transform feedback, whose size too).
-# A call past either is GL_INVALID_VALUE there and changes nothing, neither
-# the indexed binding nor the generic one (binding_ignored).
+# (GL_*_BUFFER_OFFSET_ALIGNMENT; 4 for transform feedback, whose size too,
+# and for atomic counters, a counter's size). A call past either is
+# GL_INVALID_VALUE there and changes nothing, neither the indexed binding nor
+# the generic one (binding_ignored).
 FEEDBACK_TARGET = "GL_TRANSFORM_FEEDBACK_BUFFER"
-SHADER_BINDINGS = {"GL_UNIFORM_BUFFER": (90, 16), "GL_SHADER_STORAGE_BUFFER": (80, 16), FEEDBACK_TARGET: (4, 4)}
+SHADER_BINDINGS = {"GL_UNIFORM_BUFFER": (90, 16), "GL_SHADER_STORAGE_BUFFER": (80, 16), FEEDBACK_TARGET: (4, 4),
+                   "GL_ATOMIC_COUNTER_BUFFER": (16, 4)}
 # The internal formats glClearBufferData takes (those of texture buffers,
 # GL 4.6 table 8.16) and the bytes of one element of each.
 CLEAR_FORMATS = {f"GL_{c}{bits}{kind}": len(c) * bits // 8

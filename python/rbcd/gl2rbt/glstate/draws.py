@@ -91,13 +91,11 @@ class DrawCalls:
                       "under a vertex shader are not emulated")
         if not self.draws_into_camera_pass():
             return
-        if mode in PRIM_NO_AREA:
+        if mode in PRIM_NO_AREA or mode in ("GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"):
             self.ignored_prims += 1
             return
-        if mode not in PRIM_MODES:
-            return   # GL_INVALID_ENUM: nothing is drawn
-        if mode not in PRIM_TRIANGLES:
-            fail_call(no, f"{name}: primitive mode {printable(mode)} is not emulated")
+        if mode not in PRIM_MODES or mode == "GL_PATCHES":
+            return   # GL_INVALID_ENUM, or _OPERATION (patches with no tessellation): nothing is drawn
         if self.s.depth_test and len(positions) and not self.s.rasterizer_discard:
             self.depth_tested(no, name)
         self.open_frame(no)

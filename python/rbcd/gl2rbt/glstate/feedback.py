@@ -46,6 +46,23 @@ KIND_OF_MODE = {"GL_POINTS": "GL_POINTS", "GL_LINES": "GL_LINES", "GL_LINE_LOOP"
 GEOMETRY_OUTPUT_KIND = {"points": "GL_POINTS", "line_strip": "GL_LINES", "triangle_strip": "GL_TRIANGLES"}
 
 
+def recorded_bindings(feedback):
+    """The binding points a program's outputs (Program.feedback: names and
+    buffer mode) are recorded into: one an output when separate; when
+    interleaved, binding 0 and one more after each gl_NextBuffer, those an
+    output (not only gl_SkipComponents) goes into."""
+    names, buffer_mode = feedback
+    if buffer_mode == "GL_SEPARATE_ATTRIBS":
+        return set(range(len(names)))
+    used, b = set(), 0
+    for n in names:
+        if n == "gl_NextBuffer":
+            b += 1
+        elif not n.startswith("gl_SkipComponents"):
+            used.add(b)
+    return used
+
+
 class FeedbackCalls:
     """self.s.feedback: the bound transform feedback object's name, whether
     it is active and paused; self.s.feedback_source: the program it records
@@ -60,10 +77,12 @@ class FeedbackCalls:
 
     def feedback_writes(self, no, name):
         """At a draw: the buffers feedback records into now are the GPU's."""
-        if not self.recording():
+        source = self.feedback_source() if self.recording() else None
+        if source is None or source[1].feedback is None:
             return
+        used = recorded_bindings(source[1].feedback)
         for (target, index), (b, _, _) in self.s.indexed.items():
-            if target == TARGET and b:
+            if target == TARGET and b and index in used:
                 self.gpu_wrote_buffer(no, b, f"{base_name(name)} with transform feedback recording into "
                                              f"binding {index}")
 
@@ -178,17 +197,7 @@ class FeedbackCalls:
         if source is None or source[1].feedback is None or mode not in ("GL_POINTS", "GL_LINES", "GL_TRIANGLES") \
                 or active:
             return   # GL_INVALID_OPERATION (no program, none recording) or _ENUM: nothing begins
-        names, buffer_mode = source[1].feedback
-        if buffer_mode == "GL_SEPARATE_ATTRIBS":
-            used = set(range(len(names)))
-        else:
-            used, b = set(), 0
-            for n in names:
-                if n == "gl_NextBuffer":
-                    b += 1
-                elif not n.startswith("gl_SkipComponents"):
-                    used.add(b)
-        if any(not self.s.indexed.get((TARGET, i), (0,))[0] for i in used):
+        if any(not self.s.indexed.get((TARGET, i), (0,))[0] for i in recorded_bindings(source[1].feedback)):
             return   # GL_INVALID_OPERATION: a binding point recorded into has no buffer
         self.s.feedback = (obj, True, False)
         self.s.feedback_mode, self.s.feedback_source = mode, source[0]
