@@ -391,6 +391,33 @@ def test_a_geometry_shader_s_triangles_are_bounded_by_a_draw_record(tmp_path):
     assert peak_mb(r) < 600, f"{peak_mb(r):.0f} MB"
 
 
+def test_a_frame_counts_the_triangles_geometry_shaders_make(monkeypatch):
+    """A geometry shader's draw counts what Mesa is made to run against the
+    frame's vertex bound (3 a triangle it makes), not its input points: 12
+    draws of 170 points, each made 1.38 M triangles, had been taken (R19-2).
+    In this process, the bound made small: 3 points making 762 triangles
+    pass 2,300 at the second draw."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    import argparse
+    import io
+    from rbcd.gl2rbt.converter import Converter
+    from rbcd.gl2rbt.errors import ConvertError
+    from rbcd.gl2rbt.glstate import draws
+    monkeypatch.setattr(draws, "MAX_FRAME_VERTICES", 2300)
+    c = relink_with(shader_calls(VS), "GL_GEOMETRY_SHADER", GS_STRIP)
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    first = len(c.add("glDrawArrays", mode="GL_POINTS", first=0, count=3).calls)
+    c.add("glDrawArrays", mode="GL_POINTS", first=0, count=3)
+    args = argparse.Namespace(screen=(64, 48), tile=[16, 16], depth_bits=24, select=None, frame_range=(0, None))
+    conv = Converter(args, io.BytesIO(), None)
+    with pytest.raises(ConvertError, match=f"call {first + 1}: glDrawArrays: more than 2300 vertices drawn in one "
+                                           "frame"):
+        for call in c.calls:
+            conv.handle(call)
+
+
 def test_a_geometry_shader_s_own_feedback_outputs_are_named(tmp_path):
     """xfb_ qualifiers in a geometry shader: refused naming that stage (the
     message had named the vertex shader, which has none; R18-10)."""
@@ -602,10 +629,12 @@ def feedback_state_case(case):
         c.add("glCompileShader", shader=1)
         c.add("glLinkProgram", program=2)   # GL_INVALID_OPERATION: its executable stays
         c.add("glResumeTransformFeedback")
+    elif case == "nothing_drawn":
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=0)   # no vertex: nothing recorded
     elif case == "resume_under_another_program":
         c.add("glPauseTransformFeedback").add("glUseProgram", program=0)
         c.add("glResumeTransformFeedback").add("glUseProgram", program=2)   # paused still: nothing recorded
-    if case != "link_while_paused":
+    if case not in ("link_while_paused", "nothing_drawn"):
         c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)   # (points_begun: not drawn)
     c.add("glEndTransformFeedback").add("glDisable", cap="GL_RASTERIZER_DISCARD")
     return read_buffer(c, 5 if case != "link_while_paused" else 1).swap()
@@ -613,9 +642,10 @@ def feedback_state_case(case):
 
 @pytest.mark.parametrize("case, recorded", [
     ("paused_switched_and_resumed", True), ("use_program_while_recording", True),
-    ("begin_without_its_buffer", False), ("points_begun", False), ("resume_under_another_program", False)],
+    ("begin_without_its_buffer", False), ("points_begun", False), ("resume_under_another_program", False),
+    ("nothing_drawn", False)],
     ids=["paused_switched_and_resumed", "use_program_while_recording", "begin_without_its_buffer", "points_begun",
-         "resume_under_another_program"])
+         "resume_under_another_program", "nothing_drawn"])
 def test_transform_feedback_state_as_mesa_keeps_it(tmp_path, case, recorded):
     """Whether buffer 5 is recorded into follows Mesa's state: an object
     keeps its active and paused state while another is bound (it had been

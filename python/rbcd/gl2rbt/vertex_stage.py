@@ -845,7 +845,11 @@ class VertexStage:
                             fail_call(no, f"{name}: its tessellation or geometry shaders make {made} triangles, "
                                       f"more than {limit} (a draw record's {MAX_RECORD_VERTICES} vertices; "
                                       "docs/gl-capture.md)")
-                        made = self.mesa.feedback_positions(issue, made)
+                        # What they make is the frame's work too, before
+                        # the run that feeds it back.
+                        conv.frame_work(no, name, 3 * made)
+                        return self.mesa.feedback_positions(issue, made)
+                    conv.frame_work(no, name, len(made))   # (room enough from an earlier draw)
                     return made
         except GLError as e:
             op = getattr(getattr(e, "baseOperation", None), "__name__", "a call")

@@ -269,22 +269,26 @@ class DrawCalls:
         if instances > MAX_INSTANCES:
             fail_call(no, f"{name}: {instances} instances, more than {MAX_INSTANCES}")
         mode = d["mode"]
+        if mode not in PRIM_MODES or (self.core and self.s.vao == 0) or \
+                (d.get("type", "GL_UNSIGNED_INT") not in INDEX_TYPES and "Elements" in name) or \
+                ((self.core or self.es) and mode in LEGACY_MODES) or count == 0 or instances == 0:
+            # GL_INVALID_ENUM (also quads and polygons in a core profile or
+            # ES), no vertex array object in a core context, or no vertex:
+            # nothing is drawn, stored or recorded
+            return
         refused = self.feedback_kind_refused(mode, self.stage_programs())
         if refused is not None:
             self.rejected_draws.append((no, refused))
             return
-        self.shader_stores(no, name)
-        if mode not in PRIM_MODES or (self.core and self.s.vao == 0) or \
-                (d.get("type", "GL_UNSIGNED_INT") not in INDEX_TYPES and "Elements" in name) or \
-                ((self.core or self.es) and mode in LEGACY_MODES):
-            # GL_INVALID_ENUM (also quads and polygons in a core profile or
-            # ES), or no vertex array object in a core context: nothing is drawn
-            return
-        if not self.active or count == 0 or instances == 0 or self.s.rasterizer_discard or not self.renders():
-            return
         invalid = self.pipeline_invalid()
         if invalid is not None:
-            self.rejected_draws.append((no, f"GL_INVALID_OPERATION: {invalid}"))
+            if self.active and not self.s.rasterizer_discard and self.renders():
+                self.rejected_draws.append((no, f"GL_INVALID_OPERATION: {invalid}"))
+            return
+        # What the draw's shaders store, and what transform feedback
+        # records, in every frame (converted or not, rasterized or not).
+        self.shader_stores(no, name)
+        if not self.active or self.s.rasterizer_discard or not self.renders():
             return
         stages = self.stage_programs()
         later = [stage for stage in ("geometry", "tess_control", "tess_evaluation") if stage in stages]
