@@ -67,6 +67,10 @@ case "$game" in openarena|neverball|supertuxkart) ;; *) usage "unknown game '$ga
 [ ! -L "$out" ] || usage "$out is a symlink: the entry is written only into a new directory"
 [ ! -e "$out" ] || usage "$out exists: the entry is written only into a new directory"
 [ -z "$from" ] || [ -f "$from" ] || usage "--from-trace $from: not a file"
+# Standard output opened by the shell onto the capture (1<>T) would take
+# this script's progress lines: refused, as the converter refuses it.
+[ -z "$from" ] || ! [ /dev/stdout -ef "$from" ] || \
+  { echo "capture-game.sh: $(oneline "$from"): standard output is the capture: what goes there would be written into it" >&2; exit 2; }
 # The given capture is the input: an empty one is said as such (no game ran,
 # so there is no game log to show).
 empty_capture() { echo "capture-game.sh: $(oneline "$from"): an empty file, not a capture" >&2; exit 2; }

@@ -421,6 +421,26 @@ def output_target(path):
     return ("in place", path)
 
 
+def check_standard_output(inputs):
+    """Standard output takes a tool's report (or listing) whatever its
+    outputs are: opened by the shell onto an input (what, path) (1<> or
+    >>), it would be written into it. Refused, as GNU cat refuses it
+    ("input file is output file")."""
+    try:
+        out = os.fstat(1)
+    except OSError:
+        return
+    if not stat.S_ISREG(out.st_mode):
+        return
+    for what, path in inputs:
+        try:
+            st = os.stat(path) if path else None
+        except OSError:
+            continue
+        if st is not None and (st.st_dev, st.st_ino) == (out.st_dev, out.st_ino):
+            raise UsageError(f"{path}: standard output is {what}: what goes there would be written into it")
+
+
 def check_outputs(inputs, outputs):
     """Before anything is opened: no output (option, path) names an input
     (what, path) or another output, as the same file (device and inode) or,
@@ -434,21 +454,11 @@ def check_outputs(inputs, outputs):
             return ("file", st.st_dev, st.st_ino), st
         except OSError:
             return ("path", os.path.realpath(path)), None
-    taken, named = {}, {}
+    check_standard_output(inputs)
+    taken = {}
     for what, path in inputs:
         if path:
             taken[ident(path)[0]] = what
-            named[ident(path)[0]] = path
-    # Standard output takes the tool's report (or listing) whatever the
-    # outputs are: opened by the shell onto an input (1<> or >>), it would
-    # be written into it, as GNU cat refuses to ("input file is output file").
-    try:
-        st = os.fstat(1)
-    except OSError:
-        st = None
-    key = ("file", st.st_dev, st.st_ino) if st is not None and stat.S_ISREG(st.st_mode) else None
-    if key in taken:
-        raise UsageError(f"{named[key]}: standard output is {taken[key]}: what goes there would be written into it")
     for option, path in outputs:
         if not path:
             continue

@@ -32,7 +32,7 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, check_outputs, escape, main_wrapper, open_trace, parse_toml,
+from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, check_outputs, check_standard_output, escape, main_wrapper, open_trace, parse_toml,
                       read_input_text, say, remove_left_temporaries, temporary_folder, trace_errors,
                       unregister_temporary, write_output)
 
@@ -433,6 +433,7 @@ def run(argv):
     entries = entries_of(args.entries)
     try:
         if args.cmd == "check":
+            check_standard_output([(f"{e.name}'s {what}", p) for e in entries for what, p in e.inputs()])
             for e in entries:
                 e.check()
                 e.committed_summary()

@@ -25,13 +25,14 @@ import re
 import shlex
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import threading
 import time
 import tomllib
 
-from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, finite_float, escape, main_wrapper, open_trace, parse_toml, read_input_text, say, trace_errors,
+from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, check_standard_output, finite_float, escape, main_wrapper, open_trace, parse_toml, read_input_text, say, trace_errors,
                       write_output)
 from rbcd.startup import kept
 
@@ -1232,6 +1233,24 @@ class Parser(ArgumentParser):
         sys.exit(2)
 
 
+def check_stdout(args):
+    """Standard output (the listing, the status) opened by the shell onto
+    the sweep file or a file of the output directory (1<>S.toml,
+    1<>OUT/plan.json) would be written into it: refused."""
+    if getattr(args, "sweep", None):
+        check_standard_output([("the sweep file", args.sweep)])
+    out = getattr(args, "out", None)
+    if out and os.path.isdir(out):
+        try:
+            st = os.fstat(1)
+            target = os.path.realpath("/proc/self/fd/1")
+        except OSError:
+            return
+        if stat.S_ISREG(st.st_mode) and target.startswith(os.path.realpath(out) + os.sep):
+            raise UsageError(f"{out}: standard output is {target}, a file of the output directory: what goes "
+                             "there would be written into it")
+
+
 def run(argv):
     ap = Parser(prog=PROG, description=__doc__.split("\n")[0],
                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog="\n".join(__doc__.split("\n")[2:9]))
@@ -1272,6 +1291,7 @@ def run(argv):
     if getattr(args, "poll", 1.0) <= 0:
         ap.error("--poll: must be a positive number of seconds")
     try:
+        check_stdout(args)
         return {"run": cmd_run, "list": cmd_list, "slurm": cmd_slurm, "status": cmd_status,
                 "merge": cmd_merge, "task": cmd_task}[args.cmd](args)
     except (RuntimeError, OSError) as e:

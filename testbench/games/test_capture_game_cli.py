@@ -226,3 +226,21 @@ def test_any_tmpdir_works(tmp_path, name, game):
     assert ("HOME=TMP/home" if game == "neverball" else "TMP/home") in command, command
     assert not any(name in a for a in command), command
     assert os.listdir(tmpdir) == [], "the work directory was left"
+
+
+def test_standard_output_onto_the_capture_is_refused_before_a_line(tmp_path):
+    """--from-trace T with standard output opened onto T (1<>T): refused
+    before the script writes a progress line into it (its first 43 bytes
+    had been overwritten before the converter refused it; R19-6)."""
+    cap = tmp_path / "kept.trace"
+    cap.write_bytes(b"a kept capture's bytes, left as they are" * 4)
+    before = cap.read_bytes()
+    env = dict(os.environ, TMPDIR=str(tmp_path))
+    with open(cap, "r+b") as out:
+        r = subprocess.run(["bash", CAPTURE_GAME, "openarena", "oa_dm1", "3", str(tmp_path / "out"),
+                            "--from-trace", str(cap)], stdout=out, stderr=subprocess.PIPE, text=True, env=env,
+                           stdin=subprocess.DEVNULL, timeout=600)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "standard output is the capture" in lines[0], lines
+    assert cap.read_bytes() == before
+    assert sorted(os.listdir(tmp_path)) == ["kept.trace"]

@@ -409,3 +409,18 @@ def test_a_signal_at_any_moment_of_start_up_names_no_launcher_line(tool):
             assert err.splitlines() == [f"{tool}: interrupted"], (ms, err)
         seen.add(p.returncode)
     assert seen & {0, 130}, seen
+
+
+@pytest.mark.parametrize("which, mode", [("calls.xz", "r+b"), ("summary.jsonl", "r+b"), ("capture.toml", "ab")],
+                         ids=["calls_read_write", "summary_read_write", "toml_append"])
+def test_check_with_standard_output_onto_an_entry_s_file_is_refused(tmp_path, entry, which, mode):
+    """`check` writes its report to standard output: opened onto one of the
+    entry's files (1<>calls.xz, >>capture.toml), refused before a line is
+    written (the report had overwritten the reduced capture, exit 0; R19-5)."""
+    before = {p: p.read_bytes() for p in entry.iterdir()}
+    with open(entry / which, mode) as out:
+        env = dict(os.environ, TMPDIR=str(tmp_path))
+        r = subprocess.run(["/usr/bin/python3", GAME_SUITE, "check", str(entry)], stdout=out, stderr=subprocess.PIPE,
+                           text=True, env=env, stdin=subprocess.DEVNULL, timeout=600)
+    refused(r, f"{entry / which}: standard output is {NAME}'s")
+    assert {p: p.read_bytes() for p in entry.iterdir()} == before

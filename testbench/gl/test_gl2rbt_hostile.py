@@ -418,6 +418,37 @@ def test_a_frame_counts_the_triangles_geometry_shaders_make(monkeypatch):
             conv.handle(call)
 
 
+TES_UNIFORM_POINT_MODE = TES.replace("void main() {", "uniform float point_mode;\nvoid main() {").replace(
+    "gl_TessCoord.z * gl_in[2].gl_Position;", "gl_TessCoord.z * gl_in[2].gl_Position + vec4(point_mode);")
+
+
+@pytest.mark.parametrize("stage, source, begun, drawn", [
+    # max_vertices in parentheses: triangles all the same, so nothing drawn
+    # while points are recorded (it had been drawn: 27.17% against Mesa).
+    ("GL_GEOMETRY_SHADER", GS_TRIANGLES.replace("max_vertices = 3", "max_vertices = (3)"), "GL_POINTS", False),
+    ("GL_GEOMETRY_SHADER", GS_TRIANGLES.replace("max_vertices = 3", "max_vertices = (3)"), "GL_TRIANGLES", True),
+    # A uniform named point_mode is no point mode (it had been dropped).
+    ("GL_TESS_EVALUATION_SHADER", TES_UNIFORM_POINT_MODE, "GL_TRIANGLES", True),
+    ("GL_TESS_EVALUATION_SHADER", TES_UNIFORM_POINT_MODE, "GL_POINTS", False),
+], ids=["gs_parenthesized_points", "gs_parenthesized_triangles", "tes_uniform_named_point_mode_triangles",
+        "tes_uniform_named_point_mode_points"])
+def test_what_a_later_stage_makes_is_mesa_s_kind(tmp_path, stage, source, begun, drawn):
+    """Whether a draw under a geometry or tessellation shader matches the
+    primitive mode transform feedback was begun in is decided by the kind
+    Mesa linked (R19-4: it had been read from the source's text)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    c = relink_with(shader_calls(VS, feedback=("gl_Position",)), stage, source)
+    c.add("glGenBuffers", n=3, buffers=[1, 5, 6]).add("glBindBuffer", target="GL_TRANSFORM_FEEDBACK_BUFFER", buffer=6)
+    c.add("glBufferData", target="GL_TRANSFORM_FEEDBACK_BUFFER", size=4096, data=None, usage="GL_STREAM_COPY")
+    c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=0, buffer=6)
+    c.add("glBeginTransformFeedback", primitiveMode=begun)
+    if stage == "GL_TESS_EVALUATION_SHADER":
+        c.add("glPatchParameteri", pname="GL_PATCH_VERTICES", value=3)
+    mode = "GL_PATCHES" if stage == "GL_TESS_EVALUATION_SHADER" else "GL_TRIANGLES"
+    got = fragments(tmp_path, points_draw(c, mode=mode).write(tmp_path / "c.xz"))
+    assert (got[0] > 100) == drawn, got
+
+
 def test_a_geometry_shader_s_own_feedback_outputs_are_named(tmp_path):
     """xfb_ qualifiers in a geometry shader: refused naming that stage (the
     message had named the vertex shader, which has none; R18-10)."""
@@ -676,6 +707,26 @@ def test_only_the_bindings_a_program_records_into_are_the_gpu_s(tmp_path):
         return read_buffer(record(c), read).swap().write(tmp_path / f"{read}.xz")
     assert fragments(tmp_path, capture(6))[0] > 100
     refused(gl2rbt(tmp_path, capture(5), "-o", tmp_path / "c.rbt"), "buffer 5, which the GPU wrote")
+
+
+def test_a_program_recording_by_its_own_qualifiers_writes_the_buffer(tmp_path):
+    """A vertex shader recording through xfb_ layout qualifiers (no
+    glTransformFeedbackVaryings), under rasterizer discard: the buffer at
+    its binding point is the GPU's, and a later draw from it (under another
+    program) is refused (it had been drawn from the capture's stale bytes:
+    0.00% against Mesa; R19-11)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    xfb_vs = ("#version 440 core\nin vec3 p;\nlayout(xfb_buffer = 0, xfb_offset = 0) out vec4 tf;\n"
+              "void main() { tf = vec4(p, 1.0); gl_Position = vec4(p.x / 32.0 - 1.0, p.y / 24.0 - 1.0, 0.0, 1.0); }\n")
+    c = feedback_calls(varyings=())
+    c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=8)
+    c.add("glShaderSource", shader=8, count=1, string=[xfb_vs], length=None).add("glCompileShader", shader=8)
+    c.add("glCreateProgram", ret=9).add("glAttachShader", program=9, shader=8)
+    c.add("glBindAttribLocation", program=9, index=0, name="p").add("glLinkProgram", program=9)
+    c.add("glUseProgram", program=9)
+    record(c).add("glUseProgram", program=2)
+    refused(gl2rbt(tmp_path, read_buffer(c, 5).swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+            "buffer 5, which the GPU wrote")
 
 
 def test_a_link_while_feedback_records_from_the_program_is_refused(tmp_path):

@@ -157,3 +157,61 @@ def test_a_program_in_some_of_its_stages_makes_the_pipeline_draw_nothing(tmp_pat
     assert trace(tmp_path, draw(c), "invalid").count(b"\nf ") == 0
     c.add("glUseProgramStages", pipeline=5, stages=["GL_VERTEX_SHADER_BIT", "GL_FRAGMENT_SHADER_BIT"], program=2)
     assert trace(tmp_path, draw(c), "valid").count(b"\nf ") > 100, "the pipeline's second frame draws"
+
+
+FEEDBACK_VS = MOVED_VS.replace("out gl_PerVertex", "out vec3 q;\nout gl_PerVertex").replace(
+    "void main() {", "void main() { q = p;")
+
+
+@pytest.mark.parametrize("feedback", [("q",), ()], ids=["recording", "not_recording"])
+def test_use_program_stages_on_the_bound_pipeline_while_recording_changes_nothing(tmp_path, feedback):
+    """glUseProgramStages on the pipeline draws run while transform feedback
+    records is GL_INVALID_OPERATION (Mesa): the stage keeps its program,
+    and the triangle is drawn where it was (it had been drawn by the new
+    one, 22.91% against Mesa; R19-3); with nothing recorded it takes the
+    new program."""
+    def capture(restage):
+        c = separable(FEEDBACK_VS)
+        if feedback:
+            at = next(i for i, call in enumerate(c.calls) if call[1] == "glLinkProgram")
+            c.calls.insert(at, (0, "glTransformFeedbackVaryings", [("program", 2), ("count", 1), ("varyings", ["q"]),
+                                                                   ("bufferMode", "GL_INTERLEAVED_ATTRIBS")], None, 0))
+            c.calls = [(i + 1,) + call[1:] for i, call in enumerate(c.calls)]
+        c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=8)
+        c.add("glShaderSource", shader=8, count=1, string=[MOVED_VS.replace("+ dx", "+ 1.0")], length=None)
+        c.add("glCompileShader", shader=8).add("glCreateProgram", ret=9).add("glAttachShader", program=9, shader=8)
+        c.add("glProgramParameteri", program=9, pname="GL_PROGRAM_SEPARABLE", value=1)
+        c.add("glBindAttribLocation", program=9, index=0, name="p").add("glLinkProgram", program=9)
+        c.add("glBindBuffer", target="GL_TRANSFORM_FEEDBACK_BUFFER", buffer=6)
+        c.add("glBufferData", target="GL_TRANSFORM_FEEDBACK_BUFFER", size=1024, data=None, usage="GL_STREAM_COPY")
+        c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=0, buffer=6)
+        if feedback:
+            c.add("glBeginTransformFeedback", primitiveMode="GL_TRIANGLES")
+        if restage:
+            c.add("glUseProgramStages", pipeline=5, stages=["GL_VERTEX_SHADER_BIT"], program=9)
+        return draw(c)
+    kept, restaged = trace(tmp_path, capture(False), "kept"), trace(tmp_path, capture(True), "restaged")
+    assert kept.count(b"\nf ") > 100
+    assert (kept == restaged) == bool(feedback)
+
+
+def test_a_pipeline_deleted_while_recording_stays_current(tmp_path):
+    """glDeleteProgramPipelines of the bound pipeline while transform
+    feedback records: Mesa's unbind of it is GL_INVALID_OPERATION then, so
+    it stays current and the next draw is drawn with it (it had drawn
+    nothing: 27.17% against Mesa; R19-8); not recording, the draw has no
+    pipeline and draws nothing."""
+    def capture(recording):
+        c = separable(FEEDBACK_VS)
+        at = next(i for i, call in enumerate(c.calls) if call[1] == "glLinkProgram")
+        c.calls.insert(at, (0, "glTransformFeedbackVaryings", [("program", 2), ("count", 1), ("varyings", ["q"]),
+                                                               ("bufferMode", "GL_INTERLEAVED_ATTRIBS")], None, 0))
+        c.calls = [(i + 1,) + call[1:] for i, call in enumerate(c.calls)]
+        c.add("glBindBuffer", target="GL_TRANSFORM_FEEDBACK_BUFFER", buffer=6)
+        c.add("glBufferData", target="GL_TRANSFORM_FEEDBACK_BUFFER", size=1024, data=None, usage="GL_STREAM_COPY")
+        c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=0, buffer=6)
+        if recording:
+            c.add("glBeginTransformFeedback", primitiveMode="GL_TRIANGLES")
+        return draw(c.add("glDeleteProgramPipelines", n=1, pipelines=[5]))
+    assert trace(tmp_path, capture(True), "recording").count(b"\nf ") > 100
+    assert trace(tmp_path, capture(False), "idle").count(b"\nf ") == 0

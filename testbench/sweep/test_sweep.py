@@ -612,6 +612,22 @@ def test_command_lines(c):
                          (["slurm", ok, "-o", out, "--poll", "1e999"], "--poll: invalid number")):
         one_error_line(c.sweep(*args), needle, " ".join(args[2:]))
         assert not os.path.exists(out), args
+    # Standard output opened onto the sweep file or a file of the output
+    # directory (the listing or the status had been written into it; R19-7).
+    before = c.read(ok)
+    with open(ok, "r+") as f:
+        r = subprocess.run(["/usr/bin/python3", SWEEP, "list", ok, "--rbcd-sim", c.sim], stdout=f,
+                           stderr=subprocess.PIPE, text=True, env=dict(os.environ, RBCD_CONFIG_CHECK=c.checker))
+    one_error_line(r, "standard output is the sweep file", "list 1<>sweep file")
+    assert c.read(ok) == before
+    os.makedirs(out)
+    with open(os.path.join(out, "plan.json"), "w") as f:
+        f.write("{}")
+    with open(os.path.join(out, "plan.json"), "r+") as f:
+        r = subprocess.run(["/usr/bin/python3", SWEEP, "status", out], stdout=f, stderr=subprocess.PIPE, text=True)
+    one_error_line(r, "a file of the output directory", "status 1<>OUT/plan.json")
+    assert c.read(os.path.join(out, "plan.json")) == "{}"
+    shutil.rmtree(out)
     table = c.sweep_file("t.csv", "zeb.banks,gpu.cycles\n1,10\n2,20\n")
     png = os.path.join(c.tmp, "p.png")
     for args, needle in ((["--y", "gpu.cycles", "--x", "zeb.banks", "-o", png, "--y", "x"], "--y is given twice"),

@@ -202,6 +202,10 @@ class MesaProgram:
         self.amplifies = False        # it has tessellation or geometry shaders (as many primitives as they make)
         self.tessellates = False      # it has a tessellation evaluation shader
         self.area = True              # its last stage makes triangles (not a geometry shader's points or lines)
+        # The kind of primitives its tessellation or geometry shader makes
+        # (GL_POINTS, GL_LINES, GL_TRIANGLES: what transform feedback must
+        # have begun), as Mesa linked it; None without either.
+        self.output_kind = None
 
 
 class VertexStage:
@@ -458,11 +462,14 @@ class VertexStage:
         mp.tessellates = "tess_evaluation" in stages
         if "geometry" in stages:
             # A geometry shader that makes points or lines draws no area.
-            mp.area = GL.glGetProgramiv(prog, GL.GL_GEOMETRY_OUTPUT_TYPE) == GL.GL_TRIANGLE_STRIP
+            out = GL.glGetProgramiv(prog, GL.GL_GEOMETRY_OUTPUT_TYPE)
+            mp.output_kind = "GL_TRIANGLES" if out == GL.GL_TRIANGLE_STRIP else \
+                "GL_LINES" if out == GL.GL_LINE_STRIP else "GL_POINTS"
         elif "tess_evaluation" in stages:
             # Nor does tessellation into isolines or points.
-            mp.area = GL.glGetProgramiv(prog, GL.GL_TESS_GEN_MODE) != GL.GL_ISOLINES \
-                and not GL.glGetProgramiv(prog, GL.GL_TESS_GEN_POINT_MODE)
+            mp.output_kind = "GL_POINTS" if GL.glGetProgramiv(prog, GL.GL_TESS_GEN_POINT_MODE) else \
+                "GL_LINES" if GL.glGetProgramiv(prog, GL.GL_TESS_GEN_MODE) == GL.GL_ISOLINES else "GL_TRIANGLES"
+        mp.area = mp.output_kind in (None, "GL_TRIANGLES")
         for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_ATTRIBUTES)):
             aname = name_str(GL.glGetActiveAttrib(prog, i)[0])
             mp.reads_draw_id |= aname in DRAW_ID_INPUTS
@@ -806,6 +813,12 @@ class VertexStage:
             return self.positions(conv, no, name, checks, None, issue, prims, pname, p)
         except RunAlone:
             return None
+
+    def output_kind(self, no, name, pname, p):
+        """MesaProgram.output_kind of program `pname` (`p` its executable),
+        linked in Mesa if it is not yet."""
+        with self.watchdog.on(f"call {no}: {name}"):
+            return self.program(no, pname, p).output_kind
 
     def positions(self, conv, no, name, checks, client_indices, issue, prims, pname, p):
         """What run and run_indirect share: the program, checks(mp) of what

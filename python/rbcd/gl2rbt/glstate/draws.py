@@ -20,6 +20,13 @@ LEGACY_MODES = {"GL_QUADS", "GL_QUAD_STRIP", "GL_POLYGON"}
 TRIANGLES_PER_VERTICES = {"GL_TRIANGLES": lambda n: n // 3, "GL_TRIANGLE_STRIP": lambda n: max(0, n - 2),
                           "GL_TRIANGLE_FAN": lambda n: max(0, n - 2), "GL_TRIANGLES_ADJACENCY": lambda n: n // 6,
                           "GL_TRIANGLE_STRIP_ADJACENCY": lambda n: max(0, (n - 4) // 2)}
+# The primitives n vertices of each other mode make (a last incomplete one
+# dropped, as GL drops it).
+PRIMITIVES_PER_VERTICES = {"GL_POINTS": lambda n: n, "GL_LINES": lambda n: n // 2,
+                           "GL_LINE_STRIP": lambda n: max(0, n - 1), "GL_LINE_LOOP": lambda n: n if n >= 2 else 0,
+                           "GL_LINES_ADJACENCY": lambda n: n // 4, "GL_LINE_STRIP_ADJACENCY": lambda n: max(0, n - 3),
+                           "GL_QUADS": lambda n: n // 4, "GL_QUAD_STRIP": lambda n: max(0, (n - 2) // 2),
+                           "GL_POLYGON": lambda n: int(n >= 3)} | TRIANGLES_PER_VERTICES
 MESA_STEPS_PER_UNIT = 2.0
 MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw record)
 MAX_MULTI_DRAWS = 1 << 16      # draws of one multi-draw
@@ -271,12 +278,13 @@ class DrawCalls:
         mode = d["mode"]
         if mode not in PRIM_MODES or (self.core and self.s.vao == 0) or \
                 (d.get("type", "GL_UNSIGNED_INT") not in INDEX_TYPES and "Elements" in name) or \
-                ((self.core or self.es) and mode in LEGACY_MODES) or count == 0 or instances == 0:
+                ((self.core or self.es) and mode in LEGACY_MODES) or instances == 0 or \
+                (count // self.s.patch_vertices if mode == "GL_PATCHES" else PRIMITIVES_PER_VERTICES[mode](count)) == 0:
             # GL_INVALID_ENUM (also quads and polygons in a core profile or
-            # ES), no vertex array object in a core context, or no vertex:
-            # nothing is drawn, stored or recorded
+            # ES), no vertex array object in a core context, or no whole
+            # primitive: nothing is drawn, stored or recorded
             return
-        refused = self.feedback_kind_refused(mode, self.stage_programs())
+        refused = self.feedback_kind_refused(no, name, mode, self.stage_programs())
         if refused is not None:
             self.rejected_draws.append((no, refused))
             return

@@ -43,10 +43,32 @@ class FeedbackObject:
 # valid-primitive mask; every other mode is of the triangles' kind).
 KIND_OF_MODE = {"GL_POINTS": "GL_POINTS", "GL_LINES": "GL_LINES", "GL_LINE_LOOP": "GL_LINES",
                 "GL_LINE_STRIP": "GL_LINES"}
-GEOMETRY_OUTPUT_KIND = {"points": "GL_POINTS", "line_strip": "GL_LINES", "triangle_strip": "GL_TRIANGLES"}
 
 
-def recorded_bindings(feedback):
+# xfb_buffer / xfb_offset layout qualifiers (GLSL 4.40): a program that
+# records its outputs without glTransformFeedbackVaryings.
+XFB_QUALIFIER = re.compile(r"\bxfb_(buffer|offset|stride)\b")
+
+
+def records(p):
+    """Whether program p (its executable) records outputs: named by
+    glTransformFeedbackVaryings at its last link, or by xfb_ qualifiers in
+    a stage before the fragment one."""
+    return p.feedback is not None or any(XFB_QUALIFIER.search(text) for stage, text in p.scanned.items()
+                                         if stage != "fragment")
+
+
+def recorded_bindings(p):
+    """The binding points program p records into: with xfb_ qualifiers, any
+    (their buffers are not read here: every binding is taken as written,
+    which may refuse a draw from one it leaves alone, never take a buffer
+    the GPU wrote as the capture's); else by its outputs."""
+    if p.feedback is None:
+        return set(range(4))
+    return recorded_by_names(p.feedback)
+
+
+def recorded_by_names(feedback):
     """The binding points a program's outputs (Program.feedback: names and
     buffer mode) are recorded into: one an output when separate; when
     interleaved, binding 0 and one more after each gl_NextBuffer, those an
@@ -78,29 +100,23 @@ class FeedbackCalls:
     def feedback_writes(self, no, name):
         """At a draw: the buffers feedback records into now are the GPU's."""
         source = self.feedback_source() if self.recording() else None
-        if source is None or source[1].feedback is None:
+        if source is None or not records(source[1]):
             return
-        used = recorded_bindings(source[1].feedback)
+        used = recorded_bindings(source[1])
         for (target, index), (b, _, _) in self.s.indexed.items():
             if target == TARGET and b and index in used:
                 self.gpu_wrote_buffer(no, b, f"{base_name(name)} with transform feedback recording into "
                                              f"binding {index}")
 
-    def feedback_kind_refused(self, mode, stages):
+    def feedback_kind_refused(self, no, name, mode, stages):
         """A draw of `mode` under `stages` (stage_programs) while feedback
         records: None when its primitives are of the kind begun, else the
-        GL_INVALID_OPERATION that makes Mesa draw nothing."""
+        GL_INVALID_OPERATION that makes Mesa draw nothing. A tessellation
+        or geometry shader's kind is Mesa's (the program linked there)."""
         if not self.recording():
             return None
-        if "geometry" in stages:
-            out = re.findall(r"layout\s*\(([^)]*)\)\s*out\s*;", stages["geometry"][1].scanned.get("geometry", ""))
-            words = {w.strip().split("=")[0].strip() for q in out for w in q.split(",")}
-            kinds = {GEOMETRY_OUTPUT_KIND[w] for w in words if w in GEOMETRY_OUTPUT_KIND}
-            kind = kinds.pop() if len(kinds) == 1 else None
-        elif "tess_evaluation" in stages:
-            text = stages["tess_evaluation"][1].scanned.get("tess_evaluation", "")
-            kind = "GL_POINTS" if re.search(r"\bpoint_mode\b", text) else \
-                "GL_LINES" if re.search(r"\bisolines\b", text) else "GL_TRIANGLES"
+        if "geometry" in stages or "tess_evaluation" in stages:
+            kind = self.vertex_stage().output_kind(no, base_name(name), *stages["vertex"])
         else:
             kind = KIND_OF_MODE.get(mode, "GL_TRIANGLES")
         if kind is None or kind == self.s.feedback_mode:
@@ -194,10 +210,11 @@ class FeedbackCalls:
         obj, active, _ = self.s.feedback
         source = self.feedback_source()
         mode = enum_arg(dict(args).get("primitiveMode", a[0] if a else None), no, f"{name}: the primitive mode")
-        if source is None or source[1].feedback is None or mode not in ("GL_POINTS", "GL_LINES", "GL_TRIANGLES") \
+        if source is None or not records(source[1]) or mode not in ("GL_POINTS", "GL_LINES", "GL_TRIANGLES") \
                 or active:
             return   # GL_INVALID_OPERATION (no program, none recording) or _ENUM: nothing begins
-        if any(not self.s.indexed.get((TARGET, i), (0,))[0] for i in recorded_bindings(source[1].feedback)):
+        if source[1].feedback is not None and \
+                any(not self.s.indexed.get((TARGET, i), (0,))[0] for i in recorded_bindings(source[1])):
             return   # GL_INVALID_OPERATION: a binding point recorded into has no buffer
         self.s.feedback = (obj, True, False)
         self.s.feedback_mode, self.s.feedback_source = mode, source[0]

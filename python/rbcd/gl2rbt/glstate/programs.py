@@ -546,7 +546,11 @@ class ProgramCalls:
     def h_bind_pipeline(self, no, name, a, args):
         v = dict(args).get("pipeline", a[0] if a else None)
         if (v == 0 or self.pipeline(no, name, v) is not None) and not self.recording():
-            self.s.pipeline = v   # (while feedback records: GL_INVALID_OPERATION)
+            old, self.s.pipeline = self.s.pipeline, v   # (while feedback records: GL_INVALID_OPERATION)
+            if isinstance(old, tuple) and old != v:
+                # A pipeline deleted while bound (h_delete_pipelines) goes now.
+                for prog in set(self.s.pipelines.pop(old).stages.values()):
+                    self.out_of_use(prog)
 
     def h_delete_pipelines(self, no, name, a, args):
         for v in dict(args).get("pipelines") or []:
@@ -554,6 +558,14 @@ class ProgramCalls:
             if pipe is None:
                 continue
             if self.s.pipeline == v:
+                if self.recording():
+                    # Mesa unbinds it by glBindProgramPipeline(0), which is
+                    # GL_INVALID_OPERATION while feedback records: the
+                    # pipeline stays current, its name free, until another
+                    # is bound (h_bind_pipeline).
+                    self.s.pipeline = ("deleted", v)
+                    self.s.pipelines[self.s.pipeline] = pipe
+                    continue
                 self.s.pipeline = 0
             for prog in set(pipe.stages.values()):
                 self.out_of_use(prog)
@@ -586,6 +598,8 @@ class ProgramCalls:
             fail_call(no, f"{printable(name)}: stages {printable(bits)} are no bitfield")
         if pipe is None:
             return   # GL_INVALID_OPERATION: no such pipeline
+        if self.recording() and not self.s.program and self.s.pipeline == d.get("pipeline"):
+            return   # GL_INVALID_OPERATION: the pipeline draws run, while transform feedback records
         v = d.get("program")
         p = None
         if v:
