@@ -574,7 +574,10 @@ class BufferCalls:
                     if v == b:
                         self.s.bound[t] = 0
                 for k, (v, _, _) in list(self.s.indexed.items()):
-                    if v == b:
+                    # (Mesa unbinds a transform feedback binding point by
+                    # glBindBufferBase, GL_INVALID_OPERATION while the bound
+                    # object is active: the deleted buffer stays bound there.)
+                    if v == b and not (k[0] == FEEDBACK_TARGET and self.s.feedback[1]):
                         self.s.indexed[k] = (0, 0, None)   # unbound, also in Mesa's copy an earlier draw bound
 
     HANDLERS = {
