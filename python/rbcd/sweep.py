@@ -1235,20 +1235,24 @@ class Parser(ArgumentParser):
 
 def check_stdout(args):
     """Standard output (the listing, the status) opened by the shell onto
-    the sweep file or a file of the output directory (1<>S.toml,
-    1<>OUT/plan.json) would be written into it: refused."""
+    the sweep file or a file of the output directory the command reads
+    (1<>S.toml, 1<>OUT/plan.json) would be written into it: refused. (A
+    SLURM task's and the merge job's standard output is a log file of
+    OUT/slurm/logs, which nothing reads.)"""
     if getattr(args, "sweep", None):
         check_standard_output([("the sweep file", args.sweep)])
     out = getattr(args, "out", None)
-    if out and os.path.isdir(out):
-        try:
-            st = os.fstat(1)
-            target = os.path.realpath("/proc/self/fd/1")
-        except OSError:
-            return
-        if stat.S_ISREG(st.st_mode) and target.startswith(os.path.realpath(out) + os.sep):
-            raise UsageError(f"{out}: standard output is {target}, a file of the output directory: what goes "
-                             "there would be written into it")
+    if args.cmd == "task" or not out or not os.path.isdir(out):
+        return
+    try:
+        st = os.fstat(1)
+        target = os.path.realpath("/proc/self/fd/1")
+    except OSError:
+        return
+    base = os.path.realpath(out) + os.sep
+    if stat.S_ISREG(st.st_mode) and target.startswith(base) and not target.startswith(base + "slurm" + os.sep):
+        raise UsageError(f"{out}: standard output is {target}, a file of the output directory: what goes "
+                         "there would be written into it")
 
 
 def run(argv):
