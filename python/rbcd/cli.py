@@ -26,8 +26,8 @@ rules for inputs, outputs and messages (docs/limits.md), in one place:
 import argparse
 import errno
 import gzip
-import math
 import io
+import math
 import os
 import re
 import secrets

@@ -32,9 +32,9 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, check_outputs, check_standard_output, escape, main_wrapper, open_trace, parse_toml,
-                      read_input_text, say, remove_left_temporaries, temporary_folder, trace_errors,
-                      unregister_temporary, write_output)
+from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, check_outputs, check_standard_output, escape,
+                      main_wrapper, open_trace, parse_toml, read_input_text, say, remove_left_temporaries,
+                      temporary_folder, trace_errors, unregister_temporary, write_output)
 
 # The repository (python/rbcd/ -> ../..): the entries (workloads/games/), their
 # selection rules (paths in capture.toml are relative to it) and the converter

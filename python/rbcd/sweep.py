@@ -32,8 +32,8 @@ import threading
 import time
 import tomllib
 
-from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, check_standard_output, finite_float, escape, main_wrapper, open_trace, parse_toml, read_input_text, say, trace_errors,
-                      write_output)
+from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, check_standard_output, escape, finite_float,
+                      main_wrapper, open_trace, parse_toml, read_input_text, say, trace_errors, write_output)
 from rbcd.startup import kept
 
 PROG = "rbcd-sweep"
@@ -1265,7 +1265,8 @@ def run(argv):
         p.add_argument("sweep", help="sweep file (TOML, docs/sweeps.md)")
         if out:
             p.add_argument("-o", "--out", action=Once, required=True, help="output directory")
-        p.add_argument("--rbcd-sim", action=Once, help=f"rbcd-sim executable (default: $RBCD_SIM, else {DEFAULT_SIM_HELP})")
+        p.add_argument("--rbcd-sim", action=Once,
+                       help=f"rbcd-sim executable (default: $RBCD_SIM, else {DEFAULT_SIM_HELP})")
         p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
         p.add_argument("--max-runs", action=Once, type=ascii_int, default=DEFAULT_MAX_RUNS,
                        help=f"refuse a sweep of more runs (default {DEFAULT_MAX_RUNS}; docs/limits.md)")
@@ -1275,10 +1276,12 @@ def run(argv):
     p.add_argument("-j", "--jobs", action=Once, type=ascii_int, default=0, help="workers (default: the cores)")
     p.add_argument("--timing", action="store_true", help="print elapsed and summed run wall time as JSON")
     p = sweep_cmd("list", "validate and print the runs", False)
-    p.add_argument("-j", "--jobs", action=Once, type=ascii_int, default=0, help="validation workers (default: the cores)")
+    p.add_argument("-j", "--jobs", action=Once, type=ascii_int, default=0,
+                   help="validation workers (default: the cores)")
     p = sweep_cmd("slurm", "submit the sweep to SLURM", True)
     p.add_argument("--wait", action="store_true", help="poll squeue until the merge job is done")
-    p.add_argument("--poll", action=Once, type=finite_float, default=5.0, help="seconds between squeue polls (default 5)")
+    p.add_argument("--poll", action=Once, type=finite_float, default=5.0,
+                   help="seconds between squeue polls (default 5)")
     for name, h in (("status", "progress of an output directory"), ("merge", "assemble results.csv")):
         p = sub.add_parser(name, help=h)
         p.add_argument("out")

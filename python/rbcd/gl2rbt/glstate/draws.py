@@ -10,8 +10,9 @@ from ..gl_tables import CULL, DEPTH_FUNCS, INDEX_TYPES, PRIM_NO_AREA, PRIM_TRIAN
 from ..glmath import mat_mul, triangle_indices
 from . import enum_arg, number
 
-PRIM_MODES = PRIM_TRIANGLES | PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY", "GL_TRIANGLES_ADJACENCY",
-                                              "GL_TRIANGLE_STRIP_ADJACENCY", "GL_PATCHES"}
+# Points and lines, the adjacency forms too: no area without a geometry shader.
+NO_AREA_MODES = PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"}
+PRIM_MODES = PRIM_TRIANGLES | NO_AREA_MODES | {"GL_TRIANGLES_ADJACENCY", "GL_TRIANGLE_STRIP_ADJACENCY", "GL_PATCHES"}
 # Modes a core profile and OpenGL ES do not have (GL_INVALID_ENUM there).
 LEGACY_MODES = {"GL_QUADS", "GL_QUAD_STRIP", "GL_POLYGON"}
 # The triangles a draw of n vertices under a program gives at most, by mode;
@@ -98,7 +99,7 @@ class DrawCalls:
                       "under a vertex shader are not emulated")
         if not self.draws_into_camera_pass():
             return
-        if mode in PRIM_NO_AREA or mode in ("GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"):
+        if mode in NO_AREA_MODES:
             self.ignored_prims += 1
             return
         if mode not in PRIM_MODES or mode == "GL_PATCHES":
@@ -306,7 +307,7 @@ class DrawCalls:
         if mode == "GL_PATCHES" and not any(stage.startswith("tess") for stage in later):
             return   # GL_INVALID_OPERATION with no tessellation stage: nothing is drawn
         if not later:
-            if mode in PRIM_NO_AREA or mode in ("GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"):
+            if mode in NO_AREA_MODES:
                 self.ignored_prims += 1
                 return
             if mode not in TRIANGLES_PER_VERTICES:

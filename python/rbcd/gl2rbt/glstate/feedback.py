@@ -14,18 +14,19 @@ nothing here either: beginning without a program that records outputs,
 in another primitive mode than points, lines or triangles, while active,
 or with a binding point the program records into left empty; pausing,
 resuming or ending out of turn, resuming under another program; binding
-another object, glUseProgram or glBindProgramPipeline while active and
-not paused; linking a program an active object (paused too) records from;
-glTransformFeedbackVaryings while the bound object is active; and a draw
-whose primitives are not of the kind begun (a geometry shader's output,
-or tessellation's, decides the kind when there is one) draws nothing."""
-import re
-
+another object, glUseProgram, glBindProgramPipeline or glUseProgramStages
+on the bound pipeline while active and not paused (and the unbind that
+deleting the bound pipeline makes); linking a program an active object
+(paused too) records from; glTransformFeedbackVaryings, and unbinding a
+deleted buffer from a binding point, while the bound object is active; and
+a draw whose primitives are not of the kind begun (the kind Mesa links for
+a geometry shader's output, or tessellation's, when there is one), or of no
+whole primitive, draws and records nothing."""
 from ...cli import I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import enum_arg
-from .buffers import FEEDBACK_TARGET as TARGET, binding_ignored
+from .buffers import FEEDBACK_TARGET as TARGET, SHADER_BINDINGS, binding_ignored
 
 
 class FeedbackObject:
@@ -45,17 +46,10 @@ KIND_OF_MODE = {"GL_POINTS": "GL_POINTS", "GL_LINES": "GL_LINES", "GL_LINE_LOOP"
                 "GL_LINE_STRIP": "GL_LINES"}
 
 
-# xfb_buffer / xfb_offset layout qualifiers (GLSL 4.40): a program that
-# records its outputs without glTransformFeedbackVaryings.
-XFB_QUALIFIER = re.compile(r"\bxfb_(buffer|offset|stride)\b")
-
-
 def records(p):
     """Whether program p (its executable) records outputs: named by
-    glTransformFeedbackVaryings at its last link, or by xfb_ qualifiers in
-    a stage before the fragment one."""
-    return p.feedback is not None or any(XFB_QUALIFIER.search(text) for stage, text in p.scanned.items()
-                                         if stage != "fragment")
+    glTransformFeedbackVaryings at its last link, or by xfb_ qualifiers."""
+    return p.feedback is not None or p.xfb_qualified
 
 
 def recorded_bindings(p):
@@ -64,7 +58,7 @@ def recorded_bindings(p):
     which may refuse a draw from one it leaves alone, never take a buffer
     the GPU wrote as the capture's); else by its outputs."""
     if p.feedback is None:
-        return set(range(4))
+        return set(range(SHADER_BINDINGS[TARGET][0]))
     return recorded_by_names(p.feedback)
 
 

@@ -34,6 +34,9 @@ OPERATORS = re.compile(r"[-+*/%&|^<>?:=,!~]")
 STORAGE_BLOCK = re.compile(r"\bbuffer\s+\w+\s*\{")
 ATOMIC_COUNTER = re.compile(r"\batomic_uint\b")
 READONLY = re.compile(r"\breadonly\b")
+# xfb_buffer / xfb_offset / xfb_stride layout qualifiers (GLSL 4.40): a
+# stage that records its outputs without glTransformFeedbackVaryings.
+XFB_QUALIFIER = re.compile(r"\bxfb_(buffer|offset|stride)\b")
 
 
 def may_store(text):
@@ -86,6 +89,7 @@ class Program:
         self.block_bindings = {}   # capture block index -> binding point
         self.discards = False      # its fragment shader has a discard statement
         self.stores = False        # a stage declares shader storage blocks or atomic counters
+        self.xfb_qualified = False   # a stage before the fragment one records by xfb_ qualifiers
         self.scanned = {}          # {stage: its source as the compiler reads it} at the last link (glsl_text)
         self.frag_depth = False    # its fragment shader writes gl_FragDepth
         self.digest = ""           # SHA-256 of its stages' sources at the last link (selection rules)
@@ -334,6 +338,7 @@ class ProgramCalls:
         # Whether any stage may store into buffers: shader storage blocks not
         # readonly, or atomic counters.
         p.stores = any(may_store(text) for text in p.scanned.values())
+        p.xfb_qualified = any(XFB_QUALIFIER.search(text) for stage, text in p.scanned.items() if stage != "fragment")
         p.discards = re.search(r"\bdiscard\b", fragment) is not None
         p.frag_depth = re.search(r"\bgl_FragDepth(EXT)?\b", fragment) is not None
         p.link_call = no
