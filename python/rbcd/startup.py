@@ -1,8 +1,12 @@
 """Signals while a program starts: its launcher's first lines (scripts/),
 before Python loads the program's modules and its own handlers are in
-place (rbcd.cli.main_wrapper, rbcd.gl2rbt.cli.main). The launcher's first
-statement blocks SIGINT, SIGTERM and SIGHUP (with the builtin _signal, at
-once), and hold_signals takes one that came meanwhile. Nothing exists yet
+place (rbcd.cli.main_wrapper, rbcd.gl2rbt.cli.main). SIGINT, SIGTERM and
+SIGHUP are blocked before Python starts, by the launcher's interpreter line
+(`env --block-signal`: a SIGINT while Python imports its own site module is
+Python's fatal error, a traceback no line of the launcher can catch), and
+again by the launcher's first statement (the builtin _signal, at once) when
+it is run as `python3 LAUNCHER`; hold_signals takes one that came
+meanwhile. Nothing exists yet
 to remove, so a signal then ends the start-up in the program's one line,
 "interrupted", exit 130, not in a traceback or a silent death. SIGINT or
 SIGHUP ignored when the program started (a script's background job,
