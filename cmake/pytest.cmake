@@ -1,4 +1,5 @@
-# rbcd_add_pytest(FILE test_x.py PREFIX name [ENV VAR=value ...] [PROPERTIES prop value ...])
+# rbcd_add_pytest(FILE test_x.py PREFIX name [RELEASE_ONLY] [ENV VAR=value ...]
+#                 [PROPERTIES prop value ...])
 #
 # The Python tests of one file, each in a CTest entry and a process of its
 # own, as catch_discover_tests does for the C++ cases: the file's tests are
@@ -12,11 +13,19 @@
 # fails showing why. Without python3-pytest (scripts/setup.sh installs it) each
 # file gets one failing entry saying so: the suite never passes by running
 # nothing.
+#
+# RELEASE_ONLY labels the file's tests release_only: scripts/test.sh
+# --sanitize leaves them out. They test Python code, which the sanitizers do
+# not see, and reach the project's C++ only as other tests do that run
+# under the sanitizers (rbcd-gl-raster reading a well-formed draw stream:
+# test_gl2rbt.py, the games_ tests and the draw_stream fuzz target); the
+# preloaded libraries Mesa's replays use are never sanitized. Run twice they
+# were about half of CI's time.
 set(RBCD_PYTHON /usr/bin/python3)
 execute_process(COMMAND ${RBCD_PYTHON} -c "import pytest" RESULT_VARIABLE RBCD_NO_PYTEST OUTPUT_QUIET ERROR_QUIET)
 
 function(rbcd_add_pytest)
-  cmake_parse_arguments(P "" "FILE;PREFIX" "ENV;PROPERTIES" ${ARGN})
+  cmake_parse_arguments(P "RELEASE_ONLY" "FILE;PREFIX" "ENV;PROPERTIES" ${ARGN})
   set(whole "")
   get_filename_component(file ${P_FILE} ABSOLUTE)
   set(tests ${PROJECT_SOURCE_DIR}/testbench)
@@ -59,5 +68,8 @@ function(rbcd_add_pytest)
     add_test(NAME ${P_PREFIX}_${name} COMMAND ${RBCD_PYTHON} -m pytest -q "${id}" WORKING_DIRECTORY ${tests})
     set_tests_properties(${P_PREFIX}_${name} PROPERTIES ENVIRONMENT "${env}" TIMEOUT 300
       SKIP_REGULAR_EXPRESSION "[0-9]+ skipped in " ${P_PROPERTIES})
+    if(P_RELEASE_ONLY)
+      set_tests_properties(${P_PREFIX}_${name} PROPERTIES LABELS release_only)
+    endif()
   endforeach()
 endfunction()

@@ -8,6 +8,7 @@ cd "$(dirname "$0")/.."
 ./scripts/setup.sh --slurm --plots --eval --fuzz --gl --waves --games --supertuxkart
 dir=build
 args=(-DCMAKE_BUILD_TYPE=Release)
+select=()
 if [ "${1:-}" = "--sanitize" ]; then
   dir=build-asan
   # -O1 with line tables only: what ASan's reports need (file and line of each
@@ -19,7 +20,10 @@ if [ "${1:-}" = "--sanitize" ]; then
   # exactly that note); any real error aborts the test.
   export ASAN_OPTIONS="abort_on_error=1"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+  # The Python tests of Python code run once, in the release build
+  # (cmake/pytest.cmake, RELEASE_ONLY, says which and why).
+  select=(--label-exclude "release_only")
 fi
 cmake -S . -B "$dir" -G Ninja "${args[@]}" >/dev/null
 cmake --build "$dir"
-ctest --test-dir "$dir" -j"$(nproc)" --output-on-failure
+ctest --test-dir "$dir" -j"$(nproc)" --output-on-failure "${select[@]}"
