@@ -181,9 +181,10 @@ def say(prog, text):
 # error one line and exit 2.
 
 class ArgumentParser(argparse.ArgumentParser):
-    """argparse's parser without abbreviations; its error, unless a tool
-    sets its own, is say(prog, "MESSAGE (see --help)") and exit 2.
-    Sub-commands' parsers (add_subparsers) are of the same class."""
+    """argparse's parser without abbreviations; its error is the tool's
+    UsageError "MESSAGE (see --help)": one line naming the tool, exit 2
+    (main_wrapper; rbcd.gl2rbt.cli.main). Sub-commands' parsers
+    (add_subparsers) are of the same class."""
 
     def __init__(self, *args, **kw):
         kw["allow_abbrev"] = False
@@ -194,8 +195,7 @@ class ArgumentParser(argparse.ArgumentParser):
         return super().add_subparsers(**kw)
 
     def error(self, message):
-        say(self.prog, f"{message} (see --help)")
-        sys.exit(2)
+        raise UsageError(f"{message} (see --help)")
 
 
 class Once(argparse.Action):

@@ -388,8 +388,23 @@ def check_expand_outputs(entries, out):
             if os.path.islink(p):
                 raise UsageError(f"{p}: a symlink: expand writes its outputs as files of their own, "
                                  "never through a link (remove it)")
-    check_outputs([(f"{e.name}'s {what}", p) for e in entries for what, p in e.inputs()],
+    check_outputs([(f"{what} of {e.name}", p) for e in entries for what, p in e.inputs()],
                   [("-o", p) for e in entries for p in e.all_outputs(out)])
+
+
+def make_folders(out):
+    """-o OUT and the folders above it that are missing, made; the ones
+    made, outermost first."""
+    missing = []
+    d = os.path.abspath(out)
+    while not os.path.isdir(d):
+        missing.append(d)
+        d = os.path.dirname(d)
+    try:
+        os.makedirs(out, exist_ok=True)
+    except OSError as e:
+        raise UsageError(f"-o {out}: cannot create: {e.strerror}")
+    return missing[::-1]
 
 
 def entries_of(paths):
@@ -425,15 +440,11 @@ def run(argv):
     x.add_argument("-j", "--jobs", action=Once, type=ascii_int, default=os.cpu_count() or 1)
     x.add_argument("--frames", action=Once, type=ascii_int)
     x.add_argument("entries", nargs="*")
-
-    def error(message):
-        raise UsageError(message)
-    ap.error = c.error = x.error = error
     args = ap.parse_args(argv)
     entries = entries_of(args.entries)
     try:
         if args.cmd == "check":
-            check_standard_output([(f"{e.name}'s {what}", p) for e in entries for what, p in e.inputs()])
+            check_standard_output([(f"{what} of {e.name}", p) for e in entries for what, p in e.inputs()])
             for e in entries:
                 e.check()
                 e.committed_summary()
@@ -451,21 +462,27 @@ def run(argv):
             # before any conversion: a bad one leaves nothing.
             e.check()
             e.committed_summary()
+        created = make_folders(args.out)
         try:
-            os.makedirs(args.out, exist_ok=True)
-        except OSError as e:
-            raise UsageError(f"-o {args.out}: cannot create: {e.strerror}")
-        with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
-            try:
-                futs = [pool.submit(e.expand, args.out, args.frames) for e in entries]
-                for f in futs:
-                    print(f.result())
-            except KeyboardInterrupt:
-                # The workers' converters stopped and their entries removed
-                # before the pool is waited for.
-                CONVERSIONS.stop()
-                pool.shutdown(wait=True, cancel_futures=True)
-                raise
+            with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
+                try:
+                    futs = [pool.submit(e.expand, args.out, args.frames) for e in entries]
+                    for f in futs:
+                        print(f.result())
+                except KeyboardInterrupt:
+                    # The workers' converters stopped and their entries removed
+                    # before the pool is waited for.
+                    CONVERSIONS.stop()
+                    pool.shutdown(wait=True, cancel_futures=True)
+                    raise
+        except BaseException:
+            # The folders this run made, if no entry was written into them.
+            for d in reversed(created):
+                try:
+                    os.rmdir(d)
+                except OSError:
+                    break
+            raise
         return 0
     except Mismatch as e:
         say(PROG, str(e))

@@ -1227,12 +1227,6 @@ def cmd_task(args):
 
 # ---------------------------------------------------------------- main
 
-class Parser(ArgumentParser):
-    def error(self, message):
-        say(PROG, f"{message} (see --help)")
-        sys.exit(2)
-
-
 def check_stdout(args):
     """Standard output (the listing, the status) opened by the shell onto
     the sweep file or a file of the output directory the command reads
@@ -1256,9 +1250,9 @@ def check_stdout(args):
 
 
 def run(argv):
-    ap = Parser(prog=PROG, description=__doc__.split("\n")[0],
+    ap = ArgumentParser(prog=PROG, description=__doc__.split("\n")[0],
                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog="\n".join(__doc__.split("\n")[2:9]))
-    sub = ap.add_subparsers(dest="cmd", required=True, parser_class=Parser)
+    sub = ap.add_subparsers(dest="cmd", required=True)
 
     def sweep_cmd(name, help_text, out):
         p = sub.add_parser(name, help=help_text)

@@ -148,7 +148,7 @@ def test_expand_never_writes_through_its_output_folder_into_an_input(tmp_path, e
     if link == "symlink":
         refused(r, str(out / output), "a symlink")
     elif target:
-        refused(r, str(out / output), f"is also {NAME}'s")
+        refused(r, str(out / output), "is also ", f" of {NAME}")
     else:   # a hard link to an unrelated file is a file of expand's output folder: replaced, not written through
         assert r.returncode == 0, r.stderr
         assert victim.read_text() == kept
@@ -209,11 +209,12 @@ def test_an_entry_is_a_named_folder_whose_summary_matches_its_frames(tmp_path, e
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["term", "int"])
 def test_an_interrupted_expand_leaves_nothing(tmp_path, sig):
     """SIGTERM or SIGINT to expand while an entry converts: the converter is
-    stopped with it and nothing is left in the output folder (the
+    stopped with it and nothing is left: no file in the output folder (the
     conversion had run on to its end and left the whole entry, .capture
-    included, after 'interrupted')."""
+    included, after 'interrupted'), nor the folders expand made for it
+    (they had stayed, empty)."""
     program("rbcd-gl-raster")
-    out = tmp_path / "out"
+    out = tmp_path / "made" / "out"
     env = dict(os.environ, TMPDIR=str(tmp_path), RBCD_GL_RASTER=program("rbcd-gl-raster"))
     p = subprocess.Popen(["/usr/bin/python3", GAME_SUITE, "expand", "-o", out, "--frames", "40", SOURCE],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
@@ -226,14 +227,14 @@ def test_an_interrupted_expand_leaves_nothing(tmp_path, sig):
     _, err = p.communicate(timeout=120)
     assert p.returncode == 130 and err.strip().splitlines() == ["game-suite: interrupted"], (p.returncode, err)
     time.sleep(1)
-    assert os.listdir(out) == [], "an interrupted expand left files"
+    assert os.listdir(tmp_path) == [], "an interrupted expand left files or folders"
 
 
 def test_a_converter_killed_outright_leaves_nothing(tmp_path):
     """The converter SIGKILLed while it writes an entry (no handler of its
     own runs): expand says the conversion failed (exit 1) and removes what
-    it had begun, the temporaries beside the outputs and the converter's
-    temporary folders (round 14's R14-13: `.NAME.geo.XXXXXXXX` and a folder
+    it had begun: the temporaries beside the outputs, the output folder it
+    made and the converter's temporary folders (round 14's R14-13: `.NAME.geo.XXXXXXXX` and a folder
     in TMPDIR stayed)."""
     program("rbcd-gl-raster")
     out, tmp = tmp_path / "out", tmp_path / "tmp"
@@ -255,7 +256,7 @@ def test_a_converter_killed_outright_leaves_nothing(tmp_path):
     _, err = p.communicate(timeout=120)
     assert p.returncode == 1 and "conversion failed" in err, (p.returncode, err)
     time.sleep(1)   # (its rasterizer, left without input, ends and removes its own)
-    assert os.listdir(out) == [] and os.listdir(tmp) == [], (os.listdir(out), os.listdir(tmp))
+    assert not out.exists() and os.listdir(tmp) == [], (os.listdir(tmp_path), os.listdir(tmp))
 
 
 def test_frames_past_the_entry_expand_the_whole_entry(tmp_path):
@@ -416,5 +417,6 @@ def test_check_with_standard_output_onto_an_entry_s_file_is_refused(tmp_path, en
         env = dict(os.environ, TMPDIR=str(tmp_path))
         r = subprocess.run(["/usr/bin/python3", GAME_SUITE, "check", str(entry)], stdout=out, stderr=subprocess.PIPE,
                            text=True, env=env, stdin=subprocess.DEVNULL, timeout=600)
-    refused(r, f"{entry / which}: standard output is {NAME}'s")
+    what = {"calls.xz": "the reduced capture"}.get(which, which)
+    refused(r, f"{entry / which}: standard output is {what} of {NAME}: ")
     assert {p: p.read_bytes() for p in entry.iterdir()} == before

@@ -42,14 +42,8 @@ def parse_frames(text):
     return a, b
 
 
-class ArgParser(ArgumentParser):
-    def error(self, message):
-        sys.stderr.write(f"{PROG}: {printable(message)}\n")
-        sys.exit(2)
-
-
 def parse_args(argv):
-    ap = ArgParser(prog=PROG, description="A captured OpenGL stream (apitrace) into the unit's input.")
+    ap = ArgumentParser(prog=PROG, description="A captured OpenGL stream (apitrace) into the unit's input.")
     ap.add_argument("trace", help="the apitrace capture (.trace)")
     ap.add_argument("-o", "--output", action=Once,
                     help="the fragment trace to write (.rbt; .rbt.zst or .rbt.gz compressed)")
@@ -233,7 +227,11 @@ def main(argv=None):
             signal.signal(sig, on_signal)
     trace = None
     try:
-        args = parse_args(sys.argv[1:] if argv is None else argv)
+        try:
+            args = parse_args(sys.argv[1:] if argv is None else argv)
+        except UsageError as e:
+            sys.stderr.write(f"{PROG}: {printable(str(e))}\n")
+            return 2
         trace = args.trace
         return run(args)
     except KeyboardInterrupt:
