@@ -214,6 +214,11 @@ else
   # time limit, and frames past the replay are simply not converted.
   limit=$(( 60 + (skip + frames) / 5 ))
 fi
+# Nor onto the game's selection rules, or a map or replay given as a file.
+for input in "$rules" "$map"; do
+  [ ! -f "$input" ] || ! [ /dev/stdout -ef "$input" ] || \
+    { echo "capture-game.sh: $(oneline "$input"): standard output is an input of the capture: what goes there would be written into it" >&2; exit 2; }
+done
 
 # Every string capture.toml records, as a TOML string (escaped: a map's
 # path may hold quotes, backslashes or control characters), the work

@@ -399,8 +399,19 @@ def check_toml_keys(path, text):
 def parse_toml(path, text):
     """A TOML text as tomllib reads it, its keys bounded first
     (check_toml_keys): every TOML reader of the Python tools reads so.
-    tomllib.TOMLDecodeError and RecursionError are the reader's to name."""
-    return tomllib.loads(check_toml_keys(path, text))
+    tomllib.TOMLDecodeError and RecursionError are the reader's to name;
+    an integer of more digits than Python converts is a TOMLDecodeError
+    too (tomllib lets int()'s ValueError through)."""
+    text = check_toml_keys(path, text)
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        raise
+    except ValueError:
+        limit = sys.get_int_max_str_digits()
+        m = re.search(r"[0-9][0-9_]{%d,}" % limit, text)
+        where = f" (at line {text.count(chr(10), 0, m.start()) + 1})" if m else ""
+        raise tomllib.TOMLDecodeError(f"an integer of more than {limit} digits{where}") from None
 
 
 def output_target(path):

@@ -141,8 +141,29 @@ def series(head, rows, args):
     return xs, out, varying
 
 
+def check_axes(xs, data, args, numeric_x):
+    """What no axis can show, refused: --logx with an x that is not a
+    positive number (a log axis would drop it, or fail), and values whose
+    mean or span is past a double (the axis' limits overflow)."""
+    if args.logx:
+        if not numeric_x:
+            raise PlotError(f"--logx: --x {args.x} is not numeric")
+        bad = [x for x in xs if number(x) <= 0]
+        if bad:
+            raise PlotError(f"--logx: --x {args.x} has {bad[0]}, not a positive number: a log axis cannot place it")
+    ys = [y for pts in data.values() for _, y in pts]
+    axes = [("--y", args.y, ys)] + ([("--x", args.x, [number(x) for x in xs])] if numeric_x else [])
+    for opt, col, vals in axes:
+        if not all(math.isfinite(v) for v in vals) or not math.isfinite(max(vals) - min(vals)):
+            raise PlotError(f"{opt} {col}: values (or their means) span more than an axis can hold "
+                            f"({min(vals):g} to {max(vals):g})")
+
+
 def plot_matplotlib(xs, data, args, numeric_x):
-    """The PNG's bytes."""
+    """The PNG's bytes. Matplotlib's warnings are not printed: what they
+    warn of is refused before (check_axes) or changes nothing drawn."""
+    import warnings
+    warnings.simplefilter("ignore")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -318,6 +339,7 @@ def run(argv):
     if varying:
         say(PROG, f"averaging over {', '.join(varying)} (fix them with --where)")
     numeric_x = all(number(x) is not None for x in xs)
+    check_axes(xs, data, args, numeric_x)
     backend = args.backend
     if backend == "auto":
         try:

@@ -480,6 +480,13 @@ class Sweep:
     def input_set(self, label):
         return self.input_sets.get(label, ())
 
+    def read_files(self):
+        """The files the sweep reads, (what, path): itself, its base
+        configuration and its inputs (traces and scenes)."""
+        return [("the sweep file", self.path)] + \
+            ([("base.config", self.base_config)] if self.base_config else []) + \
+            [(f"input {label}", full) for label, _, full in self.inputs if full]
+
     # -- expansion
     def points(self):
         """Every point of the grid, first axis slowest: list of [(key, value), ...]."""
@@ -972,6 +979,7 @@ def summarize_warnings(out, plan, results, quiet):
 def prepare(args, workers):
     sweep = Sweep(args.sweep, args.max_runs)
     sim = find_rbcd_sim(args.rbcd_sim, sweep)
+    check_standard_output(sweep.read_files() + [("rbcd-sim", sim)])
     cache_path = os.path.join(args.out, "validated.json") if getattr(args, "out", None) else None
     digests, cache = validate(sweep, sim, workers, cache_path)
     plan = make_plan(sweep, sim, digests)
@@ -1229,10 +1237,11 @@ def cmd_task(args):
 
 def check_stdout(args):
     """Standard output (the listing, the status) opened by the shell onto
-    the sweep file or a file of the output directory the command reads
-    (1<>S.toml, 1<>OUT/plan.json) would be written into it: refused. (A
-    SLURM task's and the merge job's standard output is a log file of
-    OUT/slurm/logs, which nothing reads.)"""
+    the sweep file or a file of the output directory (1<>S.toml,
+    1<>OUT/plan.json, or a hard link to one elsewhere) would be written
+    into it: refused. (A SLURM task's and the merge job's standard output
+    is a log file of OUT/slurm/logs, which nothing reads.) The sweep's
+    other inputs are checked once it is read (prepare)."""
     if getattr(args, "sweep", None):
         check_standard_output([("the sweep file", args.sweep)])
     out = getattr(args, "out", None)
@@ -1243,8 +1252,27 @@ def check_stdout(args):
         target = os.path.realpath("/proc/self/fd/1")
     except OSError:
         return
+    if not stat.S_ISREG(st.st_mode):
+        return
     base = os.path.realpath(out) + os.sep
-    if stat.S_ISREG(st.st_mode) and target.startswith(base) and not target.startswith(base + "slurm" + os.sep):
+    slurm = base + "slurm" + os.sep
+    inside = target.startswith(base) and not target.startswith(slurm)
+    if not inside and st.st_nlink > 1:   # a hard link elsewhere to a file of OUT
+        for d, dirs, files in os.walk(base):
+            if (d + os.sep).startswith(slurm):
+                dirs[:] = []
+                continue
+            for f in files:
+                try:
+                    fs = os.lstat(os.path.join(d, f))
+                except OSError:
+                    continue
+                if (fs.st_dev, fs.st_ino) == (st.st_dev, st.st_ino):
+                    inside, target = True, os.path.join(d, f)
+                    break
+            if inside:
+                break
+    if inside:
         raise UsageError(f"{out}: standard output is {target}, a file of the output directory: what goes "
                          "there would be written into it")
 

@@ -244,3 +244,37 @@ def test_standard_output_onto_the_capture_is_refused_before_a_line(tmp_path):
     assert r.returncode == 2 and len(lines) == 1 and "standard output is the capture" in lines[0], lines
     assert cap.read_bytes() == before
     assert sorted(os.listdir(tmp_path)) == ["kept.trace"]
+
+
+@pytest.mark.parametrize("which", ["rules", "map"], ids=["rules", "map"])
+def test_standard_output_onto_the_rules_or_a_map_file_is_refused(tmp_path, which):
+    """Standard output opened onto the game's selection rules (a copy of
+    the tree, so that the committed file is never at stake) or onto a map
+    given as a file: refused in one line before the progress line is
+    written (it had overwritten the rules' first 43 bytes; R20-8)."""
+    tree = tmp_path / "tree"
+    (tree / "scripts").mkdir(parents=True)
+    shutil.copy(CAPTURE_GAME, tree / "scripts")
+    (tree / "workloads" / "games").mkdir(parents=True)
+    for f in os.listdir(os.path.join(ROOT, "workloads", "games")):
+        if f.endswith("-select.toml"):
+            shutil.copy(os.path.join(ROOT, "workloads", "games", f), tree / "workloads" / "games")
+    os.symlink(os.path.join(ROOT, "python"), tree / "python")
+    cap = tmp_path / "kept.trace"
+    cap.write_bytes(b"a kept capture's bytes, left as they are" * 4)
+    replay = tmp_path / "r.nbr"
+    replay.write_bytes(b"a replay's bytes" * 4)
+    game, victim = (("openarena", tree / "workloads" / "games" / "openarena-select.toml") if which == "rules"
+                    else ("neverball", replay))
+    before = victim.read_bytes()
+    env = dict(os.environ, TMPDIR=str(tmp_path), RBCD_GL_RASTER=program("rbcd-gl-raster"))
+    with open(victim, "r+b") as out:
+        r = subprocess.run(["bash", tree / "scripts" / "capture-game.sh", game,
+                            "oa_dm1" if which == "rules" else str(replay), "3", str(tmp_path / "out"),
+                            "--from-trace", str(cap)], stdout=out, stderr=subprocess.PIPE, text=True, env=env,
+                           stdin=subprocess.DEVNULL, timeout=600)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "standard output is an input of the capture" in lines[0], lines
+    assert victim.read_bytes() == before
+    assert not (tmp_path / "out").exists()
+

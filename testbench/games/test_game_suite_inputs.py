@@ -85,6 +85,14 @@ def test_a_capture_description_nested_too_deep(tmp_path, entry):
     refused(game_suite(tmp_path, "check", entry), str(toml), "nested too deep to read")
 
 
+def test_a_capture_description_with_an_integer_python_cannot_convert(tmp_path, entry):
+    """5,000 digits: one line naming the file (it had been an internal
+    error, exit 1; R20-9)."""
+    toml = entry / "capture.toml"
+    toml.write_text(toml.read_text() + "huge = " + "7" * 5000 + "\n")
+    refused(game_suite(tmp_path, "check", entry), str(toml), "an integer of more than 4300 digits")
+
+
 def test_a_capture_description_with_a_key_of_too_many_dotted_parts(tmp_path, entry):
     """tomllib's memory grows with the square of a dotted key's parts (R16-7:
     a 64 KB capture.toml of 32,000 parts took 3.9 GB and 10 s): a key of more

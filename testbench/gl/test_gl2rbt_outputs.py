@@ -381,6 +381,17 @@ def test_outputs_a_command_does_not_write_are_refused(tmp_path, args, words):
     assert sorted(os.listdir(tmp_path)) == ["c.xz"]
 
 
+def test_a_selection_file_with_an_integer_python_cannot_convert(tmp_path):
+    """An integer of 5,000 digits: one line naming the file and the line
+    (it had been "internal error: ValueError: Exceeds the limit", exit 1;
+    R20-9)."""
+    cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    (tmp_path / "r.toml").write_text("[[object]]\nid = " + "1" * 5000 + "\n")
+    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--select", tmp_path / "r.toml"),
+            "r.toml", "an integer of more than 4300 digits (at line 2)")
+    assert sorted(os.listdir(tmp_path)) == ["c.xz", "r.toml"]
+
+
 def test_a_selection_file_that_is_not_utf8_says_where(tmp_path):
     cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
     (tmp_path / "r.toml").write_bytes(b"[[object]]\nid = 1\nname = '\xff'\n")

@@ -163,6 +163,20 @@ FEEDBACK_VS = MOVED_VS.replace("out gl_PerVertex", "out vec3 q;\nout gl_PerVerte
     "void main() {", "void main() { q = p;")
 
 
+def recording_separable(feedback=True):
+    """separable(FEEDBACK_VS), recording its output q (when `feedback`)
+    into buffer 6, at binding 0 of the default transform feedback object."""
+    c = separable(FEEDBACK_VS)
+    if feedback:
+        at = next(i for i, call in enumerate(c.calls) if call[1] == "glLinkProgram")
+        c.calls.insert(at, (0, "glTransformFeedbackVaryings", [("program", 2), ("count", 1), ("varyings", ["q"]),
+                                                               ("bufferMode", "GL_INTERLEAVED_ATTRIBS")], None, 0))
+        c.calls = [(i + 1,) + call[1:] for i, call in enumerate(c.calls)]
+    c.add("glBindBuffer", target="GL_TRANSFORM_FEEDBACK_BUFFER", buffer=6)
+    c.add("glBufferData", target="GL_TRANSFORM_FEEDBACK_BUFFER", size=1024, data=None, usage="GL_STREAM_COPY")
+    return c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=0, buffer=6)
+
+
 @pytest.mark.parametrize("feedback", [("q",), ()], ids=["recording", "not_recording"])
 def test_use_program_stages_on_the_bound_pipeline_while_recording_changes_nothing(tmp_path, feedback):
     """glUseProgramStages on the pipeline draws run while transform feedback
@@ -171,20 +185,12 @@ def test_use_program_stages_on_the_bound_pipeline_while_recording_changes_nothin
     one, 22.91% against Mesa; R19-3); with nothing recorded it takes the
     new program."""
     def capture(restage):
-        c = separable(FEEDBACK_VS)
-        if feedback:
-            at = next(i for i, call in enumerate(c.calls) if call[1] == "glLinkProgram")
-            c.calls.insert(at, (0, "glTransformFeedbackVaryings", [("program", 2), ("count", 1), ("varyings", ["q"]),
-                                                                   ("bufferMode", "GL_INTERLEAVED_ATTRIBS")], None, 0))
-            c.calls = [(i + 1,) + call[1:] for i, call in enumerate(c.calls)]
+        c = recording_separable(bool(feedback))
         c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=8)
         c.add("glShaderSource", shader=8, count=1, string=[MOVED_VS.replace("+ dx", "+ 1.0")], length=None)
         c.add("glCompileShader", shader=8).add("glCreateProgram", ret=9).add("glAttachShader", program=9, shader=8)
         c.add("glProgramParameteri", program=9, pname="GL_PROGRAM_SEPARABLE", value=1)
         c.add("glBindAttribLocation", program=9, index=0, name="p").add("glLinkProgram", program=9)
-        c.add("glBindBuffer", target="GL_TRANSFORM_FEEDBACK_BUFFER", buffer=6)
-        c.add("glBufferData", target="GL_TRANSFORM_FEEDBACK_BUFFER", size=1024, data=None, usage="GL_STREAM_COPY")
-        c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=0, buffer=6)
         if feedback:
             c.add("glBeginTransformFeedback", primitiveMode="GL_TRIANGLES")
         if restage:
@@ -202,16 +208,68 @@ def test_a_pipeline_deleted_while_recording_stays_current(tmp_path):
     nothing: 27.17% against Mesa; R19-8); not recording, the draw has no
     pipeline and draws nothing."""
     def capture(recording):
-        c = separable(FEEDBACK_VS)
-        at = next(i for i, call in enumerate(c.calls) if call[1] == "glLinkProgram")
-        c.calls.insert(at, (0, "glTransformFeedbackVaryings", [("program", 2), ("count", 1), ("varyings", ["q"]),
-                                                               ("bufferMode", "GL_INTERLEAVED_ATTRIBS")], None, 0))
-        c.calls = [(i + 1,) + call[1:] for i, call in enumerate(c.calls)]
-        c.add("glBindBuffer", target="GL_TRANSFORM_FEEDBACK_BUFFER", buffer=6)
-        c.add("glBufferData", target="GL_TRANSFORM_FEEDBACK_BUFFER", size=1024, data=None, usage="GL_STREAM_COPY")
-        c.add("glBindBufferBase", target="GL_TRANSFORM_FEEDBACK_BUFFER", index=0, buffer=6)
+        c = recording_separable()
         if recording:
             c.add("glBeginTransformFeedback", primitiveMode="GL_TRIANGLES")
         return draw(c.add("glDeleteProgramPipelines", n=1, pipelines=[5]))
     assert trace(tmp_path, capture(True), "recording").count(b"\nf ") > 100
     assert trace(tmp_path, capture(False), "idle").count(b"\nf ") == 0
+
+
+@pytest.mark.parametrize("case", ["lone_use_program_0", "use_program_then_0"],
+                         ids=["lone_use_program_0", "use_program_then_0"])
+def test_a_pipeline_deleted_while_recording_after_use_program_0(tmp_path, case):
+    """After the pipeline deleted while recording (still current) and the
+    recording ended: glUseProgram(0) after a program was in use makes
+    Mesa bind the current pipeline again by its name, which is free now
+    (GL_INVALID_OPERATION), and no pipeline is in effect: the next frame's
+    draw draws nothing in a core profile (it had been drawn through the
+    deleted pipeline: 38.59% against Mesa; R20-6). A glUseProgram(0) with
+    no program in use before changes nothing: the pipeline still draws."""
+    c = recording_separable().add("glBeginTransformFeedback", primitiveMode="GL_TRIANGLES")
+    draw(c.add("glDeleteProgramPipelines", n=1, pipelines=[5]))
+    c.add("glEndTransformFeedback")
+    if case == "use_program_then_0":
+        c.add("glUseProgram", program=2)
+    c.add("glUseProgram", program=0)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+    got = frames(tmp_path, c.swap(), case)
+    assert got[0]["fragments"] > 100
+    assert (got[1]["fragments"] == 0) == (case == "use_program_then_0"), got
+
+
+COMPAT_FS = "#version 410 core\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n"
+COMPAT_GS = ("#version 410 core\nlayout(triangles) in;\nlayout(triangle_strip, max_vertices = 3) out;\n"
+             "in gl_PerVertex { vec4 gl_Position; } gl_in[];\nout gl_PerVertex { vec4 gl_Position; };\n"
+             "void main() { for (int i = 0; i < 3; i++) { gl_Position = gl_in[i].gl_Position; EmitVertex(); } }\n")
+
+
+@pytest.mark.parametrize("stages, drawn", [
+    ([("GL_FRAGMENT_SHADER", "GL_FRAGMENT_SHADER_BIT", COMPAT_FS)], True),
+    ([("GL_GEOMETRY_SHADER", "GL_GEOMETRY_SHADER_BIT", COMPAT_GS)], False),
+    ([("GL_GEOMETRY_SHADER", "GL_GEOMETRY_SHADER_BIT", COMPAT_GS),
+      ("GL_FRAGMENT_SHADER", "GL_FRAGMENT_SHADER_BIT", COMPAT_FS)], False),
+    ([], False),
+], ids=["fragment_stage", "geometry_stage", "geometry_and_fragment_stages", "empty"])
+def test_a_compatibility_pipeline_validated_for_fixed_function_vertices(tmp_path, stages, drawn):
+    """A compatibility context's fixed-function draw (glVertexPointer) with
+    a pipeline bound and no program in use: Mesa validates the pipeline
+    first (_mesa_validate_program_pipeline). A fragment stage alone draws,
+    its vertices fixed-function; a geometry stage with no vertex stage, or
+    an empty pipeline, is GL_INVALID_OPERATION and draws nothing (each had
+    been drawn, 27.17% against Mesa; R20-5)."""
+    c = Calls()
+    c.add("glXCreateContextAttribsARB", attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 4,
+          "GLX_CONTEXT_MINOR_VERSION_ARB", 5, "GLX_CONTEXT_PROFILE_MASK_ARB",
+          "GLX_CONTEXT_COMPATIBILITY_PROFILE_BIT_ARB", 0], ret=1)
+    c.add("glGenProgramPipelines", n=1, pipelines=[5]).add("glBindProgramPipeline", pipeline=5)
+    for i, (kind, bit, source) in enumerate(stages):
+        c.add("glCreateShaderProgramv", type=kind, count=1, strings=[source], ret=11 + i)
+        c.add("glUseProgramStages", pipeline=5, stages=[bit], program=11 + i)
+    r = gl2rbt(tmp_path, c.triangle(obj=5).swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt",
+               "--summary", tmp_path / "c.jsonl")
+    assert r.returncode == 0, r.stderr
+    got = json.loads((tmp_path / "c.jsonl").read_text().splitlines()[0])["fragments"]
+    assert (got > 100) == drawn, got
+    assert drawn or "draws are GL errors" in r.stdout + r.stderr, r.stdout

@@ -1296,3 +1296,26 @@ def test_fixed_function_adjacency_and_patch_draws_as_mesa_draws_them():
     assert a["tris"] == [[0, 2, 4]] and a["clip"][[0, 2, 4], :2].tolist() == [[0, 0], [1, 0], [0, 1]]
     assert s["tris"] == [[0, 2, 4], [4, 2, 6]], "the second triangle's first two swapped: a strip's winding"
     assert gl.conv.ignored_prims == 2
+
+
+def test_the_frames_converted_are_bounded_by_the_capture_s_size(tmp_path):
+    """The vertices all the frames converted set up or run are bounded by
+    the capture's size (256 a byte, at least 2^26): frames each at the
+    one-frame bound pass until their sum passes it, then the draw is
+    refused naming the call (an 11.5 KB reduced capture of 1,000 frames
+    just under the frame bound had been taken: about 4.7 hours; R20-13)."""
+    from rbcd.gl2rbt.glstate.draws import (CAPTURE_VERTICES_PER_BYTE, MAX_FRAME_VERTICES, MIN_CAPTURE_VERTICES,
+                                           capture_vertex_bound)
+    small, big = tmp_path / "small.xz", tmp_path / "big.xz"
+    small.write_bytes(bytes(11488))
+    big.write_bytes(bytes(1 << 20))
+    assert capture_vertex_bound(str(small)) == MIN_CAPTURE_VERTICES == 1 << 26
+    assert capture_vertex_bound(str(big)) == CAPTURE_VERTICES_PER_BYTE << 20
+    gl = GL()   # (no capture file: the bound's floor)
+    for frame in range(MIN_CAPTURE_VERTICES // MAX_FRAME_VERTICES):
+        gl.conv.frame_vertices = 0   # (a new frame: its own bound starts again)
+        gl.conv.frame_work(frame + 1, "glDrawArrays", MAX_FRAME_VERTICES)
+    gl.conv.frame_vertices = 0
+    with pytest.raises(ConvertError, match=r"call 9: glDrawArrays: more than 67108864 vertices drawn in the frames "
+                                           r"converted, the bound for a capture of this size \(256 a byte"):
+        gl.conv.frame_work(9, "glDrawArrays", 1)

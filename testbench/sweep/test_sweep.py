@@ -441,6 +441,19 @@ def test_plot(c):
     before = c.read(table)
     r = run(["/usr/bin/python3", PLOT, table, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "-o", table])
     assert r.returncode == 2 and "is the input table" in r.stderr and c.read(table) == before, f"-o = table: {r.stderr}"
+    # What no axis can show: one line, no PNG, no warnings (matplotlib's
+    # had been printed before "internal error", exit 1; R20-11).
+    for text, args, needle in (("a,b\n-1,2\n0,3\n", ["--logx"], "--logx: --x a has -1, not a positive number"),
+                               ("a,b\nx,2\ny,3\n", ["--logx"], "--logx: --x a is not numeric"),
+                               ("a,b\n1,1e308\n2,-1e308\n", [], "--y b: values (or their means) span more than"),
+                               ("a,b\n1,1e308\n1,1e308\n", [], "--y b: values (or their means) span more than")):
+        odd, png = c.sweep_file("odd.csv", text), os.path.join(c.tmp, "odd.png")
+        for b in backends:
+            r = run(["/usr/bin/python3", PLOT, odd, "--y", "b", "--x", "a", "-o", png, "--backend", b] + args)
+            lines = r.stderr.splitlines()
+            assert r.returncode == 2 and len(lines) == 1 and lines[0].startswith(f"rbcd-plot: {needle}"), \
+                f"{b} {text!r}: {r.stderr}"
+            assert not os.path.exists(png)
 
 
 @sweep_case
@@ -560,6 +573,10 @@ def test_hostile(c):
     # Nested 5,000 deep: exit 2 naming the file, not "maximum recursion depth".
     deep = c.sweep_file("deep.toml", "[axes]\nx = " + "[" * 5000 + "]" * 5000 + "\n")
     one_error_line(c.sweep("list", deep), "deep.toml: nested too deep", "5000-deep arrays")
+    # An integer of more digits than Python converts (it had been an
+    # internal error, ValueError, naming no file; R20-9).
+    huge = c.sweep_file("huge.toml", "[axes]\nzeb.banks = [1]\n[repeats]\ncount = " + "9" * 5000 + "\n")
+    one_error_line(c.sweep("list", huge), "huge.toml: an integer of more than 4300 digits (at line 4)", "huge int")
     # Run counts capped before expansion (each took minutes or all memory).
     for name, text, needle in (
             ("count.toml", "[repeats]\ncount = 100000000\n", "repeats.count: 100000000"),
@@ -627,7 +644,28 @@ def test_command_lines(c):
         r = subprocess.run(["/usr/bin/python3", SWEEP, "status", out], stdout=f, stderr=subprocess.PIPE, text=True)
     one_error_line(r, "a file of the output directory", "status 1<>OUT/plan.json")
     assert c.read(os.path.join(out, "plan.json")) == "{}"
+    # ... a hard link to it outside the directory, the sweep's base
+    # configuration or one of its traces (each had been written over; R20-7).
+    link = os.path.join(c.tmp, "plan-link.json")
+    os.link(os.path.join(out, "plan.json"), link)
+    with open(link, "r+") as f:
+        r = subprocess.run(["/usr/bin/python3", SWEEP, "status", out], stdout=f, stderr=subprocess.PIPE, text=True)
+    one_error_line(r, "a file of the output directory", "status 1<>hard link to OUT/plan.json")
+    assert c.read(os.path.join(out, "plan.json")) == "{}"
     shutil.rmtree(out)
+    os.unlink(link)
+    cfg = c.sweep_file("cfg.toml", "[zeb]\nlist_length = 8\n")
+    trace = os.path.join(c.tmp, "t.rbt")
+    shutil.copy(os.path.join(ROOT, "vectors", "multi-frame-mixed.rbt"), trace)
+    inputs = c.sweep_file("in.toml", '[base]\nconfig = "cfg.toml"\n[axes]\nzeb.banks = [1, 2]\n'
+                                     '[inputs]\ntraces = ["t.rbt"]\n')
+    for victim, what in ((cfg, "base.config"), (trace, "input t.rbt")):
+        before = open(victim, "rb").read()
+        with open(victim, "r+b") as f:
+            r = subprocess.run(["/usr/bin/python3", SWEEP, "list", inputs, "--rbcd-sim", c.sim], stdout=f,
+                               stderr=subprocess.PIPE, text=True, env=dict(os.environ, RBCD_CONFIG_CHECK=c.checker))
+        one_error_line(r, f"standard output is {what}", f"list 1<>{what}")
+        assert open(victim, "rb").read() == before
     table = c.sweep_file("t.csv", "zeb.banks,gpu.cycles\n1,10\n2,20\n")
     png = os.path.join(c.tmp, "p.png")
     for args, needle in ((["--y", "gpu.cycles", "--x", "zeb.banks", "-o", png, "--y", "x"], "--y is given twice"),

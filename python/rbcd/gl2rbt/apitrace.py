@@ -3,6 +3,7 @@ import pickle
 import shutil
 import signal
 import subprocess
+import sys
 import tempfile
 
 from .errors import ConvertError, ToolError, printable
@@ -73,11 +74,29 @@ class PointerType(int):
     """apitrace's pickled pointers (unpickle.Pointer): an address."""
 
 
+def _dealloc_report_dropped(kind, value, tb):
+    """sys.excepthook while a pickle is read: CPython's unpickler, failing
+    on a corrupt length, frees a bytearray a view of which is still alive
+    and reports that from the deallocator through sys.excepthook
+    ("SystemError: deallocated bytearray object has exported buffers");
+    the reader's own error says what failed, so that report is dropped.
+    Anything else goes to Python's hook."""
+    if not (kind is SystemError and "exported buffers" in str(value)):
+        sys.__excepthook__(kind, value, tb)
+
+
 class CallReader(pickle.Unpickler):
     def find_class(self, module, name):
         if name == "Pointer":
             return PointerType
         raise pickle.UnpicklingError(f"unexpected object {module}.{name} in the pickle stream")
+
+    def load(self):
+        sys.excepthook = _dealloc_report_dropped
+        try:
+            return super().load()
+        finally:
+            sys.excepthook = sys.__excepthook__
 
 
 def read_apitrace_calls(trace, calls=None):

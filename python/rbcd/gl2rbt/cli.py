@@ -65,11 +65,11 @@ def parse_args(argv):
     ap.add_argument("--image", action=Once, help="with --list-draws: a PNG of the frame, each visible draw labelled")
     ap.add_argument("--check-depth", action="store_true",
                     help="compare the depth buffer at each checked frame's last 3D draw with Mesa's (glretrace)")
-    ap.add_argument("--check-frames", action=Once, type=ascii_int, default=5,
-                    help="frames to check, spread over --frames (default 5)")
+    ap.add_argument("--check-frames", action=Once, type=ascii_int,
+                    help="with --check-depth: frames to check, spread over --frames (default 5)")
     ap.add_argument("--check-timeout", action=Once, type=ascii_int, default=600,
                     help="seconds per glretrace replay (default 600)")
-    ap.add_argument("--min-agreement", action=Once, type=finite_float, default=99.0,
+    ap.add_argument("--min-agreement", action=Once, type=finite_float,
                     help="with --check-depth: exit 1 below this percentage (default 99)")
     ap.add_argument("--depth-out", action=Once, help=argparse.SUPPRESS)
     # With --check-depth: keep the depth dumps and Mesa's depth buffers in DIR,
@@ -88,6 +88,16 @@ def run(args):
         # the call: numpy's warnings would only repeat them, before the line.
         np.seterr(all="ignore")
         from . import depth_check, listing, raster   # they compute with numpy
+        for opt, value in (("-o", args.output), ("--geometry", args.geometry), ("--select", args.select),
+                           ("--summary", args.summary), ("--reduced-out", args.reduced_out), ("--image", args.image),
+                           ("--depth-out", args.depth_out), ("--check-keep", args.check_keep),
+                           ("--stream-out", args.stream_out)):
+            if value == "":
+                raise ConvertError(f"{opt}: an empty path")
+        if not args.check_depth:
+            for opt, value in (("--check-frames", args.check_frames), ("--min-agreement", args.min_agreement)):
+                if value is not None:
+                    raise ConvertError(f"{opt} goes with --check-depth")
         if args.list_draws is not None or args.check_depth:
             # The conversion's outputs are not written there: given, they
             # would be passed over.
@@ -110,6 +120,8 @@ def run(args):
         if args.check_depth:
             args.frame_range = parse_frames(args.frames)
             args.snapshots = set()
+            args.check_frames = 5 if args.check_frames is None else args.check_frames
+            args.min_agreement = 99.0 if args.min_agreement is None else args.min_agreement
             if args.check_frames < 1:
                 raise ConvertError("--check-frames must be at least 1")
             if not 0.0 <= args.min_agreement <= 100.0:   # NaN fails both

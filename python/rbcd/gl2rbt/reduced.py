@@ -225,6 +225,10 @@ class RecordStream:
             self.state, self.length = "payload", int.from_bytes(b, "little")
             if self.length < 1 << 16:   # a smaller one is in a frame
                 self.fail("a record not framed as the writer frames it")
+            limit = getattr(self.f.raw, "limit", None)
+            if limit is not None and self.length > limit:
+                self.fail(f"a value of {self.length} bytes, more than the capture may expand to "
+                          f"({REDUCED_EXPANSION} times its size, the limit; docs/gl-capture.md)")
         else:
             if self.state == "frame":
                 self.count(b)
@@ -249,9 +253,30 @@ class RecordStream:
             pass   # the frame ends within an opcode (the unpickler says how)
 
     def readinto(self, buf):
-        b = self.read(len(buf))
-        buf[:len(b)] = b
-        return len(b)
+        """The unpickler's read. A payload goes straight into the
+        unpickler's buffer (read(n) would copy it once more). On any error
+        the buffer is released first: a view of it kept alive by the
+        exception made the unpickler's clean-up print Python's own
+        SystemError ("deallocated bytearray object has exported buffers")."""
+        view = memoryview(buf).cast("B")
+        try:
+            if self.state == "payload" and len(view) == self.length:
+                got = 0
+                while got < len(view):
+                    n = self.f.readinto(view[got:])
+                    if not n:
+                        raise EOFError("the reduced capture is cut short")
+                    got += n
+                self.state = "op"
+                return got
+            b = self.read(len(view))
+            view[:len(b)] = b
+            return len(b)
+        except BaseException:
+            view.release()
+            if isinstance(buf, memoryview):
+                buf.release()
+            raise
 
     def readline(self):
         self.fail("a record not framed as the writer frames it")

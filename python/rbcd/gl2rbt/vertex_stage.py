@@ -30,6 +30,9 @@ from .vertex_textures import IMAGE_TARGETS, SAMPLER_TARGETS, VertexTextures
 BUFFER_SAMPLERS = {"GL_SAMPLER_BUFFER", "GL_INT_SAMPLER_BUFFER", "GL_UNSIGNED_INT_SAMPLER_BUFFER"}
 SAMPLER = re.compile(r"GL_(INT_|UNSIGNED_INT_)?(SAMPLER|IMAGE)_")
 GL_OUT_OF_MEMORY = 0x505
+# The program interface query of transform feedback buffers (GL 4.4,
+# ARB_enhanced_layouts), called directly (Mesa.proc).
+GL_TRANSFORM_FEEDBACK_BUFFER, GL_ACTIVE_RESOURCES, GL_BUFFER_BINDING = 0x8C8E, 0x92F5, 0x9302
 GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INVALID_OPERATION",
              GL_OUT_OF_MEMORY: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
 UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
@@ -371,10 +374,17 @@ class VertexStage:
         executable in use as it was: ProgramCalls.program_in_use)."""
         return self.full_link(p)[0]
 
+    def feedback_bindings(self, p):
+        """The transform feedback binding points program p's executable
+        records into, as Mesa links it (recorded_bindings); empty when it
+        records nothing or Mesa does not link it."""
+        return self.full_link(p)[2]
+
     def full_link(self, p):
         """Mesa's link of the program as its last link saw it, every stage
-        that draws: whether it links, and its active uniform blocks' names
-        by index."""
+        that draws: whether it links, its active uniform blocks' names by
+        index, and the binding points its transform feedback records
+        into."""
         bindings = p.linked[1]
         key = (p.digest, tuple(sorted(bindings.items())), p.separable, p.feedback)
         if key not in self.link_status:
@@ -397,14 +407,42 @@ class VertexStage:
                     ok = bool(GL.glGetProgramiv(prog, GL.GL_LINK_STATUS))
                     blocks = [block_name(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORM_BLOCKS))] \
                         if ok else []
-                    self.link_status[key] = (ok, blocks)
+                    self.link_status[key] = (ok, blocks, self.recorded_bindings(prog) if ok else frozenset())
             except GLError:
-                self.link_status[key] = (False, [])   # GL_INVALID_OPERATION: a binding GL refuses, no link
+                # GL_INVALID_OPERATION: a binding GL refuses, no link
+                self.link_status[key] = (False, [], frozenset())
             finally:
                 for sh in shaders:
                     GL.glDeleteShader(sh)
                 GL.glDeleteProgram(prog)
         return self.link_status[key]
+
+    def recorded_bindings(self, prog):
+        """The binding points linked program `prog` records into, as Mesa
+        linked its transform feedback: its last vertex-processing stage's
+        xfb_ qualifiers, else the outputs glTransformFeedbackVaryings named
+        (ignored when there are qualifiers), interleaved into binding 0 and
+        one more after each gl_NextBuffer, or one each. OpenGL ES has no
+        qualifiers nor gl_NextBuffer, nor the query of the buffers."""
+        GL = self.gl
+        n = GL.glGetProgramiv(prog, GL.GL_TRANSFORM_FEEDBACK_VARYINGS)
+        if not n:
+            return frozenset()
+        if self.mesa.es:
+            separate = GL.glGetProgramiv(prog, GL.GL_TRANSFORM_FEEDBACK_BUFFER_MODE) == GL.GL_SEPARATE_ATTRIBS
+            return frozenset(range(n) if separate else (0,))
+        u, ip = ctypes.c_uint, ctypes.POINTER(ctypes.c_int)
+        count = ctypes.c_int()
+        self.mesa.proc("glGetProgramInterfaceiv", u, u, u, ip)(
+            prog, GL_TRANSFORM_FEEDBACK_BUFFER, GL_ACTIVE_RESOURCES, ctypes.byref(count))
+        resource = self.mesa.proc("glGetProgramResourceiv", u, u, u, ctypes.c_int, ctypes.POINTER(u), ctypes.c_int,
+                                  ip, ip)
+        prop, binding = u(GL_BUFFER_BINDING), ctypes.c_int()
+        out = set()
+        for i in range(count.value):
+            resource(prog, GL_TRANSFORM_FEEDBACK_BUFFER, i, 1, ctypes.byref(prop), 1, None, ctypes.byref(binding))
+            out.add(binding.value)
+        return frozenset(out)
 
     def build(self, no, pname, p):
         """The program as its last link saw it, vertex stage only (the
@@ -574,7 +612,9 @@ class VertexStage:
             GL.glDisableVertexAttribArray(0)   # (the fixed-function array an earlier draw gave there)
         if mp.reads_vertex and not (0 in vao.attribs and vao.attribs[0].enabled):
             self.fixed_vertex_array(conv, no)
-        elem = conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
+        # An arrays draw reads no indices: the element array buffer is
+        # neither checked nor copied (it may hold no data, or the GPU's).
+        elem = conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0) if "Elements" in self.name else 0
         if client_indices is not None:
             GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.client(client_indices))
         else:

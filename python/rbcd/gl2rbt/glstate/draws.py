@@ -1,5 +1,6 @@
 """Draw calls and immediate mode, into the draw records rbcd-gl-raster reads (docs/gl-capture.md)."""
 import hashlib
+import os
 import struct
 
 import numpy as np
@@ -33,6 +34,22 @@ MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw reco
 MAX_MULTI_DRAWS = 1 << 16      # draws of one multi-draw
 MAX_FRAME_RECORDS = 1 << 17    # draw records of one frame (a game's frame has a few thousand)
 MAX_FRAME_VERTICES = 1 << 24   # vertices one frame's draws set up or run (a game's: under a million)
+# The same over all the frames converted: 256 a byte of the capture's file
+# (the committed game captures draw at most 8 a byte of their reduced
+# capture), and at least 2^26. Mesa takes about 1.4 us a vertex of a
+# geometry shader's output: a small file may ask for a few minutes, not
+# for hours.
+CAPTURE_VERTICES_PER_BYTE, MIN_CAPTURE_VERTICES = 256, 1 << 26
+
+
+def capture_vertex_bound(path):
+    """The vertices the frames converted from the capture at `path` may
+    set up or run (DrawCalls.frame_work)."""
+    try:
+        size = os.path.getsize(path) if path else 0
+    except OSError:
+        size = 0
+    return max(MIN_CAPTURE_VERTICES, CAPTURE_VERTICES_PER_BYTE * size)
 # A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
 # that could need more is refused before anything is computed for it.
 MAX_RECORD_VERTICES = 1 << 22
@@ -91,8 +108,13 @@ class DrawCalls:
         """positions: (n, 4) object-space vertices in GL order for `mode`,
         through the fixed-function transform; tris, the triangles GL
         assembles from them when primitive restart cut them into pieces."""
+        invalid = self.pipeline_invalid()
+        if invalid is not None:
+            if self.active and not self.s.rasterizer_discard and self.renders():
+                self.rejected_draws.append((no, f"GL_INVALID_OPERATION: {invalid}"))
+            return
         self.shader_stores(no, name)
-        if not self.active or not self.renders():
+        if not self.active or self.s.rasterizer_discard or not self.renders():
             return
         if self.vertex_program():
             fail_call(no, f"{name} with program {self.stage_programs()['vertex'][0]} bound: immediate-mode and glRect draws "
@@ -104,7 +126,7 @@ class DrawCalls:
             return
         if mode not in PRIM_MODES or mode == "GL_PATCHES":
             return   # GL_INVALID_ENUM, or _OPERATION (patches with no tessellation): nothing is drawn
-        if self.s.depth_test and len(positions) and not self.s.rasterizer_discard:
+        if self.s.depth_test and len(positions):
             self.depth_tested(no, name)
         self.open_frame(no)
         if tris is None:
@@ -146,6 +168,11 @@ class DrawCalls:
         if self.frame_vertices > MAX_FRAME_VERTICES:
             fail_call(no, f"{name}: more than {MAX_FRAME_VERTICES} vertices drawn in one frame "
                       "(docs/gl-capture.md, limits)")
+        self.capture_vertices += vertices
+        if self.capture_vertices > self.max_capture_vertices:
+            fail_call(no, f"{name}: more than {self.max_capture_vertices} vertices drawn in the frames converted, "
+                      f"the bound for a capture of this size ({CAPTURE_VERTICES_PER_BYTE} a byte, at least "
+                      f"{MIN_CAPTURE_VERTICES}; docs/gl-capture.md, limits)")
 
     def draw_record(self, no, name, clip, tris, obj_id, nverts, mv, proj, eye):
         """The draw record of clip-space vertices and their triangles, for

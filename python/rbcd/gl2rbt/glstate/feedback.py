@@ -26,7 +26,7 @@ from ...cli import I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import enum_arg
-from .buffers import FEEDBACK_TARGET as TARGET, SHADER_BINDINGS, binding_ignored
+from .buffers import FEEDBACK_TARGET as TARGET, binding_ignored
 
 
 class FeedbackObject:
@@ -46,39 +46,6 @@ KIND_OF_MODE = {"GL_POINTS": "GL_POINTS", "GL_LINES": "GL_LINES", "GL_LINE_LOOP"
                 "GL_LINE_STRIP": "GL_LINES"}
 
 
-def records(p):
-    """Whether program p (its executable) records outputs: named by
-    glTransformFeedbackVaryings at its last link, or by xfb_ qualifiers."""
-    return p.feedback is not None or p.xfb_qualified
-
-
-def recorded_bindings(p):
-    """The binding points program p records into: with xfb_ qualifiers, any
-    (their buffers are not read here: every binding is taken as written,
-    which may refuse a draw from one it leaves alone, never take a buffer
-    the GPU wrote as the capture's); else by its outputs."""
-    if p.feedback is None:
-        return set(range(SHADER_BINDINGS[TARGET][0]))
-    return recorded_by_names(p.feedback)
-
-
-def recorded_by_names(feedback):
-    """The binding points a program's outputs (Program.feedback: names and
-    buffer mode) are recorded into: one an output when separate; when
-    interleaved, binding 0 and one more after each gl_NextBuffer, those an
-    output (not only gl_SkipComponents) goes into."""
-    names, buffer_mode = feedback
-    if buffer_mode == "GL_SEPARATE_ATTRIBS":
-        return set(range(len(names)))
-    used, b = set(), 0
-    for n in names:
-        if n == "gl_NextBuffer":
-            b += 1
-        elif not n.startswith("gl_SkipComponents"):
-            used.add(b)
-    return used
-
-
 class FeedbackCalls:
     """self.s.feedback: the bound transform feedback object's name, whether
     it is active and paused; self.s.feedback_source: the program it records
@@ -91,12 +58,17 @@ class FeedbackCalls:
         """Whether the bound object records now (active, not paused)."""
         return self.s.feedback[1] and not self.s.feedback[2]
 
+    def recorded_bindings(self, p):
+        """The binding points program p's executable records into, as Mesa
+        links it (its last vertex-processing stage's xfb_ qualifiers, else
+        the outputs glTransformFeedbackVaryings named): none when it
+        records nothing (a begin under it is refused)."""
+        return self.vertex_stage().feedback_bindings(p)
+
     def feedback_writes(self, no, name):
         """At a draw: the buffers feedback records into now are the GPU's."""
         source = self.feedback_source() if self.recording() else None
-        if source is None or not records(source[1]):
-            return
-        used = recorded_bindings(source[1])
+        used = self.recorded_bindings(source[1]) if source is not None else ()
         for (target, index), (b, _, _) in self.s.indexed.items():
             if target == TARGET and b and index in used:
                 self.gpu_wrote_buffer(no, b, f"{base_name(name)} with transform feedback recording into "
@@ -204,12 +176,11 @@ class FeedbackCalls:
         obj, active, _ = self.s.feedback
         source = self.feedback_source()
         mode = enum_arg(dict(args).get("primitiveMode", a[0] if a else None), no, f"{name}: the primitive mode")
-        if source is None or not records(source[1]) or mode not in ("GL_POINTS", "GL_LINES", "GL_TRIANGLES") \
-                or active:
-            return   # GL_INVALID_OPERATION (no program, none recording) or _ENUM: nothing begins
-        if source[1].feedback is not None and \
-                any(not self.s.indexed.get((TARGET, i), (0,))[0] for i in recorded_bindings(source[1])):
-            return   # GL_INVALID_OPERATION: a binding point recorded into has no buffer
+        if source is None or mode not in ("GL_POINTS", "GL_LINES", "GL_TRIANGLES") or active:
+            return   # GL_INVALID_OPERATION (no program) or _ENUM: nothing begins
+        used = self.recorded_bindings(source[1])
+        if not used or any(not self.s.indexed.get((TARGET, i), (0,))[0] for i in used):
+            return   # GL_INVALID_OPERATION: nothing recorded, or a binding point recorded into has no buffer
         self.s.feedback = (obj, True, False)
         self.s.feedback_mode, self.s.feedback_source = mode, source[0]
 

@@ -34,9 +34,6 @@ OPERATORS = re.compile(r"[-+*/%&|^<>?:=,!~]")
 STORAGE_BLOCK = re.compile(r"\bbuffer\s+\w+\s*\{")
 ATOMIC_COUNTER = re.compile(r"\batomic_uint\b")
 READONLY = re.compile(r"\breadonly\b")
-# xfb_buffer / xfb_offset / xfb_stride layout qualifiers (GLSL 4.40): a
-# stage that records its outputs without glTransformFeedbackVaryings.
-XFB_QUALIFIER = re.compile(r"\bxfb_(buffer|offset|stride)\b")
 
 
 def may_store(text):
@@ -54,6 +51,8 @@ STAGE_BITS = {"GL_VERTEX_SHADER_BIT": "vertex", "GL_FRAGMENT_SHADER_BIT": "fragm
               "GL_GEOMETRY_SHADER_BIT": "geometry", "GL_TESS_CONTROL_SHADER_BIT": "tess_control",
               "GL_TESS_EVALUATION_SHADER_BIT": "tess_evaluation", "GL_COMPUTE_SHADER_BIT": "compute"}
 STAGE_BIT_VALUES = {1 << i: stage for i, stage in enumerate(STAGE_BITS.values())}   # (in the bits' order)
+# The stages in the order primitives pass them (Mesa's gl_shader_stage).
+PIPELINE_ORDER = ["vertex", "tess_control", "tess_evaluation", "geometry", "fragment", "compute"]
 
 
 class Shader:
@@ -89,7 +88,6 @@ class Program:
         self.block_bindings = {}   # capture block index -> binding point
         self.discards = False      # its fragment shader has a discard statement
         self.stores = False        # a stage declares shader storage blocks or atomic counters
-        self.xfb_qualified = False   # a stage before the fragment one records by xfb_ qualifiers
         self.scanned = {}          # {stage: its source as the compiler reads it} at the last link (glsl_text)
         self.frag_depth = False    # its fragment shader writes gl_FragDepth
         self.digest = ""           # SHA-256 of its stages' sources at the last link (selection rules)
@@ -193,21 +191,38 @@ class ProgramCalls:
 
     def pipeline_invalid(self):
         """Why the bound pipeline draws nothing, when no program is in use
-        (GL 4.6 §11.1.3.11: GL_INVALID_OPERATION at the draw): a program
-        active for some of the stages it links and not others; None when
-        it draws."""
+        (GL 4.6 §11.1.3.11: GL_INVALID_OPERATION at the draw, under a
+        program's stages or the fixed-function ones alike), as Mesa 22.3
+        validates it (_mesa_validate_program_pipeline): no program for any
+        stage; a program active for some of the stages it links and not
+        others; a program's stages on both sides of another's; a
+        tessellation or geometry stage with no vertex stage; a program
+        linked again without GL_PROGRAM_SEPARABLE. None when it draws."""
         if self.s.program in self.s.programs:
             return None
         pipe = self.s.pipelines.get(self.s.pipeline)
         if pipe is None:
             return None
+        where = f"pipeline {self.s.pipeline[1] if isinstance(self.s.pipeline, tuple) else self.s.pipeline}"
+        if not pipe.stages:
+            return f"{where} has no program for any stage"
         for v in set(pipe.stages.values()):
             p = self.s.programs.get(v)
             if p is None or not p.linked:
                 continue
             linked = {stage for stage in p.linked[0] if stage != "compute"}
             if {stage for stage, w in pipe.stages.items() if w == v} != linked:
-                return f"program {v} is in pipeline {self.s.pipeline}'s stages for some of its stages, not all"
+                return f"program {v} is in {where}'s stages for some of its stages, not all"
+        stages = self.stage_programs()
+        order = [v for stage, (v, _) in sorted(stages.items(), key=lambda kv: PIPELINE_ORDER.index(kv[0]))]
+        for i in range(1, len(order)):
+            if order[i] != order[i - 1] and order[i] in order[:i]:
+                return f"program {order[i]} is in {where}'s stages before and after another program's"
+        if "vertex" not in stages and stages.keys() & {"tess_control", "tess_evaluation", "geometry"}:
+            return f"{where} has a tessellation or geometry stage and no vertex stage"
+        for v, p in stages.values():
+            if not p.separable:
+                return f"program {v}, in {where}, was linked again without GL_PROGRAM_SEPARABLE"
         return None
 
     def draw_digest(self):
@@ -338,7 +353,6 @@ class ProgramCalls:
         # Whether any stage may store into buffers: shader storage blocks not
         # readonly, or atomic counters.
         p.stores = any(may_store(text) for text in p.scanned.values())
-        p.xfb_qualified = any(XFB_QUALIFIER.search(text) for stage, text in p.scanned.items() if stage != "fragment")
         p.discards = re.search(r"\bdiscard\b", fragment) is not None
         p.frag_depth = re.search(r"\bgl_FragDepth(EXT)?\b", fragment) is not None
         p.link_call = no
@@ -358,6 +372,13 @@ class ProgramCalls:
         self.s.program = v
         if old is not None and v != was:
             self.out_of_use(was)
+        if not v and was and isinstance(self.s.pipeline, tuple):
+            # Mesa's glUseProgram(0) after a program binds the current
+            # pipeline again by its name, which a pipeline deleted while
+            # bound (h_delete_pipelines) no longer has: GL_INVALID_OPERATION,
+            # and no pipeline is in effect (Mesa 22.3 use_program; with no
+            # program in use before, the call changes nothing).
+            self.release_deleted_pipeline()
 
     def out_of_use(self, v):
         """Program v may have gone out of use (glUseProgram of another, a
@@ -551,11 +572,17 @@ class ProgramCalls:
     def h_bind_pipeline(self, no, name, a, args):
         v = dict(args).get("pipeline", a[0] if a else None)
         if (v == 0 or self.pipeline(no, name, v) is not None) and not self.recording():
-            old, self.s.pipeline = self.s.pipeline, v   # (while feedback records: GL_INVALID_OPERATION)
-            if isinstance(old, tuple) and old != v:
-                # A pipeline deleted while bound (h_delete_pipelines) goes now.
-                for prog in set(self.s.pipelines.pop(old).stages.values()):
-                    self.out_of_use(prog)
+            # (while feedback records: GL_INVALID_OPERATION)
+            if isinstance(self.s.pipeline, tuple):
+                self.release_deleted_pipeline()   # a pipeline deleted while bound goes now
+            self.s.pipeline = v
+
+    def release_deleted_pipeline(self):
+        """The pipeline deleted while bound (h_delete_pipelines) is current
+        no more: its programs may go out of use."""
+        old, self.s.pipeline = self.s.pipeline, 0
+        for prog in set(self.s.pipelines.pop(old).stages.values()):
+            self.out_of_use(prog)
 
     def h_delete_pipelines(self, no, name, a, args):
         for v in dict(args).get("pipelines") or []:
