@@ -141,10 +141,15 @@ def series(head, rows, args):
     return xs, out, varying
 
 
+MAX_AXIS_VALUE = 1e300
+MAX_TITLE_CHARS = 1000
+
+
 def check_axes(xs, data, args, numeric_x):
-    """What no axis can show, refused: --logx with an x that is not a
-    positive number (a log axis would drop it, or fail), and values whose
-    mean or span is past a double (the axis' limits overflow)."""
+    """What no plot can show, refused: --logx with an x that is not a
+    positive number (a log axis would drop it, or fail), values (or means)
+    past 1e300 (an axis' limits and margins would overflow a double), and a
+    title longer than a plot's raster holds."""
     if args.logx:
         if not numeric_x:
             raise PlotError(f"--logx: --x {args.x} is not numeric")
@@ -154,9 +159,13 @@ def check_axes(xs, data, args, numeric_x):
     ys = [y for pts in data.values() for _, y in pts]
     axes = [("--y", args.y, ys)] + ([("--x", args.x, [number(x) for x in xs])] if numeric_x else [])
     for opt, col, vals in axes:
-        if not all(math.isfinite(v) for v in vals) or not math.isfinite(max(vals) - min(vals)):
-            raise PlotError(f"{opt} {col}: values (or their means) span more than an axis can hold "
-                            f"({min(vals):g} to {max(vals):g})")
+        # (An axis' limits, margins and ticks are computed from the span:
+        # within 1e300 they stay doubles.)
+        if not all(math.isfinite(v) and abs(v) <= MAX_AXIS_VALUE for v in vals):
+            raise PlotError(f"{opt} {col}: values (or their means) past {MAX_AXIS_VALUE:g}, more than an axis can "
+                            f"hold ({min(vals):g} to {max(vals):g})")
+    if args.title is not None and len(args.title) > MAX_TITLE_CHARS:
+        raise PlotError(f"--title: {len(args.title)} characters, more than the {MAX_TITLE_CHARS} a plot shows")
 
 
 def plot_matplotlib(xs, data, args, numeric_x):
@@ -166,6 +175,9 @@ def plot_matplotlib(xs, data, args, numeric_x):
     warnings.simplefilter("ignore")
     import matplotlib
     matplotlib.use("Agg")
+    # Titles and column names are text, never TeX: a '$' in them is a dollar
+    # sign (mathtext would fail on '$\\frac{$').
+    matplotlib.rcParams["text.parse_math"] = False
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(7, 4.5), dpi=100)
     names = legend_names(list(data))

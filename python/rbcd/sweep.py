@@ -1013,12 +1013,16 @@ def lock_out(out):
     lock_out.held = f   # held until the process exits
 
 
-def check_out(out):
+def check_out(out, sweep):
     """Before anything is written: OUT and what the sweep writes into it are what they
     must be (a dangling symlink, or a file where runs/ goes, is refused here, not after
-    .lock and plan.json are written)."""
+    .lock and plan.json are written), and none of it is the sweep file."""
     if os.path.lexists(out) and not os.path.isdir(out):
         raise SweepError(f"-o {out}: exists and is not a directory")
+    real, base = os.path.realpath(sweep), os.path.realpath(out) + os.sep
+    written = [os.path.join(base, f) for f in ("plan.json", "validated.json", "results.csv", "wall.csv", ".lock")]
+    if real in written or real.startswith((base + "runs" + os.sep, base + "slurm" + os.sep)):
+        raise SweepError(f"-o {out}: the sweep writes {real}, the sweep file {sweep}")
     if os.path.isdir(out) and set(os.listdir(out)) - {".lock"} and not os.path.isfile(os.path.join(out, "plan.json")):
         raise SweepError(f"-o {out}: a non-empty directory that is not a sweep output")
     for d in ("runs", "slurm", os.path.join("slurm", "logs")):
@@ -1039,7 +1043,7 @@ def finish(out, plan, quiet):
 
 
 def cmd_run(args):
-    check_out(args.out)
+    check_out(args.out, args.sweep)
     workers = args.jobs or cores()
     tv = time.monotonic()
     _, plan, cache = prepare(args, workers)
@@ -1110,7 +1114,7 @@ def self_command(*argv):
 
 
 def cmd_slurm(args):
-    check_out(args.out)
+    check_out(args.out, args.sweep)
     sweep, plan, cache = prepare(args, cores())
     out = os.path.abspath(args.out)
     lock_out(out)

@@ -171,14 +171,17 @@ def test_reduced_capture_bombs_and_garbage(tmp_path):
     assert left_behind(tmp_path, ["bomb.xz", "many.xz", "good.xz", "one.xz", "two.xz"]) == []
 
 
-def test_a_corrupt_length_in_a_reduced_capture_is_one_line(tmp_path):
+@pytest.mark.parametrize("past_2_63", [False, True], ids=["bit_flip", "past_2_63"])
+def test_a_corrupt_length_in_a_reduced_capture_is_one_line(tmp_path, past_2_63):
     """One flipped bit makes a call's TUPLE2 opcode a BYTEARRAY8 whose
     length is the next 8 bytes (3 * 10^18): one line, the converter's,
     not CPython's "SystemError: deallocated bytearray object has exported
-    buffers" before it (R20-14)."""
+    buffers" before it (R20-14); with those bytes a length past 2^63, not
+    "internal error: OverflowError" (R21-3)."""
     raw = lzma.decompress(open(Calls().triangle(obj=1).swap().write(tmp_path / "good.xz"), "rb").read())
     at = raw.index(b"GL_PROJECTION\x94\x86") + len("GL_PROJECTION\x94")
-    (tmp_path / "flip.xz").write_bytes(lzma.compress(raw[:at] + b"\x96" + raw[at + 1:], format=lzma.FORMAT_XZ))
+    raw = raw[:at] + b"\x96" + (b"\xff" * 8 + raw[at + 9:] if past_2_63 else raw[at + 1:])
+    (tmp_path / "flip.xz").write_bytes(lzma.compress(raw, format=lzma.FORMAT_XZ))
     r = gl2rbt(tmp_path, tmp_path / "flip.xz", "-o", tmp_path / "f.rbt")
     refused(r, "flip.xz", "the reduced capture does not decode")
     assert left_behind(tmp_path, ["good.xz", "flip.xz"]) == []

@@ -273,3 +273,21 @@ def test_a_compatibility_pipeline_validated_for_fixed_function_vertices(tmp_path
     got = json.loads((tmp_path / "c.jsonl").read_text().splitlines()[0])["fragments"]
     assert (got > 100) == drawn, got
     assert drawn or "draws are GL errors" in r.stdout + r.stderr, r.stdout
+
+
+def test_a_validated_pipeline_stays_valid_until_its_stages_change(tmp_path):
+    """Mesa validates a bound pipeline at a draw and keeps that until
+    glUseProgramStages changes it: its vertex program relinked without
+    GL_PROGRAM_SEPARABLE still draws (it had drawn nothing: 86.65% against
+    Mesa; R21-2); after a glUseProgramStages the next draw validates again,
+    and fails."""
+    c = draw(separable())
+
+    def again(c):
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+        return c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup").swap()
+    c.add("glProgramParameteri", program=2, pname="GL_PROGRAM_SEPARABLE", value=0).add("glLinkProgram", program=2)
+    again(c)
+    again(c.add("glUseProgramStages", pipeline=5, stages=["GL_FRAGMENT_SHADER_BIT"], program=0))
+    got = frames(tmp_path, c, "relinked")
+    assert [f["fragments"] > 100 for f in got] == [True, True, False], got

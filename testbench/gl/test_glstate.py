@@ -1300,22 +1300,37 @@ def test_fixed_function_adjacency_and_patch_draws_as_mesa_draws_them():
 
 def test_the_frames_converted_are_bounded_by_the_capture_s_size(tmp_path):
     """The vertices all the frames converted set up or run are bounded by
-    the capture's size (256 a byte, at least 2^26): frames each at the
-    one-frame bound pass until their sum passes it, then the draw is
-    refused naming the call (an 11.5 KB reduced capture of 1,000 frames
-    just under the frame bound had been taken: about 4.7 hours; R20-13)."""
-    from rbcd.gl2rbt.glstate.draws import (CAPTURE_VERTICES_PER_BYTE, MAX_FRAME_VERTICES, MIN_CAPTURE_VERTICES,
-                                           capture_vertex_bound)
+    the capture's size: 256 a byte, at least 2^30 in all and 2^26 made by
+    tessellation or geometry shaders. Frames each at the one-frame bound
+    pass until their sum passes a bound, then the draw is refused naming
+    the call (an 11.5 KB reduced capture of 1,000 geometry-shader frames
+    just under the frame bound had been taken: about 4.7 hours; R20-13);
+    200 frames of a 393,216-vertex grid from a 64 KB capture, a plausible
+    game, pass (they had been refused by a bound of 2^26 for all vertices;
+    R21-4)."""
+    from rbcd.gl2rbt.glstate.draws import (MAX_FRAME_VERTICES, MIN_CAPTURE_AMPLIFIED, MIN_CAPTURE_VERTICES,
+                                           capture_vertex_bounds)
     small, big = tmp_path / "small.xz", tmp_path / "big.xz"
     small.write_bytes(bytes(11488))
-    big.write_bytes(bytes(1 << 20))
-    assert capture_vertex_bound(str(small)) == MIN_CAPTURE_VERTICES == 1 << 26
-    assert capture_vertex_bound(str(big)) == CAPTURE_VERTICES_PER_BYTE << 20
-    gl = GL()   # (no capture file: the bound's floor)
-    for frame in range(MIN_CAPTURE_VERTICES // MAX_FRAME_VERTICES):
-        gl.conv.frame_vertices = 0   # (a new frame: its own bound starts again)
-        gl.conv.frame_work(frame + 1, "glDrawArrays", MAX_FRAME_VERTICES)
+    big.write_bytes(bytes(16 << 20))
+    assert capture_vertex_bounds(str(small)) == (MIN_CAPTURE_VERTICES, MIN_CAPTURE_AMPLIFIED) == (1 << 30, 1 << 26)
+    assert capture_vertex_bounds(str(big)) == (256 << 24, 256 << 24)
+
+    def frames(gl, n, vertices, amplified=False):
+        for frame in range(n):
+            gl.conv.frame_vertices = 0   # (a new frame: its own bound starts again)
+            gl.conv.frame_work(frame + 1, "glDrawArrays", vertices, amplified)
+    gl = GL()   # (no capture file: the bounds' floors)
+    frames(gl, 200, 393216)
+    frames(gl, MIN_CAPTURE_AMPLIFIED // MAX_FRAME_VERTICES, MAX_FRAME_VERTICES, amplified=True)
     gl.conv.frame_vertices = 0
-    with pytest.raises(ConvertError, match=r"call 9: glDrawArrays: more than 67108864 vertices drawn in the frames "
-                                           r"converted, the bound for a capture of this size \(256 a byte"):
+    with pytest.raises(ConvertError, match=r"call 9: glDrawArrays: more than 67108864 vertices made by tessellation "
+                                           r"or geometry shaders in the frames converted, the bound for a capture of "
+                                           r"this size \(256 a byte, at least 67108864"):
+        gl.conv.frame_work(9, "glDrawArrays", 1, amplified=True)
+    gl = GL()
+    frames(gl, MIN_CAPTURE_VERTICES // MAX_FRAME_VERTICES, MAX_FRAME_VERTICES)
+    gl.conv.frame_vertices = 0
+    with pytest.raises(ConvertError, match=r"call 9: glDrawArrays: more than 1073741824 vertices drawn in the frames "
+                                           r"converted"):
         gl.conv.frame_work(9, "glDrawArrays", 1)

@@ -441,12 +441,14 @@ def test_plot(c):
     before = c.read(table)
     r = run(["/usr/bin/python3", PLOT, table, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "-o", table])
     assert r.returncode == 2 and "is the input table" in r.stderr and c.read(table) == before, f"-o = table: {r.stderr}"
-    # What no axis can show: one line, no PNG, no warnings (matplotlib's
-    # had been printed before "internal error", exit 1; R20-11).
+    # What no plot can show: one line, no PNG, no warnings (matplotlib's
+    # had been printed before "internal error", exit 1; R20-11, R21-5).
     for text, args, needle in (("a,b\n-1,2\n0,3\n", ["--logx"], "--logx: --x a has -1, not a positive number"),
                                ("a,b\nx,2\ny,3\n", ["--logx"], "--logx: --x a is not numeric"),
-                               ("a,b\n1,1e308\n2,-1e308\n", [], "--y b: values (or their means) span more than"),
-                               ("a,b\n1,1e308\n1,1e308\n", [], "--y b: values (or their means) span more than")):
+                               ("a,b\n1,1e308\n2,-1e308\n", [], "--y b: values (or their means) past 1e+300"),
+                               ("a,b\n1,8.9e307\n2,-8.9e307\n", [], "--y b: values (or their means) past 1e+300"),
+                               ("a,b\n1,1e308\n1,1e308\n", [], "--y b: values (or their means) past 1e+300"),
+                               ("a,b\n1,2\n2,3\n", ["--title", "t" * 100000], "--title: 100000 characters")):
         odd, png = c.sweep_file("odd.csv", text), os.path.join(c.tmp, "odd.png")
         for b in backends:
             r = run(["/usr/bin/python3", PLOT, odd, "--y", "b", "--x", "a", "-o", png, "--backend", b] + args)
@@ -454,6 +456,14 @@ def test_plot(c):
             assert r.returncode == 2 and len(lines) == 1 and lines[0].startswith(f"rbcd-plot: {needle}"), \
                 f"{b} {text!r}: {r.stderr}"
             assert not os.path.exists(png)
+    # A '$' in a title or a column name is a dollar sign, not TeX (mathtext
+    # had failed: internal error, exit 1; R21-6).
+    odd, png = c.sweep_file("odd.csv", "$\\sqrt{$,b\n1,2\n2,3\n"), os.path.join(c.tmp, "odd.png")
+    for b in backends:
+        r = run(["/usr/bin/python3", PLOT, odd, "--y", "b", "--x", "$\\sqrt{$", "-o", png, "--backend", b,
+                 "--title", "$\\frac{$"])
+        assert r.returncode == 0 and r.stderr == "" and c.read(png, "rb")[:4] == b"\x89PNG", f"{b}: {r.stderr}"
+        os.unlink(png)
 
 
 @sweep_case
@@ -666,6 +676,14 @@ def test_command_lines(c):
                                stderr=subprocess.PIPE, text=True, env=dict(os.environ, RBCD_CONFIG_CHECK=c.checker))
         one_error_line(r, f"standard output is {what}", f"list 1<>{what}")
         assert open(victim, "rb").read() == before
+    # The sweep file where the sweep writes in OUT (plan.json): refused, kept
+    # (it had been written over by the plan, exit 0; R21-7).
+    os.makedirs(os.path.join(c.tmp, "d1"))
+    inside = c.sweep_file(os.path.join("d1", "plan.json"), "[axes]\nzeb.banks = [1, 2]\n[inputs]\ndefault = true\n")
+    before = c.read(inside)
+    one_error_line(c.sweep("run", inside, "-o", os.path.join(c.tmp, "d1"), "-q"), "the sweep writes",
+                   "sweep file as OUT/plan.json")
+    assert c.read(inside) == before and os.listdir(os.path.join(c.tmp, "d1")) == ["plan.json"]
     table = c.sweep_file("t.csv", "zeb.banks,gpu.cycles\n1,10\n2,20\n")
     png = os.path.join(c.tmp, "p.png")
     for args, needle in ((["--y", "gpu.cycles", "--x", "zeb.banks", "-o", png, "--y", "x"], "--y is given twice"),

@@ -11,7 +11,7 @@ from .gl_tables import (CALL_FLAG_END_FRAME, COMPAT_ONLY, COMPAT_ONLY_FORMS, END
 from .glstate import CONVERSION_STATE, SHARED_STATE, GLState
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
-from .glstate.draws import DrawCalls, capture_vertex_bound
+from .glstate.draws import DrawCalls, capture_vertex_bounds
 from .glstate.feedback import FeedbackCalls
 from .glstate.camera_depth import CameraDepthCalls
 from .glstate.framebuffers import FramebufferCalls
@@ -96,7 +96,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.frame_records = 0           # draw records in it
         self.frame_vertices = 0          # vertices its draws set up or ran (every instance's)
         self.capture_vertices = 0        # the same, over the frames converted
-        self.max_capture_vertices = capture_vertex_bound(getattr(args, "trace", None))
+        self.capture_amplified = 0       # of them, made by tessellation or geometry shaders
+        self.max_capture_vertices = capture_vertex_bounds(getattr(args, "trace", None))
         self.multi_draw_index = 0        # the draw of a multi-draw being run (gl_DrawID)
         self.multi_draw_name = None      # that multi-draw's call
         self.batched = None              # an indirect multi-draw's positions, run whole (indirect_batch)

@@ -121,7 +121,7 @@ def reduced_header(path):
         with open(path, "rb") as raw:
             return CallReader(io.BufferedReader(BoundedXz(raw, 1 << 20))).load()
     except (ConvertError, lzma.LZMAError, EOFError, OSError, pickle.UnpicklingError, ValueError, TypeError,
-            AttributeError, IndexError, MemoryError, RecursionError):
+            AttributeError, IndexError, MemoryError, OverflowError, RecursionError):
         return None
 
 
@@ -323,7 +323,8 @@ def read_reduced_calls(path):
                     check_rest(f, count, last)
                     return
     except (lzma.LZMAError, EOFError, OSError, pickle.UnpicklingError, ValueError, TypeError, AttributeError,
-            IndexError, MemoryError, RecursionError) as e:
+            IndexError, MemoryError, OverflowError, RecursionError) as e:
+        # (OverflowError: a length past 2^63 read by the unpickler itself.)
         raise ConvertError(f"{where(last)}: the reduced capture does not decode ({printable(e, 80)})")
 
 

@@ -900,9 +900,9 @@ class VertexStage:
                                       "docs/gl-capture.md)")
                         # What they make is the frame's work too, before
                         # the run that feeds it back.
-                        conv.frame_work(no, name, 3 * made)
+                        conv.frame_work(no, name, 3 * made, amplified=True)
                         return self.mesa.feedback_positions(issue, made)
-                    conv.frame_work(no, name, len(made))   # (room enough from an earlier draw)
+                    conv.frame_work(no, name, len(made), amplified=True)   # (room enough from an earlier draw)
                     return made
         except GLError as e:
             op = getattr(getattr(e, "baseOperation", None), "__name__", "a call")

@@ -34,22 +34,26 @@ MAX_INSTANCES = 1 << 16        # instances of one draw (each becomes a draw reco
 MAX_MULTI_DRAWS = 1 << 16      # draws of one multi-draw
 MAX_FRAME_RECORDS = 1 << 17    # draw records of one frame (a game's frame has a few thousand)
 MAX_FRAME_VERTICES = 1 << 24   # vertices one frame's draws set up or run (a game's: under a million)
-# The same over all the frames converted: 256 a byte of the capture's file
-# (the committed game captures draw at most 8 a byte of their reduced
-# capture), and at least 2^26. Mesa takes about 1.4 us a vertex of a
-# geometry shader's output: a small file may ask for a few minutes, not
-# for hours.
-CAPTURE_VERTICES_PER_BYTE, MIN_CAPTURE_VERTICES = 256, 1 << 26
+# The same over all the frames converted, each at least 256 a byte of the
+# capture's file (the committed game captures draw at most 8 a byte of
+# their reduced capture): at least 2^30 vertices in all (a game's frame of
+# a million vertices, a thousand frames), of which at least 2^26 made by
+# tessellation or geometry shaders (which amplify a few bytes most). Mesa
+# takes about 1.5 us a vertex: a small file may ask for about half an hour
+# of plain draws and a minute and a half of amplified ones, not for hours.
+CAPTURE_VERTICES_PER_BYTE, MIN_CAPTURE_VERTICES, MIN_CAPTURE_AMPLIFIED = 256, 1 << 30, 1 << 26
 
 
-def capture_vertex_bound(path):
-    """The vertices the frames converted from the capture at `path` may
-    set up or run (DrawCalls.frame_work)."""
+def capture_vertex_bounds(path):
+    """The vertices the frames converted from the capture at `path` may set
+    up or run, and of them those tessellation or geometry shaders may make
+    (DrawCalls.frame_work)."""
     try:
         size = os.path.getsize(path) if path else 0
     except OSError:
         size = 0
-    return max(MIN_CAPTURE_VERTICES, CAPTURE_VERTICES_PER_BYTE * size)
+    return (max(MIN_CAPTURE_VERTICES, CAPTURE_VERTICES_PER_BYTE * size),
+            max(MIN_CAPTURE_AMPLIFIED, CAPTURE_VERTICES_PER_BYTE * size))
 # A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
 # that could need more is refused before anything is computed for it.
 MAX_RECORD_VERTICES = 1 << 22
@@ -159,20 +163,28 @@ class DrawCalls:
         if p is not None:
             self.note_fragment_effects(p, obj_id is not None)
 
-    def frame_work(self, no, name, vertices):
-        """A draw's vertices (every instance's), counted against the frame's
-        bound before they are fetched or run: each draw is bounded alone,
-        and a frame of many (one buffer's indices drawn again and again)
-        would otherwise cost hours from a kilobyte."""
+    def frame_work(self, no, name, vertices, amplified=False):
+        """A draw's vertices (every instance's; `amplified`: made by its
+        tessellation or geometry shaders), counted against the frame's and
+        the capture's bounds before they are fetched or run: each draw is
+        bounded alone, and a frame of many (one buffer's indices drawn again
+        and again), or many such frames, would otherwise cost hours from a
+        kilobyte."""
         self.frame_vertices += vertices
         if self.frame_vertices > MAX_FRAME_VERTICES:
             fail_call(no, f"{name}: more than {MAX_FRAME_VERTICES} vertices drawn in one frame "
                       "(docs/gl-capture.md, limits)")
         self.capture_vertices += vertices
-        if self.capture_vertices > self.max_capture_vertices:
-            fail_call(no, f"{name}: more than {self.max_capture_vertices} vertices drawn in the frames converted, "
-                      f"the bound for a capture of this size ({CAPTURE_VERTICES_PER_BYTE} a byte, at least "
-                      f"{MIN_CAPTURE_VERTICES}; docs/gl-capture.md, limits)")
+        if amplified:
+            self.capture_amplified += vertices
+        most, most_amplified = self.max_capture_vertices
+        if self.capture_vertices > most or self.capture_amplified > most_amplified:
+            what, bound, least = (("vertices made by tessellation or geometry shaders", most_amplified,
+                                   MIN_CAPTURE_AMPLIFIED) if self.capture_amplified > most_amplified
+                                  else ("vertices drawn", most, MIN_CAPTURE_VERTICES))
+            fail_call(no, f"{name}: more than {bound} {what} in the frames converted, the bound for a capture of "
+                      f"this size ({CAPTURE_VERTICES_PER_BYTE} a byte, at least {least}; docs/gl-capture.md, "
+                      "limits)")
 
     def draw_record(self, no, name, clip, tris, obj_id, nverts, mv, proj, eye):
         """The draw record of clip-space vertices and their triangles, for

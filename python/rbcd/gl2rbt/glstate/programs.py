@@ -106,11 +106,13 @@ class Program:
 
 class Pipeline:
     """A program pipeline object (GL 4.1, ES 3.1): the separable program
-    of each stage, and the active one glUniform* sets."""
-    __slots__ = ("stages", "active")
+    of each stage, the active one glUniform* sets, and whether a draw
+    validated it (Mesa's pipe->Validated: kept until glUseProgramStages
+    changes it, whatever is relinked meanwhile)."""
+    __slots__ = ("stages", "active", "validated")
 
     def __init__(self):
-        self.stages, self.active = {}, 0   # stage -> program name
+        self.stages, self.active, self.validated = {}, 0, False   # stage -> program name
 
 
 def sources_digest(sources):
@@ -201,8 +203,15 @@ class ProgramCalls:
         if self.s.program in self.s.programs:
             return None
         pipe = self.s.pipelines.get(self.s.pipeline)
-        if pipe is None:
+        if pipe is None or pipe.validated:
             return None
+        why = self.pipeline_fault(pipe)
+        pipe.validated = why is None
+        return why
+
+    def pipeline_fault(self, pipe):
+        """Why pipeline `pipe`, bound, fails Mesa's validation; None when it
+        passes (pipeline_invalid)."""
         where = f"pipeline {self.s.pipeline[1] if isinstance(self.s.pipeline, tuple) else self.s.pipeline}"
         if not pipe.stages:
             return f"{where} has no program for any stage"
@@ -640,6 +649,7 @@ class ProgramCalls:
                     ("vertex" in p.linked[0] and not self.vertex_stage().links(p)):
                 return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: the stages stay as they were
         old = set(pipe.stages.values())
+        pipe.validated = False
         for stage in stages:
             if p is not None and stage in p.linked[0]:
                 pipe.stages[stage] = v
