@@ -245,20 +245,26 @@ COMPAT_GS = ("#version 410 core\nlayout(triangles) in;\nlayout(triangle_strip, m
              "void main() { for (int i = 0; i < 3; i++) { gl_Position = gl_in[i].gl_Position; EmitVertex(); } }\n")
 
 
+COMPUTE = "#version 430 core\nlayout(local_size_x = 1) in;\nvoid main() {}\n"
+
+
 @pytest.mark.parametrize("stages, drawn", [
     ([("GL_FRAGMENT_SHADER", "GL_FRAGMENT_SHADER_BIT", COMPAT_FS)], True),
+    ([("GL_COMPUTE_SHADER", "GL_COMPUTE_SHADER_BIT", COMPUTE)], True),
     ([("GL_GEOMETRY_SHADER", "GL_GEOMETRY_SHADER_BIT", COMPAT_GS)], False),
     ([("GL_GEOMETRY_SHADER", "GL_GEOMETRY_SHADER_BIT", COMPAT_GS),
       ("GL_FRAGMENT_SHADER", "GL_FRAGMENT_SHADER_BIT", COMPAT_FS)], False),
     ([], False),
-], ids=["fragment_stage", "geometry_stage", "geometry_and_fragment_stages", "empty"])
+], ids=["fragment_stage", "compute_stage", "geometry_stage", "geometry_and_fragment_stages", "empty"])
 def test_a_compatibility_pipeline_validated_for_fixed_function_vertices(tmp_path, stages, drawn):
     """A compatibility context's fixed-function draw (glVertexPointer) with
     a pipeline bound and no program in use: Mesa validates the pipeline
     first (_mesa_validate_program_pipeline). A fragment stage alone draws,
     its vertices fixed-function; a geometry stage with no vertex stage, or
     an empty pipeline, is GL_INVALID_OPERATION and draws nothing (each had
-    been drawn, 27.17% against Mesa; R20-5)."""
+    been drawn, 27.17% against Mesa; R20-5); a compute program in the
+    compute stage alone leaves the draw fixed-function (it had been taken
+    for a program in some of its stages: nothing drawn; R21-9)."""
     c = Calls()
     c.add("glXCreateContextAttribsARB", attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 4,
           "GLX_CONTEXT_MINOR_VERSION_ARB", 5, "GLX_CONTEXT_PROFILE_MASK_ARB",
@@ -291,3 +297,14 @@ def test_a_validated_pipeline_stays_valid_until_its_stages_change(tmp_path):
     again(c.add("glUseProgramStages", pipeline=5, stages=["GL_FRAGMENT_SHADER_BIT"], program=0))
     got = frames(tmp_path, c, "relinked")
     assert [f["fragments"] > 100 for f in got] == [True, True, False], got
+
+
+def test_a_compute_program_beside_the_vertex_stage_leaves_the_draw(tmp_path):
+    """A pipeline's compute stage is no draw's: with a compute program
+    there beside the vertex stage's, the draw is the vertex stage's (it
+    had been taken for a program in some of its stages, not all: nothing
+    drawn, 27.17% against Mesa; R21-9)."""
+    base = trace(tmp_path, draw(separable()), "base")
+    c = separable().add("glCreateShaderProgramv", type="GL_COMPUTE_SHADER", count=1, strings=[COMPUTE], ret=11)
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_COMPUTE_SHADER_BIT"], program=11)
+    assert trace(tmp_path, draw(c), "compute") == base and base.count(b"\nf ") > 100

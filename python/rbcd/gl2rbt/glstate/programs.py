@@ -219,8 +219,10 @@ class ProgramCalls:
             p = self.s.programs.get(v)
             if p is None or not p.linked:
                 continue
+            # (A compute stage is no draw's: a compute program beside the
+            # others, or alone, leaves the draws to them.)
             linked = {stage for stage in p.linked[0] if stage != "compute"}
-            if {stage for stage, w in pipe.stages.items() if w == v} != linked:
+            if {stage for stage, w in pipe.stages.items() if w == v and stage != "compute"} != linked:
                 return f"program {v} is in {where}'s stages for some of its stages, not all"
         stages = self.stage_programs()
         order = [v for stage, (v, _) in sorted(stages.items(), key=lambda kv: PIPELINE_ORDER.index(kv[0]))]
