@@ -254,10 +254,10 @@ class RecordStream:
 
     def readinto(self, buf):
         """The unpickler's read. A payload goes straight into the
-        unpickler's buffer (read(n) would copy it once more). On any error
-        the buffer is released first: a view of it kept alive by the
-        exception made the unpickler's clean-up print Python's own
-        SystemError ("deallocated bytearray object has exported buffers")."""
+        unpickler's buffer (read(n) would hold a second copy of it while
+        it is copied in). On an error the views of that buffer are
+        released before the exception travels on, so that none outlives
+        the read in the exception's frames."""
         view = memoryview(buf).cast("B")
         try:
             if self.state == "payload" and len(view) == self.length:
