@@ -1256,29 +1256,14 @@ def check_stdout(args):
         target = os.path.realpath("/proc/self/fd/1")
     except OSError:
         return
-    if not stat.S_ISREG(st.st_mode):
-        return
     base = os.path.realpath(out) + os.sep
-    slurm = base + "slurm" + os.sep
-    inside = target.startswith(base) and not target.startswith(slurm)
-    if not inside and st.st_nlink > 1:   # a hard link elsewhere to a file of OUT
-        for d, dirs, files in os.walk(base):
-            if (d + os.sep).startswith(slurm):
-                dirs[:] = []
-                continue
-            for f in files:
-                try:
-                    fs = os.lstat(os.path.join(d, f))
-                except OSError:
-                    continue
-                if (fs.st_dev, fs.st_ino) == (st.st_dev, st.st_ino):
-                    inside, target = True, os.path.join(d, f)
-                    break
-            if inside:
-                break
-    if inside:
-        raise UsageError(f"{out}: standard output is {target}, a file of the output directory: what goes "
-                         "there would be written into it")
+    if not stat.S_ISREG(st.st_mode) or (st.st_nlink == 1 and not target.startswith(base)):
+        return   # (neither a file of OUT by its path nor, hard-linked elsewhere, by its inode)
+    files = []
+    for d, dirs, names in os.walk(base):
+        dirs[:] = [n for n in dirs if os.path.join(d, n) != base + "slurm"]
+        files += [os.path.join(d, n) for n in names]
+    check_standard_output([("a file of the output directory", f) for f in files])
 
 
 def run(argv):

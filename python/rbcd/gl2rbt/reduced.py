@@ -255,28 +255,20 @@ class RecordStream:
     def readinto(self, buf):
         """The unpickler's read. A payload goes straight into the
         unpickler's buffer (read(n) would hold a second copy of it while
-        it is copied in). On an error the views of that buffer are
-        released before the exception travels on, so that none outlives
-        the read in the exception's frames."""
+        it is copied in)."""
         view = memoryview(buf).cast("B")
-        try:
-            if self.state == "payload" and len(view) == self.length:
-                got = 0
-                while got < len(view):
-                    n = self.f.readinto(view[got:])
-                    if not n:
-                        raise EOFError("the reduced capture is cut short")
-                    got += n
-                self.state = "op"
-                return got
-            b = self.read(len(view))
-            view[:len(b)] = b
-            return len(b)
-        except BaseException:
-            view.release()
-            if isinstance(buf, memoryview):
-                buf.release()
-            raise
+        if self.state == "payload" and len(view) == self.length:
+            got = 0
+            while got < len(view):
+                n = self.f.readinto(view[got:])
+                if not n:
+                    raise EOFError("the reduced capture is cut short")
+                got += n
+            self.state = "op"
+            return got
+        b = self.read(len(view))
+        view[:len(b)] = b
+        return len(b)
 
     def readline(self):
         self.fail("a record not framed as the writer frames it")
