@@ -39,7 +39,7 @@ import tempfile
 import tomllib
 import unicodedata
 
-from .startup import kept, release_signals
+from .startup import ignore_signals, kept, release_signals
 
 MAX_TOKEN = 1024
 
@@ -684,4 +684,5 @@ def main_wrapper(prog, fn, argv):
         say(prog, f"internal error: {type(e).__name__}: {e}")
         return 1
     finally:
+        ignore_signals()   # (done: a signal from here changes nothing)
         remove_temporaries()

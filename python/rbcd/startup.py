@@ -34,6 +34,15 @@ def hold_signals(prog):
     signal.pthread_sigmask(signal.SIG_UNBLOCK, HANDLED)
 
 
+def ignore_signals():
+    """The program's work has ended (done, failed or interrupted): a signal
+    from here on changes nothing, and cannot end the process as Python
+    finishes (its exit status is the work's; Python restores the default
+    action of a signal it handled, not of one ignored)."""
+    for sig in HANDLED:
+        signal.signal(sig, signal.SIG_IGN)
+
+
 def release_signals():
     """The program's own turn: SIGINT raises KeyboardInterrupt again
     (Python's default), the others as the program sets them."""

@@ -414,6 +414,24 @@ def test_a_signal_at_any_moment_of_start_up_is_one_line_or_none(tool):
     assert seen & {0, 130}, seen
 
 
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM", "SIGHUP"])
+def test_a_signal_once_the_work_is_done_changes_nothing(sig):
+    """A signal that comes after a tool's work has ended, as Python
+    finishes, changes nothing: the exit status is the work's, with no
+    message (rbcd-sweep run had exited 143 or 129 with its results
+    complete, its handler gone and the default action taken; round 21's
+    R21-11). Sent to itself by a program whose work returned 0, right after
+    the tools' common wrapper (rbcd.cli.main_wrapper) returns."""
+    script = ("import os, signal, sys\n"
+              f"sys.path.insert(0, {os.path.join(ROOT, 'python')!r})\n"
+              "from rbcd.cli import main_wrapper\n"
+              "status = main_wrapper('tool', lambda argv: 0, [])\n"
+              f"os.kill(os.getpid(), signal.{sig})\n"
+              "sys.exit(status)\n")
+    r = subprocess.run(["/usr/bin/python3", "-c", script], capture_output=True, text=True, timeout=60)
+    assert (r.returncode, r.stdout, r.stderr) == (0, "", ""), r
+
+
 @pytest.mark.parametrize("which, mode", [("calls.xz", "r+b"), ("summary.jsonl", "r+b"), ("capture.toml", "ab")],
                          ids=["calls_read_write", "summary_read_write", "toml_append"])
 def test_check_with_standard_output_onto_an_entry_s_file_is_refused(tmp_path, entry, which, mode):

@@ -8,7 +8,7 @@ import threading
 
 from ..cli import (ArgumentParser, Once, UsageError, WriteError, ascii_int, escape, exception_text, finite_float,
                    remove_temporaries, to_standard_output)
-from ..startup import HANDLED, kept
+from ..startup import HANDLED, ignore_signals, kept
 from .errors import LAST_WORD, ConvertError, ToolError, printable
 
 PROG = "rbcd-gl2rbt"
@@ -209,11 +209,6 @@ INTERRUPTED = threading.Event()   # a handled signal came
 # marks the run interrupted, and require_numpy raises it once numpy has
 # loaded (a fraction of a second).
 HELD = threading.Event()
-
-
-def ignore_signals():
-    for sig in HANDLED:
-        signal.signal(sig, signal.SIG_IGN)
 
 
 def on_signal(signum, frame):
