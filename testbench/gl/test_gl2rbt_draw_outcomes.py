@@ -427,10 +427,17 @@ def test_a_reduced_capture_of_another_version_or_miscounted_names(tmp_path):
     had passed as 1 and 2) or one this converter does not read is named as
     such; glCreateBuffers and glGenVertexArrays whose names are not their
     count are the capture's error."""
-    for version, words in ((True, "version True"), (2.0, "version 2.0"), (4, "version 4")):
-        data = lzma.compress(pickle.dumps(("rbcd-reduced-capture", version), protocol=4))
+    for head, words in ((("rbcd-reduced-capture", True), "version True"),
+                        (("rbcd-reduced-capture", 2.0), "version 2.0"),
+                        (("rbcd-reduced-capture", 5, 100), "version 5"),
+                        (("rbcd-reduced-capture", 4), "version 4 whose header is not of that version"),
+                        (("rbcd-reduced-capture", 3, 100), "version 3 whose header is not of that version"),
+                        (("rbcd-reduced-capture", 4, -1), "its source's size as -1"),
+                        (("rbcd-reduced-capture", 4, 2.5), "its source's size as 2.5"),
+                        (("rbcd-reduced-capture", 4, 1 << 63), f"its source's size as {1 << 63}")):
+        data = lzma.compress(pickle.dumps(head, protocol=4))
         (tmp_path / "h.xz").write_bytes(data)
-        refused(gl2rbt(tmp_path, tmp_path / "h.xz", "-o", tmp_path / "h.rbt"), "a reduced capture of " + words)
+        refused(gl2rbt(tmp_path, tmp_path / "h.xz", "-o", tmp_path / "h.rbt"), "a reduced capture", words)
     for fn, key in (("glCreateBuffers", "buffers"), ("glGenVertexArrays", "arrays")):
         c = shader_calls(VS).add(fn, n=3, **{key: [11, 12]})
         refused(gl2rbt(tmp_path, draw(c).write(tmp_path / "n.xz"), "-o", tmp_path / "n.rbt"), fn,

@@ -94,3 +94,27 @@ def test_pixel_rectangles_keep_their_size_not_their_pixels(tmp_path):
     got = list(read_reduced_calls(str(p)))
     assert [c[1] for c in got] == ["glViewport", "glDrawPixels", "glBitmap", "glPrimitiveRestartNV", "glXSwapBuffers"]
     assert got[1][2] == [("width", 10), ("height", 10), ("format", "GL_RGBA"), ("pixels", None)]
+
+
+def test_the_source_s_size_is_carried_and_credited_within_bounds(tmp_path):
+    """A reduced capture names the size of the capture it was reduced from
+    (version 4), and the converter's bounds take that size, up to 1000
+    times the reduced capture's own, and at least its own: a reduced
+    capture of a large capture is no longer held to the smaller bounds of
+    its own size (a 72.5 KB reduction of a 597 KB capture was refused
+    where the capture was taken; R21-8), and a reduced capture cannot
+    claim bounds without end."""
+    from rbcd.gl2rbt.reduced import REDUCED_SOURCE_CREDIT, reduced_header, source_bytes
+    for claimed, credit in ((0, "own"), (100_000, "claimed"), (1 << 62, "capped")):
+        p = tmp_path / f"{credit}.xz"
+        w = ReducedWriter(str(p), claimed)
+        for c in CALLS:
+            w.call(c)
+        w.commit()
+        own = p.stat().st_size
+        assert reduced_header(str(p)) == ("rbcd-reduced-capture", 4, claimed)
+        want = {"own": own, "claimed": claimed, "capped": REDUCED_SOURCE_CREDIT * own}[credit]
+        assert source_bytes(str(p)) == want, (credit, own)
+    plain = tmp_path / "capture.trace"
+    plain.write_bytes(bytes(12345))
+    assert source_bytes(str(plain)) == 12345 and source_bytes(str(tmp_path / "none")) == 0

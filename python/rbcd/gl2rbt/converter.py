@@ -14,6 +14,7 @@ from .glstate.buffers import BufferCalls
 from .glstate.draws import DrawCalls, capture_vertex_bounds
 from .glstate.feedback import FeedbackCalls
 from .glstate.camera_depth import CameraDepthCalls
+from .glstate.color_outputs import ColorOutputCalls
 from .glstate.framebuffers import FramebufferCalls
 from .glstate.textures import REDUCED_TEXTURES, TextureImageCalls
 from .glstate.dsa import DirectStateCalls
@@ -50,7 +51,7 @@ ES_VERSIONS = {(1, 0), (1, 1), (2, 0), (3, 0), (3, 1), (3, 2)}
 
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
                 ProgramCalls, FramebufferCalls, CameraDepthCalls, TextureImageCalls, DirectStateCalls, DrawCalls,
-                FeedbackCalls, ObjectCalls)
+                FeedbackCalls, ObjectCalls, ColorOutputCalls)
 
 
 # Arguments that name a buffer target, and the suffixes of an extension's
@@ -79,7 +80,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         # capture (the state tests), as a reduced capture of version 1.
         from .capture import shows_every_gen
         self.every_gen_shown = bool(getattr(args, "trace", None)) and shows_every_gen(args.trace)
-        from .reduced import is_reduced_capture
+        from .reduced import is_reduced_capture, source_bytes
         # A reduced capture carries, with a draw whose vertex shader reads
         # textures, the calls that made them (REDUCED_TEXTURES); written
         # there by run_calls when writes_reduced.
@@ -97,7 +98,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.frame_vertices = 0          # vertices its draws set up or ran (every instance's)
         self.capture_vertices = 0        # the same, over the frames converted
         self.capture_amplified = 0       # of them, made by tessellation or geometry shaders
-        self.max_capture_vertices = capture_vertex_bounds(getattr(args, "trace", None))
+        # The size of the capture, or of the one a reduced capture was
+        # reduced from, which the bounds scale with (reduced.source_bytes).
+        self.source_bytes = source_bytes(args.trace) if getattr(args, "trace", None) else 0
+        self.max_capture_vertices = capture_vertex_bounds(self.source_bytes)
         self.multi_draw_index = 0        # the draw of a multi-draw being run (gl_DrawID)
         self.multi_draw_name = None      # that multi-draw's call
         self.batched = None              # an indirect multi-draw's positions, run whole (indirect_batch)

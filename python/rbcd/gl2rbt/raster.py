@@ -210,7 +210,7 @@ def convert_in(args, tmpdir, listing, ids, report):
             conv.geo.write("rbcd-geometry 2\n")
         reduced = None
         if getattr(args, "reduced_out", None):
-            reduced = ReducedWriter(args.reduced_out)
+            reduced = ReducedWriter(args.reduced_out, conv.source_bytes)
             outputs.append(reduced)
         started = time.time()
         proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)

@@ -20,14 +20,21 @@ from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
 from .glstate.textures import REDUCED_TEXTURES
 from .outputs import SafeText
 
-REDUCED_HEADER = ("rbcd-reduced-capture", 3)
-# Versions read: 3 carries, with a draw whose vertex shader reads 2D
+REDUCED_HEADER = ("rbcd-reduced-capture", 4, 0)   # (the source's size: 0, none known)
+# Versions read: 4 names, in its header record ("rbcd-reduced-capture", 4,
+# bytes), the size of the capture it was reduced from (the converter's
+# bounds scale with it: source_bytes), and keeps the blend factors and draw
+# buffers (glstate.color_outputs), which 3 and earlier dropped as changing
+# no fragment. 3 carries, with a draw whose vertex shader reads 2D
 # textures, the calls that made them (glstate.textures.REDUCED_TEXTURES);
 # 2 and 1 were written before vertex shaders could read them. Version 1,
 # written before glGenFramebuffers and glGenRenderbuffers were kept: the
 # framebuffer and renderbuffer names it binds are taken as it binds them
 # (shows_every_gen).
-REDUCED_VERSIONS = (1, 2, 3)
+REDUCED_VERSIONS = (1, 2, 3, 4)
+# A reduced capture is credited with the size of its source capture, up to
+# this many times its own.
+REDUCED_SOURCE_CREDIT = 1000
 # A reduced capture expands to at most this many times its size (the game
 # suite's expand 10 to 20 times; a file that expands more is refused before
 # its memory is spent).
@@ -107,11 +114,36 @@ def header_version(head):
     and 2.0 equal 1 and 2 in Python, and are no version), or None when the
     record is no such header; a version this converter does not read is
     the file's error."""
-    version = head[1] if isinstance(head, tuple) and len(head) == 2 and head[0] == REDUCED_HEADER[0] else None
+    version = head[1] if isinstance(head, tuple) and len(head) in (2, 3) and head[0] == REDUCED_HEADER[0] else None
     if version is not None and (type(version) is not int or version not in REDUCED_VERSIONS):
         raise ConvertError(f"a reduced capture of version {printable(version, 40)}: this converter reads "
                            f"versions {', '.join(map(str, REDUCED_VERSIONS[:-1]))} and {REDUCED_VERSIONS[-1]}")
+    if version is not None and (len(head) == 3) != (version >= 4):
+        raise ConvertError(f"a reduced capture of version {version} whose header is not of that version")
+    if version is not None and version >= 4 and not (type(head[2]) is int and 0 <= head[2] < 1 << 63):
+        raise ConvertError(f"a reduced capture whose header gives its source's size as {printable(head[2], 40)}, "
+                           "not a number of bytes")
     return version
+
+
+def source_bytes(path):
+    """The size the converter's bounds take for the capture at `path`: an
+    apitrace capture's own; a reduced capture's source's, as its header
+    names it (version 4), up to REDUCED_SOURCE_CREDIT times its own size,
+    and at least its own (0 for a path that cannot be read: its reader
+    names the error)."""
+    try:
+        size = os.path.getsize(path)
+    except OSError:
+        return 0
+    if not is_reduced_capture(path):
+        return size
+    try:
+        head = reduced_header(path)
+        claimed = head[2] if header_version(head) and header_version(head) >= 4 else 0
+    except ConvertError:
+        claimed = 0   # (read_reduced_calls names the file's error)
+    return max(size, min(claimed, REDUCED_SOURCE_CREDIT * size))
 
 
 def reduced_header(path):
@@ -352,12 +384,12 @@ def check_rest(f, count, last):
 class ReducedWriter:
     """--reduced-out: the calls the emulation reads, as it reads them."""
 
-    def __init__(self, path):
+    def __init__(self, path, source_size=0):
         self.out = SafeText(path, binary=True)
         self.z = lzma.LZMACompressor(preset=6)
         self.pickler_buf = io.BytesIO()
         self.count = 0
-        self.put(REDUCED_HEADER)
+        self.put(REDUCED_HEADER[:2] + (source_size,) if REDUCED_HEADER[1] >= 4 else REDUCED_HEADER)
 
     def put(self, rec):
         self.pickler_buf.seek(0)

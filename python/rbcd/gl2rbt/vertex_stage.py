@@ -10,6 +10,7 @@ when their version changed; the vertex array object; current attribute
 values; primitive restart) and issues the capture's own draw call with
 transform feedback on (mesa.py). Only what a draw reads reaches Mesa: frames
 outside --frames, and draws that are not the camera pass, cost nothing."""
+import contextlib
 import ctypes
 import re
 
@@ -33,6 +34,11 @@ GL_OUT_OF_MEMORY = 0x505
 # The program interface query of transform feedback buffers (GL 4.4,
 # ARB_enhanced_layouts), called directly (Mesa.proc).
 GL_TRANSFORM_FEEDBACK_BUFFER, GL_ACTIVE_RESOURCES, GL_BUFFER_BINDING = 0x8C8E, 0x92F5, 0x9302
+# The program interface of uniforms, and the properties that say which
+# stage reads one (GL_REFERENCED_BY_*_SHADER).
+GL_UNIFORM = 0x92E1
+REFERENCED_BY = {"vertex": 0x9306, "tess_control": 0x9307, "tess_evaluation": 0x9308, "geometry": 0x9309,
+                 "fragment": 0x930A, "compute": 0x930B}
 GL_ERRORS = {0x500: "GL_INVALID_ENUM", 0x501: "GL_INVALID_VALUE", 0x502: "GL_INVALID_OPERATION",
              GL_OUT_OF_MEMORY: "GL_OUT_OF_MEMORY", 0x506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
 UNIFORM_DTYPES = {"f": np.float32, "d": np.float64, "i": np.int32, "ui": np.uint32}
@@ -237,6 +243,12 @@ class VertexStage:
         self.sampler_targets = {int(getattr(GL, n)): t for n, t in SAMPLER_TARGETS.items() if hasattr(GL, n)}
         self.image_targets = {int(getattr(GL, n)): n for n in IMAGE_TARGETS if hasattr(GL, n)}
         self.buffer_sampler_types = {int(getattr(GL, n)) for n in BUFFER_SAMPLERS if hasattr(GL, n)}
+        # Every sampler type with its texture target, for the check of two
+        # types on one unit (a buffer sampler's is GL_TEXTURE_BUFFER, an
+        # external image's its own).
+        self.sampler_kinds = {**{v: n for v, n in self.texture_samplers.items() if "SAMPLER" in n},
+                              **{v: "GL_TEXTURE_BUFFER" for v in self.buffer_sampler_types},
+                              **self.sampler_targets}
 
     # ---- objects
     def forget_objects(self):
@@ -385,37 +397,123 @@ class VertexStage:
         that draws: whether it links, its active uniform blocks' names by
         index, and the binding points its transform feedback records
         into."""
-        bindings = p.linked[1]
-        key = (p.digest, tuple(sorted(bindings.items())), p.separable, p.feedback)
+        key = (p.digest, tuple(sorted(p.linked[1].items())), p.separable, p.feedback)
         if key not in self.link_status:
-            from OpenGL.error import GLError
             GL = self.gl
-            prog, shaders = GL.glCreateProgram(), []
-            try:
-                with self.watchdog.on(f"the program linked at call {p.link_call}", grows=True):
+            with self.whole_program(p) as prog:
+                ok = prog is not None
+                blocks = [block_name(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORM_BLOCKS))] \
+                    if ok else []
+                self.link_status[key] = (ok, blocks, self.recorded_bindings(prog) if ok else frozenset())
+        return self.link_status[key]
+
+    @contextlib.contextmanager
+    def whole_program(self, p):
+        """Mesa's link of the program as its last link saw it, every stage
+        that draws, with the capture's attribute bindings, separability and
+        transform feedback outputs (its link may fail on them): the
+        program's name, or None when Mesa does not link it; deleted after."""
+        from OpenGL.error import GLError
+        GL = self.gl
+        prog, shaders = GL.glCreateProgram(), []
+        try:
+            with self.watchdog.on(f"the program linked at call {p.link_call}", grows=True):
+                try:
                     for stage, texts in p.objects.items():
                         if stage in LINKED_STAGES:
                             attach_stage(GL, prog, getattr(GL, LINKED_STAGES[stage]), texts, shaders)
-                    for attr, index in bindings.items():
+                    for attr, index in p.linked[1].items():
                         GL.glBindAttribLocation(prog, index, attr)
                     if p.separable:   # (OpenGL ES links a program of one stage only so)
                         self.mesa.separable(prog)
-                    if p.feedback:   # the capture's own outputs, which its link may fail on
+                    if p.feedback:
                         names, mode = p.feedback
                         GL.glTransformFeedbackVaryings(prog, len(names), varying_names(names), getattr(GL, mode))
                     GL.glLinkProgram(prog)
                     ok = bool(GL.glGetProgramiv(prog, GL.GL_LINK_STATUS))
-                    blocks = [block_name(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORM_BLOCKS))] \
-                        if ok else []
-                    self.link_status[key] = (ok, blocks, self.recorded_bindings(prog) if ok else frozenset())
-            except GLError:
-                # GL_INVALID_OPERATION: a binding GL refuses, no link
-                self.link_status[key] = (False, [], frozenset())
-            finally:
-                for sh in shaders:
-                    GL.glDeleteShader(sh)
-                GL.glDeleteProgram(prog)
-        return self.link_status[key]
+                except GLError:
+                    ok = False   # GL_INVALID_OPERATION: a binding GL refuses, no link
+                yield prog if ok else None
+        finally:
+            for sh in shaders:
+                GL.glDeleteShader(sh)
+            GL.glDeleteProgram(prog)
+
+    def sampler_validation(self, p):
+        """Mesa's view of program p's samplers as the capture left them:
+        (whether a draw with p in use passes Mesa's check that no two
+        active samplers of different types refer to one texture unit,
+        {stage: ((unit, target) of each active sampler the stage reads)}).
+        The first is Mesa's own answer: it follows the check through the
+        link and every glUniform that changed a sampler since, the answer
+        depending on which stages the last such call changed
+        (_mesa_sampler_uniforms_are_valid); a copy of the program is
+        linked, given the capture's glUniform1i(v) values in the order
+        last set, and validated (glValidateProgram). The second is what a
+        pipeline's validation compares across its programs. Kept for the
+        program's link and the values and order of its glUniform1i(v) calls
+        (a capture that sets the same units before each draw links once)."""
+        calls = (p.link_call, p.version, p.int_uniform_calls)
+        checked = p.samplers_checked
+        if checked is not None and checked[0] == calls:
+            return checked[2]
+        key = (p.link_call, p.version,
+               tuple((k, tuple(v[1])) for k, v in p.uniforms.items() if k[1] in ("glUniform1i", "glUniform1iv")))
+        if checked is not None and checked[1] == key:
+            p.samplers_checked = (calls, key, checked[2])
+            return checked[2]
+        GL = self.gl
+        answer = (True, {})
+        with self.whole_program(p) as prog:
+            if prog is not None:
+                u, ip = ctypes.c_uint, ctypes.POINTER(ctypes.c_int)
+                set_units = self.mesa.proc("glProgramUniform1iv", u, ctypes.c_int, ctypes.c_int, ip)
+                for (loc, func, count), (_, values, _, _, _) in p.uniforms.items():
+                    if func not in ("glUniform1i", "glUniform1iv"):
+                        continue
+                    name = p.uniform_names.get(loc)
+                    at = GL.glGetUniformLocation(prog, name) if name is not None else loc
+                    if at < 0:
+                        continue
+                    units = np.array(values, dtype=np.int32).ravel()
+                    set_units(prog, at, len(units), units.ctypes.data_as(ip))
+                    # (A call Mesa refuses, GL_INVALID_OPERATION or _VALUE,
+                    # did nothing in the capture either; its error is
+                    # cleared for the calls after.)
+                    GL.glGetError()
+                GL.glValidateProgram(prog)
+                answer = (bool(GL.glGetProgramiv(prog, GL.GL_VALIDATE_STATUS)), self.stage_samplers(prog))
+        p.samplers_checked = (calls, key, answer)
+        return answer
+
+    def stage_samplers(self, prog):
+        """{stage: ((unit, target), ...)} of linked program `prog`'s active
+        samplers, each element of an array, by the stages that read them."""
+        GL = self.gl
+        u, ip = ctypes.c_uint, ctypes.POINTER(ctypes.c_int)
+        resource = self.mesa.proc("glGetProgramResourceiv", u, u, u, ctypes.c_int, ctypes.POINTER(u), ctypes.c_int,
+                                  ip, ip)
+        props = (u * len(REFERENCED_BY))(*REFERENCED_BY.values())
+        referenced = (ctypes.c_int * len(REFERENCED_BY))()
+        get_unit, unit = self.mesa.proc("glGetUniformiv", u, ctypes.c_int, ip), ctypes.c_int()
+        out = {}
+        for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORMS)):
+            uname, size, utype = GL.glGetActiveUniform(prog, i)
+            target = self.sampler_kinds.get(int(utype))
+            if target is None:
+                continue
+            resource(prog, GL_UNIFORM, i, len(props), props, len(props), None, referenced)
+            base = name_str(uname).removesuffix("[0]")
+            units = []
+            for k in range(size):
+                at = GL.glGetUniformLocation(prog, f"{base}[{k}]" if size > 1 else base)
+                if at >= 0:
+                    get_unit(prog, at, ctypes.byref(unit))
+                    units.append((unit.value, target))
+            for stage, flag in zip(REFERENCED_BY, referenced):
+                if flag:
+                    out[stage] = out.get(stage, ()) + tuple(units)
+        return out
 
     def recorded_bindings(self, prog):
         """The binding points linked program `prog` records into, as Mesa

@@ -81,6 +81,14 @@ class GLState:
         self.restart_fixed = False
         self.restart_index = 0
         self.rasterizer_discard = False
+        # Blend factors and draw buffers (color_outputs.py): each draw
+        # buffer's factors (GL_ONE, GL_ZERO), and how many colour draw
+        # buffers the window (GL_BACK: one) and each framebuffer object
+        # (GL_COLOR_ATTACHMENT0: one, unless listed) have.
+        from .color_outputs import DEFAULT_BLEND, MAX_DRAW_BUFFERS   # (it imports this module)
+        self.blend_factors = [DEFAULT_BLEND] * MAX_DRAW_BUFFERS
+        self.window_draw_buffers = 1
+        self.fbo_draw_buffers = {}
         # Shaders and programs (programs.py).
         self.shaders = {}
         self.programs = {}
@@ -184,7 +192,7 @@ SHARED_STATE = {
     "depth_types",
     "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names", "sampler_names",
     "texture_buffers", "texture_images", "texture_calls", "samplers", "views", "reduced_texture_versions",
-    "rendered_images", "fbo_depth", "fbo_attachments", "framebuffer_names"}
+    "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "framebuffer_names"}
 # The memory limits are of all groups together.
 CONVERSION_STATE = {"next_version", "gpu_writes", "readback_call", "buffer_bytes_in_all", "texture_bytes_kept"}
 

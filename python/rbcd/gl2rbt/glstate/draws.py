@@ -1,6 +1,5 @@
 """Draw calls and immediate mode, into the draw records rbcd-gl-raster reads (docs/gl-capture.md)."""
 import hashlib
-import os
 import struct
 
 import numpy as np
@@ -44,14 +43,10 @@ MAX_FRAME_VERTICES = 1 << 24   # vertices one frame's draws set up or run (a gam
 CAPTURE_VERTICES_PER_BYTE, MIN_CAPTURE_VERTICES, MIN_CAPTURE_AMPLIFIED = 256, 1 << 30, 1 << 26
 
 
-def capture_vertex_bounds(path):
-    """The vertices the frames converted from the capture at `path` may set
-    up or run, and of them those tessellation or geometry shaders may make
-    (DrawCalls.frame_work)."""
-    try:
-        size = os.path.getsize(path) if path else 0
-    except OSError:
-        size = 0
+def capture_vertex_bounds(size):
+    """The vertices the frames converted from a capture of `size` bytes
+    (reduced.source_bytes) may set up or run, and of them those
+    tessellation or geometry shaders may make (DrawCalls.frame_work)."""
     return (max(MIN_CAPTURE_VERTICES, CAPTURE_VERTICES_PER_BYTE * size),
             max(MIN_CAPTURE_AMPLIFIED, CAPTURE_VERTICES_PER_BYTE * size))
 # A draw record holds at most 2^22 vertices (rbcd-gl-raster's bound): a draw
@@ -107,12 +102,20 @@ class DrawCalls:
                     self.gpu_wrote_buffer(no, b, f"{base_name(name)}, whose program may store into {target} "
                                                  f"binding {index}")
 
+    def draw_invalid(self):
+        """Why Mesa refuses every draw now with GL_INVALID_OPERATION,
+        whatever its mode and arrays, in the order Mesa 22.3 checks
+        (_mesa_update_valid_to_render_state): the bound pipeline's
+        validation, the samplers of the program in use, dual-source
+        blending against the draw buffers. None when it draws."""
+        return self.pipeline_invalid() or self.samplers_invalid() or self.dual_source_invalid()
+
     # ---- draws
     def draw(self, no, mode, positions, name, tris=None):
         """positions: (n, 4) object-space vertices in GL order for `mode`,
         through the fixed-function transform; tris, the triangles GL
         assembles from them when primitive restart cut them into pieces."""
-        invalid = self.pipeline_invalid()
+        invalid = self.draw_invalid()
         if invalid is not None:
             if self.active and not self.s.rasterizer_discard and self.renders():
                 self.rejected_draws.append((no, f"GL_INVALID_OPERATION: {invalid}"))
@@ -328,7 +331,7 @@ class DrawCalls:
         if refused is not None:
             self.rejected_draws.append((no, refused))
             return
-        invalid = self.pipeline_invalid()
+        invalid = self.draw_invalid()
         if invalid is not None:
             if self.active and not self.s.rasterizer_discard and self.renders():
                 self.rejected_draws.append((no, f"GL_INVALID_OPERATION: {invalid}"))
@@ -617,7 +620,7 @@ class DrawCalls:
                 or not self.vertex_program() or (self.core and self.s.vao == 0) \
                 or mode not in TRIANGLES_PER_VERTICES or (index_type is not None and (self.s.restart or
                                                                                     self.s.restart_fixed)) \
-                or self.s.rasterizer_discard or self.s.image_writes or self.pipeline_invalid() is not None:
+                or self.s.rasterizer_discard or self.s.image_writes or self.draw_invalid() is not None:
             return None
         stages = self.stage_programs()
         if set(stages) - {"vertex", "fragment"} or any(p.stores for _, p in stages.values()):

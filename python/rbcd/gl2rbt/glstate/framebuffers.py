@@ -411,6 +411,7 @@ class FramebufferCalls:
                     self.s.framebuffer_names.discard(fb)
                 self.s.fbo_depth.pop(fb, None)
                 self.s.fbo_attachments.pop(fb, None)
+                self.s.fbo_draw_buffers.pop(fb, None)
                 if self.s.draw_fbo == fb:
                     self.s.draw_fbo = 0   # GL binds the window's framebuffer again
                 if self.s.read_fbo == fb:

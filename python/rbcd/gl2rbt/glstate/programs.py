@@ -53,6 +53,11 @@ STAGE_BITS = {"GL_VERTEX_SHADER_BIT": "vertex", "GL_FRAGMENT_SHADER_BIT": "fragm
 STAGE_BIT_VALUES = {1 << i: stage for i, stage in enumerate(STAGE_BITS.values())}   # (in the bits' order)
 # The stages in the order primitives pass them (Mesa's gl_shader_stage).
 PIPELINE_ORDER = ["vertex", "tess_control", "tess_evaluation", "geometry", "fragment", "compute"]
+# A sampler type's shape in GLSL (sampler2D, isamplerCubeArray,
+# sampler2DShadow: 2D, CubeArray, 2D), which gives its texture target; and
+# the glUniform forms that set a sampler's unit.
+SAMPLER_TYPE = re.compile(r"\b[iu]?sampler([0-9A-Z]\w*?)(?:Shadow)?\b")
+SAMPLER_SETTERS = ("glUniform1i", "glUniform1iv")
 
 
 class Shader:
@@ -102,6 +107,14 @@ class Program:
         # and uniforms), which stays in use if this link fails
         # (program_in_use).
         self.in_use_before = None
+        # The shapes of sampler its stages' texts declare, at the last link
+        # (only two or more can put two types on one unit), how many
+        # glUniform1i(v) calls it has had since (the sampler units the
+        # capture may have set), and Mesa's validation of its samplers
+        # for that count (VertexStage.sampler_validation).
+        self.sampler_shapes = frozenset()
+        self.int_uniform_calls = 0
+        self.samplers_checked = None
 
 
 class Pipeline:
@@ -209,6 +222,20 @@ class ProgramCalls:
         pipe.validated = why is None
         return why
 
+    def samplers_invalid(self):
+        """Why the program in use draws nothing for its samplers: active
+        samplers of different types on one texture unit (GL 4.6
+        §11.1.3.11), as Mesa 22.3 follows it for a program used by
+        glUseProgram (_mesa_sampler_uniforms_are_valid, at every draw).
+        None when it draws; a pipeline's samplers are part of its
+        validation (pipeline_fault)."""
+        if self.s.program not in self.s.programs:
+            return None
+        p = self.program_in_use()
+        if p.linked is None or len(p.sampler_shapes) < 2 or self.vertex_stage().sampler_validation(p)[0]:
+            return None
+        return f"program {self.s.program} has active samplers of different types on one texture unit"
+
     def pipeline_fault(self, pipe):
         """Why pipeline `pipe`, bound, fails Mesa's validation; None when it
         passes (pipeline_invalid)."""
@@ -234,6 +261,16 @@ class ProgramCalls:
         for v, p in stages.values():
             if not p.separable:
                 return f"program {v}, in {where}, was linked again without GL_PROGRAM_SEPARABLE"
+        if len(set().union(*(p.sampler_shapes for _, p in stages.values()))) >= 2:
+            # Two types of sampler on one unit across the stages, unit 0
+            # aside (Mesa 22.3 _mesa_sampler_uniforms_pipeline_are_valid:
+            # every sampler starts there).
+            targets = {}
+            for stage in sorted(stages, key=PIPELINE_ORDER.index):
+                v, p = stages[stage]
+                for unit, target in self.vertex_stage().sampler_validation(p)[1].get(stage, ()):
+                    if unit and targets.setdefault(unit, target) != target:
+                        return f"program {v}, in {where}, reads texture unit {unit} as a second type of texture"
         return None
 
     def draw_digest(self):
@@ -366,6 +403,7 @@ class ProgramCalls:
         p.stores = any(may_store(text) for text in p.scanned.values())
         p.discards = re.search(r"\bdiscard\b", fragment) is not None
         p.frag_depth = re.search(r"\bgl_FragDepth(EXT)?\b", fragment) is not None
+        p.sampler_shapes = frozenset(m.group(1) for text in p.scanned.values() for m in SAMPLER_TYPE.finditer(text))
         p.link_call = no
         p.version += 1
         p.uniform_names, p.block_names, p.uniforms, p.block_bindings = {}, {}, {}, {}
@@ -514,6 +552,8 @@ class ProgramCalls:
         key = (loc, func, count)
         p.uniforms.pop(key, None)
         p.uniforms[key] = (func, values, transpose, m.group(5), count)
+        if func in SAMPLER_SETTERS:
+            p.int_uniform_calls += 1
 
     def h_patch_parameter(self, no, name, a, args):
         """glPatchParameteri(GL_PATCH_VERTICES) and glPatchParameterfv's

@@ -1,0 +1,194 @@
+"""Where the fragment shader's colour outputs go: each draw buffer's blend
+factors and each framebuffer's list of draw buffers. Neither moves a
+fragment; together they decide whether GL draws at all: a blend factor that
+reads the second colour output (dual-source blending) on a draw buffer past
+the first of several is GL_INVALID_OPERATION at the draw (GL 4.6 §17.3.6.3;
+Mesa 22.3 _mesa_update_valid_to_render_state, whatever GL_BLEND says, with
+llvmpipe's GL_MAX_DUAL_SOURCE_DRAW_BUFFERS of 1)."""
+from ...cli import I32, U32, integer
+from ..errors import checked
+from ..gl_tables import base_name
+from . import enum_arg
+
+MAX_DRAW_BUFFERS = 8              # llvmpipe's GL_MAX_DRAW_BUFFERS and GL_MAX_COLOR_ATTACHMENTS
+MAX_DUAL_SOURCE_DRAW_BUFFERS = 1  # llvmpipe's GL_MAX_DUAL_SOURCE_DRAW_BUFFERS
+# The blend factors GL takes (by name as apitrace writes them, and by
+# value), those of the second colour output marked.
+BLEND_FACTORS = {
+    "GL_ZERO": 0, "GL_ONE": 1, "GL_SRC_COLOR": 0x300, "GL_ONE_MINUS_SRC_COLOR": 0x301, "GL_SRC_ALPHA": 0x302,
+    "GL_ONE_MINUS_SRC_ALPHA": 0x303, "GL_DST_ALPHA": 0x304, "GL_ONE_MINUS_DST_ALPHA": 0x305, "GL_DST_COLOR": 0x306,
+    "GL_ONE_MINUS_DST_COLOR": 0x307, "GL_SRC_ALPHA_SATURATE": 0x308, "GL_CONSTANT_COLOR": 0x8001,
+    "GL_ONE_MINUS_CONSTANT_COLOR": 0x8002, "GL_CONSTANT_ALPHA": 0x8003, "GL_ONE_MINUS_CONSTANT_ALPHA": 0x8004,
+    "GL_SRC1_ALPHA": 0x8589, "GL_SRC1_COLOR": 0x88F9, "GL_ONE_MINUS_SRC1_COLOR": 0x88FA,
+    "GL_ONE_MINUS_SRC1_ALPHA": 0x88FB,
+    # Other names of the same values, as a table may spell them.
+    "GL_SOURCE1_ALPHA": 0x8589, "GL_FALSE": 0, "GL_NONE": 0, "GL_POINTS": 0, "GL_TRUE": 1, "GL_LINES": 1,
+}
+DUAL_SOURCE = {0x8589, 0x88F9, 0x88FA, 0x88FB}
+DEFAULT_BLEND = (1, 0, 1, 0)      # GL_ONE, GL_ZERO for colour and alpha
+# Draw buffers: the window's colour buffers each name selects (a
+# double-buffered, monoscopic window, as Mesa's replay has: the right
+# buffers and GL_AUXi select none), by name and value.
+GL_NONE, GL_BACK = 0, 0x405
+WINDOW_BUFFERS = {"GL_FRONT_LEFT": 1, "GL_BACK_LEFT": 1, "GL_FRONT": 1, "GL_BACK": 1, "GL_LEFT": 2,
+                  "GL_FRONT_AND_BACK": 2, "GL_FRONT_RIGHT": 0, "GL_BACK_RIGHT": 0, "GL_RIGHT": 0,
+                  "GL_AUX0": 0, "GL_AUX1": 0, "GL_AUX2": 0, "GL_AUX3": 0}
+BUFFER_VALUES = {"GL_NONE": 0, "GL_FRONT_LEFT": 0x400, "GL_FRONT_RIGHT": 0x401, "GL_BACK_LEFT": 0x402,
+                 "GL_BACK_RIGHT": 0x403, "GL_FRONT": 0x404, "GL_BACK": 0x405, "GL_LEFT": 0x406, "GL_RIGHT": 0x407,
+                 "GL_FRONT_AND_BACK": 0x408, "GL_AUX0": 0x409, "GL_AUX1": 0x40A, "GL_AUX2": 0x40B, "GL_AUX3": 0x40C,
+                 **{f"GL_COLOR_ATTACHMENT{i}": 0x8CE0 + i for i in range(32)}}
+BUFFER_NAMES = {v: k for k, v in BUFFER_VALUES.items() if k != "GL_NONE"} | {0: "GL_NONE"}
+MULTIPLE = {"GL_FRONT", "GL_BACK", "GL_LEFT", "GL_RIGHT", "GL_FRONT_AND_BACK"}
+
+
+def factor(v, no, what):
+    """A blend factor's value, or None for one GL refuses (GL_INVALID_ENUM)."""
+    v = enum_arg(v, no, what)
+    return BLEND_FACTORS.get(v) if isinstance(v, str) else v if v in BLEND_FACTORS.values() else None
+
+
+def buffer_name(v, no, what):
+    """A draw buffer's name (a value named as GL names it), or None for a
+    value that names no buffer (GL_INVALID_ENUM)."""
+    v = enum_arg(v, no, what)
+    if isinstance(v, int):
+        return BUFFER_NAMES.get(v)
+    return v if v in BUFFER_VALUES else None
+
+
+class ColorOutputCalls:
+    """self.s.blend_factors: each draw buffer's (source colour, destination
+    colour, source alpha, destination alpha) factors; self.s.window_draw_buffers
+    and self.s.fbo_draw_buffers[fbo]: how many colour draw buffers the window
+    and each framebuffer object have (Mesa's _NumColorDrawBuffers: one past
+    the last that is not GL_NONE, or the two buffers of GL_FRONT_AND_BACK
+    and GL_LEFT)."""
+
+    def h_blend_func(self, no, name, a, args):
+        """glBlendFunc, glBlendFuncSeparate and their per-buffer forms
+        (glBlendFunci, glBlendFuncSeparatei, the AMD Indexed ones): a
+        factor GL refuses or a buffer past the last changes nothing."""
+        d = dict(args)
+        base = base_name(name)
+        per_buffer = base.endswith(("i", "IndexedAMD"))
+        keys = [k for k, _ in args if k != "buf"]
+        values = [factor(d[k], no, f"{name}: {k}") for k in keys]
+        if len(values) not in (2, 4) or None in values:
+            return   # GL_INVALID_ENUM
+        if len(values) == 2:
+            values = values * 2
+        if per_buffer:
+            buf = checked(no, integer, d.get("buf"), f"{name}: the draw buffer", *U32)
+            if buf >= MAX_DRAW_BUFFERS:
+                return   # GL_INVALID_VALUE
+            self.s.blend_factors[buf] = tuple(values)
+        else:
+            self.s.blend_factors = [tuple(values)] * MAX_DRAW_BUFFERS
+
+    def draw_buffer_counts(self, no, name, fb, buffers):
+        """The number of colour draw buffers framebuffer fb (0: the window)
+        has after glDrawBuffer (one name, which may select two of the
+        window's buffers) or glDrawBuffers (each name one buffer), or None
+        when GL refuses the call (Mesa 22.3 draw_buffer, draw_buffers)."""
+        single = base_name(name) in ("glDrawBuffer", "glNamedFramebufferDrawBuffer", "glFramebufferDrawBuffer")
+        names = [buffer_name(b, no, f"{name}: a buffer") for b in buffers]
+        if None in names:
+            return None   # GL_INVALID_ENUM
+        if single:
+            (b,) = names
+            if b == "GL_NONE":
+                return 0
+            n = WINDOW_BUFFERS.get(b, 0) if fb == 0 else int(b.startswith("GL_COLOR_ATTACHMENT") and
+                                                                BUFFER_VALUES[b] - 0x8CE0 < MAX_DRAW_BUFFERS)
+            return n or None   # (none of them: GL_INVALID_OPERATION)
+        if len(names) > MAX_DRAW_BUFFERS:
+            return None   # GL_INVALID_VALUE
+        if self.es and fb == 0 and (len(names) != 1 or names[0] not in ("GL_NONE", "GL_BACK")):
+            return None   # GL_INVALID_OPERATION
+        count, used = 0, set()
+        for i, b in enumerate(names):
+            if b == "GL_NONE":
+                continue
+            if b in MULTIPLE and not (b == "GL_BACK" and fb == 0 and (self.es or len(names) == 1)):
+                return None   # GL_INVALID_ENUM (desktop GL 4.x: GL_BACK alone on the window)
+            if fb == 0:
+                if WINDOW_BUFFERS.get(b, 0) == 0:
+                    return None   # a buffer the window lacks: GL_INVALID_OPERATION
+                selected = "GL_BACK_LEFT" if b == "GL_BACK" else b
+            else:
+                index = BUFFER_VALUES[b] - 0x8CE0 if b.startswith("GL_COLOR_ATTACHMENT") else -1
+                if not 0 <= index < MAX_DRAW_BUFFERS or (self.es and index != i):
+                    return None   # GL_INVALID_OPERATION
+                selected = b
+            if selected in used:
+                return None   # GL_INVALID_OPERATION: a buffer twice
+            used.add(selected)
+            count = i + 1
+        return count
+
+    def h_draw_buffers(self, no, name, a, args):
+        """glDrawBuffer, glDrawBuffers, and their direct state access forms."""
+        d = dict(args)
+        base = base_name(name)
+        if base.startswith(("glNamedFramebuffer", "glFramebuffer")):
+            fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
+            if fb and fb not in self.s.fbo_draw_buffers and not self.known_framebuffer(fb):
+                return   # GL_INVALID_OPERATION: no such framebuffer
+        else:
+            fb = self.s.draw_fbo
+        if "Buffers" in base:
+            n = checked(no, integer, d.get("n"), f"{name}: the count", *I32)
+            bufs = d.get("bufs")
+            if n < 0:
+                return   # GL_INVALID_VALUE
+            if not isinstance(bufs, list) or len(bufs) != n:
+                bufs = [] if n == 0 else None
+            if bufs is None:
+                return   # apitrace recorded no list (a pointer GL could not read)
+        else:
+            bufs = [d.get("buf", d.get("mode", a[-1] if a else None))]
+        count = self.draw_buffer_counts(no, name, fb, bufs)
+        if count is None:
+            return
+        if fb == 0:
+            self.s.window_draw_buffers = count
+        else:
+            self.s.fbo_draw_buffers[fb] = count
+
+    def known_framebuffer(self, fb):
+        """Whether framebuffer object fb exists for a direct state access
+        call (named by glGen/glCreateFramebuffers, or seen bound)."""
+        names = self.s.framebuffer_names
+        return (names is not None and fb in names) or fb in (self.s.draw_fbo, self.s.read_fbo) \
+            or fb in self.s.fbo_depth or fb in self.s.fbo_attachments
+
+    def dual_source_invalid(self):
+        """Why the draw is GL_INVALID_OPERATION for dual-source blending: a
+        draw buffer past llvmpipe's one that takes a second colour output
+        has a blend factor reading it (blending enabled or not, as Mesa
+        checks). None when it draws."""
+        fb = self.s.draw_fbo
+        n = self.s.window_draw_buffers if fb == 0 else self.s.fbo_draw_buffers.get(fb, 1)
+        for i in range(MAX_DUAL_SOURCE_DRAW_BUFFERS, n):
+            if DUAL_SOURCE.intersection(self.s.blend_factors[i]):
+                where = "the window" if fb == 0 else f"framebuffer {fb}"
+                return (f"draw buffer {i} of {where}'s {n} blends with the second colour output "
+                        f"(a GL_SRC1_ factor), which only the first {MAX_DUAL_SOURCE_DRAW_BUFFERS} may")
+        return None
+
+    HANDLERS = {
+        "glBlendFunc": h_blend_func,
+        "glBlendFuncSeparate": h_blend_func,
+        "glBlendFunci": h_blend_func,
+        "glBlendFuncSeparatei": h_blend_func,
+        "glBlendFuncIndexedAMD": h_blend_func,
+        "glBlendFuncSeparateIndexedAMD": h_blend_func,
+        "glDrawBuffer": h_draw_buffers,
+        "glDrawBuffers": h_draw_buffers,
+        "glDrawBuffersATI": h_draw_buffers,
+        "glDrawBuffersNV": h_draw_buffers,
+        "glNamedFramebufferDrawBuffer": h_draw_buffers,
+        "glNamedFramebufferDrawBuffers": h_draw_buffers,
+        "glFramebufferDrawBuffer": h_draw_buffers,
+        "glFramebufferDrawBuffers": h_draw_buffers,
+    }

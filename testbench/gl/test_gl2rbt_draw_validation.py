@@ -1,0 +1,166 @@
+"""Draws GL refuses for the state they run under, whatever their mode and
+arrays, as Mesa 22.3 checks it at each draw: active samplers of different
+types on one texture unit (in the program in use, and across a pipeline's
+programs), and dual-source blend factors on a draw buffer past the first.
+Each capture is written by the test; a refused draw draws nothing and is
+counted among the GL errors, as Mesa drops it."""
+import pytest
+
+from gl_captures import gl2rbt_timed as gl2rbt
+from test_gl2rbt_draw_outcomes import draw
+from test_gl2rbt_hostile import shader_calls
+from test_gl2rbt_pipelines import MOVED_VS, context, separable
+
+pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+
+# A fragment shader reading a 2D and a cube texture (both active).
+TWO_TYPES_FS = ("#version 410 core\n{layout}uniform sampler2D a;\nuniform samplerCube b;\nout vec4 c;\n"
+                "void main() {{ c = texture(a, vec2(0.5)) + texture(b, vec3(1.0, 0.0, 0.0)); }}\n")
+ONE_TYPE_FS = ("#version 410 core\nuniform sampler2D a;\nuniform sampler2D b;\nout vec4 c;\n"
+               "void main() { c = texture(a, vec2(0.5)) + texture(b, vec2(0.25)); }\n")
+PLAIN_FS = "#version 410 core\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n"
+
+
+def fragments(tmp_path, c, tag):
+    """Fragments of the converted capture, and the converter's report."""
+    r = gl2rbt(tmp_path, c.write(tmp_path / f"{tag}.xz"), "-o", tmp_path / f"{tag}.rbt")
+    assert r.returncode == 0, f"{tag}: {r.stderr}"
+    return (tmp_path / f"{tag}.rbt").read_bytes().count(b"\nf "), r.stdout + r.stderr
+
+
+def with_fragment_shader(fs):
+    """shader_calls' program 2 (in use) linked with fragment shader fs, its
+    samplers' locations asked as the capture asked them (a at 7, b at 9:
+    not Mesa's own numbers)."""
+    c = context(shader_calls(MOVED_VS))
+    at = next(i for i, call in enumerate(c.calls) if call[1] == "glLinkProgram")
+    c.calls[at:at] = [(0, "glCreateShader", [("type", "GL_FRAGMENT_SHADER")], 8, 0),
+                      (0, "glShaderSource", [("shader", 8), ("count", 1), ("string", [fs]), ("length", None)], None, 0),
+                      (0, "glCompileShader", [("shader", 8)], None, 0),
+                      (0, "glAttachShader", [("program", 2), ("shader", 8)], None, 0)]
+    c.calls = [(i + 1,) + call[1:] for i, call in enumerate(c.calls)]
+    c.add("glGetUniformLocation", program=2, name="a", ret=7)
+    return c.add("glGetUniformLocation", program=2, name="b", ret=9)
+
+
+@pytest.mark.parametrize("fs, units, drawn", [
+    (TWO_TYPES_FS.format(layout=""), [], False),
+    (TWO_TYPES_FS.format(layout=""), [("glUniform1i", 9, 1)], True),
+    (TWO_TYPES_FS.format(layout=""), [("glUniform1iv", 9, [3])], True),
+    (TWO_TYPES_FS.format(layout=""), [("glUniform1i", 9, 1), ("glUniform1i", 9, 0)], False),
+    (TWO_TYPES_FS.format(layout=""), [("glUniform1i", 7, 4), ("glUniform1i", 9, 4)], False),
+    # Set through glProgramUniform on a program in use, and by the
+    # shader's own binding.
+    (TWO_TYPES_FS.format(layout=""), [("glProgramUniform1i", 9, 2)], True),
+    (TWO_TYPES_FS.format(layout="").replace("uniform samplerCube", "layout(binding = 5) uniform samplerCube")
+     .replace("410", "420"), [], True),
+    # A sampler given a float, or a unit past Mesa's 192: GL refuses the
+    # call, the unit stays 0.
+    (TWO_TYPES_FS.format(layout=""), [("glUniform1f", 9, 1.0)], False),
+    (TWO_TYPES_FS.format(layout=""), [("glUniform1i", 9, 192)], False),
+    (ONE_TYPE_FS, [], True),
+], ids=["both_unit_0", "cube_at_1", "cube_at_3_by_v_form", "cube_at_1_then_0", "both_at_4", "program_uniform",
+        "cube_bound_by_the_shader", "float_refused", "unit_past_the_last_refused", "one_type"])
+def test_two_types_of_sampler_on_one_unit(tmp_path, fs, units, drawn):
+    """Active samplers of different types on one texture unit make every
+    draw of the program GL_INVALID_OPERATION (GL 4.6 §11.1.3.11; Mesa's
+    check follows every glUniform of a sampler): the draws had been drawn
+    (27.17% against Mesa; R21-1). The units are set by the capture's
+    locations, which the converter maps by name to Mesa's."""
+    c = with_fragment_shader(fs)
+    for fn, loc, value in units:
+        if fn == "glProgramUniform1i":
+            c.add(fn, program=2, location=loc, v0=value)
+        elif fn.endswith("v"):
+            c.add(fn, location=loc, count=len(value), value=value)
+        else:
+            c.add(fn, location=loc, v0=value)
+    got, report = fragments(tmp_path, draw(c), "samplers")
+    assert (got > 100) == drawn, (got, report)
+    assert drawn or "active samplers of different types on one texture unit" in report, report
+
+
+@pytest.mark.parametrize("units, drawn", [
+    ({}, True),                    # both at unit 0, which Mesa's pipeline check passes over
+    ({"a": 2, "b": 2}, False),
+    ({"a": 2, "b": 3}, True),
+    ({"a": 2}, True),
+], ids=["both_unit_0", "both_at_2", "at_2_and_3", "one_at_2"])
+def test_two_types_of_sampler_on_one_unit_of_a_pipeline(tmp_path, units, drawn):
+    """A pipeline's validation compares its programs' samplers, unit 0
+    aside (Mesa 22.3 _mesa_sampler_uniforms_pipeline_are_valid): the
+    fragment stage's 2D and cube samplers on unit 2 fail it."""
+    c = separable()
+    c.add("glCreateShaderProgramv", type="GL_FRAGMENT_SHADER", count=1, strings=[TWO_TYPES_FS.format(layout="")],
+          ret=11)
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_FRAGMENT_SHADER_BIT"], program=11)
+    for loc, (uniform, unit) in enumerate(units.items()):
+        c.add("glGetUniformLocation", program=11, name=uniform, ret=20 + loc)
+        c.add("glProgramUniform1i", program=11, location=20 + loc, v0=unit)
+    got, report = fragments(tmp_path, draw(c), "pipeline")
+    assert (got > 100) == drawn, (got, report)
+    assert drawn or "reads texture unit 2 as a second type of texture" in report, report
+
+
+def blending(calls):
+    """The triangle under a plain fragment shader, after `calls`
+    ((function, arguments) each)."""
+    c = with_fragment_shader(PLAIN_FS)
+    for fn, args in calls:
+        c.add(fn, **args)
+    return c
+
+
+SRC1 = ("glBlendFunc", dict(sfactor="GL_SRC1_COLOR", dfactor="GL_ONE"))
+BOTH = ("glDrawBuffer", dict(mode="GL_FRONT_AND_BACK"))
+
+
+@pytest.mark.parametrize("calls, drawn", [
+    ([SRC1], True),
+    ([BOTH], True),
+    ([BOTH, SRC1], False),
+    ([SRC1, BOTH, ("glEnable", dict(cap="GL_BLEND"))], False),
+    ([BOTH, ("glDrawBuffer", dict(mode="GL_LEFT")), SRC1], False),
+    ([BOTH, SRC1, ("glDrawBuffer", dict(mode="GL_BACK"))], True),
+    ([BOTH, ("glBlendFunci", dict(buf=0, src="GL_SRC1_ALPHA", dst="GL_ONE"))], True),
+    ([BOTH, ("glBlendFuncSeparatei", dict(buf=1, srcRGB="GL_ONE", dstRGB="GL_ZERO", srcAlpha="GL_ONE",
+                                          dstAlpha="GL_ONE_MINUS_SRC1_ALPHA"))], False),
+    ([BOTH, ("glBlendFunci", dict(buf=8, src="GL_SRC1_COLOR", dst="GL_ONE"))], True),
+    ([BOTH, SRC1, ("glBlendFunc", dict(sfactor="GL_FRONT", dfactor="GL_ONE"))], False),
+    ([BOTH, SRC1, ("glBlendFunc", dict(sfactor="GL_ONE", dfactor="GL_ZERO"))], True),
+    ([("glDrawBuffers", dict(n=2, bufs=["GL_NONE", "GL_BACK_LEFT"])), SRC1], False),
+    ([("glDrawBuffers", dict(n=2, bufs=["GL_BACK_LEFT", "GL_NONE"])), SRC1], True),
+    ([("glDrawBuffers", dict(n=2, bufs=["GL_BACK_LEFT", "GL_BACK_LEFT"])), BOTH, SRC1], False),
+    ([BOTH, ("glDrawBuffers", dict(n=2, bufs=["GL_BACK_LEFT", "GL_BACK_LEFT"])), SRC1], False),
+    ([BOTH, ("glDrawBuffer", dict(mode="GL_RIGHT")), SRC1], False),
+    ([("glGenFramebuffers", dict(n=1, framebuffers=[3])), ("glBindFramebuffer", dict(target="GL_FRAMEBUFFER",
+                                                                                      framebuffer=3)),
+      ("glDrawBuffers", dict(n=2, bufs=["GL_COLOR_ATTACHMENT0", "GL_COLOR_ATTACHMENT1"])),
+      ("glBindFramebuffer", dict(target="GL_FRAMEBUFFER", framebuffer=0)), SRC1], True),
+    ([("glNamedFramebufferDrawBuffer", dict(framebuffer=0, buf="GL_FRONT_AND_BACK")), SRC1], False),
+], ids=["blend_one_buffer", "two_buffers_no_blend", "two_buffers_src1", "blend_enabled_after", "left",
+        "back_again", "src1_on_buffer_0_only", "src1_alpha_on_buffer_1", "buffer_past_the_last_refused",
+        "bad_factor_refused", "blend_undone", "none_then_back_left", "back_left_then_none",
+        "a_buffer_twice_refused", "a_buffer_twice_refused_after", "right_refused", "framebuffer_s_own_list",
+        "named_window"])
+def test_dual_source_blending_on_a_second_draw_buffer(tmp_path, calls, drawn):
+    """A blend factor of the second colour output on any draw buffer past
+    the first makes the draw GL_INVALID_OPERATION (GL_MAX_DUAL_SOURCE_DRAW_
+    BUFFERS is 1 in llvmpipe; Mesa checks the factors whether GL_BLEND is
+    enabled or not): two draw buffers with GL_SRC1_COLOR had been drawn
+    (27.17% against Mesa; R21-10). The draw buffers are the framebuffer's
+    own; what GL refuses (a factor, a buffer, a list) changes nothing."""
+    got, report = fragments(tmp_path, draw(blending(calls)), "blend")
+    assert (got > 100) == drawn, (got, report)
+    assert drawn or "the second colour output" in report, report
+
+
+
+def test_a_reduced_capture_keeps_blend_factors_and_draw_buffers(tmp_path):
+    """A reduced capture of version 4 keeps the blend factors and draw
+    buffers, so that it draws as its capture does."""
+    from rbcd.gl2rbt.reduced import read_reduced_calls
+    c = blending([BOTH, SRC1])
+    names = [call[1] for call in read_reduced_calls(str(draw(c).write(tmp_path / "c.xz")))]
+    assert "glDrawBuffer" in names and "glBlendFunc" in names
+    assert fragments(tmp_path, draw(blending([BOTH, SRC1])), "refused")[0] == 0
