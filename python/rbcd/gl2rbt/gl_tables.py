@@ -24,7 +24,8 @@ MAX_CLIP_PLANES = 8
 
 # Calls that cannot change where a fragment lands or which reach the unit:
 # texturing, colour, blending, lighting, fog, materials, queries, the window
-# system. Listed in docs/gl-capture.md; anything else that is neither
+# system (the blend factors and draw buffers, which decide whether GL refuses
+# a draw, have handlers: glstate/color_outputs.py). Listed in docs/gl-capture.md; anything else that is neither
 # emulated nor here is refused.
 IGNORED_PREFIXES = (
     "glTex", "glBindTexture", "glGenTextures", "glActiveTexture", "glClientActiveTexture",
