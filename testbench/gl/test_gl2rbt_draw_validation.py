@@ -164,3 +164,16 @@ def test_a_reduced_capture_keeps_blend_factors_and_draw_buffers(tmp_path):
     names = [call[1] for call in read_reduced_calls(str(draw(c).write(tmp_path / "c.xz")))]
     assert "glDrawBuffer" in names and "glBlendFunc" in names
     assert fragments(tmp_path, draw(blending([BOTH, SRC1])), "refused")[0] == 0
+
+
+def test_a_draw_buffer_list_not_its_count_is_refused(tmp_path):
+    """A glDrawBuffers whose list is not its count is a capture altered
+    (apitrace records every buffer the call read): one line naming the
+    call, exit 2, nothing left; past GL's 8 buffers GL reads no list."""
+    from gl_captures import left_behind, refused
+    c = blending([("glDrawBuffers", dict(n=2, bufs=["GL_BACK_LEFT"])), SRC1])
+    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    refused(r, "glDrawBuffers", "1 buffers, not its count (2)")
+    assert left_behind(tmp_path, ["c.xz"]) == []
+    got, _ = fragments(tmp_path, draw(blending([BOTH, ("glDrawBuffers", dict(n=9, bufs=None)), SRC1])), "nine")
+    assert got == 0, "GL_INVALID_VALUE: the window's two buffers stay"

@@ -6,7 +6,7 @@ the first of several is GL_INVALID_OPERATION at the draw (GL 4.6 §17.3.6.3;
 Mesa 22.3 _mesa_update_valid_to_render_state, whatever GL_BLEND says, with
 llvmpipe's GL_MAX_DUAL_SOURCE_DRAW_BUFFERS of 1)."""
 from ...cli import I32, U32, integer
-from ..errors import checked
+from ..errors import checked, fail_call
 from ..gl_tables import base_name
 from . import enum_arg
 
@@ -101,8 +101,6 @@ class ColorOutputCalls:
             n = WINDOW_BUFFERS.get(b, 0) if fb == 0 else int(b.startswith("GL_COLOR_ATTACHMENT") and
                                                                 BUFFER_VALUES[b] - 0x8CE0 < MAX_DRAW_BUFFERS)
             return n or None   # (none of them: GL_INVALID_OPERATION)
-        if len(names) > MAX_DRAW_BUFFERS:
-            return None   # GL_INVALID_VALUE
         if self.es and fb == 0 and (len(names) != 1 or names[0] not in ("GL_NONE", "GL_BACK")):
             return None   # GL_INVALID_OPERATION
         count, used = 0, set()
@@ -139,12 +137,12 @@ class ColorOutputCalls:
         if "Buffers" in base:
             n = checked(no, integer, d.get("n"), f"{name}: the count", *I32)
             bufs = d.get("bufs")
-            if n < 0:
-                return   # GL_INVALID_VALUE
+            if n < 0 or n > MAX_DRAW_BUFFERS:
+                return   # GL_INVALID_VALUE: the list is not read
+            if n == 0:
+                bufs = []
             if not isinstance(bufs, list) or len(bufs) != n:
-                bufs = [] if n == 0 else None
-            if bufs is None:
-                return   # apitrace recorded no list (a pointer GL could not read)
+                fail_call(no, f"{name}: {len(bufs) if isinstance(bufs, list) else 'no'} buffers, not its count ({n})")
         else:
             bufs = [d.get("buf", d.get("mode", a[-1] if a else None))]
         count = self.draw_buffer_counts(no, name, fb, bufs)
