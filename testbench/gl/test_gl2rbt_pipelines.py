@@ -308,3 +308,20 @@ def test_a_compute_program_beside_the_vertex_stage_leaves_the_draw(tmp_path):
     c = separable().add("glCreateShaderProgramv", type="GL_COMPUTE_SHADER", count=1, strings=[COMPUTE], ret=11)
     c.add("glUseProgramStages", pipeline=5, stages=["GL_COMPUTE_SHADER_BIT"], program=11)
     assert trace(tmp_path, draw(c), "compute") == base and base.count(b"\nf ") > 100
+
+
+@pytest.mark.parametrize("validate, drawn", [(None, False), (5, True), (6, False)],
+                         ids=["not_validated", "validated", "another_validated"])
+def test_glvalidateprogrampipeline_validates_as_a_draw_does(tmp_path, validate, drawn):
+    """glValidateProgramPipeline validates the pipeline as a draw would, bound
+    or not, and its draws keep that answer until glUseProgramStages: the
+    pipeline validated before its program is relinked without
+    GL_PROGRAM_SEPARABLE still draws (Mesa's pipe->Validated; the call had
+    been passed over, and the draw refused)."""
+    c = separable().add("glGenProgramPipelines", n=1, pipelines=[6])
+    if validate is not None:
+        c.add("glBindProgramPipeline", pipeline=0).add("glValidateProgramPipeline", pipeline=validate)
+        c.add("glBindProgramPipeline", pipeline=5)
+    c.add("glProgramParameteri", program=2, pname="GL_PROGRAM_SEPARABLE", value=0).add("glLinkProgram", program=2)
+    got = frames(tmp_path, draw(c), "validate")
+    assert (got[0]["fragments"] > 100) == drawn, got

@@ -628,6 +628,23 @@ class ProgramCalls:
                 self.release_deleted_pipeline()   # a pipeline deleted while bound goes now
             self.s.pipeline = v
 
+    def h_validate_pipeline(self, no, name, a, args):
+        """glValidateProgramPipeline: Mesa validates the pipeline now, bound
+        or not, and its draws take that answer until glUseProgramStages
+        changes the pipeline (pipe->Validated: one that passed draws
+        whatever is relinked meanwhile; one that failed is validated again
+        at its next draw)."""
+        v = dict(args).get("pipeline", a[0] if a else None)
+        pipe = self.pipeline(no, name, v)
+        if pipe is None:
+            return   # GL_INVALID_OPERATION: no such pipeline
+        bound, used = self.s.pipeline, self.s.program
+        self.s.pipeline, self.s.program = v, 0   # (its stages, as if bound with no program in use)
+        try:
+            pipe.validated = self.pipeline_fault(pipe) is None
+        finally:
+            self.s.pipeline, self.s.program = bound, used
+
     def release_deleted_pipeline(self):
         """The pipeline deleted while bound (h_delete_pipelines) is current
         no more: its programs may go out of use."""
@@ -763,6 +780,7 @@ class ProgramCalls:
         "glGenProgramPipelines": h_gen_pipelines,
         "glCreateProgramPipelines": h_gen_pipelines,
         "glBindProgramPipeline": h_bind_pipeline,
+        "glValidateProgramPipeline": h_validate_pipeline,
         "glDeleteProgramPipelines": h_delete_pipelines,
         "glUseProgramStages": h_use_program_stages,
         "glActiveShaderProgram": h_active_shader_program,
