@@ -388,7 +388,7 @@ class VertexStage:
 
     def feedback_bindings(self, p):
         """The transform feedback binding points program p's executable
-        records into, as Mesa links it (recorded_bindings); empty when it
+        records into, as Mesa links it (linked_feedback_bindings); empty when it
         records nothing or Mesa does not link it."""
         return self.full_link(p)[2]
 
@@ -404,7 +404,7 @@ class VertexStage:
                 ok = prog is not None
                 blocks = [block_name(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORM_BLOCKS))] \
                     if ok else []
-                self.link_status[key] = (ok, blocks, self.recorded_bindings(prog) if ok else frozenset())
+                self.link_status[key] = (ok, blocks, self.linked_feedback_bindings(prog) if ok else frozenset())
         return self.link_status[key]
 
     @contextlib.contextmanager
@@ -515,7 +515,7 @@ class VertexStage:
                     out[stage] = out.get(stage, ()) + tuple(units)
         return out
 
-    def recorded_bindings(self, prog):
+    def linked_feedback_bindings(self, prog):
         """The binding points linked program `prog` records into, as Mesa
         linked its transform feedback: its last vertex-processing stage's
         xfb_ qualifiers, else the outputs glTransformFeedbackVaryings named
