@@ -102,6 +102,56 @@ def test_two_types_of_sampler_on_one_unit_of_a_pipeline(tmp_path, units, drawn):
     assert drawn or "reads texture unit 2 as a second type of texture" in report, report
 
 
+def test_a_compute_program_s_samplers_count_in_a_pipeline(tmp_path):
+    """A pipeline's compute program is validated with the others: its cube
+    sampler on the unit the fragment program reads as 2D fails the
+    pipeline (Mesa iterates every stage's program; it had been passed
+    over: 27.83% against Mesa; R22-2)."""
+    compute = ("#version 430 core\nlayout(local_size_x = 1) in;\nuniform samplerCube k;\nlayout(std430) buffer B { vec4 o; };\n"
+               "void main() { o = texture(k, vec3(1.0, 0.0, 0.0)); }\n")
+    def pipeline(unit):
+        c = separable()
+        c.add("glCreateShaderProgramv", type="GL_FRAGMENT_SHADER", count=1, strings=[ONE_TYPE_FS], ret=11)
+        c.add("glUseProgramStages", pipeline=5, stages=["GL_FRAGMENT_SHADER_BIT"], program=11)
+        c.add("glCreateShaderProgramv", type="GL_COMPUTE_SHADER", count=1, strings=[compute], ret=12)
+        c.add("glUseProgramStages", pipeline=5, stages=["GL_COMPUTE_SHADER_BIT"], program=12)
+        c.add("glGetUniformLocation", program=11, name="a", ret=20).add("glProgramUniform1i", program=11, location=20, v0=2)
+        c.add("glGetUniformLocation", program=12, name="k", ret=21)
+        return draw(c.add("glProgramUniform1i", program=12, location=21, v0=unit))
+    drawn, _ = fragments(tmp_path, pipeline(3), "apart")
+    refused, report = fragments(tmp_path, pipeline(2), "shared")
+    assert drawn > 100 and refused == 0, (drawn, refused, report)
+    assert "program 12, in pipeline 5, reads texture unit 2 as a second type of texture" in report, report
+
+
+@pytest.mark.parametrize("bound, drawn", [(True, False), (False, True)], ids=["bound", "not_bound"])
+def test_a_sampler_set_has_the_bound_pipeline_validated_again(tmp_path, bound, drawn):
+    """Mesa clears the bound pipeline's validation at every glUniform1i of
+    a sampler: a pipeline validated at a draw, its fragment sampler then
+    moved onto the unit another stage's program reads as another type,
+    draws nothing at the next draw (it had kept the first validation:
+    78.79% against Mesa; R22-1); moved while the pipeline is not bound, the
+    pipeline keeps its validation, as Mesa's."""
+    import json
+    c = separable()
+    c.add("glCreateShaderProgramv", type="GL_FRAGMENT_SHADER", count=1, strings=[TWO_TYPES_FS.format(layout="")],
+          ret=11)
+    c.add("glUseProgramStages", pipeline=5, stages=["GL_FRAGMENT_SHADER_BIT"], program=11)
+    c.add("glGetUniformLocation", program=11, name="a", ret=20).add("glGetUniformLocation", program=11, name="b", ret=21)
+    c.add("glProgramUniform1i", program=11, location=20, v0=2).add("glProgramUniform1i", program=11, location=21, v0=3)
+    draw(c)
+    if not bound:
+        c.add("glBindProgramPipeline", pipeline=0)
+    c.add("glProgramUniform1i", program=11, location=21, v0=2)
+    c.add("glBindProgramPipeline", pipeline=5)
+    c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup").swap()
+    r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt", "--summary", tmp_path / "c.jsonl")
+    assert r.returncode == 0, r.stderr
+    got = [json.loads(line)["fragments"] > 100 for line in (tmp_path / "c.jsonl").read_text().splitlines()]
+    assert got == [True, drawn], (got, r.stdout)
+
+
 def blending(calls):
     """The triangle under a plain fragment shader, after `calls`
     ((function, arguments) each)."""
@@ -129,6 +179,10 @@ BOTH = ("glDrawBuffer", dict(mode="GL_FRONT_AND_BACK"))
     ([BOTH, SRC1, ("glBlendFunc", dict(sfactor="GL_FRONT", dfactor="GL_ONE"))], False),
     ([BOTH, SRC1, ("glBlendFunc", dict(sfactor="GL_ONE", dfactor="GL_ZERO"))], True),
     ([("glDrawBuffers", dict(n=2, bufs=["GL_NONE", "GL_BACK_LEFT"])), SRC1], False),
+    # apitrace writes a 0 in a list of enumerants by the first name it has
+    # for 0 (a list with GL_NONE had been refused as GL_INVALID_ENUM; R22-3).
+    ([("glDrawBuffers", dict(n=2, bufs=["GL_ZERO", "GL_BACK_LEFT"])), SRC1], False),
+    ([BOTH, ("glDrawBuffers", dict(n=2, bufs=["GL_BACK_LEFT", "GL_ZERO"])), SRC1], True),
     ([("glDrawBuffers", dict(n=2, bufs=["GL_BACK_LEFT", "GL_NONE"])), SRC1], True),
     ([("glDrawBuffers", dict(n=2, bufs=["GL_BACK_LEFT", "GL_BACK_LEFT"])), BOTH, SRC1], False),
     ([BOTH, ("glDrawBuffers", dict(n=2, bufs=["GL_BACK_LEFT", "GL_BACK_LEFT"])), SRC1], False),
@@ -140,7 +194,8 @@ BOTH = ("glDrawBuffer", dict(mode="GL_FRONT_AND_BACK"))
     ([("glNamedFramebufferDrawBuffer", dict(framebuffer=0, buf="GL_FRONT_AND_BACK")), SRC1], False),
 ], ids=["blend_one_buffer", "two_buffers_no_blend", "two_buffers_src1", "blend_enabled_after", "left",
         "back_again", "src1_on_buffer_0_only", "src1_alpha_on_buffer_1", "buffer_past_the_last_refused",
-        "bad_factor_refused", "blend_undone", "none_then_back_left", "back_left_then_none",
+        "bad_factor_refused", "blend_undone", "none_then_back_left", "back_left_then_none", "zero_then_back_left",
+        "back_left_then_zero",
         "a_buffer_twice_refused", "a_buffer_twice_refused_after", "right_refused", "framebuffer_s_own_list",
         "named_window"])
 def test_dual_source_blending_on_a_second_draw_buffer(tmp_path, calls, drawn):

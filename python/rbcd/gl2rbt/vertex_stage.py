@@ -195,6 +195,7 @@ def attach_stage(GL, prog, kind, texts, shaders):
 # The stages a program draws with, as Mesa links them together.
 LINKED_STAGES = {"vertex": "GL_VERTEX_SHADER", "fragment": "GL_FRAGMENT_SHADER", "geometry": "GL_GEOMETRY_SHADER",
                  "tess_control": "GL_TESS_CONTROL_SHADER", "tess_evaluation": "GL_TESS_EVALUATION_SHADER"}
+ALL_STAGES = {**LINKED_STAGES, "compute": "GL_COMPUTE_SHADER"}
 
 
 class MesaProgram:
@@ -408,11 +409,12 @@ class VertexStage:
         return self.link_status[key]
 
     @contextlib.contextmanager
-    def whole_program(self, p):
+    def whole_program(self, p, stages=LINKED_STAGES):
         """Mesa's link of the program as its last link saw it, every stage
-        that draws, with the capture's attribute bindings, separability and
-        transform feedback outputs (its link may fail on them): the
-        program's name, or None when Mesa does not link it; deleted after."""
+        that draws (or `stages`), with the capture's attribute bindings,
+        separability and transform feedback outputs (its link may fail on
+        them): the program's name, or None when Mesa does not link it;
+        deleted after."""
         from OpenGL.error import GLError
         GL = self.gl
         prog, shaders = GL.glCreateProgram(), []
@@ -420,8 +422,8 @@ class VertexStage:
             with self.watchdog.on(f"the program linked at call {p.link_call}", grows=True):
                 try:
                     for stage, texts in p.objects.items():
-                        if stage in LINKED_STAGES:
-                            attach_stage(GL, prog, getattr(GL, LINKED_STAGES[stage]), texts, shaders)
+                        if stage in stages:
+                            attach_stage(GL, prog, getattr(GL, stages[stage]), texts, shaders)
                     for attr, index in p.linked[1].items():
                         GL.glBindAttribLocation(prog, index, attr)
                     if p.separable:   # (OpenGL ES links a program of one stage only so)
@@ -464,7 +466,7 @@ class VertexStage:
             return checked[2]
         GL = self.gl
         answer = (True, {})
-        with self.whole_program(p) as prog:
+        with self.whole_program(p, ALL_STAGES) as prog:   # (a compute program's samplers count in a pipeline)
             if prog is not None:
                 u, ip = ctypes.c_uint, ctypes.POINTER(ctypes.c_int)
                 set_units = self.mesa.proc("glProgramUniform1iv", u, ctypes.c_int, ctypes.c_int, ip)
@@ -485,6 +487,28 @@ class VertexStage:
                 answer = (bool(GL.glGetProgramiv(prog, GL.GL_VALIDATE_STATUS)), self.stage_samplers(prog))
         p.samplers_checked = (calls, key, answer)
         return answer
+
+    def sampler_uniforms(self, p):
+        """(names, locations) of program p's active samplers as Mesa links
+        it, each element of an array by its own name and location too: what
+        a glUniform1i call sets a sampler through. Kept for the link."""
+        key = (p.link_call, p.version)
+        if p.sampler_uniforms is None or p.sampler_uniforms[0] != key:
+            GL = self.gl
+            names, locations = set(), set()
+            with self.whole_program(p, ALL_STAGES) as prog:
+                for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORMS) if prog is not None else 0):
+                    uname, size, utype = GL.glGetActiveUniform(prog, i)
+                    if int(utype) not in self.sampler_kinds:
+                        continue
+                    base = name_str(uname).removesuffix("[0]")
+                    names.add(base)
+                    for k in range(size):
+                        element = f"{base}[{k}]"
+                        names.add(element)
+                        locations.add(GL.glGetUniformLocation(prog, element if size > 1 or k else base))
+            p.sampler_uniforms = (key, frozenset(names), frozenset(locations) - {-1})
+        return p.sampler_uniforms[1:]
 
     def stage_samplers(self, prog):
         """{stage: ((unit, target), ...)} of linked program `prog`'s active

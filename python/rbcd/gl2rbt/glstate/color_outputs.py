@@ -38,6 +38,9 @@ BUFFER_VALUES = {"GL_NONE": 0, "GL_FRONT_LEFT": 0x400, "GL_FRONT_RIGHT": 0x401, 
                  "GL_FRONT_AND_BACK": 0x408, "GL_AUX0": 0x409, "GL_AUX1": 0x40A, "GL_AUX2": 0x40B, "GL_AUX3": 0x40C,
                  **{f"GL_COLOR_ATTACHMENT{i}": 0x8CE0 + i for i in range(32)}}
 BUFFER_NAMES = {v: k for k, v in BUFFER_VALUES.items() if k != "GL_NONE"} | {0: "GL_NONE"}
+# apitrace writes a 0 in an array of enumerants by the first name its table
+# has for 0: GL_NONE in a list of draw buffers may come as any of these.
+BUFFER_VALUES.update(dict.fromkeys(("GL_ZERO", "GL_FALSE", "GL_POINTS", "GL_NO_ERROR"), 0))
 MULTIPLE = {"GL_FRONT", "GL_BACK", "GL_LEFT", "GL_RIGHT", "GL_FRONT_AND_BACK"}
 
 
@@ -53,7 +56,7 @@ def buffer_name(v, no, what):
     v = enum_arg(v, no, what)
     if isinstance(v, int):
         return BUFFER_NAMES.get(v)
-    return v if v in BUFFER_VALUES else None
+    return BUFFER_NAMES.get(BUFFER_VALUES[v]) if v in BUFFER_VALUES else None
 
 
 class ColorOutputCalls:

@@ -58,6 +58,7 @@ PIPELINE_ORDER = ["vertex", "tess_control", "tess_evaluation", "geometry", "frag
 # the glUniform forms that set a sampler's unit.
 SAMPLER_TYPE = re.compile(r"\b[iu]?sampler([0-9A-Z]\w*?)(?:Shadow)?\b")
 SAMPLER_SETTERS = ("glUniform1i", "glUniform1iv")
+MAX_TEXTURE_UNITS = 192   # llvmpipe's GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS: a unit past it is refused
 
 
 class Shader:
@@ -115,6 +116,7 @@ class Program:
         self.sampler_shapes = frozenset()
         self.int_uniform_calls = 0
         self.samplers_checked = None
+        self.sampler_uniforms = None   # (its link, the names and locations of its samplers in Mesa's link)
 
 
 class Pipeline:
@@ -554,6 +556,16 @@ class ProgramCalls:
         p.uniforms[key] = (func, values, transpose, m.group(5), count)
         if func in SAMPLER_SETTERS:
             p.int_uniform_calls += 1
+            if self.s.program not in self.s.programs and p.sampler_shapes:
+                # Mesa clears the bound pipeline's validation at every
+                # glUniform1i(v) it takes for a sampler, changed or not
+                # (validate_uniform): the next draw validates it again.
+                pipe = self.s.pipelines.get(self.s.pipeline)
+                if pipe is not None and pipe.validated and all(0 <= v < MAX_TEXTURE_UNITS for v in values):
+                    names, locations = self.vertex_stage().sampler_uniforms(p)
+                    name = p.uniform_names.get(loc)
+                    if (name in names) if name is not None else (loc in locations):
+                        pipe.validated = False
 
     def h_patch_parameter(self, no, name, a, args):
         """glPatchParameteri(GL_PATCH_VERTICES) and glPatchParameterfv's
