@@ -590,13 +590,17 @@ def remove_temporaries():
         _temporaries.discard(t)
 
 
-def write_output(path, data, what="output"):
-    """Writes `data` (str or bytes) to `path` as rbcd-sim writes its outputs."""
+def write_output(path, data, what="output", own=False):
+    """Writes `data` (str or bytes) to `path` as rbcd-sim writes its outputs;
+    `own`: a file of the tool's own in its output folder, always replaced
+    through a temporary, whatever is at its name (a symlink, another name of
+    a file, a FIFO: the name is given a new file, nothing is written
+    through it)."""
     if isinstance(data, str):
         data = data.encode("utf-8")
-    if os.path.isdir(path):
+    if os.path.isdir(path) and not (own and os.path.islink(path)):
         raise UsageError(f"{path}: cannot create: is a directory")
-    how, target = output_target(path)
+    how, target = ("replace", path) if own else output_target(path)
     if how == "in place":
         try:
             fd = os.open(path, os.O_WRONLY | os.O_NOCTTY | os.O_CLOEXEC)

@@ -138,9 +138,21 @@ def flatten(table, prefix="", where=None, out=None):
 
 
 def write_atomic(path, text):
-    """Written as rbcd-sim writes its outputs (rbcd.cli.write_output): a reader never
-    sees half a file, and no planted symlink is followed."""
-    write_output(path, text)
+    """One of the sweep's own files in OUT, written whole through a temporary renamed
+    over it (rbcd.cli.write_output): a reader never sees half a file, and whatever was
+    planted at its name (a symlink, a hard link to an input, a FIFO) is replaced, never
+    written through."""
+    write_output(path, text, own=True)
+
+
+def clear_outputs(*paths):
+    """rbcd-sim's and rbcd-merge's outputs in a run's folder, removed before they run:
+    a link planted at their names would be written through (those tools write
+    through a symlink to a regular file, as documented), into a file that is none
+    of the run's inputs they check against (the sweep file, a base configuration)."""
+    for path in paths:
+        if os.path.lexists(path) and not os.path.isdir(path):
+            os.unlink(path)
 
 
 def digest(obj):
@@ -729,6 +741,7 @@ class Runner:
         os.makedirs(d, exist_ok=True)
         # One thread a run: the sweep's parallelism is its workers, and a run's
         # own second thread would only compete with them (docs/sweeps.md, "Speed").
+        clear_outputs(os.path.join(d, "stats.json"), os.path.join(d, "collisions.txt"))
         cmd = [sim, "-q", "--threads", "1", "--stats", os.path.join(d, "stats.json")] + run["args"]
         if self.jobs_per_run > 1 and splits_well(run["args"]):
             cmd += ["--jobs", str(self.jobs_per_run)]
@@ -877,6 +890,7 @@ def merge_parts(out, plan, parts, dest_dir):
     if not os.access(merger, os.X_OK):
         raise RuntimeError(f"rbcd-merge not found beside rbcd-sim ({merger})")
     os.makedirs(dest_dir, exist_ok=True)
+    clear_outputs(os.path.join(dest_dir, "stats.json"), os.path.join(dest_dir, "collisions.txt"))
     r = subprocess.run([merger, "--stats", os.path.join(dest_dir, "stats.json"),
                         "--collisions", os.path.join(dest_dir, "collisions.txt")] +
                        [os.path.join(out, "runs", p, "stats.json") for p in parts],
@@ -1005,7 +1019,14 @@ def lock_out(out):
     since each writes only its own runs."""
     import fcntl
     os.makedirs(out, exist_ok=True)
-    f = open(os.path.join(out, ".lock"), "w")
+    try:   # (not truncated, no link followed: a .lock planted onto an input is no lock)
+        f = os.fdopen(os.open(os.path.join(out, ".lock"),
+                              os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NOCTTY, 0o666), "r+b")
+    except OSError as e:
+        raise SweepError(f"-o {out}: .lock cannot be opened ({e.strerror}): not the sweep's own lock file")
+    if os.fstat(f.fileno()).st_nlink != 1 or not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+        f.close()
+        raise SweepError(f"-o {out}: .lock is another name for a file, or not a regular file: not the sweep's own")
     try:
         fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
@@ -1027,8 +1048,12 @@ def check_out(out, sweep):
         raise SweepError(f"-o {out}: a non-empty directory that is not a sweep output")
     for d in ("runs", "slurm", os.path.join("slurm", "logs")):
         p = os.path.join(out, d)
-        if os.path.lexists(p) and not os.path.isdir(p):
-            raise SweepError(f"-o {out}: {d} exists and is not a directory")
+        if os.path.lexists(p) and (not os.path.isdir(p) or os.path.islink(p)):
+            raise SweepError(f"-o {out}: {d} exists and is not a directory of its own (a file, or a symbolic link)")
+    runs = os.path.join(out, "runs")
+    for rid in sorted(os.listdir(runs)) if os.path.isdir(runs) else ():
+        if os.path.islink(os.path.join(runs, rid)):
+            raise SweepError(f"-o {out}: runs/{rid} is a symbolic link, not a run's own folder")
     for f in ("plan.json", "validated.json", "results.csv", "wall.csv", ".lock"):
         p = os.path.join(out, f)
         if os.path.lexists(p) and not os.path.isfile(p):

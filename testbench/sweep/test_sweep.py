@@ -620,6 +620,59 @@ def test_hostile(c):
 
 
 @sweep_case
+def test_links_planted_in_out_write_nothing_through(c):
+    """The sweep's own files in OUT are replaced through a temporary, never
+    written through what is planted at their names: a .lock, results.csv or
+    wall.csv that is a symlink or a hard link to the sweep's base
+    configuration, sweep file or trace had been emptied or overwritten
+    (exit 0; round 22's R22-5). A .lock that is not the sweep's own, and a
+    runs/ that is a symbolic link, are refused in one line; a run's
+    stats.json planted as a symlink is removed before rbcd-sim writes."""
+    cfg = c.sweep_file("cfg.toml", "[zeb]\nbanks = 2\n")
+    sweep = c.sweep_file("s.toml", f'[base]\nconfig = "{cfg}"\n[axes]\nzeb.list_length = [2, 4]\n'
+                         f'[inputs]\ndefault = false\ntraces = ["{VEC}/default.rbt"]\n')
+    kept = {p: c.read(p, "rb") for p in (cfg, sweep, f"{VEC}/default.rbt")}
+
+    def intact():
+        for p, data in kept.items():
+            assert c.read(p, "rb") == data, f"{p} changed"
+
+    for i, plant in enumerate((os.symlink, os.link)):
+        out = os.path.join(c.tmp, f"lock{i}")
+        os.makedirs(out)
+        plant(cfg, os.path.join(out, ".lock"))
+        one_error_line(c.sweep("run", sweep, "-o", out, "-q"), "not the sweep's own", f".lock by {plant.__name__}")
+        intact()
+    out = os.path.join(c.tmp, "o")
+    assert c.sweep("run", sweep, "-o", out, "-q").returncode == 0
+    for name, target in (("results.csv", cfg), ("wall.csv", f"{VEC}/default.rbt"), ("plan.json", sweep)):
+        os.unlink(os.path.join(out, name))
+        os.symlink(target, os.path.join(out, name))
+    r = c.sweep("run", sweep, "-o", out, "-q")
+    assert r.returncode == 0, r.stderr
+    assert c.sweep("merge", out).returncode == 0
+    intact()
+    for name in ("results.csv", "wall.csv", "plan.json"):
+        assert not os.path.islink(os.path.join(out, name)), f"{name} still a link"
+    assert len(c.rows(out)) == 2
+    # A run to do again, its stats.json a link to the sweep file.
+    rid = sorted(os.listdir(os.path.join(out, "runs")))[0]
+    os.unlink(os.path.join(out, "runs", rid, "result.json"))
+    os.unlink(os.path.join(out, "runs", rid, "stats.json"))
+    os.symlink(sweep, os.path.join(out, "runs", rid, "stats.json"))
+    assert c.sweep("run", sweep, "-o", out, "-q").returncode == 0
+    intact()
+    assert not os.path.islink(os.path.join(out, "runs", rid, "stats.json"))
+    elsewhere = os.path.join(c.tmp, "elsewhere")
+    os.makedirs(elsewhere)
+    shutil.rmtree(os.path.join(out, "runs"))
+    os.symlink(elsewhere, os.path.join(out, "runs"))
+    one_error_line(c.sweep("run", sweep, "-o", out, "-q"), "runs exists and is not a directory of its own",
+                   "runs a symlink")
+    assert os.listdir(elsewhere) == []
+
+
+@sweep_case
 def test_command_lines(c):
     """rbcd-sweep's and rbcd-plot's command lines as the converter's
     (rbcd.cli.ArgumentParser): an option given twice, an abbreviated one,
