@@ -153,12 +153,13 @@ def test_a_sampler_set_has_the_bound_pipeline_validated_again(tmp_path, bound, d
 
 
 def blending(calls):
-    """The triangle under a plain fragment shader, after `calls`
-    ((function, arguments) each)."""
-    c = with_fragment_shader(PLAIN_FS)
+    """The triangle under a plain fragment shader drawn after `calls`
+    ((function, arguments) each), its vertex array object bound before them
+    (binding one has Mesa decide again whether draws are valid)."""
+    c = with_fragment_shader(PLAIN_FS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
     for fn, args in calls:
         c.add(fn, **args)
-    return c
+    return draw(c, vao=None)
 
 
 SRC1 = ("glBlendFunc", dict(sfactor="GL_SRC1_COLOR", dfactor="GL_ONE"))
@@ -171,7 +172,14 @@ BOTH = ("glDrawBuffer", dict(mode="GL_FRONT_AND_BACK"))
     ([BOTH, SRC1], False),
     ([SRC1, BOTH, ("glEnable", dict(cap="GL_BLEND"))], False),
     ([BOTH, ("glDrawBuffer", dict(mode="GL_LEFT")), SRC1], False),
-    ([BOTH, SRC1, ("glDrawBuffer", dict(mode="GL_BACK"))], True),
+    # Mesa decides at the calls it revalidates at (REVALIDATING), which
+    # glDrawBuffer is not: two buffers after the blend still draw, one after
+    # it still draws nothing, until a call Mesa revalidates at (R22-4).
+    ([BOTH, SRC1, ("glDrawBuffer", dict(mode="GL_BACK"))], False),
+    ([SRC1, BOTH], True),
+    ([SRC1, BOTH, ("glUseProgram", dict(program=0)), ("glUseProgram", dict(program=2))], False),
+    ([BOTH, SRC1, ("glDrawBuffer", dict(mode="GL_BACK")), ("glUseProgram", dict(program=0)),
+      ("glUseProgram", dict(program=2))], True),
     ([BOTH, ("glBlendFunci", dict(buf=0, src="GL_SRC1_ALPHA", dst="GL_ONE"))], True),
     ([BOTH, ("glBlendFuncSeparatei", dict(buf=1, srcRGB="GL_ONE", dstRGB="GL_ZERO", srcAlpha="GL_ONE",
                                           dstAlpha="GL_ONE_MINUS_SRC1_ALPHA"))], False),
@@ -193,7 +201,7 @@ BOTH = ("glDrawBuffer", dict(mode="GL_FRONT_AND_BACK"))
       ("glBindFramebuffer", dict(target="GL_FRAMEBUFFER", framebuffer=0)), SRC1], True),
     ([("glNamedFramebufferDrawBuffer", dict(framebuffer=0, buf="GL_FRONT_AND_BACK")), SRC1], False),
 ], ids=["blend_one_buffer", "two_buffers_no_blend", "two_buffers_src1", "blend_enabled_after", "left",
-        "back_again", "src1_on_buffer_0_only", "src1_alpha_on_buffer_1", "buffer_past_the_last_refused",
+        "back_again", "two_buffers_after_the_blend", "use_program_after", "back_again_then_bind", "src1_on_buffer_0_only", "src1_alpha_on_buffer_1", "buffer_past_the_last_refused",
         "bad_factor_refused", "blend_undone", "none_then_back_left", "back_left_then_none", "zero_then_back_left",
         "back_left_then_zero",
         "a_buffer_twice_refused", "a_buffer_twice_refused_after", "right_refused", "framebuffer_s_own_list",
@@ -204,8 +212,9 @@ def test_dual_source_blending_on_a_second_draw_buffer(tmp_path, calls, drawn):
     BUFFERS is 1 in llvmpipe; Mesa checks the factors whether GL_BLEND is
     enabled or not): two draw buffers with GL_SRC1_COLOR had been drawn
     (27.17% against Mesa; R21-10). The draw buffers are the framebuffer's
-    own; what GL refuses (a factor, a buffer, a list) changes nothing."""
-    got, report = fragments(tmp_path, draw(blending(calls)), "blend")
+    own, counted as Mesa last decided; what GL refuses (a factor, a buffer,
+    a list) changes nothing."""
+    got, report = fragments(tmp_path, blending(calls), "blend")
     assert (got > 100) == drawn, (got, report)
     assert drawn or "the second colour output" in report, report
 
@@ -215,10 +224,9 @@ def test_a_reduced_capture_keeps_blend_factors_and_draw_buffers(tmp_path):
     """A reduced capture of version 4 keeps the blend factors and draw
     buffers, so that it draws as its capture does."""
     from rbcd.gl2rbt.reduced import read_reduced_calls
-    c = blending([BOTH, SRC1])
-    names = [call[1] for call in read_reduced_calls(str(draw(c).write(tmp_path / "c.xz")))]
+    names = [call[1] for call in read_reduced_calls(str(blending([BOTH, SRC1]).write(tmp_path / "c.xz")))]
     assert "glDrawBuffer" in names and "glBlendFunc" in names
-    assert fragments(tmp_path, draw(blending([BOTH, SRC1])), "refused")[0] == 0
+    assert fragments(tmp_path, blending([BOTH, SRC1]), "refused")[0] == 0
 
 
 def test_a_draw_buffer_list_not_its_count_is_refused(tmp_path):
@@ -227,8 +235,8 @@ def test_a_draw_buffer_list_not_its_count_is_refused(tmp_path):
     call, exit 2, nothing left; past GL's 8 buffers GL reads no list."""
     from gl_captures import left_behind, refused
     c = blending([("glDrawBuffers", dict(n=2, bufs=["GL_BACK_LEFT"])), SRC1])
-    r = gl2rbt(tmp_path, draw(c).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
     refused(r, "glDrawBuffers", "1 buffers, not its count (2)")
     assert left_behind(tmp_path, ["c.xz"]) == []
-    got, _ = fragments(tmp_path, draw(blending([BOTH, ("glDrawBuffers", dict(n=9, bufs=None)), SRC1])), "nine")
+    got, _ = fragments(tmp_path, blending([BOTH, ("glDrawBuffers", dict(n=9, bufs=None)), SRC1]), "nine")
     assert got == 0, "GL_INVALID_VALUE: the window's two buffers stay"

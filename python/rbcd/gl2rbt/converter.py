@@ -14,7 +14,7 @@ from .glstate.buffers import BufferCalls
 from .glstate.draws import DrawCalls, capture_vertex_bounds
 from .glstate.feedback import FeedbackCalls
 from .glstate.camera_depth import CameraDepthCalls
-from .glstate.color_outputs import ColorOutputCalls
+from .glstate.color_outputs import ALWAYS_REVALIDATING, REVALIDATING, ColorOutputCalls
 from .glstate.framebuffers import FramebufferCalls
 from .glstate.textures import REDUCED_TEXTURES, TextureImageCalls
 from .glstate.dsa import DirectStateCalls
@@ -302,12 +302,15 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if self.core and (base in COMPAT_ONLY or name in COMPAT_ONLY_FORMS) or not self.es and name in ES_ONLY_FORMS:
             h = Converter.h_not_in_core
         if h is not None:
+            bound = self.bindings() if base in REVALIDATING else None
             try:
                 h(self, no, name, a, args)
             except (TypeError, ValueError, OverflowError, IndexError, KeyError, struct.error) as e:
                 # An argument of a type or size no GL call takes: the
                 # capture's error, whichever check it slipped past.
                 fail_call(no, f"{printable(name)}: malformed arguments ({type(e).__name__}: {printable(e, 80)})")
+            if bound is not None and (base in ALWAYS_REVALIDATING or self.bindings() != bound):
+                self.revalidate()
         elif base.startswith("glVertex") and not base.startswith("glVertexAttrib"):
             fail_call(no, f"{printable(name)} outside glBegin/glEnd")
         elif base.startswith(IGNORED_PREFIXES) and not (base.startswith("glTexture") and base not in TEXTURE_IGNORED):

@@ -89,6 +89,8 @@ class GLState:
         self.blend_factors = [DEFAULT_BLEND] * MAX_DRAW_BUFFERS
         self.window_draw_buffers = 1
         self.fbo_draw_buffers = {}
+        self.validated_draw_buffers = 1   # the draw framebuffer's, as Mesa last decided (ColorOutputCalls.revalidate)
+        self.blend_on = False             # GL_BLEND (any draw buffer's)
         # Shaders and programs (programs.py).
         self.shaders = {}
         self.programs = {}

@@ -42,6 +42,20 @@ BUFFER_NAMES = {v: k for k, v in BUFFER_VALUES.items() if k != "GL_NONE"} | {0: 
 # has for 0: GL_NONE in a list of draw buffers may come as any of these.
 BUFFER_VALUES.update(dict.fromkeys(("GL_ZERO", "GL_FALSE", "GL_POINTS", "GL_NO_ERROR"), 0))
 MULTIPLE = {"GL_FRONT", "GL_BACK", "GL_LEFT", "GL_RIGHT", "GL_FRONT_AND_BACK"}
+# The calls after which Mesa 22.3 decides again whether draws are valid
+# (_mesa_update_valid_to_render_state): a change of the program in use, the
+# bound pipeline or draw framebuffer, or transform feedback's state, a core
+# profile's vertex array binding to or from object 0; a link, a pipeline's stages, the current context (always); and the
+# blend factors and GL_BLEND when they change (ColorOutputCalls). Draws keep
+# that decision until the next: a glDrawBuffer(s), which is none of them,
+# changes the draw buffers the dual-source check counts only then.
+REVALIDATING = frozenset({
+    "glUseProgram", "glLinkProgram", "glBindProgramPipeline", "glUseProgramStages", "glBindFramebuffer",
+    "glDeleteFramebuffers", "glBindVertexArray", "glBeginTransformFeedback", "glEndTransformFeedback",
+    "glPauseTransformFeedback", "glResumeTransformFeedback", "glXMakeCurrent", "glXMakeContextCurrent",
+    "eglMakeCurrent", "wglMakeCurrent"})
+ALWAYS_REVALIDATING = frozenset({"glLinkProgram", "glUseProgramStages", "glXMakeCurrent", "glXMakeContextCurrent",
+                                 "eglMakeCurrent", "wglMakeCurrent"})
 
 
 def factor(v, no, what):
@@ -80,6 +94,7 @@ class ColorOutputCalls:
             return   # GL_INVALID_ENUM
         if len(values) == 2:
             values = values * 2
+        before = self.dual_source_buffers()
         if per_buffer:
             buf = checked(no, integer, d.get("buf"), f"{name}: the draw buffer", *U32)
             if buf >= MAX_DRAW_BUFFERS:
@@ -87,6 +102,32 @@ class ColorOutputCalls:
             self.s.blend_factors[buf] = tuple(values)
         else:
             self.s.blend_factors = [tuple(values)] * MAX_DRAW_BUFFERS
+        if self.dual_source_buffers() != before:
+            self.revalidate()   # (Mesa: _BlendUsesDualSrc changed)
+
+    def dual_source_buffers(self):
+        """The draw buffers whose blend factors read the second colour output."""
+        return [i for i, f in enumerate(self.s.blend_factors) if DUAL_SOURCE.intersection(f)]
+
+    def revalidate(self):
+        """Mesa decides again whether draws are valid (REVALIDATING): the
+        dual-source check takes the draw framebuffer's draw buffers as they
+        are now."""
+        fb = self.s.draw_fbo
+        self.s.validated_draw_buffers = self.s.window_draw_buffers if fb == 0 else self.s.fbo_draw_buffers.get(fb, 1)
+
+    def bindings(self):
+        """What a REVALIDATING call has Mesa decide again on when it changes
+        (of the vertex array binding, in a core profile, only whether it is
+        vertex array object 0)."""
+        s = self.s
+        return (s.program, s.pipeline, s.draw_fbo, self.core and s.vao == 0, s.feedback)
+
+    def blend_enabled(self, on):
+        """glEnable or glDisable(GL_BLEND): a change has Mesa decide again."""
+        if on != self.s.blend_on:
+            self.s.blend_on = on
+            self.revalidate()
 
     def draw_buffer_counts(self, no, name, fb, buffers):
         """The number of colour draw buffers framebuffer fb (0: the window)
@@ -167,9 +208,9 @@ class ColorOutputCalls:
         """Why the draw is GL_INVALID_OPERATION for dual-source blending: a
         draw buffer past llvmpipe's one that takes a second colour output
         has a blend factor reading it (blending enabled or not, as Mesa
-        checks). None when it draws."""
-        fb = self.s.draw_fbo
-        n = self.s.window_draw_buffers if fb == 0 else self.s.fbo_draw_buffers.get(fb, 1)
+        checks), the draw buffers counted as Mesa last decided (revalidate).
+        None when it draws."""
+        fb, n = self.s.draw_fbo, self.s.validated_draw_buffers
         for i in range(MAX_DUAL_SOURCE_DRAW_BUFFERS, n):
             if DUAL_SOURCE.intersection(self.s.blend_factors[i]):
                 where = "the window" if fb == 0 else f"framebuffer {fb}"

@@ -129,6 +129,9 @@ class PerFragmentCalls:
                 s.clip_planes[i] = np.zeros(4)   # GL's default plane (0,0,0,0) keeps everything
             s.clip_enabled[i] = on
             return
+        if cap == "GL_BLEND":
+            self.blend_enabled(on)
+            return
         # GL_PRIMITIVE_RESTART_NV is a client state (glEnableClientState):
         # glEnable of it is GL_INVALID_ENUM in Mesa.
         if cap in CAPS_IGNORED or cap in CAPS_MESA_LACKS or cap == "GL_PRIMITIVE_RESTART_NV" or not on:
