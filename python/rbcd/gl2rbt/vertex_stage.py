@@ -459,8 +459,13 @@ class VertexStage:
         checked = p.samplers_checked
         if checked is not None and checked[0] == calls:
             return checked[2]
-        key = (p.link_call, p.version,
-               tuple((k, tuple(v[1])) for k, v in p.uniforms.items() if k[1] in ("glUniform1i", "glUniform1iv")))
+        # The capture's calls that set a sampler (no other call changes
+        # what Mesa answers), in the order last set.
+        names, locations = self.sampler_uniforms(p)
+        sets = [(loc, p.uniform_names.get(loc), value[1]) for (loc, func, _), value in p.uniforms.items()
+                if func in ("glUniform1i", "glUniform1iv") and (
+                    p.uniform_names[loc] in names if loc in p.uniform_names else loc in locations)]
+        key = (p.link_call, p.version, tuple((loc, name, tuple(values)) for loc, name, values in sets))
         if checked is not None and checked[1] == key:
             p.samplers_checked = (calls, key, checked[2])
             return checked[2]
@@ -470,10 +475,7 @@ class VertexStage:
             if prog is not None:
                 u, ip = ctypes.c_uint, ctypes.POINTER(ctypes.c_int)
                 set_units = self.mesa.proc("glProgramUniform1iv", u, ctypes.c_int, ctypes.c_int, ip)
-                for (loc, func, count), (_, values, _, _, _) in p.uniforms.items():
-                    if func not in ("glUniform1i", "glUniform1iv"):
-                        continue
-                    name = p.uniform_names.get(loc)
+                for loc, name, values in sets:
                     at = GL.glGetUniformLocation(prog, name) if name is not None else loc
                     if at < 0:
                         continue
