@@ -434,6 +434,7 @@ def test_a_reduced_capture_of_another_version_or_miscounted_names(tmp_path):
                         (("rbcd-reduced-capture", 3, 100), "version 3 whose header is not of that version"),
                         (("rbcd-reduced-capture", 4, -1), "its source's size as -1"),
                         (("rbcd-reduced-capture", 4, 2.5), "its source's size as 2.5"),
+                        (("rbcd-reduced-capture", 4, "1000"), "its source's size as '1000'"),
                         (("rbcd-reduced-capture", 4, 1 << 63), f"its source's size as {1 << 63}")):
         data = lzma.compress(pickle.dumps(head, protocol=4))
         (tmp_path / "h.xz").write_bytes(data)

@@ -33,8 +33,11 @@ REDUCED_HEADER = ("rbcd-reduced-capture", 4, 0)   # (the source's size: 0, none 
 # (shows_every_gen).
 REDUCED_VERSIONS = (1, 2, 3, 4)
 # A reduced capture is credited with the size of its source capture, up to
-# this many times its own.
-REDUCED_SOURCE_CREDIT = 1000
+# this many times its own: its header's claim cannot be checked, and the
+# bounds it buys must stay of the file's own order (round 22's R22-6: a
+# claim 1000 times an 11 KB file's size had bought 80 minutes of geometry
+# shaders). A geometry-heavy capture reduces to about an eighth of its size.
+REDUCED_SOURCE_CREDIT = 16
 # A reduced capture expands to at most this many times its size (the game
 # suite's expand 10 to 20 times; a file that expands more is refused before
 # its memory is spent).
@@ -121,7 +124,7 @@ def header_version(head):
     if version is not None and (len(head) == 3) != (version >= 4):
         raise ConvertError(f"a reduced capture of version {version} whose header is not of that version")
     if version is not None and version >= 4 and not (type(head[2]) is int and 0 <= head[2] < 1 << 63):
-        raise ConvertError(f"a reduced capture whose header gives its source's size as {printable(head[2], 40)}, "
+        raise ConvertError(f"a reduced capture whose header gives its source's size as {printable(repr(head[2]), 40)}, "
                            "not a number of bytes")
     return version
 
