@@ -26,12 +26,14 @@ import csv
 import io
 import math
 import os
+import re
 import shutil
 import subprocess
 import sys
 import tempfile
 
-from rbcd.cli import ArgumentParser, Once, UsageError, ascii_int, main_wrapper, read_input_text, say, write_output
+from rbcd.cli import (ArgumentParser, Once, UsageError, ascii_int, check_outputs, main_wrapper, read_input_text, say,
+                      write_output)
 
 PROG = "rbcd-plot"
 META = {"point", "repeat", "status", "error", "run"}
@@ -74,12 +76,17 @@ def legend_names(values):
     return {v: os.path.relpath(v, common) if common else v for v in values}
 
 
+# A number as rbcd-sweep writes one (and as the other tools read numbers):
+# ASCII digits, a sign, a point, an exponent; not float()'s underscores,
+# other scripts' digits or spaces around it.
+NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|[+-]?(inf|infinity|nan)", re.ASCII | re.IGNORECASE)
+
+
 def number(s):
-    try:
-        v = float(s)
-        return v if math.isfinite(v) else None
-    except ValueError:
+    if not NUMBER.fullmatch(s):
         return None
+    v = float(s)
+    return v if math.isfinite(v) else None
 
 
 def order(values):
@@ -143,6 +150,7 @@ def series(head, rows, args):
 
 MAX_AXIS_VALUE = 1e300
 MAX_TITLE_CHARS = 1000
+MAX_LINES = 100   # lines one plot draws (--lines), each with its legend entry
 
 
 def check_axes(xs, data, args, numeric_x):
@@ -166,6 +174,15 @@ def check_axes(xs, data, args, numeric_x):
                             f"hold ({min(vals):g} to {max(vals):g})")
     if args.title is not None and len(args.title) > MAX_TITLE_CHARS:
         raise PlotError(f"--title: {len(args.title)} characters, more than the {MAX_TITLE_CHARS} a plot shows")
+    # The axes' labels and the legend's entries are column names and values.
+    for opt, col in (("--x", args.x), ("--y", args.y), ("--lines", args.lines)):
+        if col is not None and len(col) > MAX_TITLE_CHARS:
+            raise PlotError(f"{opt}: a column name of {len(col)} characters, more than the {MAX_TITLE_CHARS} "
+                            "a plot's label shows")
+    longest = max((len(str(ln)) for ln in data), default=0)
+    if len(data) > MAX_LINES or longest > MAX_TITLE_CHARS:
+        raise PlotError(f"--lines {args.lines}: {len(data)} values (the longest of {longest} characters), more "
+                        f"than the {MAX_LINES} lines of {MAX_TITLE_CHARS} characters a legend shows")
 
 
 def plot_matplotlib(xs, data, args, numeric_x):
@@ -346,6 +363,9 @@ def run(argv):
     args = ap.parse_args(argv)
     if same_path(args.output, args.table):
         raise PlotError(f"-o {args.output}: is the input table {args.table}")
+    # (A FIFO or socket as -o would be waited on for a reader: refused, as
+    # every tool refuses it.)
+    check_outputs([("the input table", args.table)], [("-o", args.output)])
     head, rows = load(args.table, args)
     xs, data, varying = series(head, rows, args)
     if varying:

@@ -438,6 +438,10 @@ def test_plot(c):
     os.mkfifo(fifo)
     r = run(["/usr/bin/python3", PLOT, fifo, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "-o", os.path.join(c.tmp, "f.png")])
     assert r.returncode == 2 and "is a FIFO" in r.stderr and len(r.stderr.splitlines()) == 1, f"FIFO table: {r.stderr}"
+    # A FIFO as -o: one line before any work, not a wait for a reader (R22-7).
+    r = run(["/usr/bin/python3", PLOT, table, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "-o", fifo], timeout=60)
+    assert r.returncode == 2 and "-o " + fifo + ": cannot create: is a FIFO" in r.stderr \
+        and len(r.stderr.splitlines()) == 1, f"FIFO -o: {r.stderr}"
     before = c.read(table)
     r = run(["/usr/bin/python3", PLOT, table, "--y", "gpu.overhead_pct", "--x", "zeb.banks", "-o", table])
     assert r.returncode == 2 and "is the input table" in r.stderr and c.read(table) == before, f"-o = table: {r.stderr}"
@@ -448,10 +452,19 @@ def test_plot(c):
                                ("a,b\n1,1e308\n2,-1e308\n", [], "--y b: values (or their means) past 1e+300"),
                                ("a,b\n1,8.9e307\n2,-8.9e307\n", [], "--y b: values (or their means) past 1e+300"),
                                ("a,b\n1,1e308\n1,1e308\n", [], "--y b: values (or their means) past 1e+300"),
-                               ("a,b\n1,2\n2,3\n", ["--title", "t" * 100000], "--title: 100000 characters")):
+                               ("a,b\n1,2\n2,3\n", ["--title", "t" * 100000], "--title: 100000 characters"),
+                               # Labels and legends past what a plot shows, and
+                               # numbers the other tools do not read (R22-8, R22-10).
+                               ("a," + "y" * 100000 + "\n1,2\n2,3\n", ["--y", "y" * 100000],
+                                "--y: a column name of 100000 characters"),
+                               ("a,b,c\n" + "".join(f"1,2,{i}\n" for i in range(101)), ["--lines", "c"],
+                                "--lines c: 101 values"),
+                               ("a,b\n1,1_000\n2,3\n", [], '--y b: not a number in some rows (e.g. "1_000")'),
+                               ("a,b\n1,\u0661\n2,3\n", [], '--y b: not a number in some rows (e.g. "\u0661")')):
         odd, png = c.sweep_file("odd.csv", text), os.path.join(c.tmp, "odd.png")
         for b in backends:
-            r = run(["/usr/bin/python3", PLOT, odd, "--y", "b", "--x", "a", "-o", png, "--backend", b] + args)
+            y = [] if "--y" in args else ["--y", "b"]
+            r = run(["/usr/bin/python3", PLOT, odd, *y, "--x", "a", "-o", png, "--backend", b] + args)
             lines = r.stderr.splitlines()
             assert r.returncode == 2 and len(lines) == 1 and lines[0].startswith(f"rbcd-plot: {needle}"), \
                 f"{b} {text!r}: {r.stderr}"
