@@ -67,6 +67,10 @@ case "$game" in openarena|neverball|supertuxkart) ;; *) usage "unknown game '$ga
 [ ! -L "$out" ] || usage "$out is a symlink: the entry is written only into a new directory"
 [ ! -e "$out" ] || usage "$out exists: the entry is written only into a new directory"
 [ -z "$from" ] || [ -f "$from" ] || usage "--from-trace $from: not a file"
+# The capture is read more than once, by its path: a name of an open
+# descriptor (/dev/stdin, /proc/self/fd/N), which each read would take on
+# from where the last left it, is replaced by the file it names.
+[ -z "$from" ] || from=$(readlink -f -- "$from")
 # Standard output opened by the shell onto the capture (1<>T) would take
 # this script's progress lines: refused, as the converter refuses it.
 [ -z "$from" ] || ! [ /dev/stdout -ef "$from" ] || \

@@ -149,6 +149,19 @@ def test_names_that_read_as_options(tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["--keep-trace", "-boxes.trace"], "something else was left"
 
 
+def test_a_capture_named_by_dev_stdin(tmp_path):
+    """--from-trace /dev/stdin with the capture redirected: the script reads
+    the capture more than once, by the file /dev/stdin names (each read of
+    the descriptor had taken on where the last left off: "the capture has
+    no frame"; round 22's R22-9)."""
+    with open(boxes_capture(), "rb") as cap:
+        r = subprocess.run(["bash", CAPTURE_GAME, "openarena", "oa_dm1", "2", str(tmp_path / "out"), "--from-trace",
+                            "/dev/stdin", "--skip", "0"], capture_output=True, text=True, stdin=cap, timeout=600,
+                           env=dict(os.environ, TMPDIR=str(tmp_path), RBCD_GL_RASTER=program("rbcd-gl-raster")))
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    assert sorted(os.listdir(tmp_path / "out")) == ["calls.xz", "capture.toml", "summary.jsonl"]
+
+
 def test_a_full_device_is_one_line(tmp_path):
     """OUT_DIR on a full file system (a 4 KiB tmpfs): one line, exit 1,
     nothing left there (mv had written a line for each file)."""

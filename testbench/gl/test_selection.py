@@ -97,7 +97,7 @@ def test_each_condition(tmp_path, field, value, inside, outside):
     ("[[object]]\nid = 1\ninstances = [3, 1]\n", "object[0].instances: must be [MIN, MAX]"),
     ("[[object]]\nid = 1\ngroup_instances = 1\n", "object[0].group_instances: must be true or false"),
     ("[[object]]\nid = 1\ntexture_image = [\"89ABCDEF\"]\n", "object[0].texture_image: must be a list"),
-    ("[[exclude]]\nid = \"x\"\n", "exclude[0].id: must be an integer in"),
+    ("[[exclude]]\nid = \"x\"\n", "exclude[0].id: an exclude rule gives no id"),
     # Every integer a rule takes is within what it can match (R16-12).
     ("[[object]]\nid = 1\ntexture = [-1]\n", "object[0].texture: must be a list of texture names (integers in "
      "[0, 4294967295])"),
@@ -326,3 +326,24 @@ def test_the_shipped_rules_read():
         {f.rsplit("/", 1)[1] for f in files}
     for f in files:
         assert Selection(f).rules, f"{f}: no rule"
+
+
+@pytest.mark.parametrize("text, words", [
+    ('[[object]]\ngroup_by = "projection"\n', 'object[0].group_by: must be "modelview" or "instance_origin"'),
+    ('[[object]]\nid = 3\ngroup_by = "modelview"\n', "object[0]: id and group_by both given"),
+    ("[[exclude]]\nid = 5\n", "exclude[0].id: an exclude rule gives no id"),
+    ('[[exclude]]\ngroup_by = "modelview"\n', "exclude[0].group_by: an exclude rule gives no id"),
+    ("[[object]]\nid = 3\nmax_screen_area = -1\n", "object[0].max_screen_area: -1 is outside [0.0, None]"),
+    ("[[object]]\nid = 3\nmin_screen_area = 9\nmax_screen_area = 4\n", "min_screen_area is above max_screen_area"),
+], ids=["unknown_group_by", "id_and_group_by", "exclude_id", "exclude_group_by", "negative_area", "areas_reversed"])
+def test_rules_that_match_nothing_or_name_no_id_are_refused(tmp_path, text, words):
+    """A rule whose keys contradict each other or cannot match is the
+    file's error, named, not taken silently (round 22's R22-9: a negative
+    max_screen_area, an exclude rule's id and an id beside group_by had
+    been accepted without a word; an unknown group_by said the rule needed
+    an id)."""
+    p = tmp_path / "s.toml"
+    p.write_text(text)
+    with pytest.raises(ConvertError) as e:
+        Selection(str(p))
+    assert words in str(e.value), str(e.value)

@@ -93,9 +93,17 @@ class Selection:
         for k in r:
             if k not in self.KEYS:
                 raise ConvertError(f"{where}.{printable(k)}: unknown key")
+        if "group_by" in r and r["group_by"] not in ("modelview", "instance_origin"):
+            raise ConvertError(f"{where}.group_by: must be \"modelview\" or \"instance_origin\"")
         if kind == "object":
-            if "id" not in r and r.get("group_by") not in ("modelview", "instance_origin"):
+            if "id" not in r and "group_by" not in r:
                 raise ConvertError(f"{where}: needs id (or group_by)")
+            if "id" in r and "group_by" in r:
+                raise ConvertError(f"{where}: id and group_by both given (group_by gives the ids: one or the other)")
+        else:
+            for k in ("id", "group_by"):
+                if k in r:
+                    raise ConvertError(f"{where}.{k}: an exclude rule gives no id (it keeps draws out)")
         if "id" in r and (not isinstance(r["id"], int) or isinstance(r["id"], bool)
                           or not U32[0] <= r["id"] <= U32[1]):
             raise ConvertError(f"{where}.id: must be an integer in [0, {U32[1]}]")
@@ -128,14 +136,14 @@ class Selection:
         for k in ("depth_write", "modelview_differs_from_view", "group_instances"):
             if k in r and not isinstance(r[k], bool):
                 raise ConvertError(f"{where}.{k}: must be true or false")
-        if "group_by" in r and r["group_by"] not in ("modelview", "instance_origin"):
-            raise ConvertError(f"{where}.group_by: must be \"modelview\" or \"instance_origin\"")
         for k in ("min_screen_area", "max_screen_area"):
             if k in r:
                 try:
-                    real(r[k], f"{where}.{k}")
+                    real(r[k], f"{where}.{k}", 0.0)   # (pixels: a negative area matches nothing, or everything)
                 except UsageError as e:
                     raise ConvertError(str(e)) from None
+        if r.get("min_screen_area", 0) > r.get("max_screen_area", float("inf")):
+            raise ConvertError(f"{where}: min_screen_area is above max_screen_area (no draw matches)")
 
     @staticmethod
     def matches(r, d):
