@@ -1024,7 +1024,8 @@ def lock_out(out):
                               os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NOCTTY, 0o666), "r+b")
     except OSError as e:
         raise SweepError(f"-o {out}: .lock cannot be opened ({e.strerror}): not the sweep's own lock file")
-    if os.fstat(f.fileno()).st_nlink != 1 or not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+    st = os.fstat(f.fileno())
+    if st.st_nlink != 1 or not stat.S_ISREG(st.st_mode):
         f.close()
         raise SweepError(f"-o {out}: .lock is another name for a file, or not a regular file: not the sweep's own")
     try:

@@ -143,7 +143,7 @@ def source_bytes(path):
         return size
     try:
         head = reduced_header(path)
-        claimed = head[2] if header_version(head) and header_version(head) >= 4 else 0
+        claimed = head[2] if (header_version(head) or 0) >= 4 else 0
     except ConvertError:
         claimed = 0   # (read_reduced_calls names the file's error)
     return max(size, min(claimed, REDUCED_SOURCE_CREDIT * size))

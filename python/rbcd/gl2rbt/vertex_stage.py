@@ -20,7 +20,7 @@ from .errors import fail_call, printable
 from .gl_tables import INDEX_TYPES
 from .glstate.attributes import Attrib, Binding, element_bytes
 from .glstate.buffers import merge_extents
-from .glstate.programs import COMMENTS
+from .glstate.programs import COMMENTS, SAMPLER_SETTERS
 from .glstate.textures import DEFAULT_BUFFER_TEXTURE
 from .mesa import Mesa, Watchdog
 from .vertex_textures import IMAGE_TARGETS, SAMPLER_TARGETS, VertexTextures
@@ -463,7 +463,7 @@ class VertexStage:
         # what Mesa answers), in the order last set.
         names, locations = self.sampler_uniforms(p)
         sets = [(loc, p.uniform_names.get(loc), value[1]) for (loc, func, _), value in p.uniforms.items()
-                if func in ("glUniform1i", "glUniform1iv") and (
+                if func in SAMPLER_SETTERS and (
                     p.uniform_names[loc] in names if loc in p.uniform_names else loc in locations)]
         key = (p.link_call, p.version, tuple((loc, name, tuple(values)) for loc, name, values in sets))
         if checked is not None and checked[1] == key:
@@ -496,26 +496,31 @@ class VertexStage:
         a glUniform1i call sets a sampler through. Kept for the link."""
         key = (p.link_call, p.version)
         if p.sampler_uniforms is None or p.sampler_uniforms[0] != key:
-            GL = self.gl
             names, locations = set(), set()
             with self.whole_program(p, ALL_STAGES) as prog:
-                for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORMS) if prog is not None else 0):
-                    uname, size, utype = GL.glGetActiveUniform(prog, i)
-                    if int(utype) not in self.sampler_kinds:
-                        continue
-                    base = name_str(uname).removesuffix("[0]")
+                for _, base, _, elements in self.active_samplers(prog) if prog is not None else ():
                     names.add(base)
-                    for k in range(size):
-                        element = f"{base}[{k}]"
-                        names.add(element)
-                        locations.add(GL.glGetUniformLocation(prog, element if size > 1 or k else base))
+                    names.update(f"{base}[{k}]" for k in range(len(elements)))
+                    locations.update(elements)
             p.sampler_uniforms = (key, frozenset(names), frozenset(locations) - {-1})
         return p.sampler_uniforms[1:]
+
+    def active_samplers(self, prog):
+        """(index, name, texture target, location of each element) of linked
+        program `prog`'s active samplers (an array's elements in order; a
+        plain sampler's one location by its own name)."""
+        GL = self.gl
+        for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORMS)):
+            uname, size, utype = GL.glGetActiveUniform(prog, i)
+            target = self.sampler_kinds.get(int(utype))
+            if target is not None:
+                base = name_str(uname).removesuffix("[0]")
+                yield i, base, target, [GL.glGetUniformLocation(prog, f"{base}[{k}]" if size > 1 else base)
+                                        for k in range(size)]
 
     def stage_samplers(self, prog):
         """{stage: ((unit, target), ...)} of linked program `prog`'s active
         samplers, each element of an array, by the stages that read them."""
-        GL = self.gl
         u, ip = ctypes.c_uint, ctypes.POINTER(ctypes.c_int)
         resource = self.mesa.proc("glGetProgramResourceiv", u, u, u, ctypes.c_int, ctypes.POINTER(u), ctypes.c_int,
                                   ip, ip)
@@ -523,16 +528,10 @@ class VertexStage:
         referenced = (ctypes.c_int * len(REFERENCED_BY))()
         get_unit, unit = self.mesa.proc("glGetUniformiv", u, ctypes.c_int, ip), ctypes.c_int()
         out = {}
-        for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORMS)):
-            uname, size, utype = GL.glGetActiveUniform(prog, i)
-            target = self.sampler_kinds.get(int(utype))
-            if target is None:
-                continue
+        for i, _, target, elements in self.active_samplers(prog):
             resource(prog, GL_UNIFORM, i, len(props), props, len(props), None, referenced)
-            base = name_str(uname).removesuffix("[0]")
             units = []
-            for k in range(size):
-                at = GL.glGetUniformLocation(prog, f"{base}[{k}]" if size > 1 else base)
+            for at in elements:
                 if at >= 0:
                     get_unit(prog, at, ctypes.byref(unit))
                     units.append((unit.value, target))
