@@ -1,18 +1,24 @@
-# rbcd_add_pytest(FILE test_x.py PREFIX name [RELEASE_ONLY] [ENV VAR=value ...]
-#                 [PROPERTIES prop value ...])
+# rbcd_add_pytest(FILE test_x.py PREFIX name [RELEASE_ONLY] [ONE_PROCESS]
+#                 [ENV VAR=value ...] [PROPERTIES prop value ...])
 #
-# The Python tests of one file, each in a CTest entry and a process of its
-# own, as catch_discover_tests does for the C++ cases: the file's tests are
-# collected when CMake configures (the file is a configure dependency, so a
-# new test appears at the next build) and test_NAME becomes PREFIX_NAME.
-# pytest runs from testbench/ (testbench/pytest.ini: the package from python/)
-# with the built programs in RBCD_BIN (and ENV). A skipped test is reported
-# skipped with its reason; a file whose every test is skipped at import (a
-# module-level pytest.importorskip) is one entry, PREFIX_all, reported
-# skipped; a file that does not import is one entry, PREFIX_collect, that
-# fails showing why. Without python3-pytest (scripts/setup.sh installs it) each
-# file gets one failing entry saying so: the suite never passes by running
-# nothing.
+# The Python tests of one file as CTest entries: one entry and process per
+# test function, all its parametrizations in that process; with ONE_PROCESS
+# (files of unit tests that run in seconds) the whole file in one entry,
+# PREFIX_all. A pytest process costs about 0.6 s before its first test
+# (pytest, its plugins, the test module): as one process per parametrized
+# case they had been 941 processes and about 9 minutes of CI's CPU. The
+# file's tests are collected when CMake configures (the file is a configure
+# dependency, so a new test appears at the next build) and test_NAME becomes
+# PREFIX_NAME, which `ctest -R` selects; `pytest FILE::test_NAME[id]` runs one
+# case. pytest runs from testbench/ (testbench/pytest.ini: the package from
+# python/) with the built programs in RBCD_BIN (and ENV). An entry is
+# reported skipped only when every test in it skipped (pytest's summary line
+# is then "N skipped in"), with the reasons; a file whose every test is
+# skipped at import (a module-level pytest.importorskip) is one entry,
+# PREFIX_all, reported skipped; a file that does not import is one entry,
+# PREFIX_collect, that fails showing why. Without python3-pytest
+# (scripts/setup.sh installs it) each file gets one failing entry saying so:
+# the suite never passes by running nothing.
 #
 # RELEASE_ONLY labels the file's tests release_only: scripts/test.sh
 # --sanitize leaves them out. They test Python code, which the sanitizers do
@@ -25,7 +31,7 @@ set(RBCD_PYTHON /usr/bin/python3)
 execute_process(COMMAND ${RBCD_PYTHON} -c "import pytest" RESULT_VARIABLE RBCD_NO_PYTEST OUTPUT_QUIET ERROR_QUIET)
 
 function(rbcd_add_pytest)
-  cmake_parse_arguments(P "RELEASE_ONLY" "FILE;PREFIX" "ENV;PROPERTIES" ${ARGN})
+  cmake_parse_arguments(P "RELEASE_ONLY;ONE_PROCESS" "FILE;PREFIX" "ENV;PROPERTIES" ${ARGN})
   set(whole "")
   get_filename_component(file ${P_FILE} ABSOLUTE)
   set(tests ${PROJECT_SOURCE_DIR}/testbench)
@@ -45,12 +51,14 @@ function(rbcd_add_pytest)
   execute_process(COMMAND ${CMAKE_COMMAND} -E env PYTHONPYCACHEPREFIX=${PROJECT_BINARY_DIR}/pycache
       --unset=PYTHONDONTWRITEBYTECODE ${RBCD_PYTHON} -m pytest --collect-only -q ${file}
     WORKING_DIRECTORY ${tests} OUTPUT_VARIABLE out ERROR_VARIABLE err RESULT_VARIABLE rc)
-  # A parametrized test's id holds brackets, which a CMake list would take as
-  # quoting (and merge the ids after it): they travel as placeholders.
-  string(REPLACE "[" "<rbcd-lb>" out "${out}")
-  string(REPLACE "]" "<rbcd-rb>" out "${out}")
-  string(REPLACE ";" "<rbcd-sc>" out "${out}")
+  # A test's id is FILE::test_NAME, then [PARAMETERS] for a parametrized
+  # one: the entries are the ids without their parameters, once each. The
+  # parameters may hold brackets and semicolons, which a CMake list would
+  # take as quoting and separators: they are cut off before the list is made.
+  string(REGEX REPLACE "\\[[^\n]*" "" out "${out}")
+  string(REPLACE ";" "_" out "${out}")
   string(REGEX MATCHALL "[^\n]+::[^\n]+" ids "${out}")
+  list(REMOVE_DUPLICATES ids)
   if(rc EQUAL 5)        # nothing collected: the module skipped itself
     set(ids "${file}")
     set(whole all)
@@ -58,23 +66,24 @@ function(rbcd_add_pytest)
     set(ids "${file}")
     set(whole collect)
     message(WARNING "pytest cannot collect the tests of ${P_FILE}: ${P_PREFIX}_collect shows why")
+  elseif(P_ONE_PROCESS)
+    set(ids "${file}")
+    set(whole all)
   endif()
   foreach(id ${ids})
     string(REGEX REPLACE ".*::test_" "" name "${id}")
     if(whole)
-      set(name ${whole})
+      set(name ${P_PREFIX}_${whole})
+    else()
+      string(REGEX REPLACE "[^A-Za-z0-9_.-]+" "_" name "${P_PREFIX}_${name}")
     endif()
-    string(REPLACE "<rbcd-lb>" "[" id "${id}")
-    string(REPLACE "<rbcd-rb>" "]" id "${id}")
-    string(REPLACE "<rbcd-sc>" "\\;" id "${id}")
-    string(REGEX REPLACE "<rbcd-..>" "_" name "${name}")
-    string(REGEX REPLACE "[^A-Za-z0-9_.-]+" "_" name "${name}")
-    string(REGEX REPLACE "_$" "" name "${name}")
-    add_test(NAME ${P_PREFIX}_${name} COMMAND ${RBCD_PYTHON} -m pytest -q "${id}" WORKING_DIRECTORY ${tests})
-    set_tests_properties(${P_PREFIX}_${name} PROPERTIES ENVIRONMENT "${env}" TIMEOUT 300
-      SKIP_REGULAR_EXPRESSION "[0-9]+ skipped in " ${P_PROPERTIES})
+    add_test(NAME ${name} COMMAND ${RBCD_PYTHON} -m pytest -q "${id}" WORKING_DIRECTORY ${tests})
+    # Skipped when pytest's last line is "N skipped in ...": every test of the
+    # entry skipped ("3 passed, 2 skipped in" is a pass, "1 failed, ..." a failure).
+    set_tests_properties(${name} PROPERTIES ENVIRONMENT "${env}" TIMEOUT 600
+      SKIP_REGULAR_EXPRESSION "\n[0-9]+ skipped in " ${P_PROPERTIES})
     if(P_RELEASE_ONLY)
-      set_tests_properties(${P_PREFIX}_${name} PROPERTIES LABELS release_only)
+      set_tests_properties(${name} PROPERTIES LABELS release_only)
     endif()
   endforeach()
 endfunction()

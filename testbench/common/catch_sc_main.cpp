@@ -1,9 +1,8 @@
 // libsystemc.so defines main() and calls sc_main(): Catch runs from there.
-#define CATCH_CONFIG_RUNNER
-#include <catch2/catch.hpp>
 #include <cstdlib>
 #include <systemc>
 
+#include "catch_run.h"
 #include "rbcd/run/sanitizer_stack.h"
 
 namespace {
@@ -17,5 +16,5 @@ int sc_main(int argc, char* argv[]) {
     // The tests' simulations leave the main thread's stack recorded as a
     // coroutine's for LeakSanitizer's scan at exit: recorded again here.
     const rbcd::MainStackForSanitizer main_stack;
-    return Catch::Session().run(argc, argv);
+    return rbcd_catch_run(argc, argv);
 }
