@@ -49,9 +49,9 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --bots) once "$1"; [ $# -ge 2 ] || usage "--bots needs a number"; bots=$2; shift 2 ;;
     --karts) once "$1"; [ $# -ge 2 ] || usage "--karts needs a number"; karts=$2; shift 2 ;;
-    --skip) once "$1"; [ $# -ge 2 ] || usage "--skip needs a number"; skip=$2; shift 2 ;;
+    --skip) once "$1"; [ $# -ge 2 ] && [ -n "$2" ] || usage "--skip needs a number"; skip=$2; shift 2 ;;
     --keep-trace) once "$1"; keep=yes; shift ;;
-    --from-trace) once "$1"; [ $# -ge 2 ] || usage "--from-trace needs a capture"; from=$2; shift 2 ;;
+    --from-trace) once "$1"; [ $# -ge 2 ] && [ -n "$2" ] || usage "--from-trace needs a capture"; from=$2; shift 2 ;;
     *) usage "unknown option '$1'" ;;
   esac
 done

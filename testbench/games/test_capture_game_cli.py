@@ -57,6 +57,11 @@ def test_an_unusable_output_folder_is_refused_before_the_work(tmp_path):
     # that reads as an option to dirname.
     refused(capture_game(tmp_path, *base, tmp_path / "out", "--from-trace", cap, "--skip", "08"),
             "--skip '08' is not a number")
+    # An empty value is no value: it had been taken as the option left out
+    # (a game captured afresh, the default skip; R23-5).
+    refused(capture_game(tmp_path, *base, tmp_path / "out", "--from-trace", ""), "--from-trace needs a capture")
+    refused(capture_game(tmp_path, *base, tmp_path / "out", "--from-trace", cap, "--skip", ""),
+            "--skip needs a number")
     os.chdir(tmp_path)
     r = capture_game(tmp_path, *base, "-x", "--from-trace", cap, "--skip", "0")
     lines = r.stderr.strip().splitlines()

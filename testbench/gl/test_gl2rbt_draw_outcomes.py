@@ -435,7 +435,9 @@ def test_a_reduced_capture_of_another_version_or_miscounted_names(tmp_path):
                         (("rbcd-reduced-capture", 4, -1), "its source's size as -1"),
                         (("rbcd-reduced-capture", 4, 2.5), "its source's size as 2.5"),
                         (("rbcd-reduced-capture", 4, "1000"), "its source's size as '1000'"),
-                        (("rbcd-reduced-capture", 4, 1 << 63), f"its source's size as {1 << 63}")):
+                        (("rbcd-reduced-capture", 4, 1 << 63), f"its source's size as {1 << 63}"),
+                        # (past 4,300 digits Python will not write an int: R23-7)
+                        (("rbcd-reduced-capture", 4, -10 ** 5000), "its source's size as an integer of 16610 bits")):
         data = lzma.compress(pickle.dumps(head, protocol=4))
         (tmp_path / "h.xz").write_bytes(data)
         refused(gl2rbt(tmp_path, tmp_path / "h.xz", "-o", tmp_path / "h.rbt"), "a reduced capture", words)
@@ -1095,7 +1097,7 @@ def test_a_signal_ctypes_wraps_is_an_interruption(tmp_path, monkeypatch, capsys)
 
     from rbcd.gl2rbt import cli, raster
 
-    def convert(args, report=None):
+    def convert(args, report=None, last=False):
         cli.INTERRUPTED.set()   # as the handler sets it before raising KeyboardInterrupt
         raise ctypes.ArgumentError("argument 2: KeyboardInterrupt: ")
     monkeypatch.setattr(raster, "convert", convert)
@@ -1123,7 +1125,7 @@ def test_out_of_memory_is_one_line(tmp_path, monkeypatch, capsys, failure):
     errors of the capture's, exit 0)."""
     from rbcd.gl2rbt import cli, raster
 
-    def convert(args, report=None):
+    def convert(args, report=None, last=False):
         raise failure()
     monkeypatch.setattr(raster, "convert", convert)
     cap = draw(shader_calls(VS)).write(tmp_path / "m.xz")

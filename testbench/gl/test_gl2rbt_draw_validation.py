@@ -164,6 +164,10 @@ def blending(calls):
 
 SRC1 = ("glBlendFunc", dict(sfactor="GL_SRC1_COLOR", dfactor="GL_ONE"))
 BOTH = ("glDrawBuffer", dict(mode="GL_FRONT_AND_BACK"))
+FBO = ("glGenFramebuffers", dict(n=1, framebuffers=[3]))
+COMPLETE = ("glCheckNamedFramebufferStatus", dict(framebuffer=3, target="GL_FRAMEBUFFER", ret="GL_FRAMEBUFFER_COMPLETE"))
+SAMPLER_PROGRAM = [("glCreateShaderProgramv", dict(type="GL_FRAGMENT_SHADER", count=1, strings=[ONE_TYPE_FS], ret=11)),
+                   ("glGetUniformLocation", dict(program=11, name="a", ret=20))]
 
 
 @pytest.mark.parametrize("calls, drawn", [
@@ -200,12 +204,29 @@ BOTH = ("glDrawBuffer", dict(mode="GL_FRONT_AND_BACK"))
       ("glDrawBuffers", dict(n=2, bufs=["GL_COLOR_ATTACHMENT0", "GL_COLOR_ATTACHMENT1"])),
       ("glBindFramebuffer", dict(target="GL_FRAMEBUFFER", framebuffer=0)), SRC1], True),
     ([("glNamedFramebufferDrawBuffer", dict(framebuffer=0, buf="GL_FRONT_AND_BACK")), SRC1], False),
+    # Other calls at which Mesa decides again, on any framebuffer or program
+    # (R23-3: draws kept drawing): an image attached, a completeness test, a
+    # read framebuffer bound, a sampler of a program not in use moved to
+    # another unit; not a glUniform1i that leaves it where it was.
+    ([SRC1, BOTH, FBO, ("glNamedFramebufferRenderbuffer", dict(
+        framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", renderbuffertarget="GL_RENDERBUFFER", renderbuffer=0))],
+     False),
+    ([SRC1, BOTH, FBO, ("glCheckNamedFramebufferStatus", dict(framebuffer=3, target="GL_FRAMEBUFFER"))], False),
+    # Not at a texture attached, nor at a test of a framebuffer found
+    # complete before (Mesa keeps its status).
+    ([SRC1, BOTH, FBO, ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0",
+                                                          texture=0, level=0))], True),
+    ([FBO, COMPLETE, SRC1, BOTH, COMPLETE], True),
+    ([SRC1, BOTH, FBO, ("glBindFramebuffer", dict(target="GL_READ_FRAMEBUFFER", framebuffer=3))], False),
+    ([SRC1, BOTH] + SAMPLER_PROGRAM + [("glProgramUniform1i", dict(program=11, location=20, v0=3))], False),
+    ([SRC1, BOTH] + SAMPLER_PROGRAM + [("glProgramUniform1i", dict(program=11, location=20, v0=0))], True),
 ], ids=["blend_one_buffer", "two_buffers_no_blend", "two_buffers_src1", "blend_enabled_after", "left",
         "back_again", "two_buffers_after_the_blend", "use_program_after", "back_again_then_bind", "src1_on_buffer_0_only", "src1_alpha_on_buffer_1", "buffer_past_the_last_refused",
         "bad_factor_refused", "blend_undone", "none_then_back_left", "back_left_then_none", "zero_then_back_left",
         "back_left_then_zero",
         "a_buffer_twice_refused", "a_buffer_twice_refused_after", "right_refused", "framebuffer_s_own_list",
-        "named_window"])
+        "named_window", "attached_elsewhere", "completeness_tested", "texture_attached", "found_complete_again", "read_framebuffer_bound",
+        "another_program_s_sampler_moved", "another_program_s_sampler_kept"])
 def test_dual_source_blending_on_a_second_draw_buffer(tmp_path, calls, drawn):
     """A blend factor of the second colour output on any draw buffer past
     the first makes the draw GL_INVALID_OPERATION (GL_MAX_DUAL_SOURCE_DRAW_
@@ -240,3 +261,35 @@ def test_a_draw_buffer_list_not_its_count_is_refused(tmp_path):
     assert left_behind(tmp_path, ["c.xz"]) == []
     got, _ = fragments(tmp_path, blending([BOTH, ("glDrawBuffers", dict(n=9, bufs=None)), SRC1]), "nine")
     assert got == 0, "GL_INVALID_VALUE: the window's two buffers stay"
+
+
+MULTIPLY = ("glBlendEquation", dict(mode="GL_MULTIPLY_KHR"))
+BLEND = ("glEnable", dict(cap="GL_BLEND"))
+SUPPORTING_FS = ("#version 410 core\n#extension GL_KHR_blend_equation_advanced : require\n"
+                 "layout(blend_support_multiply) out;\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n")
+
+
+@pytest.mark.parametrize("fs, calls, drawn", [
+    (PLAIN_FS, [MULTIPLY], True),
+    (PLAIN_FS, [MULTIPLY, BLEND], False),
+    (PLAIN_FS, [BLEND, MULTIPLY], False),
+    (PLAIN_FS, [BLEND, MULTIPLY, ("glBlendEquation", dict(mode="GL_FUNC_ADD"))], True),
+    (PLAIN_FS, [BLEND, ("glBlendEquationSeparate", dict(modeRGB="GL_MULTIPLY_KHR", modeAlpha="GL_FUNC_ADD"))], True),
+    (SUPPORTING_FS, [BLEND, MULTIPLY], True),
+    (SUPPORTING_FS, [BLEND, ("glBlendEquation", dict(mode="GL_SCREEN_KHR"))], False),
+    (SUPPORTING_FS, [BOTH, BLEND, MULTIPLY], False),
+], ids=["blend_off", "enabled_after", "equation_after", "equation_undone", "separate_refused", "declared",
+        "another_declared", "two_buffers"])
+def test_advanced_blending_needs_its_layout_and_one_buffer(tmp_path, fs, calls, drawn):
+    """An advanced blend equation (KHR_blend_equation_advanced) with
+    blending enabled draws nothing under a fragment shader that does not
+    declare it (layout(blend_support_NAME)) or into more than one colour
+    buffer (GL_INVALID_OPERATION, Mesa 22.3); glBlendEquation had been
+    passed over (27.83% against Mesa; R23-8). glBlendEquationSeparate takes
+    no advanced equation (GL_INVALID_ENUM: nothing changes)."""
+    c = with_fragment_shader(fs).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    for fn, args in calls:
+        c.add(fn, **args)
+    got, report = fragments(tmp_path, draw(c, vao=None), "advanced")
+    assert (got > 100) == drawn, (got, report)
+    assert drawn or "advanced blending (" in report, report

@@ -596,3 +596,27 @@ def test_a_replay_outliving_sigterm_is_killed_when_the_converter_dies():
     glretrace.end_replay(proc)
     assert time.monotonic() - t < 1.0, f"end_replay took {time.monotonic() - t:.1f} s"
     assert glretrace.session_left(proc.pid, watcher=True) == []
+
+
+def test_a_signal_once_every_output_is_in_place_ends_nothing(tmp_path):
+    """A signal just after the last output is renamed into place: the run
+    has succeeded (exit 0, its outputs kept), not 'interrupted' (exit 130)
+    with every output complete (R23-6). The commit of each output sends the
+    converter a SIGINT as it returns."""
+    capture = Calls().frame().write(tmp_path / "c.xz")
+    script = (
+        "import os, signal, sys\n"
+        f"sys.path.insert(0, {os.path.join(os.path.dirname(GL2RBT), '..', 'python')!r})\n"
+        "from rbcd.gl2rbt import cli, outputs\n"
+        "commit = outputs.SafeText.commit\n"
+        "def signalled(self):\n"
+        "    commit(self)\n"
+        "    os.kill(os.getpid(), signal.SIGINT)\n"
+        "outputs.SafeText.commit = signalled\n"
+        f"sys.exit(cli.main([{capture!r}, '-o', {str(tmp_path / 'c.rbt')!r}, '--geometry', "
+        f"{str(tmp_path / 'c.geo')!r}]))\n")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    r = subprocess.run(["/usr/bin/python3", "-c", script], capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0 and "interrupted" not in r.stderr, (r.returncode, r.stderr)
+    assert (tmp_path / "c.rbt").stat().st_size > 0 and (tmp_path / "c.geo").read_text().startswith("rbcd-geometry")
+    assert left_behind(tmp_path, ["c.xz", "c.rbt", "c.geo"]) == []

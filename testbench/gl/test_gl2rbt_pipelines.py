@@ -310,18 +310,26 @@ def test_a_compute_program_beside_the_vertex_stage_leaves_the_draw(tmp_path):
     assert trace(tmp_path, draw(c), "compute") == base and base.count(b"\nf ") > 100
 
 
-@pytest.mark.parametrize("validate, drawn", [(None, False), (5, True), (6, False)],
-                         ids=["not_validated", "validated", "another_validated"])
-def test_glvalidateprogrampipeline_validates_as_a_draw_does(tmp_path, validate, drawn):
-    """glValidateProgramPipeline validates the pipeline as a draw would, bound
-    or not, and its draws keep that answer until glUseProgramStages: the
-    pipeline validated before its program is relinked without
-    GL_PROGRAM_SEPARABLE still draws (Mesa's pipe->Validated; the call had
-    been passed over, and the draw refused)."""
-    c = separable().add("glGenProgramPipelines", n=1, pipelines=[6])
-    if validate is not None:
-        c.add("glBindProgramPipeline", pipeline=0).add("glValidateProgramPipeline", pipeline=validate)
-        c.add("glBindProgramPipeline", pipeline=5)
+VALIDATE = ("glValidateProgramPipeline", {"pipeline": 5})
+DECIDE = ("glActiveShaderProgram", {"pipeline": 5, "program": 0})
+
+
+@pytest.mark.parametrize("calls, drawn", [
+    ((), True), ((VALIDATE,), True), ((VALIDATE, DECIDE), False), ((DECIDE,), True)],
+    ids=["kept", "validate_decides_nothing", "validated_then_decided", "kept_when_decided"])
+def test_glvalidateprogrampipeline_validates_as_a_draw_does(tmp_path, calls, drawn):
+    """Mesa validates the bound pipeline when it decides whether draws are
+    valid (its glUseProgramStages here) and keeps pipe->Validated until the
+    stages change: its program relinked without GL_PROGRAM_SEPARABLE still
+    draws. glValidateProgramPipeline validates it again (and fails) but
+    decides nothing: the draws keep Mesa's last decision until a call that
+    decides (glActiveShaderProgram on the pipeline draws run), which then
+    validates it (R23-1; the converter had taken the call as deciding).
+    The vertex array is bound first: in a core profile, binding one in
+    place of object 0 decides too."""
+    c = separable().add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
     c.add("glProgramParameteri", program=2, pname="GL_PROGRAM_SEPARABLE", value=0).add("glLinkProgram", program=2)
-    got = frames(tmp_path, draw(c), "validate")
+    for fn, args in calls:
+        c.add(fn, **args)
+    got = frames(tmp_path, draw(c, vao=None), "validate")
     assert (got[0]["fragments"] > 100) == drawn, got

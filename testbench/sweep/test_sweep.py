@@ -459,16 +459,26 @@ def test_plot(c):
                                 "--y: a column name of 100000 characters"),
                                ("a,b,c\n" + "".join(f"1,2,{i}\n" for i in range(101)), ["--lines", "c"],
                                 "--lines c: 101 values"),
+                               # Refused before a line is computed (a pass per line and x had run for
+                               # hours; R23-4).
+                               ("a,b,c\n" + "".join(f"{i},2,{i}\n" for i in range(20000)), ["--lines", "c"],
+                                "--lines c: 20000 values"),
                                ("a,b\n1,1_000\n2,3\n", [], '--y b: not a number in some rows (e.g. "1_000")'),
                                ("a,b\n1,\u0661\n2,3\n", [], '--y b: not a number in some rows (e.g. "\u0661")')):
         odd, png = c.sweep_file("odd.csv", text), os.path.join(c.tmp, "odd.png")
         for b in backends:
             y = [] if "--y" in args else ["--y", "b"]
-            r = run(["/usr/bin/python3", PLOT, odd, *y, "--x", "a", "-o", png, "--backend", b] + args)
+            r = run(["/usr/bin/python3", PLOT, odd, *y, "--x", "a", "-o", png, "--backend", b] + args, timeout=120)
             lines = r.stderr.splitlines()
             assert r.returncode == 2 and len(lines) == 1 and lines[0].startswith(f"rbcd-plot: {needle}"), \
                 f"{b} {text!r}: {r.stderr}"
             assert not os.path.exists(png)
+    # Means in one pass over the rows: 30,000 values of x, each its own
+    # point (a pass per x had taken an hour; R23-4).
+    wide, png = c.sweep_file("wide.csv", "a,b\n" + "".join(f"{i},{i % 7}\n" for i in range(30000))), \
+        os.path.join(c.tmp, "wide.png")
+    r = run(["/usr/bin/python3", PLOT, wide, "--y", "b", "--x", "a", "-o", png], timeout=120)
+    assert r.returncode == 0 and r.stderr == "" and c.read(png, "rb")[:4] == b"\x89PNG", r.stderr
     # A '$' in a title or a column name is a dollar sign, not TeX (mathtext
     # had failed: internal error, exit 1; R21-6).
     odd, png = c.sweep_file("odd.csv", "$\\sqrt{$,b\n1,2\n2,3\n"), os.path.join(c.tmp, "odd.png")

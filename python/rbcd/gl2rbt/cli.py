@@ -140,7 +140,7 @@ def run(args):
             args.snapshots = set(int(x) for x in args.snapshot_calls.split(",")) if args.snapshot_calls else set()
         except ValueError:
             raise ConvertError("--snapshot-calls: not a list of call numbers")
-        raster.convert(args, report=None if args.quiet else write_report)
+        raster.convert(args, report=None if args.quiet else write_report, last=True)
         return 0
     except ConvertError as e:
         sys.stderr.write(f"{PROG}: {printable(args.trace)}: {message(e)}\n")

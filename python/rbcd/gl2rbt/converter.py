@@ -301,16 +301,14 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             self.check_draw_context(no)   # before the second context's own state refuses it otherwise
         if self.core and (base in COMPAT_ONLY or name in COMPAT_ONLY_FORMS) or not self.es and name in ES_ONLY_FORMS:
             h = Converter.h_not_in_core
+        bound = self.bindings() if base in REVALIDATING else None
         if h is not None:
-            bound = self.bindings() if base in REVALIDATING else None
             try:
                 h(self, no, name, a, args)
             except (TypeError, ValueError, OverflowError, IndexError, KeyError, struct.error) as e:
                 # An argument of a type or size no GL call takes: the
                 # capture's error, whichever check it slipped past.
                 fail_call(no, f"{printable(name)}: malformed arguments ({type(e).__name__}: {printable(e, 80)})")
-            if bound is not None and (base in ALWAYS_REVALIDATING or self.bindings() != bound):
-                self.revalidate()
         elif base.startswith("glVertex") and not base.startswith("glVertexAttrib"):
             fail_call(no, f"{printable(name)} outside glBegin/glEnd")
         elif base.startswith(IGNORED_PREFIXES) and not (base.startswith("glTexture") and base not in TEXTURE_IGNORED):
@@ -321,6 +319,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.gpu_wrote()
         else:
             fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
+        if bound is not None and (base in ALWAYS_REVALIDATING or self.bindings() != bound):
+            self.revalidate()
         if flags & CALL_FLAG_END_FRAME and self.swaps_main_drawable(no, args):
             self.end_frame(no)
 

@@ -58,8 +58,6 @@ IGNORED_PREFIXES = (
     # Hints that a framebuffer's contents are no longer needed (ES 3 and its
     # EXT form): they change no pixel a later draw or the unit sees.
     "glInvalidateFramebuffer", "glInvalidateSubFramebuffer", "glDiscardFramebuffer",
-    # A query of the bound framebuffer's completeness: it changes no state.
-    "glCheckFramebufferStatus", "glCheckNamedFramebufferStatus",
     # Which colour buffers a framebuffer draws or reads (direct state access),
     # hints that its contents are no longer needed.
     "glNamedFramebufferDrawBuffer", "glNamedFramebufferReadBuffer", "glInvalidateNamedFramebuffer",

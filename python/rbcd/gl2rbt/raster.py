@@ -11,6 +11,7 @@ import subprocess
 import time
 
 from ..cli import check_outputs, remove_left_temporaries, temporary_folder, unregister_temporary, write_output
+from ..startup import ignore_signals
 from .capture import check_input_file, check_rest, read_calls
 from .converter import Converter, swapped_drawable
 from .errors import ConvertError, RasterStopped, ToolError, printable
@@ -43,15 +44,17 @@ def raster_program():
     raise ToolError("rbcd-gl-raster not found (build it: cmake --build build --target rbcd-gl-raster)")
 
 
-def convert(args, listing=False, ids=None, report=None):
+def convert(args, listing=False, ids=None, report=None, last=False):
     """The conversion; `report(frames, conv)` writes the run's report
     before the outputs are committed: a report that cannot be written fails
-    the run, and no output is left."""
+    the run, and no output is left. `last`: the run's last work (not the
+    first step of --check-depth or --list-draws), which a signal no longer
+    ends once its outputs are committed."""
     # The temporary directory goes whatever fails, before or after the
     # rasterizer starts (the test suite's refusals used to leave them).
     tmpdir = temporary_folder("rbcd-gl2rbt.")
     try:
-        return convert_in(args, tmpdir, listing, ids, report)
+        return convert_in(args, tmpdir, listing, ids, report, last)
     finally:
         shutil.rmtree(tmpdir, ignore_errors=True)
         unregister_temporary(tmpdir)
@@ -182,7 +185,7 @@ def first_window(args):
     return None
 
 
-def convert_in(args, tmpdir, listing, ids, report):
+def convert_in(args, tmpdir, listing, ids, report, last=False):
     check_input_file(args.trace)
     check_paths(args)
     if getattr(args, "reduced_out", None) and is_reduced_capture(args.trace):
@@ -221,6 +224,11 @@ def convert_in(args, tmpdir, listing, ids, report):
         try:
             if report is not None:
                 report(frames, conv)
+            # The trace and summary stand; the other outputs are renamed into
+            # place now, and from here a signal ends nothing: the run has
+            # succeeded (an interrupt had left them all in place, exit 130).
+            if last:
+                ignore_signals()
             for o in outputs:
                 o.commit()
         except BaseException:

@@ -68,9 +68,10 @@ def reduced_keeps(name):
     """Whether the emulation reads the call for the outputs: it has a
     handler, or it is not passed over (and is refused), or it is the window
     system's."""
-    if base_name(name) in REDUCED_CHECK_ONLY:
+    base = base_name(name)
+    if base in REDUCED_CHECK_ONLY:
         return False
-    return base_name(name) in Converter.HANDLERS or not name.startswith(IGNORED_PREFIXES) \
+    return base in Converter.HANDLERS or not name.startswith(IGNORED_PREFIXES) \
         or name.startswith(REDUCED_KEEP) or name in END_FRAME_CALLS
 
 
@@ -124,7 +125,8 @@ def header_version(head):
     if version is not None and (len(head) == 3) != (version >= 4):
         raise ConvertError(f"a reduced capture of version {version} whose header is not of that version")
     if version is not None and version >= 4 and not (type(head[2]) is int and 0 <= head[2] < 1 << 63):
-        raise ConvertError(f"a reduced capture whose header gives its source's size as {printable(repr(head[2]), 40)}, "
+        size = head[2] if type(head[2]) is int else repr(head[2])   # (printable names a long integer by its size)
+        raise ConvertError(f"a reduced capture whose header gives its source's size as {printable(size, 40)}, "
                            "not a number of bytes")
     return version
 

@@ -89,8 +89,15 @@ class GLState:
         self.blend_factors = [DEFAULT_BLEND] * MAX_DRAW_BUFFERS
         self.window_draw_buffers = 1
         self.fbo_draw_buffers = {}
-        self.validated_draw_buffers = 1   # the draw framebuffer's, as Mesa last decided (ColorOutputCalls.revalidate)
+        # Whether only colour output 0 is drawn, into one buffer (not
+        # GL_FRONT_AND_BACK), on the window and each framebuffer object, and
+        # the advanced blend equation (KHR_blend_equation_advanced) in use.
+        self.window_one_output = True
+        self.fbo_one_output = {}
+        self.fbo_found_complete = set()   # framebuffer objects a status check found complete since their last attachment
+        self.advanced_blend = None
         self.blend_on = False             # GL_BLEND (any draw buffer's)
+        self.render_fault = None          # why draws are refused, as Mesa last decided (DrawCalls.revalidate)
         # Shaders and programs (programs.py).
         self.shaders = {}
         self.programs = {}
@@ -194,7 +201,7 @@ SHARED_STATE = {
     "depth_types",
     "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names", "sampler_names",
     "texture_buffers", "texture_images", "texture_calls", "samplers", "views", "reduced_texture_versions",
-    "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "framebuffer_names"}
+    "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "fbo_one_output", "fbo_found_complete", "framebuffer_names"}
 # The memory limits are of all groups together.
 CONVERSION_STATE = {"next_version", "gpu_writes", "readback_call", "buffer_bytes_in_all", "texture_bytes_kept"}
 

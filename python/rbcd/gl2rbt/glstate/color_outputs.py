@@ -4,7 +4,12 @@ fragment; together they decide whether GL draws at all: a blend factor that
 reads the second colour output (dual-source blending) on a draw buffer past
 the first of several is GL_INVALID_OPERATION at the draw (GL 4.6 §17.3.6.3;
 Mesa 22.3 _mesa_update_valid_to_render_state, whatever GL_BLEND says, with
-llvmpipe's GL_MAX_DUAL_SOURCE_DRAW_BUFFERS of 1)."""
+llvmpipe's GL_MAX_DUAL_SOURCE_DRAW_BUFFERS of 1), and so is an advanced
+blend equation (KHR_blend_equation_advanced) into more than one buffer or
+under a fragment shader that does not declare it.
+"""
+import re
+
 from ...cli import I32, U32, integer
 from ..errors import checked, fail_call
 from ..gl_tables import base_name
@@ -43,19 +48,41 @@ BUFFER_NAMES = {v: k for k, v in BUFFER_VALUES.items() if k != "GL_NONE"} | {0: 
 BUFFER_VALUES.update(dict.fromkeys(("GL_ZERO", "GL_FALSE", "GL_POINTS", "GL_NO_ERROR"), 0))
 MULTIPLE = {"GL_FRONT", "GL_BACK", "GL_LEFT", "GL_RIGHT", "GL_FRONT_AND_BACK"}
 # The calls after which Mesa 22.3 decides again whether draws are valid
-# (_mesa_update_valid_to_render_state): a change of the program in use, the
-# bound pipeline or draw framebuffer, or transform feedback's state, a core
-# profile's vertex array binding to or from object 0; a link, a pipeline's stages, the current context (always); and the
-# blend factors and GL_BLEND when they change (ColorOutputCalls). Draws keep
-# that decision until the next: a glDrawBuffer(s), which is none of them,
-# changes the draw buffers the dual-source check counts only then.
+# (_mesa_update_valid_to_render_state), its ValidPrimMask, which draws then
+# read until the next (DrawCalls.revalidate): a change of the program in
+# use, the bound pipeline (with no program in use), the draw or read
+# framebuffer, transform feedback's state, a core profile's vertex array
+# binding to or from object 0 (REVALIDATING, when bindings() changes); a
+# link, the current context, a renderbuffer attached to any framebuffer
+# object (ALWAYS_REVALIDATING, every time); a test of a framebuffer's
+# completeness, unless it was found complete since its attachments last
+# changed (Mesa keeps the status; STATUS_CHECKS);
+# the blend factors and GL_BLEND when they change (ColorOutputCalls), a
+# sampler moved to another texture unit (ProgramCalls.sampler_set), the
+# stages or active program of the pipeline draws run (ProgramCalls). Not
+# among them:
+# glDrawBuffer(s), glValidateProgramPipeline, a glUniform1i that leaves a
+# sampler where it was, glColorMaski, a glUseProgram of the program in use.
+ALWAYS_REVALIDATING = frozenset({"glLinkProgram", "glXMakeCurrent", "glXMakeContextCurrent", "eglMakeCurrent",
+                                 "wglMakeCurrent", "glFramebufferRenderbuffer", "glNamedFramebufferRenderbuffer"})
+# Completeness tests, which decide again unless the framebuffer was found
+# complete and no image was attached to it since (ColorOutputCalls).
+STATUS_CHECKS = frozenset({"glCheckFramebufferStatus", "glCheckNamedFramebufferStatus"})
 REVALIDATING = frozenset({
-    "glUseProgram", "glLinkProgram", "glBindProgramPipeline", "glUseProgramStages", "glBindFramebuffer",
-    "glDeleteFramebuffers", "glBindVertexArray", "glBeginTransformFeedback", "glEndTransformFeedback",
-    "glPauseTransformFeedback", "glResumeTransformFeedback", "glXMakeCurrent", "glXMakeContextCurrent",
-    "eglMakeCurrent", "wglMakeCurrent"})
-ALWAYS_REVALIDATING = frozenset({"glLinkProgram", "glUseProgramStages", "glXMakeCurrent", "glXMakeContextCurrent",
-                                 "eglMakeCurrent", "wglMakeCurrent"})
+    "glUseProgram", "glBindProgramPipeline", "glDeleteProgramPipelines", "glBindFramebuffer", "glDeleteFramebuffers",
+    "glBindVertexArray",
+    "glBeginTransformFeedback", "glEndTransformFeedback", "glPauseTransformFeedback",
+    "glResumeTransformFeedback"}) | ALWAYS_REVALIDATING
+
+
+# Blend equations (glBlendEquation*): GL's own, and the advanced ones of
+# KHR_blend_equation_advanced (NV's names too), each by the layout qualifier
+# a fragment shader declares it with (blend_support_NAME).
+SIMPLE_EQUATIONS = {"GL_FUNC_ADD", "GL_FUNC_SUBTRACT", "GL_FUNC_REVERSE_SUBTRACT", "GL_MIN", "GL_MAX",
+                    0x8006, 0x800A, 0x800B, 0x8007, 0x8008}
+ADVANCED_EQUATIONS = {f"GL_{mode.upper()}_{suffix}": mode for suffix in ("KHR", "NV") for mode in (
+    "multiply", "screen", "overlay", "darken", "lighten", "colordodge", "colorburn", "hardlight", "softlight",
+    "difference", "exclusion", "hsl_hue", "hsl_saturation", "hsl_color", "hsl_luminosity")}
 
 
 def factor(v, no, what):
@@ -105,23 +132,80 @@ class ColorOutputCalls:
         if self.dual_source_buffers() != before:
             self.revalidate()   # (Mesa: _BlendUsesDualSrc changed)
 
+    def h_blend_equation(self, no, name, a, args):
+        """glBlendEquation, glBlendEquationSeparate and their per-buffer
+        forms: which advanced equation (KHR_blend_equation_advanced) blends,
+        as Mesa keeps it (_AdvancedBlendMode: set by glBlendEquation, and by
+        a per-buffer form on buffer 0; a separate form takes GL's own
+        equations only); an equation GL refuses changes nothing. A change
+        has Mesa decide again whether draws are valid."""
+        d = dict(args)
+        per_buffer = base_name(name).endswith(("i", "IndexedAMD"))
+        modes = [enum_arg(d[k], no, f"{name}: {k}") for k, _ in args if k != "buf"]
+        if len(modes) not in (1, 2) or any(m not in SIMPLE_EQUATIONS and (len(modes) == 2 or m not in
+                                                                           ADVANCED_EQUATIONS) for m in modes):
+            return   # GL_INVALID_ENUM
+        if per_buffer:
+            buf = checked(no, integer, d.get("buf"), f"{name}: the draw buffer", *U32)
+            if buf >= MAX_DRAW_BUFFERS:
+                return   # GL_INVALID_VALUE
+            if buf != 0:
+                return
+        mode = ADVANCED_EQUATIONS.get(modes[0]) if len(modes) == 1 else None
+        if mode != self.s.advanced_blend:
+            self.s.advanced_blend = mode
+            self.revalidate()
+
+    def h_check_framebuffer_status(self, no, name, a, args):
+        """glCheck(Named)FramebufferStatus: Mesa tests a framebuffer object's
+        completeness unless it has found it complete since its attachments
+        last changed, and decides again whether draws are valid at each
+        test (complete or not); the window's is no test. The answer is the
+        capture's (the call's return value)."""
+        d = dict(args)
+        if "Named" in name:
+            fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
+        else:
+            fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
+        if not fb or (fb in self.s.fbo_found_complete and self.ret == "GL_FRAMEBUFFER_COMPLETE"):
+            return
+        if self.ret == "GL_FRAMEBUFFER_COMPLETE":
+            self.s.fbo_found_complete.add(fb)
+        else:
+            self.s.fbo_found_complete.discard(fb)
+        self.revalidate()
+
+    def advanced_blend_invalid(self):
+        """Why draws are GL_INVALID_OPERATION for an advanced blend equation
+        with blending enabled (KHR_blend_equation_advanced, Mesa 22.3's
+        checks): colour output 0 into two buffers (GL_FRONT_AND_BACK) or a
+        draw buffer past the first; a fragment shader that does not declare
+        the equation (layout(blend_support_NAME) or
+        blend_support_all_equations), or none. None when they draw."""
+        mode = self.s.advanced_blend
+        if mode is None or not self.s.blend_on:
+            return None
+        fb = self.s.draw_fbo
+        where = "the window" if fb == 0 else f"framebuffer {fb}"
+        if not (self.s.window_one_output if fb == 0 else self.s.fbo_one_output.get(fb, True)):
+            return f"advanced blending ({mode}) into more than one colour buffer of {where}"
+        fragment = self.stage_programs().get("fragment")
+        text = fragment[1].scanned.get("fragment", "") if fragment is not None else ""
+        supports = set(re.findall(r"\bblend_support_(\w+)", text))
+        if "all_equations" in supports or mode in supports:
+            return None
+        return f"advanced blending ({mode}) under a fragment shader that does not declare blend_support_{mode}"
+
     def dual_source_buffers(self):
         """The draw buffers whose blend factors read the second colour output."""
         return [i for i, f in enumerate(self.s.blend_factors) if DUAL_SOURCE.intersection(f)]
 
-    def revalidate(self):
-        """Mesa decides again whether draws are valid (REVALIDATING): the
-        dual-source check takes the draw framebuffer's draw buffers as they
-        are now."""
-        fb = self.s.draw_fbo
-        self.s.validated_draw_buffers = self.s.window_draw_buffers if fb == 0 else self.s.fbo_draw_buffers.get(fb, 1)
-
     def bindings(self):
         """What a REVALIDATING call has Mesa decide again on when it changes
         (of the vertex array binding, in a core profile, only whether it is
-        vertex array object 0)."""
+        vertex array object 0; of the pipeline, only the one draws run)."""
         s = self.s
-        return (s.program, s.pipeline, s.draw_fbo, self.core and s.vao == 0, s.feedback)
+        return (s.program, self.current_pipeline(), s.draw_fbo, s.read_fbo, self.core and s.vao == 0, s.feedback)
 
     def blend_enabled(self, on):
         """glEnable or glDisable(GL_BLEND): a change has Mesa decide again."""
@@ -192,10 +276,13 @@ class ColorOutputCalls:
         count = self.draw_buffer_counts(no, name, fb, bufs)
         if count is None:
             return
+        # Only colour output 0 drawn, into one buffer (what advanced blending
+        # needs): not GL_FRONT_AND_BACK, no buffer past the first in a list.
+        one = count <= 1 if "Buffers" in base else buffer_name(bufs[0], no, name) != "GL_FRONT_AND_BACK"
         if fb == 0:
-            self.s.window_draw_buffers = count
+            self.s.window_draw_buffers, self.s.window_one_output = count, one
         else:
-            self.s.fbo_draw_buffers[fb] = count
+            self.s.fbo_draw_buffers[fb], self.s.fbo_one_output[fb] = count, one
 
     def known_framebuffer(self, fb):
         """Whether framebuffer object fb exists for a direct state access
@@ -205,12 +292,12 @@ class ColorOutputCalls:
             or fb in self.s.fbo_depth or fb in self.s.fbo_attachments
 
     def dual_source_invalid(self):
-        """Why the draw is GL_INVALID_OPERATION for dual-source blending: a
+        """Why draws are GL_INVALID_OPERATION for dual-source blending: a
         draw buffer past llvmpipe's one that takes a second colour output
         has a blend factor reading it (blending enabled or not, as Mesa
-        checks), the draw buffers counted as Mesa last decided (revalidate).
-        None when it draws."""
-        fb, n = self.s.draw_fbo, self.s.validated_draw_buffers
+        checks). None when they draw."""
+        fb = self.s.draw_fbo
+        n = self.s.window_draw_buffers if fb == 0 else self.s.fbo_draw_buffers.get(fb, 1)
         for i in range(MAX_DUAL_SOURCE_DRAW_BUFFERS, n):
             if DUAL_SOURCE.intersection(self.s.blend_factors[i]):
                 where = "the window" if fb == 0 else f"framebuffer {fb}"
@@ -225,6 +312,14 @@ class ColorOutputCalls:
         "glBlendFuncSeparatei": h_blend_func,
         "glBlendFuncIndexedAMD": h_blend_func,
         "glBlendFuncSeparateIndexedAMD": h_blend_func,
+        "glBlendEquation": h_blend_equation,
+        "glBlendEquationSeparate": h_blend_equation,
+        "glBlendEquationi": h_blend_equation,
+        "glBlendEquationSeparatei": h_blend_equation,
+        "glBlendEquationIndexedAMD": h_blend_equation,
+        "glBlendEquationSeparateIndexedAMD": h_blend_equation,
+        "glCheckFramebufferStatus": h_check_framebuffer_status,
+        "glCheckNamedFramebufferStatus": h_check_framebuffer_status,
         "glDrawBuffer": h_draw_buffers,
         "glDrawBuffers": h_draw_buffers,
         "glDrawBuffersATI": h_draw_buffers,

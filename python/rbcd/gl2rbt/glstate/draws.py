@@ -104,11 +104,20 @@ class DrawCalls:
 
     def draw_invalid(self):
         """Why Mesa refuses every draw now with GL_INVALID_OPERATION,
-        whatever its mode and arrays, in the order Mesa 22.3 checks
-        (_mesa_update_valid_to_render_state): the bound pipeline's
-        validation, the samplers of the program in use, dual-source
-        blending against the draw buffers. None when it draws."""
-        return self.pipeline_invalid() or self.samplers_invalid() or self.dual_source_invalid()
+        whatever its mode and arrays: what it last decided (revalidate).
+        None when it draws."""
+        return self.s.render_fault
+
+    def revalidate(self):
+        """Mesa decides again whether draws are valid, after one of the
+        calls color_outputs.REVALIDATING names, in the order Mesa 22.3
+        checks (_mesa_update_valid_to_render_state): the bound pipeline's
+        validation (only if not validated since it last changed), the
+        samplers of the program in use, dual-source blending against the
+        draw buffers as they are now, an advanced blend equation. Draws keep the answer until the next
+        such call, whatever changes meanwhile."""
+        self.s.render_fault = self.pipeline_invalid() or self.samplers_invalid() or self.dual_source_invalid() \
+            or self.advanced_blend_invalid()
 
     # ---- draws
     def draw(self, no, mode, positions, name, tris=None):

@@ -108,6 +108,7 @@ class FramebufferCalls:
         the camera pass: camera_pass)."""
         d = dict(args)
         fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
+        self.s.fbo_found_complete.discard(fb)   # (its completeness is tested again)
         attachment = d.get("attachment")
         if fb and (attachment in DEPTH_ATTACHMENTS or attachment in OTHER_ATTACHMENTS):
             kind = "renderbuffer" if "Renderbuffer" in name else "texture"
@@ -412,6 +413,8 @@ class FramebufferCalls:
                 self.s.fbo_depth.pop(fb, None)
                 self.s.fbo_attachments.pop(fb, None)
                 self.s.fbo_draw_buffers.pop(fb, None)
+                self.s.fbo_one_output.pop(fb, None)
+                self.s.fbo_found_complete.discard(fb)
                 if self.s.draw_fbo == fb:
                     self.s.draw_fbo = 0   # GL binds the window's framebuffer again
                 if self.s.read_fbo == fb:

@@ -117,13 +117,14 @@ class Program:
         self.int_uniform_calls = 0
         self.samplers_checked = None
         self.sampler_uniforms = None   # (its link, the names and locations of its samplers in Mesa's link)
+        self.sampler_units = {}        # capture location -> the unit a glUniform1i(v) last set there
 
 
 class Pipeline:
     """A program pipeline object (GL 4.1, ES 3.1): the separable program
-    of each stage, the active one glUniform* sets, and whether a draw
-    validated it (Mesa's pipe->Validated: kept until glUseProgramStages
-    changes it, whatever is relinked meanwhile)."""
+    of each stage, the active one glUniform* sets, and whether Mesa
+    validated it (pipe->Validated: kept until glUseProgramStages changes
+    it or a sampler's glUniform1i, whatever is relinked meanwhile)."""
     __slots__ = ("stages", "active", "validated")
 
     def __init__(self):
@@ -214,10 +215,9 @@ class ProgramCalls:
         stage; a program active for some of the stages it links and not
         others; a program's stages on both sides of another's; a
         tessellation or geometry stage with no vertex stage; a program
-        linked again without GL_PROGRAM_SEPARABLE. None when it draws."""
-        if self.s.program in self.s.programs:
-            return None
-        pipe = self.s.pipelines.get(self.s.pipeline)
+        linked again without GL_PROGRAM_SEPARABLE. None when it draws.
+        Asked when Mesa decides (DrawCalls.revalidate)."""
+        pipe = self.current_pipeline()
         if pipe is None or pipe.validated:
             return None
         why = self.pipeline_fault(pipe)
@@ -228,7 +228,7 @@ class ProgramCalls:
         """Why the program in use draws nothing for its samplers: active
         samplers of different types on one texture unit (GL 4.6
         §11.1.3.11), as Mesa 22.3 follows it for a program used by
-        glUseProgram (_mesa_sampler_uniforms_are_valid, at every draw).
+        glUseProgram (_mesa_sampler_uniforms_are_valid, when it decides).
         None when it draws; a pipeline's samplers are part of its
         validation (pipeline_fault)."""
         if self.s.program not in self.s.programs:
@@ -408,7 +408,7 @@ class ProgramCalls:
         p.sampler_shapes = frozenset(m.group(1) for text in p.scanned.values() for m in SAMPLER_TYPE.finditer(text))
         p.link_call = no
         p.version += 1
-        p.uniform_names, p.block_names, p.uniforms, p.block_bindings = {}, {}, {}, {}
+        p.uniform_names, p.block_names, p.uniforms, p.block_bindings, p.sampler_units = {}, {}, {}, {}, {}
 
     def h_use_program(self, no, name, a, args):
         v = a[0] if a else None
@@ -556,16 +556,27 @@ class ProgramCalls:
         p.uniforms[key] = (func, values, transpose, m.group(5), count)
         if func in SAMPLER_SETTERS:
             p.int_uniform_calls += 1
-            if self.s.program not in self.s.programs and p.sampler_shapes:
-                # Mesa clears the bound pipeline's validation at every
-                # glUniform1i(v) it takes for a sampler, changed or not
-                # (validate_uniform): the next draw validates it again.
-                pipe = self.s.pipelines.get(self.s.pipeline)
-                if pipe is not None and pipe.validated and all(0 <= v < MAX_TEXTURE_UNITS for v in values):
-                    names, locations = self.vertex_stage().sampler_uniforms(p)
-                    name = p.uniform_names.get(loc)
-                    if (name in names) if name is not None else (loc in locations):
-                        pipe.validated = False
+            if p.sampler_shapes and all(0 <= v < MAX_TEXTURE_UNITS for v in values):
+                names, locations = self.vertex_stage().sampler_uniforms(p)
+                uname = p.uniform_names.get(loc)
+                if (uname in names) if uname is not None else (loc in locations):
+                    self.sampler_set(p, loc, values)
+
+    def sampler_set(self, p, loc, values):
+        """A glUniform1i(v) Mesa takes for a sampler of program p (elements
+        from capture location loc on): Mesa clears the bound pipeline's
+        validation, whichever program it is and changed or not
+        (validate_uniform), and decides again whether draws are valid only
+        when a sampler moved to another unit (_mesa_uniform's any_changed;
+        a sampler starts at unit 0)."""
+        pipe = self.current_pipeline()
+        if pipe is not None:
+            pipe.validated = False
+        units = p.sampler_units
+        moved = any(units.get(loc + i, 0) != v for i, v in enumerate(values))
+        units.update((loc + i, v) for i, v in enumerate(values))
+        if moved:
+            self.revalidate()
 
     def h_patch_parameter(self, no, name, a, args):
         """glPatchParameteri(GL_PATCH_VERTICES) and glPatchParameterfv's
@@ -642,10 +653,11 @@ class ProgramCalls:
 
     def h_validate_pipeline(self, no, name, a, args):
         """glValidateProgramPipeline: Mesa validates the pipeline now, bound
-        or not, and its draws take that answer until glUseProgramStages
-        changes the pipeline (pipe->Validated: one that passed draws
-        whatever is relinked meanwhile; one that failed is validated again
-        at its next draw)."""
+        or not (pipe->Validated: one that passed is not validated again
+        until glUseProgramStages or a sampler's glUniform1i clears it; one
+        that failed is, at the next call that has Mesa decide whether draws
+        are valid). The draws themselves keep Mesa's last decision
+        (DrawCalls.revalidate): this call is not one that decides."""
         v = dict(args).get("pipeline", a[0] if a else None)
         pipe = self.pipeline(no, name, v)
         if pipe is None:
@@ -728,6 +740,8 @@ class ProgramCalls:
                 pipe.stages.pop(stage, None)
         for prog in old - set(pipe.stages.values()):
             self.out_of_use(prog)
+        if pipe is self.current_pipeline():
+            self.revalidate()   # (Mesa decides again for the pipeline draws run, not another)
 
     def h_active_shader_program(self, no, name, a, args):
         d = dict(args)
@@ -735,12 +749,18 @@ class ProgramCalls:
         v = d.get("program")
         if pipe is None:
             return
-        if v == 0:
-            pipe.active = 0
-            return
-        p = self.s.programs.get(name_arg(no, name, v, "program"))
-        if p is not None and p.linked is not None:
-            pipe.active = v   # (an unlinked one is GL_INVALID_OPERATION)
+        if v != 0:
+            p = self.s.programs.get(name_arg(no, name, v, "program"))
+            if p is None or p.linked is None:
+                return   # GL_INVALID_OPERATION
+        pipe.active = v
+        if pipe is self.current_pipeline():
+            self.revalidate()   # (as glUseProgramStages)
+
+    def current_pipeline(self):
+        """The pipeline draws run: the bound one when no program is in use
+        (Mesa's ctx->_Shader when it is a pipeline object), else None."""
+        return None if self.s.program in self.s.programs else self.s.pipelines.get(self.s.pipeline)
 
     def h_transform_feedback_varyings(self, no, name, a, args):
         """The outputs a program's next link records by transform feedback
