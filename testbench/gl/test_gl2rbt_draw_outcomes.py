@@ -437,7 +437,8 @@ def test_a_reduced_capture_of_another_version_or_miscounted_names(tmp_path):
                         (("rbcd-reduced-capture", 4, "1000"), "its source's size as '1000'"),
                         (("rbcd-reduced-capture", 4, 1 << 63), f"its source's size as {1 << 63}"),
                         # (past 4,300 digits Python will not write an int: R23-7)
-                        (("rbcd-reduced-capture", 4, -10 ** 5000), "its source's size as an integer of 16610 bits")):
+                        (("rbcd-reduced-capture", 4, -10 ** 5000), "its source's size as an integer of 16610 bits"),
+                        (("rbcd-reduced-capture", 4, (10 ** 5000,)), "size as a tuple too large or deep to write")):
         data = lzma.compress(pickle.dumps(head, protocol=4))
         (tmp_path / "h.xz").write_bytes(data)
         refused(gl2rbt(tmp_path, tmp_path / "h.xz", "-o", tmp_path / "h.rbt"), "a reduced capture", words)

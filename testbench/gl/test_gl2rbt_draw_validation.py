@@ -278,8 +278,16 @@ SUPPORTING_FS = ("#version 410 core\n#extension GL_KHR_blend_equation_advanced :
     (SUPPORTING_FS, [BLEND, MULTIPLY], True),
     (SUPPORTING_FS, [BLEND, ("glBlendEquation", dict(mode="GL_SCREEN_KHR"))], False),
     (SUPPORTING_FS, [BOTH, BLEND, MULTIPLY], False),
+    # A separate per-buffer equation on any buffer ends it (Mesa's
+    # blend_equation_separatei; R24-4), one mode on another buffer does not.
+    (PLAIN_FS, [BLEND, MULTIPLY, ("glBlendEquationSeparatei", dict(buf=1, modeRGB="GL_FUNC_ADD",
+                                                                    modeAlpha="GL_FUNC_SUBTRACT"))], True),
+    (PLAIN_FS, [BLEND, MULTIPLY, ("glBlendEquationi", dict(buf=1, mode="GL_FUNC_ADD"))], False),
+    # Only a layout(...) out; declaration counts, not a name that holds the word.
+    (PLAIN_FS.replace("out vec4 c;", "out vec4 c;\nfloat blend_support_multiply;"), [BLEND, MULTIPLY], False),
 ], ids=["blend_off", "enabled_after", "equation_after", "equation_undone", "separate_refused", "declared",
-        "another_declared", "two_buffers"])
+        "another_declared", "two_buffers", "separate_on_another_buffer_ends_it", "one_mode_on_another_buffer",
+        "a_name_is_no_declaration"])
 def test_advanced_blending_needs_its_layout_and_one_buffer(tmp_path, fs, calls, drawn):
     """An advanced blend equation (KHR_blend_equation_advanced) with
     blending enabled draws nothing under a fragment shader that does not

@@ -302,6 +302,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if self.core and (base in COMPAT_ONLY or name in COMPAT_ONLY_FORMS) or not self.es and name in ES_ONLY_FORMS:
             h = Converter.h_not_in_core
         bound = self.bindings() if base in REVALIDATING else None
+        self.decides = False   # set by a handler whose call has Mesa decide (a successful attachment, ...)
         if h is not None:
             try:
                 h(self, no, name, a, args)
@@ -319,7 +320,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.gpu_wrote()
         else:
             fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
-        if bound is not None and (base in ALWAYS_REVALIDATING or self.bindings() != bound):
+        if self.decides or bound is not None and (base in ALWAYS_REVALIDATING or self.bindings() != bound):
             self.revalidate()
         if flags & CALL_FLAG_END_FRAME and self.swaps_main_drawable(no, args):
             self.end_frame(no)
@@ -401,7 +402,12 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if self.ret is not None and self.ret in ("EGL_FALSE", "GL_FALSE", 0):
             return   # it failed (a destroyed context, a bad surface): what was current stays current
         d = dict(args)
-        self.current_drawable = d.get("drawable", d.get("draw", d.get("hdc")))
+        drawable = d.get("drawable", d.get("draw", d.get("hdc")))
+        # (the context and drawables already current: GLX returns at once,
+        # and Mesa decides nothing)
+        self.decides = (ctx, drawable, d.get("read", drawable)) != \
+            (self.context, self.current_drawable, self.read_drawable)
+        self.current_drawable = drawable
         self.read_drawable = d.get("read", self.current_drawable)
         self.drawables.add(self.current_drawable)
         self.context = ctx

@@ -113,6 +113,15 @@ def is_reduced_capture(path):
         return False
 
 
+def writable(v):
+    """repr(v), or what v is when Python will not write it (an integer of
+    more than 4,300 digits inside it, nesting past the recursion limit)."""
+    try:
+        return repr(v)
+    except (ValueError, RecursionError):
+        return f"a {type(v).__name__} too large or deep to write"
+
+
 def header_version(head):
     """The version a reduced capture's header record names (an int: True
     and 2.0 equal 1 and 2 in Python, and are no version), or None when the
@@ -125,7 +134,7 @@ def header_version(head):
     if version is not None and (len(head) == 3) != (version >= 4):
         raise ConvertError(f"a reduced capture of version {version} whose header is not of that version")
     if version is not None and version >= 4 and not (type(head[2]) is int and 0 <= head[2] < 1 << 63):
-        size = head[2] if type(head[2]) is int else repr(head[2])   # (printable names a long integer by its size)
+        size = head[2] if type(head[2]) is int else writable(head[2])   # (printable names a long integer by its size)
         raise ConvertError(f"a reduced capture whose header gives its source's size as {printable(size, 40)}, "
                            "not a number of bytes")
     return version

@@ -53,8 +53,9 @@ MULTIPLE = {"GL_FRONT", "GL_BACK", "GL_LEFT", "GL_RIGHT", "GL_FRONT_AND_BACK"}
 # use, the bound pipeline (with no program in use), the draw or read
 # framebuffer, transform feedback's state, a core profile's vertex array
 # binding to or from object 0 (REVALIDATING, when bindings() changes); a
-# link, the current context, a renderbuffer attached to any framebuffer
-# object (ALWAYS_REVALIDATING, every time); a test of a framebuffer's
+# link (ALWAYS_REVALIDATING, every time); a MakeCurrent that changes the
+# context or a drawable, a renderbuffer attached to any framebuffer object
+# by a call GL takes (Converter.decides); a test of a framebuffer's
 # completeness, unless it was found complete since its attachments last
 # changed (Mesa keeps the status; STATUS_CHECKS);
 # the blend factors and GL_BLEND when they change (ColorOutputCalls), a
@@ -63,8 +64,7 @@ MULTIPLE = {"GL_FRONT", "GL_BACK", "GL_LEFT", "GL_RIGHT", "GL_FRONT_AND_BACK"}
 # among them:
 # glDrawBuffer(s), glValidateProgramPipeline, a glUniform1i that leaves a
 # sampler where it was, glColorMaski, a glUseProgram of the program in use.
-ALWAYS_REVALIDATING = frozenset({"glLinkProgram", "glXMakeCurrent", "glXMakeContextCurrent", "eglMakeCurrent",
-                                 "wglMakeCurrent", "glFramebufferRenderbuffer", "glNamedFramebufferRenderbuffer"})
+ALWAYS_REVALIDATING = frozenset({"glLinkProgram"})
 # Completeness tests, which decide again unless the framebuffer was found
 # complete and no image was attached to it since (ColorOutputCalls).
 STATUS_CHECKS = frozenset({"glCheckFramebufferStatus", "glCheckNamedFramebufferStatus"})
@@ -83,6 +83,11 @@ SIMPLE_EQUATIONS = {"GL_FUNC_ADD", "GL_FUNC_SUBTRACT", "GL_FUNC_REVERSE_SUBTRACT
 ADVANCED_EQUATIONS = {f"GL_{mode.upper()}_{suffix}": mode for suffix in ("KHR", "NV") for mode in (
     "multiply", "screen", "overlay", "darken", "lighten", "colordodge", "colorburn", "hardlight", "softlight",
     "difference", "exclusion", "hsl_hue", "hsl_saturation", "hsl_color", "hsl_luminosity")}
+
+
+# A fragment shader's declaration of the advanced equations it supports:
+# layout(blend_support_NAME, ...) out; (its text as the compiler reads it).
+LAYOUT_OUT = re.compile(r"\blayout\s*\(([^()]*)\)\s*out\s*;")
 
 
 def factor(v, no, what):
@@ -136,8 +141,9 @@ class ColorOutputCalls:
         """glBlendEquation, glBlendEquationSeparate and their per-buffer
         forms: which advanced equation (KHR_blend_equation_advanced) blends,
         as Mesa keeps it (_AdvancedBlendMode: set by glBlendEquation, and by
-        a per-buffer form on buffer 0; a separate form takes GL's own
-        equations only); an equation GL refuses changes nothing. A change
+        glBlendEquationi on buffer 0; a separate form takes GL's own
+        equations only and ends it, on any buffer); an equation GL refuses
+        changes nothing. A change
         has Mesa decide again whether draws are valid."""
         d = dict(args)
         per_buffer = base_name(name).endswith(("i", "IndexedAMD"))
@@ -149,8 +155,8 @@ class ColorOutputCalls:
             buf = checked(no, integer, d.get("buf"), f"{name}: the draw buffer", *U32)
             if buf >= MAX_DRAW_BUFFERS:
                 return   # GL_INVALID_VALUE
-            if buf != 0:
-                return
+            if buf != 0 and len(modes) == 1:
+                return   # (one mode on another buffer: Mesa's blend_equationi leaves the advanced one)
         mode = ADVANCED_EQUATIONS.get(modes[0]) if len(modes) == 1 else None
         if mode != self.s.advanced_blend:
             self.s.advanced_blend = mode
@@ -191,7 +197,8 @@ class ColorOutputCalls:
             return f"advanced blending ({mode}) into more than one colour buffer of {where}"
         fragment = self.stage_programs().get("fragment")
         text = fragment[1].scanned.get("fragment", "") if fragment is not None else ""
-        supports = set(re.findall(r"\bblend_support_(\w+)", text))
+        supports = {q.strip()[len("blend_support_"):] for m in LAYOUT_OUT.finditer(text)
+                    for q in m.group(1).split(",") if q.strip().startswith("blend_support_")}
         if "all_equations" in supports or mode in supports:
             return None
         return f"advanced blending ({mode}) under a fragment shader that does not declare blend_support_{mode}"

@@ -127,6 +127,9 @@ class FramebufferCalls:
                 # point light's shadow, a reflection): named so, of no
                 # size the converter knows, another pass than the camera's.
                 key += ("layer", d.get("textarget", "all"))
+            if kind == "renderbuffer" and d.get("renderbuffertarget", "GL_RENDERBUFFER") == "GL_RENDERBUFFER" \
+                    and (not obj or self.s.renderbuffer_names is None or obj in self.s.renderbuffer_names):
+                self.decides = True   # (Mesa: _mesa_update_framebuffer_visual, after a call it takes)
             if attachment in DEPTH_ATTACHMENTS:
                 self.s.fbo_depth[fb] = key
             elif key is None:

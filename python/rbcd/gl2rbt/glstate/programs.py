@@ -420,6 +420,9 @@ class ProgramCalls:
                 and not self.vertex_stage().links(self.s.programs[v]):
             return   # its last link failed in Mesa: GL_INVALID_OPERATION, the program in use stays
         old, was = self.s.programs.get(self.s.program), self.s.program
+        # glUseProgram(0) binds the bound pipeline again (Mesa 22.3), which
+        # has Mesa decide whether draws are valid, a program in use or not.
+        self.decides = not v and self.s.pipeline in self.s.pipelines
         self.s.program = v
         if old is not None and v != was:
             self.out_of_use(was)
@@ -573,10 +576,22 @@ class ProgramCalls:
         if pipe is not None:
             pipe.validated = False
         units = p.sampler_units
+        values = values[:self.sampler_elements(p, loc, len(values))]   # (GL sets none past the array's end)
         moved = any(units.get(loc + i, 0) != v for i, v in enumerate(values))
         units.update((loc + i, v) for i, v in enumerate(values))
         if moved:
             self.revalidate()
+
+    def sampler_elements(self, p, loc, count):
+        """How many of `count` sampler elements from capture location loc
+        on exist (Mesa clamps the count to the array's end)."""
+        names, locations = self.vertex_stage().sampler_uniforms(p)
+        uname = p.uniform_names.get(loc)
+        if uname is None:
+            return next((i for i in range(count) if loc + i not in locations), count)
+        m = re.fullmatch(r"(.*)\[(\d+)\]", uname)
+        base, first = (m.group(1), int(m.group(2))) if m else (uname, 0)
+        return next((i for i in range(count) if f"{base}[{first + i}]" not in names), count)
 
     def h_patch_parameter(self, no, name, a, args):
         """glPatchParameteri(GL_PATCH_VERTICES) and glPatchParameterfv's
@@ -645,6 +660,11 @@ class ProgramCalls:
 
     def h_bind_pipeline(self, no, name, a, args):
         v = dict(args).get("pipeline", a[0] if a else None)
+        if v == 0 and self.s.program in self.s.programs:
+            # Mesa 22.3 returns at once when the name is its current
+            # shader state's, the program's own (0) while one is in use:
+            # the pipeline stays bound, and glUseProgram(0) brings it back.
+            return
         if (v == 0 or self.pipeline(no, name, v) is not None) and not self.recording():
             # (while feedback records: GL_INVALID_OPERATION)
             if isinstance(self.s.pipeline, tuple):
