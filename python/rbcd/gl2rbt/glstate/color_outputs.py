@@ -57,17 +57,14 @@ MULTIPLE = {"GL_FRONT", "GL_BACK", "GL_LEFT", "GL_RIGHT", "GL_FRONT_AND_BACK"}
 # context or a drawable, a renderbuffer attached to any framebuffer object
 # by a call GL takes (Converter.decides); a test of a framebuffer's
 # completeness, unless it was found complete since its attachments last
-# changed (Mesa keeps the status; STATUS_CHECKS);
-# the blend factors and GL_BLEND when they change (ColorOutputCalls), a
-# sampler moved to another texture unit (ProgramCalls.sampler_set), the
-# stages or active program of the pipeline draws run (ProgramCalls). Not
-# among them:
-# glDrawBuffer(s), glValidateProgramPipeline, a glUniform1i that leaves a
-# sampler where it was, glColorMaski, a glUseProgram of the program in use.
+# changed (Mesa keeps the status; h_check_framebuffer_status); the blend
+# factors, the advanced equation and GL_BLEND when they change
+# (ColorOutputCalls); a sampler moved to another texture unit
+# (ProgramCalls.sampler_set); the stages or active program of the pipeline
+# draws run (ProgramCalls). Not among them: glDrawBuffer(s),
+# glValidateProgramPipeline, a glUniform1i that leaves a sampler where it
+# was, glColorMaski, a glUseProgram of the program in use.
 ALWAYS_REVALIDATING = frozenset({"glLinkProgram"})
-# Completeness tests, which decide again unless the framebuffer was found
-# complete and no image was attached to it since (ColorOutputCalls).
-STATUS_CHECKS = frozenset({"glCheckFramebufferStatus", "glCheckNamedFramebufferStatus"})
 REVALIDATING = frozenset({
     "glUseProgram", "glBindProgramPipeline", "glDeleteProgramPipelines", "glBindFramebuffer", "glDeleteFramebuffers",
     "glBindVertexArray",
@@ -143,8 +140,8 @@ class ColorOutputCalls:
         as Mesa keeps it (_AdvancedBlendMode: set by glBlendEquation, and by
         glBlendEquationi on buffer 0; a separate form takes GL's own
         equations only and ends it, on any buffer); an equation GL refuses
-        changes nothing. A change
-        has Mesa decide again whether draws are valid."""
+        changes nothing. A change has Mesa decide again whether draws are
+        valid."""
         d = dict(args)
         per_buffer = base_name(name).endswith(("i", "IndexedAMD"))
         modes = [enum_arg(d[k], no, f"{name}: {k}") for k, _ in args if k != "buf"]

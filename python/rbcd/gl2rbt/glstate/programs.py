@@ -560,10 +560,9 @@ class ProgramCalls:
         if func in SAMPLER_SETTERS:
             p.int_uniform_calls += 1
             if p.sampler_shapes and all(0 <= v < MAX_TEXTURE_UNITS for v in values):
-                names, locations = self.vertex_stage().sampler_uniforms(p)
-                uname = p.uniform_names.get(loc)
-                if (uname in names) if uname is not None else (loc in locations):
-                    self.sampler_set(p, loc, values)
+                n = self.sampler_elements(p, loc, len(values))   # (0: no sampler there)
+                if n:
+                    self.sampler_set(p, loc, values[:n])   # (GL sets none past the array's end)
 
     def sampler_set(self, p, loc, values):
         """A glUniform1i(v) Mesa takes for a sampler of program p (elements
@@ -576,7 +575,6 @@ class ProgramCalls:
         if pipe is not None:
             pipe.validated = False
         units = p.sampler_units
-        values = values[:self.sampler_elements(p, loc, len(values))]   # (GL sets none past the array's end)
         moved = any(units.get(loc + i, 0) != v for i, v in enumerate(values))
         units.update((loc + i, v) for i, v in enumerate(values))
         if moved:
@@ -584,7 +582,8 @@ class ProgramCalls:
 
     def sampler_elements(self, p, loc, count):
         """How many of `count` sampler elements from capture location loc
-        on exist (Mesa clamps the count to the array's end)."""
+        on exist in Mesa's link of program p (Mesa clamps the count to the
+        array's end); 0 when loc names no sampler."""
         names, locations = self.vertex_stage().sampler_uniforms(p)
         uname = p.uniform_names.get(loc)
         if uname is None:
