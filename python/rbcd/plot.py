@@ -97,56 +97,100 @@ def order(values):
     return seen
 
 
-def load(path, args):
-    text = read_input_text(path, "results table", MAX_TABLE_BYTES)
-    try:
-        rows = list(csv.DictReader(io.StringIO(text, newline="")))
-        head = rows[0].keys() if rows else []
-    except csv.Error as e:
-        raise PlotError(f"{path}: not a results table: {e}")
-    if any(None in r or None in r.values() for r in rows):
-        raise PlotError(f"{path}: not a results table: rows of another length than the header")
-    if not rows:
-        raise PlotError(f"{path}: no rows")
-    for col, what in ((args.y, "--y"), (args.x, "--x")) + (((args.lines, "--lines"),) if args.lines else ()):
-        if col not in head:
-            raise PlotError(f"{what} {col}: no such column in {path} (columns: {', '.join(head)})")
-    where = []
-    for w in args.where:
-        k, sep, v = w.partition("=")
-        if not sep or k not in head:
-            raise PlotError(f"--where {w}: expected COLUMN=VALUE with a column of {path}")
-        where.append((k, v))
-    rows = [r for r in rows if r.get("status", "0") == "0" and all(r[k] == v for k, v in where)]
-    if not rows:
-        raise PlotError(f"{path}: no successful rows{' match --where' if where else ''}")
-    bad = [r[args.y] for r in rows if number(r[args.y]) is None]
-    if bad:
-        raise PlotError(f"--y {args.y}: not a number in some rows (e.g. \"{bad[0]}\")")
-    return list(head), rows
+# A record's line as csv reads a file opened with newline="": ended by
+# "\r\n", "\r" or "\n", the ending kept (a quoted field may hold one).
+LINE = re.compile(r"[^\r\n]*(?:\r\n|\r|\n)|[^\r\n]+$")
 
 
-def series(head, rows, args):
+def records(text):
+    """The table's records (lists of fields), read without copying the
+    text: the header, then each row (csv.DictReader's blank rows left out)."""
+    reader = csv.reader(m.group(0) for m in LINE.finditer(text))
+    head = next(reader, None)
+    yield head
+    for row in reader:
+        if row:
+            yield row
+
+
+class Table:
+    """What a plot needs of a results table, gathered in passes over its
+    text, no row kept (a dict a row had taken about 60 bytes of memory a
+    byte of table): the columns, the distinct x and line values in order of
+    first appearance, each (line, x)'s sum and count of --y, and which
+    other axis columns vary."""
+
+    def __init__(self, path, args):
+        text = read_input_text(path, "results table", MAX_TABLE_BYTES)
+        try:
+            rows = records(text)
+            header = next(rows)
+            count = 0
+            for row in rows:
+                if len(row) != len(header):
+                    raise PlotError(f"{path}: not a results table: rows of another length than the header")
+                count += 1
+        except csv.Error as e:
+            raise PlotError(f"{path}: not a results table: {e}")
+        if not count:
+            raise PlotError(f"{path}: no rows")
+        # (A column named twice is read from its last place, as DictReader does.)
+        at = {c: i for i, c in enumerate(header)}
+        self.head = list(at)
+        for col, what in ((args.y, "--y"), (args.x, "--x")) + (((args.lines, "--lines"),) if args.lines else ()):
+            if col not in at:
+                raise PlotError(f"{what} {col}: no such column in {path} (columns: {', '.join(self.head)})")
+        where = []
+        for w in args.where:
+            k, sep, v = w.partition("=")
+            if not sep or k not in at:
+                raise PlotError(f"--where {w}: expected COLUMN=VALUE with a column of {path}")
+            where.append((at[k], v))
+        fixed = {args.x, args.y} | ({args.lines} if args.lines else set()) | {k for k, _ in
+                                                                              (w.partition("=")[::2] for w in args.where)}
+        # Columns before the first metric column are axes; those that vary are averaged.
+        axes = [c for c in self.head if c not in fixed and c not in META
+                and not c.startswith(("totals.", "gpu.", "energy."))] + (["repeat"] if "repeat" in at else [])
+        first, varies = {}, set()
+        status, y, x, ln = at.get("status"), at[args.y], at[args.x], at.get(args.lines) if args.lines else None
+        self.xs, self.lines, self.sums = {}, {}, {}
+        successful, bad = 0, None
+        rows = records(text)
+        next(rows)   # (the header)
+        for row in rows:
+            if status is not None and row[status] != "0" or not all(row[k] == v for k, v in where):
+                continue
+            successful += 1
+            for c in axes:
+                v = row[at[c]]
+                if first.setdefault(c, v) != v:
+                    varies.add(c)
+            if number(row[y]) is None:
+                bad = row[y] if bad is None else bad
+                continue
+            line = row[ln] if ln is not None else ""
+            self.xs.setdefault(row[x], None)
+            self.lines.setdefault(line, None)
+            if len(self.lines) > MAX_LINES:
+                continue   # (refused by check_lines: no more sums kept)
+            acc = self.sums.setdefault((line, row[x]), [0.0, 0])
+            acc[0] += float(row[y])
+            acc[1] += 1
+        if not successful:
+            raise PlotError(f"{path}: no successful rows{' match --where' if where else ''}")
+        if bad is not None:
+            raise PlotError(f"--y {args.y}: not a number in some rows (e.g. \"{bad}\")")
+        self.varying = [c for c in axes if c in varies]
+
+
+def series(table, args):
     """{line: [(x, mean y)]} and the columns averaged over."""
-    xs = order([r[args.x] for r in rows])
-    lines = order([r[args.lines] for r in rows]) if args.lines else [""]
-    fixed = {args.x, args.y} | ({args.lines} if args.lines else set()) | {k for k, _ in
-                                                                          (w.partition("=")[::2] for w in args.where)}
-    # Columns before the first metric column are axes; those that vary are averaged.
-    varying = [c for c in head if c not in fixed and c not in META and not c.startswith(("totals.", "gpu.", "energy."))
-               and len({r[c] for r in rows}) > 1]
-    if "repeat" in head and len({r["repeat"] for r in rows}) > 1:
-        varying.append("repeat")
+    xs = order(list(table.xs))
+    lines = order(list(table.lines)) if args.lines else [""]
     check_lines(lines, args)
-    # One pass over the rows (a pass per line and x had taken hours on a
-    # table of the allowed size); each mean sums its rows in their order.
-    sums = {}
-    for r in rows:
-        acc = sums.setdefault((r[args.lines] if args.lines else "", r[args.x]), [0.0, 0])
-        acc[0] += float(r[args.y])
-        acc[1] += 1
+    sums = table.sums
     out = {ln: [(x, sums[ln, x][0] / sums[ln, x][1]) for x in xs if (ln, x) in sums] for ln in lines}
-    return xs, out, varying
+    return xs, out, table.varying
 
 
 def check_lines(lines, args):
@@ -372,8 +416,7 @@ def run(argv):
     # (A FIFO or socket as -o would be waited on for a reader: refused, as
     # every tool refuses it.)
     check_outputs([("the input table", args.table)], [("-o", args.output)])
-    head, rows = load(args.table, args)
-    xs, data, varying = series(head, rows, args)
+    xs, data, varying = series(Table(args.table, args), args)
     if varying:
         say(PROG, f"averaging over {', '.join(varying)} (fix them with --where)")
     numeric_x = all(number(x) is not None for x in xs)

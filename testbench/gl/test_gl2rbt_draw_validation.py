@@ -168,6 +168,11 @@ FBO = ("glGenFramebuffers", dict(n=1, framebuffers=[3]))
 COMPLETE = ("glCheckNamedFramebufferStatus", dict(framebuffer=3, target="GL_FRAMEBUFFER", ret="GL_FRAMEBUFFER_COMPLETE"))
 SAMPLER_PROGRAM = [("glCreateShaderProgramv", dict(type="GL_FRAGMENT_SHADER", count=1, strings=[ONE_TYPE_FS], ret=11)),
                    ("glGetUniformLocation", dict(program=11, name="a", ret=20))]
+# The same with sampler a at unit 2 from the link (layout(binding = 2)).
+BOUND_FS = ONE_TYPE_FS.replace("410", "420").replace("uniform sampler2D a;", "layout(binding = 2) uniform sampler2D a;")
+SAMPLER_PROGRAM_BOUND = [("glCreateShaderProgramv", dict(type="GL_FRAGMENT_SHADER", count=1, strings=[BOUND_FS],
+                                                         ret=11)),
+                         ("glGetUniformLocation", dict(program=11, name="a", ret=20))]
 
 
 @pytest.mark.parametrize("calls, drawn", [
@@ -220,13 +225,17 @@ SAMPLER_PROGRAM = [("glCreateShaderProgramv", dict(type="GL_FRAGMENT_SHADER", co
     ([SRC1, BOTH, FBO, ("glBindFramebuffer", dict(target="GL_READ_FRAMEBUFFER", framebuffer=3))], False),
     ([SRC1, BOTH] + SAMPLER_PROGRAM + [("glProgramUniform1i", dict(program=11, location=20, v0=3))], False),
     ([SRC1, BOTH] + SAMPLER_PROGRAM + [("glProgramUniform1i", dict(program=11, location=20, v0=0))], True),
+    # A sampler starts at the unit its layout(binding) gives it (R24-6).
+    ([SRC1, BOTH] + SAMPLER_PROGRAM_BOUND + [("glProgramUniform1i", dict(program=11, location=20, v0=2))], True),
+    ([SRC1, BOTH] + SAMPLER_PROGRAM_BOUND + [("glProgramUniform1i", dict(program=11, location=20, v0=0))], False),
 ], ids=["blend_one_buffer", "two_buffers_no_blend", "two_buffers_src1", "blend_enabled_after", "left",
         "back_again", "two_buffers_after_the_blend", "use_program_after", "back_again_then_bind", "src1_on_buffer_0_only", "src1_alpha_on_buffer_1", "buffer_past_the_last_refused",
         "bad_factor_refused", "blend_undone", "none_then_back_left", "back_left_then_none", "zero_then_back_left",
         "back_left_then_zero",
         "a_buffer_twice_refused", "a_buffer_twice_refused_after", "right_refused", "framebuffer_s_own_list",
         "named_window", "attached_elsewhere", "completeness_tested", "texture_attached", "found_complete_again", "read_framebuffer_bound",
-        "another_program_s_sampler_moved", "another_program_s_sampler_kept"])
+        "another_program_s_sampler_moved", "another_program_s_sampler_kept", "bound_sampler_kept",
+        "bound_sampler_moved"])
 def test_dual_source_blending_on_a_second_draw_buffer(tmp_path, calls, drawn):
     """A blend factor of the second colour output on any draw buffer past
     the first makes the draw GL_INVALID_OPERATION (GL_MAX_DUAL_SOURCE_DRAW_
@@ -239,6 +248,77 @@ def test_dual_source_blending_on_a_second_draw_buffer(tmp_path, calls, drawn):
     assert (got > 100) == drawn, (got, report)
     assert drawn or "the second colour output" in report, report
 
+
+
+# Framebuffer 3 with renderbuffer 5 (64 x 48) attached, found complete by a
+# status check, bound for reading before the blend decision.
+RB_STORAGE = ("glRenderbufferStorage", dict(target="GL_RENDERBUFFER", internalformat="GL_RGBA8", width=64, height=48))
+WITH_IMAGE = [FBO, ("glGenRenderbuffers", dict(n=1, renderbuffers=[5])),
+              ("glBindRenderbuffer", dict(target="GL_RENDERBUFFER", renderbuffer=5)), RB_STORAGE,
+              ("glNamedFramebufferRenderbuffer", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0",
+                                                      renderbuffertarget="GL_RENDERBUFFER", renderbuffer=5))]
+READ_3 = ("glBindFramebuffer", dict(target="GL_READ_FRAMEBUFFER", framebuffer=3))
+READ_WINDOW = ("glBindFramebuffer", dict(target="GL_READ_FRAMEBUFFER", framebuffer=0))
+TEXTURE_4 = [("glGenTextures", dict(n=1, textures=[4])), ("glBindTexture", dict(target="GL_TEXTURE_2D", texture=4))]
+TEX_IMAGE = ("glTexImage2D", dict(target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA8", width=64, height=48,
+                                  border=0, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=None))
+WITH_TEXTURE = [FBO] + TEXTURE_4 + [TEX_IMAGE, ("glNamedFramebufferTexture", dict(
+    framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))]
+
+
+@pytest.mark.parametrize("calls, drawn", [
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH], True),
+    # Its status cleared: an attachment, new storage of an attached image,
+    # an attached image deleted; the next draw tests it, and decides.
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH] + TEXTURE_4 + [("glFramebufferTexture2D", dict(
+        target="GL_READ_FRAMEBUFFER", attachment="GL_COLOR_ATTACHMENT1", textarget="GL_TEXTURE_2D", texture=4,
+        level=0))], False),
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH, ("glRenderbufferStorage", dict(
+        target="GL_RENDERBUFFER", internalformat="GL_RGBA8", width=32, height=24))], False),
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH, RB_STORAGE], True),
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH, ("glDeleteRenderbuffers", dict(n=1, renderbuffers=[5]))], False),
+    (WITH_TEXTURE + [COMPLETE, READ_3, SRC1, BOTH, TEX_IMAGE], False),
+    (WITH_TEXTURE + [COMPLETE, READ_3, SRC1, BOTH, ("glTexSubImage2D", dict(
+        target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=1, height=1, format="GL_RGBA",
+        type="GL_UNSIGNED_BYTE", pixels=b"\0\0\0\0"))], True),
+    (WITH_TEXTURE + [COMPLETE, READ_3, SRC1, BOTH, ("glDeleteTextures", dict(n=1, textures=[4]))], False),
+    # Not bound: cleared, but tested only by a status check.
+    (WITH_IMAGE + [COMPLETE, SRC1, BOTH, ("glRenderbufferStorage", dict(
+        target="GL_RENDERBUFFER", internalformat="GL_RGBA8", width=32, height=24))], True),
+    (WITH_IMAGE + [COMPLETE, SRC1, BOTH, ("glRenderbufferStorage", dict(
+        target="GL_RENDERBUFFER", internalformat="GL_RGBA8", width=32, height=24)), COMPLETE], False),
+    (WITH_TEXTURE + [COMPLETE, SRC1, BOTH, TEX_IMAGE, COMPLETE], False),
+    # An incomplete one is tested at every state update a change of
+    # buffers flags (glDrawBuffer), a complete one not again.
+    ([FBO, READ_3, ("glDrawBuffer", dict(mode="GL_BACK")), SRC1, BOTH], False),
+    (WITH_IMAGE + [COMPLETE, READ_3, ("glDrawBuffer", dict(mode="GL_BACK")), SRC1, BOTH], True),
+    (WITH_IMAGE + [READ_3, ("glDrawBuffer", dict(mode="GL_BACK")), SRC1, BOTH], False),
+    ([FBO, READ_3, ("glClear", dict(mask="GL_DEPTH_BUFFER_BIT")), SRC1, BOTH,
+      ("glDrawBuffer", dict(mode="GL_FRONT_AND_BACK"))], False),
+    # A read framebuffer bound, unbound or deleted decides nothing when it
+    # is complete (R24-2), nor does a status check of one a state update
+    # found complete.
+    (WITH_IMAGE + [COMPLETE, SRC1, BOTH, READ_3], True),
+    (WITH_IMAGE + [COMPLETE, SRC1, BOTH, READ_3, READ_WINDOW], True),
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH, ("glDeleteFramebuffers", dict(n=1, framebuffers=[3]))], True),
+    (WITH_IMAGE + [READ_3, ("glClear", dict(mask="GL_DEPTH_BUFFER_BIT")), SRC1, BOTH, COMPLETE], True),
+    (WITH_IMAGE + [READ_3, SRC1, BOTH, COMPLETE], False),
+], ids=["control", "texture_attached", "storage_changed", "same_storage", "renderbuffer_deleted",
+        "texture_image_given", "texture_sub_image", "texture_deleted", "not_bound_storage_changed",
+        "not_bound_checked_again", "not_bound_texture_checked_again", "incomplete_after_draw_buffer",
+        "complete_after_draw_buffer", "untested_after_draw_buffer", "incomplete_after_a_clear", "complete_read_bound", "complete_read_unbound",
+        "complete_read_deleted", "found_complete_by_a_clear", "untested_checked"])
+def test_a_framebuffer_tested_again_decides(tmp_path, calls, drawn):
+    """Mesa keeps each framebuffer object's completeness status: a change
+    to its attachments or their images clears it, and the next test (a
+    status check, or for a bound framebuffer the next draw's or clear's
+    state update after a change of buffers) has Mesa decide again whether
+    draws are valid; a complete one bound for reading decides nothing. The
+    two draw buffers after the blend decision make the draw refused only
+    when Mesa decides again (R24-1 and R24-2: 27.83% against Mesa)."""
+    got, report = fragments(tmp_path, blending(calls), "tested")
+    assert (got > 100) == drawn, (got, report)
+    assert drawn or "the second colour output" in report, report
 
 
 def test_a_reduced_capture_keeps_blend_factors_and_draw_buffers(tmp_path):
@@ -301,3 +381,22 @@ def test_advanced_blending_needs_its_layout_and_one_buffer(tmp_path, fs, calls, 
     got, report = fragments(tmp_path, draw(c, vao=None), "advanced")
     assert (got > 100) == drawn, (got, report)
     assert drawn or "advanced blending (" in report, report
+
+
+@pytest.mark.parametrize("fs", [
+    SUPPORTING_FS.replace("layout(blend_support_multiply) out;", "#if 0\nlayout(blend_support_multiply) out;\n#endif"),
+    SUPPORTING_FS.replace("layout(blend_support_multiply) out;",
+                          "#ifdef NOT_DEFINED\nlayout(blend_support_multiply) out;\n#else\n#endif"),
+], ids=["if_0", "ifdef"])
+def test_blend_support_among_conditionals_is_refused(tmp_path, fs):
+    """The text scans keep every branch of a conditional, so a
+    blend_support qualifier under #if 0 had been taken as declared (27.83%
+    against Mesa; R24-5): a draw whose validity depends on one among
+    conditionals is refused in one line, nothing left."""
+    from gl_captures import left_behind, refused
+    c = with_fragment_shader(fs).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    for fn, args in [BLEND, MULTIPLY]:
+        c.add(fn, **args)
+    r = gl2rbt(tmp_path, draw(c, vao=None).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    refused(r, "glDrawArrays", "blend_support among preprocessor conditionals")
+    assert left_behind(tmp_path, ["c.xz"]) == []

@@ -851,3 +851,51 @@ def test_warnings(c):
     # Progress in a log (not a terminal): a line at every tenth of the runs at least.
     progress = [l for l in r.stderr.splitlines() if " runs, " in l and " failed, " in l]
     assert len(progress) >= 4, f"sparse progress: {progress}"
+
+
+@sweep_case
+def test_plot_reads_a_table_in_bounded_memory(c):
+    """rbcd-plot keeps no row of its table: a 20 MB table of 25 columns
+    plots within 160 MB of peak memory, matplotlib included (a dict a row
+    had taken 333 MB for it, and about 15 GB at the 256 MiB limit; R23-4);
+    and what it reads is what csv.DictReader reads: CR LF and CR line
+    ends, a quoted field across lines, blank lines, a column named twice
+    (its last place)."""
+    rng = random.Random(1)
+    cols = ["point", "input", "repeat", "zeb.banks", "zeb.list_length"] + [f"totals.c{i}" for i in range(15)] \
+        + ["gpu.overhead_pct", "status", "error", "run"]
+    big = os.path.join(c.tmp, "big.csv")
+    with open(big, "w") as f:
+        f.write(",".join(cols) + "\n")
+        i = 0
+        while f.tell() < 20_000_000:
+            f.write(",".join([str(i), f"in{i % 5}.rbt", "0", str(1 << i % 3), str(4 << i % 3)]
+                             + [str(rng.randint(0, 10 ** 9)) for _ in range(15)]
+                             + [f"{rng.random() * 10:.6f}", "0", "", f"r{i}"]) + "\n")
+            i += 1
+    png = os.path.join(c.tmp, "big.png")
+    peak = ("import resource, subprocess, sys; r = subprocess.run(sys.argv[1:]); "
+            "print('maxrss', resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss, file=sys.stderr); "
+            "sys.exit(r.returncode)")
+    r = run(["/usr/bin/python3", "-c", peak, "/usr/bin/python3", PLOT, big, "--y", "gpu.overhead_pct", "--x",
+             "zeb.banks", "--lines", "input", "-o", png], timeout=300)
+    assert r.returncode == 0 and c.read(png, "rb")[:4] == b"\x89PNG", r.stderr
+    mb = int(re.search(r"maxrss (\d+)", r.stderr).group(1)) / 1024
+    print(f"rbcd-plot: {os.path.getsize(big) / 1e6:.1f} MB table, {mb:.0f} MB peak")
+    assert mb < 160, f"{mb:.0f} MB peak for a 20 MB table"
+    odd = ('a,b,c,b\r\n1,2,"x\r\ny",5\r\n\r\n2,3,z,6\r3,4,z,7\n1,8,"q,r",9\n')
+    path = c.sweep_file("odd.csv", odd)
+    import argparse
+    import io
+    for lines in (None, "c"):
+        args = argparse.Namespace(y="b", x="a", lines=lines, where=[])
+        xs, data, _ = rbcd.plot.series(rbcd.plot.Table(path, args), args)
+        rows = list(csv.DictReader(io.StringIO(odd, newline="")))
+        want = {}
+        for ln in dict.fromkeys(r[lines] if lines else "" for r in rows):
+            pts = {}
+            for r in rows:
+                if (r[lines] if lines else "") == ln:
+                    pts.setdefault(r["a"], []).append(float(r["b"]))
+            want[ln] = [(x, sum(v) / len(v)) for x, v in sorted(pts.items())]
+        assert xs == ["1", "2", "3"] and data == want, (data, want)

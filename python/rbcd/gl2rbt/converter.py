@@ -56,6 +56,16 @@ STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls
 
 # Arguments that name a buffer target, and the suffixes of an extension's
 # name for one (GL_ARRAY_BUFFER_ARB is GL_ARRAY_BUFFER).
+# The calls that start with Mesa's state update (_mesa_update_state), which
+# tests the bound framebuffer objects when _NEW_BUFFERS is pending
+# (FramebufferCalls.update_framebuffers): draws, clears, blits, pixel reads,
+# draws and copies, copies into textures.
+STATE_UPDATES = (set(DrawCalls.HANDLERS) - {"glEnd", "glPrimitiveRestartNV", "glRenderMode"}) | {
+    "glClear", "glClearBufferfv", "glClearBufferiv", "glClearBufferuiv", "glClearBufferfi",
+    "glClearNamedFramebufferfv", "glClearNamedFramebufferiv", "glClearNamedFramebufferuiv",
+    "glClearNamedFramebufferfi", "glBlitFramebuffer", "glBlitNamedFramebuffer", "glReadPixels", "glReadnPixels",
+    "glCopyTexImage1D", "glCopyTexImage2D", "glCopyTexSubImage1D", "glCopyTexSubImage2D", "glCopyTexSubImage3D",
+    "glCopyTextureSubImage1D", "glCopyTextureSubImage2D", "glCopyTextureSubImage3D"}
 BUFFER_TARGET_ARGS = {"target", "readTarget", "writeTarget"}
 TARGET_SUFFIXES = ("_BUFFER_ARB", "_BUFFER_EXT", "_BUFFER_OES")
 
@@ -303,6 +313,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             h = Converter.h_not_in_core
         bound = self.bindings() if base in REVALIDATING else None
         self.decides = False   # set by a handler whose call has Mesa decide (a successful attachment, ...)
+        if s.new_buffers and base in STATE_UPDATES:
+            self.update_framebuffers()
         if h is not None:
             try:
                 h(self, no, name, a, args)
@@ -420,6 +432,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 self.switch_state(ctx)
             self.state_context = ctx
         self.unshared_contexts.discard(ctx)
+        if self.decides:
+            self.s.new_buffers = True   # (Mesa's _mesa_make_current)
 
     def switch_state(self, ctx):
         """Context `ctx` made current after another: the state of the one

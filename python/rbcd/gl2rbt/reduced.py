@@ -14,7 +14,7 @@ import pickle
 from .apitrace import MAX_RECORD_VALUES, CallReader, PointerType, call_values_within, too_many_values, where
 from ..cli import U63
 from .errors import ConvertError, printable
-from .converter import Converter
+from .converter import STATE_UPDATES, Converter
 from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
 from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
 from .glstate.textures import REDUCED_TEXTURES
@@ -66,12 +66,13 @@ REDUCED_CHECK_ONLY = {"glProvokingVertex"}
 
 def reduced_keeps(name):
     """Whether the emulation reads the call for the outputs: it has a
-    handler, or it is not passed over (and is refused), or it is the window
-    system's."""
+    handler, starts Mesa's state update (STATE_UPDATES: a copy into a
+    texture of another dimension), is not passed over (and is refused), or
+    is the window system's."""
     base = base_name(name)
     if base in REDUCED_CHECK_ONLY:
         return False
-    return base in Converter.HANDLERS or not name.startswith(IGNORED_PREFIXES) \
+    return base in Converter.HANDLERS or base in STATE_UPDATES or not name.startswith(IGNORED_PREFIXES) \
         or name.startswith(REDUCED_KEEP) or name in END_FRAME_CALLS
 
 

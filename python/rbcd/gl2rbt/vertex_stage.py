@@ -494,15 +494,32 @@ class VertexStage:
         """(names, locations) of program p's active samplers as Mesa links
         it, each element of an array by its own name and location too: what
         a glUniform1i call sets a sampler through. Kept for the link."""
+        return self.linked_samplers(p)[:2]
+
+    def sampler_start_units(self, p):
+        """({name: unit}, {location: unit}) of program p's active sampler
+        elements as Mesa's link leaves them (a layout(binding = N) sets
+        the first unit; 0 otherwise), by the names and locations of
+        sampler_uniforms."""
+        return self.linked_samplers(p)[2:]
+
+    def linked_samplers(self, p):
         key = (p.link_call, p.version)
         if p.sampler_uniforms is None or p.sampler_uniforms[0] != key:
-            names, locations = set(), set()
+            names, locations, by_name, by_location = set(), set(), {}, {}
+            unit = np.zeros(1, np.int32)
             with self.whole_program(p, ALL_STAGES) as prog:
                 for _, base, _, elements in self.active_samplers(prog) if prog is not None else ():
                     names.add(base)
                     names.update(f"{base}[{k}]" for k in range(len(elements)))
                     locations.update(elements)
-            p.sampler_uniforms = (key, frozenset(names), frozenset(locations) - {-1})
+                    for k, at in enumerate(elements):
+                        if at >= 0:
+                            self.gl.glGetUniformiv(prog, at, unit)
+                            by_name[f"{base}[{k}]"] = by_location[at] = int(unit[0])
+                            if k == 0:
+                                by_name[base] = int(unit[0])
+            p.sampler_uniforms = (key, frozenset(names), frozenset(locations) - {-1}, by_name, by_location)
         return p.sampler_uniforms[1:]
 
     def active_samplers(self, prog):

@@ -94,7 +94,17 @@ class GLState:
         # the advanced blend equation (KHR_blend_equation_advanced) in use.
         self.window_one_output = True
         self.fbo_one_output = {}
-        self.fbo_found_complete = set()   # framebuffer objects a status check found complete since their last attachment
+        # Mesa's completeness status of each framebuffer object as it keeps
+        # it (_Status): True complete, False incomplete, absent untested (a
+        # new one, or one whose attachments or their images changed since);
+        # each framebuffer's draw buffers as glDrawBuffer(s) named them; and
+        # whether a change Mesa flags _NEW_BUFFERS for is pending, which has
+        # the next state update (a draw, a clear: FramebufferCalls.
+        # update_framebuffers) test the bound framebuffers not found complete.
+        self.fbo_status = {}
+        self.fbo_buffer_names = {}
+        self.window_buffer_names = ("GL_BACK",)
+        self.new_buffers = False
         self.advanced_blend = None
         self.blend_on = False             # GL_BLEND (any draw buffer's)
         self.render_fault = None          # why draws are refused, as Mesa last decided (DrawCalls.revalidate)
@@ -201,7 +211,8 @@ SHARED_STATE = {
     "depth_types",
     "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names", "sampler_names",
     "texture_buffers", "texture_images", "texture_calls", "samplers", "views", "reduced_texture_versions",
-    "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "fbo_one_output", "fbo_found_complete", "framebuffer_names"}
+    "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "fbo_one_output", "fbo_status", "fbo_buffer_names",
+    "framebuffer_names"}
 # The memory limits are of all groups together.
 CONVERSION_STATE = {"next_version", "gpu_writes", "readback_call", "buffer_bytes_in_all", "texture_bytes_kept"}
 

@@ -50,20 +50,22 @@ MULTIPLE = {"GL_FRONT", "GL_BACK", "GL_LEFT", "GL_RIGHT", "GL_FRONT_AND_BACK"}
 # The calls after which Mesa 22.3 decides again whether draws are valid
 # (_mesa_update_valid_to_render_state), its ValidPrimMask, which draws then
 # read until the next (DrawCalls.revalidate): a change of the program in
-# use, the bound pipeline (with no program in use), the draw or read
-# framebuffer, transform feedback's state, a core profile's vertex array
-# binding to or from object 0 (REVALIDATING, when bindings() changes); a
-# link (ALWAYS_REVALIDATING, every time); a MakeCurrent that changes the
-# context or a drawable, a renderbuffer attached to any framebuffer object
-# by a call GL takes (Converter.decides); a test of a framebuffer's
-# completeness, unless it was found complete since its attachments last
-# changed (Mesa keeps the status; h_check_framebuffer_status); the blend
-# factors, the advanced equation and GL_BLEND when they change
-# (ColorOutputCalls); a sampler moved to another texture unit
-# (ProgramCalls.sampler_set); the stages or active program of the pipeline
-# draws run (ProgramCalls). Not among them: glDrawBuffer(s),
-# glValidateProgramPipeline, a glUniform1i that leaves a sampler where it
-# was, glColorMaski, a glUseProgram of the program in use.
+# use, the bound pipeline (with no program in use), the draw framebuffer,
+# transform feedback's state, a core profile's vertex array binding to or
+# from object 0 (REVALIDATING, when bindings() changes); a link
+# (ALWAYS_REVALIDATING, every time); a MakeCurrent that changes the context
+# or a drawable, a renderbuffer attached to any framebuffer object by a
+# call GL takes (Converter.decides); a test of a framebuffer object's
+# completeness whose status is not complete, by a status check
+# (h_check_framebuffer_status) or by the state update a draw or clear
+# starts with after a change of buffers (FramebufferCalls.
+# update_framebuffers); the blend factors, the advanced equation and
+# GL_BLEND when they change (ColorOutputCalls); a sampler moved to another
+# texture unit (ProgramCalls.sampler_set); the stages or active program of
+# the pipeline draws run (ProgramCalls). Not among them: a change of the
+# read framebuffer alone, glDrawBuffer(s), glValidateProgramPipeline, a
+# glUniform1i that leaves a sampler where it was, glColorMaski, a
+# glUseProgram of the program in use.
 ALWAYS_REVALIDATING = frozenset({"glLinkProgram"})
 REVALIDATING = frozenset({
     "glUseProgram", "glBindProgramPipeline", "glDeleteProgramPipelines", "glBindFramebuffer", "glDeleteFramebuffers",
@@ -85,6 +87,13 @@ ADVANCED_EQUATIONS = {f"GL_{mode.upper()}_{suffix}": mode for suffix in ("KHR", 
 # A fragment shader's declaration of the advanced equations it supports:
 # layout(blend_support_NAME, ...) out; (its text as the compiler reads it).
 LAYOUT_OUT = re.compile(r"\blayout\s*\(([^()]*)\)\s*out\s*;")
+# A preprocessor conditional, whose branches the text scans all keep.
+CONDITIONAL = re.compile(r"^[ \t]*#[ \t]*(if|ifdef|ifndef|elif|else)\b", re.M)
+
+
+class NotFollowed(str):
+    """Why draws may be refused, where the converter cannot decide it as
+    Mesa does: a draw under it is refused in one line naming it."""
 
 
 def factor(v, no, what):
@@ -161,21 +170,23 @@ class ColorOutputCalls:
 
     def h_check_framebuffer_status(self, no, name, a, args):
         """glCheck(Named)FramebufferStatus: Mesa tests a framebuffer object's
-        completeness unless it has found it complete since its attachments
-        last changed, and decides again whether draws are valid at each
-        test (complete or not); the window's is no test. The answer is the
-        capture's (the call's return value)."""
+        completeness unless its status is complete (FramebufferCalls), and
+        decides again whether draws are valid at each test (complete or
+        not); the window's is no test, nor is a name that is no
+        framebuffer. The answer is the capture's (the call's return value),
+        or the converter's own where the capture has none."""
         d = dict(args)
         if "Named" in name:
             fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
+            if fb and not self.known_framebuffer(fb):
+                return   # GL_INVALID_OPERATION
         else:
             fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
-        if not fb or (fb in self.s.fbo_found_complete and self.ret == "GL_FRAMEBUFFER_COMPLETE"):
+        if not fb or self.s.fbo_status.get(fb) is True:
             return
-        if self.ret == "GL_FRAMEBUFFER_COMPLETE":
-            self.s.fbo_found_complete.add(fb)
-        else:
-            self.s.fbo_found_complete.discard(fb)
+        ret = self.ret
+        self.s.fbo_status[fb] = ret == "GL_FRAMEBUFFER_COMPLETE" if isinstance(ret, str) and \
+            ret.startswith("GL_FRAMEBUFFER_") else self.framebuffer_complete(fb)
         self.revalidate()
 
     def advanced_blend_invalid(self):
@@ -197,6 +208,10 @@ class ColorOutputCalls:
         supports = {q.strip()[len("blend_support_"):] for m in LAYOUT_OUT.finditer(text)
                     for q in m.group(1).split(",") if q.strip().startswith("blend_support_")}
         if "all_equations" in supports or mode in supports:
+            if any(CONDITIONAL.search(source) for source in fragment[1].objects.get("fragment", ())):
+                return NotFollowed(f"advanced blending ({mode}) under a fragment shader that declares "
+                                   f"blend_support among preprocessor conditionals, which the converter does not "
+                                   "evaluate (docs/gl-capture.md)")
             return None
         return f"advanced blending ({mode}) under a fragment shader that does not declare blend_support_{mode}"
 
@@ -209,7 +224,7 @@ class ColorOutputCalls:
         (of the vertex array binding, in a core profile, only whether it is
         vertex array object 0; of the pipeline, only the one draws run)."""
         s = self.s
-        return (s.program, self.current_pipeline(), s.draw_fbo, s.read_fbo, self.core and s.vao == 0, s.feedback)
+        return (s.program, self.current_pipeline(), s.draw_fbo, self.core and s.vao == 0, s.feedback)
 
     def blend_enabled(self, on):
         """glEnable or glDisable(GL_BLEND): a change has Mesa decide again."""
@@ -280,6 +295,19 @@ class ColorOutputCalls:
         count = self.draw_buffer_counts(no, name, fb, bufs)
         if count is None:
             return
+        # The draw buffers as named (GL_NONE at the end dropped: Mesa sets
+        # GL_NONE past the list): a change flags a state update (Mesa's
+        # updated_drawbuffers).
+        names = [buffer_name(b, no, name) for b in bufs]
+        while names and names[-1] == "GL_NONE":
+            names.pop()
+        before = self.s.window_buffer_names if fb == 0 else self.s.fbo_buffer_names.get(fb, ("GL_COLOR_ATTACHMENT0",))
+        if tuple(names) != before:
+            self.s.new_buffers = True
+            if fb == 0:
+                self.s.window_buffer_names = tuple(names)
+            else:
+                self.s.fbo_buffer_names[fb] = tuple(names)
         # Only colour output 0 drawn, into one buffer (what advanced blending
         # needs): not GL_FRONT_AND_BACK, no buffer past the first in a list.
         one = count <= 1 if "Buffers" in base else buffer_name(bufs[0], no, name) != "GL_FRONT_AND_BACK"
@@ -287,6 +315,28 @@ class ColorOutputCalls:
             self.s.window_draw_buffers, self.s.window_one_output = count, one
         else:
             self.s.fbo_draw_buffers[fb], self.s.fbo_one_output[fb] = count, one
+
+    def h_read_buffer(self, no, name, a, args):
+        """glReadBuffer and glNamedFramebufferReadBuffer: one GL takes (a
+        buffer the window has, or for a framebuffer object GL_NONE or a
+        colour attachment) flags a state update (Mesa's _mesa_readbuffer),
+        the buffer changed or not; what is read is not followed."""
+        d = dict(args)
+        if "Named" in name:
+            fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
+            if fb and not self.known_framebuffer(fb):
+                return   # GL_INVALID_OPERATION
+        else:
+            fb = self.s.read_fbo
+        b = buffer_name(d.get("src", d.get("mode", a[-1] if a else None)), no, f"{name}: the buffer")
+        if b is None:
+            return   # GL_INVALID_ENUM
+        if fb == 0:
+            taken = b == "GL_NONE" or WINDOW_BUFFERS.get(b, 0) > 0
+        else:
+            taken = b == "GL_NONE" or b.startswith("GL_COLOR_ATTACHMENT") and BUFFER_VALUES[b] - 0x8CE0 < 8
+        if taken:
+            self.s.new_buffers = True
 
     def known_framebuffer(self, fb):
         """Whether framebuffer object fb exists for a direct state access
@@ -325,6 +375,8 @@ class ColorOutputCalls:
         "glCheckFramebufferStatus": h_check_framebuffer_status,
         "glCheckNamedFramebufferStatus": h_check_framebuffer_status,
         "glDrawBuffer": h_draw_buffers,
+        "glReadBuffer": h_read_buffer,
+        "glNamedFramebufferReadBuffer": h_read_buffer,
         "glDrawBuffers": h_draw_buffers,
         "glDrawBuffersATI": h_draw_buffers,
         "glDrawBuffersNV": h_draw_buffers,

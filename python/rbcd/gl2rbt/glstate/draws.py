@@ -9,6 +9,7 @@ from ..errors import checked, fail_call, printable
 from ..gl_tables import CULL, DEPTH_FUNCS, INDEX_TYPES, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
 from ..glmath import mat_mul, triangle_indices
 from . import enum_arg, number
+from .color_outputs import NotFollowed
 
 # Points and lines, the adjacency forms too: no area without a geometry shader.
 NO_AREA_MODES = PRIM_NO_AREA | {"GL_LINES_ADJACENCY", "GL_LINE_STRIP_ADJACENCY"}
@@ -102,11 +103,17 @@ class DrawCalls:
                     self.gpu_wrote_buffer(no, b, f"{base_name(name)}, whose program may store into {target} "
                                                  f"binding {index}")
 
-    def draw_invalid(self):
+    def draw_invalid(self, no=None, name=None):
         """Why Mesa refuses every draw now with GL_INVALID_OPERATION,
         whatever its mode and arrays: what it last decided (revalidate).
-        None when it draws."""
-        return self.s.render_fault
+        None when it draws. A decision the converter does not follow
+        (NotFollowed) refuses the capture at draw `no` (call `name`) when
+        it is drawn."""
+        fault = self.s.render_fault
+        if isinstance(fault, NotFollowed) and no is not None and self.active and not self.s.rasterizer_discard \
+                and self.renders():
+            fail_call(no, f"{printable(name)}: {fault}")
+        return fault
 
     def revalidate(self):
         """Mesa decides again whether draws are valid, after one of the
@@ -125,7 +132,7 @@ class DrawCalls:
         """positions: (n, 4) object-space vertices in GL order for `mode`,
         through the fixed-function transform; tris, the triangles GL
         assembles from them when primitive restart cut them into pieces."""
-        invalid = self.draw_invalid()
+        invalid = self.draw_invalid(no, name)
         if invalid is not None:
             if self.active and not self.s.rasterizer_discard and self.renders():
                 self.rejected_draws.append((no, f"GL_INVALID_OPERATION: {invalid}"))
@@ -341,7 +348,7 @@ class DrawCalls:
         if refused is not None:
             self.rejected_draws.append((no, refused))
             return
-        invalid = self.draw_invalid()
+        invalid = self.draw_invalid(no, name)
         if invalid is not None:
             if self.active and not self.s.rasterizer_discard and self.renders():
                 self.rejected_draws.append((no, f"GL_INVALID_OPERATION: {invalid}"))

@@ -95,10 +95,13 @@ class FramebufferCalls:
         fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
         if not generated_name(self.core, self.s.framebuffer_names, fb):
             return
+        before = (self.s.draw_fbo, self.s.read_fbo)
         if target in ("GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER"):
             self.s.draw_fbo = fb
         if target in ("GL_FRAMEBUFFER", "GL_READ_FRAMEBUFFER"):
             self.s.read_fbo = fb
+        if (self.s.draw_fbo, self.s.read_fbo) != before:
+            self.s.new_buffers = True   # (Mesa's _mesa_bind_framebuffers: a binding that changes)
 
     def h_framebuffer_texture(self, no, name, a, args, layer=None):
         """glFramebufferTexture(2D), glFramebufferRenderbuffer: an image
@@ -108,7 +111,6 @@ class FramebufferCalls:
         the camera pass: camera_pass)."""
         d = dict(args)
         fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
-        self.s.fbo_found_complete.discard(fb)   # (its completeness is tested again)
         attachment = d.get("attachment")
         if fb and (attachment in DEPTH_ATTACHMENTS or attachment in OTHER_ATTACHMENTS):
             kind = "renderbuffer" if "Renderbuffer" in name else "texture"
@@ -117,6 +119,7 @@ class FramebufferCalls:
                 if kind == "texture" else 0
             if level < 0:
                 return   # GL_INVALID_VALUE: the attachment stays
+            self.attachments_changed(fb)
             # A texture's level other than 0 has that level's size (or none
             # given: the framebuffer is incomplete and draws nothing there).
             key = None if not obj else (kind, obj) if level == 0 else (kind, obj, level)
@@ -172,10 +175,16 @@ class FramebufferCalls:
                 or not isinstance(d.get("internalformat"), str) or isinstance(d.get("samples"), int) \
                 and d["samples"] < 0:
             return   # GL_INVALID_VALUE or GL_INVALID_ENUM: the renderbuffer keeps its image
+        rb = ("renderbuffer", self.s.renderbuffer)
+        multisampled = isinstance(d.get("samples"), int) and d["samples"] > 0
+        if (self.s.sizes.get(rb), self.s.formats.get(rb), self.s.multisampled.get(rb)) != \
+                ((w, h), d.get("internalformat"), multisampled):
+            # (the same storage again: Mesa changes nothing, and flags nothing)
+            self.images_changed(lambda key: key[:2] == rb)
+            self.s.new_buffers = True
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
         self.s.formats[("renderbuffer", self.s.renderbuffer)] = d.get("internalformat")
-        self.s.multisampled[("renderbuffer", self.s.renderbuffer)] = isinstance(d.get("samples"), int) and \
-            d["samples"] > 0
+        self.s.multisampled[rb] = multisampled
         self.depths_replaced(("renderbuffer", self.s.renderbuffer), f"are undefined since call {no} gave the "
                                                                     f"renderbuffer storage ({printable(name)})")
 
@@ -198,6 +207,7 @@ class FramebufferCalls:
             if att is not None and att[0] == kind and att[1] == obj:
                 if fb in bound:
                     self.s.fbo_depth[fb] = None
+                    self.attachments_changed(fb)
                 else:
                     holders.append(fb)
         others = []   # (framebuffer, attachment point) of the other images
@@ -206,6 +216,7 @@ class FramebufferCalls:
                 if att[0] == kind and att[1] == obj:
                     if fb in bound:
                         del atts[point]
+                        self.attachments_changed(fb)
                     else:
                         others.append((fb, point))
         keys = [k for k in self.s.sizes if k[0] == kind and k[1] == obj]
@@ -268,6 +279,7 @@ class FramebufferCalls:
         w, h = d.get("width"), d.get("height", 1)
         level = d.get("level", 0)
         self.depth_image_written(no, name, d)
+        self.texture_levels_changed(d)
         if level == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.bound_texture(d.get("target"))
             self.s.sizes[("texture", tex)] = (w, h)
@@ -417,7 +429,10 @@ class FramebufferCalls:
                 self.s.fbo_attachments.pop(fb, None)
                 self.s.fbo_draw_buffers.pop(fb, None)
                 self.s.fbo_one_output.pop(fb, None)
-                self.s.fbo_found_complete.discard(fb)
+                self.s.fbo_status.pop(fb, None)
+                self.s.fbo_buffer_names.pop(fb, None)
+                if fb in (self.s.draw_fbo, self.s.read_fbo):
+                    self.s.new_buffers = True
                 if self.s.draw_fbo == fb:
                     self.s.draw_fbo = 0   # GL binds the window's framebuffer again
                 if self.s.read_fbo == fb:
@@ -482,6 +497,72 @@ class FramebufferCalls:
             how = f"a copy {'moved or scaled' if self.camera_pass(src) else 'from another pass'}"
         self.depths_replaced(self.depth_key(dst), f"were last written by call {no} ({printable(name)}: {how}, "
                                                   "which the converter does not follow)")
+
+    # ---- completeness as Mesa 22.3 keeps it (docs/gl-capture.md, "When it
+    # is decided"): a framebuffer object's status, cleared by a change to
+    # its attachments or their images, is tested again by a status check
+    # or, for a bound one, by the next state update after a change flagged
+    # _NEW_BUFFERS; each test has Mesa decide again whether draws are valid.
+    def attachments_changed(self, fb):
+        """An attachment of framebuffer object fb set, changed or removed
+        (Mesa: invalidate_framebuffer, and _NEW_BUFFERS)."""
+        self.s.fbo_status.pop(fb, None)
+        self.s.new_buffers = True
+
+    def images_changed(self, attached):
+        """An image given new storage: every framebuffer object with an
+        attachment (a key of fbo_depth or fbo_attachments) `attached`
+        accepts is tested again (Mesa: invalidate_rb, check_rtt_cb), and a
+        state update is flagged (for a texture only when one is bound)."""
+        holders = {fb for fb, key in self.s.fbo_depth.items() if key is not None and attached(key)}
+        holders.update(fb for fb, atts in self.s.fbo_attachments.items() for key in atts.values() if attached(key))
+        for fb in holders:
+            self.s.fbo_status.pop(fb, None)
+        return holders
+
+    def texture_levels_changed(self, d):
+        """glTexImage2D, glTexStorage2D and their kin: the levels they give
+        storage to (a storage call's from 0 on), wherever attached."""
+        levels, level = d.get("levels"), d.get("level", 0)
+        if isinstance(levels, int) and not isinstance(levels, bool):
+            given = range(min(levels, 32))
+        elif isinstance(level, int) and not isinstance(level, bool):
+            given = (level,)
+        else:
+            return
+        target = d.get("target")
+        if isinstance(target, str) and target.startswith("GL_TEXTURE_CUBE_MAP_"):
+            target = "GL_TEXTURE_CUBE_MAP"   # (a face of the cube map bound there)
+        tex = ("texture", self.bound_texture(target))
+        holders = self.images_changed(
+            lambda key: key[:2] == tex and (key[2] if len(key) > 2 and isinstance(key[2], int) else 0) in given)
+        if holders & {self.s.draw_fbo, self.s.read_fbo}:
+            self.s.new_buffers = True
+
+    def framebuffer_complete(self, fb):
+        """Whether framebuffer object fb is complete, as far as the
+        converter follows its attachments: at least one, each with an image
+        of a size (an image of a layered texture, whose size it does not
+        follow, is taken as complete). Formats and sample counts are not
+        compared (docs/gl-capture.md)."""
+        keys = [self.s.fbo_depth.get(fb)] + list(self.s.fbo_attachments.get(fb, {}).values())
+        keys = [k for k in keys if k is not None]
+        return bool(keys) and all("layer" in k or min(self.s.sizes.get(k, (0, 0))) > 0 for k in keys)
+
+    def update_framebuffers(self):
+        """Mesa's state update at a draw, a clear, a blit, a pixel read or
+        copy with _NEW_BUFFERS pending: the bound draw and read framebuffer
+        objects whose status is not complete are tested, and a test has
+        Mesa decide again (before the call is validated)."""
+        s = self.s
+        s.new_buffers = False
+        tested = False
+        for fb in {s.draw_fbo, s.read_fbo} - {0}:
+            if s.fbo_status.get(fb) is not True:
+                s.fbo_status[fb] = self.framebuffer_complete(fb)
+                tested = True
+        if tested:
+            self.revalidate()
 
     def depth_class(self, fb):
         """A framebuffer's depth format as glBlitFramebuffer compares them:

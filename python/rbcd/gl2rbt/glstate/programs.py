@@ -570,15 +570,28 @@ class ProgramCalls:
         validation, whichever program it is and changed or not
         (validate_uniform), and decides again whether draws are valid only
         when a sampler moved to another unit (_mesa_uniform's any_changed;
-        a sampler starts at unit 0)."""
+        a sampler starts at the unit Mesa's link gives it: its
+        layout(binding), or 0)."""
         pipe = self.current_pipeline()
         if pipe is not None:
             pipe.validated = False
         units = p.sampler_units
-        moved = any(units.get(loc + i, 0) != v for i, v in enumerate(values))
+        moved = any(units.get(loc + i, self.sampler_start_unit(p, loc, i)) != v for i, v in enumerate(values))
         units.update((loc + i, v) for i, v in enumerate(values))
         if moved:
             self.revalidate()
+
+    def sampler_start_unit(self, p, loc, i):
+        """The unit Mesa's link of program p gives sampler element i from
+        capture location loc on (by the name the capture asked that
+        location for, else by Mesa's own location)."""
+        by_name, by_location = self.vertex_stage().sampler_start_units(p)
+        uname = p.uniform_names.get(loc)
+        if uname is None:
+            return by_location.get(loc + i, 0)
+        m = re.fullmatch(r"(.*)\[(\d+)\]", uname)
+        base, first = (m.group(1), int(m.group(2))) if m else (uname, 0)
+        return by_name.get(f"{base}[{first + i}]", 0)
 
     def sampler_elements(self, p, loc, count):
         """How many of `count` sampler elements from capture location loc

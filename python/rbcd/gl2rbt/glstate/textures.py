@@ -451,6 +451,7 @@ class TextureImageCalls:
                 return   # GL_INVALID_VALUE or GL_INVALID_ENUM: nothing changes
             self.s.sizes[key] = (d["width"], d["height"])
             self.s.formats[key] = d["internalformat"]
+            self.texture_levels_changed(d)
         self.depths_replaced(key, f"were written by call {no} ({printable(name)}: a copy of the read framebuffer, "
                                   "which the converter does not follow)")
 
