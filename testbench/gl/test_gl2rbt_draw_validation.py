@@ -303,11 +303,16 @@ WITH_TEXTURE = [FBO] + TEXTURE_4 + [TEX_IMAGE, ("glNamedFramebufferTexture", dic
     (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH, ("glDeleteFramebuffers", dict(n=1, framebuffers=[3]))], True),
     (WITH_IMAGE + [READ_3, ("glClear", dict(mask="GL_DEPTH_BUFFER_BIT")), SRC1, BOTH, COMPLETE], True),
     (WITH_IMAGE + [READ_3, SRC1, BOTH, COMPLETE], False),
+    # A blit tests the two framebuffers it names, bound or not.
+    (WITH_TEXTURE + [SRC1, BOTH, ("glBlitNamedFramebuffer", dict(
+        readFramebuffer=3, drawFramebuffer=0, srcX0=0, srcY0=0, srcX1=8, srcY1=8, dstX0=0, dstY0=0, dstX1=8, dstY1=8,
+        mask="GL_COLOR_BUFFER_BIT", filter="GL_NEAREST"))], False),
 ], ids=["control", "texture_attached", "storage_changed", "same_storage", "renderbuffer_deleted",
         "texture_image_given", "texture_sub_image", "texture_deleted", "not_bound_storage_changed",
         "not_bound_checked_again", "not_bound_texture_checked_again", "incomplete_after_draw_buffer",
         "complete_after_draw_buffer", "untested_after_draw_buffer", "incomplete_after_a_clear", "complete_read_bound", "complete_read_unbound",
-        "complete_read_deleted", "found_complete_by_a_clear", "untested_checked"])
+        "complete_read_deleted", "found_complete_by_a_clear", "untested_checked",
+        "named_blit"])
 def test_a_framebuffer_tested_again_decides(tmp_path, calls, drawn):
     """Mesa keeps each framebuffer object's completeness status: a change
     to its attachments or their images clears it, and the next test (a

@@ -176,12 +176,8 @@ class ColorOutputCalls:
         framebuffer. The answer is the capture's (the call's return value),
         or the converter's own where the capture has none."""
         d = dict(args)
-        if "Named" in name:
-            fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
-            if fb and not self.known_framebuffer(fb):
-                return   # GL_INVALID_OPERATION
-        else:
-            fb = self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER" else self.s.draw_fbo
+        fb = self.named_framebuffer(no, name, d, self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER"
+                                    else self.s.draw_fbo)
         if not fb or self.s.fbo_status.get(fb) is True:
             return
         ret = self.ret
@@ -322,12 +318,9 @@ class ColorOutputCalls:
         colour attachment) flags a state update (Mesa's _mesa_readbuffer),
         the buffer changed or not; what is read is not followed."""
         d = dict(args)
-        if "Named" in name:
-            fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
-            if fb and not self.known_framebuffer(fb):
-                return   # GL_INVALID_OPERATION
-        else:
-            fb = self.s.read_fbo
+        fb = self.named_framebuffer(no, name, d, self.s.read_fbo)
+        if fb is None:
+            return
         b = buffer_name(d.get("src", d.get("mode", a[-1] if a else None)), no, f"{name}: the buffer")
         if b is None:
             return   # GL_INVALID_ENUM
@@ -337,6 +330,15 @@ class ColorOutputCalls:
             taken = b == "GL_NONE" or b.startswith("GL_COLOR_ATTACHMENT") and BUFFER_VALUES[b] - 0x8CE0 < 8
         if taken:
             self.s.new_buffers = True
+
+    def named_framebuffer(self, no, name, d, bound):
+        """The framebuffer a call acts on: the one its direct state access
+        form names, else `bound`; None for a name that is no framebuffer
+        (GL_INVALID_OPERATION: the call does nothing)."""
+        if "Named" not in name:
+            return bound
+        fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
+        return None if fb and not self.known_framebuffer(fb) else fb
 
     def known_framebuffer(self, fb):
         """Whether framebuffer object fb exists for a direct state access

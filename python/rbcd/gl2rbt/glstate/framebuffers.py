@@ -454,6 +454,16 @@ class FramebufferCalls:
         change nothing."""
         d = dict(args)
         self.gpu_wrote()
+        # Mesa tests both framebuffers' completeness first, whatever follows
+        # (blit_framebuffer's _mesa_update_framebuffer); a name that is no
+        # framebuffer is GL_INVALID_OPERATION before it.
+        if "drawFramebuffer" in d:
+            pair = [checked(no, integer, d[k], f"{name}: the {what} framebuffer", *U32)
+                    for k, what in (("readFramebuffer", "read"), ("drawFramebuffer", "draw"))]
+            if all(not fb or self.known_framebuffer(fb) for fb in pair):
+                self.test_framebuffers(pair)
+        else:
+            self.test_framebuffers((self.s.read_fbo, self.s.draw_fbo))
         bits = {0x100: "GL_DEPTH_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT", 0x4000: "GL_COLOR_BUFFER_BIT"}
         mask, unknown = bitfield(d.get("mask", 0), no, f"{name}: the mask", bits)
         if "GL_DEPTH_BUFFER_BIT" not in mask:
@@ -552,14 +562,18 @@ class FramebufferCalls:
     def update_framebuffers(self):
         """Mesa's state update at a draw, a clear, a blit, a pixel read or
         copy with _NEW_BUFFERS pending: the bound draw and read framebuffer
-        objects whose status is not complete are tested, and a test has
-        Mesa decide again (before the call is validated)."""
-        s = self.s
-        s.new_buffers = False
+        objects are tested (test_framebuffers), before the call is
+        validated."""
+        self.s.new_buffers = False
+        self.test_framebuffers((self.s.draw_fbo, self.s.read_fbo))
+
+    def test_framebuffers(self, fbs):
+        """Framebuffer objects among `fbs` whose status is not complete
+        tested (Mesa's update_framebuffer); a test has Mesa decide again."""
         tested = False
-        for fb in {s.draw_fbo, s.read_fbo} - {0}:
-            if s.fbo_status.get(fb) is not True:
-                s.fbo_status[fb] = self.framebuffer_complete(fb)
+        for fb in set(fbs) - {0}:
+            if self.s.fbo_status.get(fb) is not True:
+                self.s.fbo_status[fb] = self.framebuffer_complete(fb)
                 tested = True
         if tested:
             self.revalidate()
