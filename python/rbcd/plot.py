@@ -125,13 +125,14 @@ class Table:
         try:
             rows = records(text)
             header = next(rows)
-            count = 0
+            count, uneven = 0, False
             for row in rows:
-                if len(row) != len(header):
-                    raise PlotError(f"{path}: not a results table: rows of another length than the header")
+                uneven = uneven or len(row) != len(header)   # (named after the whole table is read, as csv errors)
                 count += 1
         except csv.Error as e:
             raise PlotError(f"{path}: not a results table: {e}")
+        if uneven:
+            raise PlotError(f"{path}: not a results table: rows of another length than the header")
         if not count:
             raise PlotError(f"{path}: no rows")
         # (A column named twice is read from its last place, as DictReader does.)

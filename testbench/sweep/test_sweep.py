@@ -860,7 +860,7 @@ def test_plot_reads_a_table_in_bounded_memory(c):
     had taken 333 MB for it, and about 15 GB at the 256 MiB limit; R23-4);
     and what it reads is what csv.DictReader reads: CR LF and CR line
     ends, a quoted field across lines, blank lines, a column named twice
-    (its last place)."""
+    (its last place); and its errors in the same order."""
     rng = random.Random(1)
     cols = ["point", "input", "repeat", "zeb.banks", "zeb.list_length"] + [f"totals.c{i}" for i in range(15)] \
         + ["gpu.overhead_pct", "status", "error", "run"]
@@ -899,3 +899,10 @@ def test_plot_reads_a_table_in_bounded_memory(c):
                     pts.setdefault(r["a"], []).append(float(r["b"]))
             want[ln] = [(x, sum(v) / len(v)) for x, v in sorted(pts.items())]
         assert xs == ["1", "2", "3"] and data == want, (data, want)
+    # A row of another length, then a field past csv's limit: the table is
+    # read whole before its rows' lengths are named, as DictReader read it
+    # (R25-10).
+    bad = c.sweep_file("bad.csv", "a,b,c\n1,2\n1,2,\"" + "x" * 200000 + "\"\n")
+    r = run(["/usr/bin/python3", PLOT, bad, "--y", "b", "--x", "a", "-o", png])
+    assert r.returncode == 2 and r.stderr.splitlines() == [
+        f"rbcd-plot: {bad}: not a results table: field larger than field limit (131072)"], r.stderr

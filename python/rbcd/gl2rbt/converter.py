@@ -58,14 +58,19 @@ STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls
 # name for one (GL_ARRAY_BUFFER_ARB is GL_ARRAY_BUFFER).
 # The calls that start with Mesa's state update (_mesa_update_state), which
 # tests the bound framebuffer objects when _NEW_BUFFERS is pending
-# (FramebufferCalls.update_framebuffers): draws, clears, blits, pixel reads,
-# draws and copies, copies into textures.
+# (FramebufferCalls.update_framebuffers): draws, clears, pixel reads, draws
+# and copies, copies into textures, raster positions. (A blit tests the
+# framebuffers it names itself: h_blit_framebuffer.)
 STATE_UPDATES = (set(DrawCalls.HANDLERS) - {"glEnd", "glPrimitiveRestartNV", "glRenderMode"}) | {
     "glClear", "glClearBufferfv", "glClearBufferiv", "glClearBufferuiv", "glClearBufferfi",
-    "glClearNamedFramebufferfv", "glClearNamedFramebufferiv", "glClearNamedFramebufferuiv",
-    "glClearNamedFramebufferfi", "glBlitFramebuffer", "glBlitNamedFramebuffer", "glReadPixels", "glReadnPixels",
+    "glReadPixels", "glReadnPixels",
     "glCopyTexImage1D", "glCopyTexImage2D", "glCopyTexSubImage1D", "glCopyTexSubImage2D", "glCopyTexSubImage3D",
-    "glCopyTextureSubImage1D", "glCopyTextureSubImage2D", "glCopyTextureSubImage3D"}
+    "glCopyTextureSubImage1D", "glCopyTextureSubImage2D", "glCopyTextureSubImage3D"} | {
+    f"glRasterPos{n}{t}{v}" for n in "234" for t in "sifd" for v in ("", "v")}
+# Direct state access clears: Mesa 22.3 binds the named framebuffer for
+# drawing, clears, and binds the one before again (NamedClearCalls).
+NAMED_CLEARS = {"glClearNamedFramebufferfv", "glClearNamedFramebufferiv", "glClearNamedFramebufferuiv",
+                "glClearNamedFramebufferfi"}
 BUFFER_TARGET_ARGS = {"target", "readTarget", "writeTarget"}
 TARGET_SUFFIXES = ("_BUFFER_ARB", "_BUFFER_EXT", "_BUFFER_OES")
 
@@ -314,7 +319,9 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         bound = self.bindings() if base in REVALIDATING else None
         self.decides = False   # set by a handler whose call has Mesa decide (a successful attachment, ...)
         if s.new_buffers and base in STATE_UPDATES:
-            self.update_framebuffers()
+            self.update_framebuffers(no, name)
+        elif base in NAMED_CLEARS:
+            self.named_clear(no, name, dict(args))
         if h is not None:
             try:
                 h(self, no, name, a, args)

@@ -102,6 +102,7 @@ class GLState:
         # the next state update (a draw, a clear: FramebufferCalls.
         # update_framebuffers) test the bound framebuffers not found complete.
         self.fbo_status = {}
+        self.immutable_levels = {}   # texture -> the levels glTexStorage* gave it
         self.fbo_buffer_names = {}
         self.window_buffer_names = ("GL_BACK",)
         self.new_buffers = False
@@ -211,7 +212,7 @@ SHARED_STATE = {
     "depth_types",
     "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names", "sampler_names",
     "texture_buffers", "texture_images", "texture_calls", "samplers", "views", "reduced_texture_versions",
-    "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "fbo_one_output", "fbo_status", "fbo_buffer_names",
+    "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "fbo_one_output", "fbo_status", "fbo_buffer_names", "immutable_levels",
     "framebuffer_names"}
 # The memory limits are of all groups together.
 CONVERSION_STATE = {"next_version", "gpu_writes", "readback_call", "buffer_bytes_in_all", "texture_bytes_kept"}

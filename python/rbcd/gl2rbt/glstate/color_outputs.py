@@ -14,6 +14,7 @@ from ...cli import I32, U32, integer
 from ..errors import checked, fail_call
 from ..gl_tables import base_name
 from . import enum_arg
+from .glsl_text import conditional_on
 
 MAX_DRAW_BUFFERS = 8              # llvmpipe's GL_MAX_DRAW_BUFFERS and GL_MAX_COLOR_ATTACHMENTS
 MAX_DUAL_SOURCE_DRAW_BUFFERS = 1  # llvmpipe's GL_MAX_DUAL_SOURCE_DRAW_BUFFERS
@@ -87,8 +88,6 @@ ADVANCED_EQUATIONS = {f"GL_{mode.upper()}_{suffix}": mode for suffix in ("KHR", 
 # A fragment shader's declaration of the advanced equations it supports:
 # layout(blend_support_NAME, ...) out; (its text as the compiler reads it).
 LAYOUT_OUT = re.compile(r"\blayout\s*\(([^()]*)\)\s*out\s*;")
-# A preprocessor conditional, whose branches the text scans all keep.
-CONDITIONAL = re.compile(r"^[ \t]*#[ \t]*(if|ifdef|ifndef|elif|else)\b", re.M)
 
 
 class NotFollowed(str):
@@ -178,12 +177,11 @@ class ColorOutputCalls:
         d = dict(args)
         fb = self.named_framebuffer(no, name, d, self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER"
                                     else self.s.draw_fbo)
-        if not fb or self.s.fbo_status.get(fb) is True:
+        if fb is None:
             return
         ret = self.ret
-        self.s.fbo_status[fb] = ret == "GL_FRAMEBUFFER_COMPLETE" if isinstance(ret, str) and \
-            ret.startswith("GL_FRAMEBUFFER_") else self.framebuffer_complete(fb)
-        self.revalidate()
+        self.test_framebuffers(no, name, (fb,), ret == "GL_FRAMEBUFFER_COMPLETE" if isinstance(ret, str)
+                               and ret.startswith("GL_FRAMEBUFFER_") else None)
 
     def advanced_blend_invalid(self):
         """Why draws are GL_INVALID_OPERATION for an advanced blend equation
@@ -204,7 +202,7 @@ class ColorOutputCalls:
         supports = {q.strip()[len("blend_support_"):] for m in LAYOUT_OUT.finditer(text)
                     for q in m.group(1).split(",") if q.strip().startswith("blend_support_")}
         if "all_equations" in supports or mode in supports:
-            if any(CONDITIONAL.search(source) for source in fragment[1].objects.get("fragment", ())):
+            if any(conditional_on(source, "blend_support") for source in fragment[1].objects.get("fragment", ())):
                 return NotFollowed(f"advanced blending ({mode}) under a fragment shader that declares "
                                    f"blend_support among preprocessor conditionals, which the converter does not "
                                    "evaluate (docs/gl-capture.md)")

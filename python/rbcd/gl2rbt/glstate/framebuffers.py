@@ -14,7 +14,7 @@ from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import bitfield, generated_name
-from .texture_formats import refused_level, refused_storage
+from .texture_formats import DEPTH_FORMATS, DEPTH_STENCIL_FORMATS, MAX_LEVEL, refused_level, refused_storage
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
 # The other attachment points (llvmpipe's GL_MAX_COLOR_ATTACHMENTS: 8).
@@ -22,6 +22,18 @@ OTHER_ATTACHMENTS = tuple(f"GL_COLOR_ATTACHMENT{i}" for i in range(8)) + ("GL_ST
 GL_TEXTURE0 = 0x84C0
 MAX_TEXTURE_UNITS = 192   # llvmpipe's GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS
 MAX_RENDERBUFFER_SIZE = 16384   # llvmpipe's GL_MAX_RENDERBUFFER_SIZE
+MAX_SAMPLES = 4                 # llvmpipe's GL_MAX_SAMPLES, the one count it gives multisampled images
+# A framebuffer object's completeness status (GLState.fbo_status) before a
+# test, and the test's answer when the converter cannot compute Mesa's: a
+# reason (a str) in place of True or False.
+UNTESTED = None
+# Internal formats certainly colour-renderable in llvmpipe (GL 4.6 table
+# 8.12's required ones); the others are not computed, except compressed and
+# shared-exponent ones, never renderable.
+RENDERABLE = {f"GL_{f}" for f in (
+    "RED", "RG", "RGB", "RGBA", "R8", "RG8", "RGB8", "RGBA8", "R16", "RG16", "RGBA16", "R16F", "RG16F", "RGBA16F",
+    "R32F", "RG32F", "RGBA32F", "R11F_G11F_B10F", "RGB10_A2", "RGB10_A2UI", "SRGB8_ALPHA8")} | {
+    f"GL_{c}{b}{s}" for c in ("R", "RG", "RGBA") for b in ("8", "16", "32") for s in ("I", "UI")} | {3, 4}
 # The internal formats glTexBuffer takes in Mesa 22.3 (GL 4.5's table 8.18);
 # a compatibility context also the legacy ones. Another is GL_INVALID_ENUM.
 TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}{t}" for c in ("R", "RG", "RGBA") for b, ts in
@@ -58,6 +70,10 @@ def texture_image_digest(d):
     return h.hexdigest()
 
 
+# A cube map's faces in layer order (+X, -X, +Y, -Y, +Z, -Z).
+CUBE_FACES = tuple(f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for a in "XYZ" for s in ("POSITIVE", "NEGATIVE"))
+# Targets of one level (llvmpipe's 3D textures have 12: 2048 texels a side).
+SINGLE_LEVEL_TARGETS = {"GL_TEXTURE_RECTANGLE", "GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"}
 # Textures whose attached image is one of several (a face, a layer, a
 # slice) or all of them (layered rendering).
 LAYERED_TARGETS = {"GL_TEXTURE_CUBE_MAP", "GL_TEXTURE_CUBE_MAP_ARRAY", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_3D",
@@ -119,6 +135,13 @@ class FramebufferCalls:
                 if kind == "texture" else 0
             if level < 0:
                 return   # GL_INVALID_VALUE: the attachment stays
+            if kind == "renderbuffer":
+                if d.get("renderbuffertarget", "GL_RENDERBUFFER") != "GL_RENDERBUFFER" or obj and \
+                        self.s.renderbuffer_names is not None and obj not in self.s.renderbuffer_names:
+                    return   # GL_INVALID_ENUM or GL_INVALID_OPERATION: nothing changes
+                self.decides = True   # (Mesa: _mesa_update_framebuffer_visual, after a call it takes)
+            elif obj and self.texture_attachment_refused(d, obj, level):
+                return
             self.attachments_changed(fb)
             # A texture's level other than 0 has that level's size (or none
             # given: the framebuffer is incomplete and draws nothing there).
@@ -130,9 +153,6 @@ class FramebufferCalls:
                 # point light's shadow, a reflection): named so, of no
                 # size the converter knows, another pass than the camera's.
                 key += ("layer", d.get("textarget", "all"))
-            if kind == "renderbuffer" and d.get("renderbuffertarget", "GL_RENDERBUFFER") == "GL_RENDERBUFFER" \
-                    and (not obj or self.s.renderbuffer_names is None or obj in self.s.renderbuffer_names):
-                self.decides = True   # (Mesa: _mesa_update_framebuffer_visual, after a call it takes)
             if attachment in DEPTH_ATTACHMENTS:
                 self.s.fbo_depth[fb] = key
             elif key is None:
@@ -144,6 +164,23 @@ class FramebufferCalls:
             # Its image is the GPU's from then on (a vertex shader that
             # reads it is refused: the converter runs no fragment shader).
             self.texture_rendered(tex, no, f"{name} attaches it to framebuffer {fb}")
+
+    def texture_attachment_refused(self, d, tex, level):
+        """Whether GL refuses to attach texture `tex` at `level` (Mesa 22.3
+        framebuffer_texture, check_level): no such texture, a textarget not
+        its target (a cube map's: one of its faces), a level past the
+        target's last or an immutable texture's levels. The call then
+        changes nothing."""
+        target = self.s.texture_targets.get(tex)
+        if target is None or not generated_name(self.core, self.s.texture_names, tex):
+            return True
+        textarget = d.get("textarget")
+        if textarget is not None and not (textarget == target or target == "GL_TEXTURE_CUBE_MAP" and
+                                          isinstance(textarget, str) and textarget in CUBE_FACES):
+            return True
+        last = 0 if target in SINGLE_LEVEL_TARGETS else 11 if target == "GL_TEXTURE_3D" else MAX_LEVEL
+        immutable = self.s.immutable_levels.get(tex)
+        return level > last or immutable is not None and level >= immutable
 
     def h_framebuffer_texture_layer(self, no, name, a, args):
         """glFramebufferTextureLayer: a layer of an array, 3D or cube map
@@ -176,15 +213,17 @@ class FramebufferCalls:
                 and d["samples"] < 0:
             return   # GL_INVALID_VALUE or GL_INVALID_ENUM: the renderbuffer keeps its image
         rb = ("renderbuffer", self.s.renderbuffer)
-        multisampled = isinstance(d.get("samples"), int) and d["samples"] > 0
-        if (self.s.sizes.get(rb), self.s.formats.get(rb), self.s.multisampled.get(rb)) != \
-                ((w, h), d.get("internalformat"), multisampled):
+        # Samples as asked (glretrace's replay asks at most llvmpipe's 4),
+        # and as llvmpipe gives them: 4 for any count from 1.
+        asked = min(d["samples"], MAX_SAMPLES) if isinstance(d.get("samples"), int) else 0
+        if (self.s.sizes.get(rb), self.s.formats.get(rb), self.s.multisampled.get(rb, 0)) != \
+                ((w, h), d.get("internalformat"), asked):
             # (the same storage again: Mesa changes nothing, and flags nothing)
             self.images_changed(lambda key: key[:2] == rb)
             self.s.new_buffers = True
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
         self.s.formats[("renderbuffer", self.s.renderbuffer)] = d.get("internalformat")
-        self.s.multisampled[rb] = multisampled
+        self.s.multisampled[rb] = MAX_SAMPLES if asked else 0
         self.depths_replaced(("renderbuffer", self.s.renderbuffer), f"are undefined since call {no} gave the "
                                                                     f"renderbuffer storage ({printable(name)})")
 
@@ -264,6 +303,7 @@ class FramebufferCalls:
                     self.s.texture_names.discard(tex)
                 self.detach_deleted("texture", tex)
                 self.s.texture_targets.pop(tex, None)
+                self.s.immutable_levels.pop(tex, None)
                 self.s.texture_images.pop(tex, None)
                 self.s.texture_buffers.pop(tex, None)
                 self.forget_texture_calls(tex)
@@ -283,11 +323,14 @@ class FramebufferCalls:
         if level == 0 and isinstance(w, int) and isinstance(h, int):
             tex = self.bound_texture(d.get("target"))
             self.s.sizes[("texture", tex)] = (w, h)
-            self.s.multisampled[("texture", tex)] = "Multisample" in name
+            self.s.multisampled[("texture", tex)] = MAX_SAMPLES if "Multisample" in name else 0
             self.s.formats[("texture", tex)] = d.get("internalformat")
             self.s.depth_types[("texture", tex)] = d.get("type")   # (an unsized depth format's bits)
             self.s.texture_images[tex] = texture_image_digest(d)
             levels = d.get("levels")
+            if "Storage" in name:
+                self.s.immutable_levels[tex] = levels if isinstance(levels, int) and not isinstance(levels, bool) \
+                    else 1
             if isinstance(levels, int) and not isinstance(levels, bool):   # glTexStorage2D: the levels below
                 for i in range(1, min(levels, 32)):
                     self.s.sizes[("texture", tex, i)] = (max(1, w >> i), max(1, h >> i))
@@ -461,9 +504,9 @@ class FramebufferCalls:
             pair = [checked(no, integer, d[k], f"{name}: the {what} framebuffer", *U32)
                     for k, what in (("readFramebuffer", "read"), ("drawFramebuffer", "draw"))]
             if all(not fb or self.known_framebuffer(fb) for fb in pair):
-                self.test_framebuffers(pair)
+                self.test_framebuffers(no, name, pair)
         else:
-            self.test_framebuffers((self.s.read_fbo, self.s.draw_fbo))
+            self.test_framebuffers(no, name, (self.s.read_fbo, self.s.draw_fbo))
         bits = {0x100: "GL_DEPTH_BUFFER_BIT", 0x400: "GL_STENCIL_BUFFER_BIT", 0x4000: "GL_COLOR_BUFFER_BIT"}
         mask, unknown = bitfield(d.get("mask", 0), no, f"{name}: the mask", bits)
         if "GL_DEPTH_BUFFER_BIT" not in mask:
@@ -540,43 +583,139 @@ class FramebufferCalls:
             given = (level,)
         else:
             return
-        target = d.get("target")
-        if isinstance(target, str) and target.startswith("GL_TEXTURE_CUBE_MAP_"):
+        target = face = d.get("target")
+        if face in CUBE_FACES:
             target = "GL_TEXTURE_CUBE_MAP"   # (a face of the cube map bound there)
         tex = ("texture", self.bound_texture(target))
-        holders = self.images_changed(
-            lambda key: key[:2] == tex and (key[2] if len(key) > 2 and isinstance(key[2], int) else 0) in given)
+
+        def attached(key):
+            # That level; of a cube map, that face (attached alone, as a
+            # layer, or with the others: "all").
+            if key[:2] != tex or (key[2] if len(key) > 2 and isinstance(key[2], int) else 0) not in given:
+                return False
+            if face not in CUBE_FACES or "layer" not in key:
+                return True
+            layer = key[key.index("layer") + 1]
+            return layer in ("all", face) or layer == CUBE_FACES.index(face)
+        holders = self.images_changed(attached)
         if holders & {self.s.draw_fbo, self.s.read_fbo}:
             self.s.new_buffers = True
 
     def framebuffer_complete(self, fb):
-        """Whether framebuffer object fb is complete, as far as the
-        converter follows its attachments: at least one, each with an image
-        of a size (an image of a layered texture, whose size it does not
-        follow, is taken as complete). Formats and sample counts are not
-        compared (docs/gl-capture.md)."""
-        keys = [self.s.fbo_depth.get(fb)] + list(self.s.fbo_attachments.get(fb, {}).values())
-        keys = [k for k in keys if k is not None]
-        return bool(keys) and all("layer" in k or min(self.s.sizes.get(k, (0, 0))) > 0 for k in keys)
+        """Framebuffer object fb's completeness as Mesa 22.3 tests it
+        (_mesa_test_framebuffer_completeness, llvmpipe's own test), where
+        the converter follows what decides it: True, False, or why it does
+        not (a str). Incomplete: no attachment; an image GL never gave (a
+        2D texture's level 0, a renderbuffer's storage) or of no pixels; a
+        depth format on a colour attachment or another on the depth one; a
+        compressed or shared-exponent format; sample counts that differ;
+        separate depth and stencil images (llvmpipe: unsupported).
+        Not computed: levels past 0 (Mesa asks a mutable texture to be
+        mipmap complete), layers and faces, formats outside RENDERABLE,
+        a multisampled texture beside other multisampled images."""
+        depth = self.s.fbo_depth.get(fb)
+        keys = ([("GL_DEPTH_ATTACHMENT", depth)] if depth is not None else []) + \
+            list(self.s.fbo_attachments.get(fb, {}).items())
+        if not keys:
+            return False
+        unknown = None
+        samples, multisampled = set(), []
+        for point, key in keys:
+            fmt = self.s.formats.get(key[:2])
+            if isinstance(fmt, str):
+                if fmt.startswith("GL_COMPRESSED") or fmt == "GL_RGB9_E5":
+                    return False
+                depthy = fmt in DEPTH_FORMATS or fmt in DEPTH_STENCIL_FORMATS
+                if (point == "GL_DEPTH_ATTACHMENT") != depthy and point != "GL_STENCIL_ATTACHMENT":
+                    return False
+            if "layer" in key or len(key) > 2:
+                unknown = unknown or "a layer, face or level past 0 attached"
+                continue
+            size = self.s.sizes.get(key)
+            if size is None:
+                if key[0] == "renderbuffer" or self.s.texture_targets.get(key[1]) == "GL_TEXTURE_2D":
+                    return False   # (no image: only calls the converter follows give one)
+                unknown = unknown or "an image the converter does not follow attached"
+                continue
+            if min(size) <= 0:
+                return False
+            samples.add(self.s.multisampled.get(key, 0))
+            if self.s.multisampled.get(key, 0):
+                multisampled.append(key[0])
+            if point.startswith("GL_COLOR") and fmt not in RENDERABLE:
+                unknown = unknown or f"format {printable(fmt, 40)} attached"
+        if len(samples) > 1:
+            return False
+        if "texture" in multisampled and len(multisampled) > 1:
+            # (their fixed sample locations must agree, which the converter
+            # does not follow)
+            unknown = unknown or "a multisampled texture beside other multisampled images"
+        stencil = self.s.fbo_attachments.get(fb, {}).get("GL_STENCIL_ATTACHMENT")
+        if stencil is not None and depth is not None and stencil != depth:
+            return False
+        return unknown or True
 
-    def update_framebuffers(self):
-        """Mesa's state update at a draw, a clear, a blit, a pixel read or
-        copy with _NEW_BUFFERS pending: the bound draw and read framebuffer
+    def named_clear(self, no, name, d):
+        """glClearNamedFramebuffer*: Mesa 22.3 binds the named framebuffer
+        for drawing (a change decides, and flags a state update), clears
+        (its state update tests the named and the read framebuffer), and
+        binds the one before again (which decides and flags again)."""
+        fb = checked(no, integer, d.get("framebuffer"), f"{name}: the framebuffer", *U32)
+        if fb and not self.known_framebuffer(fb):
+            return   # GL_INVALID_OPERATION
+        bound = self.s.draw_fbo
+        if fb != bound:
+            self.s.draw_fbo = fb
+            self.revalidate()
+            self.s.new_buffers = True
+        if self.s.new_buffers:
+            self.update_framebuffers(no, name)
+        if fb != bound:
+            self.s.draw_fbo = bound
+            self.revalidate()
+            self.s.new_buffers = True
+
+    def update_framebuffers(self, no, name):
+        """Mesa's state update at a draw, a clear, a pixel read or copy
+        with _NEW_BUFFERS pending: the bound draw and read framebuffer
         objects are tested (test_framebuffers), before the call is
         validated."""
         self.s.new_buffers = False
-        self.test_framebuffers((self.s.draw_fbo, self.s.read_fbo))
+        self.test_framebuffers(no, name, (self.s.draw_fbo, self.s.read_fbo))
 
-    def test_framebuffers(self, fbs):
+    def test_framebuffers(self, no, name, fbs, answer=None):
         """Framebuffer objects among `fbs` whose status is not complete
-        tested (Mesa's update_framebuffer); a test has Mesa decide again."""
-        tested = False
-        for fb in set(fbs) - {0}:
-            if self.s.fbo_status.get(fb) is not True:
-                self.s.fbo_status[fb] = self.framebuffer_complete(fb)
-                tested = True
-        if tested:
+        tested (Mesa's update_framebuffer, or a status check whose
+        `answer` the capture holds: True complete, False not); a test has
+        Mesa decide again whether draws are valid. An incomplete one is
+        found incomplete again; an untested one is given the capture's
+        answer or the converter's (framebuffer_complete). Where the
+        converter could not compute the status, whether Mesa tests is not
+        known: unless its decision would not change, the call is refused."""
+        decide, unknown = False, []
+        for fb in dict.fromkeys(fbs):
+            if not fb:
+                continue
+            status = self.s.fbo_status.get(fb, UNTESTED)
+            if isinstance(status, str):
+                if answer is None:
+                    unknown.append((fb, status))
+                    continue
+                self.s.fbo_status[fb] = answer   # (the capture says which Mesa found)
+                decide = decide or not answer
+            elif status is UNTESTED:
+                self.s.fbo_status[fb] = self.framebuffer_complete(fb) if answer is None else answer
+                decide = True
+            elif status is False:
+                decide = True
+        if decide or unknown:
+            before = self.s.render_fault
             self.revalidate()
+            if not decide and self.s.render_fault != before:
+                fb, why = unknown[0]
+                fail_call(no, f"{printable(name)}: whether Mesa decides again here if draws are valid depends on "
+                              f"framebuffer {fb}'s completeness, which the converter does not compute ({why}; "
+                              "docs/gl-capture.md)")
 
     def depth_class(self, fb):
         """A framebuffer's depth format as glBlitFramebuffer compares them:

@@ -171,3 +171,32 @@ def paste(tokens):
             out.append(tokens[k])
             k += 1
     return out
+
+
+def conditional_on(source, word):
+    """Whether `word` may be in the compiled text or not depending on the
+    preprocessor's conditionals, which the scans do not evaluate: the
+    source has a conditional, and the word is under one, in a macro's
+    definition (which a conditional may use or not), or nowhere literally
+    (made by ## pasting). False for a source without conditionals, or
+    whose word stands outside them all."""
+    text = COMMENTS.sub(" ", CONTINUATION.sub("", LINE_ENDS.sub("\n", source)))
+    if not CONDITIONAL.search(text):
+        return False
+    depth, found = 0, False
+    for line in text.split("\n"):
+        line = line.strip()
+        if OPENS.match(line):
+            depth += 1
+        elif ENDS.match(line):
+            depth = max(0, depth - 1)
+        elif word in line:
+            if depth or DEFINE.match(line):
+                return True
+            found = True
+    return not found
+
+
+CONDITIONAL = re.compile(r"^[ \t]*#[ \t]*(if|ifdef|ifndef)\b", re.M)
+OPENS = re.compile(r"#\s*(if|ifdef|ifndef)\b")
+ENDS = re.compile(r"#\s*endif\b")

@@ -449,9 +449,12 @@ class TextureImageCalls:
         if base_name(name) == "glCopyTexImage2D":
             if not (level_size_fits(d) and d.get("border") == 0 and isinstance(d.get("internalformat"), str)):
                 return   # GL_INVALID_VALUE or GL_INVALID_ENUM: nothing changes
+            if (self.s.sizes.get(key), self.s.formats.get(key)) != ((d["width"], d["height"]), d["internalformat"]):
+                # (the level as it was: Mesa copies into it, which gives no
+                # new image to framebuffers it is attached to)
+                self.texture_levels_changed(d)
             self.s.sizes[key] = (d["width"], d["height"])
             self.s.formats[key] = d["internalformat"]
-            self.texture_levels_changed(d)
         self.depths_replaced(key, f"were written by call {no} ({printable(name)}: a copy of the read framebuffer, "
                                   "which the converter does not follow)")
 
