@@ -359,6 +359,11 @@ def multisampled(samples):
     (WITH_IMAGE + [("glCheckNamedFramebufferStatus", dict(framebuffer=3, target="GL_FRAMEBUFFER",
                                                           ret="GL_FRAMEBUFFER_INCOMPLETE_ATTACHMENT")),
                    READ_3, CLEAR, SRC1, BOTH], False),
+    (colour_framebuffer("GL_RGBA8") + colour_framebuffer("GL_RGBA8", "GL_STENCIL_ATTACHMENT", rb=6)[1:]
+     + [READ_3, CLEAR, SRC1, BOTH], False),
+    # A status check GL refuses (a target that is no framebuffer's) tests nothing.
+    (WITH_IMAGE + [SRC1, BOTH, ("glCheckNamedFramebufferStatus", dict(framebuffer=3, target="GL_TEXTURE_2D",
+                                                                      ret=0))], True),
     # A direct state access clear of another framebuffer binds it and the
     # one before again (R25-3); a raster position is a state update (R25-5).
     (WITH_IMAGE + [COMPLETE, SRC1, BOTH, ("glClearNamedFramebufferfv", dict(
@@ -401,7 +406,8 @@ def multisampled(samples):
         "complete_after_draw_buffer", "untested_after_draw_buffer", "incomplete_after_a_clear", "complete_read_bound", "complete_read_unbound",
         "complete_read_deleted", "found_complete_by_a_clear", "untested_checked",
         "depth_format_on_colour", "colour_format_on_depth", "colour_format_complete", "separate_depth_and_stencil",
-        "capture_s_incomplete_answer", "named_clear_of_another", "raster_position", "level_past_the_last",
+        "capture_s_incomplete_answer", "colour_format_on_stencil", "check_of_no_framebuffer_target",
+        "named_clear_of_another", "raster_position", "level_past_the_last",
         "no_such_texture", "face_of_a_2d_texture", "level_past_immutable_levels", "immutable_level_1",
         "another_face_s_image", "the_attached_face_s_image", "copy_into_the_same_level", "copy_of_another_size",
         "two_samples_again", "four_samples_again", "multisampled_texture_alone", "named_blit"])

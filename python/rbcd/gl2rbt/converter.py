@@ -54,8 +54,6 @@ STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls
                 FeedbackCalls, ObjectCalls, ColorOutputCalls)
 
 
-# Arguments that name a buffer target, and the suffixes of an extension's
-# name for one (GL_ARRAY_BUFFER_ARB is GL_ARRAY_BUFFER).
 # The calls that start with Mesa's state update (_mesa_update_state), which
 # tests the bound framebuffer objects when _NEW_BUFFERS is pending
 # (FramebufferCalls.update_framebuffers): draws, clears, pixel reads, draws
@@ -68,9 +66,11 @@ STATE_UPDATES = (set(DrawCalls.HANDLERS) - {"glEnd", "glPrimitiveRestartNV", "gl
     "glCopyTextureSubImage1D", "glCopyTextureSubImage2D", "glCopyTextureSubImage3D"} | {
     f"glRasterPos{n}{t}{v}" for n in "234" for t in "sifd" for v in ("", "v")}
 # Direct state access clears: Mesa 22.3 binds the named framebuffer for
-# drawing, clears, and binds the one before again (NamedClearCalls).
+# drawing, clears, and binds the one before again (FramebufferCalls.named_clear).
 NAMED_CLEARS = {"glClearNamedFramebufferfv", "glClearNamedFramebufferiv", "glClearNamedFramebufferuiv",
                 "glClearNamedFramebufferfi"}
+# Arguments that name a buffer target, and the suffixes of an extension's
+# name for one (GL_ARRAY_BUFFER_ARB is GL_ARRAY_BUFFER).
 BUFFER_TARGET_ARGS = {"target", "readTarget", "writeTarget"}
 TARGET_SUFFIXES = ("_BUFFER_ARB", "_BUFFER_EXT", "_BUFFER_OES")
 

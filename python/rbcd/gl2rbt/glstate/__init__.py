@@ -124,7 +124,7 @@ class GLState:
         self.sizes = {}
         self.formats = {}   # ("texture" | "renderbuffer", name) -> internal format of level 0
         self.depth_types = {}   # ("texture", name) -> the pixels' type its level 0 was given
-        self.multisampled = {}   # the same -> whether its image has samples (glRenderbufferStorageMultisample ...)
+        self.multisampled = {}   # the same -> its samples as llvmpipe gives them (4), or 0 for none
         self.renderbuffer = 0
         self.framebuffer_names = None    # names glGen/glCreateFramebuffers returned (None: the capture showed none)
         self.renderbuffer_names = None   # the same for renderbuffers

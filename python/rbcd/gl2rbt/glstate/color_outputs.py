@@ -90,6 +90,9 @@ ADVANCED_EQUATIONS = {f"GL_{mode.upper()}_{suffix}": mode for suffix in ("KHR", 
 LAYOUT_OUT = re.compile(r"\blayout\s*\(([^()]*)\)\s*out\s*;")
 
 
+FRAMEBUFFER_TARGETS = ("GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER", "GL_READ_FRAMEBUFFER")
+
+
 class NotFollowed(str):
     """Why draws may be refused, where the converter cannot decide it as
     Mesa does: a draw under it is refused in one line naming it."""
@@ -175,11 +178,13 @@ class ColorOutputCalls:
         framebuffer. The answer is the capture's (the call's return value),
         or the converter's own where the capture has none."""
         d = dict(args)
+        ret = self.ret
+        if d.get("target") not in FRAMEBUFFER_TARGETS or ret in (0, "GL_NONE", "GL_ZERO", "GL_FALSE"):
+            return   # GL_INVALID_ENUM, or another error: no test (the call returns 0)
         fb = self.named_framebuffer(no, name, d, self.s.read_fbo if d.get("target") == "GL_READ_FRAMEBUFFER"
                                     else self.s.draw_fbo)
         if fb is None:
             return
-        ret = self.ret
         self.test_framebuffers(no, name, (fb,), ret == "GL_FRAMEBUFFER_COMPLETE" if isinstance(ret, str)
                                and ret.startswith("GL_FRAMEBUFFER_") else None)
 
@@ -202,7 +207,7 @@ class ColorOutputCalls:
         supports = {q.strip()[len("blend_support_"):] for m in LAYOUT_OUT.finditer(text)
                     for q in m.group(1).split(",") if q.strip().startswith("blend_support_")}
         if "all_equations" in supports or mode in supports:
-            if any(conditional_on(source, "blend_support") for source in fragment[1].objects.get("fragment", ())):
+            if conditional_on(fragment[1].objects.get("fragment", ()), "blend_support"):
                 return NotFollowed(f"advanced blending ({mode}) under a fragment shader that declares "
                                    f"blend_support among preprocessor conditionals, which the converter does not "
                                    "evaluate (docs/gl-capture.md)")

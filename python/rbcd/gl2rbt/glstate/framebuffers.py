@@ -218,9 +218,8 @@ class FramebufferCalls:
         asked = min(d["samples"], MAX_SAMPLES) if isinstance(d.get("samples"), int) else 0
         if (self.s.sizes.get(rb), self.s.formats.get(rb), self.s.multisampled.get(rb, 0)) != \
                 ((w, h), d.get("internalformat"), asked):
-            # (the same storage again: Mesa changes nothing, and flags nothing)
-            self.images_changed(lambda key: key[:2] == rb)
-            self.s.new_buffers = True
+            self.images_changed(lambda key: key[:2] == rb)   # (the same storage again: no new image)
+        self.s.new_buffers = True   # (Mesa flags a state update first, either way)
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
         self.s.formats[("renderbuffer", self.s.renderbuffer)] = d.get("internalformat")
         self.s.multisampled[rb] = MAX_SAMPLES if asked else 0
@@ -316,6 +315,9 @@ class FramebufferCalls:
             self.keep_texture_call(no, base_name(name), d)
             if refused_storage(d) if base_name(name) == "glTexStorage2D" else refused_level(base_name(name), d):
                 return   # GL certainly refuses it: the texture keeps its size
+        target = d.get("target")
+        if self.bound_texture("GL_TEXTURE_CUBE_MAP" if target in CUBE_FACES else target) in self.s.immutable_levels:
+            return   # GL_INVALID_OPERATION: an immutable texture's storage stays
         w, h = d.get("width"), d.get("height", 1)
         level = d.get("level", 0)
         self.depth_image_written(no, name, d)
@@ -574,11 +576,11 @@ class FramebufferCalls:
         return holders
 
     def texture_levels_changed(self, d):
-        """glTexImage2D, glTexStorage2D and their kin: the levels they give
-        storage to (a storage call's from 0 on), wherever attached."""
+        """glTexImage2D, glTexStorage2D and their kin: the level they give
+        an image (a storage call: every level), wherever attached."""
         levels, level = d.get("levels"), d.get("level", 0)
         if isinstance(levels, int) and not isinstance(levels, bool):
-            given = range(min(levels, 32))
+            given = range(32)   # (storage: Mesa looks at every level's attachments)
         elif isinstance(level, int) and not isinstance(level, bool):
             given = (level,)
         else:
@@ -595,8 +597,9 @@ class FramebufferCalls:
                 return False
             if face not in CUBE_FACES or "layer" not in key:
                 return True
+            # (a layered attachment is face 0's, as Mesa keeps it)
             layer = key[key.index("layer") + 1]
-            return layer in ("all", face) or layer == CUBE_FACES.index(face)
+            return layer == face or layer == CUBE_FACES.index(face) or layer == "all" and face == CUBE_FACES[0]
         holders = self.images_changed(attached)
         if holders & {self.s.draw_fbo, self.s.read_fbo}:
             self.s.new_buffers = True
@@ -626,7 +629,10 @@ class FramebufferCalls:
                 if fmt.startswith("GL_COMPRESSED") or fmt == "GL_RGB9_E5":
                     return False
                 depthy = fmt in DEPTH_FORMATS or fmt in DEPTH_STENCIL_FORMATS
-                if (point == "GL_DEPTH_ATTACHMENT") != depthy and point != "GL_STENCIL_ATTACHMENT":
+                if point == "GL_STENCIL_ATTACHMENT":
+                    if fmt not in DEPTH_STENCIL_FORMATS and not fmt.startswith("GL_STENCIL_INDEX"):
+                        return False
+                elif (point == "GL_DEPTH_ATTACHMENT") != depthy:
                     return False
             if "layer" in key or len(key) > 2:
                 unknown = unknown or "a layer, face or level past 0 attached"
@@ -697,25 +703,33 @@ class FramebufferCalls:
             if not fb:
                 continue
             status = self.s.fbo_status.get(fb, UNTESTED)
-            if isinstance(status, str):
-                if answer is None:
-                    unknown.append((fb, status))
-                    continue
-                self.s.fbo_status[fb] = answer   # (the capture says which Mesa found)
-                decide = decide or not answer
-            elif status is UNTESTED:
+            if status is UNTESTED:
                 self.s.fbo_status[fb] = self.framebuffer_complete(fb) if answer is None else answer
                 decide = True
+            elif answer is not None:
+                # The capture's answer says which status Mesa had: a
+                # complete one is not tested, an incomplete one is.
+                self.s.fbo_status[fb] = answer
+                decide = decide or not answer
+            elif isinstance(status, str):
+                unknown.append((fb, status))
             elif status is False:
                 decide = True
-        if decide or unknown:
-            before = self.s.render_fault
+        if decide:
             self.revalidate()
-            if not decide and self.s.render_fault != before:
+        elif unknown:
+            # Mesa tests only if it found the framebuffer incomplete: its
+            # decision then, tried, must be the one it holds.
+            before, pipe = self.s.render_fault, self.current_pipeline()
+            validated = pipe.validated if pipe is not None else None
+            self.revalidate()
+            if self.s.render_fault != before:
                 fb, why = unknown[0]
                 fail_call(no, f"{printable(name)}: whether Mesa decides again here if draws are valid depends on "
                               f"framebuffer {fb}'s completeness, which the converter does not compute ({why}; "
                               "docs/gl-capture.md)")
+            if pipe is not None:
+                pipe.validated = validated
 
     def depth_class(self, fb):
         """A framebuffer's depth format as glBlitFramebuffer compares them:

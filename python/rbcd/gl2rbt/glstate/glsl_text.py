@@ -173,27 +173,30 @@ def paste(tokens):
     return out
 
 
-def conditional_on(source, word):
-    """Whether `word` may be in the compiled text or not depending on the
-    preprocessor's conditionals, which the scans do not evaluate: the
-    source has a conditional, and the word is under one, in a macro's
-    definition (which a conditional may use or not), or nowhere literally
-    (made by ## pasting). False for a source without conditionals, or
-    whose word stands outside them all."""
-    text = COMMENTS.sub(" ", CONTINUATION.sub("", LINE_ENDS.sub("\n", source)))
-    if not CONDITIONAL.search(text):
+def conditional_on(sources, word):
+    """Whether `word` may be in a stage's compiled text or not depending on
+    the preprocessor's conditionals, which the scans do not evaluate: one
+    of its shader objects' sources has a conditional, and the word is in
+    one's condition or under one, in a macro's definition (which a
+    conditional may use or not), or nowhere literally (made by ##
+    pasting). False for sources without conditionals, or whose word
+    stands outside them all."""
+    texts = [COMMENTS.sub(" ", CONTINUATION.sub("", LINE_ENDS.sub("\n", s))) for s in sources]
+    if not any(CONDITIONAL.search(text) for text in texts):
         return False
-    depth, found = 0, False
-    for line in text.split("\n"):
-        line = line.strip()
-        if OPENS.match(line):
-            depth += 1
-        elif ENDS.match(line):
-            depth = max(0, depth - 1)
-        elif word in line:
-            if depth or DEFINE.match(line):
+    found = False
+    for text in texts:
+        depth = 0
+        for line in text.split("\n"):
+            line = line.strip()
+            if word in line and (depth or OPENS.match(line) or DEFINE.match(line)):
                 return True
-            found = True
+            if OPENS.match(line):
+                depth += 1
+            elif ENDS.match(line):
+                depth = max(0, depth - 1)
+            elif word in line:
+                found = True
     return not found
 
 
