@@ -231,13 +231,12 @@ class ColorOutputCalls:
             self.s.blend_on = on
             self.revalidate()
 
-    def draw_buffer_counts(self, no, name, fb, buffers):
+    def draw_buffer_counts(self, name, fb, names):
         """The number of colour draw buffers framebuffer fb (0: the window)
         has after glDrawBuffer (one name, which may select two of the
         window's buffers) or glDrawBuffers (each name one buffer), or None
         when GL refuses the call (Mesa 22.3 draw_buffer, draw_buffers)."""
         single = base_name(name) in ("glDrawBuffer", "glNamedFramebufferDrawBuffer", "glFramebufferDrawBuffer")
-        names = [buffer_name(b, no, f"{name}: a buffer") for b in buffers]
         if None in names:
             return None   # GL_INVALID_ENUM
         if single:
@@ -291,25 +290,27 @@ class ColorOutputCalls:
                 fail_call(no, f"{name}: {len(bufs) if isinstance(bufs, list) else 'no'} buffers, not its count ({n})")
         else:
             bufs = [d.get("buf", d.get("mode", a[-1] if a else None))]
-        count = self.draw_buffer_counts(no, name, fb, bufs)
+        names = [buffer_name(b, no, f"{name}: a buffer") for b in bufs]
+        count = self.draw_buffer_counts(name, fb, names)
         if count is None:
             return
         # The draw buffers as named (GL_NONE at the end dropped: Mesa sets
         # GL_NONE past the list): a change flags a state update (Mesa's
         # updated_drawbuffers).
-        names = [buffer_name(b, no, name) for b in bufs]
-        while names and names[-1] == "GL_NONE":
-            names.pop()
+        kept = len(names)
+        while kept and names[kept - 1] == "GL_NONE":
+            kept -= 1
+        named = tuple(names[:kept])
         before = self.s.window_buffer_names if fb == 0 else self.s.fbo_buffer_names.get(fb, ("GL_COLOR_ATTACHMENT0",))
-        if tuple(names) != before:
+        if named != before:
             self.s.new_buffers = True
             if fb == 0:
-                self.s.window_buffer_names = tuple(names)
+                self.s.window_buffer_names = named
             else:
-                self.s.fbo_buffer_names[fb] = tuple(names)
+                self.s.fbo_buffer_names[fb] = named
         # Only colour output 0 drawn, into one buffer (what advanced blending
         # needs): not GL_FRONT_AND_BACK, no buffer past the first in a list.
-        one = count <= 1 if "Buffers" in base else buffer_name(bufs[0], no, name) != "GL_FRONT_AND_BACK"
+        one = count <= 1 if "Buffers" in base else names[0] != "GL_FRONT_AND_BACK"
         if fb == 0:
             self.s.window_draw_buffers, self.s.window_one_output = count, one
         else:
