@@ -303,6 +303,38 @@ def copy_image(w, h):
                                      height=h, border=0))
 
 
+def layered_cube(skip=None):
+    """Framebuffer 3 with all of cube map 4 attached (face `skip` never
+    given an image)."""
+    faces = [face_image(f"GL_TEXTURE_CUBE_MAP_{s}_{a}") for a in "XYZ" for s in ("POSITIVE", "NEGATIVE")]
+    return [FBO, ("glGenTextures", dict(n=1, textures=[4])),
+            ("glBindTexture", dict(target="GL_TEXTURE_CUBE_MAP", texture=4))] + [
+        f for n, f in enumerate(faces) if n != skip] + [
+        ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))]
+
+
+def array_layer(layer):
+    """Framebuffer 3 with layer `layer` of 2D array texture 4 (2 layers)
+    attached."""
+    return [FBO, ("glGenTextures", dict(n=1, textures=[4])),
+            ("glBindTexture", dict(target="GL_TEXTURE_2D_ARRAY", texture=4)),
+            ("glTexImage3D", dict(target="GL_TEXTURE_2D_ARRAY", level=0, internalformat="GL_RGBA8", width=64,
+                                  height=48, depth=2, border=0, format="GL_RGBA", type="GL_UNSIGNED_BYTE",
+                                  pixels=None)),
+            ("glNamedFramebufferTextureLayer", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4,
+                                                    level=0, layer=layer))]
+
+
+def depth_stencil_texture(fmt, fmt_type):
+    """Texture 4 of depth format fmt (64 x 48) attached to framebuffer 3
+    at GL_DEPTH_STENCIL_ATTACHMENT beside its colour image."""
+    pixel_format = "GL_DEPTH_STENCIL" if "STENCIL" in fmt else "GL_DEPTH_COMPONENT"
+    return WITH_IMAGE + TEXTURE_4 + [("glTexImage2D", dict(
+        target="GL_TEXTURE_2D", level=0, internalformat=fmt, width=64, height=48, border=0, format=pixel_format,
+        type=fmt_type, pixels=None)), ("glNamedFramebufferTexture", dict(
+            framebuffer=3, attachment="GL_DEPTH_STENCIL_ATTACHMENT", texture=4, level=0))]
+
+
 def multisampled(samples):
     """Framebuffer 3 (not bound) with renderbuffer 5 of `samples` samples."""
     return colour_framebuffer("GL_RGBA8")[:3] + [("glRenderbufferStorageMultisample", dict(
@@ -400,6 +432,24 @@ def multisampled(samples):
     (WITH_TEXTURE + [SRC1, BOTH, ("glBlitNamedFramebuffer", dict(
         readFramebuffer=3, drawFramebuffer=0, srcX0=0, srcY0=0, srcX1=8, srcY1=8, dstX0=0, dstY0=0, dstX1=8, dstY1=8,
         mask="GL_COLOR_BUFFER_BIT", filter="GL_NEAREST"))], False),
+    # GL_DEPTH_STENCIL_ATTACHMENT is the depth and the stencil attachment:
+    # a depth-only texture there leaves the framebuffer incomplete; a
+    # renderbuffer with storage of another format there is GL_INVALID_OPERATION.
+    (depth_stencil_texture("GL_DEPTH_COMPONENT24", "GL_UNSIGNED_INT") + [READ_3, CLEAR, SRC1, BOTH], False),
+    (depth_stencil_texture("GL_DEPTH24_STENCIL8", "GL_UNSIGNED_INT_24_8") + [READ_3, CLEAR, SRC1, BOTH], True),
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH] + colour_framebuffer(
+        "GL_DEPTH_COMPONENT24", "GL_DEPTH_STENCIL_ATTACHMENT", rb=6)[1:], True),
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH] + colour_framebuffer(
+        "GL_DEPTH24_STENCIL8", "GL_DEPTH_STENCIL_ATTACHMENT", rb=6)[1:], False),
+    (depth_stencil_texture("GL_DEPTH24_STENCIL8", "GL_UNSIGNED_INT_24_8") + [
+        ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_STENCIL_ATTACHMENT", texture=0, level=0)),
+        READ_3, CLEAR, SRC1, BOTH], True),
+    # Layers, faces and whole cube maps are computed (round 25's v215, a
+    # complete layered cube map, had been refused).
+    (layered_cube() + [READ_3, CLEAR, SRC1, BOTH], True),
+    (layered_cube(skip=5) + [READ_3, CLEAR, SRC1, BOTH], False),
+    (array_layer(1) + [READ_3, CLEAR, SRC1, BOTH], True),
+    (array_layer(2) + [READ_3, CLEAR, SRC1, BOTH], False),
 ], ids=["control", "texture_attached", "storage_changed", "same_storage", "renderbuffer_deleted",
         "texture_image_given", "texture_sub_image", "texture_deleted", "not_bound_storage_changed",
         "not_bound_checked_again", "not_bound_texture_checked_again", "incomplete_after_draw_buffer",
@@ -410,7 +460,11 @@ def multisampled(samples):
         "named_clear_of_another", "raster_position", "level_past_the_last",
         "no_such_texture", "face_of_a_2d_texture", "level_past_immutable_levels", "immutable_level_1",
         "another_face_s_image", "the_attached_face_s_image", "copy_into_the_same_level", "copy_of_another_size",
-        "two_samples_again", "four_samples_again", "multisampled_texture_alone", "named_blit"])
+        "two_samples_again", "four_samples_again", "multisampled_texture_alone", "named_blit",
+        "depth_only_texture_at_depth_stencil", "depth_stencil_texture_at_depth_stencil",
+        "depth_only_renderbuffer_at_depth_stencil", "depth_stencil_renderbuffer_at_depth_stencil",
+        "stencil_detached_after_depth_stencil", "layered_cube_complete", "layered_cube_face_missing",
+        "array_layer_inside", "array_layer_past"])
 def test_a_framebuffer_tested_again_decides(tmp_path, calls, drawn):
     """Mesa keeps each framebuffer object's completeness status: a change
     to its attachments or their images clears it, and the next test (a
@@ -513,17 +567,19 @@ def test_blend_support_among_conditionals_is_refused(tmp_path, fs):
     ([READ_3, CLEAR, SRC1], False),
 ], ids=["decision_would_change", "decision_unchanged"])
 def test_a_completeness_the_converter_does_not_compute_is_refused_where_it_matters(tmp_path, calls, refused):
-    """Level 1 of a mutable texture attached: Mesa asks it to be mipmap
-    complete, which the converter does not compute, so whether Mesa tests
-    the framebuffer again at a change of buffers is not known. Where the
-    test would change Mesa's decision the draw is refused in one line
-    naming it (R25-1: a wrong guess had drawn what Mesa refused), and
-    where it would not, the capture converts."""
+    """Level 1 of a mutable texture whose base level was set attached:
+    Mesa asks it to be mipmap complete from that base, which the
+    converter does not compute, so whether Mesa tests the framebuffer
+    again at a change of buffers is not known. Where the test would
+    change Mesa's decision the draw is refused in one line naming it
+    (R25-1: a wrong guess had drawn what Mesa refused), and where it
+    would not, the capture converts."""
     from gl_captures import left_behind
     from gl_captures import refused as refused_line
     level_1 = dict(TEX_IMAGE[1], level=1, width=32, height=24)
-    c = blending([FBO] + TEXTURE_4 + [TEX_IMAGE, ("glTexImage2D", level_1), ("glNamedFramebufferTexture", dict(
-        framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=1))] + calls)
+    c = blending([FBO] + TEXTURE_4 + [TEX_IMAGE, ("glTexImage2D", level_1), ("glTexParameteri", dict(
+        target="GL_TEXTURE_2D", pname="GL_TEXTURE_BASE_LEVEL", param=0)), ("glNamedFramebufferTexture", dict(
+            framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=1))] + calls)
     r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
     if refused:
         refused_line(r, "glDrawArrays", "framebuffer 3's completeness, which the converter does not compute")

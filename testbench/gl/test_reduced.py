@@ -8,7 +8,7 @@ import pytest
 from rbcd.gl2rbt.apitrace import PointerType
 from rbcd.gl2rbt.errors import ConvertError
 from rbcd.gl2rbt.glstate.framebuffers import texture_image_digest
-from rbcd.gl2rbt.reduced import ReducedWriter, is_reduced_capture, read_reduced_calls
+from rbcd.gl2rbt.reduced import REDUCED_HEADER, ReducedWriter, is_reduced_capture, read_reduced_calls
 
 CALLS = [
     (1, "glViewport", [("x", 0), ("y", 0), ("width", 128), ("height", 96)], None, 1),
@@ -98,7 +98,7 @@ def test_pixel_rectangles_keep_their_size_not_their_pixels(tmp_path):
 
 def test_the_source_s_size_is_carried_and_credited_within_bounds(tmp_path):
     """A reduced capture names the size of the capture it was reduced from
-    (version 4), and the converter's bounds take that size, up to 16
+    (version 4 on), and the converter's bounds take that size, up to 16
     times the reduced capture's own, and at least its own: a reduced
     capture of a large capture is no longer held to the smaller bounds of
     its own size (a 72.5 KB reduction of a 597 KB capture was refused
@@ -113,7 +113,7 @@ def test_the_source_s_size_is_carried_and_credited_within_bounds(tmp_path):
             w.call(c)
         w.commit()
         own = p.stat().st_size
-        assert reduced_header(str(p)) == ("rbcd-reduced-capture", 4, claimed)
+        assert reduced_header(str(p)) == ("rbcd-reduced-capture", REDUCED_HEADER[1], claimed)
         want = {"own": own, "claimed": claimed, "capped": REDUCED_SOURCE_CREDIT * own}[credit]
         assert source_bytes(str(p)) == want, (credit, own)
     plain = tmp_path / "capture.trace"

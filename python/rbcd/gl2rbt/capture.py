@@ -33,6 +33,18 @@ def shows_every_gen(trace):
         return False   # read_reduced_calls names the file's error
 
 
+def shows_every_image(trace):
+    """Whether the capture shows every call that gives a texture images:
+    an apitrace capture does, and a reduced capture from version 5 on;
+    earlier ones kept those of 2D textures and cube maps alone."""
+    if not is_reduced_capture(trace):
+        return True
+    try:
+        return (header_version(reduced_header(trace)) or 0) >= 5
+    except ConvertError:
+        return False
+
+
 def check_rest(calls):
     """When the converter stops reading at the last frame asked for, before
     the capture's end: a reduced capture's rest is checked (its xz stream to

@@ -17,6 +17,7 @@ from .glstate.camera_depth import CameraDepthCalls
 from .glstate.color_outputs import ALWAYS_REVALIDATING, REVALIDATING, ColorOutputCalls
 from .glstate.framebuffers import FramebufferCalls
 from .glstate.textures import REDUCED_TEXTURES, TextureImageCalls
+from .glstate.texture_levels import PASSED_OVER_IMAGES, TextureLevelCalls
 from .glstate.dsa import DirectStateCalls
 from .glstate.objects import ObjectCalls
 from .glstate.per_fragment import PerFragmentCalls
@@ -50,8 +51,8 @@ ES_VERSIONS = {(1, 0), (1, 1), (2, 0), (3, 0), (3, 1), (3, 2)}
 
 
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
-                ProgramCalls, FramebufferCalls, CameraDepthCalls, TextureImageCalls, DirectStateCalls, DrawCalls,
-                FeedbackCalls, ObjectCalls, ColorOutputCalls)
+                ProgramCalls, FramebufferCalls, CameraDepthCalls, TextureImageCalls, TextureLevelCalls,
+                DirectStateCalls, DrawCalls, FeedbackCalls, ObjectCalls, ColorOutputCalls)
 
 
 # The calls that start with Mesa's state update (_mesa_update_state), which
@@ -93,8 +94,11 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         # Whether the capture shows every glGenFramebuffers and
         # glGenRenderbuffers call (capture.shows_every_gen); without a
         # capture (the state tests), as a reduced capture of version 1.
-        from .capture import shows_every_gen
+        from .capture import shows_every_gen, shows_every_image
         self.every_gen_shown = bool(getattr(args, "trace", None)) and shows_every_gen(args.trace)
+        # Whether every image-giving call is there (texture_levels.py):
+        # without a capture (the state tests), it is.
+        self.every_image_shown = not getattr(args, "trace", None) or shows_every_image(args.trace)
         from .reduced import is_reduced_capture, source_bytes
         # A reduced capture carries, with a draw whose vertex shader reads
         # textures, the calls that made them (REDUCED_TEXTURES); written
@@ -337,6 +341,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             # converter keeps no calls for has it read back again.
             if base.startswith(TEXTURE_CHANGING):
                 self.gpu_wrote()
+            if PASSED_OVER_IMAGES.match(base) and self.s.images_passed_over is None:
+                self.s.images_passed_over = (no, printable(name))
         else:
             fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
         if self.decides or bound is not None and (base in ALWAYS_REVALIDATING or self.bindings() != bound):

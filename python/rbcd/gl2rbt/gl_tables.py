@@ -63,11 +63,9 @@ IGNORED_PREFIXES = (
     "glNamedFramebufferDrawBuffer", "glNamedFramebufferReadBuffer", "glInvalidateNamedFramebuffer",
 )
 # Direct state access on textures that cannot make a 2D texture's image
-# (synchronisation; 1D and 3D storage, GL_INVALID_OPERATION on a 2D texture);
+# (synchronisation; 1D and 3D images, GL_INVALID_OPERATION on a 2D texture);
 # every other unhandled glTexture* call is refused, not passed over.
-TEXTURE_IGNORED = {"glTextureBarrier", "glTextureStorage1D", "glTextureStorage3D", "glTextureSubImage1D",
-                   "glTextureSubImage3D", "glTextureStorage3DMultisample", "glTextureImage1D", "glTextureImage3D",
-                   "glTextureSubImage1D", "glTextureSubImage3D", "glCompressedTextureSubImage1D",
+TEXTURE_IGNORED = {"glTextureBarrier", "glTextureSubImage1D", "glTextureSubImage3D", "glCompressedTextureSubImage1D",
                    "glCompressedTextureSubImage3D"}
 # Passed-over calls that may change a texture's image or sampling (one of a
 # target other than 2D: read back from Mesa's replay when a vertex shader

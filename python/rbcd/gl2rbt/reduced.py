@@ -20,8 +20,10 @@ from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
 from .glstate.textures import REDUCED_TEXTURES
 from .outputs import SafeText
 
-REDUCED_HEADER = ("rbcd-reduced-capture", 4, 0)   # (the source's size: 0, none known)
-# Versions read: 4 names, in its header record ("rbcd-reduced-capture", 4,
+REDUCED_HEADER = ("rbcd-reduced-capture", 5, 0)   # (the source's size: 0, none known)
+# Versions read: 5 keeps the calls that give 1D, 3D and array textures
+# their images (framebuffer completeness reads them: glstate.
+# texture_levels), which 4 and earlier dropped. 4 names, in its header record ("rbcd-reduced-capture", 4,
 # bytes), the size of the capture it was reduced from (the converter's
 # bounds scale with it: source_bytes), and keeps the blend factors and draw
 # buffers (glstate.color_outputs), which 3 and earlier dropped as changing
@@ -31,7 +33,7 @@ REDUCED_HEADER = ("rbcd-reduced-capture", 4, 0)   # (the source's size: 0, none 
 # written before glGenFramebuffers and glGenRenderbuffers were kept: the
 # framebuffer and renderbuffer names it binds are taken as it binds them
 # (shows_every_gen).
-REDUCED_VERSIONS = (1, 2, 3, 4)
+REDUCED_VERSIONS = (1, 2, 3, 4, 5)
 # A reduced capture is credited with the size of its source capture, up to
 # this many times its own: its header's claim cannot be checked, and the
 # bounds it buys must stay of the file's own order (round 22's R22-6: a
@@ -56,7 +58,9 @@ REDUCED_KEEP = ("glX", "egl", "wgl")
 REDUCED_DROP = {"glTexImage2D": "pixels", "glTexSubImage2D": "pixels", "glCompressedTexImage2D": "data",
                 "glCompressedTexSubImage2D": "data", "glTexImage2DMultisample": None,
                 "glTextureSubImage2D": "pixels", "glCompressedTextureSubImage2D": "data",
-                "glTextureImage2D": "pixels"}   # direct state access, and EXT_direct_state_access's image
+                "glTextureImage2D": "pixels", "glTexImage1D": "pixels", "glTexImage3D": "pixels",
+                "glCompressedTexImage1D": "data", "glCompressedTexImage3D": "data", "glTextureImage1D": "pixels",
+                "glTextureImage3D": "pixels", "glTexImage3DMultisample": None}   # (and EXT_direct_state_access's)
 
 
 # Read by the emulation for the depth check alone (which replays the capture

@@ -30,6 +30,7 @@ from ..cli import temporary_folder, unregister_temporary
 from .errors import ConvertError, ToolError, printable
 from .glretrace import end_replay, glretrace_command, preload_library, session_left, start_replay
 from .glstate.texture_formats import ES_COMBINATIONS
+from .glstate.texture_levels import CUBE_FACES
 
 LIBRARY = "rbcd-texture-readback.so"
 # A replay stopped this long (SIGSTOP) is the tool's failure (RenderedTextures.take).
@@ -58,8 +59,6 @@ TARGETS = {"GL_TEXTURE_2D": 0x0DE1, "GL_TEXTURE_3D": 0x806F, "GL_TEXTURE_2D_ARRA
            "GL_TEXTURE_CUBE_MAP": 0x8513, "GL_TEXTURE_CUBE_MAP_ARRAY": 0x9009, "GL_TEXTURE_1D": 0x0DE0,
            "GL_TEXTURE_1D_ARRAY": 0x8C18, "GL_TEXTURE_RECTANGLE": 0x84F5, "GL_TEXTURE_2D_MULTISAMPLE": 0x9100,
            "GL_TEXTURE_2D_MULTISAMPLE_ARRAY": 0x9102}
-CUBE_FACES = ("GL_TEXTURE_CUBE_MAP_POSITIVE_X", "GL_TEXTURE_CUBE_MAP_NEGATIVE_X", "GL_TEXTURE_CUBE_MAP_POSITIVE_Y",
-              "GL_TEXTURE_CUBE_MAP_NEGATIVE_Y", "GL_TEXTURE_CUBE_MAP_POSITIVE_Z", "GL_TEXTURE_CUBE_MAP_NEGATIVE_Z")
 
 
 # A target's dimensions as glTexImage*D, glTexSubImage*D and glTexStorage*D

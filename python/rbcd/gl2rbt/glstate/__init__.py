@@ -102,7 +102,10 @@ class GLState:
         # the next state update (a draw, a clear: FramebufferCalls.
         # update_framebuffers) test the bound framebuffers not found complete.
         self.fbo_status = {}
-        self.immutable_levels = {}   # texture -> the levels glTexStorage* gave it
+        # Textures' levels as completeness reads them (texture_levels.py):
+        # ("texture", name) -> TextureLevels; an image-giving call passed over.
+        self.texture_levels = {}
+        self.images_passed_over = None
         self.fbo_buffer_names = {}
         self.window_buffer_names = ("GL_BACK",)
         self.new_buffers = False
@@ -212,8 +215,8 @@ SHARED_STATE = {
     "depth_types",
     "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names", "sampler_names",
     "texture_buffers", "texture_images", "texture_calls", "samplers", "views", "reduced_texture_versions",
-    "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "fbo_one_output", "fbo_status", "fbo_buffer_names", "immutable_levels",
-    "framebuffer_names"}
+    "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "fbo_one_output", "fbo_status", "fbo_buffer_names", "texture_levels",
+    "images_passed_over", "framebuffer_names"}
 # The memory limits are of all groups together.
 CONVERSION_STATE = {"next_version", "gpu_writes", "readback_call", "buffer_bytes_in_all", "texture_bytes_kept"}
 

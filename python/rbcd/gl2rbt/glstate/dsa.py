@@ -9,10 +9,12 @@ the call does nothing, as in Mesa. A framebuffer or renderbuffer call on a
 name a core profile has not generated does nothing either."""
 from ...cli import I32, U32, integer
 from ..errors import checked, fail_call
+from ..gl_tables import base_name
 from . import generated_name
 from .framebuffers import FramebufferCalls
 from .per_fragment import PerFragmentCalls
 from .textures import TextureImageCalls
+from .texture_levels import TextureLevelCalls
 
 MAX_CREATED = 1 << 16   # names one glCreate* call makes (a larger n is the capture's error)
 
@@ -93,21 +95,27 @@ class DirectStateCalls:
                     self.s.texture_names.add(tex)
 
     def h_texture_image_ext(self, no, name, a, args):
-        """glTextureImage2DEXT (EXT_direct_state_access, compatibility
-        profile): glTexImage2D on the texture it names at the target it
-        gives (a name not yet bound becomes a texture of that target)."""
+        """glTextureImage1D/2D/3DEXT (EXT_direct_state_access, compatibility
+        profile): glTexImage1D/2D/3D on the texture it names at the target
+        it gives (a name not yet bound becomes a texture of that target)."""
         d = dict(args)
         tex = checked(no, integer, d.get("texture"), f"{name}: the texture", *U32)
         target = d.get("target")
         if not tex or not isinstance(target, str):
             return
         self.s.texture_targets.setdefault(tex, target)
-        on_texture(FramebufferCalls.h_tex_image, "glTexImage2D")(
-            self, no, name, a, [(k, v) for k, v in args if k != "target"])
+        as_name = base_name(name).replace("Texture", "Tex")
+        handler = FramebufferCalls.h_tex_image if as_name == "glTexImage2D" else TextureLevelCalls.h_tex_image_any
+        on_texture(handler, as_name)(self, no, name, a, [(k, v) for k, v in args if k != "target"])
 
     HANDLERS = {
         "glCreateTextures": h_create_textures,
-        "glTextureImage2D": h_texture_image_ext,   # the EXT form's base name
+        "glTextureImage1D": h_texture_image_ext,   # the EXT forms' base names
+        "glTextureImage2D": h_texture_image_ext,
+        "glTextureImage3D": h_texture_image_ext,
+        "glTextureStorage1D": on_texture(TextureLevelCalls.h_tex_image_any, "glTexStorage1D"),
+        "glTextureStorage3D": on_texture(TextureLevelCalls.h_tex_image_any, "glTexStorage3D"),
+        "glTextureStorage3DMultisample": on_texture(TextureLevelCalls.h_tex_image_any, "glTexStorage3DMultisample"),
         "glTextureStorage2D": on_texture(FramebufferCalls.h_tex_image, "glTexStorage2D"),
         "glTextureStorage2DMultisample": on_texture(FramebufferCalls.h_tex_image, "glTexStorage2DMultisample"),
         "glTextureSubImage2D": on_texture(FramebufferCalls.h_tex_sub_image, "glTexSubImage2D"),

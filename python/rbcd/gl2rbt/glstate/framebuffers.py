@@ -15,6 +15,7 @@ from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import bitfield, generated_name
 from .texture_formats import DEPTH_FORMATS, DEPTH_STENCIL_FORMATS, MAX_LEVEL, refused_level, refused_storage
+from .texture_levels import BOX, CUBE, CUBE_FACES, MAX_3D_SIZE, MAX_LAYERS, MAX_SAMPLES, SINGLE_LEVEL, UNCERTAIN
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
 # The other attachment points (llvmpipe's GL_MAX_COLOR_ATTACHMENTS: 8).
@@ -22,7 +23,6 @@ OTHER_ATTACHMENTS = tuple(f"GL_COLOR_ATTACHMENT{i}" for i in range(8)) + ("GL_ST
 GL_TEXTURE0 = 0x84C0
 MAX_TEXTURE_UNITS = 192   # llvmpipe's GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS
 MAX_RENDERBUFFER_SIZE = 16384   # llvmpipe's GL_MAX_RENDERBUFFER_SIZE
-MAX_SAMPLES = 4                 # llvmpipe's GL_MAX_SAMPLES, the one count it gives multisampled images
 # A framebuffer object's completeness status (GLState.fbo_status) before a
 # test, and the test's answer when the converter cannot compute Mesa's: a
 # reason (a str) in place of True or False.
@@ -70,14 +70,28 @@ def texture_image_digest(d):
     return h.hexdigest()
 
 
-# A cube map's faces in layer order (+X, -X, +Y, -Y, +Z, -Z).
-CUBE_FACES = tuple(f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for a in "XYZ" for s in ("POSITIVE", "NEGATIVE"))
-# Targets of one level (llvmpipe's 3D textures have 12: 2048 texels a side).
-SINGLE_LEVEL_TARGETS = {"GL_TEXTURE_RECTANGLE", "GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"}
 # Textures whose attached image is one of several (a face, a layer, a
 # slice) or all of them (layered rendering).
 LAYERED_TARGETS = {"GL_TEXTURE_CUBE_MAP", "GL_TEXTURE_CUBE_MAP_ARRAY", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_3D",
                    "GL_TEXTURE_1D_ARRAY", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"}
+# The textargets glFramebufferTexture1D, 2D and 3D take (Mesa 22.3's
+# check_textarget); the texture's own target must be the one named (a
+# cube map's: one of its faces).
+TEXTARGETS = {1: {"GL_TEXTURE_1D", "GL_TEXTURE_1D_ARRAY"},
+              2: {"GL_TEXTURE_2D", "GL_TEXTURE_RECTANGLE", "GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_ARRAY",
+                  "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"} | set(CUBE_FACES),
+              3: {"GL_TEXTURE_3D"}}
+
+
+def image_place(key):
+    """Which image an attachment key names, as Mesa compares attachments:
+    (texture, level, cube map face, layer), a layered one's at face and
+    layer 0."""
+    level = key[2] if len(key) > 2 and not isinstance(key[2], str) else 0
+    spec = key[key.index("layer") + 1] if "layer" in key else None
+    if isinstance(spec, str):
+        return key[:2], level, CUBE_FACES.index(spec) if spec in CUBE_FACES else 0, 0
+    return key[:2], level, 0, spec or 0
 
 
 class FramebufferCalls:
@@ -139,47 +153,77 @@ class FramebufferCalls:
                 if d.get("renderbuffertarget", "GL_RENDERBUFFER") != "GL_RENDERBUFFER" or obj and \
                         self.s.renderbuffer_names is not None and obj not in self.s.renderbuffer_names:
                     return   # GL_INVALID_ENUM or GL_INVALID_OPERATION: nothing changes
+                if attachment == "GL_DEPTH_STENCIL_ATTACHMENT" and obj and self.s.formats.get(
+                        ("renderbuffer", obj), "GL_DEPTH_STENCIL") not in DEPTH_STENCIL_FORMATS | {UNCERTAIN}:
+                    return   # (Mesa: storage of another format there is GL_INVALID_OPERATION; none yet is taken)
                 self.decides = True   # (Mesa: _mesa_update_framebuffer_visual, after a call it takes)
-            elif obj and self.texture_attachment_refused(d, obj, level):
+            elif obj and self.texture_attachment_refused(name, d, obj, level, layer):
                 return
             self.attachments_changed(fb)
             # A texture's level other than 0 has that level's size (or none
             # given: the framebuffer is incomplete and draws nothing there).
             key = None if not obj else (kind, obj) if level == 0 else (kind, obj, level)
-            if key and layer is not None:
-                key += ("layer", layer)   # (glFramebufferTextureLayer's)
-            elif key and kind == "texture" and self.s.texture_targets.get(obj) in LAYERED_TARGETS:
-                # A cube map's face or all of a layered texture (a
-                # point light's shadow, a reflection): named so, of no
-                # size the converter knows, another pass than the camera's.
-                key += ("layer", d.get("textarget", "all"))
+            if key and kind == "texture":
+                # A layer (glFramebufferTextureLayer's, a 3D slice), a
+                # cube map's face, layer 0 of a layered texture named
+                # by its target, or all of a layered texture (a point
+                # light's shadow, a reflection): named so, another pass
+                # than the camera's.
+                target = self.s.texture_targets.get(obj)
+                if layer is not None:
+                    key += ("layer", layer)
+                elif d.get("textarget") in CUBE_FACES:
+                    key += ("layer", d["textarget"])
+                elif target in LAYERED_TARGETS:
+                    key += ("layer", 0 if d.get("textarget") is not None else "all")
+                # The depth and stencil attachment points given the same
+                # image share one attachment, the first one's (Mesa's
+                # reuse_framebuffer_texture_attachment).
+                other = self.s.fbo_attachments.get(fb, {}).get("GL_STENCIL_ATTACHMENT") \
+                    if attachment == "GL_DEPTH_ATTACHMENT" else \
+                    self.s.fbo_depth.get(fb) if attachment == "GL_STENCIL_ATTACHMENT" else None
+                if other is not None and image_place(other) == image_place(key):
+                    key = other
             if attachment in DEPTH_ATTACHMENTS:
                 self.s.fbo_depth[fb] = key
-            elif key is None:
-                self.s.fbo_attachments.get(fb, {}).pop(attachment, None)
-            else:
-                self.s.fbo_attachments.setdefault(fb, {})[attachment] = key
+            if attachment != "GL_DEPTH_ATTACHMENT":
+                # GL_DEPTH_STENCIL_ATTACHMENT: the image is the stencil
+                # attachment too (a depth-only one there leaves the
+                # framebuffer incomplete: framebuffer_complete).
+                point = "GL_STENCIL_ATTACHMENT" if attachment == "GL_DEPTH_STENCIL_ATTACHMENT" else attachment
+                if key is None:
+                    self.s.fbo_attachments.get(fb, {}).pop(point, None)
+                else:
+                    self.s.fbo_attachments.setdefault(fb, {})[point] = key
         tex = d.get("texture")
         if "Texture" in name and fb and isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
             # Its image is the GPU's from then on (a vertex shader that
             # reads it is refused: the converter runs no fragment shader).
             self.texture_rendered(tex, no, f"{name} attaches it to framebuffer {fb}")
 
-    def texture_attachment_refused(self, d, tex, level):
-        """Whether GL refuses to attach texture `tex` at `level` (Mesa 22.3
-        framebuffer_texture, check_level): no such texture, a textarget not
-        its target (a cube map's: one of its faces), a level past the
+    def texture_attachment_refused(self, name, d, tex, level, layer):
+        """Whether GL refuses to attach texture `tex` at `level` (and
+        `layer`) (Mesa 22.3 framebuffer_texture, check_textarget,
+        check_layer, check_level): no such texture; a textarget the call's
+        dimensions do not take, or not the texture's target (a cube map's:
+        one of its faces); a layer of a texture that has none, or past the
+        cube map's six faces or llvmpipe's 2048 layers; a level past the
         target's last or an immutable texture's levels. The call then
         changes nothing."""
         target = self.s.texture_targets.get(tex)
         if target is None or not generated_name(self.core, self.s.texture_names, tex):
             return True
         textarget = d.get("textarget")
-        if textarget is not None and not (textarget == target or target == "GL_TEXTURE_CUBE_MAP" and
-                                          isinstance(textarget, str) and textarget in CUBE_FACES):
+        dims = {"1D": 1, "2D": 2, "3D": 3}.get(base_name(name)[-2:])
+        if textarget is not None and (dims is not None and textarget not in TEXTARGETS[dims] or (
+                textarget not in CUBE_FACES if target == CUBE else textarget != target)):
             return True
-        last = 0 if target in SINGLE_LEVEL_TARGETS else 11 if target == "GL_TEXTURE_3D" else MAX_LEVEL
-        immutable = self.s.immutable_levels.get(tex)
+        if layer is not None and (target not in LAYERED_TARGETS or layer >= (
+                6 if target == CUBE else MAX_3D_SIZE if target == BOX else MAX_LAYERS)):
+            return True
+        last = 0 if target in SINGLE_LEVEL else 11 if target == BOX else MAX_LEVEL
+        tl = self.s.texture_levels.get(("texture", tex))
+        immutable = tl.immutable if tl is not None else None
         return level > last or immutable is not None and level >= immutable
 
     def h_framebuffer_texture_layer(self, no, name, a, args):
@@ -208,20 +252,23 @@ class FramebufferCalls:
             fail_call(no, f"{name}: impossible size")
         if not self.s.renderbuffer:
             return   # no renderbuffer bound: GL_INVALID_OPERATION
+        fmt = d.get("internalformat")
         if not (0 <= w <= MAX_RENDERBUFFER_SIZE and 0 <= h <= MAX_RENDERBUFFER_SIZE) \
-                or not isinstance(d.get("internalformat"), str) or isinstance(d.get("samples"), int) \
-                and d["samples"] < 0:
+                or not isinstance(fmt, str) or fmt.startswith("GL_COMPRESSED") or fmt == "GL_RGB9_E5" \
+                or isinstance(d.get("samples"), int) and d["samples"] < 0:
             return   # GL_INVALID_VALUE or GL_INVALID_ENUM: the renderbuffer keeps its image
+        if not (fmt in RENDERABLE or fmt in DEPTH_FORMATS or fmt in DEPTH_STENCIL_FORMATS
+                or fmt.startswith("GL_STENCIL_INDEX")):
+            fmt = UNCERTAIN   # (one Mesa may refuse: the renderbuffer's image is not known)
         rb = ("renderbuffer", self.s.renderbuffer)
         # Samples as asked (glretrace's replay asks at most llvmpipe's 4),
         # and as llvmpipe gives them: 4 for any count from 1.
         asked = min(d["samples"], MAX_SAMPLES) if isinstance(d.get("samples"), int) else 0
-        if (self.s.sizes.get(rb), self.s.formats.get(rb), self.s.multisampled.get(rb, 0)) != \
-                ((w, h), d.get("internalformat"), asked):
+        if (self.s.sizes.get(rb), self.s.formats.get(rb), self.s.multisampled.get(rb, 0)) != ((w, h), fmt, asked):
             self.images_changed(lambda key: key[:2] == rb)   # (the same storage again: no new image)
         self.s.new_buffers = True   # (Mesa flags a state update first, either way)
         self.s.sizes[("renderbuffer", self.s.renderbuffer)] = (w, h)
-        self.s.formats[("renderbuffer", self.s.renderbuffer)] = d.get("internalformat")
+        self.s.formats[("renderbuffer", self.s.renderbuffer)] = fmt
         self.s.multisampled[rb] = MAX_SAMPLES if asked else 0
         self.depths_replaced(("renderbuffer", self.s.renderbuffer), f"are undefined since call {no} gave the "
                                                                     f"renderbuffer storage ({printable(name)})")
@@ -270,6 +317,9 @@ class FramebufferCalls:
             for fb, point in others:
                 self.s.fbo_attachments[fb][point] = (kind, kept) + self.s.fbo_attachments[fb][point][2:]
             self.depths_renamed((kind, obj), (kind, kept))
+            if (kind, obj) in self.s.texture_levels:
+                self.s.texture_levels[(kind, kept)] = self.s.texture_levels[(kind, obj)]
+        self.s.texture_levels.pop((kind, obj), None)
         for k in keys:
             del self.s.sizes[k]
 
@@ -302,7 +352,6 @@ class FramebufferCalls:
                     self.s.texture_names.discard(tex)
                 self.detach_deleted("texture", tex)
                 self.s.texture_targets.pop(tex, None)
-                self.s.immutable_levels.pop(tex, None)
                 self.s.texture_images.pop(tex, None)
                 self.s.texture_buffers.pop(tex, None)
                 self.forget_texture_calls(tex)
@@ -315,9 +364,8 @@ class FramebufferCalls:
             self.keep_texture_call(no, base_name(name), d)
             if refused_storage(d) if base_name(name) == "glTexStorage2D" else refused_level(base_name(name), d):
                 return   # GL certainly refuses it: the texture keeps its size
-        target = d.get("target")
-        if self.bound_texture("GL_TEXTURE_CUBE_MAP" if target in CUBE_FACES else target) in self.s.immutable_levels:
-            return   # GL_INVALID_OPERATION: an immutable texture's storage stays
+        if not self.record_levels(no, base_name(name), d):
+            return   # GL_INVALID_OPERATION on an immutable texture (or refused): its storage stays
         w, h = d.get("width"), d.get("height", 1)
         level = d.get("level", 0)
         self.depth_image_written(no, name, d)
@@ -330,9 +378,6 @@ class FramebufferCalls:
             self.s.depth_types[("texture", tex)] = d.get("type")   # (an unsized depth format's bits)
             self.s.texture_images[tex] = texture_image_digest(d)
             levels = d.get("levels")
-            if "Storage" in name:
-                self.s.immutable_levels[tex] = levels if isinstance(levels, int) and not isinstance(levels, bool) \
-                    else 1
             if isinstance(levels, int) and not isinstance(levels, bool):   # glTexStorage2D: the levels below
                 for i in range(1, min(levels, 32)):
                     self.s.sizes[("texture", tex, i)] = (max(1, w >> i), max(1, h >> i))
@@ -609,22 +654,43 @@ class FramebufferCalls:
         (_mesa_test_framebuffer_completeness, llvmpipe's own test), where
         the converter follows what decides it: True, False, or why it does
         not (a str). Incomplete: no attachment; an image GL never gave (a
-        2D texture's level 0, a renderbuffer's storage) or of no pixels; a
-        depth format on a colour attachment or another on the depth one; a
-        compressed or shared-exponent format; sample counts that differ;
-        separate depth and stencil images (llvmpipe: unsupported).
-        Not computed: levels past 0 (Mesa asks a mutable texture to be
-        mipmap complete), layers and faces, formats outside RENDERABLE,
-        a multisampled texture beside other multisampled images."""
+        texture level or face, a renderbuffer's storage), one of no pixels,
+        a layer past the texture's, a layered cube map whose faces differ,
+        a level past 0 of a mutable texture not mipmap complete
+        (texture_levels.attached_image); a depth format on a colour
+        attachment or another on the depth one; a stencil attachment
+        without stencil bits; a compressed or shared-exponent format;
+        samples or fixed sample locations that differ; layered and
+        unlayered images, or layered images of different targets; separate
+        depth and stencil images (llvmpipe: unsupported). Not computed:
+        images the converter cannot tell GL gave, textures whose levels it
+        does not follow, colour formats outside RENDERABLE."""
         depth = self.s.fbo_depth.get(fb)
         keys = ([("GL_DEPTH_ATTACHMENT", depth)] if depth is not None else []) + \
             list(self.s.fbo_attachments.get(fb, {}).items())
         if not keys:
             return False
         unknown = None
-        samples, multisampled = set(), []
+        samples, layering = set(), set()
         for point, key in keys:
-            fmt = self.s.formats.get(key[:2])
+            if key[0] == "renderbuffer":
+                size = self.s.sizes.get(key)
+                if size is None or min(size) <= 0:
+                    return False   # (no storage given, or none of pixels)
+                if self.s.formats.get(key[:2]) == UNCERTAIN:
+                    unknown = unknown or "a renderbuffer's storage the converter cannot tell GL gave"
+                    continue
+                image = size + (1, self.s.formats.get(key[:2]), self.s.multisampled.get(key, 0), True)
+                layered = None
+            else:
+                image = self.attached_image(key)
+                if image is False:
+                    return False
+                if isinstance(image, str):
+                    unknown = unknown or image
+                    continue
+                layered = self.s.texture_levels[key[:2]].target if key[-1] == "all" else None
+            fmt = image[3]
             if isinstance(fmt, str):
                 if fmt.startswith("GL_COMPRESSED") or fmt == "GL_RGB9_E5":
                     return False
@@ -634,28 +700,12 @@ class FramebufferCalls:
                         return False
                 elif (point == "GL_DEPTH_ATTACHMENT") != depthy:
                     return False
-            if "layer" in key or len(key) > 2:
-                unknown = unknown or "a layer, face or level past 0 attached"
-                continue
-            size = self.s.sizes.get(key)
-            if size is None:
-                if key[0] == "renderbuffer" or self.s.texture_targets.get(key[1]) == "GL_TEXTURE_2D":
-                    return False   # (no image: only calls the converter follows give one)
-                unknown = unknown or "an image the converter does not follow attached"
-                continue
-            if min(size) <= 0:
-                return False
-            samples.add(self.s.multisampled.get(key, 0))
-            if self.s.multisampled.get(key, 0):
-                multisampled.append(key[0])
+            samples.add(image[4:6])
+            layering.add(layered)
             if point.startswith("GL_COLOR") and fmt not in RENDERABLE:
                 unknown = unknown or f"format {printable(fmt, 40)} attached"
-        if len(samples) > 1:
-            return False
-        if "texture" in multisampled and len(multisampled) > 1:
-            # (their fixed sample locations must agree, which the converter
-            # does not follow)
-            unknown = unknown or "a multisampled texture beside other multisampled images"
+        if len(samples) > 1 or len(layering) > 1:
+            return False   # (Mesa: incomplete multisample, incomplete layer targets)
         stencil = self.s.fbo_attachments.get(fb, {}).get("GL_STENCIL_ATTACHMENT")
         if stencil is not None and depth is not None and stencil != depth:
             return False

@@ -417,6 +417,7 @@ class TextureImageCalls:
         for tex in (view, orig):
             if isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
                 self.s.views.add(tex)
+                self.levels_unfollowed(tex, f"a view (call {no}, {name})")
                 if tex == view and isinstance(d.get("target"), str):
                     self.s.texture_targets.setdefault(tex, d["target"])
                 self.texture_calls(tex).refused = (no, f"{name} makes texture {view} a view of texture {orig}, "
@@ -424,8 +425,14 @@ class TextureImageCalls:
 
     def h_keep(self, no, name, a, args):
         """glTexParameter*, glGenerateMipmap: kept with the bound 2D
-        texture's calls."""
-        self.keep_texture_call(no, base_name(name), dict(args))
+        texture's calls, and the levels they make or choose
+        (texture_levels)."""
+        d = dict(args)
+        if base_name(name) == "glGenerateMipmap":
+            self.record_mipmaps(no, name, d)
+        else:
+            self.level_range_set(d)
+        self.keep_texture_call(no, base_name(name), d)
 
     def h_copy_tex_image(self, no, name, a, args):
         """glCopyTexImage2D, glCopyTexSubImage2D: the GPU writes the bound 2D
@@ -435,6 +442,9 @@ class TextureImageCalls:
         glTexImage2D does (a framebuffer it is attached to may become the
         camera pass), unless GL certainly refuses it."""
         d = dict(args)
+        if base_name(name) == "glCopyTexImage2D" and self.record_levels(no, base_name(name), d) \
+                and d.get("target") != VERTEX_TEXTURE_TARGET:
+            self.texture_levels_changed(d)
         if d.get("target") != VERTEX_TEXTURE_TARGET:
             self.gpu_wrote()   # a cube map's face: read back again (texture_rendered says so of a 2D texture)
             return

@@ -1,0 +1,367 @@
+"""Texture levels as framebuffer completeness reads them (Mesa 22.3,
+llvmpipe): each level's image, and of a cube map each face's, with its
+size, layers, internal format and samples, for textures of every target;
+and what Mesa's completeness test asks of an attached one.
+
+The images come from the calls that give them (glTexImage1D/2D/3D,
+glTexStorage1D/2D/3D, their compressed, multisample and direct state
+access forms, glGenerateMipmap). A call GL certainly takes gives its
+image; one GL certainly refuses changes nothing; any other (a size, format
+or pixel type whose acceptance the tables here do not settle, pixels from
+a pixel unpack buffer, a copy from the read framebuffer) leaves the image
+UNCERTAIN, and a framebuffer it is attached to has a completeness the
+converter does not compute (framebuffers.py refuses where that matters).
+So does every image of a texture whose levels the converter does not
+follow (a view, a base or maximum level set, a mipmap generation it cannot
+tell Mesa performs), and every image once the capture holds an
+image-giving call the converter passes over."""
+import math
+import re
+
+from .texture_formats import (MAX_LEVEL, MAX_SIZE, UNSIZED, certain_level, certain_mipmaps, kind_of, pixels_fit,
+                              refused_level, whole)
+
+# A cube map's faces in layer order (+X, -X, +Y, -Y, +Z, -Z).
+CUBE_FACES = tuple(f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for a in "XYZ" for s in ("POSITIVE", "NEGATIVE"))
+CUBE = "GL_TEXTURE_CUBE_MAP"
+# llvmpipe's limits (GL_MAX_3D_TEXTURE_SIZE, GL_MAX_ARRAY_TEXTURE_LAYERS,
+# GL_MAX_SAMPLES: any count from 1 to 4 gives 4, more is refused).
+MAX_3D_SIZE = 2048
+MAX_LAYERS = 2048
+MAX_SAMPLES = 4
+# Targets by the shape of a level: a row (1D), a rectangle, a rectangle of
+# a cube map's face, rows or rectangles in layers (arrays: a level keeps
+# the layers), and a box (3D: a level halves the depth too).
+ROW_TARGETS = {"GL_TEXTURE_1D"}
+PLANE_TARGETS = {"GL_TEXTURE_2D", "GL_TEXTURE_RECTANGLE", "GL_TEXTURE_2D_MULTISAMPLE"}
+ROW_ARRAY = "GL_TEXTURE_1D_ARRAY"
+PLANE_ARRAYS = {"GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"}
+BOX = "GL_TEXTURE_3D"
+SINGLE_LEVEL = {"GL_TEXTURE_RECTANGLE", "GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"}
+# Image-giving calls the converter passes over (EXT_direct_state_access's
+# 1D/3D and multi-texture forms, an EGL image, a window-system binding):
+# after one, no texture's images are known.
+PASSED_OVER_IMAGES = re.compile(r"^gl(Compressed|Copy)?(Multi)?Tex(ture)?(Image|Storage)(Mem)?\d")
+# The targets whose images reduced captures before version 5 kept (those
+# of glTexImage2D, glTexStorage2D and their kin).
+PLANE_IMAGES = {"GL_TEXTURE_2D", "GL_TEXTURE_RECTANGLE", "GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_CUBE_MAP",
+                "GL_TEXTURE_1D_ARRAY"}
+# What an UNCERTAIN image or an unfollowed texture makes of an attachment.
+UNCERTAIN = "uncertain"
+
+
+class TextureLevels:
+    """One texture's images as completeness reads them: `images[(level,
+    face)]` = (width, height, layers, internal format, samples, fixed
+    sample locations), or UNCERTAIN; `target`; `immutable`: the levels of
+    its storage (None: mutable); `unfollowed`: why its images are not
+    known (None: they are)."""
+    __slots__ = ("target", "images", "immutable", "unfollowed")
+
+    def __init__(self, target):
+        self.target, self.images, self.immutable, self.unfollowed = target, {}, None, None
+
+
+def faces_of(target):
+    return range(6) if target == CUBE else (0,)
+
+
+def level_extent(target, d):
+    """(width, height, layers) a level-giving call's arguments name for a
+    texture of `target` (a 1D array's layers are its rows)."""
+    w, h, depth = d.get("width"), d.get("height", 1), d.get("depth", 1)
+    if target == ROW_ARRAY:
+        return w, 1, h
+    return w, h, depth
+
+
+def extent_fits(target, level, w, h, layers):
+    """Whether GL takes this size at this level (llvmpipe's limits; a cube
+    map's faces are square)."""
+    if not (all(whole(v) for v in (level, w, h, layers)) and 0 <= level <= MAX_LEVEL):
+        return False
+    if target == BOX:
+        top = MAX_3D_SIZE >> level
+        return 0 <= w <= top and 0 <= h <= top and 0 <= layers <= top
+    top = MAX_SIZE >> level
+    return 0 <= w <= top and 0 <= h <= top and 0 <= layers <= MAX_LAYERS and (target != CUBE or w == h)
+
+
+def chain(target, w, h, layers, levels):
+    """Level i's (width, height, layers) for levels 0..levels-1 of a
+    mipmap chain from (w, h, layers)."""
+    for i in range(levels):
+        yield i, (max(1, w >> i), max(1, h >> i), max(1, layers >> i) if target == BOX else layers)
+
+
+def chain_length(target, w, h, layers):
+    """The levels of a complete mipmap chain from a base of this size."""
+    if target in SINGLE_LEVEL:
+        return 1
+    largest = max(w, layers if target == BOX else 1, h if target not in ROW_TARGETS | {ROW_ARRAY} else 1)
+    return int(math.log2(largest)) + 1 if largest > 0 else 0
+
+
+def certain_image(name, target, d, es):
+    """A glTexImage*, glCompressedTexImage* or multisample image call GL
+    certainly takes: its image's (width, height, layers, internal format,
+    samples, fixed sample locations); "refused" when GL certainly refuses
+    it; None otherwise."""
+    fmt = d.get("internalformat")
+    shape = CUBE if target in CUBE_FACES else target
+    w, h, layers = level_extent(shape, d)
+    if not all(whole(v) for v in (w, h, layers)) or min(w, h, layers) < 0:
+        return "refused"   # (GL_INVALID_VALUE)
+    if shape == CUBE and w != h:
+        return "refused"   # (a cube map's face is square: GL_INVALID_VALUE)
+    if "Multisample" in name:
+        samples = d.get("samples")
+        if not whole(samples) or samples < 0:
+            return "refused"
+        if 1 <= samples <= MAX_SAMPLES and extent_fits(shape, 0, w, h, layers) and kind_of(fmt) is not None \
+                and fmt not in UNSIZED:
+            return (w, h, layers, fmt, MAX_SAMPLES, d.get("fixedsamplelocations") not in (0, False, "GL_FALSE"))
+        return None
+    plane = dict(d, width=w, height=h)
+    if refused_level(name.replace("1D", "2D").replace("3D", "2D"), plane):
+        return "refused"
+    if not extent_fits(shape, d.get("level"), w, h, layers):
+        return None
+    if name.startswith("glCompressed"):
+        # Compressed images of a plane alone are checked (the block sizes).
+        taken = certain_level(name, d, es) if shape in PLANE_TARGETS or shape == CUBE else None
+        return None if taken is None else (w, h, 1, fmt, 0, True)
+    if shape == BOX and kind_of(fmt) in ("depth", "depth-stencil"):
+        return "refused"   # (a depth image of a 3D texture: GL_INVALID_OPERATION)
+    if d.get("border") != 0 or not isinstance(fmt, str) or kind_of(fmt) is None \
+            or not pixels_fit(fmt, d.get("format"), d.get("type"), es):
+        return None
+    return (w, h, layers, fmt, 0, True)
+
+
+def certain_storage_levels(name, target, d, es):
+    """A glTexStorage* GL certainly takes: {level: image} of every level
+    (of each face); "refused" when GL certainly refuses it; None
+    otherwise (GL may take it: the texture is immutable, its images not
+    known)."""
+    if "Multisample" in name:
+        image = certain_image(name, target, d, es)
+        return image if image in (None, "refused") else {0: image}
+    levels, fmt = d.get("levels"), d.get("internalformat")
+    w, h, layers = level_extent(target, d)
+    if not all(whole(v) for v in (levels, w, h, layers)) or min(levels, w, h, layers) < 1 \
+            or levels > chain_length(target, w, h, layers) or not extent_fits(target, 0, w, h, layers) \
+            or not isinstance(fmt, str) or fmt in UNSIZED or fmt in ("GL_LUMINANCE", "GL_LUMINANCE_ALPHA",
+                                                                       "GL_ALPHA"):
+        return "refused"   # (GL_INVALID_VALUE, GL_INVALID_OPERATION or GL_INVALID_ENUM)
+    if target == BOX and kind_of(fmt) in ("depth", "depth-stencil"):
+        return "refused"
+    if kind_of(fmt) is None:
+        return None
+    return {level: extent + (fmt, 0, True) for level, extent in chain(target, w, h, layers, levels)}
+
+
+class TextureLevelCalls:
+    """self.s.texture_levels[("texture", name)] = TextureLevels (a deleted
+    texture that lives on for a framebuffer: under its kept name, as
+    framebuffers.detach_deleted renames it); self.s.images_passed_over:
+    (call, name) of an image-giving call the converter passes over."""
+
+    def texture_levels(self, tex, target):
+        img = ("texture", tex)
+        tl = self.s.texture_levels.get(img)
+        if tl is None:
+            tl = self.s.texture_levels[img] = TextureLevels(self.s.texture_targets.get(tex, target))
+        return tl
+
+    def record_levels(self, no, name, d):
+        """An image-giving call (its bind-to-edit base name) on the texture
+        bound at its target: the images it gives, or UNCERTAIN ones.
+        Whether GL may have taken it (False: it certainly refuses it, or the
+        texture is immutable, and nothing changes)."""
+        target = d.get("target")
+        bound = CUBE if target in CUBE_FACES else target
+        if not isinstance(bound, str):
+            return False
+        tex = self.bound_texture(bound)
+        if not tex:
+            return True   # (the default texture: never attached)
+        tl = self.texture_levels(tex, bound)
+        if tl.immutable is not None:
+            return False   # GL_INVALID_OPERATION: storage stays
+        if "Storage" in name:
+            levels = certain_storage_levels(name, bound, d, self.es)
+            if levels == "refused":
+                return False
+            tl.images = {}
+            if levels is None:
+                # (whether the texture is immutable is not known either)
+                tl.unfollowed = f"storage (call {no}, {name}) the converter cannot tell GL gave"
+            else:
+                tl.immutable = 1 if "Multisample" in name else d["levels"]
+                for level, image in levels.items():
+                    for face in faces_of(bound):
+                        tl.images[(level, face)] = image
+            return True
+        level = d.get("level", 0)
+        face = CUBE_FACES.index(target) if target in CUBE_FACES else 0
+        if bound == CUBE and target not in CUBE_FACES or bound in SINGLE_LEVEL and level != 0:
+            return False   # GL_INVALID_ENUM or GL_INVALID_VALUE
+        if name.startswith("glCopy"):
+            if not (whole(level) and 0 <= level <= MAX_LEVEL):
+                return False
+            old = tl.images.get((level, face))
+            if old not in (None, UNCERTAIN) and old[:2] == (d.get("width"), d.get("height", 1)) \
+                    and old[3:5] == (d.get("internalformat"), 0):
+                return False   # (Mesa copies into the level as it is: no new image)
+            taken = None   # (whether Mesa takes it depends on the read framebuffer)
+        else:
+            taken = certain_image(name, target, d, self.es)
+            if taken != "refused" and self.s.bound.get("GL_PIXEL_UNPACK_BUFFER", 0):
+                taken = None   # (Mesa refuses a pixel unpack buffer too small for the image)
+        if taken == "refused":
+            return False
+        tl.images[(level, face)] = UNCERTAIN if taken is None else taken
+        return True
+
+    def record_mipmaps(self, no, name, d):
+        """glGenerateMipmap: every level past 0 made from level 0, when GL
+        certainly does (a colour base image, not compressed, of every face
+        alike, no base or maximum level set); otherwise the texture's
+        levels are no longer known. A texture without a base image is left
+        as it was (Mesa makes nothing)."""
+        target = d.get("target")
+        if not isinstance(target, str):
+            return
+        tex = self.bound_texture(target)
+        tl = self.s.texture_levels.get(("texture", tex)) if tex else None
+        if tl is None or tl.unfollowed or tl.immutable is not None and tl.immutable <= 1:
+            return
+        base = [tl.images.get((0, f)) for f in faces_of(target)]
+        if all(b is None for b in base):
+            return
+        if any(b is None or b is UNCERTAIN for b in base) or len({b[:4] for b in base}) > 1 \
+                or target in SINGLE_LEVEL or not certain_mipmaps({0: base[0][3:4]}, self.es):
+            tl.unfollowed = f"a mipmap generation (call {no}) the converter cannot tell GL performs"
+            return
+        w, h, layers, fmt, _, _ = base[0]
+        last = tl.immutable if tl.immutable is not None else chain_length(target, w, h, layers)
+        for level, extent in chain(target, w, h, layers, last):
+            if level:
+                for face in faces_of(target):
+                    tl.images[(level, face)] = extent + (fmt, 0, True)
+
+    def level_range_set(self, d):
+        """glTexParameter* of GL_TEXTURE_BASE_LEVEL or GL_TEXTURE_MAX_LEVEL:
+        which levels a mutable texture's completeness reads, not followed."""
+        if d.get("pname") in ("GL_TEXTURE_BASE_LEVEL", "GL_TEXTURE_MAX_LEVEL", 0x813C, 0x813D):
+            target = d.get("target")
+            tex = self.bound_texture(target) if isinstance(target, str) else 0
+            if tex:
+                self.texture_levels(tex, target).unfollowed = "a base or maximum level set"
+
+    def levels_unfollowed(self, tex, why):
+        self.texture_levels(tex, self.s.texture_targets.get(tex)).unfollowed = why
+
+    def attached_image(self, key):
+        """The image a texture attachment `key` (framebuffers.py's keys)
+        names, as Mesa's completeness test reads it: its (width, height,
+        layers, internal format, samples, fixed locations); False when
+        that makes the framebuffer incomplete (no image, an empty one, a
+        layer past the texture's, a layered cube map whose faces differ, a
+        level past 0 of a mutable texture that is not mipmap complete); or
+        why it is not known (a str)."""
+        img, level = key[:2], key[2] if len(key) > 2 and whole(key[2]) else 0
+        layer = key[key.index("layer") + 1] if "layer" in key else None
+        if self.s.images_passed_over is not None:
+            no, name = self.s.images_passed_over
+            return f"call {no} ({name}) gives texture images the converter does not follow"
+        tl = self.s.texture_levels.get(img)
+        if not self.every_image_shown and (tl.target if tl is not None else self.s.texture_targets.get(img[1])) \
+                not in PLANE_IMAGES:
+            return "a reduced capture of version 4 or earlier, which kept no 1D, 3D or array texture's images"
+        if tl is None:
+            return False
+        if tl.unfollowed:
+            return tl.unfollowed
+        if tl.immutable is None and tl.target in PLANE_ARRAYS and any(
+                lv > 0 and image is not UNCERTAIN and min(image[:2]) == 1 for (lv, _), image in tl.images.items()):
+            # (Mesa's state tracker keeps such an image apart from the
+            # texture's storage, and llvmpipe then finds attachments of
+            # the texture unsupported: not followed)
+            return "an array texture's level past 0 one texel wide or high"
+        if tl.immutable is None and len({i[3] for i in tl.images.values() if i is not UNCERTAIN}) > 1:
+            # (Mesa's state tracker keeps such a texture's images in
+            # storages of their own as they come, and llvmpipe validates an
+            # attachment by the format of the texture's main storage: not
+            # followed)
+            return "a texture with images of more than one format"
+        face = CUBE_FACES.index(layer) if isinstance(layer, str) and layer in CUBE_FACES else \
+            layer if tl.target == CUBE and whole(layer) else 0
+        image = tl.images.get((level, face))
+        if image is UNCERTAIN:
+            return "an image the converter cannot tell GL gave"
+        if image is None or min(image[:3]) <= 0:
+            return False
+        if layer == "all" and tl.target == CUBE:
+            # A layered cube map: face 0's image, and a cube complete at
+            # its base level (Mesa's _mesa_cube_complete).
+            base = [tl.images.get((0, f)) for f in range(6)]
+            if any(b is UNCERTAIN for b in base):
+                return "an image the converter cannot tell GL gave"
+            if any(b is None for b in base) or len({b[:4] for b in base}) > 1:
+                return False
+        if whole(layer) and tl.target != CUBE and tl.target != "GL_TEXTURE_2D_MULTISAMPLE_ARRAY" \
+                and layer >= image[2]:
+            return False   # (Mesa does not compare a multisample array's layer)
+        if level > 0 and tl.immutable is None:
+            complete = self.mipmap_complete(tl)
+            if complete is not True:
+                return complete
+        return image
+
+    @staticmethod
+    def mipmap_complete(tl):
+        """Mesa's mipmap completeness of a mutable texture from base level
+        0 (no base or maximum level set): every level of the chain its base
+        names, each face, of the chain's size and the base's format."""
+        base = [tl.images.get((0, f)) for f in faces_of(tl.target)]
+        if any(b is UNCERTAIN for b in base):
+            return "an image the converter cannot tell GL gave"
+        if any(b is None for b in base) or len({b[:4] for b in base}) > 1:
+            return False
+        w, h, layers, fmt = base[0][:4]
+        for level, extent in chain(tl.target, w, h, layers, chain_length(tl.target, w, h, layers)):
+            for face in faces_of(tl.target):
+                image = tl.images.get((level, face))
+                if image is UNCERTAIN:
+                    return "an image the converter cannot tell GL gave"
+                if image is None or image[:4] != extent + (fmt,):
+                    return False
+        return True
+
+    def h_tex_image_any(self, no, name, a, args):
+        """glTexImage1D/3D, glCompressedTexImage1D/3D, glTexStorage1D/3D,
+        glTexImage3DMultisample, glTexStorage3DMultisample, glCopyTexImage1D
+        (glTexImage2D's kin: FramebufferCalls.h_tex_image): a texture of a
+        target other than 2D is read back again from Mesa's replay when a
+        vertex shader reads it (rendered_textures); the images it gives
+        are recorded, and clear the status of the framebuffers they are
+        attached to."""
+        from ..gl_tables import base_name
+        d = dict(args)
+        self.gpu_wrote()
+        if self.record_levels(no, base_name(name), d):
+            self.texture_levels_changed(d)
+
+    HANDLERS = {
+        "glTexImage1D": h_tex_image_any,
+        "glTexImage3D": h_tex_image_any,
+        "glCompressedTexImage1D": h_tex_image_any,
+        "glCompressedTexImage3D": h_tex_image_any,
+        "glTexStorage1D": h_tex_image_any,
+        "glTexStorage3D": h_tex_image_any,
+        "glTexImage3DMultisample": h_tex_image_any,
+        "glTexStorage3DMultisample": h_tex_image_any,
+        "glCopyTexImage1D": h_tex_image_any,
+    }
