@@ -429,7 +429,7 @@ def test_a_reduced_capture_of_another_version_or_miscounted_names(tmp_path):
     count are the capture's error."""
     for head, words in ((("rbcd-reduced-capture", True), "version True"),
                         (("rbcd-reduced-capture", 2.0), "version 2.0"),
-                        (("rbcd-reduced-capture", 5, 100), "version 5"),
+                        (("rbcd-reduced-capture", 6, 100), "version 6"),
                         (("rbcd-reduced-capture", 4), "version 4 whose header is not of that version"),
                         (("rbcd-reduced-capture", 3, 100), "version 3 whose header is not of that version"),
                         (("rbcd-reduced-capture", 4, -1), "its source's size as -1"),

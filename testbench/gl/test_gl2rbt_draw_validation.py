@@ -164,7 +164,7 @@ def blending(calls):
 
 SRC1 = ("glBlendFunc", dict(sfactor="GL_SRC1_COLOR", dfactor="GL_ONE"))
 BOTH = ("glDrawBuffer", dict(mode="GL_FRONT_AND_BACK"))
-FBO = ("glGenFramebuffers", dict(n=1, framebuffers=[3]))
+FBO = ("glCreateFramebuffers", dict(n=1, framebuffers=[3]))   # (a glGen name is no object until bound)
 COMPLETE = ("glCheckNamedFramebufferStatus", dict(framebuffer=3, target="GL_FRAMEBUFFER", ret="GL_FRAMEBUFFER_COMPLETE"))
 SAMPLER_PROGRAM = [("glCreateShaderProgramv", dict(type="GL_FRAGMENT_SHADER", count=1, strings=[ONE_TYPE_FS], ret=11)),
                    ("glGetUniformLocation", dict(program=11, name="a", ret=20))]
@@ -270,7 +270,8 @@ CLEAR = ("glClear", dict(mask="GL_COLOR_BUFFER_BIT"))
 def colour_framebuffer(fmt, point="GL_COLOR_ATTACHMENT0", fb=3, rb=5):
     """Framebuffer fb (made) with renderbuffer rb of format fmt, 64 x 48,
     attached at `point`."""
-    return [("glGenFramebuffers", dict(n=1, framebuffers=[fb])), ("glGenRenderbuffers", dict(n=1, renderbuffers=[rb])),
+    return [("glCreateFramebuffers", dict(n=1, framebuffers=[fb])),
+            ("glGenRenderbuffers", dict(n=1, renderbuffers=[rb])),
             ("glBindRenderbuffer", dict(target="GL_RENDERBUFFER", renderbuffer=rb)),
             ("glRenderbufferStorage", dict(target="GL_RENDERBUFFER", internalformat=fmt, width=64, height=48)),
             ("glNamedFramebufferRenderbuffer", dict(framebuffer=fb, attachment=point,
@@ -450,6 +451,33 @@ def multisampled(samples):
     (layered_cube(skip=5) + [READ_3, CLEAR, SRC1, BOTH], False),
     (array_layer(1) + [READ_3, CLEAR, SRC1, BOTH], True),
     (array_layer(2) + [READ_3, CLEAR, SRC1, BOTH], False),
+    # Calls Mesa refuses change nothing (round 26): a buffer texture
+    # attached, a renderbuffer name never bound, direct state access on a
+    # name that is no framebuffer, a glClear of a bit that names no buffer
+    # (no state update: the status check tests and decides).
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH, ("glCreateTextures", dict(
+        target="GL_TEXTURE_BUFFER", n=1, textures=[8])), ("glNamedFramebufferTexture", dict(
+            framebuffer=3, attachment="GL_COLOR_ATTACHMENT1", texture=8, level=0))], True),
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH, ("glGenRenderbuffers", dict(n=1, renderbuffers=[9])),
+                   ("glNamedFramebufferRenderbuffer", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT1",
+                                                           renderbuffertarget="GL_RENDERBUFFER", renderbuffer=9))],
+     True),
+    (WITH_IMAGE + [COMPLETE, READ_3, SRC1, BOTH, ("glGenFramebuffers", dict(n=1, framebuffers=[4])),
+                   ("glNamedFramebufferRenderbuffer", dict(framebuffer=4, attachment="GL_COLOR_ATTACHMENT0",
+                                                           renderbuffertarget="GL_RENDERBUFFER", renderbuffer=5)),
+                   ("glCheckNamedFramebufferStatus", dict(framebuffer=4, target="GL_FRAMEBUFFER", ret=0))], True),
+    (WITH_IMAGE + [READ_3, ("glClear", dict(mask=1)), SRC1, BOTH, COMPLETE], False),
+    # An image deleted while only a framebuffer not bound holds it keeps
+    # its format (RGBA8 on the depth point: incomplete); a multisample
+    # image of no samples is GL_INVALID_VALUE (no image: incomplete).
+    (colour_framebuffer("GL_RGBA8", "GL_DEPTH_ATTACHMENT") + [
+        ("glDeleteRenderbuffers", dict(n=1, renderbuffers=[5])), READ_3, CLEAR, SRC1, BOTH], False),
+    ([FBO, ("glGenTextures", dict(n=1, textures=[4])),
+      ("glBindTexture", dict(target="GL_TEXTURE_2D_MULTISAMPLE", texture=4)),
+      ("glTexImage2DMultisample", dict(target="GL_TEXTURE_2D_MULTISAMPLE", samples=0, internalformat="GL_RGBA8",
+                                       width=64, height=48, fixedsamplelocations="GL_TRUE")),
+      ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0)),
+      READ_3, CLEAR, SRC1, BOTH], False),
 ], ids=["control", "texture_attached", "storage_changed", "same_storage", "renderbuffer_deleted",
         "texture_image_given", "texture_sub_image", "texture_deleted", "not_bound_storage_changed",
         "not_bound_checked_again", "not_bound_texture_checked_again", "incomplete_after_draw_buffer",
@@ -464,7 +492,8 @@ def multisampled(samples):
         "depth_only_texture_at_depth_stencil", "depth_stencil_texture_at_depth_stencil",
         "depth_only_renderbuffer_at_depth_stencil", "depth_stencil_renderbuffer_at_depth_stencil",
         "stencil_detached_after_depth_stencil", "layered_cube_complete", "layered_cube_face_missing",
-        "array_layer_inside", "array_layer_past"])
+        "array_layer_inside", "array_layer_past", "buffer_texture_attached", "renderbuffer_never_bound",
+        "no_such_framebuffer", "clear_of_no_buffer", "deleted_image_keeps_its_format", "no_samples"])
 def test_a_framebuffer_tested_again_decides(tmp_path, calls, drawn):
     """Mesa keeps each framebuffer object's completeness status: a change
     to its attachments or their images clears it, and the next test (a
@@ -476,6 +505,19 @@ def test_a_framebuffer_tested_again_decides(tmp_path, calls, drawn):
     got, report = fragments(tmp_path, blending(calls), "tested")
     assert (got > 100) == drawn, (got, report)
     assert drawn or "the second colour output" in report, report
+
+
+@pytest.mark.parametrize("fmt, drawn", [("GL_RGBA8", True), ("GL_DEPTH_COMPONENT24", False),
+                                         ("GL_RGB9_E5", False)])
+def test_a_framebuffer_of_the_screen_s_size_draws_only_when_complete(tmp_path, fmt, drawn):
+    """Framebuffer 3, with a depth buffer of the screen's size, is the
+    camera pass only when complete: Mesa draws nothing into an incomplete
+    one (GL_INVALID_FRAMEBUFFER_OPERATION; round 26's R26-1 had converted
+    its draws into the frame)."""
+    calls = colour_framebuffer(fmt) + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + [
+        ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
+    got, report = fragments(tmp_path, blending(calls), "screen")
+    assert (got > 100) == drawn, (got, report)
 
 
 def test_a_reduced_capture_keeps_blend_factors_and_draw_buffers(tmp_path):

@@ -2027,7 +2027,9 @@ def test_a_depth_attachment_has_its_levels_size(tmp_path):
     none when the level has no image (the framebuffer is incomplete and
     draws nothing): the pass is the camera's only at the screen's size (the
     level was passed over, level 0's size taken: a 32 x 24 level of a
-    64 x 48 texture was the camera pass). A level that is no integer is
+    64 x 48 texture was the camera pass). A mutable texture's level past 0
+    must be mipmap complete too (levels 0 and 1 alone of a 128 x 96 one:
+    incomplete, nothing drawn; round 26). A level that is no integer is
     named."""
     def fbo(level, *tex):
         c = Calls()
@@ -2044,7 +2046,8 @@ def test_a_depth_attachment_has_its_levels_size(tmp_path):
                                      format="GL_DEPTH_COMPONENT", type="GL_UNSIGNED_INT", pixels=None))
     storage = ("glTexStorage2D", dict(levels=3, internalformat="GL_DEPTH_COMPONENT24", width=128, height=96))
     for level, tex, frags in [(0, [img(0, 64, 48)], 630), (1, [img(0, 64, 48)], 0),
-                              (1, [img(0, 64, 48), img(1, 32, 24)], 0), (1, [img(0, 128, 96), img(1, 64, 48)], 630),
+                              (1, [img(0, 64, 48), img(1, 32, 24)], 0), (1, [img(0, 128, 96), img(1, 64, 48)], 0),
+                              (1, [img(lv, max(1, 128 >> lv), max(1, 96 >> lv)) for lv in range(8)], 630),
                               (1, [storage], 630), (3, [storage], 0)]:
         assert fragments(tmp_path, fbo(level, *tex).write(tmp_path / "a.xz")) == [frags], (level, tex)
     refused(gl2rbt(tmp_path, fbo("x", img(0, 64, 48)).write(tmp_path / "b.xz"), "-o", tmp_path / "b.rbt"), "b.xz",

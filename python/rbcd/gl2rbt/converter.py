@@ -182,6 +182,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         # test on, why the converter's depth buffer was wrong for it or None)
         self.last_3d_draws = []
         self.last_call = None
+        self.last_name = None   # (the call being handled, for checks made below its handler)
         self.header_written = False
         self.first_frame, self.last_frame = args.frame_range
         self.active = self.in_range(0)   # the current frame is converted
@@ -281,6 +282,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             fail_call(no, f"{printable(name)}: the end-of-frame flag on a call that ends no frame "
                       "(apitrace sets it on buffer swaps only)")
         self.flags, self.ret = flags, ret
+        self.last_call, self.last_name = no, name
         s = self.s
         if args and isinstance(args[-1], tuple) and args[-1][0] == REDUCED_TEXTURES:
             if not self.reads_reduced:
@@ -322,7 +324,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             h = Converter.h_not_in_core
         bound = self.bindings() if base in REVALIDATING else None
         self.decides = False   # set by a handler whose call has Mesa decide (a successful attachment, ...)
-        if s.new_buffers and base in STATE_UPDATES:
+        if s.new_buffers and base in STATE_UPDATES and not self.refused_before_update(no, name, base, args):
             self.update_framebuffers(no, name)
         elif base in NAMED_CLEARS:
             self.named_clear(no, name, dict(args))
@@ -349,6 +351,21 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             self.revalidate()
         if flags & CALL_FLAG_END_FRAME and self.swaps_main_drawable(no, args):
             self.end_frame(no)
+
+    def refused_before_update(self, no, name, base, args):
+        """Whether Mesa 22.3 refuses a call of STATE_UPDATES before its state
+        update, which then tests nothing: glClear of a bit that names no
+        buffer, a pixel rectangle of negative size, a copy into a texture
+        that does not exist."""
+        d = dict(args)
+        if base == "glClear":
+            return self.clear_bits(no, name, args[0][1] if args else None) is None
+        if base in ("glReadPixels", "glReadnPixels", "glCopyPixels", "glDrawPixels", "glBitmap"):
+            return any(isinstance(v, int) and not isinstance(v, bool) and v < 0
+                       for v in (d.get("width"), d.get("height")))
+        if base.startswith("glCopyTextureSubImage"):
+            return d.get("texture") not in self.s.texture_targets
+        return False
 
     def swaps_main_drawable(self, no, args):
         """Whether a buffer swap is the main window's (another window's or

@@ -241,8 +241,9 @@ def check_depth(args):
               f"camera pass's (the first, frame {unfollowed[0][0]}: {unfollowed[0][1]})")
     # glretrace replays a capture's first frame wrongly at times (seen: the
     # test program's first frame replays without its clear): it is checked
-    # only when it is the one frame asked for.
-    if len(frames) > 1 and frames[0][1] == 0:
+    # only when it is the one frame asked for (--frames 0:0), not in place
+    # of later frames left out.
+    if frames and frames[0][1] == 0 and tuple(getattr(args, "frame_range", (0, None)) or (0, None)) != (0, 0):
         frames = frames[1:]
     if not frames and unreadable:
         no, name = unreadable[0][1]

@@ -131,6 +131,12 @@ class GLState:
         self.renderbuffer = 0
         self.framebuffer_names = None    # names glGen/glCreateFramebuffers returned (None: the capture showed none)
         self.renderbuffer_names = None   # the same for renderbuffers
+        # Framebuffer and renderbuffer objects: names bound once or made by
+        # glCreate* and not deleted since (a name glGen* returned is no
+        # object until bound: direct state access on it is
+        # GL_INVALID_OPERATION in Mesa, as on any other name).
+        self.framebuffer_objects = set()
+        self.renderbuffer_objects = set()
         self.deleted_images = 0   # deleted textures and renderbuffers that live on for framebuffers not bound
         self.active_unit = 0
         self.unit_lod_bias = {}        # texture unit -> its GL_TEXTURE_LOD_BIAS (glTexEnv), when not 0
@@ -216,7 +222,7 @@ SHARED_STATE = {
     "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names", "sampler_names",
     "texture_buffers", "texture_images", "texture_calls", "samplers", "views", "reduced_texture_versions",
     "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "fbo_one_output", "fbo_status", "fbo_buffer_names", "texture_levels",
-    "images_passed_over", "framebuffer_names"}
+    "images_passed_over", "framebuffer_names", "framebuffer_objects", "renderbuffer_objects"}
 # The memory limits are of all groups together.
 CONVERSION_STATE = {"next_version", "gpu_writes", "readback_call", "buffer_bytes_in_all", "texture_bytes_kept"}
 

@@ -346,10 +346,9 @@ class ColorOutputCalls:
 
     def known_framebuffer(self, fb):
         """Whether framebuffer object fb exists for a direct state access
-        call (named by glGen/glCreateFramebuffers, or seen bound)."""
-        names = self.s.framebuffer_names
-        return (names is not None and fb in names) or fb in (self.s.draw_fbo, self.s.read_fbo) \
-            or fb in self.s.fbo_depth or fb in self.s.fbo_attachments
+        call (made by glCreateFramebuffers, or bound once; a name
+        glGenFramebuffers returned is none until bound)."""
+        return fb in self.s.framebuffer_objects
 
     def dual_source_invalid(self):
         """Why draws are GL_INVALID_OPERATION for dual-source blending: a

@@ -10,7 +10,6 @@ name a core profile has not generated does nothing either."""
 from ...cli import I32, U32, integer
 from ..errors import checked, fail_call
 from ..gl_tables import base_name
-from . import generated_name
 from .framebuffers import FramebufferCalls
 from .per_fragment import PerFragmentCalls
 from .textures import TextureImageCalls
@@ -43,16 +42,17 @@ def on_texture(handler, as_name, target=None):
     return h
 
 
-def on_bound(handler, as_name, param, state, target, names, zero_allowed=False):
+def on_bound(handler, as_name, param, state, target, objects, zero_allowed=False):
     """The handler of `as_name` run with the object the call's `param`
     names bound for the call alone (self.s.<state>, read by the handler at
     `target`): a framebuffer for drawing (0, the window's, only where the
-    call takes it) or a renderbuffer; a name a core profile did not
-    generate (self.s.<names>) makes the call do nothing."""
+    call takes it) or a renderbuffer; a name that is no object
+    (self.s.<objects>: bound once or created) makes the call do nothing,
+    in every profile."""
     def h(self, no, name, a, args):
         d = dict(args)
         obj = checked(no, integer, d.get(param), f"{name}: the {param}", *U32)
-        if (not obj and not zero_allowed) or not generated_name(self.core, getattr(self.s, names), obj):
+        if (not obj and not zero_allowed) or obj and obj not in getattr(self.s, objects):
             return   # GL_INVALID_OPERATION
         saved = getattr(self.s, state)
         setattr(self.s, state, obj)
@@ -65,12 +65,12 @@ def on_bound(handler, as_name, param, state, target, names, zero_allowed=False):
 
 
 def on_framebuffer(handler, as_name, default_allowed=False):
-    return on_bound(handler, as_name, "framebuffer", "draw_fbo", "GL_DRAW_FRAMEBUFFER", "framebuffer_names",
+    return on_bound(handler, as_name, "framebuffer", "draw_fbo", "GL_DRAW_FRAMEBUFFER", "framebuffer_objects",
                     default_allowed)
 
 
 def on_renderbuffer(handler, as_name):
-    return on_bound(handler, as_name, "renderbuffer", "renderbuffer", "GL_RENDERBUFFER", "renderbuffer_names")
+    return on_bound(handler, as_name, "renderbuffer", "renderbuffer", "GL_RENDERBUFFER", "renderbuffer_objects")
 
 
 class DirectStateCalls:

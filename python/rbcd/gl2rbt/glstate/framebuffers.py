@@ -117,14 +117,21 @@ class FramebufferCalls:
         if getattr(self.s, attr) is None:
             setattr(self.s, attr, set())
         for n in names:
-            getattr(self.s, attr).add(checked(no, integer, n, f"{name}: a {kind} name", *U32))
+            n = checked(no, integer, n, f"{name}: a {kind} name", *U32)
+            getattr(self.s, attr).add(n)
+            if "Create" in name and kind in ("framebuffer", "renderbuffer") and n:
+                getattr(self.s, f"{kind}_objects").add(n)   # (made by the call itself)
 
     def h_bind_framebuffer(self, no, name, a, args):
         d = dict(args)
         target = d["target"]
+        if not isinstance(target, (str, int)) or isinstance(target, bool):
+            fail_call(no, f"{name}: the target {printable(target, 40)} is not an enumerant")
         fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
         if not generated_name(self.core, self.s.framebuffer_names, fb):
             return
+        if fb:
+            self.s.framebuffer_objects.add(fb)
         before = (self.s.draw_fbo, self.s.read_fbo)
         if target in ("GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER"):
             self.s.draw_fbo = fb
@@ -144,18 +151,23 @@ class FramebufferCalls:
         attachment = d.get("attachment")
         if fb and (attachment in DEPTH_ATTACHMENTS or attachment in OTHER_ATTACHMENTS):
             kind = "renderbuffer" if "Renderbuffer" in name else "texture"
-            obj = d.get("renderbuffer" if kind == "renderbuffer" else "texture")
+            obj = checked(no, integer, d.get("renderbuffer" if kind == "renderbuffer" else "texture"),
+                          f"{name}: the {kind}", *U32)
             level = checked(no, integer, d.get("level", 0), f"{name}: the level", -(1 << 31), (1 << 31) - 1) \
                 if kind == "texture" else 0
             if level < 0:
                 return   # GL_INVALID_VALUE: the attachment stays
             if kind == "renderbuffer":
                 if d.get("renderbuffertarget", "GL_RENDERBUFFER") != "GL_RENDERBUFFER" or obj and \
-                        self.s.renderbuffer_names is not None and obj not in self.s.renderbuffer_names:
-                    return   # GL_INVALID_ENUM or GL_INVALID_OPERATION: nothing changes
+                        obj not in self.s.renderbuffer_objects:
+                    return   # GL_INVALID_ENUM or GL_INVALID_OPERATION (no such object): nothing changes
                 if attachment == "GL_DEPTH_STENCIL_ATTACHMENT" and obj and self.s.formats.get(
-                        ("renderbuffer", obj), "GL_DEPTH_STENCIL") not in DEPTH_STENCIL_FORMATS | {UNCERTAIN}:
-                    return   # (Mesa: storage of another format there is GL_INVALID_OPERATION; none yet is taken)
+                        ("renderbuffer", obj), "GL_DEPTH_STENCIL") not in DEPTH_STENCIL_FORMATS | {UNCERTAIN,
+                                                                                           "GL_RGB9_E5"}:
+                    # (Mesa: storage of another format there is
+                    # GL_INVALID_OPERATION; none yet, or one llvmpipe gives
+                    # no format of its own (shared exponent), is taken)
+                    return
                 self.decides = True   # (Mesa: _mesa_update_framebuffer_visual, after a call it takes)
             elif obj and self.texture_attachment_refused(name, d, obj, level, layer):
                 return
@@ -211,8 +223,9 @@ class FramebufferCalls:
         target's last or an immutable texture's levels. The call then
         changes nothing."""
         target = self.s.texture_targets.get(tex)
-        if target is None or not generated_name(self.core, self.s.texture_names, tex):
-            return True
+        if target is None or not generated_name(self.core, self.s.texture_names, tex) \
+                or target in ("GL_TEXTURE_BUFFER", "GL_TEXTURE_EXTERNAL_OES"):
+            return True   # (no such texture, or one no framebuffer takes)
         textarget = d.get("textarget")
         dims = {"1D": 1, "2D": 2, "3D": 3}.get(base_name(name)[-2:])
         if textarget is not None and (dims is not None and textarget not in TEXTARGETS[dims] or (
@@ -254,11 +267,11 @@ class FramebufferCalls:
             return   # no renderbuffer bound: GL_INVALID_OPERATION
         fmt = d.get("internalformat")
         if not (0 <= w <= MAX_RENDERBUFFER_SIZE and 0 <= h <= MAX_RENDERBUFFER_SIZE) \
-                or not isinstance(fmt, str) or fmt.startswith("GL_COMPRESSED") or fmt == "GL_RGB9_E5" \
+                or not isinstance(fmt, str) or fmt.startswith("GL_COMPRESSED") \
                 or isinstance(d.get("samples"), int) and d["samples"] < 0:
             return   # GL_INVALID_VALUE or GL_INVALID_ENUM: the renderbuffer keeps its image
         if not (fmt in RENDERABLE or fmt in DEPTH_FORMATS or fmt in DEPTH_STENCIL_FORMATS
-                or fmt.startswith("GL_STENCIL_INDEX")):
+                or fmt.startswith("GL_STENCIL_INDEX") or fmt == "GL_RGB9_E5"):
             fmt = UNCERTAIN   # (one Mesa may refuse: the renderbuffer's image is not known)
         rb = ("renderbuffer", self.s.renderbuffer)
         # Samples as asked (glretrace's replay asks at most llvmpipe's 4),
@@ -277,6 +290,8 @@ class FramebufferCalls:
         rb = checked(no, integer, dict(args).get("renderbuffer"), f"{name}: the renderbuffer", *U32)
         if generated_name(self.core, self.s.renderbuffer_names, rb):
             self.s.renderbuffer = rb
+            if rb:
+                self.s.renderbuffer_objects.add(rb)
 
     def detach_deleted(self, kind, obj):
         """A texture or renderbuffer deleted: detached from the bound draw
@@ -310,8 +325,9 @@ class FramebufferCalls:
             kept = ("deleted", obj, self.s.deleted_images)
             for k in keys:
                 self.s.sizes[(kind, kept) + k[2:]] = self.s.sizes[k]
-                if k in self.s.multisampled:
-                    self.s.multisampled[(kind, kept) + k[2:]] = self.s.multisampled[k]
+                for kept_by in (self.s.multisampled, self.s.formats, self.s.depth_types):
+                    if k in kept_by:
+                        kept_by[(kind, kept) + k[2:]] = kept_by[k]
             for fb in holders:
                 self.s.fbo_depth[fb] = (kind, kept) + self.s.fbo_depth[fb][2:]
             for fb, point in others:
@@ -328,6 +344,7 @@ class FramebufferCalls:
             if isinstance(rb, int) and not isinstance(rb, bool) and rb > 0:
                 if self.s.renderbuffer_names is not None:
                     self.s.renderbuffer_names.discard(rb)
+                self.s.renderbuffer_objects.discard(rb)
                 if self.s.renderbuffer == rb:
                     self.s.renderbuffer = 0   # GL binds renderbuffer 0
                 self.detach_deleted("renderbuffer", rb)
@@ -515,6 +532,7 @@ class FramebufferCalls:
             if isinstance(fb, int) and not isinstance(fb, bool) and fb > 0:
                 if self.s.framebuffer_names is not None:
                     self.s.framebuffer_names.discard(fb)
+                self.s.framebuffer_objects.discard(fb)
                 self.s.fbo_depth.pop(fb, None)
                 self.s.fbo_attachments.pop(fb, None)
                 self.s.fbo_draw_buffers.pop(fb, None)
@@ -568,14 +586,19 @@ class FramebufferCalls:
                 for k in ("srcX0", "srcY0", "srcX1", "srcY1", "dstX0", "dstY0", "dstX1", "dstY1")]
         if not self.active or not self.camera_pass(dst):
             return
+        if src and isinstance(self.s.fbo_status.get(src), str):
+            fail_call(no, f"{printable(name)}: whether it copies depth into the camera pass depends on read "
+                          f"framebuffer {src}'s completeness, which the converter does not compute "
+                          f"({self.s.fbo_status[src]}; docs/gl-capture.md)")
+        if src and self.s.fbo_status.get(src) is False:
+            return   # GL_INVALID_FRAMEBUFFER_OPERATION: an incomplete read framebuffer copies nothing
         if src and self.s.fbo_depth.get(src) is None:
             # A read framebuffer with no depth buffer copies no depth (GL
             # ignores the bit), and one with no attachment is incomplete
             # (GL_INVALID_FRAMEBUFFER_OPERATION): nothing changes.
             return
-        names = self.s.framebuffer_names
         refused = refused or "drawFramebuffer" in d and any(
-            fb and (names is not None and fb not in names) for fb in (src, dst))   # no such framebuffer
+            fb and fb not in self.s.framebuffer_objects for fb in (src, dst))   # no such framebuffer
         if refused or d.get("filter") not in ("GL_NEAREST", 0x2600) or self.depth_class(src) != self.depth_class(dst):
             return
         if self.depth_key(src) == self.depth_key(dst):
@@ -823,7 +846,16 @@ class FramebufferCalls:
             size = self.s.sizes.get(key)
             if size is None or size[0] < w or size[1] < h:
                 return False
-        return True
+        # And it is complete: Mesa draws, clears and copies nothing into an
+        # incomplete one (GL_INVALID_FRAMEBUFFER_OPERATION).
+        status = self.s.fbo_status.get(fb, UNTESTED)
+        if status is UNTESTED:
+            status = self.framebuffer_complete(fb)
+        if isinstance(status, str):
+            fail_call(self.last_call, f"{printable(self.last_name)}: whether it writes framebuffer {fb}, of the "
+                                      "camera pass's size, depends on the framebuffer's completeness, which the "
+                                      f"converter does not compute ({status}; docs/gl-capture.md)")
+        return status is True
 
     HANDLERS = {
         "glBindFramebuffer": h_bind_framebuffer,

@@ -411,9 +411,7 @@ class ProgramCalls:
         p.uniform_names, p.block_names, p.uniforms, p.block_bindings, p.sampler_units = {}, {}, {}, {}, {}
 
     def h_use_program(self, no, name, a, args):
-        v = a[0] if a else None
-        if not isinstance(v, int) or v < 0:
-            fail_call(no, f"{name}: impossible program {printable(v)}")
+        v = checked(no, integer, a[0] if a else None, f"{name}: the program", *U32)
         if v and (v not in self.s.programs or self.s.programs[v].linked is None) or self.recording():
             return   # GL_INVALID_VALUE or GL_INVALID_OPERATION (also while feedback records): the call does nothing
         if v and v != self.s.program and "vertex" in self.s.programs[v].linked[0] \

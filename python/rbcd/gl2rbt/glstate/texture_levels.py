@@ -18,8 +18,8 @@ image-giving call the converter passes over."""
 import math
 import re
 
-from .texture_formats import (MAX_LEVEL, MAX_SIZE, UNSIZED, certain_level, certain_mipmaps, kind_of, pixels_fit,
-                              refused_level, whole)
+from .texture_formats import (COMPRESSED_BLOCKS, KIND_PIXELS, MAX_LEVEL, MAX_SIZE, UNSIZED, certain_level,
+                              certain_mipmaps, kind_of, pixels_fit, refused_level, whole)
 
 # A cube map's faces in layer order (+X, -X, +Y, -Y, +Z, -Z).
 CUBE_FACES = tuple(f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for a in "XYZ" for s in ("POSITIVE", "NEGATIVE"))
@@ -38,6 +38,8 @@ ROW_ARRAY = "GL_TEXTURE_1D_ARRAY"
 PLANE_ARRAYS = {"GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"}
 BOX = "GL_TEXTURE_3D"
 SINGLE_LEVEL = {"GL_TEXTURE_RECTANGLE", "GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"}
+# Targets whose storage takes the compressed formats every Mesa has.
+COMPRESSIBLE = {"GL_TEXTURE_2D", "GL_TEXTURE_CUBE_MAP", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY"}
 # Image-giving calls the converter passes over (EXT_direct_state_access's
 # 1D/3D and multi-texture forms, an EGL image, a window-system binding):
 # after one, no texture's images are known.
@@ -116,15 +118,16 @@ def certain_image(name, target, d, es):
         return "refused"   # (a cube map's face is square: GL_INVALID_VALUE)
     if "Multisample" in name:
         samples = d.get("samples")
-        if not whole(samples) or samples < 0:
-            return "refused"
-        if 1 <= samples <= MAX_SAMPLES and extent_fits(shape, 0, w, h, layers) and kind_of(fmt) is not None \
-                and fmt not in UNSIZED:
+        if not whole(samples) or samples < 1:
+            return "refused"   # (GL_INVALID_VALUE; glretrace's replay asks at most llvmpipe's 4, which it gives)
+        if extent_fits(shape, 0, w, h, layers) and kind_of(fmt) is not None and fmt not in UNSIZED:
             return (w, h, layers, fmt, MAX_SAMPLES, d.get("fixedsamplelocations") not in (0, False, "GL_FALSE"))
         return None
     plane = dict(d, width=w, height=h)
     if refused_level(name.replace("1D", "2D").replace("3D", "2D"), plane):
         return "refused"
+    if not name.startswith("glCompressed") and isinstance(fmt, str) and ("ETC2" in fmt or fmt.endswith("_EAC")):
+        return "refused"   # (pixels Mesa does not compress: GL_INVALID_OPERATION)
     if not extent_fits(shape, d.get("level"), w, h, layers):
         return None
     if name.startswith("glCompressed"):
@@ -133,8 +136,15 @@ def certain_image(name, target, d, es):
         return None if taken is None else (w, h, 1, fmt, 0, True)
     if shape == BOX and kind_of(fmt) in ("depth", "depth-stencil"):
         return "refused"   # (a depth image of a 3D texture: GL_INVALID_OPERATION)
-    if d.get("border") != 0 or not isinstance(fmt, str) or kind_of(fmt) is None \
-            or not pixels_fit(fmt, d.get("format"), d.get("type"), es):
+    if d.get("border") != 0 or not isinstance(fmt, str) or kind_of(fmt) is None:
+        return None
+    pixels = d.get("format")
+    if not es and kind_of(fmt) in ("depth", "depth-stencil") and pixels in ("GL_DEPTH_COMPONENT", "GL_DEPTH_STENCIL"):
+        # (depth pixels into a depth-and-stencil image and the reverse are
+        # taken: GL 4.6, 8.5)
+        if d.get("type") not in KIND_PIXELS["depth" if pixels == "GL_DEPTH_COMPONENT" else "depth-stencil"][1]:
+            return None
+    elif not pixels_fit(fmt, pixels, d.get("type"), es):
         return None
     return (w, h, layers, fmt, 0, True)
 
@@ -156,7 +166,9 @@ def certain_storage_levels(name, target, d, es):
         return "refused"   # (GL_INVALID_VALUE, GL_INVALID_OPERATION or GL_INVALID_ENUM)
     if target == BOX and kind_of(fmt) in ("depth", "depth-stencil"):
         return "refused"
-    if kind_of(fmt) is None:
+    if fmt in COMPRESSED_BLOCKS and target in COMPRESSIBLE:
+        pass   # (compressed storage of a plane or an array of planes: taken)
+    elif kind_of(fmt) is None:
         return None
     return {level: extent + (fmt, 0, True) for level, extent in chain(target, w, h, layers, levels)}
 
