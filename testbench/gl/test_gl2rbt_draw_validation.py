@@ -336,6 +336,16 @@ def depth_stencil_texture(fmt, fmt_type):
             framebuffer=3, attachment="GL_DEPTH_STENCIL_ATTACHMENT", texture=4, level=0))]
 
 
+def multisample_texture(call, samples):
+    """Framebuffer 3 with multisample texture 4 (64 x 48, `samples`
+    samples, given by `call`) attached."""
+    return [FBO, ("glGenTextures", dict(n=1, textures=[4])),
+            ("glBindTexture", dict(target="GL_TEXTURE_2D_MULTISAMPLE", texture=4)),
+            (call, dict(target="GL_TEXTURE_2D_MULTISAMPLE", samples=samples, internalformat="GL_RGBA8", width=64,
+                        height=48, fixedsamplelocations="GL_TRUE")),
+            ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))]
+
+
 def multisampled(samples):
     """Framebuffer 3 (not bound) with renderbuffer 5 of `samples` samples."""
     return colour_framebuffer("GL_RGBA8")[:3] + [("glRenderbufferStorageMultisample", dict(
@@ -423,12 +433,7 @@ def multisampled(samples):
     (multisampled(2) + [COMPLETE, SRC1, BOTH] + multisampled(2)[-2:-1] + [COMPLETE], False),
     (multisampled(4) + [COMPLETE, SRC1, BOTH] + multisampled(4)[-2:-1] + [COMPLETE], True),
     # A multisampled texture alone is computed (complete), as renderbuffers are.
-    ([FBO, ("glGenTextures", dict(n=1, textures=[4])),
-      ("glBindTexture", dict(target="GL_TEXTURE_2D_MULTISAMPLE", texture=4)),
-      ("glTexStorage2DMultisample", dict(target="GL_TEXTURE_2D_MULTISAMPLE", samples=4, internalformat="GL_RGBA8",
-                                         width=64, height=48, fixedsamplelocations="GL_TRUE")),
-      ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0)),
-      READ_3, CLEAR, SRC1, BOTH], True),
+    (multisample_texture("glTexStorage2DMultisample", 4) + [READ_3, CLEAR, SRC1, BOTH], True),
     # A blit tests the two framebuffers it names, bound or not.
     (WITH_TEXTURE + [SRC1, BOTH, ("glBlitNamedFramebuffer", dict(
         readFramebuffer=3, drawFramebuffer=0, srcX0=0, srcY0=0, srcX1=8, srcY1=8, dstX0=0, dstY0=0, dstX1=8, dstY1=8,
@@ -472,12 +477,7 @@ def multisampled(samples):
     # image of no samples is GL_INVALID_VALUE (no image: incomplete).
     (colour_framebuffer("GL_RGBA8", "GL_DEPTH_ATTACHMENT") + [
         ("glDeleteRenderbuffers", dict(n=1, renderbuffers=[5])), READ_3, CLEAR, SRC1, BOTH], False),
-    ([FBO, ("glGenTextures", dict(n=1, textures=[4])),
-      ("glBindTexture", dict(target="GL_TEXTURE_2D_MULTISAMPLE", texture=4)),
-      ("glTexImage2DMultisample", dict(target="GL_TEXTURE_2D_MULTISAMPLE", samples=0, internalformat="GL_RGBA8",
-                                       width=64, height=48, fixedsamplelocations="GL_TRUE")),
-      ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0)),
-      READ_3, CLEAR, SRC1, BOTH], False),
+    (multisample_texture("glTexImage2DMultisample", 0) + [READ_3, CLEAR, SRC1, BOTH], False),
 ], ids=["control", "texture_attached", "storage_changed", "same_storage", "renderbuffer_deleted",
         "texture_image_given", "texture_sub_image", "texture_deleted", "not_bound_storage_changed",
         "not_bound_checked_again", "not_bound_texture_checked_again", "incomplete_after_draw_buffer",
