@@ -235,6 +235,19 @@ CASES = {
     "array_storage_layer_2": [bind("GL_TEXTURE_2D_ARRAY", 1), ("glTexStorage3D", dict(
         target="GL_TEXTURE_2D_ARRAY", levels=3, internalformat="GL_RGBA8", width=8, height=8, depth=2)),
         FBO, layer(1, level=2)],
+    # Calls of another dimension than the texture's target: refused.
+    "3d_image_of_a_2d_texture": [bind("GL_TEXTURE_2D", 1), ("glTexImage3D", dict(
+        target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA8", width=8, height=8, depth=1, border=0,
+        format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=None)), FBO, attach()],
+    "2d_image_of_a_3d_texture": [bind("GL_TEXTURE_3D", 1), ("glTexImage2D", dict(
+        target="GL_TEXTURE_3D", level=0, internalformat="GL_RGBA8", width=8, height=8, border=0, format="GL_RGBA",
+        type="GL_UNSIGNED_BYTE", pixels=None)), FBO, layer(0)],
+    "3d_storage_of_a_2d_texture": [bind("GL_TEXTURE_2D", 1), ("glTexStorage3D", dict(
+        target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA8", width=8, height=8, depth=1)), FBO, attach()],
+    # Depth and stencil given one face of a cube map, by layer and by face.
+    "cube_face_by_layer_and_by_name": CUBE_1 + faces(0, 8, fmt="GL_DEPTH24_STENCIL8") + [
+        FBO, layer(3, point="GL_DEPTH_ATTACHMENT"),
+        attach("glFramebufferTexture2D", point="GL_STENCIL_ATTACHMENT", textarget=CUBE_FACES[3])],
     "cube_storage_layered": [bind("GL_TEXTURE_CUBE_MAP", 1), ("glTexStorage2D", dict(
         target="GL_TEXTURE_CUBE_MAP", levels=2, internalformat="GL_RGBA8", width=8, height=8)), FBO, attach(level=1)],
 }
@@ -259,7 +272,7 @@ def texture_calls(draw, tex):
     calls = [bind(target, tex)]
     w, h, layers = draw(SIZES), draw(SIZES), draw(st.sampled_from([1, 2, 4]))
     for _ in range(draw(st.integers(1, 4))):
-        op = draw(st.sampled_from(["chain", "chain", "level", "storage", "generate", "base"]))
+        op = draw(st.sampled_from(["chain", "chain", "level", "storage", "generate", "base", "other_call"]))
         fmt = draw(FORMATS)
         if target == "GL_TEXTURE_2D_MULTISAMPLE":
             calls.append(("glTexImage2DMultisample", dict(
@@ -287,6 +300,11 @@ def texture_calls(draw, tex):
             else:
                 calls.append(("glTexStorage2D", dict(args, height=layers if target == "GL_TEXTURE_1D_ARRAY"
                                                      else w if target == "GL_TEXTURE_CUBE_MAP" else h)))
+        elif op == "other_call":
+            # An image call of another dimension than the target's.
+            call = draw(st.sampled_from(["GL_TEXTURE_1D", "GL_TEXTURE_2D", "GL_TEXTURE_3D"]))
+            calls.append((image(call, 0, fmt, w, h, layers)[0], dict(image(call, 0, fmt, w, h, layers)[1],
+                                                                     target=target)))
         elif op == "generate":
             calls.append(("glGenerateMipmap", dict(target=target)))
         else:

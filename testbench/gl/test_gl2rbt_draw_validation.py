@@ -478,6 +478,12 @@ def multisampled(samples):
     (colour_framebuffer("GL_RGBA8", "GL_DEPTH_ATTACHMENT") + [
         ("glDeleteRenderbuffers", dict(n=1, renderbuffers=[5])), READ_3, CLEAR, SRC1, BOTH], False),
     (multisample_texture("glTexImage2DMultisample", 0) + [READ_3, CLEAR, SRC1, BOTH], False),
+    # Mesa tests an incomplete framebuffer again at each change of buffers:
+    # a face no attachment names completes a layered cube map, and the test
+    # after it finds it complete (no test at the draw).
+    (layered_cube(skip=5) + [READ_3, CLEAR, face_image("GL_TEXTURE_CUBE_MAP_NEGATIVE_Z"), READ_WINDOW, READ_3,
+                             CLEAR, SRC1, BOTH], True),
+    (layered_cube(skip=5) + [READ_3, CLEAR, READ_WINDOW, READ_3, CLEAR, SRC1, BOTH], False),
 ], ids=["control", "texture_attached", "storage_changed", "same_storage", "renderbuffer_deleted",
         "texture_image_given", "texture_sub_image", "texture_deleted", "not_bound_storage_changed",
         "not_bound_checked_again", "not_bound_texture_checked_again", "incomplete_after_draw_buffer",
@@ -493,7 +499,8 @@ def multisampled(samples):
         "depth_only_renderbuffer_at_depth_stencil", "depth_stencil_renderbuffer_at_depth_stencil",
         "stencil_detached_after_depth_stencil", "layered_cube_complete", "layered_cube_face_missing",
         "array_layer_inside", "array_layer_past", "buffer_texture_attached", "renderbuffer_never_bound",
-        "no_such_framebuffer", "clear_of_no_buffer", "deleted_image_keeps_its_format", "no_samples"])
+        "no_such_framebuffer", "clear_of_no_buffer", "deleted_image_keeps_its_format", "no_samples",
+        "completed_by_a_face_not_attached", "still_incomplete"])
 def test_a_framebuffer_tested_again_decides(tmp_path, calls, drawn):
     """Mesa keeps each framebuffer object's completeness status: a change
     to its attachments or their images clears it, and the next test (a
@@ -518,6 +525,22 @@ def test_a_framebuffer_of_the_screen_s_size_draws_only_when_complete(tmp_path, f
         ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
     got, report = fragments(tmp_path, blending(calls), "screen")
     assert (got > 100) == drawn, (got, report)
+
+
+def test_a_reduced_capture_before_version_5_leaves_array_textures_unknown(tmp_path, monkeypatch):
+    """A reduced capture of version 4 or earlier kept no glTexImage3D: a 2D
+    array texture's attachment read from one has a completeness the
+    converter does not compute, and a draw whose validity depends on it
+    is refused in one line naming it, nothing left; version 5 keeps the
+    call, and the converter computes it (layer 2 of 2: incomplete)."""
+    import rbcd.gl2rbt.reduced as reduced
+    from gl_captures import left_behind, refused
+    c = blending(array_layer(2) + [READ_3, CLEAR, SRC1, BOTH])
+    assert fragments(tmp_path, c, "five")[0] == 0
+    monkeypatch.setattr(reduced, "REDUCED_HEADER", ("rbcd-reduced-capture", 4, 0))
+    r = gl2rbt(tmp_path, c.write(tmp_path / "four.xz"), "-o", tmp_path / "four.rbt")
+    refused(r, "glDrawArrays", "a reduced capture of version 4 or earlier")
+    assert left_behind(tmp_path, ["five.xz", "five.rbt", "four.xz"]) == []
 
 
 def test_a_reduced_capture_keeps_blend_factors_and_draw_buffers(tmp_path):

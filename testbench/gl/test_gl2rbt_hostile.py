@@ -2029,8 +2029,7 @@ def test_a_depth_attachment_has_its_levels_size(tmp_path):
     level was passed over, level 0's size taken: a 32 x 24 level of a
     64 x 48 texture was the camera pass). A mutable texture's level past 0
     must be mipmap complete too (levels 0 and 1 alone of a 128 x 96 one:
-    incomplete, nothing drawn; round 26). A level that is no integer is
-    named."""
+    incomplete, nothing drawn). A level that is no integer is named."""
     def fbo(level, *tex):
         c = Calls()
         c.add("glGenFramebuffers", n=1, framebuffers=[3]).add("glBindFramebuffer", target="GL_FRAMEBUFFER",

@@ -364,7 +364,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             return any(isinstance(v, int) and not isinstance(v, bool) and v < 0
                        for v in (d.get("width"), d.get("height")))
         if base.startswith("glCopyTextureSubImage"):
-            return d.get("texture") not in self.s.texture_targets
+            tex = d.get("texture")
+            return not (isinstance(tex, int) and not isinstance(tex, bool) and tex in self.s.texture_targets)
         return False
 
     def swaps_main_drawable(self, no, args):

@@ -17,6 +17,7 @@ from .errors import ConvertError, printable
 from .converter import STATE_UPDATES, Converter
 from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
 from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
+from .glstate.texture_levels import PASSED_OVER_IMAGES
 from .glstate.textures import REDUCED_TEXTURES
 from .outputs import SafeText
 
@@ -71,12 +72,14 @@ REDUCED_CHECK_ONLY = {"glProvokingVertex"}
 def reduced_keeps(name):
     """Whether the emulation reads the call for the outputs: it has a
     handler, starts Mesa's state update (STATE_UPDATES: a copy into a
-    texture of another dimension), is not passed over (and is refused), or
-    is the window system's."""
+    texture of another dimension), is not passed over (and is refused),
+    gives texture images the converter does not follow (texture_levels:
+    what follows is not computed), or is the window system's."""
     base = base_name(name)
     if base in REDUCED_CHECK_ONLY:
         return False
     return base in Converter.HANDLERS or base in STATE_UPDATES or not name.startswith(IGNORED_PREFIXES) \
+        or PASSED_OVER_IMAGES.match(base) \
         or name.startswith(REDUCED_KEEP) or name in END_FRAME_CALLS
 
 

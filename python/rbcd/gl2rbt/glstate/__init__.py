@@ -102,6 +102,7 @@ class GLState:
         # the next state update (a draw, a clear: FramebufferCalls.
         # update_framebuffers) test the bound framebuffers not found complete.
         self.fbo_status = {}
+        self.fbo_answered = set()    # those whose status is the capture's answer to a status check
         # Textures' levels as completeness reads them (texture_levels.py):
         # ("texture", name) -> TextureLevels; an image-giving call passed over.
         self.texture_levels = {}
@@ -222,7 +223,7 @@ SHARED_STATE = {
     "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names", "sampler_names",
     "texture_buffers", "texture_images", "texture_calls", "samplers", "views", "reduced_texture_versions",
     "rendered_images", "fbo_depth", "fbo_attachments", "fbo_draw_buffers", "fbo_one_output", "fbo_status", "fbo_buffer_names", "texture_levels",
-    "images_passed_over", "framebuffer_names", "framebuffer_objects", "renderbuffer_objects"}
+    "images_passed_over", "framebuffer_names", "framebuffer_objects", "renderbuffer_objects", "fbo_answered"}
 # The memory limits are of all groups together.
 CONVERSION_STATE = {"next_version", "gpu_writes", "readback_call", "buffer_bytes_in_all", "texture_bytes_kept"}
 

@@ -47,7 +47,8 @@ DIGEST_TAG = "rbcd-digest"
 
 
 def texture_image_digest(d):
-    """The digest of a glTexImage2D's level-0 image (its size, formats and
+    """The digest of an image call's level-0 image (glTexImage2D's, and a
+    reduced capture's glTexImage1D/3D: its size, formats and
     pixels; 16 hex digits), or None when the call carries no pixels (NULL,
     a pixel unpack buffer's offset, or a reduced capture written without
     them). Selection rules name textures by it (`texture_image`): unlike the
@@ -128,8 +129,9 @@ class FramebufferCalls:
         if not isinstance(target, (str, int)) or isinstance(target, bool):
             fail_call(no, f"{name}: the target {printable(target, 40)} is not an enumerant")
         fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
-        if not generated_name(self.core, self.s.framebuffer_names, fb):
-            return
+        if not generated_name(self.core, self.s.framebuffer_names, fb) or target not in (
+                "GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER", "GL_READ_FRAMEBUFFER"):
+            return   # GL_INVALID_OPERATION or GL_INVALID_ENUM: no binding, no object
         if fb:
             self.s.framebuffer_objects.add(fb)
         before = (self.s.draw_fbo, self.s.read_fbo)
@@ -183,7 +185,8 @@ class FramebufferCalls:
                 # than the camera's.
                 target = self.s.texture_targets.get(obj)
                 if layer is not None:
-                    key += ("layer", layer)
+                    # (a cube map's layer is its face, as Mesa keeps it)
+                    key += ("layer", CUBE_FACES[layer] if target == CUBE else layer)
                 elif d.get("textarget") in CUBE_FACES:
                     key += ("layer", d["textarget"])
                 elif target in LAYERED_TARGETS:
@@ -288,7 +291,8 @@ class FramebufferCalls:
 
     def h_bind_renderbuffer(self, no, name, a, args):
         rb = checked(no, integer, dict(args).get("renderbuffer"), f"{name}: the renderbuffer", *U32)
-        if generated_name(self.core, self.s.renderbuffer_names, rb):
+        if generated_name(self.core, self.s.renderbuffer_names, rb) and \
+                dict(args).get("target", "GL_RENDERBUFFER") == "GL_RENDERBUFFER":
             self.s.renderbuffer = rb
             if rb:
                 self.s.renderbuffer_objects.add(rb)
@@ -338,6 +342,9 @@ class FramebufferCalls:
         self.s.texture_levels.pop((kind, obj), None)
         for k in keys:
             del self.s.sizes[k]
+        for kept_by in (self.s.multisampled, self.s.formats, self.s.depth_types):
+            for k in [k for k in kept_by if k[:2] == (kind, obj)]:
+                del kept_by[k]
 
     def h_delete_renderbuffers(self, no, name, a, args):
         for rb in dict(args).get("renderbuffers") or []:
@@ -778,15 +785,24 @@ class FramebufferCalls:
             status = self.s.fbo_status.get(fb, UNTESTED)
             if status is UNTESTED:
                 self.s.fbo_status[fb] = self.framebuffer_complete(fb) if answer is None else answer
+                self.s.fbo_answered.discard(fb) if answer is None else self.s.fbo_answered.add(fb)
                 decide = True
             elif answer is not None:
                 # The capture's answer says which status Mesa had: a
                 # complete one is not tested, an incomplete one is.
                 self.s.fbo_status[fb] = answer
+                self.s.fbo_answered.add(fb)
                 decide = decide or not answer
             elif isinstance(status, str):
                 unknown.append((fb, status))
             elif status is False:
+                # Mesa tests an incomplete one again: images its
+                # attachments do not name (levels of the mipmap chain, the
+                # faces of a layered cube map's base) may have completed it.
+                # An answer the capture gave stands until the framebuffer
+                # changes.
+                if fb not in self.s.fbo_answered:
+                    self.s.fbo_status[fb] = self.framebuffer_complete(fb)
                 decide = True
         if decide:
             self.revalidate()
@@ -852,9 +868,9 @@ class FramebufferCalls:
         if status is UNTESTED:
             status = self.framebuffer_complete(fb)
         if isinstance(status, str):
-            fail_call(self.last_call, f"{printable(self.last_name)}: whether it writes framebuffer {fb}, of the "
-                                      "camera pass's size, depends on the framebuffer's completeness, which the "
-                                      f"converter does not compute ({status}; docs/gl-capture.md)")
+            fail_call(self.last_call, f"{printable(self.last_name or 'the call')}: whether it writes framebuffer "
+                                      f"{fb}, of the camera pass's size, depends on the framebuffer's completeness, "
+                                      f"which the converter does not compute ({status}; docs/gl-capture.md)")
         return status is True
 
     HANDLERS = {

@@ -18,8 +18,10 @@ image-giving call the converter passes over."""
 import math
 import re
 
+from ..gl_tables import base_name
 from .texture_formats import (COMPRESSED_BLOCKS, KIND_PIXELS, MAX_LEVEL, MAX_SIZE, UNSIZED, certain_level,
-                              certain_mipmaps, kind_of, pixels_fit, refused_level, whole)
+                              certain_mipmaps, compressed_size, kind_of, level_size_fits, pixels_fit, refused_level,
+                              whole)
 
 # A cube map's faces in layer order (+X, -X, +Y, -Y, +Z, -Z).
 CUBE_FACES = tuple(f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for a in "XYZ" for s in ("POSITIVE", "NEGATIVE"))
@@ -40,10 +42,28 @@ BOX = "GL_TEXTURE_3D"
 SINGLE_LEVEL = {"GL_TEXTURE_RECTANGLE", "GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"}
 # Targets whose storage takes the compressed formats every Mesa has.
 COMPRESSIBLE = {"GL_TEXTURE_2D", "GL_TEXTURE_CUBE_MAP", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY"}
+# The targets each image-giving call takes (bind-to-edit base names); any
+# other is GL_INVALID_ENUM or GL_INVALID_OPERATION (a proxy target changes
+# no texture).
+PLANE_CALL_TARGETS = {"GL_TEXTURE_2D", "GL_TEXTURE_RECTANGLE", "GL_TEXTURE_1D_ARRAY"} | set(CUBE_FACES)
+CALL_TARGETS = {
+    "glTexImage1D": {"GL_TEXTURE_1D"}, "glCompressedTexImage1D": {"GL_TEXTURE_1D"},
+    "glCopyTexImage1D": {"GL_TEXTURE_1D"}, "glTexStorage1D": {"GL_TEXTURE_1D"},
+    "glTexImage2D": PLANE_CALL_TARGETS, "glCompressedTexImage2D": PLANE_CALL_TARGETS,
+    "glCopyTexImage2D": PLANE_CALL_TARGETS,
+    "glTexStorage2D": {"GL_TEXTURE_2D", "GL_TEXTURE_RECTANGLE", "GL_TEXTURE_1D_ARRAY", CUBE},
+    "glTexImage3D": {"GL_TEXTURE_3D", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY"},
+    "glCompressedTexImage3D": {"GL_TEXTURE_3D", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY"},
+    "glTexStorage3D": {"GL_TEXTURE_3D", "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY"},
+    "glTexImage2DMultisample": {"GL_TEXTURE_2D_MULTISAMPLE"},
+    "glTexStorage2DMultisample": {"GL_TEXTURE_2D_MULTISAMPLE"},
+    "glTexImage3DMultisample": {"GL_TEXTURE_2D_MULTISAMPLE_ARRAY"},
+    "glTexStorage3DMultisample": {"GL_TEXTURE_2D_MULTISAMPLE_ARRAY"},
+}
 # Image-giving calls the converter passes over (EXT_direct_state_access's
-# 1D/3D and multi-texture forms, an EGL image, a window-system binding):
-# after one, no texture's images are known.
-PASSED_OVER_IMAGES = re.compile(r"^gl(Compressed|Copy)?(Multi)?Tex(ture)?(Image|Storage)(Mem)?\d")
+# compressed and copy forms, storage in external memory, a window system's
+# drawable bound as a texture): after one, no texture's images are known.
+PASSED_OVER_IMAGES = re.compile(r"^(gl(Compressed|Copy)?Tex(ture)?(Image|Storage)(Mem)?\d|(glX|egl|wgl)BindTexImage)")
 # The targets whose images reduced captures before version 5 kept (those
 # of glTexImage2D, glTexStorage2D and their kin).
 PLANE_IMAGES = {"GL_TEXTURE_2D", "GL_TEXTURE_RECTANGLE", "GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_CUBE_MAP",
@@ -132,8 +152,18 @@ def certain_image(name, target, d, es):
         return None
     if name.startswith("glCompressed"):
         # Compressed images of a plane alone are checked (the block sizes).
-        taken = certain_level(name, d, es) if shape in PLANE_TARGETS or shape == CUBE else None
-        return None if taken is None else (w, h, 1, fmt, 0, True)
+        if shape not in PLANE_TARGETS and shape != CUBE:
+            return None
+        if isinstance(d.get("data"), tuple):
+            # A reduced capture's digest in the pixels' place: apitrace
+            # recorded imageSize bytes, the size the format's blocks make.
+            level = d.get("level")
+            taken = level_size_fits(d) and d.get("border") == 0 and fmt in COMPRESSED_BLOCKS \
+                and d.get("imageSize") == compressed_size(fmt, w, h) \
+                and not (es and level and (w & (w - 1) or h & (h - 1)))
+        else:
+            taken = certain_level(name, d, es) is not None
+        return (w, h, 1, fmt, 0, True) if taken else None
     if shape == BOX and kind_of(fmt) in ("depth", "depth-stencil"):
         return "refused"   # (a depth image of a 3D texture: GL_INVALID_OPERATION)
     if d.get("border") != 0 or not isinstance(fmt, str) or kind_of(fmt) is None:
@@ -193,8 +223,8 @@ class TextureLevelCalls:
         texture is immutable, and nothing changes)."""
         target = d.get("target")
         bound = CUBE if target in CUBE_FACES else target
-        if not isinstance(bound, str):
-            return False
+        if not isinstance(bound, str) or target not in CALL_TARGETS.get(name, ()):
+            return False   # (a target the call does not take, or a proxy: the call changes no texture)
         tex = self.bound_texture(bound)
         if not tex:
             return True   # (the default texture: never attached)
@@ -360,7 +390,6 @@ class TextureLevelCalls:
         vertex shader reads it (rendered_textures); the images it gives
         are recorded, and clear the status of the framebuffers they are
         attached to."""
-        from ..gl_tables import base_name
         d = dict(args)
         self.gpu_wrote()
         if self.record_levels(no, base_name(name), d):
