@@ -269,8 +269,8 @@ def test_reduced(gl):
                 assert f1.read() == f2.read(), f"frames {tag}: the reduced capture's .{ext} differs"
     size, full = os.path.getsize(red), os.path.getsize(capture_path())
     assert size < full / 2, f"the reduced capture is {size} bytes, the capture {full}"
-    from rbcd.gl2rbt.reduced import reduced_header, source_bytes
-    assert reduced_header(red) == ("rbcd-reduced-capture", 4, full) and source_bytes(red) == full, \
+    from rbcd.gl2rbt.reduced import REDUCED_HEADER, reduced_header, source_bytes
+    assert reduced_header(red) == ("rbcd-reduced-capture", REDUCED_HEADER[1], full) and source_bytes(red) == full, \
         "the reduced capture names the capture's size, which its bounds take (R21-8)"
     with open(red, "rb") as f:
         data = f.read()
