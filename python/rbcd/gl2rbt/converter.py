@@ -17,6 +17,7 @@ from .glstate.camera_depth import CameraDepthCalls
 from .glstate.color_outputs import ALWAYS_REVALIDATING, REVALIDATING, ColorOutputCalls
 from .glstate.framebuffers import FramebufferCalls
 from .glstate.textures import REDUCED_TEXTURES, TextureImageCalls
+from .glstate.texture_formats import whole
 from .glstate.texture_levels import PASSED_OVER_IMAGES, TextureLevelCalls
 from .glstate.dsa import DirectStateCalls
 from .glstate.objects import ObjectCalls
@@ -361,11 +362,9 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if base == "glClear":
             return self.clear_bits(no, name, args[0][1] if args else None) is None
         if base in ("glReadPixels", "glReadnPixels", "glCopyPixels", "glDrawPixels", "glBitmap"):
-            return any(isinstance(v, int) and not isinstance(v, bool) and v < 0
-                       for v in (d.get("width"), d.get("height")))
+            return any(whole(v) and v < 0 for v in (d.get("width"), d.get("height")))
         if base.startswith("glCopyTextureSubImage"):
-            tex = d.get("texture")
-            return not (isinstance(tex, int) and not isinstance(tex, bool) and tex in self.s.texture_targets)
+            return not (whole(d.get("texture")) and d["texture"] in self.s.texture_targets)
         return False
 
     def swaps_main_drawable(self, no, args):

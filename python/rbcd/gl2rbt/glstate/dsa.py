@@ -6,7 +6,8 @@ arrays have theirs in buffers.py and attributes.py).
 A texture call names a texture that exists, with its target: one made by
 glCreateTextures, or bound once; another name is GL_INVALID_OPERATION and
 the call does nothing, as in Mesa. A framebuffer or renderbuffer call on a
-name a core profile has not generated does nothing either."""
+name that is no object (bound once, or made by glCreate*) does nothing
+either, in every profile."""
 from ...cli import I32, U32, integer
 from ..errors import checked, fail_call
 from ..gl_tables import base_name

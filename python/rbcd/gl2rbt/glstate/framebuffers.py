@@ -605,7 +605,7 @@ class FramebufferCalls:
             # (GL_INVALID_FRAMEBUFFER_OPERATION): nothing changes.
             return
         refused = refused or "drawFramebuffer" in d and any(
-            fb and fb not in self.s.framebuffer_objects for fb in (src, dst))   # no such framebuffer
+            fb and not self.known_framebuffer(fb) for fb in (src, dst))   # no such framebuffer
         if refused or d.get("filter") not in ("GL_NEAREST", 0x2600) or self.depth_class(src) != self.depth_class(dst):
             return
         if self.depth_key(src) == self.depth_key(dst):
