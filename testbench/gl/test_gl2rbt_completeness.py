@@ -18,6 +18,7 @@ hypothesis = pytest.importorskip("hypothesis", reason="python3-hypothesis is mis
 from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E402
 
 from rbcd.gl2rbt.converter import Converter  # noqa: E402
+from rbcd.gl2rbt.glstate.framebuffers import DESKTOP_RENDERABLE, RENDERABLE  # noqa: E402
 from rbcd.gl2rbt.glstate.texture_levels import CUBE_FACES  # noqa: E402
 
 EXAMPLES = int(os.environ.get("HYPOTHESIS_EXAMPLES", "400"))
@@ -251,6 +252,13 @@ CASES = {
     "cube_storage_layered": [bind("GL_TEXTURE_CUBE_MAP", 1), ("glTexStorage2D", dict(
         target="GL_TEXTURE_CUBE_MAP", levels=2, internalformat="GL_RGBA8", width=8, height=8)), FBO, attach(level=1)],
 }
+# The colour formats a desktop context renders beyond OpenGL ES's, as a
+# texture's storage and as a renderbuffer's.
+for fmt in sorted(DESKTOP_RENDERABLE - RENDERABLE):
+    CASES[f"texture_{fmt[3:].lower()}"] = [bind("GL_TEXTURE_2D", 1), ("glTexStorage2D", dict(
+        target="GL_TEXTURE_2D", levels=1, internalformat=fmt, width=8, height=8)), FBO, attach()]
+    CASES[f"renderbuffer_{fmt[3:].lower()}"] = [RB_3[0], ("glRenderbufferStorage", dict(
+        RB_3[1][1], internalformat=fmt)), FBO, RB_ATTACH]
 
 
 @pytest.mark.parametrize("name", sorted(CASES))

@@ -527,6 +527,107 @@ def test_a_framebuffer_of_the_screen_s_size_draws_only_when_complete(tmp_path, f
     assert (got > 100) == drawn, (got, report)
 
 
+STORAGE_4 = TEXTURE_4 + [("glTexStorage2D", dict(target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA8",
+                                                  width=64, height=48))]
+
+
+def view_8(target, fmt, minlevel, minlayer, numlevels=1):
+    """Texture 8 made a view of texture 4 and attached to framebuffer 3."""
+    return [("glGenTextures", dict(n=1, textures=[8])), ("glTextureView", dict(
+        texture=8, target=target, origtexture=4, internalformat=fmt, minlevel=minlevel, numlevels=numlevels,
+        minlayer=minlayer, numlayers=1)), ("glNamedFramebufferTexture", dict(
+            framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=8, level=0))]
+
+
+@pytest.mark.parametrize("colour, outcome", [
+    # Texture 4's own storage, of the screen's size: the camera pass.
+    (STORAGE_4 + [("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4,
+                                                     level=0))], "drawn"),
+    # A view of it (R26-6 and R27-1 had left its draws out), of level 1 of
+    # a texture twice as large, of a layer of an array texture, in
+    # another format of the class: the view's images are the original's.
+    (STORAGE_4 + view_8("GL_TEXTURE_2D", "GL_RGBA8", 0, 0), "drawn"),
+    ([TEXTURE_4[0], TEXTURE_4[1], ("glTexStorage2D", dict(STORAGE_4[2][1], levels=2, width=128, height=96))]
+     + view_8("GL_TEXTURE_2D", "GL_RGBA8", 1, 0), "drawn"),
+    (array_layer(0)[1:3] + [("glTexStorage3D", dict(target="GL_TEXTURE_2D_ARRAY", levels=1,
+                                                    internalformat="GL_RGBA8", width=64, height=48, depth=2))]
+     + view_8("GL_TEXTURE_2D", "GL_R32F", 0, 1), "drawn"),
+    # One whose range the converter does not follow (no level): its size
+    # is not known, and the pass rests on it.
+    (STORAGE_4 + view_8("GL_TEXTURE_2D", "GL_RGBA8", 0, 0, numlevels=0), "refused"),
+    # A layer of an array texture of the screen's size: another pass, as
+    # documented, whatever its size.
+    (array_layer(0)[1:], "left out"),
+    # A smaller texture, its attachment point given by value (R26-11's
+    # m32: the driver takes 0x8CE0 as GL_COLOR_ATTACHMENT0): another pass.
+    ([STORAGE_4[0], STORAGE_4[1],
+      ("glTexStorage2D", dict(STORAGE_4[2][1], width=32, height=24)),
+      ("glNamedFramebufferTexture", dict(framebuffer=3, attachment=0x8CE0, texture=4, level=0))], "left out"),
+], ids=["storage", "view", "view_of_level_1", "view_of_a_layer", "view_of_no_level", "array_layer",
+        "smaller_by_value"])
+def test_a_screen_sized_framebuffer_s_colour_texture_decides_the_pass(tmp_path, colour, outcome):
+    """Framebuffer 3 with a depth buffer of the screen's size is the camera
+    pass when its colour attachment is as large: a texture's size comes
+    from the images the converter follows, a view's from the original's,
+    and one it does not know is refused in one line naming the texture,
+    nothing left (round 26's v410 and round 27's R27-1 had left a view's
+    draws out of the frame, where Mesa drew them)."""
+    from gl_captures import left_behind, refused
+    calls = [FBO] + colour + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + [
+        ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
+    c = blending(calls)
+    if outcome == "refused":
+        r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+        refused(r, "glDrawArrays", "framebuffer 3 depends on the size of its attachment of texture 8")
+        assert left_behind(tmp_path, ["c.xz"]) == []
+    else:
+        got, report = fragments(tmp_path, c, "pass")
+        assert (got > 100) == (outcome == "drawn"), (got, report)
+
+
+@pytest.mark.parametrize("colour, drawn", [
+    (colour_framebuffer("GL_RGBA8"), True),
+    (colour_framebuffer("GL_RGBA8UI"), False),
+    (colour_framebuffer("GL_RGB10_A2UI"), False),
+    # An integer attachment no draw buffer names counts too (Mesa keeps
+    # one bit an attachment).
+    (colour_framebuffer("GL_RGBA8") + colour_framebuffer("GL_R32I", "GL_COLOR_ATTACHMENT1", rb=7)[1:], False),
+], ids=["rgba8", "rgba8ui", "rgb10_a2ui", "integer_not_drawn"])
+def test_fixed_function_draws_into_an_integer_colour_buffer_are_refused(tmp_path, colour, drawn):
+    """In a compatibility profile, a draw with no fragment shader into a
+    framebuffer with an integer colour attachment is GL_INVALID_OPERATION
+    (EXT_texture_integer; Mesa 22.3's _IntegerBuffers): it draws nothing
+    and is counted among the GL errors (R27-2 had converted such draws
+    into the frame, 0.00% against Mesa)."""
+    from gl_captures import Calls
+    c = Calls()
+    for fn, args in colour + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + [
+            ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]:
+        c.add(fn, **args)
+    got, report = fragments(tmp_path, c.triangle(obj=1).swap(), "integer")
+    assert (got > 100) == drawn, (got, report)
+    assert drawn or "integer format" in report, report
+
+
+@pytest.mark.parametrize("first_bind", [None, "GL_DEPTH_TEST", "GL_PROXY_TEXTURE_2D", 0x0DE1],
+                         ids=["none", "not_a_target", "proxy", "2d_by_value"])
+def test_a_bind_gl_refuses_gives_the_texture_no_target(tmp_path, first_bind):
+    """glBindTexture of a target GL does not bind (GL_INVALID_ENUM)
+    changes nothing: texture 4 bound next as a 2D texture takes its image,
+    and framebuffer 3 (of the screen's size) draws (R27-3 had kept the
+    refused target, dropped the 2D bind and its image, and left the draws
+    out). A target given by value is that target."""
+    calls = [FBO, ("glGenTextures", dict(n=1, textures=[4]))]
+    if first_bind is not None:
+        calls.append(("glBindTexture", dict(target=first_bind, texture=4)))
+    calls += [TEXTURE_4[1], TEX_IMAGE, ("glNamedFramebufferTexture", dict(
+        framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))]
+    calls += colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + [
+        ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
+    got, report = fragments(tmp_path, blending(calls), "bind")
+    assert got > 100, (got, report)
+
+
 def test_a_reduced_capture_before_version_5_leaves_array_textures_unknown(tmp_path, monkeypatch):
     """A reduced capture of version 4 or earlier kept no glTexImage3D: a 2D
     array texture's attachment read from one has a completeness the

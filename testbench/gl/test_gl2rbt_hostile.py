@@ -51,9 +51,25 @@ def test_a_good_capture_converts(tmp_path):
      "the buffer mode: ['x'] is not an enumerant"),
     (lambda c: c.add("glPatchParameteri", pname="GL_PATCH_VERTICES\n", value=3), "the parameter"),
     (lambda c: c.add("glPatchParameterfv", pname=1.5, values=[1.0] * 4), "the parameter: 1.5 is not an enumerant"),
+    # Texture image, attachment and view calls of a reduced capture
+    # (R27-4: taken, one of them changing the trace).
+    (lambda c: c.add("glTexStorage2D", target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA8",
+                     width=float("nan"), height=48), "the width: nan is not an integer"),
+    (lambda c: c.add("glTexStorage3D", target="GL_TEXTURE_2D_ARRAY", levels=1, internalformat="GL_RGBA8",
+                     width=1 << 40, height=48, depth=2), "the width: 1099511627776 is outside"),
+    (lambda c: c.add("glTexImage2D", target="GL_TEXTURE_2D", level=1 << 63, internalformat="GL_RGBA8", width=4,
+                     height=4, border=0, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=None), "the level"),
+    (lambda c: c.add("glTexImage1D", target="GL_TEXTURE_1D", level=0, internalformat="GL_RGBA8\n", width=4,
+                     border=0, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=None), "is not an enumerant"),
+    (lambda c: c.add("glFramebufferTextureLayer", target="GL_FRAMEBUFFER", attachment="GL_COLOR_ATTACHMENT0",
+                     texture=4, level=0), "glFramebufferTextureLayer: no layer"),
+    (lambda c: c.add("glTextureView", texture=5, target="GL_TEXTURE_2D", origtexture=4, internalformat="GL_RGBA8",
+                     minlevel=-1, numlevels=1, minlayer=0, numlayers=1), "the minlevel: -1 is outside"),
 ], ids=["nan", "list", "group_id", "inf_angle", "missing_argument", "huge_count", "past_the_array", "enum_newline",
         "enum_escape", "enum_long", "index_type_nul", "drawable_list", "drawable_nan", "drawable_huge",
-        "feedback_mode", "feedback_target", "feedback_buffer_mode", "patch_parameter", "patch_parameter_float"])
+        "feedback_mode", "feedback_target", "feedback_buffer_mode", "patch_parameter", "patch_parameter_float",
+        "image_width_nan", "image_width_huge", "image_level_huge", "image_format_newline",
+        "layer_missing", "view_level_negative"])
 def test_bad_calls_are_named(tmp_path, build, words):
     c = Calls().triangle(obj=1)
     build(c)

@@ -486,8 +486,17 @@ def test_rules_name_a_texture_by_its_image_whatever_its_name(tmp_path):
         assert [d["object"] for d in gl.draws()] == [0 if pixels is None else 9], name
     gl = GL()
     gl.glBindTexture(target="GL_TEXTURE_2D", texture=1)
-    with pytest.raises(ConvertError, match="malformed arguments"):
+    with pytest.raises(ConvertError, match="neither an image nor its digest"):
         gl.glTexImage2D(pixels=(DIGEST_TAG, "xyz"), **args)
+    # Those of the images reduced captures keep digests of too (R27-4:
+    # a 3D image's taken), and pixels that are neither bytes, an offset
+    # nor a digest.
+    cube = dict(args, target="GL_TEXTURE_3D", depth=4)
+    gl.glBindTexture(target="GL_TEXTURE_3D", texture=2)
+    with pytest.raises(ConvertError, match="neither an image nor its digest"):
+        gl.glTexImage3D(pixels=(DIGEST_TAG, "zz"), **cube)
+    with pytest.raises(ConvertError, match=r"the pixels \(an offset\): \[1, 2, 3\] is not an integer"):
+        gl.glTexImage3D(pixels=[1, 2, 3], **cube)
 
 
 def test_frames_end_at_swaps_and_unmodelled_calls_are_refused():

@@ -136,7 +136,10 @@ def header_version(head):
     record is no such header; a version this converter does not read is
     the file's error."""
     version = head[1] if isinstance(head, tuple) and len(head) in (2, 3) and head[0] == REDUCED_HEADER[0] else None
-    if version is not None and (type(version) is not int or version not in REDUCED_VERSIONS):
+    if version is not None and type(version) is not int:
+        raise ConvertError(f"a reduced capture whose header's version, {printable(writable(version), 40)} "
+                           f"({type(version).__name__}), is not a whole number")
+    if version is not None and version not in REDUCED_VERSIONS:
         raise ConvertError(f"a reduced capture of version {printable(version, 40)}: this converter reads "
                            f"versions {', '.join(map(str, REDUCED_VERSIONS[:-1]))} and {REDUCED_VERSIONS[-1]}")
     if version is not None and (len(head) == 3) != (version >= 4):

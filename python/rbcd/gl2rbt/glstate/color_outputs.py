@@ -214,6 +214,24 @@ class ColorOutputCalls:
             return None
         return f"advanced blending ({mode}) under a fragment shader that does not declare blend_support_{mode}"
 
+    def integer_buffers_invalid(self):
+        """Why draws are GL_INVALID_OPERATION for an integer colour buffer
+        (EXT_texture_integer; Mesa 22.3 in a compatibility profile): no
+        fragment shader runs and the draw framebuffer had a colour
+        attachment of an integer format at its last test, drawn into or
+        not. None when they draw."""
+        fb = self.s.draw_fbo
+        if self.core or self.es or not fb or self.stage_programs().get("fragment") is not None:
+            return None
+        integer = self.s.fbo_integer.get(fb)
+        if isinstance(integer, str):
+            return NotFollowed(f"whether framebuffer {fb} has an integer colour attachment, which fixed-function "
+                               f"fragments cannot write, is not known ({integer}; docs/gl-capture.md)")
+        if integer is not None:
+            return (f"framebuffer {fb}'s {integer[0]} has integer format {integer[1]}, which only a fragment shader "
+                    "writes")
+        return None
+
     def dual_source_buffers(self):
         """The draw buffers whose blend factors read the second colour output."""
         return [i for i, f in enumerate(self.s.blend_factors) if DUAL_SOURCE.intersection(f)]

@@ -121,11 +121,12 @@ class DrawCalls:
         checks (_mesa_update_valid_to_render_state): the bound pipeline's
         validation (only if not validated since it last changed), the
         samplers of the program in use, dual-source blending against the
-        draw buffers as they are now, an advanced blend equation. Draws
+        draw buffers as they are now, an advanced blend equation, an
+        integer colour buffer with no fragment shader. Draws
         keep the answer until the next such call, whatever changes
         meanwhile."""
         self.s.render_fault = self.pipeline_invalid() or self.samplers_invalid() or self.dual_source_invalid() \
-            or self.advanced_blend_invalid()
+            or self.advanced_blend_invalid() or self.integer_buffers_invalid()
 
     # ---- draws
     def draw(self, no, mode, positions, name, tris=None):

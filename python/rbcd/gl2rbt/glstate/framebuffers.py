@@ -13,13 +13,21 @@ import re
 from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
-from . import bitfield, generated_name
-from .texture_formats import DEPTH_FORMATS, DEPTH_STENCIL_FORMATS, MAX_LEVEL, refused_level, refused_storage
+from . import bitfield, by_value, generated_name
+from .texture_formats import (DEPTH_FORMATS, DEPTH_STENCIL_FORMATS, INTEGER_FORMATS, MAX_LEVEL, refused_level,
+                              refused_storage)
 from .texture_levels import BOX, CUBE, CUBE_FACES, MAX_3D_SIZE, MAX_LAYERS, MAX_SAMPLES, SINGLE_LEVEL, UNCERTAIN
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
 # The other attachment points (llvmpipe's GL_MAX_COLOR_ATTACHMENTS: 8).
 OTHER_ATTACHMENTS = tuple(f"GL_COLOR_ATTACHMENT{i}" for i in range(8)) + ("GL_STENCIL_ATTACHMENT",)
+# The targets glBindTexture takes (Mesa 22.3's _mesa_tex_target_to_index:
+# 1D, 1D arrays and rectangles only in desktop GL, external images only in
+# OpenGL ES); another is GL_INVALID_ENUM, a proxy target too.
+BIND_TARGETS = {f"GL_TEXTURE_{t}" for t in ("1D", "2D", "3D", "1D_ARRAY", "2D_ARRAY", "RECTANGLE", "CUBE_MAP",
+                                             "CUBE_MAP_ARRAY", "BUFFER", "2D_MULTISAMPLE", "2D_MULTISAMPLE_ARRAY",
+                                             "EXTERNAL_OES")}
+DESKTOP_BIND_TARGETS = {"GL_TEXTURE_1D", "GL_TEXTURE_1D_ARRAY", "GL_TEXTURE_RECTANGLE"}
 GL_TEXTURE0 = 0x84C0
 MAX_TEXTURE_UNITS = 192   # llvmpipe's GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS
 MAX_RENDERBUFFER_SIZE = 16384   # llvmpipe's GL_MAX_RENDERBUFFER_SIZE
@@ -34,6 +42,13 @@ RENDERABLE = {f"GL_{f}" for f in (
     "RED", "RG", "RGB", "RGBA", "R8", "RG8", "RGB8", "RGBA8", "R16", "RG16", "RGBA16", "R16F", "RG16F", "RGBA16F",
     "R32F", "RG32F", "RGBA32F", "R11F_G11F_B10F", "RGB10_A2", "RGB10_A2UI", "SRGB8_ALPHA8")} | {
     f"GL_{c}{b}{s}" for c in ("R", "RG", "RGBA") for b in ("8", "16", "32") for s in ("I", "UI")} | {3, 4}
+# And those a desktop GL context (core or compatibility) renders too, as
+# Mesa 22.3 and llvmpipe find them complete, texture and renderbuffer
+# alike (OpenGL ES renders fewer: RENDERABLE there).
+DESKTOP_RENDERABLE = RENDERABLE | {f"GL_{f}" for f in (
+    "RGB16F", "RGB32F", "R8_SNORM", "RG8_SNORM", "RGBA8_SNORM", "R16_SNORM", "RG16_SNORM", "RGBA16_SNORM",
+    "RGB565", "RGBA4", "RGB5_A1", "SRGB8", "RGB16", "RGB8I", "RGB8UI", "RGB16I", "RGB16UI", "RGB32I", "RGB32UI",
+    "R3_G3_B2", "RGB4", "RGB5", "RGB10", "RGB12", "RGBA2", "RGBA12")}
 # The internal formats glTexBuffer takes in Mesa 22.3 (GL 4.5's table 8.18);
 # a compatibility context also the legacy ones. Another is GL_INVALID_ENUM.
 TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}{t}" for c in ("R", "RG", "RGBA") for b, ts in
@@ -125,7 +140,7 @@ class FramebufferCalls:
 
     def h_bind_framebuffer(self, no, name, a, args):
         d = dict(args)
-        target = d["target"]
+        target = by_value(d["target"])
         if not isinstance(target, (str, int)) or isinstance(target, bool):
             fail_call(no, f"{name}: the target {printable(target, 40)} is not an enumerant")
         fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
@@ -273,7 +288,7 @@ class FramebufferCalls:
                 or not isinstance(fmt, str) or fmt.startswith("GL_COMPRESSED") \
                 or isinstance(d.get("samples"), int) and d["samples"] < 0:
             return   # GL_INVALID_VALUE or GL_INVALID_ENUM: the renderbuffer keeps its image
-        if not (fmt in RENDERABLE or fmt in DEPTH_FORMATS or fmt in DEPTH_STENCIL_FORMATS
+        if not (fmt in self.renderable() or fmt in DEPTH_FORMATS or fmt in DEPTH_STENCIL_FORMATS
                 or fmt.startswith("GL_STENCIL_INDEX") or fmt == "GL_RGB9_E5"):
             fmt = UNCERTAIN   # (one Mesa may refuse: the renderbuffer's image is not known)
         rb = ("renderbuffer", self.s.renderbuffer)
@@ -459,6 +474,10 @@ class FramebufferCalls:
         d = dict(args)
         target = d["target"]
         tex = checked(no, integer, d["texture"], f"{name}: the texture", *U32)
+        target = by_value(target)
+        if target not in BIND_TARGETS or (target in DESKTOP_BIND_TARGETS if self.es else
+                                                   target == "GL_TEXTURE_EXTERNAL_OES"):
+            return   # GL_INVALID_ENUM: nothing is bound
         if tex and (self.s.texture_targets.get(tex, target) != target
                     or not generated_name(self.core, self.s.texture_names, tex)):
             return   # another target's texture, or (core) a name glGenTextures did not give: GL_INVALID_OPERATION
@@ -545,6 +564,7 @@ class FramebufferCalls:
                 self.s.fbo_draw_buffers.pop(fb, None)
                 self.s.fbo_one_output.pop(fb, None)
                 self.s.fbo_status.pop(fb, None)
+                self.s.fbo_integer.pop(fb, None)
                 self.s.fbo_buffer_names.pop(fb, None)
                 if fb in (self.s.draw_fbo, self.s.read_fbo):
                     self.s.new_buffers = True
@@ -679,6 +699,11 @@ class FramebufferCalls:
         if holders & {self.s.draw_fbo, self.s.read_fbo}:
             self.s.new_buffers = True
 
+    def renderable(self):
+        """The colour formats the converter knows llvmpipe renders in this
+        context's API."""
+        return RENDERABLE if self.es else DESKTOP_RENDERABLE
+
     def framebuffer_complete(self, fb):
         """Framebuffer object fb's completeness as Mesa 22.3 tests it
         (_mesa_test_framebuffer_completeness, llvmpipe's own test), where
@@ -694,7 +719,7 @@ class FramebufferCalls:
         unlayered images, or layered images of different targets; separate
         depth and stencil images (llvmpipe: unsupported). Not computed:
         images the converter cannot tell GL gave, textures whose levels it
-        does not follow, colour formats outside RENDERABLE."""
+        does not follow, colour formats outside renderable()."""
         depth = self.s.fbo_depth.get(fb)
         keys = ([("GL_DEPTH_ATTACHMENT", depth)] if depth is not None else []) + \
             list(self.s.fbo_attachments.get(fb, {}).items())
@@ -732,7 +757,7 @@ class FramebufferCalls:
                     return False
             samples.add(image[4:6])
             layering.add(layered)
-            if point.startswith("GL_COLOR") and fmt not in RENDERABLE:
+            if point.startswith("GL_COLOR") and fmt not in self.renderable():
                 unknown = unknown or f"format {printable(fmt, 40)} attached"
         if len(samples) > 1 or len(layering) > 1:
             return False   # (Mesa: incomplete multisample, incomplete layer targets)
@@ -786,12 +811,15 @@ class FramebufferCalls:
             if status is UNTESTED:
                 self.s.fbo_status[fb] = self.framebuffer_complete(fb) if answer is None else answer
                 self.s.fbo_answered.discard(fb) if answer is None else self.s.fbo_answered.add(fb)
+                self.s.fbo_integer[fb] = self.integer_attachment(fb)
                 decide = True
             elif answer is not None:
                 # The capture's answer says which status Mesa had: a
                 # complete one is not tested, an incomplete one is.
                 self.s.fbo_status[fb] = answer
                 self.s.fbo_answered.add(fb)
+                if not answer:
+                    self.s.fbo_integer[fb] = self.integer_attachment(fb)
                 decide = decide or not answer
             elif isinstance(status, str):
                 unknown.append((fb, status))
@@ -803,6 +831,7 @@ class FramebufferCalls:
                 # changes.
                 if fb not in self.s.fbo_answered:
                     self.s.fbo_status[fb] = self.framebuffer_complete(fb)
+                self.s.fbo_integer[fb] = self.integer_attachment(fb)
                 decide = True
         if decide:
             self.revalidate()
@@ -819,6 +848,28 @@ class FramebufferCalls:
                               "docs/gl-capture.md)")
             if pipe is not None:
                 pipe.validated = validated
+
+    def integer_attachment(self, fb):
+        """Framebuffer object fb's colour attachment of an integer format,
+        as its test finds it (Mesa's _IntegerBuffers, read only when the
+        framebuffer is complete): (point, format), None, or why the
+        converter does not know (a str)."""
+        unknown = None
+        for point, key in sorted(self.s.fbo_attachments.get(fb, {}).items()):
+            if not point.startswith("GL_COLOR_ATTACHMENT"):
+                continue
+            if key[0] == "renderbuffer":
+                fmt = self.s.formats.get(key[:2])
+                if fmt == UNCERTAIN:
+                    unknown = unknown or "a renderbuffer's storage the converter cannot tell GL gave"
+            else:
+                image = self.attached_image(key)
+                fmt = image[3] if isinstance(image, tuple) else None
+                if isinstance(image, str):
+                    unknown = unknown or image   # (why the image is not known)
+            if fmt in INTEGER_FORMATS:
+                return point, fmt
+        return unknown
 
     def depth_class(self, fb):
         """A framebuffer's depth format as glBlitFramebuffer compares them:
@@ -843,6 +894,23 @@ class FramebufferCalls:
             return False
         return self.main_drawable is None or self.current_drawable == self.main_drawable
 
+    def attachment_size(self, fb, key):
+        """The (width, height) framebuffer fb's attachment `key` draws into,
+        for the camera-pass test: None for no image, and for a layer, a
+        face or a layered texture (another pass, whatever its size). A size
+        not known is refused in one line: GL's choice of pass rests on it."""
+        if key[0] == "renderbuffer":
+            return self.s.sizes.get(key)
+        if "layer" in key:
+            return None
+        size = self.plane_size(key)
+        if isinstance(size, str):
+            tex = f"{key[1][1]} (deleted)" if isinstance(key[1], tuple) else key[1]
+            fail_call(self.last_call, f"{printable(self.last_name or 'the call')}: whether it writes framebuffer "
+                                      f"{fb} depends on the size of its attachment of texture {tex}, "
+                                      f"which the converter does not know ({size}; docs/gl-capture.md)")
+        return size
+
     def camera_pass(self, fb=None):
         """Whether a draw now writes the frame's camera pass (or would,
         into framebuffer `fb`)."""
@@ -852,14 +920,14 @@ class FramebufferCalls:
         if self.screen is None:
             self.write_header()   # the screen, from the window or the viewport (or the capture's error)
         depth = self.s.fbo_depth.get(fb)
-        if depth is None or self.s.sizes.get(depth) != tuple(self.screen):
+        if depth is None or self.attachment_size(fb, depth) != tuple(self.screen):
             return False
         # Every other attachment has an image (else the framebuffer is
         # incomplete: GL draws and clears nothing), as large as the screen
         # (else GL draws into the smaller area the attachments share).
         w, h = self.screen
         for key in self.s.fbo_attachments.get(fb, {}).values():
-            size = self.s.sizes.get(key)
+            size = self.attachment_size(fb, key)
             if size is None or size[0] < w or size[1] < h:
                 return False
         # And it is complete: Mesa draws, clears and copies nothing into an

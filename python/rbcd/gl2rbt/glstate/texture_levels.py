@@ -84,6 +84,30 @@ class TextureLevels:
         self.target, self.images, self.immutable, self.unfollowed = target, {}, None, None
 
 
+# glTextureView: the targets a view of each target may have (GL 4.6 table
+# 8.21), and the view classes of the uncompressed formats (table 8.22): a
+# view's format is the texture's or one of its class. Other formats
+# (compressed, depth) the converter does not follow in a view.
+VIEW_TARGETS = {
+    "GL_TEXTURE_1D": {"GL_TEXTURE_1D", ROW_ARRAY}, ROW_ARRAY: {"GL_TEXTURE_1D", ROW_ARRAY},
+    "GL_TEXTURE_2D": {"GL_TEXTURE_2D", "GL_TEXTURE_2D_ARRAY"}, BOX: {BOX},
+    "GL_TEXTURE_RECTANGLE": {"GL_TEXTURE_RECTANGLE"},
+    **dict.fromkeys((CUBE, "GL_TEXTURE_2D_ARRAY", "GL_TEXTURE_CUBE_MAP_ARRAY"),
+                    {"GL_TEXTURE_2D", "GL_TEXTURE_2D_ARRAY", CUBE, "GL_TEXTURE_CUBE_MAP_ARRAY"}),
+    **dict.fromkeys(("GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"),
+                    {"GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY"})}
+VIEW_CLASSES = {f"GL_{f}": bits for bits, names in (
+    (128, "RGBA32F RGBA32UI RGBA32I"), (96, "RGB32F RGB32UI RGB32I"),
+    (64, "RGBA16F RG32F RGBA16UI RG32UI RGBA16I RG32I RGBA16 RGBA16_SNORM"),
+    (48, "RGB16 RGB16_SNORM RGB16F RGB16UI RGB16I"),
+    (32, "RG16F R11F_G11F_B10F R32F RGB10_A2UI RGBA8UI RG16UI R32UI RGBA8I RG16I R32I RGB10_A2 RGBA8 RG16 "
+         "RGBA8_SNORM RG16_SNORM SRGB8_ALPHA8 RGB9_E5"),
+    (24, "RGB8 RGB8_SNORM SRGB8 RGB8UI RGB8I"),
+    (16, "R16F RG8UI R16UI RG8I R16I RG8 R16 RG8_SNORM R16_SNORM"),
+    (8, "R8UI R8I R8 R8_SNORM")) for f in names.split()}
+CUBE_VIEW_SIZE = 8192   # llvmpipe's GL_MAX_CUBE_MAP_TEXTURE_SIZE
+
+
 def faces_of(target):
     return range(6) if target == CUBE else (0,)
 
@@ -302,8 +326,99 @@ class TextureLevelCalls:
             if tex:
                 self.texture_levels(tex, target).unfollowed = "a base or maximum level set"
 
+    def record_view(self, d):
+        """glTextureView(texture, target, origtexture, internalformat,
+        minlevel, numlevels, minlayer, numlayers) as Mesa 22.3 makes it:
+        "view" when GL certainly makes texture a view of origtexture's
+        images (its levels and layers, in the format given: its images
+        recorded, immutable as the original is), "refused" when GL certainly
+        refuses it (nothing changes), None when the converter cannot tell
+        (a name it did not see generated, an original whose images it does
+        not follow, a compressed or depth format, an empty range)."""
+        view, orig, target, fmt = d.get("texture"), d.get("origtexture"), d.get("target"), d.get("internalformat")
+        minlevel, numlevels, minlayer, numlayers = (d.get(k) for k in ("minlevel", "numlevels", "minlayer",
+                                                                        "numlayers"))
+        if not all(whole(v) for v in (view, orig, minlevel, numlevels, minlayer, numlayers)):
+            return None
+        if not orig or not view:
+            return "refused"   # (GL_INVALID_VALUE)
+        tl = self.s.texture_levels.get(("texture", orig))
+        if tl is None or tl.unfollowed or self.s.texture_names is None or view not in self.s.texture_names:
+            return None
+        if tl.immutable is None:
+            return "refused" if orig in self.s.texture_targets else None   # (not immutable: GL_INVALID_OPERATION)
+        if view in self.s.texture_targets:
+            return "refused"   # (a texture bound before: GL_INVALID_OPERATION)
+        if target not in VIEW_TARGETS.get(tl.target, ()):
+            return "refused" if isinstance(target, str) and target in VIEW_TARGETS else None
+        base = [tl.images.get((lv, f)) for lv in range(minlevel, minlevel + 1) for f in faces_of(tl.target)]
+        if any(b is None or b is UNCERTAIN for b in base):
+            return None
+        levels = 1 + max(lv for lv, _ in tl.images)
+        layers = 6 if tl.target == CUBE else base[0][2] if tl.target in PLANE_ARRAYS | {ROW_ARRAY} else 1
+        if minlevel >= levels or minlayer >= layers:
+            return "refused"   # (GL_INVALID_VALUE)
+        own = base[0][3]
+        if fmt != own and not (VIEW_CLASSES.get(fmt) is not None and VIEW_CLASSES.get(fmt) == VIEW_CLASSES.get(own)):
+            return "refused" if fmt in VIEW_CLASSES and own in VIEW_CLASSES else None
+        if fmt not in VIEW_CLASSES:
+            return None   # (a depth or compressed view: its contents are followed no further)
+        new_levels, new_layers = min(numlevels, levels - minlevel), min(numlayers, layers - minlayer)
+        if new_levels < 1 or new_layers < 1:
+            return None
+        if target in (CUBE, "GL_TEXTURE_CUBE_MAP_ARRAY"):
+            if new_layers % 6 or target == CUBE and new_layers != 6:
+                return "refused"   # (GL_INVALID_VALUE)
+            if base[0][0] != base[0][1] or base[0][0] > CUBE_VIEW_SIZE:
+                return "refused" if base[0][0] != base[0][1] else None   # (GL_INVALID_OPERATION)
+        elif target not in PLANE_ARRAYS | {ROW_ARRAY} and numlayers != 1:
+            return "refused"   # (GL_INVALID_VALUE: the argument, not its clamped value)
+        vl = self.s.texture_levels[("texture", view)] = TextureLevels(target)
+        vl.immutable = tl.immutable   # (Mesa: the original's immutable levels)
+        for i in range(new_levels):
+            for face in faces_of(target):
+                if tl.target == CUBE:
+                    image = tl.images.get((minlevel + i, minlayer + face))
+                else:
+                    image = tl.images.get((minlevel + i, 0))
+                if image is None or image is UNCERTAIN:
+                    vl.unfollowed = "a view of an image the converter cannot tell GL gave"
+                    return "view"
+                if target in PLANE_ARRAYS | {ROW_ARRAY}:
+                    count = new_layers
+                else:
+                    count = image[2] if target == BOX else 1
+                vl.images[(i, face)] = image[:2] + (count, fmt) + image[4:]
+        return "view"
+
     def levels_unfollowed(self, tex, why):
         self.texture_levels(tex, self.s.texture_targets.get(tex)).unfollowed = why
+
+    def unknown_images(self, img):
+        """Why texture `img`'s images are not known (a str), or None: an
+        image-giving call passed over, a reduced capture that kept no 1D,
+        3D or array images, a texture whose levels are not followed."""
+        if self.s.images_passed_over is not None:
+            no, name = self.s.images_passed_over
+            return f"call {no} ({name}) gives texture images the converter does not follow"
+        tl = self.s.texture_levels.get(img)
+        if not self.every_image_shown and (tl.target if tl is not None else self.s.texture_targets.get(img[1])) \
+                not in PLANE_IMAGES:
+            return "a reduced capture of version 4 or earlier, which kept no 1D, 3D or array texture's images"
+        return tl.unfollowed if tl is not None else None
+
+    def plane_size(self, key):
+        """The (width, height) of texture attachment `key`, one level of a
+        texture without layers or faces (framebuffers.py's keys without
+        "layer"), as GL draws into it: None when that level has no image;
+        why it is not known (a str)."""
+        img, level = key[:2], key[2] if len(key) > 2 and whole(key[2]) else 0
+        tl = self.s.texture_levels.get(img)
+        image = tl.images.get((level, 0)) if tl is not None else None
+        if image is None or image is UNCERTAIN:
+            # (no image: GL never gave one, unless its images are not followed)
+            return self.unknown_images(img) or (None if image is None else "an image the converter cannot tell GL gave")
+        return image[:2]
 
     def attached_image(self, key):
         """The image a texture attachment `key` (framebuffers.py's keys)
@@ -315,17 +430,12 @@ class TextureLevelCalls:
         why it is not known (a str)."""
         img, level = key[:2], key[2] if len(key) > 2 and whole(key[2]) else 0
         layer = key[key.index("layer") + 1] if "layer" in key else None
-        if self.s.images_passed_over is not None:
-            no, name = self.s.images_passed_over
-            return f"call {no} ({name}) gives texture images the converter does not follow"
+        unknown = self.unknown_images(img)
+        if unknown:
+            return unknown
         tl = self.s.texture_levels.get(img)
-        if not self.every_image_shown and (tl.target if tl is not None else self.s.texture_targets.get(img[1])) \
-                not in PLANE_IMAGES:
-            return "a reduced capture of version 4 or earlier, which kept no 1D, 3D or array texture's images"
         if tl is None:
             return False
-        if tl.unfollowed:
-            return tl.unfollowed
         if tl.immutable is None and tl.target in PLANE_ARRAYS and any(
                 lv > 0 and image is not UNCERTAIN and min(image[:2]) == 1 for (lv, _), image in tl.images.items()):
             # (Mesa's state tracker keeps such an image apart from the

@@ -408,16 +408,24 @@ class TextureImageCalls:
             self.s.pixel_transfer[pname] = value
 
     def texture_view(self, no, name, a, args):
-        """glTextureView: the view and the texture it views share images,
-        which the converter's calls do not follow: both are read back from
-        Mesa's replay when a vertex shader reads them, again after any
-        texture call on either (keep_texture_call)."""
+        """glTextureView: the view and the texture it views share images.
+        Where GL certainly makes the view, its images are the original's
+        levels and layers it names (texture_levels.record_view: its size
+        and completeness as attached); where it certainly refuses, nothing
+        changes; otherwise neither texture's images are known. Either way
+        the pixels the two share are not followed: both are read back
+        from Mesa's replay when a vertex shader reads them, again after
+        any texture call on either (keep_texture_call)."""
         d = dict(args)
         view, orig = d.get("texture"), d.get("origtexture")
+        made = self.record_view(d)
+        if made == "refused":
+            return
         for tex in (view, orig):
             if isinstance(tex, int) and not isinstance(tex, bool) and tex > 0:
                 self.s.views.add(tex)
-                self.levels_unfollowed(tex, f"a view (call {no}, {name})")
+                if made is None:
+                    self.levels_unfollowed(tex, f"a view (call {no}, {name})")
                 if tex == view and isinstance(d.get("target"), str):
                     self.s.texture_targets.setdefault(tex, d["target"])
                 self.texture_calls(tex).refused = (no, f"{name} makes texture {view} a view of texture {orig}, "
