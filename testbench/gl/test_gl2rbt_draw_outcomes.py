@@ -427,8 +427,10 @@ def test_a_reduced_capture_of_another_version_or_miscounted_names(tmp_path):
     had passed as 1 and 2) or one this converter does not read is named as
     such; glCreateBuffers and glGenVertexArrays whose names are not their
     count are the capture's error."""
-    for head, words in ((("rbcd-reduced-capture", True), "version True"),
-                        (("rbcd-reduced-capture", 2.0), "version 2.0"),
+    for head, words in ((("rbcd-reduced-capture", True), "version, True (bool), is not a whole number"),
+                        (("rbcd-reduced-capture", 2.0), "version, 2.0 (float), is not a whole number"),
+                        # (R27-5: a string "5" had been called version 5)
+                        (("rbcd-reduced-capture", "5", 0), "version, '5' (str), is not a whole number"),
                         (("rbcd-reduced-capture", 6, 100), "version 6"),
                         (("rbcd-reduced-capture", 4), "version 4 whose header is not of that version"),
                         (("rbcd-reduced-capture", 3, 100), "version 3 whose header is not of that version"),

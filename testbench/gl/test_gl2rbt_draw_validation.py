@@ -555,6 +555,13 @@ def view_8(target, fmt, minlevel, minlayer, numlevels=1):
     # One whose range the converter does not follow (no level): its size
     # is not known, and the pass rests on it.
     (STORAGE_4 + view_8("GL_TEXTURE_2D", "GL_RGBA8", 0, 0, numlevels=0), "refused"),
+    # A copy from the read framebuffer (an image the converter cannot tell
+    # GL gave): refused, unless Mesa answered the framebuffer complete, the
+    # image then there at the size the copy asked.
+    (TEXTURE_4 + [copy_image(64, 48), ("glNamedFramebufferTexture", dict(
+        framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))], "refused"),
+    (TEXTURE_4 + [copy_image(64, 48), ("glNamedFramebufferTexture", dict(
+        framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0)), COMPLETE], "drawn"),
     # A layer of an array texture of the screen's size: another pass, as
     # documented, whatever its size.
     (array_layer(0)[1:], "left out"),
@@ -563,8 +570,8 @@ def view_8(target, fmt, minlevel, minlayer, numlevels=1):
     ([STORAGE_4[0], STORAGE_4[1],
       ("glTexStorage2D", dict(STORAGE_4[2][1], width=32, height=24)),
       ("glNamedFramebufferTexture", dict(framebuffer=3, attachment=0x8CE0, texture=4, level=0))], "left out"),
-], ids=["storage", "view", "view_of_level_1", "view_of_a_layer", "view_of_no_level", "array_layer",
-        "smaller_by_value"])
+], ids=["storage", "view", "view_of_level_1", "view_of_a_layer", "view_of_no_level", "copied", "copied_complete",
+        "array_layer", "smaller_by_value"])
 def test_a_screen_sized_framebuffer_s_colour_texture_decides_the_pass(tmp_path, colour, outcome):
     """Framebuffer 3 with a depth buffer of the screen's size is the camera
     pass when its colour attachment is as large: a texture's size comes
@@ -573,12 +580,12 @@ def test_a_screen_sized_framebuffer_s_colour_texture_decides_the_pass(tmp_path, 
     nothing left (round 26's v410 and round 27's R27-1 had left a view's
     draws out of the frame, where Mesa drew them)."""
     from gl_captures import left_behind, refused
-    calls = [FBO] + colour + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + [
+    calls = [FBO] + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + colour + [
         ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
     c = blending(calls)
     if outcome == "refused":
         r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
-        refused(r, "glDrawArrays", "framebuffer 3 depends on the size of its attachment of texture 8")
+        refused(r, "glDrawArrays", "framebuffer 3 depends on the size of its attachment of texture")
         assert left_behind(tmp_path, ["c.xz"]) == []
     else:
         got, report = fragments(tmp_path, c, "pass")
@@ -592,7 +599,12 @@ def test_a_screen_sized_framebuffer_s_colour_texture_decides_the_pass(tmp_path, 
     # An integer attachment no draw buffer names counts too (Mesa keeps
     # one bit an attachment).
     (colour_framebuffer("GL_RGBA8") + colour_framebuffer("GL_R32I", "GL_COLOR_ATTACHMENT1", rb=7)[1:], False),
-], ids=["rgba8", "rgba8ui", "rgb10_a2ui", "integer_not_drawn"])
+    # A texture whose base level was set: its format still known.
+    ([FBO] + TEXTURE_4 + [TEX_IMAGE, ("glTexParameteri", dict(target="GL_TEXTURE_2D", pname="GL_TEXTURE_MAX_LEVEL",
+                                                              param=0)),
+                          ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0",
+                                                             texture=4, level=0)), COMPLETE], True),
+], ids=["rgba8", "rgba8ui", "rgb10_a2ui", "integer_not_drawn", "max_level_set"])
 def test_fixed_function_draws_into_an_integer_colour_buffer_are_refused(tmp_path, colour, drawn):
     """In a compatibility profile, a draw with no fragment shader into a
     framebuffer with an integer colour attachment is GL_INVALID_OPERATION
@@ -601,12 +613,22 @@ def test_fixed_function_draws_into_an_integer_colour_buffer_are_refused(tmp_path
     into the frame, 0.00% against Mesa)."""
     from gl_captures import Calls
     c = Calls()
-    for fn, args in colour + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + [
-            ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]:
+    for fn, args in colour[:1] + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + \
+            colour[1:] + [("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]:
         c.add(fn, **args)
     got, report = fragments(tmp_path, c.triangle(obj=1).swap(), "integer")
     assert (got > 100) == drawn, (got, report)
     assert drawn or "integer format" in report, report
+
+
+def test_a_fragment_shader_draws_into_an_integer_colour_buffer(tmp_path):
+    """The same integer attachment under a fragment shader (here of a core
+    profile's program) draws: only fixed-function fragments cannot write it."""
+    calls = colour_framebuffer("GL_RGBA8UI") + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT",
+                                                                   rb=6)[1:] + [
+        ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
+    got, report = fragments(tmp_path, blending(calls), "shader")
+    assert got > 100, (got, report)
 
 
 @pytest.mark.parametrize("first_bind", [None, "GL_DEPTH_TEST", "GL_PROXY_TEXTURE_2D", 0x0DE1],
@@ -626,6 +648,23 @@ def test_a_bind_gl_refuses_gives_the_texture_no_target(tmp_path, first_bind):
         ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
     got, report = fragments(tmp_path, blending(calls), "bind")
     assert got > 100, (got, report)
+
+
+def test_a_multisample_depth_buffer_is_left_out_of_the_check(tmp_path):
+    """A camera pass into a multisample framebuffer converts, and its frame
+    is named as one --check-depth cannot compare (glretrace reads such a
+    depth buffer back one sample a pixel: R28-4's 4.31% against Mesa)."""
+    depth = [("glGenRenderbuffers", dict(n=1, renderbuffers=[6])),
+             ("glBindRenderbuffer", dict(target="GL_RENDERBUFFER", renderbuffer=6)),
+             ("glRenderbufferStorageMultisample", dict(target="GL_RENDERBUFFER", samples=4,
+                                                       internalformat="GL_DEPTH_COMPONENT24", width=64, height=48)),
+             ("glNamedFramebufferRenderbuffer", dict(framebuffer=3, attachment="GL_DEPTH_ATTACHMENT",
+                                                     renderbuffertarget="GL_RENDERBUFFER", renderbuffer=6))]
+    calls = multisampled(4) + depth + [("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3)),
+                                       ("glEnable", dict(cap="GL_DEPTH_TEST")),
+                                       ("glClear", dict(mask="GL_DEPTH_BUFFER_BIT"))]
+    got, report = fragments(tmp_path, blending(calls), "ms")
+    assert got > 100 and "framebuffer 3's depth buffer is multisampled" in report, (got, report)
 
 
 def test_a_reduced_capture_before_version_5_leaves_array_textures_unknown(tmp_path, monkeypatch):

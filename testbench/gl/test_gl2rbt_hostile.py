@@ -25,6 +25,16 @@ def test_a_good_capture_converts(tmp_path):
     assert "1 frames: 1.0 collisionable objects" in r.stdout
 
 
+def test_astc_names_are_enumerants(tmp_path):
+    """apitrace names ASTC formats with a lower-case x
+    (GL_COMPRESSED_RGBA_ASTC_4x4_KHR): an enumerant, not a capture altered."""
+    c = Calls().add("glGenTextures", n=1, textures=[4]).add("glBindTexture", target="GL_TEXTURE_2D", texture=4)
+    c.add("glCompressedTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_COMPRESSED_RGBA_ASTC_4x4_KHR",
+          width=4, height=4, border=0, imageSize=16, data=bytes(16))
+    r = gl2rbt(tmp_path, c.triangle(obj=1).swap().write(tmp_path / "c.xz", images=True), "-o", tmp_path / "c.rbt")
+    assert r.returncode == 0, r.stderr
+
+
 @pytest.mark.parametrize("build, words", [
     (lambda c: c.add("glTranslatef", x=float("nan"), y=0, z=0), "an offset: nan is not finite"),
     (lambda c: c.add("glViewport", x=[1], y=0, width=4, height=4), "a viewport value: [1] is not an integer"),
@@ -65,11 +75,29 @@ def test_a_good_capture_converts(tmp_path):
                      texture=4, level=0), "glFramebufferTextureLayer: no layer"),
     (lambda c: c.add("glTextureView", texture=5, target="GL_TEXTURE_2D", origtexture=4, internalformat="GL_RGBA8",
                      minlevel=-1, numlevels=1, minlayer=0, numlayers=1), "the minlevel: -1 is outside"),
+    # Arguments missing or added, renderbuffer storage and binds (R28-1
+    # to R28-3: taken, some changing the trace).
+    (lambda c: c.add("glTexStorage2D", levels=1, internalformat="GL_RGBA8", width=64, height=48),
+     "glTexStorage2D: no target"),
+    (lambda c: c.add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA8", width=4, height=4,
+                     border=0, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=None, extra=1),
+     "arguments apitrace does not write (extra)"),
+    (lambda c: c.add("glTexStorage2DMultisample", target="GL_TEXTURE_2D_MULTISAMPLE", samples=4,
+                     internalformat="GL_RGBA8", width=4, height=4, fixedsamplelocations=[1]),
+     "fixedsamplelocations"),
+    (lambda c: c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat=float("nan"), width=4,
+                     height=4), "glRenderbufferStorage: the internalformat: nan is not an enumerant"),
+    (lambda c: c.add("glNamedRenderbufferStorage", renderbuffer=5, internalformat="GL_RGBA8", height=4),
+     "glNamedRenderbufferStorage: no width"),
+    (lambda c: c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_RGBA8", width=1 << 40,
+                     height=4), "the width: 1099511627776 is outside"),
+    (lambda c: c.add("glBindTexture", target=float("nan"), texture=4), "glBindTexture: the target: nan"),
 ], ids=["nan", "list", "group_id", "inf_angle", "missing_argument", "huge_count", "past_the_array", "enum_newline",
         "enum_escape", "enum_long", "index_type_nul", "drawable_list", "drawable_nan", "drawable_huge",
         "feedback_mode", "feedback_target", "feedback_buffer_mode", "patch_parameter", "patch_parameter_float",
         "image_width_nan", "image_width_huge", "image_level_huge", "image_format_newline",
-        "layer_missing", "view_level_negative"])
+        "layer_missing", "view_level_negative", "target_missing", "argument_added", "sample_locations_list",
+        "renderbuffer_format_nan", "named_storage_width_missing", "renderbuffer_width_huge", "bind_target_nan"])
 def test_bad_calls_are_named(tmp_path, build, words):
     c = Calls().triangle(obj=1)
     build(c)

@@ -167,21 +167,6 @@ def test_the_rest_of_a_reduced_capture_is_checked(tmp_path):
     assert left_behind(tmp_path, ["good.xz", "g.rbt", "junk.xz", "cut.xz", "noend.xz"]) == []
 
 
-@pytest.mark.parametrize("version, words", [
-    ("5", "header's version, '5' (str), is not a whole number"),
-    (True, "header's version, True (bool), is not a whole number"),
-    (9, "of version 9: this converter reads versions 1, 2, 3, 4 and 5"),
-], ids=["string", "bool", "unknown"])
-def test_a_reduced_capture_s_version_is_a_whole_number_it_reads(tmp_path, monkeypatch, version, words):
-    """The header's version is named for what it is: a string "5" is no
-    version 5 (R27-5's message had said this converter reads version 5
-    while refusing it)."""
-    monkeypatch.setitem(globals(), "REDUCED_HEADER", (REDUCED_HEADER[0], version, 0))
-    cap = Calls().frame().write(tmp_path / "c.xz")
-    refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt"), "c.xz", words)
-    assert left_behind(tmp_path, ["c.xz"]) == []
-
-
 # ---- the hidden outputs and late write failures
 
 def test_hidden_outputs_never_destroy_inputs(tmp_path):

@@ -335,10 +335,27 @@ def test_extension_enumerants_and_the_ext_image_call(tmp_path):
     assert convert(tmp_path, draw(c), "ext") == moved(tmp_path, 6, 2)
 
 
+def view_of_3(c):
+    return c.add("glGenTextures", n=1, textures=[4]).add(
+        "glTextureView", texture=4, target="GL_TEXTURE_2D", origtexture=3, internalformat="GL_RGBA32F", minlevel=0,
+        numlevels=1, minlayer=0, numlayers=1)
+
+
+def storage_of_3(c):
+    """Texture 3 (bound) given immutable storage and the texels."""
+    return c.add("glTexStorage2D", target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA32F", width=2,
+                 height=1).add("glTexSubImage2D", target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=2,
+                               height=1, format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS)
+
+
+def test_a_view_gl_refuses_leaves_the_texture_read(tmp_path):
+    """A view of a mutable texture is GL_INVALID_OPERATION: nothing
+    changes, and the texture is read as before."""
+    assert convert(tmp_path, draw(view_of_3(texture(shader_calls(VS_TEXEL % FETCH)))), "view") == moved(tmp_path, 6, 2)
+
+
 @pytest.mark.parametrize("make, words", [
-    (lambda c: c.add("glGenTextures", n=1, textures=[4])
-     .add("glTextureView", texture=4, target="GL_TEXTURE_2D", origtexture=3, internalformat="GL_RGBA32F",
-          minlevel=0, numlevels=1, minlayer=0, numlayers=1), "glTextureView makes texture 4 a view of texture 3"),
+    (lambda c: view_of_3(storage_of_3(c)), "glTextureView makes texture 4 a view of texture 3"),
     (lambda c: c.add("glPixelTransferf", pname="GL_RED_SCALE", param=0.5)
      .add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA32F", width=2, height=1, border=0,
           format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS), "pixel transfer state (GL_RED_SCALE)"),

@@ -468,7 +468,8 @@ def test_rules_name_a_texture_by_its_image_whatever_its_name(tmp_path):
     """Two captures that load the same image under other GL names: a rule by
     `texture_image` matches both; the reduced capture's digest (in place of
     the pixels) matches as the pixels do; a texture without pixels has none."""
-    from rbcd.gl2rbt.glstate.framebuffers import DIGEST_TAG, texture_image_digest
+    from rbcd.gl2rbt.glstate.framebuffers import texture_image_digest
+    from rbcd.gl2rbt.glstate.texture_formats import DIGEST_TAG
     rules = tmp_path / "rules.toml"
     image = bytes(range(256)) * 16
     args = dict(target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA8", width=32, height=32, border=0,

@@ -8,7 +8,8 @@ from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
 from .gl_tables import (CALL_FLAG_END_FRAME, COMPAT_ONLY, COMPAT_ONLY_FORMS, END_FRAME_CALLS, IGNORED_PREFIXES,
                         ES_ONLY_FORMS, MESA_NO_OPS, TEXTURE_CHANGING, TEXTURE_IGNORED, base_name)
-from .glstate import ATTACHING_CALL, CONVERSION_STATE, IMAGE_CALL, SHARED_STATE, GLState, image_call_args
+from .glstate import CONVERSION_STATE, SHARED_STATE, GLState
+from .glstate.image_calls import checked_calls, image_call_args
 from .glstate.attributes import AttributeCalls
 from .glstate.buffers import BufferCalls
 from .glstate.draws import DrawCalls, capture_vertex_bounds
@@ -87,11 +88,6 @@ def swapped_drawable(args, no):
     if v is not None and (not isinstance(v, int) or isinstance(v, bool) or not 0 <= v < 1 << 64):
         fail_call(no, f"the buffer swap's drawable {printable(v, 40)} is not a handle")
     return v
-
-
-# Whether a base name is a texture image, attachment or view call, whose
-# arguments image_call_args checks: computed once a name.
-IMAGE_CALLS = {}
 
 
 class Converter(*STATE_GROUPS, GeometryOutput):
@@ -301,11 +297,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             args = [(k, v.rsplit("_", 1)[0] if k in BUFFER_TARGET_ARGS and isinstance(v, str)
                      and v.endswith(TARGET_SUFFIXES) else v) for k, v in args]
         base = base_name(name)
-        checks = IMAGE_CALLS.get(base)
-        if checks is None:
-            checks = IMAGE_CALLS[base] = bool(IMAGE_CALL.fullmatch(base) or ATTACHING_CALL.fullmatch(base))
-        if checks:
-            args = image_call_args(no, printable(name), base, args)
+        if base in self.IMAGE_CALLS:
+            args = image_call_args(no, name, args)
         a = [v for _, v in args]
         if s.begin_mode is not None:
             if base.startswith("glVertex"):
@@ -628,3 +621,6 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         "glPopClientAttrib": h_refuse,
     }
     HANDLERS = WINDOW_SYSTEM | REFUSED | {k: v for group in STATE_GROUPS for k, v in group.HANDLERS.items()}
+    # The handled texture image, attachment and view calls, their arguments
+    # checked before their handler reads them (glstate.image_calls).
+    IMAGE_CALLS = checked_calls(HANDLERS)

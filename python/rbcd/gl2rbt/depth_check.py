@@ -235,9 +235,9 @@ def check_depth(args):
     unfollowed = [(c, wrong) for _, c, call, wrong, _ in probe.last_3d_draws if call is not None and wrong is not None]
     if unfollowed:
         # The converter's one camera-pass depth buffer did not hold what
-        # the frame's last depth-tested draw's buffer held (camera_depth.py):
-        # its depths are not the frame's, and the frame is not checked.
-        print(f"{len(unfollowed)} frames not checked: the converter's depth buffer does not follow their "
+        # the frame's last depth-tested draw's buffer held, or that buffer
+        # is multisampled (camera_depth.py): the frame is not checked.
+        print(f"{len(unfollowed)} frames not checked: the converter's depth buffer cannot be compared with their "
               f"camera pass's (the first, frame {unfollowed[0][0]}: {unfollowed[0][1]})")
     # glretrace replays a capture's first frame wrongly at times (seen: the
     # test program's first frame replays without its clear): it is checked

@@ -16,7 +16,8 @@ from ..cli import U63
 from .errors import ConvertError, printable
 from .converter import STATE_UPDATES, Converter
 from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
-from .glstate.framebuffers import DIGEST_TAG, texture_image_digest
+from .glstate.framebuffers import texture_image_digest
+from .glstate.texture_formats import DIGEST_TAG
 from .glstate.texture_levels import PASSED_OVER_IMAGES
 from .glstate.textures import REDUCED_TEXTURES
 from .outputs import SafeText

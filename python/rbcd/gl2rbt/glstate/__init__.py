@@ -280,7 +280,7 @@ def bitfield(mask, no, what, bits):
 
 
 # An enumerant's name as apitrace's tables spell them.
-ENUM_NAME = re.compile(r"(GL|GLX|EGL|WGL)_[A-Z0-9_]{1,120}")
+ENUM_NAME = re.compile(r"(GL|GLX|EGL|WGL)_[A-Za-z0-9_]{1,120}")   # (ASTC names have an x)
 
 
 def enum_arg(v, no, what):
@@ -292,92 +292,6 @@ def enum_arg(v, no, what):
             (isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 1 << 32):
         return v
     fail_call(no, f"{what}: {printable(v, 40)} is not an enumerant (a name, or a 32-bit value)")
-
-
-# Texture image calls by their base name: (Compressed|Copy)?, the direct
-# state access form or not, Sub or not, Image or Storage, the dimensions,
-# Multisample; and the calls that attach or view a texture's images.
-IMAGE_CALL = re.compile(r"gl(Compressed|Copy)?(Tex|Texture)(Sub)?(Image|Storage)([123])D(Multisample)?")
-ATTACHING_CALL = re.compile(r"gl(Named)?Framebuffer(Texture|Renderbuffer)(Layer|[123]D)?|glTextureView")
-# Their arguments by kind: GLint and GLsizei values, object names
-# and glTextureView's levels and layers (GLuint), enumerants (a GLint internal format may be a number, as the
-# legacy component counts are).
-INT_ARGS = {"level", "levels", "width", "height", "depth", "border", "xoffset", "yoffset", "zoffset", "x", "y",
-            "samples", "imageSize", "layer"}
-NAME_ARGS = {"texture", "origtexture", "framebuffer", "renderbuffer", "minlevel", "numlevels", "minlayer", "numlayers"}
-ENUM_ARGS = {"target", "format", "type", "attachment", "textarget", "renderbuffertarget", "internalformat"}
-PIXEL_ARGS = {"pixels", "data"}
-# Texture targets, cube map faces and framebuffer attachment points by
-# value: a number the driver takes as the enumerant it names (apitrace
-# writes names).
-ENUM_VALUES = {
-    0x0DE0: "GL_TEXTURE_1D", 0x0DE1: "GL_TEXTURE_2D", 0x806F: "GL_TEXTURE_3D", 0x8C18: "GL_TEXTURE_1D_ARRAY",
-    0x8C1A: "GL_TEXTURE_2D_ARRAY", 0x84F5: "GL_TEXTURE_RECTANGLE", 0x8513: "GL_TEXTURE_CUBE_MAP",
-    0x9009: "GL_TEXTURE_CUBE_MAP_ARRAY", 0x8C2A: "GL_TEXTURE_BUFFER", 0x9100: "GL_TEXTURE_2D_MULTISAMPLE",
-    0x9102: "GL_TEXTURE_2D_MULTISAMPLE_ARRAY", 0x8D65: "GL_TEXTURE_EXTERNAL_OES",
-    **{0x8515 + i: f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for i, (a, s) in
-       enumerate((a, s) for a in "XYZ" for s in ("POSITIVE", "NEGATIVE"))},
-    0x8D40: "GL_FRAMEBUFFER", 0x8CA9: "GL_DRAW_FRAMEBUFFER", 0x8CA8: "GL_READ_FRAMEBUFFER",
-    0x8D00: "GL_DEPTH_ATTACHMENT", 0x8D20: "GL_STENCIL_ATTACHMENT", 0x821A: "GL_DEPTH_STENCIL_ATTACHMENT",
-    0x8D41: "GL_RENDERBUFFER", **{0x8CE0 + i: f"GL_COLOR_ATTACHMENT{i}" for i in range(32)}}
-NAMED_VALUE_ARGS = {"target", "textarget", "attachment", "renderbuffertarget"}
-
-
-def by_value(v):
-    """An enumerant of ENUM_VALUES given by its value, by name; any other
-    value as it is."""
-    return ENUM_VALUES.get(v, v) if isinstance(v, int) and not isinstance(v, bool) else v
-
-
-def required_image_args(base):
-    """The arguments apitrace writes for every texture image call of this
-    base name (a reduced capture without one is the file's error)."""
-    m = IMAGE_CALL.fullmatch(base)
-    if m is None:
-        return ("layer",) if base.endswith("TextureLayer") else ()
-    copy, sub, storage, dims, multisample = m.group(1) == "Copy", m.group(3), m.group(4) == "Storage", \
-        int(m.group(5)), m.group(6)
-    names = ["width", "height", "depth"][:min(dims, 2) if copy else dims]
-    if sub:
-        names += ["xoffset", "yoffset", "zoffset"][:dims]
-    names.append("samples" if multisample else "levels" if storage else "level")
-    return tuple(names)
-
-
-def image_call_args(no, name, base, args):
-    """A texture image, attachment or view call's arguments checked as
-    the project's input rule asks, before any handler reads them: whole
-    numbers of the C types' widths, enumerants as apitrace writes them
-    (targets and attachment points given by value taken as named), pixels
-    as bytes, an offset or a reduced capture's digest, and every argument
-    apitrace writes present. Anything else is the capture's error, in one
-    line naming the call."""
-    out = []
-    for k, v in args:
-        if k in INT_ARGS:
-            checked(no, integer, v, f"{name}: the {k}", *I32)
-        elif k in NAME_ARGS:
-            checked(no, integer, v, f"{name}: the {k}", 0, (1 << 32) - 1)
-        elif k in ENUM_ARGS:
-            if k == "internalformat" and isinstance(v, int) and not isinstance(v, bool) and -(1 << 31) <= v < 0:
-                pass   # (a GLint: GL_INVALID_VALUE)
-            else:
-                v = enum_arg(v, no, f"{name}: the {k}")
-            if k in NAMED_VALUE_ARGS:
-                v = by_value(v)
-        elif k in PIXEL_ARGS:
-            if isinstance(v, tuple):
-                if not (len(v) == 2 and v[0] == "rbcd-digest" and isinstance(v[1], str)
-                        and re.fullmatch(r"[0-9a-f]{16}", v[1])):
-                    fail_call(no, f"{name}: the {k}: {printable(v, 40)} is neither an image nor its digest")
-            elif not (v is None or isinstance(v, (bytes, bytearray))):
-                checked(no, integer, v, f"{name}: the {k} (an offset)", 0, (1 << 64) - 1)
-        out.append((k, v))
-    present = {k for k, _ in args}
-    missing = [k for k in required_image_args(base) if k not in present]
-    if missing:
-        fail_call(no, f"{name}: no {missing[0]} (apitrace writes every argument)")
-    return out
 
 
 def gl_boolean(v, no, what, nonzero=False):

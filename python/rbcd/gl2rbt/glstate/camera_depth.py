@@ -65,6 +65,20 @@ class CameraDepthCalls:
             return min(16, self.args.depth_bits)
         return self.args.depth_bits
 
+    def multisample_depth(self):
+        """Why --check-depth cannot compare the bound framebuffer's depth
+        buffer: a multisample one, which Mesa's replay reads back one
+        sample a pixel of, not the pixel centre's depth the converter
+        keeps (None: it can)."""
+        att = self.s.fbo_depth.get(self.s.draw_fbo) if self.s.draw_fbo else None
+        if att is None:
+            return None
+        tl = self.s.texture_levels.get(att[:2]) if att[0] == "texture" else None
+        image = tl.images.get((0, 0)) if tl is not None else None
+        samples = image[4] if isinstance(image, tuple) else self.s.multisampled.get(att[:2], 0)
+        return f"{self.buffer_name(self.s.draw_fbo)} is multisampled, and Mesa's replay reads back one sample a " \
+               "pixel, not the pixel centre's depth" if samples else None
+
     def depth_key(self, fb):
         return "window" if not fb else self.s.fbo_depth.get(fb)
 

@@ -294,7 +294,7 @@ class DrawCalls:
         rec += np.ascontiguousarray(tris, dtype="<u4").tobytes()
         self.emit(bytes(rec))
         if st.depth_test:
-            self.last_depth_draw, self.last_depth_wrong = no, self.kept_wrong
+            self.last_depth_draw, self.last_depth_wrong = no, self.kept_wrong or self.multisample_depth()
             self.last_depth_bits = self.depth_bits()
             if not self.s.draw_fbo and self.read_drawable != self.current_drawable:
                 # Mesa's replay dumps a window's depth with glReadPixels,

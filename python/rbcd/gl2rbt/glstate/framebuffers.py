@@ -8,25 +8,23 @@ Draws into other targets (shadow maps, reflections, cube maps, post
 processing at other sizes) are GPU work of their own, left out of the trace
 and counted (docs/gl-capture.md, "Which pass")."""
 import hashlib
-import re
 
 from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
-from . import bitfield, by_value, generated_name
-from .texture_formats import (DEPTH_FORMATS, DEPTH_STENCIL_FORMATS, INTEGER_FORMATS, MAX_LEVEL, refused_level,
-                              refused_storage)
+from . import bitfield, generated_name
+from .image_calls import TEXTURE_TARGETS, by_value
+from .texture_formats import (DEPTH_FORMATS, DEPTH_STENCIL_FORMATS, INTEGER_FORMATS, MAX_LEVEL,
+                              is_digest, refused_level, refused_storage)
 from .texture_levels import BOX, CUBE, CUBE_FACES, MAX_3D_SIZE, MAX_LAYERS, MAX_SAMPLES, SINGLE_LEVEL, UNCERTAIN
 
 DEPTH_ATTACHMENTS = ("GL_DEPTH_ATTACHMENT", "GL_DEPTH_STENCIL_ATTACHMENT")
 # The other attachment points (llvmpipe's GL_MAX_COLOR_ATTACHMENTS: 8).
 OTHER_ATTACHMENTS = tuple(f"GL_COLOR_ATTACHMENT{i}" for i in range(8)) + ("GL_STENCIL_ATTACHMENT",)
-# The targets glBindTexture takes (Mesa 22.3's _mesa_tex_target_to_index:
-# 1D, 1D arrays and rectangles only in desktop GL, external images only in
-# OpenGL ES); another is GL_INVALID_ENUM, a proxy target too.
-BIND_TARGETS = {f"GL_TEXTURE_{t}" for t in ("1D", "2D", "3D", "1D_ARRAY", "2D_ARRAY", "RECTANGLE", "CUBE_MAP",
-                                             "CUBE_MAP_ARRAY", "BUFFER", "2D_MULTISAMPLE", "2D_MULTISAMPLE_ARRAY",
-                                             "EXTERNAL_OES")}
+# The targets glBindTexture takes are image_calls.TEXTURE_TARGETS (Mesa
+# 22.3's _mesa_tex_target_to_index): 1D, 1D arrays and rectangles only in
+# desktop GL, external images only in OpenGL ES; another is GL_INVALID_ENUM,
+# a proxy target too.
 DESKTOP_BIND_TARGETS = {"GL_TEXTURE_1D", "GL_TEXTURE_1D_ARRAY", "GL_TEXTURE_RECTANGLE"}
 GL_TEXTURE0 = 0x84C0
 MAX_TEXTURE_UNITS = 192   # llvmpipe's GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS
@@ -56,9 +54,6 @@ TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}{t}" for c in ("R", "RG", "RGBA") for b, ts
                           for t in ts} | {"GL_RGB32F", "GL_RGB32I", "GL_RGB32UI"}
 LEGACY_TEXTURE_BUFFER_FORMATS = {f"GL_{c}{b}" for c in ("ALPHA", "INTENSITY", "LUMINANCE") for b in ("8", "16")} \
     | {"GL_LUMINANCE8_ALPHA8", "GL_LUMINANCE16_ALPHA16"}
-# A texture image's digest as a reduced capture carries it in place of the
-# pixels: ("rbcd-digest", 16 lower-case hex digits).
-DIGEST_TAG = "rbcd-digest"
 
 
 def texture_image_digest(d):
@@ -73,8 +68,7 @@ def texture_image_digest(d):
     if isinstance(pixels, tuple):
         # A reduced capture's digest; anything else in its place is the
         # file's error (the handler's net names the call).
-        if not (len(pixels) == 2 and pixels[0] == DIGEST_TAG and isinstance(pixels[1], str)
-                and re.fullmatch(r"[0-9a-f]{16}", pixels[1])):
+        if not is_digest(pixels):
             raise ValueError("pixels: neither an image nor its digest")
         return pixels[1]
     if d.get("level", 0) != 0 or not isinstance(pixels, (bytes, bytearray)):
@@ -475,7 +469,7 @@ class FramebufferCalls:
         target = d["target"]
         tex = checked(no, integer, d["texture"], f"{name}: the texture", *U32)
         target = by_value(target)
-        if target not in BIND_TARGETS or (target in DESKTOP_BIND_TARGETS if self.es else
+        if target not in TEXTURE_TARGETS or (target in DESKTOP_BIND_TARGETS if self.es else
                                                    target == "GL_TEXTURE_EXTERNAL_OES"):
             return   # GL_INVALID_ENUM: nothing is bound
         if tex and (self.s.texture_targets.get(tex, target) != target
@@ -851,24 +845,37 @@ class FramebufferCalls:
 
     def integer_attachment(self, fb):
         """Framebuffer object fb's colour attachment of an integer format,
-        as its test finds it (Mesa's _IntegerBuffers, read only when the
-        framebuffer is complete): (point, format), None, or why the
-        converter does not know (a str)."""
+        as its test finds it complete (Mesa's _IntegerBuffers, which a
+        compatibility profile's draws read: integer_buffers_invalid):
+        (point, format), None, or why the converter does not know (a str).
+        A texture's image gives its format whether or not the converter
+        follows the texture's other rules; one it cannot tell GL gave, the
+        format its call asked (the framebuffer complete, an image is there)."""
+        if self.core or self.es or self.s.fbo_status.get(fb) is not True:
+            return None
         unknown = None
         for point, key in sorted(self.s.fbo_attachments.get(fb, {}).items()):
             if not point.startswith("GL_COLOR_ATTACHMENT"):
                 continue
             if key[0] == "renderbuffer":
                 fmt = self.s.formats.get(key[:2])
-                if fmt == UNCERTAIN:
-                    unknown = unknown or "a renderbuffer's storage the converter cannot tell GL gave"
             else:
-                image = self.attached_image(key)
-                fmt = image[3] if isinstance(image, tuple) else None
-                if isinstance(image, str):
-                    unknown = unknown or image   # (why the image is not known)
+                tl = self.s.texture_levels.get(key[:2])
+                level = key[2] if len(key) > 2 and isinstance(key[2], int) else 0
+                layer = key[key.index("layer") + 1] if "layer" in key else 0
+                face = CUBE_FACES.index(layer) if layer in CUBE_FACES else layer if tl is not None and \
+                    tl.target == CUBE and isinstance(layer, int) else 0
+                image = tl.images.get((level, face)) if tl is not None else None
+                if self.s.images_passed_over is not None:
+                    fmt = UNCERTAIN   # (a call passed over may have given any image)
+                elif isinstance(image, tuple):
+                    fmt = image[3]
+                else:
+                    fmt = self.s.formats.get(key[:2], UNCERTAIN) if level == 0 else UNCERTAIN
             if fmt in INTEGER_FORMATS:
                 return point, fmt
+            if fmt == UNCERTAIN:
+                unknown = unknown or f"the format of {point}'s image"
         return unknown
 
     def depth_class(self, fb):
@@ -894,52 +901,60 @@ class FramebufferCalls:
             return False
         return self.main_drawable is None or self.current_drawable == self.main_drawable
 
-    def attachment_size(self, fb, key):
-        """The (width, height) framebuffer fb's attachment `key` draws into,
-        for the camera-pass test: None for no image, and for a layer, a
-        face or a layered texture (another pass, whatever its size). A size
-        not known is refused in one line: GL's choice of pass rests on it."""
+    def attachment_size(self, key, status):
+        """The (width, height) an attachment `key` draws into, for the
+        camera-pass test: None for no image, and for a layer, a face or a
+        layered texture (another pass, whatever its size); why it is not
+        known (a str). A framebuffer Mesa found complete (`status`: the
+        capture's answer) has an image there: one the converter cannot
+        tell GL gave is taken at the size its call asked."""
         if key[0] == "renderbuffer":
             return self.s.sizes.get(key)
         if "layer" in key:
             return None
         size = self.plane_size(key)
-        if isinstance(size, str):
-            tex = f"{key[1][1]} (deleted)" if isinstance(key[1], tuple) else key[1]
-            fail_call(self.last_call, f"{printable(self.last_name or 'the call')}: whether it writes framebuffer "
-                                      f"{fb} depends on the size of its attachment of texture {tex}, "
-                                      f"which the converter does not know ({size}; docs/gl-capture.md)")
+        if isinstance(size, str) and status is True:
+            return self.s.sizes.get(key, size)
         return size
 
     def camera_pass(self, fb=None):
         """Whether a draw now writes the frame's camera pass (or would,
-        into framebuffer `fb`)."""
+        into framebuffer `fb`): a complete framebuffer object whose depth
+        buffer has the screen's size and whose other attachments each have
+        an image at least as large (else GL draws into the smaller area
+        they share). Where what decides it is not known, the call is
+        refused in one line."""
         fb = self.s.draw_fbo if fb is None else fb
         if not fb:
             return self.on_main_drawable()
         if self.screen is None:
             self.write_header()   # the screen, from the window or the viewport (or the capture's error)
         depth = self.s.fbo_depth.get(fb)
-        if depth is None or self.attachment_size(fb, depth) != tuple(self.screen):
+        if depth is None:
             return False
-        # Every other attachment has an image (else the framebuffer is
-        # incomplete: GL draws and clears nothing), as large as the screen
-        # (else GL draws into the smaller area the attachments share).
-        w, h = self.screen
-        for key in self.s.fbo_attachments.get(fb, {}).values():
-            size = self.attachment_size(fb, key)
-            if size is None or size[0] < w or size[1] < h:
-                return False
-        # And it is complete: Mesa draws, clears and copies nothing into an
-        # incomplete one (GL_INVALID_FRAMEBUFFER_OPERATION).
         status = self.s.fbo_status.get(fb, UNTESTED)
         if status is UNTESTED:
             status = self.framebuffer_complete(fb)
+        if status is False:
+            return False   # (Mesa draws, clears and copies nothing into an incomplete one)
+        w, h = self.screen
+        keys = [depth] + list(self.s.fbo_attachments.get(fb, {}).values())
+        sizes = [self.attachment_size(key, status) for key in keys]
+        if not isinstance(sizes[0], str) and sizes[0] != (w, h) or any(
+                size is None or not isinstance(size, str) and (size[0] < w or size[1] < h) for size in sizes):
+            return False
+        unknown = next(((key, size) for key, size in zip(keys, sizes) if isinstance(size, str)), None)
+        if unknown is not None:
+            key, why = unknown
+            tex = f"{key[1][1]} (deleted)" if isinstance(key[1], tuple) else key[1]
+            fail_call(self.last_call, f"{printable(self.last_name or 'the call')}: whether it writes framebuffer "
+                                      f"{fb} depends on the size of its attachment of texture {tex}, "
+                                      f"which the converter does not know ({why}; docs/gl-capture.md)")
         if isinstance(status, str):
             fail_call(self.last_call, f"{printable(self.last_name or 'the call')}: whether it writes framebuffer "
                                       f"{fb}, of the camera pass's size, depends on the framebuffer's completeness, "
                                       f"which the converter does not compute ({status}; docs/gl-capture.md)")
-        return status is True
+        return True
 
     HANDLERS = {
         "glBindFramebuffer": h_bind_framebuffer,

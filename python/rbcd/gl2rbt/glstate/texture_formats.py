@@ -124,6 +124,16 @@ MAX_SIZE = 16384          # llvmpipe's GL_MAX_TEXTURE_SIZE (the smallest a GL 4 
 MAX_LEVEL = 14            # its last level
 
 
+# A texture image's digest as a reduced capture carries it in place of the
+# pixels: ("rbcd-digest", 16 lower-case hex digits).
+DIGEST_TAG = "rbcd-digest"
+
+
+def is_digest(v):
+    return isinstance(v, tuple) and len(v) == 2 and v[0] == DIGEST_TAG and isinstance(v[1], str) \
+        and len(v[1]) == 16 and all(c in "0123456789abcdef" for c in v[1])
+
+
 def kind_of(internalformat):
     for kind, names in (("colour", COLOUR_FORMATS), ("integer", INTEGER_FORMATS), ("depth", DEPTH_FORMATS),
                         ("depth-stencil", DEPTH_STENCIL_FORMATS)):

@@ -343,7 +343,8 @@ class TextureLevelCalls:
         if not orig or not view:
             return "refused"   # (GL_INVALID_VALUE)
         tl = self.s.texture_levels.get(("texture", orig))
-        if tl is None or tl.unfollowed or self.s.texture_names is None or view not in self.s.texture_names:
+        if tl is None or self.unknown_images(("texture", orig)) or self.s.texture_names is None \
+                or view not in self.s.texture_names:
             return None
         if tl.immutable is None:
             return "refused" if orig in self.s.texture_targets else None   # (not immutable: GL_INVALID_OPERATION)
@@ -351,12 +352,14 @@ class TextureLevelCalls:
             return "refused"   # (a texture bound before: GL_INVALID_OPERATION)
         if target not in VIEW_TARGETS.get(tl.target, ()):
             return "refused" if isinstance(target, str) and target in VIEW_TARGETS else None
-        base = [tl.images.get((lv, f)) for lv in range(minlevel, minlevel + 1) for f in faces_of(tl.target)]
+        levels = 1 + max((lv for lv, _ in tl.images), default=-1)   # (an immutable texture's: all given)
+        if minlevel >= levels:
+            return "refused" if levels > 0 else None   # (GL_INVALID_VALUE)
+        base = [tl.images.get((minlevel, f)) for f in faces_of(tl.target)]
         if any(b is None or b is UNCERTAIN for b in base):
             return None
-        levels = 1 + max(lv for lv, _ in tl.images)
         layers = 6 if tl.target == CUBE else base[0][2] if tl.target in PLANE_ARRAYS | {ROW_ARRAY} else 1
-        if minlevel >= levels or minlayer >= layers:
+        if minlayer >= layers:
             return "refused"   # (GL_INVALID_VALUE)
         own = base[0][3]
         if fmt != own and not (VIEW_CLASSES.get(fmt) is not None and VIEW_CLASSES.get(fmt) == VIEW_CLASSES.get(own)):
