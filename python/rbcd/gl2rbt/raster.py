@@ -17,8 +17,6 @@ from .converter import Converter, swapped_drawable
 from .errors import ConvertError, RasterStopped, ToolError, printable
 from .gl_tables import CALL_FLAG_END_FRAME, base_name
 from .glstate.draws import FRAGMENT_EFFECT_KEYS, DrawCalls
-from .glstate.feedback import FeedbackCalls
-from .glstate.programs import ProgramCalls
 from .outputs import SafeText
 from .reduced import ReducedWriter, is_reduced_capture
 
@@ -116,11 +114,6 @@ def check_depth_prefix(prefix, paths):
 FIRST_WINDOW_SWAPS = 64
 # The calls that draw (a glBegin's primitive is drawn at its glEnd).
 DRAWING = frozenset(DrawCalls.HANDLERS) - {"glPrimitiveRestartNV", "glRenderMode"}
-# The calls first_window passes over: programs and transform feedback, which
-# decide nothing of which window is drawn into or swapped (the framebuffer
-# bound, the drawable made current), and whose compiles and links in Mesa
-# had been half a shader capture's start-up, made again by the conversion.
-NOT_WINDOW_STATE = frozenset(ProgramCalls.HANDLERS) | frozenset(FeedbackCalls.HANDLERS)
 
 
 def new_converter(args, raster_in):
@@ -150,7 +143,7 @@ def first_window(args):
     draw with none found,
     or where the calls up to there are refused (the conversion then says
     so, as without this scan). The GL state alone, up to there, its draws
-    not run, its programs not made (NOT_WINDOW_STATE) and no frame opened. A game's frames are that window's;
+    not run and no frame opened. A game's frames are that window's;
     another's draws (a warm-up) and swaps and clears (a splash) before it
     end no frame and set no screen size (round 15's R15-3). The converter
     keeps the rule after that (swaps_main_drawable)."""
@@ -169,7 +162,7 @@ def first_window(args):
                     drawn.append(probe.current_drawable)
                 if not probe.core:   # (glBegin and glEnd are nothing in a core profile)
                     in_begin = name != "glEnd" and (in_begin or name == "glBegin")
-            elif name not in NOT_WINDOW_STATE:
+            else:
                 probe.last_call = call[0]
                 probe.handle(call)
             if isinstance(flags, int) and flags & CALL_FLAG_END_FRAME:
