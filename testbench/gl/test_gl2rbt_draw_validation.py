@@ -531,6 +531,14 @@ STORAGE_4 = TEXTURE_4 + [("glTexStorage2D", dict(target="GL_TEXTURE_2D", levels=
                                                   width=64, height=48))]
 
 
+ATTACH_4 = ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))
+
+
+def ext_image_4(target):
+    return ("glTextureImage2DEXT", dict(texture=4, target=target, level=0, internalformat="GL_RGBA8", width=64,
+                                        height=48, border=0, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=None))
+
+
 def view_8(target, fmt, minlevel, minlayer, numlevels=1):
     """Texture 8 made a view of texture 4 and attached to framebuffer 3."""
     return [("glGenTextures", dict(n=1, textures=[8])), ("glTextureView", dict(
@@ -562,6 +570,10 @@ def view_8(target, fmt, minlevel, minlayer, numlevels=1):
         framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))], "refused"),
     (TEXTURE_4 + [copy_image(64, 48), ("glNamedFramebufferTexture", dict(
         framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0)), COMPLETE], "drawn"),
+    # EXT_direct_state_access's image call at the texture's target, and
+    # at another (R29-1: GL_INVALID_OPERATION, no image, incomplete).
+    (TEXTURE_4 + [ext_image_4("GL_TEXTURE_2D"), ATTACH_4], "drawn"),
+    (TEXTURE_4 + [ext_image_4("GL_TEXTURE_CUBE_MAP_POSITIVE_X"), ATTACH_4], "left out"),
     # A layer of an array texture of the screen's size: another pass, as
     # documented, whatever its size.
     (array_layer(0)[1:], "left out"),
@@ -571,7 +583,7 @@ def view_8(target, fmt, minlevel, minlayer, numlevels=1):
       ("glTexStorage2D", dict(STORAGE_4[2][1], width=32, height=24)),
       ("glNamedFramebufferTexture", dict(framebuffer=3, attachment=0x8CE0, texture=4, level=0))], "left out"),
 ], ids=["storage", "view", "view_of_level_1", "view_of_a_layer", "view_of_no_level", "copied", "copied_complete",
-        "array_layer", "smaller_by_value"])
+        "ext_image", "ext_image_of_another_target", "array_layer", "smaller_by_value"])
 def test_a_screen_sized_framebuffer_s_colour_texture_decides_the_pass(tmp_path, colour, outcome):
     """Framebuffer 3 with a depth buffer of the screen's size is the camera
     pass when its colour attachment is as large: a texture's size comes

@@ -14,7 +14,8 @@ from ..gl_tables import base_name
 from .framebuffers import FramebufferCalls
 from .per_fragment import PerFragmentCalls
 from .textures import TextureImageCalls
-from .texture_levels import TextureLevelCalls
+from .image_calls import TEXTURE_TARGETS
+from .texture_levels import CUBE, CUBE_FACES, TextureLevelCalls
 
 MAX_CREATED = 1 << 16   # names one glCreate* call makes (a larger n is the capture's error)
 
@@ -98,16 +99,29 @@ class DirectStateCalls:
     def h_texture_image_ext(self, no, name, a, args):
         """glTextureImage1D/2D/3DEXT (EXT_direct_state_access, compatibility
         profile): glTexImage1D/2D/3D on the texture it names at the target
-        it gives (a name not yet bound becomes a texture of that target)."""
+        it gives (a name not yet bound becomes a texture of that target; a
+        texture of another target is GL_INVALID_OPERATION and keeps its
+        images)."""
         d = dict(args)
         tex = checked(no, integer, d.get("texture"), f"{name}: the texture", *U32)
         target = d.get("target")
-        if not tex or not isinstance(target, str):
-            return
-        self.s.texture_targets.setdefault(tex, target)
+        bound = CUBE if target in CUBE_FACES else target
+        if not tex or bound not in TEXTURE_TARGETS or self.s.texture_targets.setdefault(tex, bound) != bound:
+            return   # GL_INVALID_ENUM, or a texture of another target: GL_INVALID_OPERATION (R29-1)
         as_name = base_name(name).replace("Texture", "Tex")
         handler = FramebufferCalls.h_tex_image if as_name == "glTexImage2D" else TextureLevelCalls.h_tex_image_any
-        on_texture(handler, as_name)(self, no, name, a, [(k, v) for k, v in args if k != "target"])
+        # (the call's own target: a cube map's face stays the face)
+        key = (self.s.active_unit, bound)
+        saved = self.s.units.get(key)
+        self.s.units[key] = tex
+        try:
+            args = [(k, v) for k, v in args if k != "texture"]
+            handler(self, no, as_name, [v for _, v in args], args)
+        finally:
+            if saved is None:
+                del self.s.units[key]
+            else:
+                self.s.units[key] = saved
 
     HANDLERS = {
         "glCreateTextures": h_create_textures,
