@@ -30,18 +30,24 @@ def on_texture(handler, as_name, target=None):
         bound_target = self.s.texture_targets.get(tex)
         if not tex or bound_target is None or target is not None and bound_target != target:
             return   # GL_INVALID_OPERATION: no such texture (or not of the call's target)
-        key = (self.s.active_unit, bound_target)
-        saved = self.s.units.get(key)
-        self.s.units[key] = tex
-        args = [("target", bound_target)] + [(k, v) for k, v in args if k != "texture"]
-        try:
-            handler(self, no, as_name, [v for _, v in args], args)
-        finally:
-            if saved is None:
-                del self.s.units[key]
-            else:
-                self.s.units[key] = saved
+        run_bound(self, tex, bound_target, handler, no, as_name,
+                  [("target", bound_target)] + [(k, v) for k, v in args if k != "texture"])
     return h
+
+
+def run_bound(self, tex, target, handler, no, name, args):
+    """handler(name, args) run with texture tex bound on the active unit at
+    `target` for the call alone."""
+    key = (self.s.active_unit, target)
+    saved = self.s.units.get(key)
+    self.s.units[key] = tex
+    try:
+        handler(self, no, name, [v for _, v in args], args)
+    finally:
+        if saved is None:
+            del self.s.units[key]
+        else:
+            self.s.units[key] = saved
 
 
 def on_bound(handler, as_name, param, state, target, objects, zero_allowed=False):
@@ -111,17 +117,7 @@ class DirectStateCalls:
         as_name = base_name(name).replace("Texture", "Tex")
         handler = FramebufferCalls.h_tex_image if as_name == "glTexImage2D" else TextureLevelCalls.h_tex_image_any
         # (the call's own target: a cube map's face stays the face)
-        key = (self.s.active_unit, bound)
-        saved = self.s.units.get(key)
-        self.s.units[key] = tex
-        try:
-            args = [(k, v) for k, v in args if k != "texture"]
-            handler(self, no, as_name, [v for _, v in args], args)
-        finally:
-            if saved is None:
-                del self.s.units[key]
-            else:
-                self.s.units[key] = saved
+        run_bound(self, tex, bound, handler, no, as_name, [(k, v) for k, v in args if k != "texture"])
 
     HANDLERS = {
         "glCreateTextures": h_create_textures,
