@@ -262,8 +262,8 @@ READ_WINDOW = ("glBindFramebuffer", dict(target="GL_READ_FRAMEBUFFER", framebuff
 TEXTURE_4 = [("glGenTextures", dict(n=1, textures=[4])), ("glBindTexture", dict(target="GL_TEXTURE_2D", texture=4))]
 TEX_IMAGE = ("glTexImage2D", dict(target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA8", width=64, height=48,
                                   border=0, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=None))
-WITH_TEXTURE = [FBO] + TEXTURE_4 + [TEX_IMAGE, ("glNamedFramebufferTexture", dict(
-    framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))]
+ATTACH_4 = ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))
+WITH_TEXTURE = [FBO] + TEXTURE_4 + [TEX_IMAGE, ATTACH_4]
 CLEAR = ("glClear", dict(mask="GL_COLOR_BUFFER_BIT"))
 
 
@@ -276,6 +276,12 @@ def colour_framebuffer(fmt, point="GL_COLOR_ATTACHMENT0", fb=3, rb=5):
             ("glRenderbufferStorage", dict(target="GL_RENDERBUFFER", internalformat=fmt, width=64, height=48)),
             ("glNamedFramebufferRenderbuffer", dict(framebuffer=fb, attachment=point,
                                                     renderbuffertarget="GL_RENDERBUFFER", renderbuffer=rb))]
+
+
+# Renderbuffer 6, a depth buffer of the screen's size, attached to
+# framebuffer 3 (made before); framebuffer 3 bound for drawing.
+SCREEN_DEPTH = colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:]
+DRAW_3 = ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))
 
 
 def attach_texture_4(texture=4, level=0, textarget="GL_TEXTURE_2D"):
@@ -310,8 +316,7 @@ def layered_cube(skip=None):
     faces = [face_image(f"GL_TEXTURE_CUBE_MAP_{s}_{a}") for a in "XYZ" for s in ("POSITIVE", "NEGATIVE")]
     return [FBO, ("glGenTextures", dict(n=1, textures=[4])),
             ("glBindTexture", dict(target="GL_TEXTURE_CUBE_MAP", texture=4))] + [
-        f for n, f in enumerate(faces) if n != skip] + [
-        ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))]
+        f for n, f in enumerate(faces) if n != skip] + [ATTACH_4]
 
 
 def array_layer(layer):
@@ -342,8 +347,7 @@ def multisample_texture(call, samples):
     return [FBO, ("glGenTextures", dict(n=1, textures=[4])),
             ("glBindTexture", dict(target="GL_TEXTURE_2D_MULTISAMPLE", texture=4)),
             (call, dict(target="GL_TEXTURE_2D_MULTISAMPLE", samples=samples, internalformat="GL_RGBA8", width=64,
-                        height=48, fixedsamplelocations="GL_TRUE")),
-            ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))]
+                        height=48, fixedsamplelocations="GL_TRUE")), ATTACH_4]
 
 
 def multisampled(samples):
@@ -396,7 +400,7 @@ def multisampled(samples):
     (colour_framebuffer("GL_DEPTH_COMPONENT24") + [READ_3, CLEAR, SRC1, BOTH], False),
     (colour_framebuffer("GL_RGBA8", "GL_DEPTH_ATTACHMENT") + [READ_3, CLEAR, SRC1, BOTH], False),
     (colour_framebuffer("GL_RGBA8") + [READ_3, CLEAR, SRC1, BOTH], True),
-    (colour_framebuffer("GL_RGBA8") + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:]
+    (colour_framebuffer("GL_RGBA8") + SCREEN_DEPTH
      + colour_framebuffer("GL_STENCIL_INDEX8", "GL_STENCIL_ATTACHMENT", rb=7)[1:]
      + [READ_3, CLEAR, SRC1, BOTH], False),
     (WITH_IMAGE + [("glCheckNamedFramebufferStatus", dict(framebuffer=3, target="GL_FRAMEBUFFER",
@@ -521,17 +525,13 @@ def test_a_framebuffer_of_the_screen_s_size_draws_only_when_complete(tmp_path, f
     camera pass only when complete: Mesa draws nothing into an incomplete
     one (GL_INVALID_FRAMEBUFFER_OPERATION; round 26's R26-1 had converted
     its draws into the frame)."""
-    calls = colour_framebuffer(fmt) + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + [
-        ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
+    calls = colour_framebuffer(fmt) + SCREEN_DEPTH + [DRAW_3]
     got, report = fragments(tmp_path, blending(calls), "screen")
     assert (got > 100) == drawn, (got, report)
 
 
 STORAGE_4 = TEXTURE_4 + [("glTexStorage2D", dict(target="GL_TEXTURE_2D", levels=1, internalformat="GL_RGBA8",
                                                   width=64, height=48))]
-
-
-ATTACH_4 = ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))
 
 
 def ext_image_4(target):
@@ -549,8 +549,7 @@ def view_8(target, fmt, minlevel, minlayer, numlevels=1):
 
 @pytest.mark.parametrize("colour, outcome", [
     # Texture 4's own storage, of the screen's size: the camera pass.
-    (STORAGE_4 + [("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4,
-                                                     level=0))], "drawn"),
+    (STORAGE_4 + [ATTACH_4], "drawn"),
     # A view of it (R26-6 and R27-1 had left its draws out), of level 1 of
     # a texture twice as large, of a layer of an array texture, in
     # another format of the class: the view's images are the original's.
@@ -566,10 +565,8 @@ def view_8(target, fmt, minlevel, minlayer, numlevels=1):
     # A copy from the read framebuffer (an image the converter cannot tell
     # GL gave): refused, unless Mesa answered the framebuffer complete, the
     # image then there at the size the copy asked.
-    (TEXTURE_4 + [copy_image(64, 48), ("glNamedFramebufferTexture", dict(
-        framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))], "refused"),
-    (TEXTURE_4 + [copy_image(64, 48), ("glNamedFramebufferTexture", dict(
-        framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0)), COMPLETE], "drawn"),
+    (TEXTURE_4 + [copy_image(64, 48), ATTACH_4], "refused"),
+    (TEXTURE_4 + [copy_image(64, 48), ATTACH_4, COMPLETE], "drawn"),
     # EXT_direct_state_access's image call at the texture's target, and
     # at another (R29-1: GL_INVALID_OPERATION, no image, incomplete).
     (TEXTURE_4 + [ext_image_4("GL_TEXTURE_2D"), ATTACH_4], "drawn"),
@@ -592,8 +589,7 @@ def test_a_screen_sized_framebuffer_s_colour_texture_decides_the_pass(tmp_path, 
     nothing left (round 26's v410 and round 27's R27-1 had left a view's
     draws out of the frame, where Mesa drew them)."""
     from gl_captures import left_behind, refused
-    calls = [FBO] + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + colour + [
-        ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
+    calls = [FBO] + SCREEN_DEPTH + colour + [DRAW_3]
     c = blending(calls)
     if outcome == "refused":
         r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
@@ -614,8 +610,7 @@ def test_a_screen_sized_framebuffer_s_colour_texture_decides_the_pass(tmp_path, 
     # A texture whose base level was set: its format still known.
     ([FBO] + TEXTURE_4 + [TEX_IMAGE, ("glTexParameteri", dict(target="GL_TEXTURE_2D", pname="GL_TEXTURE_MAX_LEVEL",
                                                               param=0)),
-                          ("glNamedFramebufferTexture", dict(framebuffer=3, attachment="GL_COLOR_ATTACHMENT0",
-                                                             texture=4, level=0)), COMPLETE], True),
+                          ATTACH_4, COMPLETE], True),
 ], ids=["rgba8", "rgba8ui", "rgb10_a2ui", "integer_not_drawn", "max_level_set"])
 def test_fixed_function_draws_into_an_integer_colour_buffer_are_refused(tmp_path, colour, drawn):
     """In a compatibility profile, a draw with no fragment shader into a
@@ -625,8 +620,7 @@ def test_fixed_function_draws_into_an_integer_colour_buffer_are_refused(tmp_path
     into the frame, 0.00% against Mesa)."""
     from gl_captures import Calls
     c = Calls()
-    for fn, args in colour[:1] + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + \
-            colour[1:] + [("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]:
+    for fn, args in colour[:1] + SCREEN_DEPTH + colour[1:] + [DRAW_3]:
         c.add(fn, **args)
     got, report = fragments(tmp_path, c.triangle(obj=1).swap(), "integer")
     assert (got > 100) == drawn, (got, report)
@@ -636,9 +630,7 @@ def test_fixed_function_draws_into_an_integer_colour_buffer_are_refused(tmp_path
 def test_a_fragment_shader_draws_into_an_integer_colour_buffer(tmp_path):
     """The same integer attachment under a fragment shader (here of a core
     profile's program) draws: only fixed-function fragments cannot write it."""
-    calls = colour_framebuffer("GL_RGBA8UI") + colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT",
-                                                                   rb=6)[1:] + [
-        ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
+    calls = colour_framebuffer("GL_RGBA8UI") + SCREEN_DEPTH + [DRAW_3]
     got, report = fragments(tmp_path, blending(calls), "shader")
     assert got > 100, (got, report)
 
@@ -654,10 +646,8 @@ def test_a_bind_gl_refuses_gives_the_texture_no_target(tmp_path, first_bind):
     calls = [FBO, ("glGenTextures", dict(n=1, textures=[4]))]
     if first_bind is not None:
         calls.append(("glBindTexture", dict(target=first_bind, texture=4)))
-    calls += [TEXTURE_4[1], TEX_IMAGE, ("glNamedFramebufferTexture", dict(
-        framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=0))]
-    calls += colour_framebuffer("GL_DEPTH_COMPONENT24", "GL_DEPTH_ATTACHMENT", rb=6)[1:] + [
-        ("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3))]
+    calls += [TEXTURE_4[1], TEX_IMAGE, ATTACH_4]
+    calls += SCREEN_DEPTH + [DRAW_3]
     got, report = fragments(tmp_path, blending(calls), "bind")
     assert got > 100, (got, report)
 
@@ -672,7 +662,7 @@ def test_a_multisample_depth_buffer_is_left_out_of_the_check(tmp_path):
                                                        internalformat="GL_DEPTH_COMPONENT24", width=64, height=48)),
              ("glNamedFramebufferRenderbuffer", dict(framebuffer=3, attachment="GL_DEPTH_ATTACHMENT",
                                                      renderbuffertarget="GL_RENDERBUFFER", renderbuffer=6))]
-    calls = multisampled(4) + depth + [("glBindFramebuffer", dict(target="GL_DRAW_FRAMEBUFFER", framebuffer=3)),
+    calls = multisampled(4) + depth + [DRAW_3,
                                        ("glEnable", dict(cap="GL_DEPTH_TEST")),
                                        ("glClear", dict(mask="GL_DEPTH_BUFFER_BIT"))]
     got, report = fragments(tmp_path, blending(calls), "ms")

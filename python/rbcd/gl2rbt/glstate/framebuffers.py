@@ -13,7 +13,7 @@ from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import bitfield, generated_name
-from .image_calls import TEXTURE_TARGETS, by_value
+from .image_calls import TEXTURE_TARGETS
 from .texture_formats import (DEPTH_FORMATS, DEPTH_STENCIL_FORMATS, INTEGER_FORMATS, MAX_LEVEL,
                               is_digest, refused_level, refused_storage)
 from .texture_levels import BOX, CUBE, CUBE_FACES, MAX_3D_SIZE, MAX_LAYERS, MAX_SAMPLES, SINGLE_LEVEL, UNCERTAIN
@@ -134,9 +134,7 @@ class FramebufferCalls:
 
     def h_bind_framebuffer(self, no, name, a, args):
         d = dict(args)
-        target = by_value(d["target"])
-        if not isinstance(target, (str, int)) or isinstance(target, bool):
-            fail_call(no, f"{name}: the target {printable(target, 40)} is not an enumerant")
+        target = d["target"]   # (an enumerant, by name where it is one: image_calls)
         fb = checked(no, integer, d["framebuffer"], f"{name}: the framebuffer", *U32)
         if not generated_name(self.core, self.s.framebuffer_names, fb) or target not in (
                 "GL_FRAMEBUFFER", "GL_DRAW_FRAMEBUFFER", "GL_READ_FRAMEBUFFER"):
@@ -466,9 +464,8 @@ class FramebufferCalls:
 
     def h_bind_texture(self, no, name, a, args):
         d = dict(args)
-        target = d["target"]
+        target = d["target"]   # (an enumerant, by name where it is one: image_calls)
         tex = checked(no, integer, d["texture"], f"{name}: the texture", *U32)
-        target = by_value(target)
         if target not in TEXTURE_TARGETS or (target in DESKTOP_BIND_TARGETS if self.es else
                                                    target == "GL_TEXTURE_EXTERNAL_OES"):
             return   # GL_INVALID_ENUM: nothing is bound
@@ -860,11 +857,8 @@ class FramebufferCalls:
             if key[0] == "renderbuffer":
                 fmt = self.s.formats.get(key[:2])
             else:
-                tl = self.s.texture_levels.get(key[:2])
-                level = key[2] if len(key) > 2 and isinstance(key[2], int) else 0
-                layer = key[key.index("layer") + 1] if "layer" in key else 0
-                face = CUBE_FACES.index(layer) if layer in CUBE_FACES else layer if tl is not None and \
-                    tl.target == CUBE and isinstance(layer, int) else 0
+                img, level, face, _ = image_place(key)
+                tl = self.s.texture_levels.get(img)
                 image = tl.images.get((level, face)) if tl is not None else None
                 if self.s.images_passed_over is not None:
                     fmt = UNCERTAIN   # (a call passed over may have given any image)

@@ -362,10 +362,10 @@ class TextureLevelCalls:
         if minlayer >= layers:
             return "refused"   # (GL_INVALID_VALUE)
         own = base[0][3]
-        if fmt != own and not (VIEW_CLASSES.get(fmt) is not None and VIEW_CLASSES.get(fmt) == VIEW_CLASSES.get(own)):
-            return "refused" if fmt in VIEW_CLASSES and own in VIEW_CLASSES else None
         if fmt not in VIEW_CLASSES:
             return None   # (a depth or compressed view: its contents are followed no further)
+        if VIEW_CLASSES[fmt] != VIEW_CLASSES.get(own):
+            return "refused" if own in VIEW_CLASSES else None   # (another class: GL_INVALID_OPERATION)
         new_levels, new_layers = min(numlevels, levels - minlevel), min(numlayers, layers - minlayer)
         if new_levels < 1 or new_layers < 1:
             return None
