@@ -39,7 +39,7 @@ import tempfile
 import tomllib
 import unicodedata
 
-from .startup import ignore_signals, kept, release_signals
+from .startup import HANDLED, ignore_signals, kept, release_signals
 
 MAX_TOKEN = 1024
 
@@ -196,6 +196,32 @@ class ArgumentParser(argparse.ArgumentParser):
 
     def error(self, message):
         raise UsageError(f"{message} (see --help)")
+
+    def print_help(self, file=None):
+        """--help: the whole text on standard output or none of it (a write
+        that fails is WriteError, one line, exit 1). The text
+        is made first; it is written and flushed with SIGINT, SIGTERM and
+        SIGHUP held, and exit (argparse's next call) ignores them, which
+        drops one held meanwhile: a signal cannot cut the help short, nor
+        come after a whole help and end the run as "interrupted", exit 130
+        (a signal that came before the hold is taken at once, before a
+        byte is written)."""
+        if file is not None:
+            return super().print_help(file)
+        text = self.format_help()
+        signal.pthread_sigmask(signal.SIG_BLOCK, HANDLED)
+        try:
+            sys.stdout.write(text)
+            sys.stdout.flush()
+        except OSError as e:   # (a full device, a closed pipe)
+            raise WriteError(f"standard output: write failed: {e.strerror}") from None
+
+    def exit(self, status=0, message=None):
+        """The end of --help: the work is done, a signal from here changes
+        nothing (main_wrapper's clean-up ignores them too)."""
+        ignore_signals()
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, HANDLED)
+        super().exit(status, message)
 
 
 class Once(argparse.Action):

@@ -432,6 +432,41 @@ def test_a_signal_once_the_work_is_done_changes_nothing(sig):
     assert (r.returncode, r.stdout, r.stderr) == (0, "", ""), r
 
 
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM", "SIGHUP"])
+def test_a_signal_while_help_is_written_leaves_the_whole_help_and_exit_0(sig):
+    """A signal that comes while --help is written (sent by standard
+    output's own write, so it cannot miss the moment): the whole help, exit
+    0, nothing on standard error. The tools' parser (rbcd.cli.ArgumentParser)
+    holds the signals while it writes and drops them at its exit (CI's run
+    of the start-up test above had "interrupted", exit 130, after the whole
+    help: the signal came between the write and argparse's exit)."""
+    script = ("import io, os, signal, sys\n"
+              f"sys.path.insert(0, {os.path.join(ROOT, 'python')!r})\n"
+              "from rbcd.cli import ArgumentParser, main_wrapper\n"
+              "class Signalling(io.TextIOWrapper):\n"
+              "    def write(self, text):\n"
+              f"        os.kill(os.getpid(), signal.{sig})\n"
+              "        return super().write(text)\n"
+              "sys.stdout = Signalling(open(1, 'wb', closefd=False), encoding='utf-8')\n"
+              "def fn(argv):\n"
+              "    ArgumentParser(prog='tool').parse_args(argv)\n"
+              "    return 3\n"
+              "sys.exit(main_wrapper('tool', fn, ['--help']))\n")
+    r = subprocess.run(["/usr/bin/python3", "-c", script], capture_output=True, text=True, timeout=60)
+    assert (r.returncode, r.stdout, r.stderr) == (0, "usage: tool [-h]\n\noptions:\n"
+                                                     "  -h, --help  show this help message and exit\n", ""), r
+
+
+@pytest.mark.parametrize("tool", ["game-suite", "rbcd-sweep", "rbcd-plot", "rbcd-gl2rbt"])
+def test_help_onto_a_full_device_is_one_line(tool):
+    """--help onto /dev/full: one line naming standard output, exit 1 (the
+    converter's had ended in a traceback, the others' in "internal error")."""
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([os.path.join(ROOT, "scripts", tool), "--help"], stdout=full, stderr=subprocess.PIPE,
+                           text=True, timeout=60)
+    assert (r.returncode, r.stderr) == (1, f"{tool}: standard output: write failed: No space left on device\n"), r
+
+
 @pytest.mark.parametrize("which, mode", [("calls.xz", "r+b"), ("summary.jsonl", "r+b"), ("capture.toml", "ab")],
                          ids=["calls_read_write", "summary_read_write", "toml_append"])
 def test_check_with_standard_output_onto_an_entry_s_file_is_refused(tmp_path, entry, which, mode):

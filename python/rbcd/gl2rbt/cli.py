@@ -239,6 +239,9 @@ def main(argv=None):
         except UsageError as e:
             sys.stderr.write(f"{PROG}: {printable(str(e))}\n")
             return 2
+        except WriteError as e:   # (--help onto a full device)
+            sys.stderr.write(f"{PROG}: {printable(str(e))}\n")
+            return 1
         trace = args.trace
         return run(args)
     except KeyboardInterrupt:
