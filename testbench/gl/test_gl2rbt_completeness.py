@@ -46,6 +46,7 @@ SIGNATURES = {
                                 ("depth", i), ("fixedsamplelocations", ctypes.c_ubyte)),
     "glGenerateMipmap": (("target", e),),
     "glTexParameteri": (("target", e), ("pname", e), ("param", i)),
+    "glTexParameterf": (("target", e), ("pname", e), ("param", ctypes.c_float)),
     "glBindFramebuffer": (("target", e), ("framebuffer", e)),
     "glFramebufferTexture": (("target", e), ("attachment", e), ("texture", e), ("level", i)),
     "glFramebufferTexture1D": (("target", e), ("attachment", e), ("textarget", e), ("texture", e), ("level", i)),
@@ -252,6 +253,45 @@ CASES = {
     "cube_storage_layered": [bind("GL_TEXTURE_CUBE_MAP", 1), ("glTexStorage2D", dict(
         target="GL_TEXTURE_CUBE_MAP", levels=2, internalformat="GL_RGBA8", width=8, height=8)), FBO, attach(level=1)],
 }
+
+
+def level_range(pname, value, target="GL_TEXTURE_2D", call="glTexParameteri"):
+    return (call, dict(target=target, pname=f"GL_TEXTURE_{pname}_LEVEL", param=value))
+
+
+STORAGE_3 = ("glTexStorage2D", dict(target="GL_TEXTURE_2D", levels=3, internalformat="GL_RGBA8", width=8, height=8))
+TEX_1 = [bind("GL_TEXTURE_2D", 1)]
+# Base and maximum levels: a render target's GL_TEXTURE_MAX_LEVEL 0 (had
+# been "not computed", and a draw into it refused), an attached level at
+# or below the base (no mipmap completeness asked), past it (the chain from
+# the base up to the maximum level), a maximum below the base, values GL
+# refuses, an immutable texture's clamped ones.
+CASES.update({
+    "max_level_0_level_0": TEX_1 + chain_2d([0]) + [level_range("MAX", 0), FBO, attach()],
+    "base_level_0_level_0": TEX_1 + chain_2d([0]) + [level_range("BASE", 0), FBO, attach()],
+    "base_1_level_1_chain_short": TEX_1 + chain_2d([0, 1]) + [level_range("BASE", 1), FBO, attach(level=1)],
+    "base_1_level_0": TEX_1 + chain_2d([0, 1]) + [level_range("BASE", 1), FBO, attach(level=0)],
+    "base_1_level_2_chain_short": TEX_1 + chain_2d([1, 2]) + [level_range("BASE", 1), FBO, attach(level=2)],
+    "base_1_level_2_chain_whole": TEX_1 + chain_2d(range(1, 7)) + [level_range("BASE", 1), FBO, attach(level=2)],
+    "max_2_level_2": TEX_1 + chain_2d([0, 1, 2]) + [level_range("MAX", 2), FBO, attach(level=2)],
+    "max_1_level_2": TEX_1 + chain_2d([0, 1, 2]) + [level_range("MAX", 1), FBO, attach(level=2)],
+    "max_below_base": TEX_1 + chain_2d(range(7)) + [level_range("BASE", 2), level_range("MAX", 1), FBO,
+                                                    attach(level=3)],
+    "base_negative_refused": TEX_1 + chain_2d([0, 1, 2]) + [level_range("BASE", -1), level_range("MAX", 2), FBO,
+                                                            attach(level=1)],
+    "max_as_float": TEX_1 + chain_2d([0, 1]) + [level_range("MAX", 1.0, call="glTexParameterf"), FBO,
+                                                attach(level=1)],
+    "immutable_base_clamped": TEX_1 + [STORAGE_3, level_range("BASE", 5), FBO, attach(level=1)],
+    "immutable_max_clamped": TEX_1 + [STORAGE_3, level_range("BASE", 1), level_range("MAX", 0), FBO,
+                                      attach(level=2)],
+    "immutable_max_below_base_before_storage": TEX_1 + [level_range("BASE", 1), level_range("MAX", 0), STORAGE_3,
+                                                        FBO, attach(level=2)],
+    "immutable_base_past_storage": TEX_1 + [level_range("BASE", 4), STORAGE_3, FBO, attach(level=2)],
+    "cube_base_1": CUBE_1 + faces(1, 4) + faces(2, 2) + faces(3, 1) + [
+        level_range("BASE", 1, "GL_TEXTURE_CUBE_MAP"), FBO, face_2d(CUBE_FACES[2], level=2)],
+})
+
+
 # The colour formats a desktop context renders beyond OpenGL ES's, as a
 # texture's storage and as a renderbuffer's.
 for fmt in sorted(DESKTOP_RENDERABLE - RENDERABLE):
@@ -280,7 +320,8 @@ def texture_calls(draw, tex):
     calls = [bind(target, tex)]
     w, h, layers = draw(SIZES), draw(SIZES), draw(st.sampled_from([1, 2, 4]))
     for _ in range(draw(st.integers(1, 4))):
-        op = draw(st.sampled_from(["chain", "chain", "level", "storage", "generate", "base", "other_call"]))
+        op = draw(st.sampled_from(["chain", "chain", "level", "storage", "generate", "base", "max",
+                                   "other_call"]))
         fmt = draw(FORMATS)
         if target == "GL_TEXTURE_2D_MULTISAMPLE":
             calls.append(("glTexImage2DMultisample", dict(
@@ -316,8 +357,9 @@ def texture_calls(draw, tex):
         elif op == "generate":
             calls.append(("glGenerateMipmap", dict(target=target)))
         else:
-            calls.append(("glTexParameteri", dict(target=target, pname="GL_TEXTURE_BASE_LEVEL",
-                                                  param=draw(st.integers(0, 1)))))
+            value = draw(st.sampled_from([0, 1, 2, 3, -1] + ([1000, 0, 1] if op == "max" else [])))
+            call = draw(st.sampled_from(["glTexParameteri"] * 3 + ["glTexParameterf"]))
+            calls.append(level_range(op.upper(), float(value) if call == "glTexParameterf" else value, target, call))
     return target, calls
 
 

@@ -4,6 +4,8 @@ types on one texture unit (in the program in use, and across a pipeline's
 programs), and dual-source blend factors on a draw buffer past the first.
 Each capture is written by the test; a refused draw draws nothing and is
 counted among the GL errors, as Mesa drops it."""
+import json
+
 import pytest
 
 from gl_captures import gl2rbt_timed as gl2rbt
@@ -132,7 +134,6 @@ def test_a_sampler_set_has_the_bound_pipeline_validated_again(tmp_path, bound, d
     draws nothing at the next draw (it had kept the first validation:
     78.79% against Mesa; R22-1); moved while the pipeline is not bound, the
     pipeline keeps its validation, as Mesa's."""
-    import json
     c = separable()
     c.add("glCreateShaderProgramv", type="GL_FRAGMENT_SHADER", count=1, strings=[TWO_TYPES_FS.format(layout="")],
           ret=11)
@@ -769,13 +770,56 @@ def test_blend_support_among_conditionals_is_refused(tmp_path, fs):
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
+def level_range(pname, value):
+    return ("glTexParameteri", dict(target="GL_TEXTURE_2D", pname=f"GL_TEXTURE_{pname}_LEVEL", param=value))
+
+
+# Level 0 of 128 x 96 and level 1 of the screen's size, 64 x 48 (a
+# level-1 attachment is then the camera pass when complete).
+BIG_0 = ("glTexImage2D", dict(TEX_IMAGE[1], width=128, height=96))
+LEVEL_1 = ("glTexImage2D", dict(TEX_IMAGE[1], level=1))
+
+
+@pytest.mark.parametrize("levels, attached, drawn", [
+    ([TEX_IMAGE, level_range("MAX", 0)], 0, True),
+    ([TEX_IMAGE, level_range("BASE", 0), level_range("MAX", 0)], 0, True),
+    ([BIG_0, LEVEL_1, level_range("BASE", 1)], 1, True),
+    ([BIG_0, LEVEL_1, level_range("MAX", 1)], 1, True),
+    ([BIG_0, LEVEL_1, level_range("MAX", 0)], 1, True),
+    ([BIG_0, LEVEL_1], 1, False),
+    ([BIG_0, LEVEL_1, level_range("MAX", 2)], 1, False),
+    ([BIG_0, LEVEL_1, level_range("BASE", 1), level_range("MAX", 0)], 1, True),
+    ([BIG_0, LEVEL_1, level_range("BASE", -1), level_range("MAX", 1)], 1, True),
+], ids=["max_0", "base_0_max_0", "base_1_level_1", "max_1_level_1", "max_0_level_1", "level_1_chain_short",
+        "max_2_chain_short", "max_below_base_at_base", "negative_base_refused"])
+def test_a_render_target_s_base_and_maximum_levels_are_followed(tmp_path, levels, attached, drawn):
+    """A texture render target with GL_TEXTURE_MAX_LEVEL or BASE_LEVEL set
+    (engines set the maximum to 0 on their render targets), no status asked
+    by the capture: the framebuffer's completeness is computed as Mesa's
+    (a level past the base asks for mipmap completeness up to the maximum
+    level; test_gl2rbt_completeness compares each rule with Mesa), and its
+    draws kept where Mesa draws them (the capture had been refused: "depends
+    on the framebuffer's completeness, which the converter does not
+    compute")."""
+    from gl_captures import Calls
+    c = Calls()
+    attach = ("glNamedFramebufferTexture", dict(ATTACH_4[1], level=attached))
+    for fn, args in [FBO] + TEXTURE_4 + levels + [attach] + SCREEN_DEPTH + [DRAW_3]:
+        c.add(fn, **args)
+    r = gl2rbt(tmp_path, c.triangle(obj=1).triangle(obj=2).swap().write(tmp_path / "c.xz", images=True), "-o",
+               tmp_path / "c.rbt", "--summary", tmp_path / "c.jsonl")
+    assert r.returncode == 0, r.stderr
+    assert json.loads((tmp_path / "c.jsonl").read_text())["draws"] == (2 if drawn else 0), r.stdout
+
+
 @pytest.mark.parametrize("calls, refused", [
     ([READ_3, CLEAR, SRC1, BOTH], True),
     ([READ_3, CLEAR, SRC1], False),
 ], ids=["decision_would_change", "decision_unchanged"])
 def test_a_completeness_the_converter_does_not_compute_is_refused_where_it_matters(tmp_path, calls, refused):
-    """Level 1 of a mutable texture whose base level was set attached:
-    Mesa asks it to be mipmap complete from that base, which the
+    """Level 1 of a mutable texture whose base level was set to a value
+    the converter does not read as Mesa does (0.5, by glTexParameterf)
+    attached: Mesa asks it to be mipmap complete from that base, which the
     converter does not compute, so whether Mesa tests the framebuffer
     again at a change of buffers is not known. Where the test would
     change Mesa's decision the draw is refused in one line naming it
@@ -784,8 +828,8 @@ def test_a_completeness_the_converter_does_not_compute_is_refused_where_it_matte
     from gl_captures import left_behind
     from gl_captures import refused as refused_line
     level_1 = dict(TEX_IMAGE[1], level=1, width=32, height=24)
-    c = blending([FBO] + TEXTURE_4 + [TEX_IMAGE, ("glTexImage2D", level_1), ("glTexParameteri", dict(
-        target="GL_TEXTURE_2D", pname="GL_TEXTURE_BASE_LEVEL", param=0)), ("glNamedFramebufferTexture", dict(
+    c = blending([FBO] + TEXTURE_4 + [TEX_IMAGE, ("glTexImage2D", level_1), ("glTexParameterf", dict(
+        target="GL_TEXTURE_2D", pname="GL_TEXTURE_BASE_LEVEL", param=0.5)), ("glNamedFramebufferTexture", dict(
             framebuffer=3, attachment="GL_COLOR_ATTACHMENT0", texture=4, level=1))] + calls)
     r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
     if refused:

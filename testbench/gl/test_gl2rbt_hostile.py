@@ -110,6 +110,80 @@ def test_bad_calls_are_named(tmp_path, build, words):
     assert left_behind(tmp_path, ["c.xz"]) == [], "an output or a temporary was left"
 
 
+def image_call(name="glTexImage2D", **kw):
+    base = dict(target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA8", width=4, height=4, border=0,
+                format="GL_RGBA", type="GL_UNSIGNED_BYTE")
+    if name == "glTexSubImage2D":
+        base = dict(target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, width=4, height=4, format="GL_RGBA",
+                    type="GL_UNSIGNED_BYTE")
+    if name == "glTexImage3D":
+        base = dict(base, target="GL_TEXTURE_3D", depth=2)
+    if name == "glCompressedTexImage2D":
+        base = dict(target="GL_TEXTURE_2D", level=0, internalformat="GL_COMPRESSED_RGBA_S3TC_DXT5_EXT", width=4,
+                    height=4, border=0, imageSize=16)
+    return (name, dict(base, **kw))
+
+
+ROW_LENGTH_8 = ("glPixelStorei", dict(pname="GL_UNPACK_ROW_LENGTH", param=8))
+ALIGNMENT_8 = ("glPixelStorei", dict(pname="GL_UNPACK_ALIGNMENT", param=8))
+SKIP_IMAGES_1 = ("glPixelStorei", dict(pname="GL_UNPACK_SKIP_IMAGES", param=1))
+RGB_3x2 = dict(internalformat="GL_RGB8", format="GL_RGB", width=3, height=2)
+
+
+@pytest.mark.parametrize("calls, words", [
+    ([image_call(pixels=bytes(10))], "glTexImage2D: 10 bytes of pixels, 64 read by GL"),
+    ([image_call(pixels=bytes(63))], "glTexImage2D: 63 bytes of pixels, 64 read by GL"),
+    ([ROW_LENGTH_8, image_call(pixels=bytes(64))], "64 bytes of pixels, 112 read by GL"),
+    ([ALIGNMENT_8, image_call(pixels=bytes(17), **RGB_3x2)], "17 bytes of pixels, 25 read by GL"),
+    ([image_call("glTexSubImage2D", pixels=bytes(32))], "glTexSubImage2D: 32 bytes of pixels, 64 read"),
+    ([SKIP_IMAGES_1, image_call("glTexImage3D", pixels=bytes(128))], "glTexImage3D: 128 bytes of pixels, 192 read"),
+    ([image_call("glCompressedTexImage2D", data=bytes(8))], "glCompressedTexImage2D: 8 bytes of pixels, 16 read"),
+    ([image_call(type="GL_HALF_FLOAT_OES", pixels=b"")],
+     "0 bytes of pixels, 128 read by GL for its size, format and unpack state (apitrace 11.1 records none of type "
+     "GL_HALF_FLOAT_OES)"),
+], ids=["short", "one_byte_short", "row_length", "alignment", "sub_image", "skip_images_3d", "compressed",
+        "half_float_oes"])
+def test_pixels_shorter_than_gl_reads_are_named(tmp_path, calls, words):
+    """An image call whose pixels hold fewer bytes than GL reads for its
+    size, format, type and unpack state (apitrace records at least that
+    many): one line naming the call, exit 2, nothing left (round 29's R29-2:
+    10 bytes for a 64 x 48 RGBA image were taken, exit 0)."""
+    c = Calls().triangle(obj=1)
+    for name, kw in calls:
+        c.add(name, **kw)
+    bad_call = len(c.calls)
+    c.triangle().swap()
+    cap = c.write(tmp_path / "c.xz", images=True)
+    line = refused(gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--geometry", tmp_path / "c.geo"), words)
+    assert f": call {bad_call}: " in line, line
+    assert left_behind(tmp_path, ["c.xz"]) == [], "an output or a temporary was left"
+
+
+@pytest.mark.parametrize("calls", [
+    [image_call(pixels=bytes(64))],
+    [ROW_LENGTH_8, image_call(pixels=bytes(112))],
+    [ALIGNMENT_8, image_call(pixels=bytes(25), **RGB_3x2)],
+    [ALIGNMENT_8, image_call(pixels=bytes(32), **RGB_3x2)],   # (apitrace's count: the last row padded too)
+    [SKIP_IMAGES_1, image_call("glTexImage3D", pixels=bytes(192))],
+    [image_call("glCompressedTexImage2D", data=bytes(16))],
+    [image_call(width=0, pixels=b"")],                  # (GL_INVALID_VALUE: nothing read)
+    [image_call(format="GL_COLOR_INDEX", type="GL_BITMAP", pixels=b"")],   # (a type not sized here)
+    [image_call(pixels=None)],
+    [("glBindBuffer", dict(target="GL_PIXEL_UNPACK_BUFFER", buffer=7)), image_call(pixels=0)],
+], ids=["whole", "row_length", "alignment", "alignment_apitrace", "skip_images_3d", "compressed", "empty", "bitmap",
+        "null", "unpack_buffer"])
+def test_pixels_as_gl_reads_them_convert(tmp_path, calls):
+    """The controls of the test above: as many bytes as GL reads or more
+    (apitrace pads the last row), none where GL reads none, and pixels not
+    in the capture's call (NULL, a pixel unpack buffer's offset) convert."""
+    c = Calls().triangle(obj=1)
+    for name, kw in calls:
+        c.add(name, **kw)
+    cap = c.triangle().swap().write(tmp_path / "c.xz", images=True)
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt")
+    assert r.returncode == 0, r.stderr
+
+
 def test_a_draw_of_many_indices_is_refused_before_it_costs(tmp_path):
     """2^24 indices from a declared index buffer: refused before a vertex is
     fetched (it peaked at 2.5 GB, then rbcd-gl-raster refused it)."""

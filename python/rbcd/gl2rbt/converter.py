@@ -299,6 +299,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         base = base_name(name)
         if base in self.IMAGE_CALLS:
             args = image_call_args(no, name, args)
+            self.pixels_held(no, name, dict(args))
         a = [v for _, v in args]
         if s.begin_mode is not None:
             if base.startswith("glVertex"):

@@ -14,8 +14,8 @@ import numpy as np
 
 from ..cli import I32, U32, integer
 from .errors import checked, fail_call, printable
-from .glstate.texture_formats import FORMAT_COMPONENTS, MAX_SIZE, PACKED_BYTES, TYPE_BYTES
-from .glstate.textures import (DEFAULT_TEXTURE_BASE, IMAGE_UNIT_BASE, LEVEL_CALLS, PARAMETER_CALLS,
+from .glstate.texture_formats import MAX_SIZE
+from .glstate.textures import (DEFAULT_TEXTURE_BASE, IMAGE_UNIT_BASE, LEVEL_CALLS, PARAMETER_CALLS, pixel_bytes,
                                READ_BACK_CALLS, SAMPLER_PARAMETER_CALLS, SAMPLES_CALL, UNPACK_PARAMETERS,
                                VERTEX_TEXTURE_TARGET)
 
@@ -90,34 +90,6 @@ ARGUMENTS = {
   | {n: ("sampler", "pname", "param") for n in ("glSamplerParameteri", "glSamplerParameterf")} \
   | {n: ("sampler", "pname", "params") for n in SAMPLER_PARAMETER_CALLS if n.endswith("v")}
 ENUM_ARGUMENTS = {"target", "internalformat", "format", "type", "pname"}
-
-
-def pixel_bytes(no, what, d, unpack):
-    """The bytes GL reads for a glTexImage{1,2,3}D's or glTexSubImage2D's
-    pixels (`what` names the call in messages)."""
-    w = checked(no, integer, d.get("width"), f"{what}: the width", *I32)
-    h = checked(no, integer, d.get("height", 1), f"{what}: the height", *I32)
-    depth = checked(no, integer, d.get("depth", 1), f"{what}: the depth", *I32)
-    if w <= 0 or h <= 0 or depth <= 0:
-        return 0
-    fmt, kind = d.get("format"), d.get("type")
-    if kind in PACKED_BYTES and fmt in FORMAT_COMPONENTS:
-        elem, group = PACKED_BYTES[kind], PACKED_BYTES[kind]
-    elif kind in TYPE_BYTES and fmt in FORMAT_COMPONENTS:
-        elem, group = TYPE_BYTES[kind], TYPE_BYTES[kind] * FORMAT_COMPONENTS[fmt]
-    else:
-        fail_call(no, f"{what}: pixels of format {printable(fmt)} and type {printable(kind)} are not emulated "
-                  "for a texture a vertex shader reads")
-    state = dict(zip(UNPACK_PARAMETERS, unpack))
-    row_length = state["GL_UNPACK_ROW_LENGTH"] or w
-    align = state["GL_UNPACK_ALIGNMENT"]
-    stride = row_length * group
-    if elem < align:
-        stride = -(-stride // align) * align
-    image = (state["GL_UNPACK_IMAGE_HEIGHT"] or h) * stride   # (3D calls alone read the image parameters)
-    skip_images = state["GL_UNPACK_SKIP_IMAGES"] if "depth" in d else 0
-    return (skip_images + depth - 1) * image + state["GL_UNPACK_SKIP_ROWS"] * stride \
-        + state["GL_UNPACK_SKIP_PIXELS"] * group + (h - 1) * stride + w * group
 
 
 class VertexTextures:
@@ -505,6 +477,9 @@ class VertexTextures:
             need = checked(no, integer, d.get("imageSize"), f"{what}: imageSize", *I32)
         else:
             need = pixel_bytes(no, what, d, unpack)
+            if need is None:
+                fail_call(no, f"{what}: pixels of format {printable(d.get('format'))} and type "
+                          f"{printable(d.get('type'))} are not emulated for a texture a vertex shader reads")
         if len(v) < need:
             fail_call(no, f"{what}: {len(v)} bytes of pixels, {need} read by GL for its size, format and "
                       "unpack state")

@@ -12,9 +12,12 @@ a pixel unpack buffer, a copy from the read framebuffer) leaves the image
 UNCERTAIN, and a framebuffer it is attached to has a completeness the
 converter does not compute (framebuffers.py refuses where that matters).
 So does every image of a texture whose levels the converter does not
-follow (a view, a base or maximum level set, a mipmap generation it cannot
-tell Mesa performs), and every image once the capture holds an
-image-giving call the converter passes over."""
+follow (a view, a base or maximum level set to a value it does not read
+as Mesa does, any in OpenGL ES, a mipmap generation it cannot tell Mesa
+performs), and every image once the capture holds an image-giving call the
+converter passes over. A texture's base and maximum levels are followed
+as Mesa sets them: they decide whether an attached level past the base
+asks for mipmap completeness, and which levels that reads."""
 import math
 import re
 
@@ -77,11 +80,13 @@ class TextureLevels:
     face)]` = (width, height, layers, internal format, samples, fixed
     sample locations), or UNCERTAIN; `target`; `immutable`: the levels of
     its storage (None: mutable); `unfollowed`: why its images are not
-    known (None: they are)."""
-    __slots__ = ("target", "images", "immutable", "unfollowed")
+    known (None: they are); `base_level`, `max_level`: GL_TEXTURE_BASE_LEVEL
+    and GL_TEXTURE_MAX_LEVEL as Mesa keeps them."""
+    __slots__ = ("target", "images", "immutable", "unfollowed", "base_level", "max_level")
 
     def __init__(self, target):
         self.target, self.images, self.immutable, self.unfollowed = target, {}, None, None
+        self.base_level, self.max_level = 0, DEFAULT_MAX_LEVEL
 
 
 # glTextureView: the targets a view of each target may have (GL 4.6 table
@@ -106,6 +111,9 @@ VIEW_CLASSES = {f"GL_{f}": bits for bits, names in (
     (16, "R16F RG8UI R16UI RG8I R16I RG8 R16 RG8_SNORM R16_SNORM"),
     (8, "R8UI R8I R8 R8_SNORM")) for f in names.split()}
 CUBE_VIEW_SIZE = 8192   # llvmpipe's GL_MAX_CUBE_MAP_TEXTURE_SIZE
+DEFAULT_MAX_LEVEL = 1000   # GL_TEXTURE_MAX_LEVEL's initial value
+LEVEL_RANGE = {"GL_TEXTURE_BASE_LEVEL": "base_level", 0x813C: "base_level", "GL_TEXTURE_MAX_LEVEL": "max_level",
+               0x813D: "max_level"}
 
 
 def faces_of(target):
@@ -303,6 +311,9 @@ class TextureLevelCalls:
         tl = self.s.texture_levels.get(("texture", tex)) if tex else None
         if tl is None or tl.unfollowed or tl.immutable is not None and tl.immutable <= 1:
             return
+        if (tl.base_level, tl.max_level) != (0, DEFAULT_MAX_LEVEL):
+            tl.unfollowed = f"a mipmap generation (call {no}) with a base or maximum level set"
+            return
         base = [tl.images.get((0, f)) for f in faces_of(target)]
         if all(b is None for b in base):
             return
@@ -318,13 +329,38 @@ class TextureLevelCalls:
                     tl.images[(level, face)] = extent + (fmt, 0, True)
 
     def level_range_set(self, d):
-        """glTexParameter* of GL_TEXTURE_BASE_LEVEL or GL_TEXTURE_MAX_LEVEL:
-        which levels a mutable texture's completeness reads, not followed."""
-        if d.get("pname") in ("GL_TEXTURE_BASE_LEVEL", "GL_TEXTURE_MAX_LEVEL", 0x813C, 0x813D):
-            target = d.get("target")
-            tex = self.bound_texture(target) if isinstance(target, str) else 0
-            if tex:
-                self.texture_levels(tex, target).unfollowed = "a base or maximum level set"
+        """glTexParameter* of GL_TEXTURE_BASE_LEVEL or GL_TEXTURE_MAX_LEVEL
+        (which levels completeness reads) as Mesa 22.3 sets them
+        (texparam.c): a negative value, a base level past 0 of a rectangle
+        or multisample texture and a maximum past 0 of a rectangle one are
+        refused (nothing changes); an immutable texture's are clamped to its
+        levels (the maximum to the base level and above). A value the
+        converter does not read as Mesa does (not a whole number of a
+        GLint), or either set in OpenGL ES (whose versions differ), leaves
+        the texture's levels unfollowed."""
+        pname = d.get("pname")
+        attr = LEVEL_RANGE.get(pname) if isinstance(pname, (str, int)) else None
+        target = d.get("target")
+        tex = self.bound_texture(target) if attr and isinstance(target, str) else 0
+        if not tex:
+            return
+        tl = self.texture_levels(tex, target)
+        value = d.get("param", d.get("params"))
+        if isinstance(value, list) and value:
+            value = value[0]
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        if self.es or not whole(value) or not -(1 << 31) <= value < 1 << 31:
+            tl.unfollowed = "a base or maximum level set"
+            return
+        if value < 0 or value > 0 and (tl.target == "GL_TEXTURE_RECTANGLE" or attr == "base_level"
+                                       and tl.target in ("GL_TEXTURE_2D_MULTISAMPLE",
+                                                         "GL_TEXTURE_2D_MULTISAMPLE_ARRAY")):
+            return   # (GL_INVALID_VALUE or GL_INVALID_OPERATION)
+        if tl.immutable is not None:
+            last = tl.immutable - 1
+            value = min(last, value) if attr == "base_level" else max(tl.base_level, min(value, last))
+        setattr(tl, attr, value)
 
     def record_view(self, d):
         """glTextureView(texture, target, origtexture, internalformat,
@@ -469,24 +505,35 @@ class TextureLevelCalls:
         if whole(layer) and tl.target != CUBE and tl.target != "GL_TEXTURE_2D_MULTISAMPLE_ARRAY" \
                 and layer >= image[2]:
             return False   # (Mesa does not compare a multisample array's layer)
-        if level > 0 and tl.immutable is None:
-            complete = self.mipmap_complete(tl)
+        if level > tl.base_level:
+            # (Mesa asks a level past the base for mipmap completeness; an
+            # immutable texture's is that its base image exists and its
+            # maximum level is not below it)
+            complete = self.mipmap_complete(tl) if tl.immutable is None else \
+                tl.base_level < tl.immutable and tl.max_level >= tl.base_level
             if complete is not True:
                 return complete
         return image
 
     @staticmethod
     def mipmap_complete(tl):
-        """Mesa's mipmap completeness of a mutable texture from base level
-        0 (no base or maximum level set): every level of the chain its base
-        names, each face, of the chain's size and the base's format."""
-        base = [tl.images.get((0, f)) for f in faces_of(tl.target)]
+        """Mesa's mipmap completeness of a mutable texture
+        (_mesa_test_texobj_completeness): a maximum level not below the
+        base level, a base image of each face alike and not empty, and every
+        level past it the chain from it names, up to the maximum level, of
+        each face, of the chain's size and the base's format."""
+        first, most = tl.base_level, tl.max_level
+        if most < first:
+            return False
+        base = [tl.images.get((first, f)) for f in faces_of(tl.target)]
         if any(b is UNCERTAIN for b in base):
             return "an image the converter cannot tell GL gave"
-        if any(b is None for b in base) or len({b[:4] for b in base}) > 1:
+        if any(b is None for b in base) or len({b[:4] for b in base}) > 1 or min(base[0][:3]) <= 0:
             return False
         w, h, layers, fmt = base[0][:4]
-        for level, extent in chain(tl.target, w, h, layers, chain_length(tl.target, w, h, layers)):
+        count = min(chain_length(tl.target, w, h, layers), most - first + 1, MAX_LEVEL - first + 1)
+        for step, extent in chain(tl.target, w, h, layers, count):
+            level = first + step
             for face in faces_of(tl.target):
                 image = tl.images.get((level, face))
                 if image is UNCERTAIN:

@@ -28,7 +28,7 @@ from ..errors import ToolError, checked, fail_call, printable
 from ..gl_tables import base_name
 from . import gl_boolean, number
 from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
-from .texture_formats import (IMAGE_FORMATS, MAX_LEVEL, certain_level, certain_mipmaps, certain_part, certain_storage,
+from .texture_formats import (FORMAT_COMPONENTS, IMAGE_FORMATS, MAX_LEVEL, PACKED_BYTES, TYPE_BYTES, certain_level, certain_mipmaps, certain_part, certain_storage,
                               level_size_fits, refused_level, refused_part, refused_storage, whole)
 
 VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
@@ -139,6 +139,35 @@ class TextureCalls:
         self.version, self.bytes, self.refused, self.over, self.rendered = 0, 0, None, False, None
 
 
+def pixel_bytes(no, what, d, unpack):
+    """The bytes GL reads for an image call's pixels (glTex[Sub]Image{1,2,3}D
+    and their direct state access forms: GL 4.5, 8.4.4.1) under the unpack
+    state `unpack` (UNPACK_PARAMETERS' values), or None for a format or type
+    not known here (`what` names the call in messages)."""
+    w = checked(no, integer, d.get("width"), f"{what}: the width", *I32)
+    h = checked(no, integer, d.get("height", 1), f"{what}: the height", *I32)
+    depth = checked(no, integer, d.get("depth", 1), f"{what}: the depth", *I32)
+    if w <= 0 or h <= 0 or depth <= 0:
+        return 0
+    fmt, kind = d.get("format"), d.get("type")
+    if kind in PACKED_BYTES and fmt in FORMAT_COMPONENTS:
+        elem, group = PACKED_BYTES[kind], PACKED_BYTES[kind]
+    elif kind in TYPE_BYTES and fmt in FORMAT_COMPONENTS:
+        elem, group = TYPE_BYTES[kind], TYPE_BYTES[kind] * FORMAT_COMPONENTS[fmt]
+    else:
+        return None
+    state = dict(zip(UNPACK_PARAMETERS, unpack))
+    row_length = state["GL_UNPACK_ROW_LENGTH"] or w
+    align = state["GL_UNPACK_ALIGNMENT"]
+    stride = row_length * group
+    if elem < align:
+        stride = -(-stride // align) * align
+    image = (state["GL_UNPACK_IMAGE_HEIGHT"] or h) * stride   # (3D calls alone read the image parameters)
+    skip_images = state["GL_UNPACK_SKIP_IMAGES"] if "depth" in d else 0
+    return (skip_images + depth - 1) * image + state["GL_UNPACK_SKIP_ROWS"] * stride \
+        + state["GL_UNPACK_SKIP_PIXELS"] * group + (h - 1) * stride + w * group
+
+
 def pixels_of(d):
     p = d.get("pixels", d.get("data"))
     return p if isinstance(p, (bytes, bytearray)) else None
@@ -234,6 +263,31 @@ class TextureImageCalls:
         that redefine a level or the whole texture, made once or rarely)."""
         for seq in [k for k, c in tc.calls.items() if drop(c)]:
             self.drop_texture_call(tc, seq)
+
+    def pixels_held(self, no, name, d):
+        """An image call's pixels in the capture hold what GL reads for its
+        size, format, type and unpack state (a compressed one's: imageSize);
+        apitrace records at least that much, so fewer is the capture's error,
+        named: a capture cut or altered, or apitrace 11.1's empty record of
+        pixels of GL_HALF_FLOAT_OES. The image is not in the capture: its
+        digest (selection rules' texture_image) would be another image's,
+        and Mesa would read past it (vertex textures, the depth check's
+        replay). An offset into a pixel unpack buffer, NULL, or a reduced
+        capture's digest is not checked here."""
+        pixels = d.get("pixels", d.get("data"))
+        if not isinstance(pixels, (bytes, bytearray)) or self.s.bound.get("GL_PIXEL_UNPACK_BUFFER", 0):
+            return
+        what = printable(name)
+        if base_name(name).startswith("glCompressed"):
+            need = max(d.get("imageSize", 0), 0)   # (checked a GLsizei; a negative one is GL_INVALID_VALUE)
+        else:
+            unpack = tuple(self.s.unpack.get(p, UNPACK_DEFAULTS.get(p, 0)) for p in UNPACK_PARAMETERS)
+            need = pixel_bytes(no, what, d, unpack)
+        if need is not None and len(pixels) < need:
+            why = "apitrace 11.1 records none of type GL_HALF_FLOAT_OES" if d.get("type") == "GL_HALF_FLOAT_OES" \
+                else "the capture is cut or altered"
+            fail_call(no, f"{what}: {len(pixels)} bytes of pixels, {need} read by GL for its size, format and "
+                      f"unpack state ({why})")
 
     def keep_texture_call(self, no, name, d):
         """An image or parameter call on the bound 2D texture, kept (the
