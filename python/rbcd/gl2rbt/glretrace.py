@@ -141,6 +141,10 @@ def _end_session(proc):
             os.kill(pid, signal.SIGKILL)   # the watcher, the session's last
         except ProcessLookupError:
             pass
+    # (SIGKILL is sent, not yet taken: the watcher runs until it is)
+    deadline = time.monotonic() + END_SECONDS
+    while session_left(proc.pid, watcher=True) and time.monotonic() < deadline:
+        time.sleep(0.01)
     proc.wait()
     w = getattr(proc, "rbcd_lifeline", None)
     if w is not None:
