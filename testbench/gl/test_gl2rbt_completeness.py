@@ -47,6 +47,7 @@ SIGNATURES = {
     "glGenerateMipmap": (("target", e),),
     "glTexParameteri": (("target", e), ("pname", e), ("param", i)),
     "glTexParameterf": (("target", e), ("pname", e), ("param", ctypes.c_float)),
+    "glTextureParameteriEXT": (("texture", e), ("target", e), ("pname", e), ("param", i)),
     "glBindFramebuffer": (("target", e), ("framebuffer", e)),
     "glFramebufferTexture": (("target", e), ("attachment", e), ("texture", e), ("level", i)),
     "glFramebufferTexture1D": (("target", e), ("attachment", e), ("textarget", e), ("texture", e), ("level", i)),
@@ -289,7 +290,38 @@ CASES.update({
     "immutable_base_past_storage": TEX_1 + [level_range("BASE", 4), STORAGE_3, FBO, attach(level=2)],
     "cube_base_1": CUBE_1 + faces(1, 4) + faces(2, 2) + faces(3, 1) + [
         level_range("BASE", 1, "GL_TEXTURE_CUBE_MAP"), FBO, face_2d(CUBE_FACES[2], level=2)],
+    # Round 30: a layered cube map's faces are compared at its base level
+    # (R30-2), and EXT_direct_state_access's glTextureParameteriEXT makes a
+    # name not yet a texture one of its target, and on a texture of another
+    # target does nothing (R30-1).
+    "cube_layered_faces_at_base_1": CUBE_1 + faces(1, 4) + [level_range("BASE", 1, "GL_TEXTURE_CUBE_MAP"), FBO,
+                                                             attach(level=1)],
+    "cube_layered_base_1_face_differs": CUBE_1 + faces(0, 8) + faces(1, 4, odd=2) + [
+        level_range("BASE", 1, "GL_TEXTURE_CUBE_MAP"), FBO, attach(level=0)],
+    "ext_max_level_before_the_bind": [("glTextureParameteriEXT", dict(
+        texture=1, target="GL_TEXTURE_2D", pname="GL_TEXTURE_MAX_LEVEL", param=1))] + TEX_1 + chain_2d([0, 1]) + [
+        FBO, attach(level=1)],
+    "ext_max_level_of_another_target": [bind("GL_TEXTURE_3D", 2)] + TEX_1 + chain_2d([0, 1]) + [
+        ("glTextureParameteriEXT", dict(texture=2, target="GL_TEXTURE_2D", pname="GL_TEXTURE_MAX_LEVEL", param=1)),
+        FBO, attach(level=1)],
 })
+
+
+
+
+@pytest.mark.parametrize("target, size, base", [("GL_TEXTURE_2D", (1, 1), 1), ("GL_TEXTURE_2D", (1, 4), 2),
+                                                ("GL_TEXTURE_2D", (4, 1), 3), ("GL_TEXTURE_3D", (1, 1, 1), 2)])
+def test_an_image_mesa_cannot_size_level_0_from_is_not_computed(mesa, target, size, base):
+    """A 2D or 3D texture's one image at its base level past 0, one texel
+    wide, high or deep, attached: Mesa's state tracker cannot tell level 0's
+    size from it and llvmpipe finds the framebuffer unsupported, which the
+    converter does not follow: not computed, never complete (round 30's
+    R30-3: computed complete once base levels were followed)."""
+    calls = [bind(target, 1), image(target, base, "GL_RGBA8", *size), level_range("BASE", base, target), FBO,
+             attach(level=base)]
+    assert mesa_status(mesa, calls) is False
+    got = converter_status(calls)
+    assert isinstance(got, str) and "one texel wide, high or deep" in got, got
 
 
 # The colour formats a desktop context renders beyond OpenGL ES's, as a

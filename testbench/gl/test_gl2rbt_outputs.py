@@ -571,6 +571,35 @@ def test_a_signal_at_any_moment_of_numpy_s_loading_is_one_line(tmp_path):
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
+def test_a_signal_in_the_capture_reader_s_clean_up_is_not_lost():
+    """A loop over the capture's calls that ends early (--check-depth's
+    first pass, the last frame asked for) closes the reader there
+    (capture.close_calls), so a signal's KeyboardInterrupt raised in its
+    clean-up (apitrace's process ended) reaches the converter, which says
+    "interrupted", exit 130, and the replay is closed too. Left to Python's
+    collector it was printed as "Exception ignored" and lost: exit 0 and a
+    19-line traceback (round 30's R30-4)."""
+    from rbcd.gl2rbt.capture import close_calls
+    closed = []
+
+    def calls():
+        try:
+            yield 1
+            yield 2
+        finally:
+            raise KeyboardInterrupt
+
+    class Converter:
+        def close_replay(self):
+            closed.append(True)
+
+    reader = calls()
+    next(reader)
+    with pytest.raises(KeyboardInterrupt):
+        close_calls(reader, Converter())
+    assert closed == [True]
+
+
 def test_a_replay_outliving_sigterm_is_killed_when_the_converter_dies():
     """A replay whose process takes no SIGTERM (glretrace's own handler can
     deadlock on malloc's lock) is ended with SIGKILL by the session's

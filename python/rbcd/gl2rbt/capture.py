@@ -19,6 +19,18 @@ def read_calls(trace, calls=None):
         yield from read_apitrace_calls(trace, calls)
 
 
+def close_calls(calls, conv):
+    """The end of a loop over read_calls' generator, however it ends: the
+    generator closed here (apitrace's process ended), not when Python
+    collects it, where a signal's KeyboardInterrupt raised in its clean-up
+    would be printed as ignored and lost; then the converter's replay
+    closed, whatever the first raised."""
+    try:
+        calls.close()
+    finally:
+        conv.close_replay()
+
+
 def shows_every_gen(trace):
     """Whether the capture shows every glGenFramebuffers and
     glGenRenderbuffers call (a core profile then binds only the names they

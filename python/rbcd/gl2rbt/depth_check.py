@@ -8,7 +8,7 @@ import subprocess
 import numpy as np
 
 from ..cli import temporary_folder, unregister_temporary
-from .capture import check_input_file, read_calls
+from .capture import check_input_file, close_calls, read_calls
 from .errors import ConvertError, ToolError, printable
 from .glretrace import end_replay, glretrace_command, preload_library, start_replay
 from .raster import convert, new_converter
@@ -193,8 +193,9 @@ def check_depth(args):
     # will grow to (refused past MAX_REPLAY_PIXELS before it runs).
     probe = new_converter(args, False)
     fixed = {}   # a depth-tested draw -> the GL_FIXED attribute's call it has bound (fixed_attribute)
+    calls = read_calls(args.trace)
     try:
-        for call in read_calls(args.trace):
+        for call in calls:
             probe.last_call = call[0]
             probe.handle(call)
             if probe.last_depth_draw == call[0] and not probe.es:
@@ -209,7 +210,7 @@ def check_depth(args):
             if probe.last_frame is not None and probe.frame > probe.last_frame:
                 break
     finally:
-        probe.close_replay()
+        close_calls(calls, probe)
     try:   # missing: said before the conversion, not after it
         glretrace_command([], "--check-depth")
         if probe.es:

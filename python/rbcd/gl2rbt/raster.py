@@ -12,7 +12,7 @@ import time
 
 from ..cli import check_outputs, remove_left_temporaries, temporary_folder, unregister_temporary, write_output
 from ..startup import ignore_signals
-from .capture import check_input_file, check_rest, read_calls
+from .capture import check_input_file, check_rest, close_calls, read_calls
 from .converter import Converter, swapped_drawable
 from .errors import ConvertError, RasterStopped, ToolError, printable
 from .gl_tables import CALL_FLAG_END_FRAME, base_name
@@ -150,8 +150,9 @@ def first_window(args):
     probe = Converter(args, False, None)
     probe.first_frame, probe.last_frame, probe.active = 1 << 62, None, False   # (no frame is converted)
     drawn, swaps, in_begin, any_draw, seen = [], {}, False, False, 0
+    calls = read_calls(args.trace)
     try:
-        for call in read_calls(args.trace):
+        for call in calls:
             name, flags = base_name(call[1]), call[4]
             if in_begin or name in DRAWING:
                 if probe.current_drawable is None:
@@ -181,7 +182,7 @@ def first_window(args):
     except ConvertError:
         return None
     finally:
-        probe.close_replay()
+        close_calls(calls, probe)
     return None
 
 
@@ -267,7 +268,7 @@ def run_calls(args, conv, reduced):
                 conv.open_frame(call[0])
                 conv.emit(b"S" + struct.pack("<Q", call[0]))
     finally:
-        conv.close_replay()
+        close_calls(calls, conv)
     if conv.s.begin_mode is not None:
         raise ConvertError("the capture ends between glBegin and glEnd")
     if conv.out_frame < 0:

@@ -148,6 +148,16 @@ def chain(target, w, h, layers, levels):
         yield i, (max(1, w >> i), max(1, h >> i), max(1, layers >> i) if target == BOX else layers)
 
 
+def unguessable(target, image):
+    """Whether Mesa's state tracker cannot tell a 2D or 3D texture's level-0
+    size from this image of a level past 0 (st_cb_texture.c's guess: one
+    texel wide or high, or deep for 3D). Round 30's cases against Mesa: such
+    an image attached at its base level is GL_FRAMEBUFFER_UNSUPPORTED; a 1D
+    texture's and a cube map's are complete."""
+    w, h, layers = image[:3]
+    return target in ("GL_TEXTURE_2D", BOX) and (w == 1 or h == 1 or target == BOX and layers == 1)
+
+
 def chain_length(target, w, h, layers):
     """The levels of a complete mipmap chain from a base of this size."""
     if target in SINGLE_LEVEL:
@@ -497,7 +507,7 @@ class TextureLevelCalls:
         if layer == "all" and tl.target == CUBE:
             # A layered cube map: face 0's image, and a cube complete at
             # its base level (Mesa's _mesa_cube_complete).
-            base = [tl.images.get((0, f)) for f in range(6)]
+            base = [tl.images.get((tl.base_level, f)) for f in range(6)]
             if any(b is UNCERTAIN for b in base):
                 return "an image the converter cannot tell GL gave"
             if any(b is None for b in base) or len({b[:4] for b in base}) > 1:
@@ -513,6 +523,12 @@ class TextureLevelCalls:
                 tl.base_level < tl.immutable and tl.max_level >= tl.base_level
             if complete is not True:
                 return complete
+        if tl.immutable is None and tl.base_level > 0 and level > 0 and unguessable(tl.target, image):
+            # (Mesa's state tracker cannot tell level 0's size from such an
+            # image, keeps it apart from the texture's storage, and llvmpipe
+            # finds the attachment unsupported, where the rest of the test
+            # passes: not followed)
+            return "a level past 0 one texel wide, high or deep, of a 2D or 3D texture whose base level is past 0"
         return image
 
     @staticmethod
