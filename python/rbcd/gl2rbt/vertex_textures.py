@@ -15,9 +15,9 @@ import numpy as np
 from ..cli import I32, U32, integer
 from .errors import checked, fail_call, printable
 from .glstate.texture_formats import MAX_SIZE
-from .glstate.textures import (DEFAULT_TEXTURE_BASE, IMAGE_UNIT_BASE, LEVEL_CALLS, PARAMETER_CALLS, pixel_bytes,
+from .glstate.textures import (DEFAULT_TEXTURE_BASE, IMAGE_UNIT_BASE, LEVEL_CALLS, PARAMETER_CALLS,
                                READ_BACK_CALLS, SAMPLER_PARAMETER_CALLS, SAMPLES_CALL, UNPACK_PARAMETERS,
-                               VERTEX_TEXTURE_TARGET)
+                               VERTEX_TEXTURE_TARGET, pixel_bytes)
 
 # The images Mesa holds for vertex shaders, in all, counted at 16 bytes a
 # texel (the widest format), a third more for a mipmapped storage: Mesa

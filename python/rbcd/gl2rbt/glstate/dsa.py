@@ -7,9 +7,9 @@ A texture call names a texture that exists, with its target: one made by
 glCreateTextures, or bound once; another name is GL_INVALID_OPERATION and
 the call does nothing, as in Mesa. An EXT_direct_state_access form names
 the target too: a name not yet a texture becomes one of that target, and a
-texture of another target is GL_INVALID_OPERATION (ext_texture). A framebuffer or renderbuffer call on a
-name that is no object (bound once, or made by glCreate*) does nothing
-either, in every profile."""
+texture of another target is GL_INVALID_OPERATION (ext_texture). A
+framebuffer or renderbuffer call on a name that is no object (bound once,
+or made by glCreate*) does nothing either, in every profile."""
 from ...cli import I32, U32, integer
 from ..errors import checked, fail_call
 from ..gl_tables import base_name

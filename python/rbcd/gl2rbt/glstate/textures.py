@@ -28,8 +28,9 @@ from ..errors import ToolError, checked, fail_call, printable
 from ..gl_tables import base_name
 from . import gl_boolean, number
 from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
-from .texture_formats import (FORMAT_COMPONENTS, IMAGE_FORMATS, MAX_LEVEL, PACKED_BYTES, TYPE_BYTES, certain_level, certain_mipmaps, certain_part, certain_storage,
-                              level_size_fits, refused_level, refused_part, refused_storage, whole)
+from .texture_formats import (FORMAT_COMPONENTS, IMAGE_FORMATS, MAX_LEVEL, PACKED_BYTES, TYPE_BYTES, certain_level,
+                              certain_mipmaps, certain_part, certain_storage, level_size_fits, refused_level,
+                              refused_part, refused_storage, whole)
 
 VERTEX_TEXTURE_TARGET = "GL_TEXTURE_2D"
 MULTISAMPLE_TARGETS = ("GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY")
@@ -264,6 +265,10 @@ class TextureImageCalls:
         for seq in [k for k, c in tc.calls.items() if drop(c)]:
             self.drop_texture_call(tc, seq)
 
+    def unpack_state(self):
+        """The pixel unpack state, UNPACK_PARAMETERS' values."""
+        return tuple(self.s.unpack.get(p, UNPACK_DEFAULTS.get(p, 0)) for p in UNPACK_PARAMETERS)
+
     def pixels_held(self, no, name, d):
         """An image call's pixels in the capture hold what GL reads for its
         size, format, type and unpack state (a compressed one's: imageSize);
@@ -274,15 +279,14 @@ class TextureImageCalls:
         and Mesa would read past it (vertex textures, the depth check's
         replay). An offset into a pixel unpack buffer, NULL, or a reduced
         capture's digest is not checked here."""
-        pixels = d.get("pixels", d.get("data"))
-        if not isinstance(pixels, (bytes, bytearray)) or self.s.bound.get("GL_PIXEL_UNPACK_BUFFER", 0):
+        pixels = pixels_of(d)
+        if pixels is None or self.s.bound.get("GL_PIXEL_UNPACK_BUFFER", 0):
             return
         what = printable(name)
         if base_name(name).startswith("glCompressed"):
             need = max(d.get("imageSize", 0), 0)   # (checked a GLsizei; a negative one is GL_INVALID_VALUE)
         else:
-            unpack = tuple(self.s.unpack.get(p, UNPACK_DEFAULTS.get(p, 0)) for p in UNPACK_PARAMETERS)
-            need = pixel_bytes(no, what, d, unpack)
+            need = pixel_bytes(no, what, d, self.unpack_state())
         if need is not None and len(pixels) < need:
             why = "apitrace 11.1 records none of type GL_HALF_FLOAT_OES" if d.get("type") == "GL_HALF_FLOAT_OES" \
                 else "the capture is cut or altered"
@@ -330,8 +334,7 @@ class TextureImageCalls:
             tc.refused = (no, f"more than {MAX_TEXTURE_BYTES_KEPT >> 20} MiB of texture images, or "
                               f"{MAX_TEXTURE_CALLS_KEPT} calls for one texture, would be kept")
             return
-        unpack = tuple(self.s.unpack.get(p, UNPACK_DEFAULTS.get(p, 0)) for p in UNPACK_PARAMETERS)
-        self.add_texture_call(tc, (no, name, d, unpack))
+        self.add_texture_call(tc, (no, name, d, self.unpack_state()))
 
     def texture_rendered(self, tex, no, how):
         """A texture whose image the GPU writes: a vertex shader that reads
