@@ -335,6 +335,20 @@ def test_extension_enumerants_and_the_ext_image_call(tmp_path):
     assert convert(tmp_path, draw(c), "ext") == moved(tmp_path, 6, 2)
 
 
+def test_ext_calls_on_texture_0_edit_the_default_texture(tmp_path):
+    """glTextureImage2DEXT and glTextureParameteriEXT naming texture 0 give
+    the target's default texture its image and filters (Mesa's
+    _mesa_lookup_or_create_texture), which a vertex shader reads where
+    texture 0 is bound (the calls had done nothing: texels of 0 read)."""
+    c = texture(shader_calls(VS_TEXEL % FETCH), image=False, filters=None)
+    c.add("glBindTexture", target="GL_TEXTURE_2D", texture=0)
+    c.add("glTextureImage2DEXT", texture=0, target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA32F", width=2,
+          height=1, border=0, format="GL_RGBA", type="GL_FLOAT", pixels=TEXELS)
+    for pname in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER"):
+        c.add("glTextureParameteriEXT", texture=0, target="GL_TEXTURE_2D", pname=pname, param="GL_NEAREST")
+    assert convert(tmp_path, draw(c), "ext_0") == moved(tmp_path, 6, 2)
+
+
 def view_of_3(c):
     return c.add("glGenTextures", n=1, textures=[4]).add(
         "glTextureView", texture=4, target="GL_TEXTURE_2D", origtexture=3, internalformat="GL_RGBA32F", minlevel=0,

@@ -6,8 +6,9 @@ arrays have theirs in buffers.py and attributes.py).
 A texture call names a texture that exists, with its target: one made by
 glCreateTextures, or bound once; another name is GL_INVALID_OPERATION and
 the call does nothing, as in Mesa. An EXT_direct_state_access form names
-the target too: a name not yet a texture becomes one of that target, and a
-texture of another target is GL_INVALID_OPERATION (ext_texture). A
+the target too: a name not yet a texture becomes one of that target, 0 is
+the target's default texture, and a texture of another target is
+GL_INVALID_OPERATION (ext_texture). A
 framebuffer or renderbuffer call on a name that is no object (bound once,
 or made by glCreate*) does nothing either, in every profile."""
 from ...cli import I32, U32, integer
@@ -33,7 +34,8 @@ def on_texture(handler, as_name, target=None):
             bound_target = ext_texture(self, tex, d.get("target"))
         else:
             bound_target = self.s.texture_targets.get(tex)
-        if not tex or bound_target is None or target is not None and bound_target != target:
+        if bound_target is None or not tex and not name.endswith("EXT") \
+                or target is not None and bound_target != target:
             return   # GL_INVALID_OPERATION: no such texture (or not of the call's target)
         run_bound(self, tex, bound_target, handler, no, as_name,
                   [("target", bound_target)] + [(k, v) for k, v in args if k not in ("texture", "target")])
@@ -43,13 +45,14 @@ def on_texture(handler, as_name, target=None):
 def ext_texture(self, tex, target, faces=False):
     """The target of texture `tex` as an EXT_direct_state_access call
     naming it with `target` finds it (Mesa's _mesa_lookup_or_create_texture):
-    a name not yet a texture becomes one of that target; a texture of
-    another target, or no texture target, is None (GL_INVALID_OPERATION or
-    GL_INVALID_ENUM: the call does nothing). A cube map's face names the
+    0 is the target's default texture, the one glBindTexture(target, 0)
+    binds; a name not yet a texture becomes one of that target; a texture
+    of another target, or no texture target, is None (GL_INVALID_OPERATION
+    or GL_INVALID_ENUM: the call does nothing). A cube map's face names the
     cube map for an image call (`faces`); for any other it is
     GL_INVALID_ENUM."""
     bound = CUBE if faces and target in CUBE_FACES else target
-    if not tex or bound not in TEXTURE_TARGETS or self.s.texture_targets.setdefault(tex, bound) != bound:
+    if bound not in TEXTURE_TARGETS or tex and self.s.texture_targets.setdefault(tex, bound) != bound:
         return None
     return bound
 
