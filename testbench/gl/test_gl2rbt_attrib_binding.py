@@ -305,6 +305,26 @@ def test_double_attributes_read_as_doubles(tmp_path, how):
     assert trace(tmp_path, tagged_draw(c), how) == want
 
 
+# The triangle as GL_UNSIGNED_INT_10F_11F_11F_REV words: x and y 11-bit
+# floats (4 is 1088, 40 is 1296), z 0.
+PACKED_FLOATS = struct.pack("<3I", *(x | y << 11 for x, y in ((1088, 1088), (1296, 1088), (1088, 1296))))
+
+
+@pytest.mark.parametrize("stride", [0, 4])
+def test_a_packed_float_attribute_is_one_word_a_vertex(tmp_path, stride):
+    """GL_UNSIGNED_INT_10F_11F_11F_REV packs three components in one 32-bit
+    word: stride 0 is 4 bytes (round 31's R31-4: 12, the vertices past the
+    first read as zeros, the triangle gone)."""
+    want = trace(tmp_path, reference(shader_calls(VS)), "reference")
+    c = shader_calls(VS)
+    c.add("glBufferData", target="GL_ARRAY_BUFFER", size=12, data=PACKED_FLOATS, usage="GL_STATIC_DRAW")
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_UNSIGNED_INT_10F_11F_11F_REV", normalized="GL_FALSE",
+          stride=stride, pointer=0)
+    assert trace(tmp_path, tagged_draw(c), f"stride_{stride}") == want
+
+
 VS_OFFSET = ("#version 330 core\nin vec3 p;\nlayout(location = 1) in vec4 off;\n"
              "void main() { gl_Position = vec4((p.x + off.x) / 32.0 - 1.0, (p.y + off.y) / 24.0 - 1.0, 0.0, 1.0); }\n")
 

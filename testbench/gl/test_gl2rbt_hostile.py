@@ -510,6 +510,28 @@ def test_what_gl_draws_under_a_program(tmp_path):
     assert fragments(tmp_path, shader_draw(c, vao=7).write(tmp_path / "e.xz"))[0] > 100
 
 
+@pytest.mark.parametrize("position", ["vec4(1.0 / zero, 0.0, 0.0, 1.0)", "vec4(0.0, 0.0, zero / zero, 1.0)",
+                                      "vec4(0.0, 0.0, -1.0 / zero, 1.0)", "vec4(0.0, 0.0, 0.0, 1.0 / zero)"],
+                         ids=["x_inf", "z_nan", "z_minus_inf", "w_inf"])
+def test_a_vertex_at_infinity_or_nan(tmp_path, position):
+    """A triangle whose first vertex the vertex shader puts at an infinity
+    or NaN is not drawn, as Mesa's clipper or triangle setup drops it; one
+    at w = +infinity with finite x, y and z is inside every clip plane,
+    and Mesa draws it at the viewport's centre where no clipping is
+    needed: refused, naming the draw (round 31's R31-5: dropped, where
+    Mesa drew 45 pixels)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
+    vs = VS.replace("in vec3 p;", "in vec3 p;\nuniform float zero;").replace(
+        "gl_Position = vec4(", f"gl_Position = gl_VertexID == 0 ? {position} : vec4(")
+    cap = shader_draw(shader_calls(vs), vao=7).write(tmp_path / "i.xz")
+    if position.endswith("1.0 / zero)"):
+        r = gl2rbt(tmp_path, cap, "-o", tmp_path / "i.rbt")
+        refused(r, "call ", "glDrawArrays: a vertex at w = +infinity with finite x, y and z", "not emulated")
+        assert left_behind(tmp_path, ["i.xz"]) == []
+    else:
+        assert fragments(tmp_path, cap) == [0]
+
+
 def trace_bytes(tmp_path, c, name):
     r = gl2rbt(tmp_path, c.write(tmp_path / f"{name}.xz"), "-o", tmp_path / f"{name}.rbt")
     assert r.returncode == 0, f"{name}: {r.stderr}"

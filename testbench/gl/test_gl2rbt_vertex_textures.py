@@ -109,6 +109,20 @@ def test_filtering_of_the_texture_or_of_a_sampler_object(tmp_path, sampler, want
     assert convert(tmp_path, draw(c), f"filter_{sampler}") == moved(tmp_path, *want)
 
 
+def test_a_sampler_s_parameters_given_by_the_vector_forms(tmp_path):
+    """glSamplerParameteriv and glSamplerParameterfv (apitrace names their
+    values `param`, not `params`): filters, a wrap mode and a border colour
+    a vertex shader's fetch outside the texture reads (round 31's R31-2:
+    refused as 'parameter values that are not a list')."""
+    c = texture(shader_calls(VS_TEXEL % "textureLod(heights, vec2(1.5, 0.5), 0.0)"), filters=None)
+    c.add("glGenSamplers", count=1, samplers=[8]).add("glBindSampler", unit=0, sampler=8)
+    for pname, value in (("GL_TEXTURE_MAG_FILTER", "GL_NEAREST"), ("GL_TEXTURE_MIN_FILTER", "GL_NEAREST"),
+                         ("GL_TEXTURE_WRAP_S", "GL_CLAMP_TO_BORDER")):
+        c.add("glSamplerParameteriv", sampler=8, pname=pname, param=[value])
+    c.add("glSamplerParameterfv", sampler=8, pname="GL_TEXTURE_BORDER_COLOR", param=[3.0, 1.0, 0.0, 0.0])
+    assert convert(tmp_path, draw(c), "sampler_v") == moved(tmp_path, 3, 1)
+
+
 @pytest.mark.parametrize("bias, core, want", [(None, False, (0, 0)), (1.0, False, (3, 1)), (0.0, False, (0, 0)),
                                              (1.0, True, (0, 0))], ids=["none", "one", "zero", "core"])
 def test_a_texture_unit_s_lod_bias_moves_a_vertex_shader_s_level(tmp_path, bias, core, want):
@@ -261,6 +275,23 @@ def test_a_texture_made_by_direct_state_access(tmp_path):
           type="GL_FLOAT", pixels=TEXELS[::-1])   # texture 8 does not exist: GL_INVALID_OPERATION
     c.add("glBindTextureUnit", unit=0, texture=3)
     assert convert(tmp_path, draw(c), "dsa") == moved(tmp_path, 6, 2)
+
+
+def test_a_created_texture_is_bound_after_a_later_glgentextures(tmp_path):
+    """A texture glCreateTextures made before the capture's first
+    glGenTextures is a name a core profile binds (round 31's R31-1: that
+    glGenTextures started the set of generated names without it, and every
+    later bind of the created texture did nothing)."""
+    c = shader_calls(VS_TEXEL % FETCH)
+    c.add("glCreateTextures", target="GL_TEXTURE_2D", n=1, textures=[3])
+    c.add("glTextureStorage2D", texture=3, levels=1, internalformat="GL_RGBA32F", width=2, height=1)
+    c.add("glTextureSubImage2D", texture=3, level=0, xoffset=0, yoffset=0, width=2, height=1, format="GL_RGBA",
+          type="GL_FLOAT", pixels=TEXELS)
+    for pname in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER"):
+        c.add("glTextureParameteri", texture=3, pname=pname, param="GL_NEAREST")
+    c.add("glGenTextures", n=1, textures=[4]).add("glBindTexture", target="GL_TEXTURE_2D", texture=4)
+    c.add("glBindTexture", target="GL_TEXTURE_2D", texture=3)
+    assert convert(tmp_path, draw(c), "created_first") == moved(tmp_path, 6, 2)
 
 
 @pytest.mark.parametrize("image", ["texture", "renderbuffer"])

@@ -103,15 +103,19 @@ def es_fragment_shader(vertex_source):
     return f"#version {version} es\nprecision mediump float;\nout vec4 c;\nvoid main() {{ c = vec4(0.0); }}\n"
 
 
-def check_client_data(conv, no, name, d, instances, client_indices, mp):
-    """What a draw reads from client memory must be in the capture: apitrace
-    records, for each client array and for client indices, the bytes the
-    draw reads. An indexed draw with no element array buffer bound and no
-    indices recorded (an offset, which would be an address), and data
-    shorter than the draw reads (a capture cut or altered, or apitrace's
-    blob of no bytes for an ES half-float array), are the capture's errors:
-    Mesa would read memory outside it."""
-    rows = None
+def check_vertex_data(conv, no, name, d, instances, client_indices, mp):
+    """What a draw reads must be data the capture holds: apitrace records,
+    for each client array and for client indices, the bytes the draw reads,
+    and a buffer object's data as the capture gave it. An indexed draw with
+    no element array buffer bound and no indices recorded (an offset, which
+    would be an address), and client data shorter than the draw reads (a
+    capture cut or altered, or apitrace's blob of no bytes for an ES
+    half-float array), are the capture's errors: Mesa would read memory
+    outside it. Indices, a first or instances that reach outside an
+    attribute's buffer object are refused too: GL leaves what they read
+    undefined, and Mesa 22.3's llvmpipe, which read zeros just past a
+    buffer's end, crashed far past it (round 31's R31-6)."""
+    lo = hi = None   # the vertices an indexed draw reads, basevertex added
     if "Elements" in name:
         kind = np.dtype(INDEX_TYPES[d["type"]])
         if client_indices is None:
@@ -119,41 +123,54 @@ def check_client_data(conv, no, name, d, instances, client_indices, mp):
             if not elem:
                 fail_call(no, f"{name}: no element array buffer is bound and the capture holds no indices "
                           f"(indices at address {d.get('indices') or 0})")
-            held = len(conv.s.buffers.get(elem) or b"")
-            if (d.get("indices") or 0) + d["count"] * kind.itemsize > held:
+            data = conv.checked_buffer(no, name, elem, "indices") or b""
+            start = d.get("indices") or 0
+            if start + d["count"] * kind.itemsize > len(data):
                 # GL leaves what they read undefined (round 16's R16-8: 2^22
                 # of them past a 12-byte buffer ran Mesa to 1.9 GB).
-                fail_call(no, f"{name}: {d['count']} indices from byte {d.get('indices') or 0} reach past element "
-                          f"buffer {elem}'s {held} bytes: not emulated")
+                fail_call(no, f"{name}: {d['count']} indices from byte {start} reach past element "
+                          f"buffer {elem}'s {len(data)} bytes: not emulated")
+            idx = np.frombuffer(data, dtype=kind, count=d["count"], offset=start)
         else:
             if len(client_indices) < d["count"] * kind.itemsize:
                 fail_call(no, f"{name}: the capture's indices are {len(client_indices)} bytes, the draw reads "
                           f"{d['count'] * kind.itemsize}")
-            idx = np.frombuffer(client_indices, dtype=kind, count=d["count"]).astype(np.int64)
-            if conv.s.restart_fixed:
-                idx = idx[idx != (1 << 8 * kind.itemsize) - 1]
-            elif conv.s.restart:
-                idx = idx[idx != conv.s.restart_index]
-            rows = int(idx.max()) + d.get("basevertex", 0) + 1 if len(idx) else 0
+            idx = np.frombuffer(client_indices, dtype=kind, count=d["count"])
+        if conv.s.restart_fixed:
+            idx = idx[idx != (1 << 8 * kind.itemsize) - 1]
+        elif conv.s.restart:
+            idx = idx[idx != conv.s.restart_index]
+        if len(idx):
+            lo, hi = int(idx.min()) + d.get("basevertex", 0), int(idx.max()) + d.get("basevertex", 0)
+            if lo < 0:
+                fail_call(no, f"{name}: index {int(idx.min())} with base vertex {d.get('basevertex', 0)} reads "
+                          "before every attribute's data: not emulated")
     vao = conv.current_vao()
     sources = vao.sources()
     if mp.reads_vertex and conv.s.vertex_array_enabled and not (0 in vao.attribs and vao.attribs[0].enabled):
         sources.append(("0 (the vertex array)",) + fixed_source(conv.s.vertex_array))
     for i, at, b in sources:
-        if not at.enabled or b.buffer or b.client is None:
-            continue
+        held = b.client if not b.buffer else conv.s.buffers.get(b.buffer)
+        if not at.enabled or held is None:
+            continue   # (a buffer that holds no data is refused where Mesa is given it)
         if b.divisor:
             n = d.get("baseinstance", 0) + (instances - 1) // b.divisor + 1
         elif "Elements" in name:
-            if rows is None:
-                continue   # indices in a buffer object: the blob is what apitrace found they read
-            n = rows
+            n = hi + 1 if hi is not None else 0
         else:
             n = d.get("first", 0) + d["count"]
-        need = at.relative + (n - 1) * b.stride + element_bytes(at.size, at.type) if n > 0 else 0
-        if len(b.client) < need:
-            fail_call(no, f"{name}: attribute {i}'s client array in the capture is {len(b.client)} bytes, "
+        # (client memory: from the array's start, offset 0 or relative)
+        need = (b.offset if b.buffer else 0) + at.relative + (n - 1) * b.stride + element_bytes(at.size, at.type) \
+            if n > 0 else 0
+        if len(held) >= need:
+            continue
+        if not b.buffer:
+            fail_call(no, f"{name}: attribute {i}'s client array in the capture is {len(held)} bytes, "
                       f"the draw reads {need}")
+        what = f"index {hi - d.get('basevertex', 0)}" if "Elements" in name and not b.divisor else \
+            f"instance {n - 1}" if b.divisor else f"vertex {n - 1}"
+        fail_call(no, f"{name}: {what} reads attribute {i} past buffer {b.buffer}'s {len(held)} bytes "
+                  f"({need} read): not emulated")
 
 
 def fixed_source(arr):
@@ -202,6 +219,7 @@ class MesaProgram:
     def __init__(self, name, version):
         self.name, self.version = name, version
         self.locations = {}   # active uniform name (and name[i]) -> Mesa location
+        self.uniform_of = {}  # Mesa location -> the active uniform (its index) whose storage it names
         self.applied = {}     # Program.uniforms key -> the value last given Mesa
         self.texture_locations = []   # Mesa locations of its samplers (each element of an array), with targets
         self.image_locations = []     # the same of its images
@@ -354,18 +372,21 @@ class VertexStage:
         from OpenGL.error import GLError
         for key, value in p.uniforms.items():
             if mp.applied.get(key) != value:
-                loc = key[0]
                 mp.applied[key] = value
+                mloc = self.mesa_location(mp, p, key[0])
+                if mloc < 0:
+                    continue   # not read by the vertex stage
                 try:
-                    self.set_uniform(mp, p, loc, value)
+                    self.set_uniform(mloc, value)
                 except GLError:
                     continue   # GL_INVALID_OPERATION (a type or count its uniform lacks): the call did nothing
                 # Another form at this location, or an array and its elements
-                # (they share storage): what was set through them is no
-                # longer what Mesa holds.
-                base = p.uniform_names.get(loc, "").split("[")[0]
+                # (they share storage, whether the capture named them or
+                # gave their locations in the shader): what was set through
+                # them is no longer what Mesa holds.
+                storage = mp.uniform_of.get(mloc)
                 for other in [o for o in mp.applied if o != key and (
-                        o[0] == loc or base and p.uniform_names.get(o[0], "").split("[")[0] == base)]:
+                        o[0] == key[0] or mp.uniform_of.get(self.mesa_location(mp, p, o[0])) == storage)]:
                     del mp.applied[other]
         for idx, binding in p.block_bindings.items():
             block = p.block_names.get(idx)
@@ -674,6 +695,7 @@ class VertexStage:
             for k in range(1, size):
                 mp.locations[f"{base}[{k}]"] = GL.glGetUniformLocation(prog, f"{base}[{k}]")
             elements = [loc] + [mp.locations[f"{base}[{k}]"] for k in range(1, size)]   # (an array's each)
+            mp.uniform_of.update((at, i) for at in elements if at >= 0)
             if int(utype) in self.sampler_targets:
                 mp.texture_locations += [(at, self.sampler_targets[int(utype)]) for at in elements]
             elif int(utype) in self.buffer_sampler_types:
@@ -682,16 +704,18 @@ class VertexStage:
                 mp.image_locations += elements
         return mp
 
-    def set_uniform(self, mp, p, loc, value):
-        GL = self.gl
-        func, values, transpose, kind, count = value
+    @staticmethod
+    def mesa_location(mp, p, loc):
+        """The location in Mesa's program of the capture's location `loc`
+        of program p (-1: not read by the vertex stage)."""
         name = p.uniform_names.get(loc)
         if name is not None:
-            mloc = mp.locations.get(name, mp.locations.get(name.removesuffix("[0]"), -1))
-        else:
-            mloc = loc if loc in mp.locations.values() else -1   # an explicit location
-        if mloc < 0:
-            return   # not read by the vertex stage
+            return mp.locations.get(name, mp.locations.get(name.removesuffix("[0]"), -1))
+        return loc if loc in mp.uniform_of else -1   # an explicit location
+
+    def set_uniform(self, mloc, value):
+        GL = self.gl
+        func, values, transpose, kind, count = value
         fn = getattr(GL, func)
         if count is None:
             fn(mloc, *values)
@@ -946,7 +970,7 @@ class VertexStage:
                 # gl_DrawID is 0.
                 fail_call(no, f"{printable(conv.multi_draw_name)}: its draw {conv.multi_draw_index}, whose vertex "
                           "shader reads gl_DrawID: not emulated")
-            check_client_data(conv, no, name, d, instances, client_indices, mp)
+            check_vertex_data(conv, no, name, d, instances, client_indices, mp)
         clip = self.positions(conv, no, name, checks, client_indices,
                               lambda: self.issue(name, d, client_indices is not None), prims, pname, p)
         # Every instance has the same primitives (primitive restart cuts them
@@ -968,7 +992,7 @@ class VertexStage:
             if mp.reads_draw_id and not whole:
                 raise RunAlone()
             for single, d in draws:
-                check_client_data(conv, no, single, d, d["instancecount"], None, mp)
+                check_vertex_data(conv, no, single, d, d["instancecount"], None, mp)
 
         def issue():
             GL = self.gl

@@ -88,7 +88,9 @@ ARGUMENTS = {
 } | {n: ("target", "pname", "param") for n in ("glTexParameteri", "glTexParameterf")} \
   | {n: ("target", "pname", "params") for n in PARAMETER_CALLS if n.endswith("v")} \
   | {n: ("sampler", "pname", "param") for n in ("glSamplerParameteri", "glSamplerParameterf")} \
-  | {n: ("sampler", "pname", "params") for n in SAMPLER_PARAMETER_CALLS if n.endswith("v")}
+  | {n: ("sampler", "pname", "param") for n in SAMPLER_PARAMETER_CALLS if n.endswith("v")}
+# (apitrace names glTexParameter*v's values params, glSamplerParameter*v's
+# param.)
 ENUM_ARGUMENTS = {"target", "internalformat", "format", "type", "pname"}
 
 
@@ -403,7 +405,9 @@ class VertexTextures:
         state = [call for calls in params.values() for call in calls]
         for _, d in state:
             pname = d.get("pname")
-            if pname in ANISOTROPY and not (isinstance(d.get("param"), (int, float)) and d["param"] <= 1):
+            value = d.get("param")
+            value = value[0] if isinstance(value, list) and len(value) == 1 else value   # (a *v form's)
+            if pname in ANISOTROPY and not (isinstance(value, (int, float)) and value <= 1):
                 # Measured: the draw kills Mesa's llvmpipe with SIGSEGV (the
                 # capture's own program died there too).
                 fail_call(self.no, f"{self.draw}: sampler {sampler}, bound where its vertex shader reads, filters "
@@ -441,7 +445,7 @@ class VertexTextures:
                 args.append(v)
             elif key in ("pixels", "data"):
                 args.append(self.pixels(what, name, d, unpack, v, keep))
-            elif key == "params":
+            elif key == "params" or key == "param" and name.endswith("v"):
                 if not isinstance(v, list) or not v or len(v) > 4:
                     fail_call(no, f"{what}: parameter values that are not a list of one to four numbers")
                 kind = np.float32 if name.endswith("fv") else np.uint32 if name.endswith("uiv") else np.int32

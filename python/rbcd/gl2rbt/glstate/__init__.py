@@ -317,6 +317,14 @@ def clamped01(v, no, what):
     return min(1.0, max(0.0, number(v, no, what)))
 
 
+def parameter_value(d):
+    """A parameter call's value, a vector form's first (apitrace names
+    glTexParameter*v's values `params`, glSamplerParameter*v's `param`);
+    None for an empty list."""
+    v = d.get("param", d.get("params"))
+    return (v[0] if v else None) if isinstance(v, list) else v
+
+
 def number(v, no, what):
     """A finite number from the capture (GL leaves infinities and NaN in
     most calls' results unspecified: refused, naming the call)."""

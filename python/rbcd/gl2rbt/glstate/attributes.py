@@ -86,7 +86,10 @@ class Binding:
 
 def element_bytes(size, kind):
     """Bytes of one element of an attribute of `size` components of `kind`
-    (GL_BGRA: four)."""
+    (GL_BGRA: four; a packed type's element is one 32-bit word, whatever its
+    size)."""
+    if kind in PACKED_ATTRIB_TYPES or kind == "GL_UNSIGNED_INT_10F_11F_11F_REV":
+        return 4
     return (4 if size == "GL_BGRA" else size) * ATTRIB_SIZES.get(kind, 4)
 
 

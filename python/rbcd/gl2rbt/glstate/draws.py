@@ -417,12 +417,19 @@ class DrawCalls:
             self.depth_tested(no, name)
         for i, clip in enumerate(clips):
             # A primitive with a vertex at NaN or infinity is not drawn (GL
-            # leaves its rasterization undefined; Mesa's clipper drops it).
-            # Nor is one whose three vertices have w = 0: the clip volume
-            # meets the plane w = 0 only at its origin (gl_Position =
-            # vec4(0.0), a common way to cull a vertex, draws nothing).
-            good = np.isfinite(clip).all(axis=1).reshape(-1, 3).all(axis=1) & \
-                (clip[:, 3] != 0).reshape(-1, 3).any(axis=1)
+            # leaves its rasterization undefined; Mesa's clipper, or its
+            # triangle setup, drops it). Nor is one whose three vertices
+            # have w = 0: the clip volume meets the plane w = 0 only at its
+            # origin (gl_Position = vec4(0.0), a common way to cull a
+            # vertex, draws nothing).
+            finite = np.isfinite(clip)
+            if (finite[:, :3].all(axis=1) & (clip[:, 3] == np.inf)).any():
+                # Inside every clip plane, at the viewport's centre once
+                # divided: Mesa draws it where its primitive needs no
+                # clipping, and drops it otherwise (round 31's R31-5).
+                fail_call(no, f"{name}: a vertex at w = +infinity with finite x, y and z (Mesa draws or drops its "
+                          "primitive as its clipping decides): not emulated")
+            good = finite.all(axis=1).reshape(-1, 3).all(axis=1) & (clip[:, 3] != 0).reshape(-1, 3).any(axis=1)
             tris = np.arange(len(clip), dtype=np.uint32).reshape(-1, 3)[good]
             if len(tris) == 0:
                 continue

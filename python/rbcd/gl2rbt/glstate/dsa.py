@@ -117,12 +117,13 @@ class DirectStateCalls:
         target = d.get("target")
         if not isinstance(target, str) or not target.startswith("GL_TEXTURE"):
             return   # GL_INVALID_ENUM
+        if self.s.texture_names is None:
+            self.s.texture_names = set()   # (as glGenTextures's first call makes it)
         for tex in names:
             tex = checked(no, integer, tex, f"{name}: a texture", *U32)
             if tex:
                 self.s.texture_targets[tex] = target
-                if self.s.texture_names is not None:
-                    self.s.texture_names.add(tex)
+                self.s.texture_names.add(tex)
 
     def h_texture_image_ext(self, no, name, a, args):
         """glTextureImage1D/2D/3DEXT (EXT_direct_state_access, compatibility

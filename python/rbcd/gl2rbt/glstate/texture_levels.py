@@ -22,6 +22,7 @@ import math
 import re
 
 from ..gl_tables import base_name
+from . import parameter_value
 from .texture_formats import (COMPRESSED_BLOCKS, KIND_PIXELS, MAX_LEVEL, MAX_SIZE, UNSIZED, certain_level,
                               certain_mipmaps, compressed_size, kind_of, level_size_fits, pixels_fit, refused_level,
                               whole)
@@ -355,9 +356,7 @@ class TextureLevelCalls:
         if not tex:
             return
         tl = self.texture_levels(tex, target)
-        value = d.get("param", d.get("params"))
-        if isinstance(value, list) and value:
-            value = value[0]
+        value = parameter_value(d)
         if isinstance(value, float) and value.is_integer():
             value = int(value)
         if self.es or not whole(value) or not -(1 << 31) <= value < 1 << 31:

@@ -26,7 +26,7 @@ import math
 from ...cli import I32, U32, U63, integer
 from ..errors import ToolError, checked, fail_call, printable
 from ..gl_tables import base_name
-from . import gl_boolean, number
+from . import gl_boolean, number, parameter_value
 from .framebuffers import MAX_TEXTURE_UNITS, FramebufferCalls
 from .texture_formats import (FORMAT_COMPONENTS, IMAGE_FORMATS, MAX_LEVEL, PACKED_BYTES, TYPE_BYTES, certain_level,
                               certain_mipmaps, certain_part, certain_storage, level_size_fits, refused_level,
@@ -104,14 +104,14 @@ def compat_only(d):
     if isinstance(v, str) and (any(w in v for w in COMPAT_TEXTURE_WORDS) or v.startswith("GL_ALPHA")) \
             or isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= 4:   # the legacy component counts
         return True
-    return d.get("pname") in COMPAT_TEXTURE_PARAMETERS or d.get("param") == "GL_CLAMP" or \
-        isinstance(d.get("params"), list) and "GL_CLAMP" in d["params"]
+    return d.get("pname") in COMPAT_TEXTURE_PARAMETERS or parameter_value(d) == "GL_CLAMP"
 
 
 def parameter_certain(name, d):
     """Whether GL certainly takes a texture or sampler parameter call (a
     known parameter's value of the tables)."""
-    return d.get("param", (d.get("params") or [None])[0]) in PARAMETER_VALUES.get(d.get("pname"), ())
+    v = parameter_value(d)
+    return isinstance(v, (str, int, float)) and v in PARAMETER_VALUES.get(d.get("pname"), ())
 
 
 def pixel_transfer_default(pname):
@@ -689,11 +689,7 @@ class TextureImageCalls:
         d = dict(args)
         if d.get("target") != "GL_TEXTURE_FILTER_CONTROL" or d.get("pname") != "GL_TEXTURE_LOD_BIAS":
             return
-        value = d.get("param", d.get("params"))
-        if isinstance(value, list):
-            if not value:
-                fail_call(no, f"{printable(name)}: no value")
-            value = value[0]
+        value = parameter_value(d)
         if base_name(name).endswith(("x", "xv")):
             value = number(value, no, f"{printable(name)}: the bias") / 65536.0
         bias = number(value, no, f"{printable(name)}: the bias")
