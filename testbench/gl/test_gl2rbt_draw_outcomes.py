@@ -1096,6 +1096,39 @@ def test_an_array_element_set_through_its_own_explicit_location(tmp_path, use_ag
     assert trace(tmp_path, capture(True), "element") == want
 
 
+VS_COLOUR_FIRST = ("#version 330 core\nin vec3 p;\nuniform vec4 acol;\nuniform vec2 off;\nout vec4 vc;\n"
+                   "void main() { vc = acol; gl_Position = vec4((p.x + off.x) / 32.0 - 1.0, "
+                   "(p.y + off.y) / 24.0 - 1.0, 0.0, 1.0); }\n")
+FS_COLOUR = "#version 330 core\nin vec4 vc;\nout vec4 c;\nvoid main() { c = vc; }\n"
+
+
+@pytest.mark.parametrize("how", ["named", "unnamed", "relinked"])
+def test_a_location_the_capture_did_not_ask_of_the_program(tmp_path, how):
+    """Mesa's link of the whole program numbers acol 0 and off 1 (acol feeds
+    the fragment stage); the vertex stage linked alone drops acol. A
+    glUniform2f at location 1 the capture never asked of this program (a
+    twin program's, glGetProgramResourceiv's, or asked before a relink of
+    the same sources) moves the triangle as the named one does (round 32's
+    R32-1: taken as location 1 of the vertex stage alone, which has none:
+    the triangle drawn unmoved, or collapsed)."""
+    def capture(how):
+        c = shader_calls(VS_COLOUR_FIRST)
+        c.add("glCreateShader", type="GL_FRAGMENT_SHADER", ret=3)
+        c.add("glShaderSource", shader=3, count=1, string=[FS_COLOUR], length=None)
+        c.add("glCompileShader", shader=3).add("glAttachShader", program=2, shader=3)
+        c.add("glLinkProgram", program=2).add("glUseProgram", program=2)
+        if how in ("named", "relinked"):
+            c.add("glGetUniformLocation", program=2, name="off", ret=1)
+        if how == "relinked":
+            c.add("glLinkProgram", program=2)
+        if how != "unmoved":
+            c.add("glUniform2f", location=1, v0=6.0, v1=2.0)
+        return draw(c)
+    want = trace(tmp_path, capture("named"), "named")
+    assert want != trace(tmp_path, capture("unmoved"), "unmoved")
+    assert trace(tmp_path, capture(how), how) == want
+
+
 @pytest.mark.parametrize("share", [1, 0], ids=["shared", "unshared"])
 def test_a_second_context_s_state_is_its_own(tmp_path, share):
     """A second context (a loader's) that binds, sets the viewport and uses

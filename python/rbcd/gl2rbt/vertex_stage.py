@@ -220,6 +220,7 @@ class MesaProgram:
         self.name, self.version = name, version
         self.locations = {}   # active uniform name (and name[i]) -> Mesa location
         self.uniform_of = {}  # Mesa location -> the active uniform (its index) whose storage it names
+        self.mapped = {}      # (capture location, the name the capture asked it of) -> Mesa location (mesa_location)
         self.applied = {}     # Program.uniforms key -> the value last given Mesa
         self.texture_locations = []   # Mesa locations of its samplers (each element of an array), with targets
         self.image_locations = []     # the same of its images
@@ -417,8 +418,8 @@ class VertexStage:
     def full_link(self, p):
         """Mesa's link of the program as its last link saw it, every stage
         that draws: whether it links, its active uniform blocks' names by
-        index, and the binding points its transform feedback records
-        into."""
+        index, the binding points its transform feedback records into, and
+        the name at each location of its default-block uniforms."""
         key = (p.digest, tuple(sorted(p.linked[1].items())), p.separable, p.feedback)
         if key not in self.link_status:
             GL = self.gl
@@ -426,8 +427,23 @@ class VertexStage:
                 ok = prog is not None
                 blocks = [block_name(GL, prog, i) for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORM_BLOCKS))] \
                     if ok else []
-                self.link_status[key] = (ok, blocks, self.linked_feedback_bindings(prog) if ok else frozenset())
+                self.link_status[key] = (ok, blocks, self.linked_feedback_bindings(prog) if ok else frozenset(),
+                                         self.location_names(prog) if ok else {})
         return self.link_status[key]
+
+    def location_names(self, prog):
+        """Location -> name of each default-block uniform of Mesa's program
+        `prog`, every element of an array ("a[0]", "a[1]", ...)."""
+        GL, out = self.gl, {}
+        for i in range(GL.glGetProgramiv(prog, GL.GL_ACTIVE_UNIFORMS)):
+            uname, size, _ = GL.glGetActiveUniform(prog, i)
+            uname = name_str(uname)
+            base = uname[:-3] if uname.endswith("[0]") else uname
+            for each in [uname] + [f"{base}[{k}]" for k in range(1, size)]:
+                loc = GL.glGetUniformLocation(prog, each)
+                if loc >= 0:
+                    out[loc] = each
+        return out
 
     @contextlib.contextmanager
     def whole_program(self, p, stages=LINKED_STAGES):
@@ -704,14 +720,24 @@ class VertexStage:
                 mp.image_locations += elements
         return mp
 
-    @staticmethod
-    def mesa_location(mp, p, loc):
+    def mesa_location(self, mp, p, loc):
         """The location in Mesa's program of the capture's location `loc`
-        of program p (-1: not read by the vertex stage)."""
+        of program p (-1: not read by the vertex stage): that of the name
+        the capture asked it of, or else of the name at `loc` in Mesa's
+        link of the whole program, which numbers the uniforms as the
+        capture's did (a location asked of a twin program or before a
+        relink of the same sources, read by glGetProgramResourceiv, or
+        given in the shader: round 32's R32-1). The vertex stage linked
+        alone numbers them otherwise: it drops those only later stages
+        read."""
         name = p.uniform_names.get(loc)
-        if name is not None:
-            return mp.locations.get(name, mp.locations.get(name.removesuffix("[0]"), -1))
-        return loc if loc in mp.uniform_of else -1   # an explicit location
+        key = (loc, name)
+        if key not in mp.mapped:
+            if name is None:
+                names = self.full_link(p)[3]
+                name = names.get(loc) if names else next((n for n, at in mp.locations.items() if at == loc), None)
+            mp.mapped[key] = -1 if name is None else mp.locations.get(name, mp.locations.get(name.removesuffix("[0]"), -1))
+        return mp.mapped[key]
 
     def set_uniform(self, mloc, value):
         GL = self.gl
