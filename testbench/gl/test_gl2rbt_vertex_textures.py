@@ -260,17 +260,24 @@ def test_a_texture_rewritten_every_frame_keeps_what_it_holds(tmp_path):
 
 # ---- direct state access (GL 4.5) on textures, framebuffers, renderbuffers
 
-def test_a_texture_made_by_direct_state_access(tmp_path):
-    """glCreateTextures, glTextureStorage2D, glTextureSubImage2D and
-    glTextureParameteri, bound with glBindTextureUnit: the image of
-    glTexImage2D; the same calls on a name that is no texture do nothing."""
-    c = shader_calls(VS_TEXEL % FETCH)
+def created_texture_3(c):
+    """Texture 3 made by glCreateTextures, its storage, texels and filters
+    given by name."""
     c.add("glCreateTextures", target="GL_TEXTURE_2D", n=1, textures=[3])
     c.add("glTextureStorage2D", texture=3, levels=1, internalformat="GL_RGBA32F", width=2, height=1)
     c.add("glTextureSubImage2D", texture=3, level=0, xoffset=0, yoffset=0, width=2, height=1, format="GL_RGBA",
           type="GL_FLOAT", pixels=TEXELS)
     for pname in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER"):
         c.add("glTextureParameteri", texture=3, pname=pname, param="GL_NEAREST")
+    return c
+
+
+def test_a_texture_made_by_direct_state_access(tmp_path):
+    """glCreateTextures, glTextureStorage2D, glTextureSubImage2D and
+    glTextureParameteri, bound with glBindTextureUnit: the image of
+    glTexImage2D; the same calls on a name that is no texture do nothing."""
+    c = shader_calls(VS_TEXEL % FETCH)
+    created_texture_3(c)
     c.add("glTextureSubImage2D", texture=8, level=0, xoffset=0, yoffset=0, width=2, height=1, format="GL_RGBA",
           type="GL_FLOAT", pixels=TEXELS[::-1])   # texture 8 does not exist: GL_INVALID_OPERATION
     c.add("glBindTextureUnit", unit=0, texture=3)
@@ -283,12 +290,7 @@ def test_a_created_texture_is_bound_after_a_later_glgentextures(tmp_path):
     glGenTextures started the set of generated names without it, and every
     later bind of the created texture did nothing)."""
     c = shader_calls(VS_TEXEL % FETCH)
-    c.add("glCreateTextures", target="GL_TEXTURE_2D", n=1, textures=[3])
-    c.add("glTextureStorage2D", texture=3, levels=1, internalformat="GL_RGBA32F", width=2, height=1)
-    c.add("glTextureSubImage2D", texture=3, level=0, xoffset=0, yoffset=0, width=2, height=1, format="GL_RGBA",
-          type="GL_FLOAT", pixels=TEXELS)
-    for pname in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER"):
-        c.add("glTextureParameteri", texture=3, pname=pname, param="GL_NEAREST")
+    created_texture_3(c)
     c.add("glGenTextures", n=1, textures=[4]).add("glBindTexture", target="GL_TEXTURE_2D", texture=4)
     c.add("glBindTexture", target="GL_TEXTURE_2D", texture=3)
     assert convert(tmp_path, draw(c), "created_first") == moved(tmp_path, 6, 2)
