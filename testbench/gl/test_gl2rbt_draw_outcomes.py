@@ -12,6 +12,7 @@ import re
 import signal
 import subprocess
 import struct
+import sys
 import time
 
 import pytest
@@ -1199,6 +1200,43 @@ def test_one_thread_says_how_the_run_ended(capsys):
     finally:
         LAST_WORD.release()
     assert capsys.readouterr().err == ""
+
+
+WATCHED = """import sys, time, types
+from rbcd.gl2rbt import mesa
+mesa.MESA_SECONDS, mesa.MESA_WALL_SECONDS = 0.5, int(sys.argv[1])
+dog = mesa.Watchdog(types.SimpleNamespace(args=types.SimpleNamespace(trace="x.trace")))
+with dog.on("call 5: glDrawArrays"):
+    with dog.aside():
+        time.sleep(1.5)
+    time.sleep(0.3)
+print("aside", flush=True)
+with dog.on("call 7: glDrawArrays"):
+    time.sleep(2)
+print("waited", flush=True)
+with dog.on("call 9: glDrawArrays"):
+    while True:
+        pass
+"""
+
+
+@pytest.mark.parametrize("wall, out, words", [
+    (60, "aside\nwaited\n", "call 9: glDrawArrays: Mesa worked on it for more than 0.5 s of processor time"),
+    (1, "aside\n", "call 7: glDrawArrays: Mesa took more than 1 s on it"),
+], ids=["processor", "wall"])
+def test_the_watchdog_bounds_mesa_s_processor_time(wall, out, words):
+    """Mesa's work for a draw is bounded by the processor time the process
+    spends on it, which a busy machine does not stretch (a draw of 3 s had
+    been refused at 30 s of wall-clock time beside other work): 2 s waiting
+    under a 0.5 s bound pass, computing is stopped; the wall clock bounds
+    work that waits (MESA_WALL_SECONDS). A wait set aside (Mesa's replay
+    reaching a call to read textures back, bounded by --check-timeout) is
+    not counted: it had been refused at 30 s whatever --check-timeout said."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    r = subprocess.run([sys.executable, "-c", WATCHED, str(wall)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                       text=True, env=env, timeout=60)
+    assert (r.returncode, r.stdout) == (2, out), (r.returncode, r.stdout, r.stderr)
+    assert r.stderr.splitlines() == [f"rbcd-gl2rbt: x.trace: {words} (docs/gl-capture.md, limits)"], r.stderr
 
 
 def test_a_signal_ctypes_wraps_is_an_interruption(tmp_path, monkeypatch, capsys):

@@ -1,8 +1,10 @@
 """A draw's shading cost from its fragment shader as Mesa compiles it
 (rbcd.gl2rbt.shading; docs/gpu-model.md, "Shading cost")."""
 import os
+import signal
 import subprocess
 import sys
+import threading
 import time
 
 import pytest
@@ -126,6 +128,44 @@ def test_the_childs_work_for_a_program_is_bounded(monkeypatch, bound, value, wor
         assert costs.child is None and not alive(child)
     finally:
         costs.close()
+
+
+def signal_if_alive(pid, sig):
+    try:
+        os.kill(pid, sig)
+    except ProcessLookupError:
+        pass
+
+
+@pytest.mark.parametrize("wall, words", [(60, None), (1, "Mesa took more than 1 s on it")], ids=["cpu", "wall"])
+def test_the_childs_time_is_its_processor_time(monkeypatch, wall, words):
+    """A busy machine does not stretch the child's bound: its processor
+    time is measured, not the wall clock's (held stopped for 2.5 s, the
+    child used none: under a 1 s bound the program's cost still comes
+    back; a wall-clock bound had refused good captures beside other work),
+    and the wall clock bounds a child that waits (CHILD_WALL_SECONDS)."""
+    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl installs it)")
+    costs, resume = ShadingCosts(), None
+    try:
+        if costs.shade_of("one", {"vertex": VS, "fragment": ONE}) is None:
+            pytest.skip("Mesa's surfaceless EGL gives no context here (scripts/setup.sh --gl)")
+        monkeypatch.setattr(shading, "CHILD_SECONDS", 1)
+        monkeypatch.setattr(shading, "CHILD_WALL_SECONDS", wall)
+        child = costs.child.pid
+        os.kill(child, signal.SIGSTOP)
+        resume = threading.Timer(2.5, signal_if_alive, (child, signal.SIGCONT))
+        resume.start()
+        other = ONE.replace("c = ", "c = 0.5 * ")
+        if words is None:
+            assert costs.shade_of("two", {"vertex": VS, "fragment": other}) > 0
+        else:
+            with pytest.raises(ConvertError) as e:
+                costs.shade_of("5e1fc0de" * 8, {"vertex": VS, "fragment": other})
+            assert words in str(e.value), e.value
+    finally:
+        costs.close()
+        if resume is not None:
+            resume.join()
 
 
 PARENT = """import os, sys, threading

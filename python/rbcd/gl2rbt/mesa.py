@@ -11,6 +11,7 @@ and the rasterizer discarded: Mesa runs the capture's own shaders on the
 captured buffers, uniforms and textures, and hands back each primitive's
 clip-space positions, assembled as GL assembles them (strips, fans,
 primitive restart, base vertex, instances in order)."""
+import contextlib
 import ctypes
 import glob
 import os
@@ -96,9 +97,24 @@ def _load():
 # at 1.9 GB), and a signal's handler waits until Mesa returns: a watchdog
 # thread bounds both. The memory Mesa takes for a draw, buffers apart
 # (uploaded before it), is the JIT's and the fed-back positions' (48 bytes
-# a triangle, 2^22 triangles at most: 192 MiB).
+# a triangle, 2^22 triangles at most: 192 MiB). The time is the processor
+# time the process spent meanwhile (every thread: Mesa's own and llvmpipe's),
+# which a busy machine does not stretch (a 3 s draw had been refused at 30 s
+# of wall-clock time beside other work, load 4 on 2 processors); the wall
+# clock bounds work that waits rather than computes, at ten times that.
 MESA_SECONDS = 30
+MESA_WALL_SECONDS = 300
 MESA_GROWTH = 1 << 30
+
+
+def over_time(wall0, cpu0, wall, cpu, cpu_bound, wall_bound):
+    """Why a piece of Mesa's work that started at (wall0, cpu0) and is at
+    (wall, cpu) is out of bounds, or None."""
+    if cpu - cpu0 > cpu_bound:
+        return f"Mesa worked on it for more than {cpu_bound} s of processor time"
+    if wall - wall0 > wall_bound:
+        return f"Mesa took more than {wall_bound} s on it"
+    return None
 
 
 def resident_bytes():
@@ -109,8 +125,9 @@ def resident_bytes():
 class Watchdog:
     """One thread for the run: while the main thread is in Mesa's work
     (`with watchdog.on(what, grows=...)`: a draw, a link), it checks every
-    0.1 s the time that work took and, for `grows`, the resident memory it
-    added. Past MESA_SECONDS or MESA_GROWTH it says so in one line naming
+    0.1 s the time that work took (processor and wall-clock) and, for
+    `grows`, the resident memory it added. Past MESA_SECONDS,
+    MESA_WALL_SECONDS or MESA_GROWTH it says so in one line naming
     the capture and `what`, removes the run's temporaries and outputs,
     closes the rasterizer's input (which then removes what it was writing)
     and ends the process, exit status 2: the capture asks for work out of
@@ -118,8 +135,9 @@ class Watchdog:
 
     def __init__(self, conv):
         self.conv = conv   # the converter: the capture's path, and its rasterizer once started
-        self.work = None   # (what, start time, resident bytes at the start or None)
+        self.work = None   # (what, work clocks at the start, resident bytes then or None)
         self.lock = threading.Lock()
+        self.set_aside = [0.0, 0.0]   # the wall-clock and processor time spent aside in the run
         # A signal's number is written here by Python's own handler at once:
         # SIGINT, SIGTERM or SIGHUP while Mesa works ends the run from this
         # thread (the main thread's handler would wait until Mesa returns).
@@ -134,6 +152,27 @@ class Watchdog:
     def on(self, what, grows=False):
         return _Work(self, what, grows)
 
+    def clocks(self):
+        """The wall-clock and processor time of Mesa's work: the process's,
+        less what was spent aside."""
+        return time.monotonic() - self.set_aside[0], time.process_time() - self.set_aside[1]
+
+    @contextlib.contextmanager
+    def aside(self):
+        """A wait within Mesa's work that is not Mesa's work (Mesa's replay
+        reaching a call to read textures back, bounded by --check-timeout):
+        not counted, signals taken by the main thread's handler."""
+        with self.lock:
+            work, self.work = self.work, None
+        t, c = time.monotonic(), time.process_time()
+        try:
+            yield
+        finally:
+            with self.lock:
+                self.set_aside[0] += time.monotonic() - t
+                self.set_aside[1] += time.process_time() - c
+                self.work = work
+
     def watch(self):
         while True:
             ready = select.select([self.signals], [], [], 0.1)[0]
@@ -144,9 +183,10 @@ class Watchdog:
                 continue
             if any(n in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP) for n in got):
                 self.end(f"{printable(self.conv.args.trace)}: interrupted", 130)
-            what, t0, rss0 = work
-            if time.monotonic() - t0 > MESA_SECONDS:
-                self.expire(what, f"Mesa worked on it for more than {MESA_SECONDS} s")
+            what, t0, cpu0, rss0 = work
+            why = over_time(t0, cpu0, *self.clocks(), MESA_SECONDS, MESA_WALL_SECONDS)
+            if why:
+                self.expire(what, why)
             if rss0 is not None and resident_bytes() - rss0 > MESA_GROWTH:
                 self.expire(what, f"Mesa took more than {MESA_GROWTH >> 20} MiB of memory for it")
 
@@ -175,8 +215,8 @@ class _Work:
     def __enter__(self):
         with self.dog.lock:
             self.outer = self.dog.work
-            self.dog.work = (self.what, time.monotonic() if self.outer is None else self.outer[1],
-                             resident_bytes() if self.grows else None)
+            start = self.dog.clocks() if self.outer is None else self.outer[1:3]
+            self.dog.work = (self.what, *start, resident_bytes() if self.grows else None)
 
     def __exit__(self, *exc):
         with self.dog.lock:

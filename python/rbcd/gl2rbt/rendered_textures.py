@@ -243,8 +243,8 @@ class RenderedTextures:
                 continue
             # Stopped from outside (SIGSTOP: in a session of its own, the
             # terminal's Ctrl-Z does not reach it) for STOPPED_SECONDS:
-            # the tool's failure, said before the watchdog's 30 s of Mesa
-            # work blame the capture.
+            # the tool's failure, not the capture's, said well before
+            # --check-timeout.
             stopped = stopped + 1 if self.stopped() else 0
             if stopped >= STOPPED_SECONDS:
                 raise ToolError(f"{self.trace}: {self.what}: Mesa's replay of the capture (glretrace), reading "

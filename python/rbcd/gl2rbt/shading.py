@@ -31,7 +31,7 @@ import sys
 import time
 
 from .errors import ConvertError
-from .mesa import MESA_GROWTH, MESA_SECONDS
+from .mesa import MESA_GROWTH, MESA_SECONDS, MESA_WALL_SECONDS, over_time
 
 REFERENCE_CYCLES = 8
 TEX_CYCLES = 4
@@ -49,8 +49,10 @@ INSTR = re.compile(r"^\s*vec\d+ \d+ ssa_\d+ = (?:\([a-z0-9]+\))?([a-z_0-9]+)\b")
 # The child's work for one program (Mesa compiling and linking it, and
 # printing it) is bounded as the main process's Mesa work is (mesa.Watchdog;
 # docs/gl-capture.md, limits): the time from the program sent to its status
-# read, and the resident memory the child added meanwhile, checked every 0.1 s.
+# read (the child's processor time, and the wall clock's at ten times it),
+# and the resident memory the child added meanwhile, checked every 0.1 s.
 CHILD_SECONDS = MESA_SECONDS
+CHILD_WALL_SECONDS = MESA_WALL_SECONDS
 CHILD_GROWTH = MESA_GROWTH
 # What of a line of Mesa's print is kept: an instruction's opcode comes first.
 LINE_KEPT = 4096
@@ -118,6 +120,16 @@ class FragmentCount:
     def result(self):
         counted = self.current if self.current is not None else self.last
         return None if counted is None else tuple(counted)
+
+
+def processor_seconds(pid):
+    """The processor time a process has spent, all its threads (0 once it is gone)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")   # utime, stime
+    except (OSError, ValueError, IndexError):
+        return 0.0
 
 
 def resident_bytes(pid):
@@ -189,7 +201,7 @@ class ShadingCosts:
         its standard output: that line, or None when the child is gone."""
         child = self.child
         fin, fout, ferr = child.stdin.fileno(), child.stdout.fileno(), child.stderr.fileno()
-        t0, rss0 = time.monotonic(), resident_bytes(child.pid)
+        t0, cpu0, rss0 = time.monotonic(), processor_seconds(child.pid), resident_bytes(child.pid)
         sent, out = 0, b""
         while b"\n" not in out or (count is not None and not count.ended):
             readers = [ferr] + ([fout] if b"\n" not in out else [])
@@ -212,8 +224,10 @@ class ShadingCosts:
                         return None
                 elif count is not None:
                     count.feed(data)
-            if time.monotonic() - t0 > CHILD_SECONDS:
-                self.fail(what, f"Mesa worked on it for more than {CHILD_SECONDS} s")
+            why = over_time(t0, cpu0, time.monotonic(), processor_seconds(child.pid), CHILD_SECONDS,
+                            CHILD_WALL_SECONDS)
+            if why:
+                self.fail(what, why)
             if resident_bytes(child.pid) - rss0 > CHILD_GROWTH:
                 self.fail(what, f"Mesa took more than {CHILD_GROWTH >> 20} MiB of memory for it")
         return out.split(b"\n", 1)[0]

@@ -247,7 +247,7 @@ class VertexStage:
         self.link_status = {}   # (sources' digest, attribute bindings) -> whether Mesa links them (links)
         self.vaos = {}       # capture vertex array -> Mesa vertex array
         self.textures = {}   # capture texture buffer -> Mesa texture
-        self.vertex_textures = VertexTextures(self.mesa)   # 2D textures and samplers
+        self.vertex_textures = VertexTextures(self.mesa, self.watchdog)   # 2D textures and samplers
         self.scratch = []    # client memory (attributes, indices) goes through these buffers
         self.indirect = None  # an indirect multi-draw's commands (run_indirect)
         self.mesa_bytes = 0  # the declared sizes of the buffers Mesa holds copies of

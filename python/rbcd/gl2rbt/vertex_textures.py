@@ -8,6 +8,7 @@ the texture as the capture's driver left it).
 Before a call is replayed, its pixels are checked to hold what GL reads for
 its size, format, type and unpack state (GL 4.5, 8.4.4.1): Mesa would read
 past them."""
+import contextlib
 import ctypes
 
 import numpy as np
@@ -95,8 +96,9 @@ ENUM_ARGUMENTS = {"target", "internalformat", "format", "type", "pname"}
 
 
 class VertexTextures:
-    def __init__(self, mesa):
+    def __init__(self, mesa, watchdog=None):
         self.mesa, self.gl = mesa, mesa.gl
+        self.watchdog = watchdog   # (mesa.Watchdog: the replay's read-back waits aside from Mesa's work)
         self.images = {}     # capture texture -> (Mesa texture, version replayed, bytes counted)
         self.image_bytes = 0
         self.samplers = {}   # capture sampler -> (Mesa sampler, parameters replayed)
@@ -146,7 +148,10 @@ class VertexTextures:
             if binding is not None and target != "GL_TEXTURE_BUFFER":
                 self.read(conv, IMAGE_UNIT_BASE + unit, binding[0], target, reads, ask)
             images.append((unit, binding, target))
-        got = conv.rendered_textures(no, name, ask) if ask else {}
+        got = {}
+        if ask:
+            with self.watchdog.aside() if self.watchdog is not None else contextlib.nullcontext():
+                got = conv.rendered_textures(no, name, ask)
         # Every texture made first (on the scratch unit), then each bound
         # where the draw reads it: making one must not replace another
         # already bound.
