@@ -1429,3 +1429,32 @@ def test_an_es_vertex_shader_with_a_comment_before_its_version():
         "#version 320 es\n")
     assert es_fragment_shader("// note\n#version 300 es\n").startswith("#version 300 es\n")
     assert es_fragment_shader("void main() {}\n").startswith("#version 100\n")
+
+
+def box_and_object(listing):
+    """The box and the object --list-draws shows for the frame's one draw."""
+    row = next(line for line in listing.splitlines() if "glDrawArrays" in line).split()
+    at = row.index("LESS") + 1   # the depth function, then the box
+    return tuple(int(v) for v in row[at:at + 4]), row[at + 4]
+
+
+@pytest.mark.parametrize("viewport, box", [
+    ((0, 0, 64, 48), (4, 8, 40, 44)),      # the whole screen
+    ((0, 0, 32, 24), (2, 28, 20, 46)),     # its bottom-left quarter: a quarter of the pixels
+    ((48, 0, 64, 48), (52, 8, 64, 44)),    # reaching past the screen's right edge: cut to it
+], ids=["screen", "quarter", "past"])
+def test_a_draw_s_screen_box_and_area_are_taken_through_the_viewport(tmp_path, viewport, box):
+    """--list-draws' box and the rules' screen_area are the pixels the draw
+    covers as GL maps it through the viewport (they had been mapped onto
+    the whole screen whatever the viewport: a draw into a quarter of it
+    reported four times its pixels, and min/max_screen_area misjudged it)."""
+    x, y, w, h = viewport
+    c = Calls().add("glViewport", x=x, y=y, width=w, height=h).triangle().swap()
+    cap = c.write(tmp_path / "v.xz")
+    area = (box[2] - box[0]) * (box[3] - box[1])
+    rules = tmp_path / "r.toml"
+    for bound, obj in ((area + 1, "3"), (area - 1, "-")):   # (float32 positions: within a pixel)
+        rules.write_text(f"[[object]]\nid = 3\nmax_screen_area = {bound}\n")
+        r = gl2rbt(tmp_path, cap, "--list-draws", "0", "--select", rules)
+        assert r.returncode == 0, r.stderr
+        assert box_and_object(r.stdout) == (box, obj), r.stdout

@@ -24,9 +24,7 @@ class ObjectCalls:
         if self.listing is None:
             return
         d = self.describe(no, mv, proj, nverts, clip)
-        w, h = self.screen
-        (x0, y0), (x1, y1) = d["box"]
-        box = (int((x0 + 1) * w / 2), int((1 - y1) * h / 2), int((x1 + 1) * w / 2), int((1 - y0) * h / 2))
+        box = tuple(round(v) for v in d["box"])
         self.listing.append({"index": len(self.listing), "call": no, "function": name, "vertices": nverts,
                              "texture": d["texture"], "texture_image": d["texture_image"],
                              "projection": d["projection"],
@@ -71,19 +69,31 @@ class ObjectCalls:
         are None for a draw under a program, whose projection is told from
         its clip-space w (all 1: orthographic)."""
         view = getattr(self, "frame_view", None)
-        w, h = self.screen
-        ndc = clip[:, 0:2] / np.maximum(np.abs(clip[:, 3:4]), 1e-30)
-        lo, hi = np.clip(ndc.min(axis=0), -1, 1), np.clip(ndc.max(axis=0), -1, 1)
-        area = float(max(0.0, hi[0] - lo[0]) * max(0.0, hi[1] - lo[1]) * w * h / 4.0)
+        x0, y0, x1, y1 = self.screen_box(clip)
+        area = float((x1 - x0) * (y1 - y0))
         return {"call": no, "frame": self.frame, "vertices": nverts, "texture": self.s.texture,
                 "texture_image": self.s.texture_images.get(self.s.texture) or "",
                 "depth_write": self.s.depth_test and self.s.depth_mask,
                 "projection": projection_of(proj, clip),
                 "own_modelview": mv is not None and view is not None and not np.allclose(mv, view, atol=1e-6),
-                "screen_area": area, "box": (lo, hi), "program": self.program_digest(),
+                "screen_area": area, "box": (x0, y0, x1, y1), "program": self.program_digest(),
                 "pass": self.pass_name(), "instances": self.draw_instances,
                 "vertex_data": self.draw_vertex_data() if self.listing is not None or self.select.names_vertex_data
                 else ""}
+
+    def screen_box(self, clip):
+        """The screen pixels the box of a draw's clip-space positions covers,
+        (x0, y0, x1, y1) from the screen's top left: its normalized device
+        coordinates cut to the clip volume, taken through the viewport as GL
+        takes them (a draw into a quarter of the screen covers a quarter of
+        the pixels it would cover in the whole), then cut to the screen."""
+        w, h = self.screen
+        vx, vy, vw, vh = self.s.viewport or (0, 0, w, h)
+        ndc = clip[:, 0:2] / np.maximum(np.abs(clip[:, 3:4]), 1e-30)
+        lo, hi = np.clip(ndc.min(axis=0), -1, 1), np.clip(ndc.max(axis=0), -1, 1)
+        x0, x1 = (min(max(vx + (v + 1) * vw / 2, 0.0), w) for v in (float(lo[0]), float(hi[0])))
+        y0, y1 = (min(max(vy + (v + 1) * vh / 2, 0.0), h) for v in (float(lo[1]), float(hi[1])))
+        return x0, h - y1, x1, h - y0
 
     def draw_vertex_data(self):
         """The digest rules' `vertex_data` names the current draw by (its
