@@ -1151,7 +1151,7 @@ def test_compatibility_programs_read_the_captures_matrices_and_vertices(tmp_path
     (lambda: points_draw(relink_with(shader_calls(VS), "GL_TESS_EVALUATION_SHADER", TES), mode="GL_PATCHES",
                          instances=3), "3 instances under program 2's tess evaluation shader: not emulated"),
     (lambda: shader_draw(shader_calls(VS).add("glClipControl", origin="GL_LOWER_LEFT", depth="GL_ZERO_TO_ONE"),
-                         vao=7), "glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE) is not emulated"),
+                         vao=7), "glDrawArrays: glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE) at call "),
     (lambda: shader_draw(shader_calls(VS).add("glUniformSubroutinesuiv", shadertype="GL_VERTEX_SHADER", count=1,
                                               indices=[0]), vao=7), "shader subroutines"),
     (lambda: shader_draw(shader_calls(VS), vao=7).add("glDrawTransformFeedback", mode="GL_TRIANGLES", id=0),
@@ -1231,7 +1231,8 @@ def test_modern_forms_of_emulated_state(tmp_path):
     """GL 4.x forms of state the converter emulates give what their older
     forms give: a uniform located by glGetProgramResourceLocation, viewport
     and scissor 0 set by their indexed calls (other indices change nothing
-    drawn), GL's default glClipControl, a harmless glProgramParameteri and a
+    drawn), GL's default glClipControl (another set and reset before the
+    draw: it had been refused), a harmless glProgramParameteri and a
     fragment-stage subroutine choice."""
     pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
 
@@ -1260,6 +1261,8 @@ def test_modern_forms_of_emulated_state(tmp_path):
                                               ("glScissorIndexed", dict(index=0, left=0, bottom=0, width=20,
                                                                         height=20)),
                                               ("glScissorIndexedv", dict(index=2, v=[1, 1, 1, 1])),
+                                              ("glClipControl", dict(origin="GL_UPPER_LEFT",
+                                                                     depth="GL_ZERO_TO_ONE")),
                                               ("glClipControl", dict(origin="GL_LOWER_LEFT",
                                                                      depth="GL_NEGATIVE_ONE_TO_ONE")),
                                               ("glProgramParameteri", dict(program=2,

@@ -46,6 +46,7 @@ class GLState:
         self.scissor = None
         self.scissor_test = False
         self.depth_range = (0.0, 1.0)
+        self.clip_control = None       # (call, origin, depth) of a glClipControl other than GL's default
         self.depth_test = False
         self.depth_func = "GL_LESS"
         self.depth_mask = True

@@ -212,6 +212,9 @@ class DrawCalls:
         object obj_id (None: other work); eye() gives the eye-space vertices
         for the geometry output (None: a draw under a program, whose geometry
         is written in normalized device coordinates)."""
+        if self.s.clip_control is not None:
+            at, origin, depth = self.s.clip_control
+            fail_call(no, f"{name}: glClipControl({origin}, {depth}) at call {at} is not emulated")
         self.frame_records += 1
         if self.frame_records > MAX_FRAME_RECORDS:
             fail_call(no, f"{name}: more than {MAX_FRAME_RECORDS} draw records (draws and their instances) in one "

@@ -168,13 +168,14 @@ class TransformCalls:
 
     def h_clip_control(self, no, name, a, args):
         """glClipControl: GL's default (lower-left origin, depth from -1 to 1)
-        is what the converter computes; the others are refused."""
+        is what the converter computes; a draw made under another is refused
+        (draws.draw_record), one set and reset before any draw is not."""
         d = dict(args)
         origin, depth = d.get("origin"), d.get("depth")
         if origin not in ("GL_LOWER_LEFT", "GL_UPPER_LEFT") or depth not in ("GL_NEGATIVE_ONE_TO_ONE", "GL_ZERO_TO_ONE"):
             return   # GL_INVALID_ENUM: the call does nothing
-        if (origin, depth) != ("GL_LOWER_LEFT", "GL_NEGATIVE_ONE_TO_ONE"):
-            fail_call(no, f"{name}({origin}, {depth}) is not emulated")
+        default = (origin, depth) == ("GL_LOWER_LEFT", "GL_NEGATIVE_ONE_TO_ONE")
+        self.s.clip_control = None if default else (no, origin, depth)
 
     def h_depth_range(self, no, name, a, args):
         n, f = [clamped01(v, no, "a depth range bound") for v in a[:2]]
