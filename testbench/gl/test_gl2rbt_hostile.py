@@ -1347,6 +1347,19 @@ def test_records_that_no_gl_call_makes(tmp_path, build, words):
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
+@pytest.mark.parametrize("fn", ["glXSwapBuffers", "glFrameTerminatorGREMEDY"])
+def test_a_swap_without_the_end_of_frame_flag_is_refused(tmp_path, fn):
+    """apitrace's reader flags every buffer swap by its name: a swap
+    without the flag (a reduced capture altered) had merged its frame into
+    the next, exit 0. One line naming the call, exit 2, nothing left."""
+    c = Calls().triangle(obj=1).add(fn, dpy=1, drawable=2) if fn == "glXSwapBuffers" else \
+        Calls().triangle(obj=1).add(fn)
+    bad_call = len(c.calls)
+    line = refused(gl2rbt(tmp_path, c.triangle(obj=2).swap().write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt"),
+                   f"call {bad_call}: {fn}: a buffer swap without the end-of-frame flag")
+    assert left_behind(tmp_path, ["c.xz"]) == [], line
+
+
 @pytest.mark.parametrize("fn, args", [
     ("glDrawArrays", dict(mode="GL_TRIANGLES", first=0, count=3)),
     ("glViewport", dict(x=0, y=0, width=64, height=48)),

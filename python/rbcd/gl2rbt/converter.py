@@ -283,6 +283,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if flags & CALL_FLAG_END_FRAME and name not in END_FRAME_CALLS:
             fail_call(no, f"{printable(name)}: the end-of-frame flag on a call that ends no frame "
                       "(apitrace sets it on buffer swaps only)")
+        if name in END_FRAME_CALLS and not flags & CALL_FLAG_END_FRAME:
+            # apitrace's reader flags a call by its name: a swap without the
+            # flag had merged its frame into the next.
+            fail_call(no, f"{printable(name)}: a buffer swap without the end-of-frame flag apitrace gives every one")
         self.flags, self.ret = flags, ret
         self.last_call, self.last_name = no, name
         s = self.s
