@@ -89,6 +89,22 @@ def test_mesa(gl):
     assert len(per_frame) == 2 and lp and float(lp.group(1)) >= 99.0 and lp.group(2) == m.group(2), r.stdout
 
 
+def test_mesa_check_of_a_capture_whose_only_frame_is_frame_0(gl):
+    """glretrace replays a capture's first frame wrongly at times, so frame
+    0 is checked only when asked for alone (--frames 0:0): a capture of one
+    frame is refused saying so and how (round 33's F2: "no selected frame
+    draws with the depth test on", which it does)."""
+    one = gl.path("one.trace")
+    r = run(["apitrace", "trim", "--frames=0", "-o", one, capture_path()])
+    assert r.returncode == 0 and os.path.exists(one), r.stderr
+    r = gl(one, "--check-depth")
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "only frame 0 draws with the depth test on" in lines[0] \
+        and "--frames 0:0 checks it alone" in lines[0], (r.returncode, lines)
+    r = gl(one, "--check-depth", "--frames", "0:0")
+    assert re.search(r"^agreement: [0-9.]+% of \d+ covered pixels in 1 frames", r.stdout, re.M), r.stdout + r.stderr
+
+
 def test_mesa_check_leaves_out_frames_read_through_another_window(gl):
     """Frames 0 and 1 drawn with a 16 x 16 window as the context's read
     drawable (glXMakeContextCurrent), frame 2 reading its own: the trace is

@@ -926,6 +926,29 @@ def camera_fbo(gl, fb=5, rb=6, samples=0, fmt="GL_DEPTH_COMPONENT24"):
                                       renderbuffertarget="GL_RENDERBUFFER", renderbuffer=rb)
 
 
+@pytest.mark.parametrize("fmt, steps", [("GL_DEPTH_COMPONENT16", 2.0 * 256), ("GL_DEPTH_COMPONENT24", 2.0),
+                                        (None, 2.0), ("GL_DEPTH_COMPONENT32F", None)])
+def test_a_polygon_offset_unit_is_a_step_of_the_buffer_drawn_into(fmt, steps):
+    """GL 4.5, 14.6.5: a unit is the smallest step of the depth buffer
+    drawn into (llvmpipe takes two): into a 16-bit attachment 256 of the
+    trace's 24-bit steps (round 33's F1: taken as 24-bit steps, Mesa's
+    depth 0.0505 converted as 0.0201); a floating-point buffer's step
+    depends on each primitive's depths: refused, naming the draw."""
+    gl = GL()
+    if fmt:
+        camera_fbo(gl, fmt=fmt)
+        gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
+    gl.glEnable("GL_DEPTH_TEST")
+    gl.glEnable("GL_POLYGON_OFFSET_FILL")
+    gl.glPolygonOffset(0.0, 1000.0)
+    if steps is None:
+        with pytest.raises(ConvertError, match="polygon offset's units into a floating-point depth buffer"):
+            square(gl)
+    else:
+        square(gl)
+        assert gl.draws()[0]["offset"] == (0.0, 1000.0 * steps)
+
+
 def test_a_part_of_a_cleared_buffer_cleared_after_it_is_given_back():
     """The window cleared, framebuffer 5 cleared and drawn, then a part of
     the window cleared: the window's whole clear is given back to the one

@@ -244,14 +244,20 @@ def check_depth(args):
     # test program's first frame replays without its clear): it is checked
     # only when it is the one frame asked for (--frames 0:0), not in place
     # of later frames left out.
+    first_only = False
     if frames and frames[0][1] == 0 and tuple(getattr(args, "frame_range", (0, None)) or (0, None)) != (0, 0):
         frames = frames[1:]
+        first_only = not frames
     if not frames and unreadable:
         no, name = unreadable[0][1]
         raise ConvertError(f"call {no}: {printable(name)}: a GL_FIXED vertex attribute, bound at frame "
                            f"{unreadable[0][0]}'s last depth-tested draw: glretrace's state dump of a desktop GL "
                            "context aborts on it, and no selected frame is left to check (docs/gl-capture.md, the "
                            "check against Mesa)")
+    if first_only:
+        raise ConvertError("only frame 0 draws with the depth test on into a depth buffer the converter follows "
+                           "and Mesa's replay reads back, and glretrace replays a capture's first frame wrongly at "
+                           "times: --frames 0:0 checks it alone (docs/gl-capture.md, the check against Mesa)")
     if not frames:
         raise ConvertError("no selected frame draws with the depth test on into a depth buffer the converter "
                            "follows and Mesa's replay reads back: nothing to check")

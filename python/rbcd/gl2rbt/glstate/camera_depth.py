@@ -65,6 +65,11 @@ class CameraDepthCalls:
             return min(16, self.args.depth_bits)
         return self.args.depth_bits
 
+    def float_depth(self):
+        """Whether the bound framebuffer's depth buffer holds floating-point depths."""
+        att = self.s.fbo_depth.get(self.s.draw_fbo) if self.s.draw_fbo else None
+        return bool(att) and self.s.formats.get(att[:2]) in ("GL_DEPTH_COMPONENT32F", "GL_DEPTH32F_STENCIL8")
+
     def multisample_depth(self):
         """Why --check-depth cannot compare the bound framebuffer's depth
         buffer: a multisample one, which Mesa's replay reads back one

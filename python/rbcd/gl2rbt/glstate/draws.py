@@ -279,6 +279,16 @@ class DrawCalls:
         # 100, 20000 move a 24-bit depth 1, 199, 39999 steps; a 16-bit one
         # 2, 200, and to its clamp).
         ou *= MESA_STEPS_PER_UNIT
+        if ou:
+            # A unit is a step of the depth buffer drawn into (GL 4.5,
+            # 14.6.5): a 16-bit one's is 2^(bits - 16) of the trace's steps.
+            # A floating-point one's depends on each primitive's largest
+            # depth exponent, which the draw stream cannot say: refused
+            # where the depths matter (tested, or the unit's).
+            if (st.depth_test or collisionable) and self.float_depth():
+                fail_call(no, f"{name}: a polygon offset's units into a floating-point depth buffer "
+                          "(GL_DEPTH_COMPONENT32F, GL_DEPTH32F_STENCIL8): not emulated")
+            ou *= 2.0 ** (self.args.depth_bits - self.depth_bits())
         rec = bytearray(b"D")
         # Flags: bit 0 collisionable; bit 1 its fragment shader can discard or
         # write gl_FragDepth (the depth it writes is an upper bound); bit 2
