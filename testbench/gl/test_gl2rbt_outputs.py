@@ -18,7 +18,7 @@ import time
 import pytest
 
 from conftest import program
-from gl_captures import GL2RBT, Calls as SharedCalls, gl2rbt_timed as gl2rbt, left_behind, peak_mb, refused
+from gl_captures import GL2RBT, Calls as SharedCalls, capture_path, gl2rbt_timed as gl2rbt, left_behind, peak_mb, refused
 from rbcd.cli import describe
 from rbcd.gl2rbt.apitrace import MAX_RECORD_VALUES
 from rbcd.gl2rbt.errors import printable
@@ -335,6 +335,25 @@ def test_a_listing_image_on_standard_output_has_it_to_itself(tmp_path):
         assert r.returncode == 0 and r.stdout.startswith(b"\x89PNG\r\n\x1a\n"), (image, r.stderr)
         assert b"frame 0:" in r.stderr and b"frame 0:" not in r.stdout
         assert sorted(os.listdir(tmp_path)) == ["c.xz"], os.listdir(tmp_path)
+
+
+@pytest.mark.parametrize("option, starts", [("--summary", b'{"frame":0,'), ("--geometry", b"rbcd-geometry "),
+                                           ("--reduced-out", b"\xfd7zXZ")], ids=["summary", "geometry", "reduced"])
+def test_dash_is_standard_output_for_every_output(tmp_path, option, starts):
+    """--summary, --geometry or --reduced-out "-": the output alone on
+    standard output, the report on standard error (round 33's D4: a file
+    named "-" had been written, an existing one replaced, while standard
+    output stayed empty)."""
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    (tmp_path / "-").write_bytes(b"keep")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    args = [GL2RBT, cap, "-o", tmp_path / "c.rbt", option, "-"]
+    if option == "--reduced-out":
+        capture = capture_path()
+        args[1] = capture
+    r = subprocess.run(["/usr/bin/python3"] + args, capture_output=True, env=env, cwd=tmp_path, timeout=120)
+    assert r.returncode == 0 and r.stdout.startswith(starts), (r.stdout[:40], r.stderr)
+    assert (tmp_path / "-").read_bytes() == b"keep"
 
 
 def test_a_listing_image_of_a_large_screen_is_built_in_bounded_memory(tmp_path):

@@ -94,6 +94,11 @@ def run(args):
                            ("--stream-out", args.stream_out)):
             if value == "":
                 raise ConvertError(f"{opt}: an empty path")
+        for attr in ("geometry", "summary", "reduced_out"):
+            # "-" is standard output, as for -o and --image (a file named
+            # "-" had been written, while the report moved to stderr).
+            if getattr(args, attr) == "-":
+                setattr(args, attr, "/dev/stdout")
         if not args.check_depth:
             for opt, value in (("--check-frames", args.check_frames), ("--min-agreement", args.min_agreement)):
                 if value is not None:
