@@ -30,6 +30,25 @@
 # refuses; 1 when the game, Xvfb, apitrace or the conversion otherwise
 # fails. OUT_DIR is written only at the end, complete.
 set -euo pipefail
+# SIGINT, SIGTERM or SIGHUP until the entry goes into place: one line,
+# exit 130, the work directory and the staged entry removed (the EXIT trap). The converter, run in the same
+# process group, says "interrupted" itself and exits 130: not said twice.
+# A signal ignored when the script started stays ignored (bash keeps it so).
+# The script's short helpers run with the three ignored (quiet): a Python
+# helper's KeyboardInterrupt traceback, or bash's "Terminated" for a
+# command the signal killed, would be a second line.
+interrupted() {
+  local rc=$?
+  trap '' INT TERM HUP
+  [ "$rc" -eq 130 ] || echo "capture-game.sh: interrupted" >&2
+  if [ -n "${game_pid:-}" ]; then   # the game's run (timeout passes SIGTERM on to it)
+    kill -TERM "$game_pid" 2>/dev/null || true
+    wait "$game_pid" 2>/dev/null || true
+  fi
+  exit 130
+}
+trap interrupted INT TERM HUP
+quiet() { ( trap '' INT TERM HUP; exec "$@" ); }
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
 # One line, whatever the arguments hold: control characters as \xNN.
@@ -116,7 +135,7 @@ trap 'rm -rf "$staged"' EXIT
 work=$(mktemp -d "${TMPDIR:-/tmp}/capture-game.XXXXXXXX" 2>/dev/null) ||
   { echo "capture-game.sh: cannot create a work directory in $(oneline "${TMPDIR:-/tmp}") (TMPDIR)" >&2; exit 2; }
 trap 'rm -rf "$work" "$staged"' EXIT
-mkdir -p "$work/home" "$work/entry"
+quiet mkdir -p "$work/home" "$work/entry"
 width=800 height=480
 version=$(dpkg-query -W -f='${Version}' "$game" 2>/dev/null || echo unknown)
 
@@ -125,7 +144,7 @@ if [ "$game" = openarena ]; then
   # A map the game lacks would leave the engine at its console until the time
   # limit: refuse it now, from the game's own archives.
   if [ -z "$from" ] && [ -d /usr/share/games/openarena/baseoa ]; then
-    maps=$(/usr/bin/python3 -c '
+    maps=$(quiet /usr/bin/python3 -c '
 import glob, sys, zipfile
 names = set()
 for p in glob.glob("/usr/share/games/openarena/baseoa/*.pk3"):
@@ -153,8 +172,8 @@ print(" ".join(sorted(names)))') || maps=
     echo "wait $waits"
     echo "quit"
   } >"$work/rbcdcap.cfg"
-  mkdir -p "$work/home/baseoa"
-  cp "$work/rbcdcap.cfg" "$work/home/baseoa/"
+  quiet mkdir -p "$work/home/baseoa"
+  quiet cp "$work/rbcdcap.cfg" "$work/home/baseoa/"
   cmd=(/usr/games/openarena +set fs_homepath "$work/home" +set cl_renderer opengl1
        +set r_mode -1 +set r_customwidth $width +set r_customheight $height +set r_fullscreen 0
        +set s_initsound 0 +set cg_draw2D 0 +set cg_drawGun 0 +set cg_thirdPerson 1
@@ -166,7 +185,7 @@ elif [ "$game" = supertuxkart ]; then
   # Race tracks only: arenas, soccer fields and cutscenes have no race.
   tracks=/usr/share/games/supertuxkart/data/tracks
   if [ -z "$from" ] && [ -d "$tracks" ]; then
-    races=$(/usr/bin/python3 -c '
+    races=$(quiet /usr/bin/python3 -c '
 import glob, os, sys, xml.etree.ElementTree as ET
 out = []
 for p in sorted(glob.glob(os.path.join(sys.argv[1], "*", "track.xml"))):
@@ -209,7 +228,7 @@ else
     *) usage "MAP '$map' is neither a replay (.nbr) nor a level (.sol)" ;;
   esac
   : "${skip:=30}"
-  mkdir -p "$work/home/.neverball"
+  quiet mkdir -p "$work/home/.neverball"
   printf 'fullscreen 0\nwidth %d\nheight %d\naudio 0\nmultisample 0\nreflection 1\nbackground 1\nshadow 1\nfps 0\n' \
     $width $height >"$work/home/.neverball/neverballrc"
   cmd=(env HOME="$work/home" /usr/games/neverball "${mode[@]}")
@@ -231,7 +250,7 @@ done
 # path that is not UTF-8) is refused first.
 apitrace_version=$(dpkg-query -W -f='${Version}' apitrace 2>/dev/null || echo unknown)
 mesa_version=$(dpkg-query -W -f='${Version}' libgl1-mesa-dri 2>/dev/null || echo unknown)
-strings=$(PYTHONPATH="$root/python" /usr/bin/python3 -c '
+strings=$(PYTHONPATH="$root/python" quiet /usr/bin/python3 -c '
 import sys
 from rbcd.game_suite import capture_strings
 sys.exit(capture_strings(sys.argv[1:]))' "$work" "$game" "$version" "$(basename -- "$map")" "$apitrace_version" \
@@ -247,10 +266,16 @@ echo "capture-game.sh: capturing $game $map under Xvfb (at most ${limit} s)"
 set +e
 # xvfb-run's own temporary folder inside the work directory, which goes
 # at the end: xvfb-run stopped by the time limit leaves it.
+# In the background, waited for: timeout runs the game in a process group of
+# its own, out of reach of a signal to the script's, and a signal to the
+# script ends the wait at once (interrupted stops the game, then exits).
 SDL_AUDIODRIVER=dummy TMPDIR=$work timeout --signal=TERM --kill-after=30 "$limit" \
   xvfb-run -a -s "-screen 0 1024x768x24" apitrace trace -o "$work/capture.trace" "${cmd[@]}" \
-  >"$work/game.log" 2>&1
+  >"$work/game.log" 2>&1 &
+game_pid=$!
+wait "$game_pid"
 rc=$?
+game_pid=
 set -e
 fi
 # OpenArena and SuperTuxKart quit by themselves (0); a replay is stopped by
@@ -258,7 +283,7 @@ fi
 if [ ! -s "$capture" ] || { [ $rc -ne 0 ] && [ $rc -ne 124 ]; }; then
   [ -z "$from" ] || empty_capture
   echo "capture-game.sh: the game or its capture failed (exit $rc); its log:" >&2
-  tail -n 20 "$work/game.log" >&2
+  quiet tail -n 20 "$work/game.log" >&2
   exit 1
 fi
 race_start=
@@ -278,7 +303,7 @@ last=$(( skip + frames - 1 ))
 # The game's own configuration (the settings its options gave), kept beside
 # the entry's other settings.
 stk_config=$work/home/.config/supertuxkart/config-0.10/config.xml
-[ "$game" != supertuxkart ] || [ ! -f "$stk_config" ] || cp "$stk_config" "$work/entry/game-config.xml"
+[ "$game" != supertuxkart ] || [ ! -f "$stk_config" ] || quiet cp "$stk_config" "$work/entry/game-config.xml"
 echo "capture-game.sh: converting frames $skip to $last"
 RBCD_GL_RASTER=$raster "$here/rbcd-gl2rbt" "$capture" -o "$work/trace.rbt.zst" --frames "$skip:$last" \
   --screen $width $height --select "$rules" --geometry "$work/geometry.geo" \
@@ -308,28 +333,30 @@ sum() { sha256sum | cut -d' ' -f1; }
   echo "mesa_version = ${q[4]}"
   echo "selection = ${q[5]}"
   echo "command = ${q[6]}"
-  if [ "$game" = openarena ]; then echo "config = '''"; cat "$work/rbcdcap.cfg"; echo "'''"; fi
+  if [ "$game" = openarena ]; then echo "config = '''"; quiet cat "$work/rbcdcap.cfg"; echo "'''"; fi
   if [ -f "$work/entry/game-config.xml" ]; then
     echo "game_config = \"game-config.xml\"      # the game's configuration as it wrote it at the end of the run"
   fi
   echo ""
   echo "[sha256]   # scripts/game-suite checks the regenerated files against these"
   echo "calls = \"$(sum <"$work/entry/calls.xz")\""
-  echo "trace = \"$(PYTHONPATH="$here/../python" /usr/bin/python3 -c '
+  echo "trace = \"$(PYTHONPATH="$here/../python" quiet /usr/bin/python3 -c '
 import sys
 from rbcd.game_suite import sha256_file
 print(sha256_file(sys.argv[1], decompress=True))' "$work/trace.rbt.zst")\"      # uncompressed"
   echo "geometry = \"$(sum <"$work/geometry.geo")\""
 } >"$work/entry/capture.toml"
 if [ "$keep" = yes ]; then
-  cp -- "$capture" "$work/entry/capture.trace"
-  mv "$work/trace.rbt.zst" "$work/geometry.geo" "$work/entry/"
+  quiet cp -- "$capture" "$work/entry/capture.trace"
+  quiet mv "$work/trace.rbt.zst" "$work/geometry.geo" "$work/entry/"
 fi
-chmod "$(printf '%o' $((0777 & ~0$(umask))))" "$staged"   # mktemp's 0700, made what mkdir would
+quiet chmod "$(printf '%o' $((0777 & ~0$(umask))))" "$staged"   # mktemp's 0700, made what mkdir would
 # Across file systems mv copies: a full device is one line, exit 1 (the
 # staged folder goes with the trap).
 err=$(mv "$work/entry"/* "$staged"/ 2>&1) ||
   { echo "capture-game.sh: $out: write failed: $(oneline "${err%%$'\n'*}")" >&2; exit 1; }
-mv -T -- "$staged" "$out"
+# The entry goes into place whole: a signal from here changes nothing.
+trap true INT TERM HUP
+quiet mv -T -- "$staged" "$out"
 staged=
 echo "capture-game.sh: wrote $out ($(du -sh -- "$out" | cut -f1))"

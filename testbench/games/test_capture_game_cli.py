@@ -9,7 +9,9 @@ a map path TOML cannot hold (not UTF-8) is refused before the work.
 Run with --from-trace (no game needed); nothing is left."""
 import os
 import shutil
+import signal
 import subprocess
+import time
 import tomllib
 
 import pytest
@@ -296,3 +298,64 @@ def test_standard_output_onto_the_rules_or_a_map_file_is_refused(tmp_path, which
     assert victim.read_bytes() == before
     assert not (tmp_path / "out").exists()
 
+
+
+def session_process(sid, marker):
+    """A process of session `sid` whose command line holds `marker`, or None."""
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open(f"/proc/{d}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            with open(f"/proc/{d}/cmdline", "rb") as f:
+                cmd = f.read()
+        except OSError:
+            continue
+        if int(fields[3]) == sid and fields[0] != "Z" and marker in cmd:
+            return int(d)
+    return None
+
+
+@pytest.mark.parametrize("moment", ["helper", "conversion"])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=["term", "hup", "int"])
+def test_a_signal_is_one_line_and_exit_130(tmp_path, sig, moment):
+    """SIGINT, SIGTERM or SIGHUP to the script's process group while its
+    Python helper makes capture.toml's strings or while the converter works
+    (the helper, or the converter's rasterizer, held stopped meanwhile, as a
+    busy machine may hold it): exit 130, one
+    line saying "interrupted" (the script's or the converter's, not both),
+    nothing left (round 33's D5 and D6: a BrokenPipeError traceback, or
+    death by the signal with nothing said)."""
+    cap = boxes_capture()
+    env = dict(os.environ, TMPDIR=str(tmp_path), RBCD_GL_RASTER=program("rbcd-gl-raster"))
+    p = subprocess.Popen(["bash", CAPTURE_GAME, "openarena", "oa_dm1", "2", str(tmp_path / "out"), "--from-trace",
+                          cap, "--skip", "0"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env,
+                         stdin=subprocess.DEVNULL, start_new_session=True,
+                         preexec_fn=lambda: signal.signal(sig, signal.SIG_DFL))
+    # The converter's rasterizer: the converter has its handlers by then.
+    marker = b"capture_strings" if moment == "helper" else b"rbcd-gl-raster"
+    try:
+        found, t = None, time.monotonic()
+        while found is None and p.poll() is None and time.monotonic() - t < 60:
+            found = session_process(p.pid, marker)
+            try:
+                if found:
+                    os.kill(found, signal.SIGSTOP)
+            except ProcessLookupError:   # gone between the two
+                found = None
+        assert found, f"no {marker} process seen"
+        os.killpg(p.pid, sig)
+        time.sleep(0.3)
+        try:
+            os.kill(found, signal.SIGCONT)
+        except ProcessLookupError:   # the converter stopped its rasterizer
+            pass
+        _, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+        p.wait()
+    lines = err.strip().splitlines()
+    assert p.returncode == 130 and len(lines) == 1 and lines[0].endswith("interrupted"), (p.returncode, lines)
+    assert os.listdir(tmp_path) == [], os.listdir(tmp_path)
