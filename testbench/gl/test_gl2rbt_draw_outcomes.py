@@ -147,11 +147,25 @@ def test_polygon_offset_of_lines_or_points_on_filled_triangles(tmp_path, cap):
     assert trace(tmp_path, draw(c.add("glDisable", cap=cap)), "disabled") == want
 
 
-def test_indices_past_the_element_buffer_are_refused_in_bounded_memory(tmp_path):
+@pytest.mark.parametrize("target", ["window", "other_pass"])
+def test_indices_past_the_element_buffer_are_refused_in_bounded_memory(tmp_path, target):
     """2^22 indices read from a 6-byte element buffer (GL leaves what they
     read undefined): refused naming the draw, at once, in the memory of a
-    small capture (round 16's R16-8: converted, 1.9 GB and 73 s)."""
-    c = shader_calls(VS).add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
+    small capture (round 16's R16-8: converted, 1.9 GB and 73 s); also in
+    a draw into another pass than the camera's, which the converter leaves
+    out (round 33's D3: converted, exit 0)."""
+    c = shader_calls(VS)
+    if target == "other_pass":
+        c.add("glGenFramebuffers", n=1, framebuffers=[1]).add("glBindFramebuffer", target="GL_FRAMEBUFFER",
+                                                               framebuffer=1)
+        c.add("glGenRenderbuffers", n=1, renderbuffers=[2]).add("glBindRenderbuffer", target="GL_RENDERBUFFER",
+                                                                 renderbuffer=2)
+        c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_DEPTH_COMPONENT24", width=32,
+              height=32)   # (not the screen's size: a shadow map's pass, not the camera's)
+        c.add("glFramebufferRenderbuffer", target="GL_FRAMEBUFFER", attachment="GL_DEPTH_ATTACHMENT",
+              renderbuffertarget="GL_RENDERBUFFER", renderbuffer=2)
+        c.add("glEnable", cap="GL_DEPTH_TEST")
+    c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
     c.add("glEnableVertexAttribArray", index=0)
     c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
     c.add("glBindBuffer", target="GL_ELEMENT_ARRAY_BUFFER", buffer=8)
@@ -159,6 +173,9 @@ def test_indices_past_the_element_buffer_are_refused_in_bounded_memory(tmp_path)
           usage="GL_STATIC_DRAW")
     c.add("glDrawElementsInstanced", mode="GL_TRIANGLES", count=1 << 22, type="GL_UNSIGNED_SHORT", indices=0,
           instancecount=2)
+    if target == "other_pass":   # then the camera pass, into the window
+        c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=0)
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
     r = gl2rbt(tmp_path, c.swap().write(tmp_path / "i.xz"), "-o", tmp_path / "i.rbt")
     refused(r, "call ", "glDrawElementsInstanced: 4194304 indices from byte 0 reach past element buffer 8's 6 bytes")
     assert peak_mb(r) < 400, peak_mb(r)

@@ -386,6 +386,7 @@ class DrawCalls:
             if mode not in TRIANGLES_PER_VERTICES:
                 fail_call(no, f"{name}: primitive mode {printable(mode)} under a program is not emulated")
         if not self.draws_into_camera_pass():
+            self.check_element_bounds(no, name, d)
             return
         if later:
             # Tessellation and geometry shaders run in Mesa with the vertex
@@ -798,6 +799,20 @@ class DrawCalls:
         if self.active and self.renders() and not self.s.rasterizer_discard and self.s.depth_test \
                 and self.s.depth_mask and self.camera_pass():
             fail_call(no, f"{printable(name)} with the depth test on writes depth: not emulated")
+
+    def check_element_bounds(self, no, name, d):
+        """A draw left out (another pass's) reads its indices all the same:
+        those past its element buffer's data are refused as in a draw the
+        converter makes (vertex_stage.check_vertex_data; GL leaves what
+        they read undefined)."""
+        start, count = d.get("indices"), d.get("count")
+        if "Elements" not in name or not isinstance(start, int) or not isinstance(count, int):
+            return   # client indices (apitrace records the bytes read), or an array draw
+        elem = self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
+        size = len(self.s.buffers.get(elem, b"")) if elem else 0
+        if elem and start + count * np.dtype(INDEX_TYPES[d["type"]]).itemsize > size:
+            fail_call(no, f"{name}: {count} indices from byte {start} reach past element buffer {elem}'s {size} "
+                      "bytes: not emulated")
 
     def draws_into_camera_pass(self):
         """Whether a draw now reaches the camera pass: one that does not is
