@@ -380,7 +380,7 @@ def test_a_signal_at_start_up_is_an_interruption(tmp_path, tool, sig):
 @pytest.mark.parametrize("tool", ["game-suite", "rbcd-sweep", "rbcd-plot", "rbcd-gl2rbt"])
 def test_a_signal_at_any_moment_of_start_up_is_one_line_or_none(tool):
     """The launcher run as a user runs it (its interpreter line), sent
-    SIGINT every 2 ms from the start to 100 ms (and later, until a run gets
+    SIGINT every 4 ms from the start to 100 ms (and later, until a run gets
     past Python's start-up on a loaded machine): the run ends in
     "interrupted", exit 130, or finishes, or dies of the signal saying
     nothing (before env blocks it: microseconds); never in a traceback
@@ -393,7 +393,7 @@ def test_a_signal_at_any_moment_of_start_up_is_one_line_or_none(tool):
     whole = subprocess.run([launcher, "--help"], capture_output=True, text=True, timeout=60).stdout
     assert whole.startswith("usage:")
     seen = set()
-    for ms in list(range(0, 101, 2)) + [160, 240, 320, 480, 640, 960, 1280, 1920, 2560]:
+    for ms in list(range(0, 101, 4)) + [160, 240, 320, 480, 640, 960, 1280, 1920, 2560]:
         if ms > 100 and seen & {0, 130}:
             break
         p = subprocess.Popen([launcher, "--help"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,

@@ -368,6 +368,7 @@ def read_reduced_calls(path):
                 if not all(isinstance(x, tuple) and len(x) == 2 and isinstance(x[0], str) for x in c[2]) \
                         or len({x[0] for x in c[2]}) != len(c[2]):   # each argument named once, as apitrace's
                     raise ConvertError(f"{where(last)}: the reduced capture does not decode (unexpected record)")
+                c = in_order(c)
                 last = c[0]
                 if (yield c) is CHECK_REST:
                     check_rest(f, count, last)
@@ -376,6 +377,42 @@ def read_reduced_calls(path):
             IndexError, MemoryError, OverflowError, RecursionError) as e:
         # (OverflowError: a length past 2^63 read by the unpickler itself.)
         raise ConvertError(f"{where(last)}: the reduced capture does not decode ({printable(e, 80)})")
+
+
+# A function's parameters in GL's order (the registry's, PyOpenGL's), by
+# name; None where PyOpenGL lacks it or is not installed.
+_PARAMETERS = {}
+
+
+def gl_parameters(name):
+    if name not in _PARAMETERS:
+        names = None
+        if name.startswith("gl") and name.isidentifier():
+            try:
+                os.environ["PYOPENGL_PLATFORM"] = "egl"   # (as mesa.py sets it: PyOpenGL reads it once)
+                from OpenGL import GL
+                f = getattr(GL, name, None)
+                f = getattr(f, "wrappedOperation", f)
+                names = tuple(getattr(f, "argNames", None) or ()) or None
+            except Exception:   # noqa: BLE001: PyOpenGL missing or failing to load: nothing to compare with
+                names = None
+        _PARAMETERS[name] = names
+    return _PARAMETERS[name]
+
+
+def in_order(c):
+    """The call with its arguments in the order apitrace decodes them, the
+    function's own (the C prototype's, the registry's), where the record
+    names the function's parameters in another order: a reduced capture
+    names every argument, and handlers read some by position (an altered
+    record with glOrtho's right before its left had been read as a
+    mirrored projection, exit 0)."""
+    names = tuple(k for k, _ in c[2])
+    want = gl_parameters(c[1])
+    if want and names != want and sorted(names) == sorted(want):
+        by_name = dict(c[2])
+        return (c[0], c[1], [(k, by_name[k]) for k in want], c[3], c[4])
+    return c
 
 
 def check_rest(f, count, last):
