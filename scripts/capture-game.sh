@@ -40,7 +40,7 @@ set -euo pipefail
 interrupted() {
   local rc=$?
   trap '' INT TERM HUP
-  [ "$rc" -eq 130 ] || echo "capture-game.sh: interrupted" >&2
+  [ "$rc" -eq 130 ] && [ -n "${converting:-}" ] || echo "capture-game.sh: interrupted" >&2
   if [ -n "${game_pid:-}" ]; then   # the game's run (timeout passes SIGTERM on to it)
     kill -TERM "$game_pid" 2>/dev/null || true
     wait "$game_pid" 2>/dev/null || true
@@ -48,7 +48,18 @@ interrupted() {
   exit 130
 }
 trap interrupted INT TERM HUP
-quiet() { ( trap '' INT TERM HUP; exec "$@" ); }
+# SIGTERM and SIGHUP ignored, SIGINT at its default: bash acts on a SIGINT
+# only once the command it waited for has died of it (a helper that ignored
+# it had had the script's Ctrl-C dropped). A Python helper takes SIGINT at
+# its default too (held blocked until then: no KeyboardInterrupt traceback).
+quiet() { ( trap '' TERM HUP; exec "$@" ); }
+quiet_py() {
+  local code=$1; shift
+  quiet env --block-signal=INT /usr/bin/python3 -c "import signal
+signal.signal(signal.SIGINT, signal.SIG_DFL)
+signal.pthread_sigmask(signal.SIG_UNBLOCK, [signal.SIGINT])
+$code" "$@"
+}
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
 # One line, whatever the arguments hold: control characters as \xNN.
@@ -129,12 +140,20 @@ if [ ! -d "$parent" ]; then
   [ ! -e "$p" ] || [ -d "$p" ] || usage "$out: $p is not a directory: the entry needs a folder there"
   usage "$out: its folder $parent does not exist"
 fi
-staged=$(mktemp -d "$parent/.$(basename -- "$out").XXXXXXXX" 2>/dev/null) ||
+# A signal while the two folders are made is taken once both are named
+# (and so removed by the EXIT trap): one between a folder made and its name
+# kept had left it behind. (mktemp itself ignores the three: killed, it had
+# made the folder unnamed; a SIGINT in its milliseconds is lost, as bash
+# drops a SIGINT its command survived.)
+pending= staged= work=
+trap 'pending=1' INT TERM HUP
+trap 'rm -rf "${work:-}" "${staged:-}"' EXIT
+staged=$(trap '' INT TERM HUP; exec mktemp -d "$parent/.$(basename -- "$out").XXXXXXXX" 2>/dev/null) || [ -n "$pending" ] ||
   usage "$out: cannot create the entry in $parent (not writable?)"
-trap 'rm -rf "$staged"' EXIT
-work=$(mktemp -d "${TMPDIR:-/tmp}/capture-game.XXXXXXXX" 2>/dev/null) ||
+work=$(trap '' INT TERM HUP; exec mktemp -d "${TMPDIR:-/tmp}/capture-game.XXXXXXXX" 2>/dev/null) || [ -n "$pending" ] ||
   { echo "capture-game.sh: cannot create a work directory in $(oneline "${TMPDIR:-/tmp}") (TMPDIR)" >&2; exit 2; }
-trap 'rm -rf "$work" "$staged"' EXIT
+trap interrupted INT TERM HUP
+[ -z "$pending" ] || interrupted
 quiet mkdir -p "$work/home" "$work/entry"
 width=800 height=480
 version=$(dpkg-query -W -f='${Version}' "$game" 2>/dev/null || echo unknown)
@@ -144,7 +163,7 @@ if [ "$game" = openarena ]; then
   # A map the game lacks would leave the engine at its console until the time
   # limit: refuse it now, from the game's own archives.
   if [ -z "$from" ] && [ -d /usr/share/games/openarena/baseoa ]; then
-    maps=$(quiet /usr/bin/python3 -c '
+    maps=$(quiet_py '
 import glob, sys, zipfile
 names = set()
 for p in glob.glob("/usr/share/games/openarena/baseoa/*.pk3"):
@@ -185,7 +204,7 @@ elif [ "$game" = supertuxkart ]; then
   # Race tracks only: arenas, soccer fields and cutscenes have no race.
   tracks=/usr/share/games/supertuxkart/data/tracks
   if [ -z "$from" ] && [ -d "$tracks" ]; then
-    races=$(quiet /usr/bin/python3 -c '
+    races=$(quiet_py '
 import glob, os, sys, xml.etree.ElementTree as ET
 out = []
 for p in sorted(glob.glob(os.path.join(sys.argv[1], "*", "track.xml"))):
@@ -250,11 +269,12 @@ done
 # path that is not UTF-8) is refused first.
 apitrace_version=$(dpkg-query -W -f='${Version}' apitrace 2>/dev/null || echo unknown)
 mesa_version=$(dpkg-query -W -f='${Version}' libgl1-mesa-dri 2>/dev/null || echo unknown)
-strings=$(PYTHONPATH="$root/python" quiet /usr/bin/python3 -c '
+strings=$(PYTHONPATH="$root/python" quiet_py '
 import sys
 from rbcd.game_suite import capture_strings
 sys.exit(capture_strings(sys.argv[1:]))' "$work" "$game" "$version" "$(basename -- "$map")" "$apitrace_version" \
-  "$mesa_version" "workloads/games/$(basename -- "$rules")" -- "${cmd[@]}") || exit $?
+  "$mesa_version" "workloads/games/$(basename -- "$rules")" -- "${cmd[@]}") ||
+  { rc=$?; [ "$rc" -le 128 ] || interrupted; exit "$rc"; }   # (killed by a signal: taken here, before the exit)
 mapfile -t q <<<"$strings"
 
 capture=$work/capture.trace
@@ -305,9 +325,11 @@ last=$(( skip + frames - 1 ))
 stk_config=$work/home/.config/supertuxkart/config-0.10/config.xml
 [ "$game" != supertuxkart ] || [ ! -f "$stk_config" ] || quiet cp "$stk_config" "$work/entry/game-config.xml"
 echo "capture-game.sh: converting frames $skip to $last"
+converting=1   # (the converter says "interrupted" itself)
 RBCD_GL_RASTER=$raster "$here/rbcd-gl2rbt" "$capture" -o "$work/trace.rbt.zst" --frames "$skip:$last" \
   --screen $width $height --select "$rules" --geometry "$work/geometry.geo" \
   --summary "$work/entry/summary.jsonl" --reduced-out "$work/entry/calls.xz" -q
+converting=
 got=$(wc -l <"$work/entry/summary.jsonl")
 [ "$got" = "$frames" ] || { echo "capture-game.sh: the capture holds only $got of the $frames frames asked for after the first $skip" >&2; exit 2; }
 sum() { sha256sum | cut -d' ' -f1; }
@@ -340,7 +362,7 @@ sum() { sha256sum | cut -d' ' -f1; }
   echo ""
   echo "[sha256]   # scripts/game-suite checks the regenerated files against these"
   echo "calls = \"$(sum <"$work/entry/calls.xz")\""
-  echo "trace = \"$(PYTHONPATH="$here/../python" quiet /usr/bin/python3 -c '
+  echo "trace = \"$(PYTHONPATH="$here/../python" quiet_py '
 import sys
 from rbcd.game_suite import sha256_file
 print(sha256_file(sys.argv[1], decompress=True))' "$work/trace.rbt.zst")\"      # uncompressed"
