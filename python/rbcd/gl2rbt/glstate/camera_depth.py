@@ -53,12 +53,17 @@ class CameraDepthCalls:
         self.depths_at_start = self.kept_depths = Depths(None, "as they were when the converted frames began")
         self.kept_wrong = None
 
+    def bound_depth_attachment(self):
+        """The depth attachment of the framebuffer object drawn into, or None
+        (the window, or no depth attachment)."""
+        return self.s.fbo_depth.get(self.s.draw_fbo) if self.s.draw_fbo else None
+
     def depth_bits(self):
         """The bits of the bound framebuffer's depth buffer, where they are
         fewer than the trace's: a 16-bit attachment (GL_DEPTH_COMPONENT16,
         or an unsized depth texture of 16-bit pixels, as Mesa stores them);
         the trace's otherwise. --check-depth compares at these."""
-        att = self.s.fbo_depth.get(self.s.draw_fbo) if self.s.draw_fbo else None
+        att = self.bound_depth_attachment()
         fmt = self.s.formats.get(att[:2]) if att else None
         if fmt == "GL_DEPTH_COMPONENT16" or fmt == "GL_DEPTH_COMPONENT" and \
                 self.s.depth_types.get(att[:2]) == "GL_UNSIGNED_SHORT":
@@ -67,7 +72,7 @@ class CameraDepthCalls:
 
     def float_depth(self):
         """Whether the bound framebuffer's depth buffer holds floating-point depths."""
-        att = self.s.fbo_depth.get(self.s.draw_fbo) if self.s.draw_fbo else None
+        att = self.bound_depth_attachment()
         return bool(att) and self.s.formats.get(att[:2]) in ("GL_DEPTH_COMPONENT32F", "GL_DEPTH32F_STENCIL8")
 
     def multisample_depth(self):
@@ -75,7 +80,7 @@ class CameraDepthCalls:
         buffer: a multisample one, which Mesa's replay reads back one
         sample a pixel of, not the pixel centre's depth the converter
         keeps (None: it can)."""
-        att = self.s.fbo_depth.get(self.s.draw_fbo) if self.s.draw_fbo else None
+        att = self.bound_depth_attachment()
         if att is None:
             return None
         tl = self.s.texture_levels.get(att[:2]) if att[0] == "texture" else None
