@@ -34,9 +34,9 @@ set -euo pipefail
 # exit 130, the work directory and the staged entry removed (the EXIT trap). The converter, run in the same
 # process group, says "interrupted" itself and exits 130: not said twice.
 # A signal ignored when the script started stays ignored (bash keeps it so).
-# The script's short helpers run with the three ignored (quiet): a Python
-# helper's KeyboardInterrupt traceback, or bash's "Terminated" for a
-# command the signal killed, would be a second line.
+# The script's short helpers run under quiet (below): bash's "Terminated"
+# for a command the signal killed, or a Python helper's KeyboardInterrupt
+# traceback, would be a second line.
 interrupted() {
   local rc=$?
   trap '' INT TERM HUP
