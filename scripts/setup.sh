@@ -40,7 +40,7 @@ for opt in "$@"; do
     --eval) pkgs+=(libbullet-dev libfcl-dev assimp-testmodels python3-matplotlib valgrind) ;;
     --fuzz) pkgs+=(clang-14 libclang-rt-14-dev assimp-testmodels) ;;
     --gl) pkgs+=(apitrace xvfb xauth libgl1-mesa-dri libglx-mesa0 libgl-dev libx11-dev python3-numpy
-               python3-opengl libegl1 libegl-mesa0 libopengl0 libegl-dev libgles-dev python3-zstandard
+               python3-opengl libegl1 libegl-mesa0 libopengl0 libegl-dev libgles-dev python3-zstandard khronos-api
                glmark2-es2-x11) ;;
     --waves) pkgs+=(verilator gtkwave libsqlite3-dev) ;;
     --games) pkgs+=(openarena neverball) ;;

@@ -327,24 +327,35 @@ def test_a_signal_is_one_line_and_exit_130(tmp_path, sig, moment):
     line saying "interrupted" (the script's or the converter's, not both),
     nothing left (round 33's D5 and D6: a BrokenPipeError traceback, or
     death by the signal with nothing said)."""
-    cap = boxes_capture()
-    env = dict(os.environ, TMPDIR=str(tmp_path), RBCD_GL_RASTER=program("rbcd-gl-raster"))
-    p = subprocess.Popen(["bash", CAPTURE_GAME, "openarena", "oa_dm1", "2", str(tmp_path / "out"), "--from-trace",
-                          cap, "--skip", "0"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env,
-                         stdin=subprocess.DEVNULL, start_new_session=True,
-                         preexec_fn=lambda: signal.signal(sig, signal.SIG_DFL))
     # The converter's rasterizer: the converter has its handlers by then.
     marker = b"capture_strings" if moment == "helper" else b"rbcd-gl-raster"
+
+    def stop_it(p):
+        found = session_process(p.pid, marker)
+        try:
+            if found:
+                os.kill(found, signal.SIGSTOP)
+        except ProcessLookupError:   # gone between the two
+            found = None
+        return found
+    interrupted_while_stopped(tmp_path, dict(os.environ, TMPDIR=str(tmp_path)), sig, stop_it)
+    assert os.listdir(tmp_path) == [], os.listdir(tmp_path)
+
+
+def interrupted_while_stopped(tmp_path, env, sig, stopped):
+    """The script run on the boxes capture into tmp_path/out; `sig` to its
+    process group while the process `stopped(p)` finds is held stopped,
+    which then goes on: the script says "interrupted" in one line and exits
+    130."""
+    p = subprocess.Popen(["bash", CAPTURE_GAME, "openarena", "oa_dm1", "2", str(tmp_path / "out"), "--from-trace",
+                          boxes_capture(), "--skip", "0"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                         text=True, env=dict(env, RBCD_GL_RASTER=program("rbcd-gl-raster")), stdin=subprocess.DEVNULL,
+                         start_new_session=True, preexec_fn=lambda: signal.signal(sig, signal.SIG_DFL))
     try:
         found, t = None, time.monotonic()
         while found is None and p.poll() is None and time.monotonic() - t < 60:
-            found = session_process(p.pid, marker)
-            try:
-                if found:
-                    os.kill(found, signal.SIGSTOP)
-            except ProcessLookupError:   # gone between the two
-                found = None
-        assert found, f"no {marker} process seen"
+            found = stopped(p)
+        assert found, "the process to stop was never seen"
         os.killpg(p.pid, sig)
         time.sleep(0.3)
         try:
@@ -358,4 +369,32 @@ def test_a_signal_is_one_line_and_exit_130(tmp_path, sig, moment):
         p.wait()
     lines = err.strip().splitlines()
     assert p.returncode == 130 and len(lines) == 1 and lines[0].endswith("interrupted"), (p.returncode, lines)
-    assert os.listdir(tmp_path) == [], os.listdir(tmp_path)
+
+
+@pytest.mark.parametrize("folder", ["staged", "work"])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP], ids=["term", "hup"])
+def test_a_signal_while_the_folders_are_made_leaves_neither(tmp_path, sig, folder):
+    """SIGTERM or SIGHUP to the script's process group while mktemp makes
+    the staged entry or the work folder (a mktemp first in PATH that stops
+    itself once the folder exists, as a busy machine may hold it there):
+    exit 130, one line, neither folder left (round 34's D4: the folder mktemp
+    had made was left, unnamed, when the signal killed it)."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    marker = ".out." if folder == "staged" else "capture-game."
+    (bin_dir / "mktemp").write_text(f'#!/bin/sh\nd=$(/usr/bin/mktemp "$@") || exit 1\n'
+                                    f'case "$d" in *{marker}*) kill -STOP $$;; esac\nprintf "%s\\n" "$d"\n')
+    (bin_dir / "mktemp").chmod(0o755)
+    work = tmp_path / "w"
+    work.mkdir()
+
+    def stopped_mktemp(p):
+        pid = session_process(p.pid, str(bin_dir / "mktemp").encode())
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                return pid if f.read().rsplit(")", 1)[1].split()[0] == "T" else None
+        except (OSError, TypeError):
+            return None
+    interrupted_while_stopped(work, dict(os.environ, TMPDIR=str(work), PATH=f"{bin_dir}:{os.environ['PATH']}"), sig,
+                              stopped_mktemp)
+    assert os.listdir(work) == [], os.listdir(work)

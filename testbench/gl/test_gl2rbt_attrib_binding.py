@@ -88,7 +88,8 @@ def direct_state_access(c):
     never bound but the object at the draw; indices through the object's
     element buffer."""
     c.add("glCreateBuffers", n=2, buffers=[11, 12])
-    c.add("glNamedBufferStorage", buffer=11, size=len(PADDED), data=PADDED, flags=0)
+    c.calls.append((len(c.calls) + 1, "glNamedBufferStorage", [("buffer", 11), ("size", len(PADDED)), ("data", PADDED),
+                                                               ("flags", 0)], None, 0))   # (add's flags are the call's)
     c.add("glNamedBufferData", buffer=12, size=6, data=struct.pack("<3H", 0, 1, 2), usage="GL_STATIC_DRAW")
     c.add("glCreateVertexArrays", n=1, arrays=[9])
     c.add("glVertexArrayVertexBuffer", vaobj=9, bindingindex=1, buffer=11, offset=16, stride=20)

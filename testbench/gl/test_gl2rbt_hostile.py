@@ -41,7 +41,7 @@ def test_astc_names_are_enumerants(tmp_path):
     (lambda c: c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=1 << 40, length=-1,
                      message="rbcd-object"), "1099511627776 is outside"),
     (lambda c: c.add("glRotatef", angle=float("inf"), x=0, y=0, z=1), "a rotation: inf is not finite"),
-    (lambda c: c.add("glScalef", x=1, y=2), "malformed arguments"),
+    (lambda c: c.add("glScalef", x=1, y=2), "glScalef's arguments are named (x, y); apitrace writes (x, y, z)"),
     (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 30), "count: 1073741824 is outside"),
     (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=1 << 20), "reach past"),
     # Enumerants no table spells (round 17's R17-7: taken as unknown, the
@@ -72,23 +72,24 @@ def test_astc_names_are_enumerants(tmp_path):
     (lambda c: c.add("glTexImage1D", target="GL_TEXTURE_1D", level=0, internalformat="GL_RGBA8\n", width=4,
                      border=0, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=None), "is not an enumerant"),
     (lambda c: c.add("glFramebufferTextureLayer", target="GL_FRAMEBUFFER", attachment="GL_COLOR_ATTACHMENT0",
-                     texture=4, level=0), "glFramebufferTextureLayer: no layer"),
+                     texture=4, level=0), "glFramebufferTextureLayer's arguments are named"),
     (lambda c: c.add("glTextureView", texture=5, target="GL_TEXTURE_2D", origtexture=4, internalformat="GL_RGBA8",
                      minlevel=-1, numlevels=1, minlayer=0, numlayers=1), "the minlevel: -1 is outside"),
     # Arguments missing or added, renderbuffer storage and binds (R28-1
     # to R28-3: taken, some changing the trace).
     (lambda c: c.add("glTexStorage2D", levels=1, internalformat="GL_RGBA8", width=64, height=48),
-     "glTexStorage2D: no target"),
+     "glTexStorage2D's arguments are named (levels, "),
     (lambda c: c.add("glTexImage2D", target="GL_TEXTURE_2D", level=0, internalformat="GL_RGBA8", width=4, height=4,
                      border=0, format="GL_RGBA", type="GL_UNSIGNED_BYTE", pixels=None, extra=1),
-     "arguments apitrace does not write (extra)"),
+     "glTexImage2D's arguments are named (target, level, internalformat, width, height, border, format, type, "
+     "pixels, extra)"),
     (lambda c: c.add("glTexStorage2DMultisample", target="GL_TEXTURE_2D_MULTISAMPLE", samples=4,
                      internalformat="GL_RGBA8", width=4, height=4, fixedsamplelocations=[1]),
      "fixedsamplelocations"),
     (lambda c: c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat=float("nan"), width=4,
                      height=4), "glRenderbufferStorage: the internalformat: nan is not an enumerant"),
     (lambda c: c.add("glNamedRenderbufferStorage", renderbuffer=5, internalformat="GL_RGBA8", height=4),
-     "glNamedRenderbufferStorage: no width"),
+     "glNamedRenderbufferStorage's arguments are named (renderbuffer, internalformat, height)"),
     (lambda c: c.add("glRenderbufferStorage", target="GL_RENDERBUFFER", internalformat="GL_RGBA8", width=1 << 40,
                      height=4), "the width: 1099511627776 is outside"),
     (lambda c: c.add("glBindTexture", target=float("nan"), texture=4), "glBindTexture: the target: nan"),
@@ -1336,10 +1337,16 @@ def test_a_fragment_only_program_is_counted(tmp_path):
     (lambda c: c.add("glShaderSource", shader=1, count=5, string=["x"], length=None), "as many as its count"),
     (lambda c: c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=1 << 32), "4294967296 is outside"),
     (lambda c: c.add("glUniform1i", location=1 << 40, v0=1), "the location: 1099511627776 is outside"),
-    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0), "glDrawArrays: no count"),
+    (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0), "glDrawArrays's arguments are named (mode, first)"),
     (lambda c: c.add("glBufferData", target="GL_ARRAY_BUFFER", size=36, data=[1, 2], usage="GL_STATIC_DRAW"),
      "the data is neither bytes"),
-], ids=["uniform_count", "memcpy_length", "source_count", "framebuffer_name", "location", "no_count", "data_list"])
+    # Index bytes with an element buffer bound, where apitrace records an
+    # offset into it (round 34's D6: the bytes drawn).
+    (lambda c: c.add("glGenBuffers", n=1, buffers=[8]).add("glBindBuffer", target="GL_ELEMENT_ARRAY_BUFFER", buffer=8)
+     .add("glDrawElements", mode="GL_TRIANGLES", count=3, type="GL_UNSIGNED_SHORT", indices=struct.pack("<3H", 0, 1, 2)),
+     "glDrawElements: indices recorded as bytes while element buffer 8 is bound"),
+], ids=["uniform_count", "memcpy_length", "source_count", "framebuffer_name", "location", "no_count", "data_list",
+        "index_bytes_with_element_buffer"])
 def test_records_that_no_gl_call_makes(tmp_path, build, words):
     c = shader_calls(VS)
     build(c)
@@ -1682,7 +1689,8 @@ def test_a_failed_relink_keeps_the_executable_in_use(tmp_path):
     ("glUniform1i", dict(v0=1 << 31), "a value: 2147483648 is outside"),
     ("glUniform1ui", dict(v0=-1), "a value: -1 is outside"),
     ("glUniform1i", dict(v0=1.5), "a value: 1.5 is not an integer"),
-    ("glUniform3f", dict(v0=1.0, v1=1.0), "2 values, not 3"),
+    ("glUniform3f", dict(v0=1.0, v1=1.0), "glUniform3f's arguments are named (location, v0, v1); apitrace writes "
+     "(location, v0, v1, v2)"),
 ])
 def test_uniform_values_past_their_c_types_are_named(tmp_path, fn, values, words):
     """Values a glUniform's C types cannot take: the capture's error, named
@@ -2073,7 +2081,9 @@ def test_texture_buffers_as_mesa_takes_them(tmp_path):
     for calls, frags in [([whole], moved), ([rng()], moved), ([rng(offset=4)], still), ([whole, rng(offset=4)], moved),
                          ([whole, rng(offset=-16)], moved), ([whole, rng(size=0)], moved),
                          ([whole, rng(offset=16, size=32)], moved), ([rng(fmt="GL_DEPTH_COMPONENT24")], still),
-                         ([whole, rng(fmt="GL_LUMINANCE8")], moved), ([whole, rng(fmt=0x8229)], moved),
+                         ([whole, rng(fmt="GL_LUMINANCE8")], moved), ([whole, rng(fmt="GL_R8")], still),
+                         # GL_R8 by value, as the driver takes it (round 34's D2: unknown, nothing changed)
+                         ([whole, rng(fmt=0x8229)], still),
                          ([whole, ("glTexBuffer", dict(internalformat="GL_R32F", buffer=0))], still)]:
         assert fragments(tmp_path, texel_draw(*calls).write(tmp_path / "a.xz")) == [frags], calls
     for value, words in [(float("nan"), "the offset: nan is not an integer"),
@@ -2261,11 +2271,78 @@ def test_arguments_out_of_the_function_s_order_are_read_by_name(tmp_path, fn):
     in another order than the C prototype's (apitrace's, the registry's):
     read by their names, the trace the same as in order (round 33's D1:
     read by position, glOrtho's right taken as its left, exit 0 with a
-    mirrored frame)."""
-    pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl): the order is PyOpenGL's")
+    mirrored frame). glDepthRange and glOrthof by apitrace's names, which
+    are not the registry's (round 34's D1: read by position)."""
     c = Calls().triangle(obj=1).swap()
     want = trace_bytes(tmp_path, c, "in_order")
     i = next(k for k, call in enumerate(c.calls) if call[1] == fn)
     no, name, args, ret, flags = c.calls[i]
     c.calls[i] = (no, name, [args[1], args[0]] + args[2:], ret, flags)
     assert trace_bytes(tmp_path, c, "swapped") == want
+
+
+def test_functions_named_by_apitrace_otherwise_than_the_registry_are_put_in_order(tmp_path):
+    """glDepthRange's arguments are zNear and zFar in apitrace (n and f in
+    the registry): given far first, they are read by name (round 34's D1:
+    read by position, the depth range reversed, exit 0)."""
+    def capture(swapped):
+        c = Calls().add("glEnable", cap="GL_DEPTH_TEST")
+        args = [("zNear", 0.25), ("zFar", 0.75)]
+        c.calls.append((len(c.calls) + 1, "glDepthRange", args[::-1] if swapped else args, None, 0))
+        return c.triangle(obj=1).swap()
+    want = trace_bytes(tmp_path, capture(False), "in_order")
+    assert trace_bytes(tmp_path, capture(True), "swapped") == want
+
+
+@pytest.mark.parametrize("fn, args, words", [
+    ("glOrtho", [("left", 0), ("right", 64), ("bottom", 0), ("up", 48), ("zNear", -100), ("zFar", 100)],
+     "glOrtho's arguments are named (left, right, bottom, up, zNear, zFar); apitrace writes (left, right, bottom, "
+     "top, zNear, zFar)"),
+    ("glOrtho", [("left", 0), ("right", 64), ("bottom", 0), ("top", 48), ("zNear", -100)],
+     "glOrtho's arguments are named (left, right, bottom, top, zNear)"),
+    ("glOrtho", [("left", 0), ("right", 64), ("bottom", 0), ("top", 48), ("zNear", -100), ("zFar", 100), ("w", 1)],
+     "glOrtho's arguments are named (left, right, bottom, top, zNear, zFar, w)"),
+    ("glDepthRange", [("n", 0.0), ("f", 1.0)], "glDepthRange's arguments are named (n, f); apitrace writes (zNear, zFar)"),
+    ("glLoadMatrixf", [("m", [1.0] * 15)], "glLoadMatrixf: the m holds 15 values, not 16"),
+], ids=["renamed", "missing", "extra", "registry_names", "short_list"])
+def test_a_call_whose_arguments_are_not_the_function_s_is_refused(tmp_path, fn, args, words):
+    """A reduced capture's call naming a parameter its function lacks,
+    leaving one out, adding one, or giving a fixed-length array another
+    length (apitrace writes every parameter, by its names, and an array of
+    its length): refused naming the call, nothing left (round 34's D1: read
+    by position, exit 0)."""
+    c = Calls()
+    c.calls.append((len(c.calls) + 1, fn, args, None, 0))
+    cap = c.triangle(obj=1).swap().write(tmp_path / "a.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "a.rbt")
+    refused(r, "a.xz", "call 6: ", words)
+    assert left_behind(tmp_path, ["a.xz"]) == []
+
+
+# The enumerants test_enumerants_given_by_value_are_the_driver_s gives by value.
+ENUMERANT_VALUES = {"GL_PROJECTION": 0x1701, "GL_MODELVIEW": 0x1700, "GL_TRIANGLES": 4, "GL_DEPTH_TEST": 0x0B71,
+                    "GL_GREATER": 0x0204, "GL_CULL_FACE": 0x0B44, "GL_FRONT": 0x0404, "GL_CW": 0x0900,
+                    "GL_FLOAT": 0x1406, "GL_VERTEX_ARRAY": 0x8074}
+
+
+def test_enumerants_given_by_value_are_the_driver_s(tmp_path):
+    """A reduced capture's enumerants given by value (apitrace writes their
+    names): each is the enumerant of that value among those the call takes,
+    as the driver takes it, so the trace is the one with names, culling the
+    front face of a clockwise-front triangle and testing depth GL_GREATER
+    (round 34's D2: glCullFace(1028), glMatrixMode(5889) and draw mode 4
+    taken as unknown, glEnable(2929) refused). A value no enumerant has
+    stays GL_INVALID_ENUM: glEnable of it changes nothing."""
+    def capture(by_value):
+        c = Calls().add("glEnable", cap="GL_DEPTH_TEST").add("glDepthFunc", func="GL_GREATER")
+        c.add("glEnable", cap="GL_CULL_FACE").add("glCullFace", mode="GL_FRONT").add("glFrontFace", mode="GL_CW")
+        c.triangle(obj=1).swap()
+        if by_value:
+            c.calls = [(no, fn, [(k, ENUMERANT_VALUES.get(v, v) if isinstance(v, str) else v) for k, v in args], ret,
+                        flags) for no, fn, args, ret, flags in c.calls]
+        return c
+    want = trace_bytes(tmp_path, capture(False), "names")
+    assert want.count(b"\nf ") > 100
+    assert trace_bytes(tmp_path, capture(True), "values") == want
+    c = Calls().add("glEnable", cap=0x7FFF1234).triangle(obj=1).swap()
+    assert trace_bytes(tmp_path, c, "unknown") == trace_bytes(tmp_path, Calls().triangle(obj=1).swap(), "plain")

@@ -356,6 +356,23 @@ def test_dash_is_standard_output_for_every_output(tmp_path, option, starts):
     assert (tmp_path / "-").read_bytes() == b"keep"
 
 
+@pytest.mark.parametrize("option", ["-o", "--summary"])
+def test_an_output_on_a_closed_standard_output_fails_the_run(tmp_path, option):
+    """An output to standard output when it is closed: one line, exit 1
+    (the run's environment, as a write that fails: docs/gl-capture.md),
+    nothing left (round 34: "-: cannot create: Bad file descriptor",
+    exit 2, as if the command line were wrong)."""
+    cap = Calls().frame().write(tmp_path / "c.xz")
+    env = dict(os.environ, RBCD_GL_RASTER=program("rbcd-gl-raster"), TMPDIR=str(tmp_path))
+    args = [cap, "-o", "-"] if option == "-o" else [cap, "-o", tmp_path / "c.rbt", option, "-"]
+    r = subprocess.run(["/usr/bin/python3", GL2RBT] + [str(a) for a in args], stdout=subprocess.DEVNULL,
+                       stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path, timeout=120,
+                       preexec_fn=lambda: os.close(1))
+    assert r.returncode == 1 and r.stderr.strip().splitlines() == [
+        f"rbcd-gl2rbt: {option}: standard output is closed; no output written"], r.stderr
+    assert left_behind(tmp_path, ["c.xz"]) == []
+
+
 def test_a_listing_image_of_a_large_screen_is_built_in_bounded_memory(tmp_path):
     """--image of a 4096 x 4096 frame one draw covers: the label's place
     from counts, not every pixel's coordinates (16 bytes a pixel, 256 MiB

@@ -216,10 +216,17 @@ def test_odd_calls_do_what_mesa_does():
     (lambda gl: gl.glPushDebugGroup(source="GL_DEBUG_SOURCE_APPLICATION", id=1, length=-1, message=[1]),
      "the message is not a string"),
     (lambda gl: gl.glFlush(flags=-1), "the call's flags -1 are not apitrace's"),
+    # Bits above the eleven apitrace defines (round 34's D5: taken).
+    (lambda gl: gl.glFlush(flags=1 << 20), "the call's flags 1048576 are not apitrace's"),
+    (lambda gl: gl.glXSwapBuffers(dpy=1, drawable=2, flags=0xFFFFFFFF), "the call's flags 4294967295 are not"),
+    # A swap without the window it shows (round 34's D5: taken as the main one's).
+    (lambda gl: gl.glXSwapBuffers(dpy=1, flags=32), "glXSwapBuffers without its drawable"),
+    (lambda gl: gl.eglSwapBuffers(dpy=1, flags=32), "eglSwapBuffers without its surface"),
     (lambda gl: gl.glDepthFunc(1 << 70), "is not an enumerant"),
     (lambda gl: gl.glDepthMask(256), "is not a GLboolean"),
 ], ids=["begin_list", "mask_list", "mask_none", "clear_none", "clear_float", "func_nan", "mode_none", "message",
-        "flags", "enum_width", "boolean_width"])
+        "flags", "flags_unknown_bit", "flags_all", "swap_no_drawable", "swap_no_surface", "enum_width",
+        "boolean_width"])
 def test_values_no_gl_call_takes_are_refused_naming_the_call(call, words):
     gl = GL()
     with pytest.raises(ConvertError, match=r"^call 1: .*" + re.escape(words)):
@@ -503,7 +510,7 @@ def test_rules_name_a_texture_by_its_image_whatever_its_name(tmp_path):
 def test_frames_end_at_swaps_and_unmodelled_calls_are_refused():
     gl = GL()
     square(gl)
-    swap = gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
+    swap = gl.glXSwapBuffers(dpy=1, drawable=2, flags=CALL_FLAG_END_FRAME)
     gl.glBindTexture(target="GL_TEXTURE_2D", texture=9)   # passed over: cannot move a fragment
     square(gl)
     kinds = [r[0] for r in gl.records()]
@@ -978,7 +985,7 @@ def test_a_part_of_a_cleared_buffer_cleared_after_it_is_given_back():
     gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=0)
     gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
     assert gl.conv.depths_of("window").clear == 0.3, "a scissor box past the screen clears all of it"
-    gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
+    gl.glXSwapBuffers(dpy=1, drawable=2, flags=CALL_FLAG_END_FRAME)
     assert [w for *_, w, _ in gl.conv.last_3d_draws] == [None], "every depth-tested draw had its buffer kept"
 
 
@@ -1013,7 +1020,7 @@ def test_depths_the_converter_cannot_follow_are_reported(how):
         gl.glClear(mask="GL_DEPTH_BUFFER_BIT")
         gl.glCopyTexSubImage2D(target="GL_TEXTURE_2D", level=0, xoffset=0, yoffset=0, x=0, y=0, width=W, height=H)
     square(gl)
-    gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
+    gl.glXSwapBuffers(dpy=1, drawable=2, flags=CALL_FLAG_END_FRAME)
     (wrong,) = [w for *_, w, _ in gl.conv.last_3d_draws]
     assert wrong is not None and ("resolve" if how == "resolve" else "glCopyTexSubImage2D") in wrong, wrong
 
@@ -1235,7 +1242,7 @@ def test_the_check_compares_at_the_bits_of_the_buffer_drawn_into(fmt, bits):
         gl.glBindFramebuffer(target="GL_FRAMEBUFFER", framebuffer=5)
     gl.glEnable("GL_DEPTH_TEST")
     square(gl)
-    gl.glXSwapBuffers(flags=CALL_FLAG_END_FRAME)
+    gl.glXSwapBuffers(dpy=1, drawable=2, flags=CALL_FLAG_END_FRAME)
     assert [b for *_, b in gl.conv.last_3d_draws] == [bits]
 
 

@@ -12,10 +12,14 @@ from rbcd.gl2rbt.reduced import REDUCED_HEADER, ReducedWriter, is_reduced_captur
 
 CALLS = [
     (1, "glViewport", [("x", 0), ("y", 0), ("width", 128), ("height", 96)], None, 1),
-    (2, "glTexEnvi", [("pname", "GL_TEXTURE_ENV_MODE")], None, 0),   # cannot move a fragment: left out
-    (3, "glTexImage2D", [("width", 64), ("height", 32), ("pixels", b"\xff" * 4096)], None, 0),   # its size kept
+    (2, "glTexEnvi", [("target", "GL_TEXTURE_ENV"), ("pname", "GL_TEXTURE_ENV_MODE"), ("param", "GL_MODULATE")],
+     None, 0),   # cannot move a fragment: left out
+    (3, "glTexImage2D", [("target", "GL_TEXTURE_2D"), ("level", 0), ("internalformat", "GL_RGBA8"), ("width", 64),
+                         ("height", 32), ("border", 0), ("format", "GL_RGBA"), ("type", "GL_UNSIGNED_BYTE"),
+                         ("pixels", b"\xff" * 8192)], None, 0),   # its size kept
     (4, "glBindTexture", [("target", "GL_TEXTURE_2D"), ("texture", 7)], None, 0),   # kept: rules name textures
-    (5, "glVertexPointer", [("size", 3), ("pointer", PointerType(0x7F00))], None, 0),
+    (5, "glVertexPointer", [("size", 3), ("type", "GL_FLOAT"), ("stride", 0), ("pointer", PointerType(0x7F00))], None,
+     0),
     (6, "glXSwapBuffers", [("dpy", PointerType(1)), ("drawable", 2)], None, 32),
     (7, "glTexEnvf", [("target", "GL_TEXTURE_FILTER_CONTROL"), ("pname", "GL_TEXTURE_LOD_BIAS"), ("param", 1.0)],
      None, 0),   # kept: a texture unit's bias moves a vertex shader's texture() level
@@ -36,9 +40,10 @@ def test_round_trip_keeps_what_the_emulation_reads(tmp_path):
     got = list(read_reduced_calls(str(p)))
     assert [c[0] for c in got] == [1, 3, 4, 5, 6, 7], \
         "a texture environment call is left out, the binding and a texture unit's bias kept"
-    assert got[1][2] == [("width", 64), ("height", 32), ("pixels", ("rbcd-digest", texture_image_digest(
-        dict(CALLS[2][2]))))], "a texture's size kept, and its image's digest in place of its pixels"
-    assert got[3][2] == [("size", 3), ("pointer", 0x7F00)] and type(got[3][2][1][1]) is int, \
+    assert got[1][2] == CALLS[2][2][:-1] + [("pixels", ("rbcd-digest", texture_image_digest(dict(CALLS[2][2]))))], \
+        "a texture's size kept, and its image's digest in place of its pixels"
+    assert got[3][2] == [("size", 3), ("type", "GL_FLOAT"), ("stride", 0), ("pointer", 0x7F00)] \
+        and type(got[3][2][3][1]) is int, \
         "pointers become plain integers"
     assert got[0] == CALLS[0] and got[4][4] == 32, "arguments and call flags as read"
     assert not [f for f in os.listdir(tmp_path) if f.startswith(".")], "no temporary left"
@@ -88,12 +93,15 @@ def test_pixel_rectangles_keep_their_size_not_their_pixels(tmp_path):
     write (not emulated with depth writes on): kept, their pixels left out."""
     p = tmp_path / "c.calls.xz"
     write(p, CALLS[:1] + [
-        (2, "glDrawPixels", [("width", 10), ("height", 10), ("format", "GL_RGBA"), ("pixels", b"\0" * 400)], None, 0),
-        (3, "glBitmap", [("width", 0), ("height", 0), ("xmove", 5.0), ("bitmap", None)], None, 0),
+        (2, "glDrawPixels", [("width", 10), ("height", 10), ("format", "GL_RGBA"), ("type", "GL_UNSIGNED_BYTE"),
+                             ("pixels", b"\0" * 400)], None, 0),
+        (3, "glBitmap", [("width", 0), ("height", 0), ("xorig", 0.0), ("yorig", 0.0), ("xmove", 5.0), ("ymove", 0.0),
+                         ("bitmap", None)], None, 0),
         (4, "glPrimitiveRestartNV", [], None, 0)] + CALLS[5:6])
     got = list(read_reduced_calls(str(p)))
     assert [c[1] for c in got] == ["glViewport", "glDrawPixels", "glBitmap", "glPrimitiveRestartNV", "glXSwapBuffers"]
-    assert got[1][2] == [("width", 10), ("height", 10), ("format", "GL_RGBA"), ("pixels", None)]
+    assert got[1][2] == [("width", 10), ("height", 10), ("format", "GL_RGBA"), ("type", "GL_UNSIGNED_BYTE"),
+                         ("pixels", None)]
 
 
 def test_the_source_s_size_is_carried_and_credited_within_bounds(tmp_path):

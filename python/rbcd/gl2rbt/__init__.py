@@ -19,7 +19,7 @@ of rules. Everything else is the GPU's other work.
 
 Exit status: 0 done; 2 bad capture, call, selection file or command line (one
 line on stderr naming the capture and call number, no output left); 1 a tool
-failed. Needs apitrace (scripts/setup.sh --gl) and numpy.
+failed. Needs apitrace, numpy and the OpenGL registry (khronos-api): scripts/setup.sh --gl.
 
 The package, by concern:
 
@@ -27,6 +27,7 @@ The package, by concern:
     capture        the capture, apitrace's or reduced; apitrace: apitrace's reader
     reduced        the reduced capture's format, read and written
     converter      the emulation: the GL state, call by call, into draw records
+    gl_registry    GL's functions and enumerants (Khronos' gl.xml) as apitrace writes them
     glstate/       the GL state by state group, with its calls' handlers
     glmath         fixed-function matrices and primitive assembly
     selection      selection files; entities: the objects of unmodified games

@@ -1,6 +1,7 @@
 """rbcd-gl2rbt's command line."""
 import argparse
 import errno
+import os
 import re
 import signal
 import sys
@@ -99,6 +100,15 @@ def run(args):
             # "-" had been written, while the report moved to stderr).
             if getattr(args, attr) == "-":
                 setattr(args, attr, "/dev/stdout")
+        to_stdout = [opt for opt, value in (("-o", args.output), ("--geometry", args.geometry), ("--summary", args.summary),
+                                            ("--reduced-out", args.reduced_out), ("--image", args.image))
+                     if value in ("-", "/dev/stdout")]
+        if to_stdout:
+            try:
+                os.fstat(1)
+            except OSError:
+                # (the run's environment, not its input: as a write that fails)
+                raise ToolError(f"{to_stdout[0]}: standard output is closed; no output written") from None
         if not args.check_depth:
             for opt, value in (("--check-frames", args.check_frames), ("--min-agreement", args.min_agreement)):
                 if value is not None:

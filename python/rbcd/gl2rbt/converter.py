@@ -6,7 +6,8 @@ import struct
 from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
-from .gl_tables import (CALL_FLAG_END_FRAME, COMPAT_ONLY, COMPAT_ONLY_FORMS, END_FRAME_CALLS, IGNORED_PREFIXES,
+from .gl_registry import named_enumerants
+from .gl_tables import (CALL_FLAG_END_FRAME, CALL_FLAGS_APITRACE, SWAP_HANDLES, COMPAT_ONLY, COMPAT_ONLY_FORMS, END_FRAME_CALLS, IGNORED_PREFIXES,
                         ES_ONLY_FORMS, MESA_NO_OPS, TEXTURE_CHANGING, TEXTURE_IGNORED, base_name)
 from .glstate import CONVERSION_STATE, SHARED_STATE, GLState
 from .glstate.image_calls import checked_calls, image_call_args
@@ -78,14 +79,20 @@ BUFFER_TARGET_ARGS = {"target", "readTarget", "writeTarget"}
 TARGET_SUFFIXES = ("_BUFFER_ARB", "_BUFFER_EXT", "_BUFFER_OES")
 
 
-def swapped_drawable(args, no):
-    """The window or surface a buffer swap (call `no`) names
-    (glXSwapBuffers' drawable, eglSwapBuffers' surface, wglSwapBuffers'
-    device context): a handle, as apitrace records one, or None (a frame
-    terminator names none); anything else is the capture's error."""
+def swapped_drawable(name, args, no):
+    """The window or surface buffer swap `name` (call `no`) names
+    (SWAP_HANDLES: glXSwapBuffers' drawable, eglSwapBuffers' surface,
+    wglSwapBuffers' device context): a handle, as apitrace records one, or
+    None (a frame terminator names none); anything else, or none where
+    apitrace records one, is the capture's error."""
+    key = SWAP_HANDLES.get(name)
+    if key is None:
+        return None
     d = dict(args)
-    v = d.get("drawable", d.get("surface", d.get("hdc")))
-    if v is not None and (not isinstance(v, int) or isinstance(v, bool) or not 0 <= v < 1 << 64):
+    if key not in d:
+        fail_call(no, f"{printable(name)} without its {key} (apitrace records the one swapped)")
+    v = d[key]
+    if not isinstance(v, int) or isinstance(v, bool) or not 0 <= v < 1 << 64:
         fail_call(no, f"the buffer swap's drawable {printable(v, 40)} is not a handle")
     return v
 
@@ -278,7 +285,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
     # ---- the call handlers
     def handle(self, call):
         no, name, args, ret, flags = call
-        if isinstance(flags, bool) or not isinstance(flags, int) or not 0 <= flags < 1 << 32:
+        if isinstance(flags, bool) or not isinstance(flags, int) or not 0 <= flags <= CALL_FLAGS_APITRACE:
             fail_call(no, f"{printable(name)}: the call's flags {printable(flags, 40)} are not apitrace's")
         if flags & CALL_FLAG_END_FRAME and name not in END_FRAME_CALLS:
             fail_call(no, f"{printable(name)}: the end-of-frame flag on a call that ends no frame "
@@ -295,12 +302,14 @@ class Converter(*STATE_GROUPS, GeometryOutput):
                 fail_call(no, f"{printable(name)}: an argument apitrace does not write ({REDUCED_TEXTURES})")
             self.restore_texture_calls(no, name, args[-1][1])
             args = args[:-1]
+        base = base_name(name)
+        if base in self.HANDLERS:
+            args = named_enumerants(name, args)
         if any(k in BUFFER_TARGET_ARGS and isinstance(v, str) and v.endswith(TARGET_SUFFIXES) for k, v in args):
             # apitrace names some buffer targets by their extension's enumerant
             # (GL_PARAMETER_BUFFER_ARB): the same value as the core name.
             args = [(k, v.rsplit("_", 1)[0] if k in BUFFER_TARGET_ARGS and isinstance(v, str)
                      and v.endswith(TARGET_SUFFIXES) else v) for k, v in args]
-        base = base_name(name)
         if base in self.IMAGE_CALLS:
             args = image_call_args(no, name, args)
             self.pixels_held(no, name, dict(args))
@@ -381,7 +390,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         A window drawn into and swapped twice while the main one had
         neither takes its place (the game moved to a window made anew:
         a resolution change)."""
-        swapped = swapped_drawable(args, no)
+        swapped = swapped_drawable(self.last_name, args, no)
         if self.main_drawable is None or swapped == self.main_drawable or swapped not in self.drawables:
             self.main_idle = {}
             return True

@@ -257,7 +257,8 @@ def check_depth(args):
     if first_only:
         raise ConvertError("only frame 0 draws with the depth test on into a depth buffer the converter follows "
                            "and Mesa's replay reads back, and glretrace replays a capture's first frame wrongly at "
-                           "times: --frames 0:0 checks it alone (docs/gl-capture.md, the check against Mesa)")
+                           "times, so its agreement may mean nothing: --frames 0:0 checks it all the same "
+                           "(docs/gl-capture.md, the check against Mesa)")
     if not frames:
         raise ConvertError("no selected frame draws with the depth test on into a depth buffer the converter "
                            "follows and Mesa's replay reads back: nothing to check")

@@ -4,6 +4,9 @@
 # state (the window's size at MakeCurrent), and a call that ends a frame.
 CALL_FLAG_FAKE = 1 << 0
 CALL_FLAG_END_FRAME = 1 << 5
+# The eleven flags apitrace 11.1 defines (fake to marker pop): a bit above
+# them is in no capture apitrace writes.
+CALL_FLAGS_APITRACE = (1 << 11) - 1
 # The calls apitrace's reader flags as ending a frame (it flags calls by
 # their name: the buffer swaps and glFrameTerminatorGREMEDY). The flag on
 # any other call (a draw) is in no capture apitrace writes: the capture's
@@ -12,6 +15,11 @@ END_FRAME_CALLS = frozenset({
     "glXSwapBuffers", "eglSwapBuffers", "eglSwapBuffersWithDamageEXT", "eglSwapBuffersWithDamageKHR",
     "wglSwapBuffers", "wglSwapLayerBuffers", "wglSwapMultipleBuffers", "CGLFlushDrawable",
     "glFrameTerminatorGREMEDY"})
+# The argument naming the window or surface each swap shows (apitrace's
+# names; the frame terminator and wglSwapMultipleBuffers name none alone).
+SWAP_HANDLES = {"glXSwapBuffers": "drawable", "eglSwapBuffers": "surface", "eglSwapBuffersWithDamageEXT": "surface",
+                "eglSwapBuffersWithDamageKHR": "surface", "wglSwapBuffers": "hdc", "wglSwapLayerBuffers": "hdc",
+                "CGLFlushDrawable": "ctx"}
 
 PRIM_TRIANGLES = {"GL_TRIANGLES", "GL_TRIANGLE_STRIP", "GL_TRIANGLE_FAN", "GL_QUADS", "GL_QUAD_STRIP", "GL_POLYGON"}
 PRIM_NO_AREA = {"GL_POINTS", "GL_LINES", "GL_LINE_STRIP", "GL_LINE_LOOP"}

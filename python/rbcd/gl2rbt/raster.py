@@ -167,7 +167,7 @@ def first_window(args):
                 probe.last_call = call[0]
                 probe.handle(call)
             if isinstance(flags, int) and flags & CALL_FLAG_END_FRAME:
-                swapped = swapped_drawable(call[2], call[0])
+                swapped = swapped_drawable(call[1], call[2], call[0])
                 if drawn and swapped == drawn[0]:
                     return swapped
                 if swapped in drawn:

@@ -15,6 +15,7 @@ from .apitrace import MAX_RECORD_VALUES, CallReader, PointerType, call_values_wi
 from ..cli import U63
 from .errors import ConvertError, printable
 from .converter import STATE_UPDATES, Converter
+from .gl_registry import registry
 from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
 from .glstate.framebuffers import texture_image_digest
 from .glstate.texture_formats import DIGEST_TAG
@@ -379,39 +380,34 @@ def read_reduced_calls(path):
         raise ConvertError(f"{where(last)}: the reduced capture does not decode ({printable(e, 80)})")
 
 
-# A function's parameters in GL's order (the registry's, PyOpenGL's), by
-# name; None where PyOpenGL lacks it or is not installed.
-_PARAMETERS = {}
-
-
-def gl_parameters(name):
-    if name not in _PARAMETERS:
-        names = None
-        if name.startswith("gl") and name.isidentifier():
-            try:
-                os.environ["PYOPENGL_PLATFORM"] = "egl"   # (as mesa.py sets it: PyOpenGL reads it once)
-                from OpenGL import GL
-                f = getattr(GL, name, None)
-                f = getattr(f, "wrappedOperation", f)
-                names = tuple(getattr(f, "argNames", None) or ()) or None
-            except Exception:   # noqa: BLE001: PyOpenGL missing or failing to load: nothing to compare with
-                names = None
-        _PARAMETERS[name] = names
-    return _PARAMETERS[name]
-
-
 def in_order(c):
-    """The call with its arguments in the order apitrace decodes them, the
-    function's own (the C prototype's, the registry's), where the record
-    names the function's parameters in another order: a reduced capture
-    names every argument, and handlers read some by position (an altered
-    record with glOrtho's right before its left had been read as a
-    mirrored projection, exit 0)."""
-    names = tuple(k for k, _ in c[2])
-    want = gl_parameters(c[1])
-    if want and names != want and sorted(names) == sorted(want):
-        by_name = dict(c[2])
-        return (c[0], c[1], [(k, by_name[k]) for k in want], c[3], c[4])
+    """The call with its arguments as apitrace writes them: the function's
+    parameters (gl_registry: apitrace's names, the prototype's order), each
+    fixed-length array of its length. A record naming them in another order
+    is put in order (handlers read some by position: an altered record with
+    glOrtho's right before its left had been read as a mirrored
+    projection); one naming a parameter the function lacks or leaving one
+    out, or an array of another length (glVertex3fv of two), is the
+    reduced capture's error. Calls the registry lacks (the window
+    system's, memcpy) are taken as they are; their handlers read by name."""
+    no, name, args = c[0], c[1], c[2]
+    sig = registry().signature(name) if name.startswith("gl") else None
+    if sig is None:
+        return c
+    extra = args[-1:] if args and args[-1][0] == REDUCED_TEXTURES else []
+    own = args[:len(args) - len(extra)]
+    want = tuple(p[0] for p in sig)
+    names = tuple(k for k, _ in own)
+    if names != want:
+        if sorted(names) != sorted(want):
+            raise ConvertError(f"call {no}: {printable(name)}'s arguments are named ({printable(', '.join(names))}); "
+                               f"apitrace writes ({', '.join(want)})")
+        by_name = dict(own)
+        own = [(k, by_name[k]) for k in want]
+        c = (no, name, own + extra, c[3], c[4])
+    for (k, v), p in zip(own, sig):
+        if p[3] is not None and isinstance(v, list) and len(v) != p[3]:
+            raise ConvertError(f"call {no}: {printable(name)}: the {k} holds {len(v)} values, not {p[3]}")
     return c
 
 

@@ -17,8 +17,7 @@ import re
 import numpy as np
 
 from .errors import fail_call, printable
-from .gl_tables import INDEX_TYPES
-from .glstate.attributes import Attrib, Binding, element_bytes
+from .glstate.attributes import check_vertex_data, element_bytes
 from .glstate.buffers import merge_extents
 from .glstate.programs import COMMENTS, SAMPLER_SETTERS
 from .glstate.textures import DEFAULT_BUFFER_TEXTURE
@@ -101,86 +100,6 @@ def es_fragment_shader(vertex_source):
     if version == "100":
         return "#version 100\nprecision mediump float;\nvoid main() { gl_FragColor = vec4(0.0); }\n"
     return f"#version {version} es\nprecision mediump float;\nout vec4 c;\nvoid main() {{ c = vec4(0.0); }}\n"
-
-
-def check_vertex_data(conv, no, name, d, instances, client_indices, mp):
-    """What a draw reads must be data the capture holds: apitrace records,
-    for each client array and for client indices, the bytes the draw reads,
-    and a buffer object's data as the capture gave it. An indexed draw with
-    no element array buffer bound and no indices recorded (an offset, which
-    would be an address), and client data shorter than the draw reads (a
-    capture cut or altered, or apitrace's blob of no bytes for an ES
-    half-float array), are the capture's errors: Mesa would read memory
-    outside it. Indices, a first or instances that reach outside an
-    attribute's buffer object are refused too: GL leaves what they read
-    undefined, and Mesa 22.3's llvmpipe, which read zeros just past a
-    buffer's end, crashed far past it (round 31's R31-6)."""
-    lo = hi = None   # the vertices an indexed draw reads, basevertex added
-    if "Elements" in name:
-        kind = np.dtype(INDEX_TYPES[d["type"]])
-        if client_indices is None:
-            elem = conv.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
-            if not elem:
-                fail_call(no, f"{name}: no element array buffer is bound and the capture holds no indices "
-                          f"(indices at address {d.get('indices') or 0})")
-            data = conv.checked_buffer(no, name, elem, "indices") or b""
-            start = d.get("indices") or 0
-            if start + d["count"] * kind.itemsize > len(data):
-                # GL leaves what they read undefined (round 16's R16-8: 2^22
-                # of them past a 12-byte buffer ran Mesa to 1.9 GB).
-                fail_call(no, f"{name}: {d['count']} indices from byte {start} reach past element "
-                          f"buffer {elem}'s {len(data)} bytes: not emulated")
-            idx = np.frombuffer(data, dtype=kind, count=d["count"], offset=start)
-        else:
-            if len(client_indices) < d["count"] * kind.itemsize:
-                fail_call(no, f"{name}: the capture's indices are {len(client_indices)} bytes, the draw reads "
-                          f"{d['count'] * kind.itemsize}")
-            idx = np.frombuffer(client_indices, dtype=kind, count=d["count"])
-        if conv.s.restart_fixed:
-            idx = idx[idx != (1 << 8 * kind.itemsize) - 1]
-        elif conv.s.restart:
-            idx = idx[idx != conv.s.restart_index]
-        if len(idx):
-            lo, hi = int(idx.min()) + d.get("basevertex", 0), int(idx.max()) + d.get("basevertex", 0)
-            if lo < 0:
-                fail_call(no, f"{name}: index {int(idx.min())} with base vertex {d.get('basevertex', 0)} reads "
-                          "before every attribute's data: not emulated")
-    vao = conv.current_vao()
-    sources = vao.sources()
-    if mp.reads_vertex and conv.s.vertex_array_enabled and not (0 in vao.attribs and vao.attribs[0].enabled):
-        sources.append(("0 (the vertex array)",) + fixed_source(conv.s.vertex_array))
-    for i, at, b in sources:
-        held = b.client if not b.buffer else conv.s.buffers.get(b.buffer)
-        if not at.enabled or held is None:
-            continue   # (a buffer that holds no data is refused where Mesa is given it)
-        if b.divisor:
-            n = d.get("baseinstance", 0) + (instances - 1) // b.divisor + 1
-        elif "Elements" in name:
-            n = hi + 1 if hi is not None else 0
-        else:
-            n = d.get("first", 0) + d["count"]
-        # (client memory: from the array's start, offset 0 or relative)
-        need = (b.offset if b.buffer else 0) + at.relative + (n - 1) * b.stride + element_bytes(at.size, at.type) \
-            if n > 0 else 0
-        if len(held) >= need:
-            continue
-        if not b.buffer:
-            fail_call(no, f"{name}: attribute {i}'s client array in the capture is {len(held)} bytes, "
-                      f"the draw reads {need}")
-        what = f"index {hi - d.get('basevertex', 0)}" if "Elements" in name and not b.divisor else \
-            f"instance {n - 1}" if b.divisor else f"vertex {n - 1}"
-        fail_call(no, f"{name}: {what} reads attribute {i} past buffer {b.buffer}'s {len(held)} bytes "
-                  f"({need} read): not emulated")
-
-
-def fixed_source(arr):
-    """The fixed-function vertex array as the generic attribute and binding
-    that give it to Mesa (VertexStage.fixed_vertex_array)."""
-    at, b = Attrib(0), Binding()
-    at.enabled, at.size, at.type = True, arr.size, arr.type
-    b.buffer, b.offset, b.stride = arr.buffer, arr.offset, arr.stride or element_bytes(arr.size, arr.type)
-    b.client = None if arr.buffer else arr.data
-    return at, b
 
 
 class RunAlone(Exception):
@@ -996,7 +915,7 @@ class VertexStage:
                 # gl_DrawID is 0.
                 fail_call(no, f"{printable(conv.multi_draw_name)}: its draw {conv.multi_draw_index}, whose vertex "
                           "shader reads gl_DrawID: not emulated")
-            check_vertex_data(conv, no, name, d, instances, client_indices, mp)
+            check_vertex_data(conv, no, name, d, instances, client_indices, mp.reads_vertex)
         clip = self.positions(conv, no, name, checks, client_indices,
                               lambda: self.issue(name, d, client_indices is not None), prims, pname, p)
         # Every instance has the same primitives (primitive restart cuts them
@@ -1018,7 +937,7 @@ class VertexStage:
             if mp.reads_draw_id and not whole:
                 raise RunAlone()
             for single, d in draws:
-                check_vertex_data(conv, no, single, d, d["instancecount"], None, mp)
+                check_vertex_data(conv, no, single, d, d["instancecount"], None, mp.reads_vertex)
 
         def issue():
             GL = self.gl

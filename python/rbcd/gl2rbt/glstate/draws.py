@@ -9,6 +9,7 @@ from ..errors import checked, fail_call, printable
 from ..gl_tables import CULL, DEPTH_FUNCS, INDEX_TYPES, PRIM_NO_AREA, PRIM_TRIANGLES, base_name
 from ..glmath import mat_mul, triangle_indices
 from . import enum_arg, number
+from .attributes import check_vertex_data
 from .color_outputs import NotFollowed
 
 # Points and lines, the adjacency forms too: no area without a geometry shader.
@@ -386,7 +387,11 @@ class DrawCalls:
             if mode not in TRIANGLES_PER_VERTICES:
                 fail_call(no, f"{name}: primitive mode {printable(mode)} under a program is not emulated")
         if not self.draws_into_camera_pass():
-            self.check_element_bounds(no, name, d)
+            # (what its program reads is not known without Mesa: its
+            # enabled attributes all, as for a draw the converter makes)
+            indices = d.get("indices")
+            check_vertex_data(self, no, name, d, instances, indices if isinstance(indices, (bytes, bytearray)) else None,
+                              False)
             return
         if later:
             # Tessellation and geometry shaders run in Mesa with the vertex
@@ -498,6 +503,11 @@ class DrawCalls:
         if not isinstance(d.get("indices"), (bytes, bytearray, type(None))):
             # An offset into the element buffer: what a pointer holds.
             checked(no, integer, d["indices"], f"{name}: the index buffer offset", *U63)
+        elif d.get("indices") is not None and self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER"):
+            # With an element buffer bound the pointer is an offset into
+            # it, and apitrace records it so (round 34's D6: the bytes read).
+            fail_call(no, f"{name}: indices recorded as bytes while element buffer "
+                      f"{self.s.bound['GL_ELEMENT_ARRAY_BUFFER']} is bound (apitrace records an offset into it)")
         return d
 
     def h_draw_under_program(self, no, name, a, args):
@@ -799,20 +809,6 @@ class DrawCalls:
         if self.active and self.renders() and not self.s.rasterizer_discard and self.s.depth_test \
                 and self.s.depth_mask and self.camera_pass():
             fail_call(no, f"{printable(name)} with the depth test on writes depth: not emulated")
-
-    def check_element_bounds(self, no, name, d):
-        """A draw left out (another pass's) reads its indices all the same:
-        those past its element buffer's data are refused as in a draw the
-        converter makes (vertex_stage.check_vertex_data; GL leaves what
-        they read undefined)."""
-        start, count = d.get("indices"), d.get("count")
-        if "Elements" not in name or not isinstance(start, int) or not isinstance(count, int):
-            return   # client indices (apitrace records the bytes read), or an array draw
-        elem = self.s.bound.get("GL_ELEMENT_ARRAY_BUFFER", 0)
-        size = len(self.s.buffers.get(elem, b"")) if elem else 0
-        if elem and start + count * np.dtype(INDEX_TYPES[d["type"]]).itemsize > size:
-            fail_call(no, f"{name}: {count} indices from byte {start} reach past element buffer {elem}'s {size} "
-                      "bytes: not emulated")
 
     def draws_into_camera_pass(self):
         """Whether a draw now reaches the camera pass: one that does not is

@@ -3,17 +3,14 @@ project's input rule asks before any handler reads them (converter.handle):
 whole numbers of the C types' widths, enumerants as apitrace writes them,
 pixels as bytes, an offset or a reduced capture's digest, and the sizes,
 offsets, levels, samples and layers every call of its kind has. Anything
-else is the capture's error, in one line naming the call. Texture targets,
-cube map faces and framebuffer attachment points given by value (apitrace
-writes names) are taken as the enumerant of that value, as the driver
-takes them."""
+else is the capture's error, in one line naming the call. (Enumerants
+given by value are named before: gl_registry.named_enumerants.)"""
 import re
 
 from ...cli import I32, U32, integer
 from ..errors import checked, fail_call, printable
 from . import enum_arg, gl_boolean
 from .texture_formats import is_digest
-from .texture_levels import CUBE_FACES
 
 # Texture image calls by their base name: (Compressed|Copy)?, the direct
 # state access form or not, Sub or not, Image or Storage, the dimensions,
@@ -51,25 +48,11 @@ NAME_ARGS = {"texture", "origtexture", "framebuffer", "renderbuffer", "minlevel"
 BOOLEAN_ARGS = {"fixedsamplelocations"}
 ENUM_ARGS = {"target", "format", "type", "attachment", "textarget", "renderbuffertarget", "internalformat"}
 PIXEL_ARGS = {"pixels", "data"}
-# Texture targets, cube map faces, framebuffer targets and attachment points
-# by value.
-ENUM_VALUES = {
-    0x0DE0: "GL_TEXTURE_1D", 0x0DE1: "GL_TEXTURE_2D", 0x806F: "GL_TEXTURE_3D", 0x8C18: "GL_TEXTURE_1D_ARRAY",
-    0x8C1A: "GL_TEXTURE_2D_ARRAY", 0x84F5: "GL_TEXTURE_RECTANGLE", 0x8513: "GL_TEXTURE_CUBE_MAP",
-    0x9009: "GL_TEXTURE_CUBE_MAP_ARRAY", 0x8C2A: "GL_TEXTURE_BUFFER", 0x9100: "GL_TEXTURE_2D_MULTISAMPLE",
-    0x9102: "GL_TEXTURE_2D_MULTISAMPLE_ARRAY", 0x8D65: "GL_TEXTURE_EXTERNAL_OES",
-    **{0x8515 + i: face for i, face in enumerate(CUBE_FACES)},
-    0x8D40: "GL_FRAMEBUFFER", 0x8CA9: "GL_DRAW_FRAMEBUFFER", 0x8CA8: "GL_READ_FRAMEBUFFER",
-    0x8D00: "GL_DEPTH_ATTACHMENT", 0x8D20: "GL_STENCIL_ATTACHMENT", 0x821A: "GL_DEPTH_STENCIL_ATTACHMENT",
-    0x8D41: "GL_RENDERBUFFER", **{0x8CE0 + i: f"GL_COLOR_ATTACHMENT{i}" for i in range(32)}}
-TEXTURE_TARGETS = frozenset(v for v in ENUM_VALUES.values() if v.startswith("GL_TEXTURE") and v not in CUBE_FACES)
-NAMED_VALUE_ARGS = {"target", "textarget", "attachment", "renderbuffertarget"}
-
-
-def by_value(v):
-    """An enumerant of ENUM_VALUES given by its value, by name; any other
-    value as it is."""
-    return ENUM_VALUES.get(v, v) if isinstance(v, int) and not isinstance(v, bool) else v
+# The targets glBindTexture and the direct state access calls take.
+TEXTURE_TARGETS = frozenset({
+    "GL_TEXTURE_1D", "GL_TEXTURE_2D", "GL_TEXTURE_3D", "GL_TEXTURE_1D_ARRAY", "GL_TEXTURE_2D_ARRAY",
+    "GL_TEXTURE_RECTANGLE", "GL_TEXTURE_CUBE_MAP", "GL_TEXTURE_CUBE_MAP_ARRAY", "GL_TEXTURE_BUFFER",
+    "GL_TEXTURE_2D_MULTISAMPLE", "GL_TEXTURE_2D_MULTISAMPLE_ARRAY", "GL_TEXTURE_EXTERNAL_OES"})
 
 
 def checked_calls(names):
@@ -112,8 +95,7 @@ def call_args(name):
 
 
 def image_call_args(no, raw, args):
-    """The call's arguments checked (the module's rule), targets and
-    attachment points by value named."""
+    """The call's arguments checked (the module's rule)."""
     name = printable(raw)
     out = []
     for k, v in args:
@@ -126,8 +108,6 @@ def image_call_args(no, raw, args):
                 pass   # (a GLint: GL_INVALID_VALUE)
             else:
                 v = enum_arg(v, no, f"{name}: the {k}")
-            if k in NAMED_VALUE_ARGS:
-                v = by_value(v)
         elif k in BOOLEAN_ARGS:
             gl_boolean(v, no, f"{name}: the {k}")
         elif k in PIXEL_ARGS:

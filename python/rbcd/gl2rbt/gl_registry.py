@@ -1,0 +1,254 @@
+"""The OpenGL registry (Khronos' gl.xml, Debian's khronos-api) as the converter
+reads it: each command's parameters in order (apitrace's name, C type,
+enumerant group, a fixed array length), and the enumerants of each group by
+value. Two uses:
+
+- an enumerant given by value where apitrace writes its name (a reduced
+  capture altered by hand, glCullFace(1028)) is the enumerant of that
+  value among those GL takes there, as the driver takes it
+  (named_enumerants);
+- a reduced capture's record must name the function's parameters as
+  apitrace does, every one once and no other, in any order, and give each
+  fixed-length array its length (reduced.in_order).
+
+Parsing gl.xml takes about 0.4 s; what is read of it is kept in the user's
+cache folder ($XDG_CACHE_HOME/rbcd, else ~/.cache/rbcd: matplotlib keeps
+its font list so), keyed by the registry's size and time, and read back in
+milliseconds. A cache that cannot be written or read is rebuilt, never an
+error."""
+import json
+import os
+import tempfile
+import xml.etree.ElementTree as ET
+
+from .errors import ToolError
+
+REGISTRY = "/usr/share/khronos-api/gl.xml"
+CACHE_FORMAT = 2
+
+# apitrace's parameter names where they differ from the registry's
+# (apitrace 11.1's specs/glapi.py, Debian's): a capture's calls, and so a
+# reduced capture's, carry these. The two EXT forms list a wrong parameter
+# count in the registry of 2022.
+APITRACE_NAMES = {
+    "glAreProgramsResidentNV": ("n", "ids", "residences"), "glBindProgramNV": ("target", "program"),
+    "glBlendFuncSeparateOES": ("sfactorRGB", "dfactorRGB", "sfactorAlpha", "dfactorAlpha"),
+    "glClipPlanef": ("plane", "equation"),
+    "glColorTableEXT": ("target", "internalformat", "width", "format", "type", "table"),
+    "glCurrentPaletteMatrixOES": ("index",), "glDepthRange": ("zNear", "zFar"), "glDepthRangex": ("zNear", "zFar"),
+    "glDrawArraysInstancedANGLE": ("mode", "first", "count", "instancecount"),
+    "glDrawArraysInstancedARB": ("mode", "first", "count", "instancecount"),
+    "glDrawArraysInstancedBaseInstanceEXT": ("mode", "first", "count", "instancecount", "baseinstance"),
+    "glDrawBuffer": ("mode",),
+    "glDrawElementsInstancedANGLE": ("mode", "count", "type", "indices", "instancecount"),
+    "glDrawElementsInstancedARB": ("mode", "count", "type", "indices", "instancecount"),
+    "glFogxv": ("pname", "params"),
+    "glFrustumf": ("left", "right", "bottom", "top", "zNear", "zFar"),
+    "glFrustumx": ("left", "right", "bottom", "top", "zNear", "zFar"),
+    "glGetActiveSubroutineName": ("program", "shadertype", "index", "bufsize", "length", "name"),
+    "glGetActiveSubroutineUniformName": ("program", "shadertype", "index", "bufsize", "length", "name"),
+    "glGetActiveUniformARB": ("programObj", "index", "bufSize", "length", "size", "type", "name"),
+    "glGetArrayObjectivATI": ("array", "pname", "params"),
+    "glGetAttachedShaders": ("program", "maxCount", "count", "obj"), "glGetBooleanv": ("pname", "params"),
+    "glGetCoverageModulationTableNV": ("bufsize", "v"),
+    "glGetDebugMessageLog": ("count", "bufsize", "sources", "types", "ids", "severities", "lengths", "messageLog"),
+    "glGetDebugMessageLogAMD": ("count", "bufsize", "categories", "severities", "ids", "lengths", "message"),
+    "glGetDebugMessageLogARB": ("count", "bufsize", "sources", "types", "ids", "severities", "lengths", "messageLog"),
+    "glGetDebugMessageLogKHR": ("count", "bufsize", "sources", "types", "ids", "severities", "lengths", "messageLog"),
+    "glGetDoublei_vEXT": ("target", "index", "data"), "glGetDoublev": ("pname", "params"),
+    "glGetFloati_vEXT": ("target", "index", "data"), "glGetFloatv": ("pname", "params"),
+    "glGetInteger64v": ("pname", "params"), "glGetIntegerv": ("pname", "params"),
+    "glGetInternalformati64v": ("target", "internalformat", "pname", "bufSize", "params"),
+    "glGetInternalformativ": ("target", "internalformat", "pname", "bufSize", "params"),
+    "glGetPointeri_vEXT": ("target", "index", "data"),
+    "glGetProgramResourcefvNV": ("program", "programInterface", "index", "propCount", "props", "bufSize", "length",
+                                 "params"),
+    "glGetProgramResourceiv": ("program", "programInterface", "index", "propCount", "props", "bufSize", "length",
+                               "params"),
+    "glGetShaderSourceARB": ("obj", "bufSize", "length", "source"),
+    "glGetSynciv": ("sync", "pname", "bufSize", "length", "values"),
+    "glGetSyncivAPPLE": ("sync", "pname", "bufSize", "length", "values"),
+    "glGetTranslatedShaderSourceANGLE": ("shader", "bufsize", "length", "source"), "glIsProgramNV": ("program",),
+    "glLightModelxv": ("pname", "params"), "glMaterialxv": ("face", "pname", "params"),
+    "glMultiDrawArraysEXT": ("mode", "first", "count", "drawcount"),
+    "glMultiDrawArraysIndirectAMD": ("mode", "indirect", "drawcount", "stride"),
+    "glMultiDrawElementArrayAPPLE": ("mode", "first", "count", "drawcount"),
+    "glMultiDrawElementsEXT": ("mode", "count", "type", "indices", "drawcount"),
+    "glMultiDrawElementsIndirectAMD": ("mode", "type", "indirect", "drawcount", "stride"),
+    "glMultiDrawRangeElementArrayAPPLE": ("mode", "start", "end", "first", "count", "drawcount"),
+    "glMultiModeDrawArraysIBM": ("mode", "first", "count", "drawcount", "modestride"),
+    "glMultiModeDrawElementsIBM": ("mode", "count", "type", "indices", "drawcount", "modestride"),
+    "glMultiTexCoord4x": ("target", "s", "t", "r", "q"),
+    "glOrthof": ("left", "right", "bottom", "top", "zNear", "zFar"),
+    "glOrthox": ("left", "right", "bottom", "top", "zNear", "zFar"),
+    "glPointSizePointerOES": ("type", "stride", "ptr"),
+    "glProgramBufferParametersIivNV": ("target", "buffer", "index", "count", "params"),
+    "glProgramBufferParametersIuivNV": ("target", "buffer", "index", "count", "params"),
+    "glProgramBufferParametersfvNV": ("target", "buffer", "index", "count", "params"),
+    "glReadBuffer": ("mode",), "glSampleMaski": ("index", "mask"),
+    "glShaderBinary": ("count", "shaders", "binaryformat", "binary", "length"),
+    "glTexPageCommitmentARB": ("target", "level", "xoffset", "yoffset", "zoffset", "width", "height", "depth",
+                               "resident"),
+    "glTextureParameterfv": ("texture", "pname", "params"), "glTextureParameteriv": ("texture", "pname", "params"),
+    "glVDPAUGetSurfaceivNV": ("surface", "pname", "bufSize", "length", "values"),
+    "glVertexAttribPointerNV": ("index", "size", "type", "stride", "pointer"),
+}
+# Fixed array lengths apitrace writes otherwise than the registry states.
+LENGTHS_DIFFER = {"glDrawTexfvOES", "glDrawTexivOES", "glDrawTexsvOES", "glDrawTexxvOES"}
+VENDOR_SUFFIXES = ("_ARB", "_EXT", "_KHR", "_OES", "_NV", "_AMD", "_APPLE", "_ATI", "_SGIX", "_SGIS", "_IMG",
+                   "_INTEL", "_MESA", "_QCOM", "_ANGLE", "_IBM", "_SUN", "_3DFX", "_OML", "_HP", "_PGI", "_WIN",
+                   "_SGI", "_REND", "_INGR", "_ARM", "_MESAX", "_OVR", "_NVX", "_S3", "_DMP", "_FJ", "_VIV", "_GREMEDY")
+
+
+def _parse(path):
+    """The registry's commands, {name: [[apitrace's name, C type, group,
+    length], ...]}, and enumerants, {group: [[value, name], ...]} (each value
+    once, by its name GL's core gives it where it has one, else the first
+    the registry lists; the group "" for values with one core name only,
+    or no core name and one other, whatever their groups), bitmasks left
+    out."""
+    root = ET.parse(path).getroot()
+    by_value = {}   # value: [(name, groups)], in the registry's order
+    for block in root.iter("enums"):
+        if block.get("type") == "bitmask":
+            continue
+        for e in block.iter("enum"):
+            try:
+                v = int(e.get("value", ""), 0)
+            except ValueError:
+                continue
+            if 0 <= v < 1 << 32:
+                by_value.setdefault(v, []).append((e.get("name"), (e.get("group") or "").split(",")))
+    groups = {}
+    for v, names in by_value.items():
+        core = {n for n, _ in names if not n.endswith(VENDOR_SUFFIXES)} or {n for n, _ in names}
+        if len(core) == 1:
+            groups.setdefault("", []).append([v, core.pop()])
+        seen = set()
+        for n, gs in sorted(names, key=lambda x: x[0].endswith(VENDOR_SUFFIXES)):   # core names first
+            for g in gs:
+                if g and g not in seen:
+                    seen.add(g)
+                    groups.setdefault(g, []).append([v, n])
+    commands = {}
+    for c in root.find("commands").iter("command"):
+        name = c.findtext("proto/name")
+        params = []
+        for p in c.findall("param"):
+            text = "".join(p.itertext())
+            length = p.get("len", "")
+            params.append([p.findtext("name"), p.findtext("ptype"), p.get("group"),
+                           int(length) if length.isdigit() and int(length) > 1 and text.lstrip().startswith("const")
+                           and name not in LENGTHS_DIFFER else None])
+        commands[name] = params
+    return {"format": CACHE_FORMAT, "commands": commands, "groups": groups}
+
+
+def _cache_path(st):
+    home = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(home, "rbcd", f"gl-registry-{CACHE_FORMAT}-{st.st_size}-{st.st_mtime_ns}.json")
+
+
+def _load():
+    try:
+        st = os.stat(REGISTRY)
+    except OSError:
+        raise ToolError(f"the OpenGL registry {REGISTRY} is missing (scripts/setup.sh --gl installs khronos-api)") \
+            from None
+    cache = _cache_path(st)
+    try:
+        with open(cache, encoding="utf-8") as f:
+            data = json.load(f)
+        if data.get("format") == CACHE_FORMAT and isinstance(data.get("commands"), dict) \
+                and isinstance(data.get("groups"), dict):
+            return data
+    except (OSError, ValueError, AttributeError):
+        pass
+    try:
+        data = _parse(REGISTRY)
+    except (OSError, ET.ParseError, AttributeError) as e:
+        raise ToolError(f"the OpenGL registry {REGISTRY} cannot be read ({e})") from None
+    tmp = None
+    try:
+        os.makedirs(os.path.dirname(cache), exist_ok=True)
+        with tempfile.NamedTemporaryFile("w", dir=os.path.dirname(cache), suffix=".tmp", delete=False,
+                                         encoding="utf-8") as f:
+            tmp = f.name
+            json.dump(data, f, separators=(",", ":"))
+        os.replace(tmp, cache)
+    except OSError:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+    return data
+
+
+class Registry:
+    def __init__(self, data):
+        self.commands = data["commands"]
+        self.groups = {g: {int(v): n for v, n in pairs} for g, pairs in data["groups"].items()}
+        self.signatures = {}
+
+    def signature(self, name):
+        """The function's parameters as apitrace writes them: ((name, C
+        type, group, fixed length), ...), or None where the registry lacks
+        the function (the window system's, apitrace's own)."""
+        sig = self.signatures.get(name, False)
+        if sig is False:
+            params = self.commands.get(name)
+            names = APITRACE_NAMES.get(name)
+            if params is not None and names is not None and len(names) != len(params):
+                # (the registry's count wrong: the core form's types)
+                core = self.commands.get(name[:-3])
+                params = core if core is not None and len(core) == len(names) else None
+            if params is not None:
+                sig = tuple((names[i] if names else p[0], p[1], p[2], p[3]) for i, p in enumerate(params))
+            else:
+                sig = None
+            self.signatures[name] = sig
+        return sig
+
+    def enumerant(self, group, value):
+        """The enumerant of `value` among those of `group` (a parameter's),
+        by name; else its one core name, if it has one; else None."""
+        named = self.groups.get(group) if group else None
+        name = named.get(value) if named else None
+        return name if name is not None else self.groups.get("", {}).get(value)
+
+
+_REGISTRY = None
+
+
+def registry():
+    global _REGISTRY
+    if _REGISTRY is None:
+        _REGISTRY = Registry(_load())
+    return _REGISTRY
+
+
+def named_enumerants(name, args):
+    """`args` (apitrace's (name, value) pairs, in its order) with each GLenum
+    argument given by value named as apitrace names it (Registry.enumerant);
+    a value with no name stays a number (GL_INVALID_ENUM where it is read).
+    Costs a scan of the arguments when none is a number."""
+    if not any(type(v) is int for _, v in args):
+        return args
+    sig = registry().signature(name)
+    if sig is None:
+        return args
+    by_name = {p[0]: p for p in sig}
+    # By name; by position where no argument has one of the function's
+    # names and there are as many (a caller's own numbering).
+    positional = len(args) == len(sig) and not any(k in by_name for k, _ in args)
+    out = None
+    for i, (k, v) in enumerate(args):
+        p = sig[i] if positional else by_name.get(k)
+        if type(v) is int and p is not None and p[1] == "GLenum" and 0 <= v < 1 << 32:
+            n = registry().enumerant(p[2], v)
+            if n is not None:
+                if out is None:
+                    out = list(args)
+                out[i] = (k, n)
+    return out if out is not None else args
