@@ -18,6 +18,7 @@ milliseconds. A cache that cannot be written or read is rebuilt, never an
 error."""
 import json
 import os
+import stat
 import tempfile
 import xml.etree.ElementTree as ET
 
@@ -144,9 +145,48 @@ def _parse(path):
     return {"format": CACHE_FORMAT, "commands": commands, "groups": groups}
 
 
+# A cache file past this size is not the converter's (about 0.6 MB): not read.
+CACHE_MAX_BYTES = 16 << 20
+
+
 def _cache_path(st):
-    home = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    home = os.environ.get("XDG_CACHE_HOME", "")
+    if not os.path.isabs(home):   # (the XDG rule: a relative path is ignored)
+        home = os.path.join(os.path.expanduser("~"), ".cache")
     return os.path.join(home, "rbcd", f"gl-registry-{CACHE_FORMAT}-{st.st_size}-{st.st_mtime_ns}.json")
+
+
+def _read_cache(cache):
+    """The cached registry, or None where there is none usable: not a
+    regular file (a FIFO is never waited on), too large, not JSON, or not
+    of the shapes _parse makes."""
+    try:
+        fd = os.open(cache, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError:
+        return None
+    try:
+        with os.fdopen(fd, "rb") as f:
+            st = os.fstat(f.fileno())
+            if not stat.S_ISREG(st.st_mode) or st.st_size > CACHE_MAX_BYTES:
+                return None
+            data = json.loads(f.read(CACHE_MAX_BYTES + 1))
+        if not (isinstance(data, dict) and data.get("format") == CACHE_FORMAT):
+            return None
+        commands, groups = data.get("commands"), data.get("groups")
+        if not (isinstance(commands, dict) and isinstance(groups, dict)):
+            return None
+        for params in commands.values():
+            if not isinstance(params, list) or not all(
+                    isinstance(p, list) and len(p) == 4 and all(isinstance(x, (str, type(None))) for x in p[:3])
+                    and (p[3] is None or type(p[3]) is int) for p in params):
+                return None
+        for pairs in groups.values():
+            if not isinstance(pairs, list) or not all(
+                    isinstance(x, list) and len(x) == 2 and type(x[0]) is int and isinstance(x[1], str) for x in pairs):
+                return None
+        return data
+    except (OSError, ValueError, RecursionError):
+        return None
 
 
 def _load():
@@ -156,17 +196,12 @@ def _load():
         raise ToolError(f"the OpenGL registry {REGISTRY} is missing (scripts/setup.sh --gl installs khronos-api)") \
             from None
     cache = _cache_path(st)
-    try:
-        with open(cache, encoding="utf-8") as f:
-            data = json.load(f)
-        if data.get("format") == CACHE_FORMAT and isinstance(data.get("commands"), dict) \
-                and isinstance(data.get("groups"), dict):
-            return data
-    except (OSError, ValueError, AttributeError):
-        pass
+    data = _read_cache(cache)
+    if data is not None:
+        return data
     try:
         data = _parse(REGISTRY)
-    except (OSError, ET.ParseError, AttributeError) as e:
+    except (OSError, ET.ParseError, AttributeError, ValueError) as e:
         raise ToolError(f"the OpenGL registry {REGISTRY} cannot be read ({e})") from None
     tmp = None
     try:
