@@ -65,7 +65,7 @@ def test_a_described_value_is_bounded():
     assert printable(TypeError("unhashable type: 'list'")) == "unhashable type: 'list'"
     assert printable(OSError(28, "No space left on device")) == "[Errno 28] No space left on device"
     assert printable(MemoryError()) == "MemoryError", "an exception of no words is named by its type"
-    assert time.monotonic() - t < 1.0
+    assert time.monotonic() - t < 10, "a walk of the value's every element (minutes, not milliseconds)"
 
 
 @pytest.mark.parametrize("fn, words", [
@@ -636,13 +636,15 @@ def test_a_signal_in_the_capture_reader_s_clean_up_is_not_lost():
     assert closed == [True]
 
 
-def test_a_replay_outliving_sigterm_is_killed_when_the_converter_dies():
+def test_a_replay_outliving_sigterm_is_killed_when_the_converter_dies(monkeypatch):
     """A replay whose process takes no SIGTERM (glretrace's own handler can
     deadlock on malloc's lock) is ended with SIGKILL by the session's
     watcher once the converter is gone (its lifeline closed, as SIGKILL
     closes it): it had lived on under PID 1 (R18-13). The converter's own
-    end of a replay is not slowed by the watcher: under a second for one
-    that takes SIGTERM."""
+    end of a replay is not slowed by the watcher: one that takes SIGTERM
+    ends by it, the session with no SIGKILL (which comes only after
+    END_SECONDS of waiting; a bound on the seconds themselves had failed
+    on a loaded machine)."""
     from rbcd.gl2rbt import glretrace
     proc = glretrace.start_replay(["/bin/sh", "-c", "trap '' TERM; sleep 60 & wait; sleep 60"],
                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -657,9 +659,10 @@ def test_a_replay_outliving_sigterm_is_killed_when_the_converter_dies():
     proc.wait()
     proc = glretrace.start_replay(["/bin/sleep", "60"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     time.sleep(0.3)
-    t = time.monotonic()
+    sent, killpg = [], os.killpg
+    monkeypatch.setattr(glretrace.os, "killpg", lambda pid, sig: (sent.append(sig), killpg(pid, sig))[1])
     glretrace.end_replay(proc)
-    assert time.monotonic() - t < 1.0, f"end_replay took {time.monotonic() - t:.1f} s"
+    assert signal.SIGKILL not in sent and signal.SIGTERM in sent, sent
     assert glretrace.session_left(proc.pid, watcher=True) == []
 
 
