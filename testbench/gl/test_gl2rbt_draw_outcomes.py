@@ -192,6 +192,22 @@ def test_indices_past_the_element_buffer_are_refused_in_bounded_memory(tmp_path,
     assert left_behind(tmp_path, ["i.xz"]) == []
 
 
+def test_a_draw_left_out_reads_no_client_data(tmp_path):
+    """A draw into another pass whose client array is shorter than it reads
+    (apitrace records no bytes for an ES half-float array): never given to
+    Mesa, nothing of it is read, and the capture converts (the first fix of
+    round 34's D3 had refused it as a draw Mesa runs)."""
+    c = into_other_pass(shader_calls(VS, core=False))
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=0)
+    c.add("glEnableVertexAttribArray", index=0)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0,
+          pointer=TRIANGLE[:12])
+    c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3)
+    c.add("glBindBuffer", target="GL_ARRAY_BUFFER", buffer=1)
+    c.add("glVertexAttribPointer", index=0, size=3, type="GL_FLOAT", normalized="GL_FALSE", stride=0, pointer=0)
+    assert trace(tmp_path, camera_pass_after(c).swap(), "left_out").count(b"\no ") >= 5   # (the camera pass's)
+
+
 VS_INSTANCED = VS.replace("in vec3 p;", "in vec3 p;\nlayout(location = 1) in vec3 off;").replace(
     "p.x / 32.0 - 1.0", "(p.x + off.x) / 32.0 - 1.0")
 

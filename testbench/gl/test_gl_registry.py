@@ -33,8 +33,24 @@ pytestmark = pytest.mark.skipif(not os.path.exists(gl_registry.REGISTRY),
     ("glXSwapBuffers", [("dpy", 1), ("drawable", 2)], [("dpy", 1), ("drawable", 2)]),
     ("glDepthFunc", [("func", 1 << 40)], [("func", 1 << 40)]),
     ("glDepthFunc", [("func", True)], [("func", True)]),
+    # gl.xml puts the _EXT alias, not the core name, in the group: the core
+    # name all the same, as apitrace writes it.
+    ("glEnable", [("cap", 0x806F)], [("cap", "GL_TEXTURE_3D")]),
+    ("glEnable", [("cap", 0x803A)], [("cap", "GL_RESCALE_NORMAL")]),
+    # No core name: _EXT before ANGLE's alias, as apitrace writes it.
+    ("glCompressedTexImage2D", [("target", 0x0DE1), ("level", 0), ("internalformat", 0x83F2), ("width", 4),
+                                ("height", 4), ("border", 0), ("imageSize", 16), ("data", b"")],
+     [("target", "GL_TEXTURE_2D"), ("level", 0), ("internalformat", "GL_COMPRESSED_RGBA_S3TC_DXT3_EXT"),
+      ("width", 4), ("height", 4), ("border", 0), ("imageSize", 16), ("data", b"")]),
+    # A GLint the registry groups (apitrace writes it by name), within its
+    # group alone: 3 there is a component count.
+    ("glTexImage2D", [("internalformat", 0x81A6)], [("internalformat", "GL_DEPTH_COMPONENT24")]),
+    ("glTexImage2D", [("internalformat", 3)], [("internalformat", 3)]),
+    ("glDrawBuffers", [("n", 2), ("bufs", [0x8CE0, 0])], [("n", 2), ("bufs", ["GL_COLOR_ATTACHMENT0", "GL_NONE"])]),
 ], ids=["front", "points", "triangles_not_a_count", "draw_buffer_none", "blend_zero_one", "cap", "no_such_value",
-        "suffixed_only_name", "clip_control", "by_name", "by_position", "window_system", "past_32_bits", "boolean"])
+        "suffixed_only_name", "clip_control", "by_name", "by_position", "window_system", "past_32_bits", "boolean",
+        "core_name_of_an_ext_group_member", "rescale_normal", "ext_before_angle", "grouped_glint",
+        "component_count", "list"])
 def test_an_enumerant_by_value_is_named_in_its_parameter_s_group(fn, args, want):
     assert named_enumerants(fn, args) == want
 
@@ -45,16 +61,25 @@ def test_apitrace_s_names_where_they_differ_from_the_registry_s():
     # The registry of 2022 lists this EXT form with nine parameters.
     assert [p[0] for p in registry().signature("glDrawArraysInstancedBaseInstanceEXT")] == [
         "mode", "first", "count", "instancecount", "baseinstance"]
+    # apitrace's names of the EXT_draw_instanced forms, not the registry's
+    # start and primcount (the converter's own reduced captures had been refused).
+    assert [p[0] for p in registry().signature("glDrawArraysInstancedEXT")] == ["mode", "first", "count",
+                                                                               "instancecount"]
+    assert [p[0] for p in registry().signature("glDrawElementsInstancedEXT")] == ["mode", "count", "type", "indices",
+                                                                                 "instancecount"]
     assert [p[3] for p in registry().signature("glLoadMatrixf")] == [16]
     assert registry().signature("glXSwapBuffers") is None
 
 
-@pytest.mark.parametrize("content", [None, b"", b"{", b"[1]", b'{"format": 2}',
-                                     b'{"format": 2, "commands": {"glCullFace": [[1, 2, 3, 4]]}, "groups": {}}',
-                                     b'{"format": 2, "commands": {}, "groups": {"CullFaceMode": [["x", 1]]}}',
+@pytest.mark.parametrize("content", [None, b"", b"{", b"[1]", b'{"format": 3}',
+                                     b'{"format": 3, "commands": {"glCullFace": [[1, 2, 3, 4]]}, "groups": {}}',
+                                     b'{"format": 3, "commands": {}, "groups": {"CullFaceMode": [["x", 1]]}}',
+                                     b'{"format": 3, "commands": {"glCullFace": [[null, "GLenum", null, null]]}, '
+                                     b'"groups": {}}',
+                                     b'{"format": 3, "commands": {}, "groups": {}}',
                                      b"[" * 100000, "fifo", "directory"],
-                         ids=["absent", "empty", "cut", "list", "no_tables", "bad_command", "bad_group", "deep",
-                              "fifo", "directory"])
+                         ids=["absent", "empty", "cut", "list", "no_tables", "bad_command", "bad_group",
+                              "null_parameter_name", "cut_down", "deep", "fifo", "directory"])
 def test_a_cache_is_rebuilt_whatever_it_holds(tmp_path, monkeypatch, content):
     """The registry read again and the answer the same whatever the cache
     file holds (never a traceback, never waiting on a FIFO), and a cache of
@@ -80,7 +105,15 @@ def test_a_cache_is_rebuilt_whatever_it_holds(tmp_path, monkeypatch, content):
 
 def test_a_relative_cache_home_is_ignored(tmp_path, monkeypatch):
     """XDG's rule: a relative XDG_CACHE_HOME is ignored (the cache would
-    follow the working folder)."""
+    follow the working folder); a relative HOME too, and then there is no
+    cache (round 35's D7: one left in the working folder)."""
     monkeypatch.setenv("XDG_CACHE_HOME", "rel")
     monkeypatch.setenv("HOME", str(tmp_path))
-    assert gl_registry._cache_path(os.stat(gl_registry.REGISTRY)).startswith(str(tmp_path / ".cache" / "rbcd") + "/")
+    st = os.stat(gl_registry.REGISTRY)
+    assert gl_registry._cache_path(st).startswith(str(tmp_path / ".cache" / "rbcd") + "/")
+    monkeypatch.setenv("HOME", "relhome")
+    assert gl_registry._cache_path(st) is None
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(gl_registry, "_REGISTRY", None)
+    assert named_enumerants("glCullFace", [("mode", 0x0404)]) == [("mode", "GL_FRONT")]
+    assert not os.path.exists(tmp_path / "relhome")

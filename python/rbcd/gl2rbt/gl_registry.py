@@ -25,12 +25,12 @@ import xml.etree.ElementTree as ET
 from .errors import ToolError
 
 REGISTRY = "/usr/share/khronos-api/gl.xml"
-CACHE_FORMAT = 2
+CACHE_FORMAT = 3   # (one more whenever what _parse keeps changes: VENDOR_SUFFIXES, SUFFIX_RANK, LENGTHS_DIFFER)
 
 # apitrace's parameter names where they differ from the registry's
 # (apitrace 11.1's specs/glapi.py, Debian's): a capture's calls, and so a
-# reduced capture's, carry these. The two EXT forms list a wrong parameter
-# count in the registry of 2022.
+# reduced capture's, carry these (glDrawArraysInstancedBaseInstanceEXT and
+# glGetArrayObjectivATI of another count in the registry of 2022).
 APITRACE_NAMES = {
     "glAreProgramsResidentNV": ("n", "ids", "residences"), "glBindProgramNV": ("target", "program"),
     "glBlendFuncSeparateOES": ("sfactorRGB", "dfactorRGB", "sfactorAlpha", "dfactorAlpha"),
@@ -40,6 +40,8 @@ APITRACE_NAMES = {
     "glDrawArraysInstancedANGLE": ("mode", "first", "count", "instancecount"),
     "glDrawArraysInstancedARB": ("mode", "first", "count", "instancecount"),
     "glDrawArraysInstancedBaseInstanceEXT": ("mode", "first", "count", "instancecount", "baseinstance"),
+    "glDrawArraysInstancedEXT": ("mode", "first", "count", "instancecount"),
+    "glDrawElementsInstancedEXT": ("mode", "count", "type", "indices", "instancecount"),
     "glDrawBuffer": ("mode",),
     "glDrawElementsInstancedANGLE": ("mode", "count", "type", "indices", "instancecount"),
     "glDrawElementsInstancedARB": ("mode", "count", "type", "indices", "instancecount"),
@@ -94,6 +96,15 @@ APITRACE_NAMES = {
     "glVDPAUGetSurfaceivNV": ("surface", "pname", "bufSize", "length", "values"),
     "glVertexAttribPointerNV": ("index", "size", "type", "stride", "pointer"),
 }
+# The GL functions apitrace 11.1 records that the registry of 2022 lacks
+# (any other name of GL's form is no GL function).
+APITRACE_ONLY = frozenset({
+    "glAddSwapHintRectWIN", "glBeginQueryANGLE", "glBlendEquationSeparateATI", "glBufferRegionEnabled",
+    "glDeleteBufferRegion", "glDeleteQueriesANGLE", "glDrawBufferRegion", "glEndQueryANGLE", "glFinishRenderAPPLE",
+    "glFlushRenderAPPLE", "glGenQueriesANGLE", "glGetQueryObjecti64vANGLE", "glGetQueryObjectivANGLE",
+    "glGetQueryObjectui64vANGLE", "glGetQueryObjectuivANGLE", "glGetQueryivANGLE", "glIsQueryANGLE",
+    "glNewBufferRegion", "glPNTrianglesfATIX", "glPNTrianglesiATIX", "glPointSizePointerAPPLE", "glQueryCounterANGLE",
+    "glReadBufferRegion", "glSwapAPPLE", "glVertexPointSizefAPPLE"})
 # Fixed array lengths apitrace writes otherwise than the registry states.
 LENGTHS_DIFFER = {"glDrawTexfvOES", "glDrawTexivOES", "glDrawTexsvOES", "glDrawTexxvOES"}
 VENDOR_SUFFIXES = ("_ARB", "_EXT", "_KHR", "_OES", "_NV", "_AMD", "_APPLE", "_ATI", "_SGIX", "_SGIS", "_IMG",
@@ -101,13 +112,28 @@ VENDOR_SUFFIXES = ("_ARB", "_EXT", "_KHR", "_OES", "_NV", "_AMD", "_APPLE", "_AT
                    "_SGI", "_REND", "_INGR", "_ARM", "_MESAX", "_OVR", "_NVX", "_S3", "_DMP", "_FJ", "_VIV", "_GREMEDY")
 
 
+# The vendor suffixes apitrace's names carry where a value has no core name,
+# most often first (its table lists the registry's names in their order,
+# EXT_texture_compression_s3tc's _EXT before ANGLE's aliases).
+SUFFIX_RANK = ("_EXT", "_ARB", "_KHR", "_OES")
+
+
+def _rank(name, order):
+    """A name's place among a value's names: core names first, then by
+    SUFFIX_RANK, then in the registry's order."""
+    if not name.endswith(VENDOR_SUFFIXES):
+        return (0, order)
+    return (1 + next((i for i, sfx in enumerate(SUFFIX_RANK) if name.endswith(sfx)), len(SUFFIX_RANK)), order)
+
+
 def _parse(path):
     """The registry's commands, {name: [[apitrace's name, C type, group,
-    length], ...]}, and enumerants, {group: [[value, name], ...]} (each value
-    once, by its name GL's core gives it where it has one, else the first
-    the registry lists; the group "" for values with one core name only,
-    or no core name and one other, whatever their groups), bitmasks left
-    out."""
+    length], ...]}, and enumerants, {group: [[value, name], ...]}, bitmasks
+    left out. A value is named in a group by the best (_rank) of its names
+    the registry puts in that group, each taken by its core form where the
+    value has one (gl.xml tags GL_TEXTURE_3D_EXT, not GL_TEXTURE_3D, as a
+    capability); the group "" holds the values with one core name, or none
+    and a best other, whatever their groups."""
     root = ET.parse(path).getroot()
     by_value = {}   # value: [(name, groups)], in the registry's order
     for block in root.iter("enums"):
@@ -118,19 +144,28 @@ def _parse(path):
                 v = int(e.get("value", ""), 0)
             except ValueError:
                 continue
-            if 0 <= v < 1 << 32:
+            if 0 <= v < 1 << 32 and e.get("name"):
                 by_value.setdefault(v, []).append((e.get("name"), (e.get("group") or "").split(",")))
     groups = {}
     for v, names in by_value.items():
-        core = {n for n, _ in names if not n.endswith(VENDOR_SUFFIXES)} or {n for n, _ in names}
-        if len(core) == 1:
-            groups.setdefault("", []).append([v, core.pop()])
-        seen = set()
-        for n, gs in sorted(names, key=lambda x: x[0].endswith(VENDOR_SUFFIXES)):   # core names first
+        order = {}
+        for n, _ in names:
+            order.setdefault(n, len(order))
+        core = [n for n in order if not n.endswith(VENDOR_SUFFIXES)]
+        if len(core) == 1 or not core:
+            groups.setdefault("", []).append([v, min(order, key=lambda n: _rank(n, order[n]))])
+
+        def core_form(n):
+            base = n.rsplit("_", 1)[0] if n.endswith(VENDOR_SUFFIXES) else n
+            return base if base in order else n
+        best = {}
+        for n, gs in names:
+            n = core_form(n)
             for g in gs:
-                if g and g not in seen:
-                    seen.add(g)
-                    groups.setdefault(g, []).append([v, n])
+                if g and (g not in best or _rank(n, order[n]) < _rank(best[g], order[best[g]])):
+                    best[g] = n
+        for g, n in best.items():
+            groups.setdefault(g, []).append([v, n])
     commands = {}
     for c in root.find("commands").iter("command"):
         name = c.findtext("proto/name")
@@ -150,9 +185,13 @@ CACHE_MAX_BYTES = 16 << 20
 
 
 def _cache_path(st):
+    """The cache file for a registry of stat `st`, or None where the user
+    has no cache folder (no HOME and no entry in the password database)."""
     home = os.environ.get("XDG_CACHE_HOME", "")
     if not os.path.isabs(home):   # (the XDG rule: a relative path is ignored)
         home = os.path.join(os.path.expanduser("~"), ".cache")
+    if not os.path.isabs(home):
+        return None
     return os.path.join(home, "rbcd", f"gl-registry-{CACHE_FORMAT}-{st.st_size}-{st.st_mtime_ns}.json")
 
 
@@ -167,7 +206,8 @@ def _read_cache(cache):
     try:
         with os.fdopen(fd, "rb") as f:
             st = os.fstat(f.fileno())
-            if not stat.S_ISREG(st.st_mode) or st.st_size > CACHE_MAX_BYTES:
+            # (another user's file, in a folder others may write, is not ours)
+            if not stat.S_ISREG(st.st_mode) or st.st_size > CACHE_MAX_BYTES or st.st_uid != os.getuid():
                 return None
             data = json.loads(f.read(CACHE_MAX_BYTES + 1))
         if not (isinstance(data, dict) and data.get("format") == CACHE_FORMAT):
@@ -177,13 +217,19 @@ def _read_cache(cache):
             return None
         for params in commands.values():
             if not isinstance(params, list) or not all(
-                    isinstance(p, list) and len(p) == 4 and all(isinstance(x, (str, type(None))) for x in p[:3])
+                    isinstance(p, list) and len(p) == 4 and isinstance(p[0], str)
+                    and all(isinstance(x, (str, type(None))) for x in p[1:3])
                     and (p[3] is None or type(p[3]) is int) for p in params):
                 return None
         for pairs in groups.values():
             if not isinstance(pairs, list) or not all(
                     isinstance(x, list) and len(x) == 2 and type(x[0]) is int and isinstance(x[1], str) for x in pairs):
                 return None
+        # What every registry holds (a cache cut down, or of another
+        # registry's making, is not this one's).
+        if len(commands) < 2000 or commands.get("glDrawArrays", [[None]])[0][:3] != ["mode", "GLenum", "PrimitiveType"] \
+                or [4, "GL_TRIANGLES"] not in groups.get("PrimitiveType", []):
+            return None
         return data
     except (OSError, ValueError, RecursionError):
         return None
@@ -196,16 +242,18 @@ def _load():
         raise ToolError(f"the OpenGL registry {REGISTRY} is missing (scripts/setup.sh --gl installs khronos-api)") \
             from None
     cache = _cache_path(st)
-    data = _read_cache(cache)
+    data = _read_cache(cache) if cache else None
     if data is not None:
         return data
     try:
         data = _parse(REGISTRY)
     except (OSError, ET.ParseError, AttributeError, ValueError) as e:
         raise ToolError(f"the OpenGL registry {REGISTRY} cannot be read ({e})") from None
+    if cache is None:
+        return data
     tmp = None
     try:
-        os.makedirs(os.path.dirname(cache), exist_ok=True)
+        os.makedirs(os.path.dirname(cache), mode=0o700, exist_ok=True)
         with tempfile.NamedTemporaryFile("w", dir=os.path.dirname(cache), suffix=".tmp", delete=False,
                                          encoding="utf-8") as f:
             tmp = f.name
@@ -245,12 +293,13 @@ class Registry:
             self.signatures[name] = sig
         return sig
 
-    def enumerant(self, group, value):
+    def enumerant(self, group, value, fallback=True):
         """The enumerant of `value` among those of `group` (a parameter's),
-        by name; else its one core name, if it has one; else None."""
+        by name; else, `fallback`, its one core name, if it has one; else
+        None."""
         named = self.groups.get(group) if group else None
         name = named.get(value) if named else None
-        return name if name is not None else self.groups.get("", {}).get(value)
+        return name if name is not None or not fallback else self.groups.get("", {}).get(value)
 
 
 _REGISTRY = None
@@ -264,26 +313,37 @@ def registry():
 
 
 def named_enumerants(name, args):
-    """`args` (apitrace's (name, value) pairs, in its order) with each GLenum
-    argument given by value named as apitrace names it (Registry.enumerant);
-    a value with no name stays a number (GL_INVALID_ENUM where it is read).
+    """`args` (apitrace's (name, value) pairs) with each enumerant given by
+    value named as apitrace names it (Registry.enumerant): a GLenum
+    argument, each of a GLenum list (glDrawBuffers'), and a GLint one the
+    registry gives a group (glTexImage2D's internalformat, which apitrace
+    writes by name; only within the group: 3 there is a component count).
+    A value with no name stays a number (GL_INVALID_ENUM where it is read).
     Costs a scan of the arguments when none is a number."""
-    if not any(type(v) is int for _, v in args):
+    if not any(type(v) is int or type(v) is list for _, v in args):
         return args
     sig = registry().signature(name)
     if sig is None:
         return args
     by_name = {p[0]: p for p in sig}
     # By name; by position where no argument has one of the function's
-    # names and there are as many (a caller's own numbering).
+    # names and there are as many (a caller's own numbering: the unit tests).
     positional = len(args) == len(sig) and not any(k in by_name for k, _ in args)
     out = None
     for i, (k, v) in enumerate(args):
         p = sig[i] if positional else by_name.get(k)
-        if type(v) is int and p is not None and p[1] == "GLenum" and 0 <= v < 1 << 32:
-            n = registry().enumerant(p[2], v)
-            if n is not None:
-                if out is None:
-                    out = list(args)
-                out[i] = (k, n)
+        if p is None or not (p[1] == "GLenum" or p[1] == "GLint" and p[2]):
+            continue
+        fallback = p[1] == "GLenum"
+        if type(v) is int:
+            n = registry().enumerant(p[2], v, fallback) if 0 <= v < 1 << 32 else None
+        elif type(v) is list and fallback and any(type(x) is int for x in v):
+            n = [registry().enumerant(p[2], x, fallback) or x if type(x) is int and 0 <= x < 1 << 32 else x
+                 for x in v]
+        else:
+            continue
+        if n is not None:
+            if out is None:
+                out = list(args)
+            out[i] = (k, n)
     return out if out is not None else args

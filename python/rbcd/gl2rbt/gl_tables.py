@@ -15,8 +15,14 @@ END_FRAME_CALLS = frozenset({
     "glXSwapBuffers", "eglSwapBuffers", "eglSwapBuffersWithDamageEXT", "eglSwapBuffersWithDamageKHR",
     "wglSwapBuffers", "wglSwapLayerBuffers", "wglSwapMultipleBuffers", "CGLFlushDrawable",
     "glFrameTerminatorGREMEDY"})
-# The argument naming the window or surface each swap shows (apitrace's
-# names; the frame terminator and wglSwapMultipleBuffers name none alone).
+# The arguments of each buffer swap apitrace 11.1 records (the registry has
+# the GL calls' only), and the one naming the window or surface it shows
+# (the frame terminator and wglSwapMultipleBuffers name none alone).
+SWAP_ARGS = {"glXSwapBuffers": ("dpy", "drawable"), "eglSwapBuffers": ("dpy", "surface"),
+             "eglSwapBuffersWithDamageEXT": ("dpy", "surface", "rects", "n_rects"),
+             "eglSwapBuffersWithDamageKHR": ("dpy", "surface", "rects", "n_rects"), "wglSwapBuffers": ("hdc",),
+             "wglSwapLayerBuffers": ("hdc", "fuPlanes"), "wglSwapMultipleBuffers": ("n", "ps"),
+             "CGLFlushDrawable": ("ctx",)}
 SWAP_HANDLES = {"glXSwapBuffers": "drawable", "eglSwapBuffers": "surface", "eglSwapBuffersWithDamageEXT": "surface",
                 "eglSwapBuffersWithDamageKHR": "surface", "wglSwapBuffers": "hdc", "wglSwapLayerBuffers": "hdc",
                 "CGLFlushDrawable": "ctx"}

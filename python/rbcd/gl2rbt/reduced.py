@@ -10,13 +10,14 @@ import io
 import lzma
 import os
 import pickle
+import re
 
 from .apitrace import MAX_RECORD_VALUES, CallReader, PointerType, call_values_within, too_many_values, where
 from ..cli import U63
 from .errors import ConvertError, printable
 from .converter import STATE_UPDATES, Converter
-from .gl_registry import registry
-from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
+from .gl_registry import APITRACE_ONLY, registry
+from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, SWAP_ARGS, base_name
 from .glstate.framebuffers import texture_image_digest
 from .glstate.texture_formats import DIGEST_TAG
 from .glstate.texture_levels import PASSED_OVER_IMAGES
@@ -380,6 +381,10 @@ def read_reduced_calls(path):
         raise ConvertError(f"{where(last)}: the reduced capture does not decode ({printable(e, 80)})")
 
 
+# A GL function's name (the window system's glX calls aside).
+GL_FUNCTION = re.compile(r"gl(?!X[A-Z])[A-Z][A-Za-z0-9_]*")
+
+
 def in_order(c):
     """The call with its arguments as apitrace writes them: the function's
     parameters (gl_registry: apitrace's names, the prototype's order), each
@@ -388,11 +393,20 @@ def in_order(c):
     glOrtho's right before its left had been read as a mirrored
     projection); one naming a parameter the function lacks or leaving one
     out, or an array of another length (glVertex3fv of two), is the
-    reduced capture's error. Calls the registry lacks (the window
-    system's, memcpy) are taken as they are; their handlers read by name."""
+    reduced capture's error, as is a name of GL's form the registry lacks
+    (glDrawArraysARB), but for the few apitrace records (APITRACE_ONLY).
+    Buffer swaps are held to apitrace's arguments (SWAP_ARGS); the window
+    system's other calls and memcpy are taken as they are, their handlers
+    reading by name."""
     no, name, args = c[0], c[1], c[2]
-    sig = registry().signature(name) if name.startswith("gl") else None
+    if name in SWAP_ARGS:
+        sig = tuple((k, None, None, None) for k in SWAP_ARGS[name])
+    else:
+        sig = registry().signature(name) if name.startswith("gl") else None
     if sig is None:
+        if GL_FUNCTION.fullmatch(name) and name not in APITRACE_ONLY:
+            # (glDrawArraysARB had been drawn as glDrawArrays, its arguments unchecked)
+            raise ConvertError(f"call {no}: {printable(name)} is no GL function (the registry has none of that name)")
         return c
     extra = args[-1:] if args and args[-1][0] == REDUCED_TEXTURES else []
     own = args[:len(args) - len(extra)]
@@ -406,7 +420,7 @@ def in_order(c):
         own = [(k, by_name[k]) for k in want]
         c = (no, name, own + extra, c[3], c[4])
     for (k, v), p in zip(own, sig):
-        if p[3] is not None and isinstance(v, list) and len(v) != p[3]:
+        if p[3] is not None and isinstance(v, (list, tuple)) and len(v) != p[3]:
             raise ConvertError(f"call {no}: {printable(name)}: the {k} holds {len(v)} values, not {p[3]}")
     return c
 

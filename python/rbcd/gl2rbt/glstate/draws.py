@@ -391,7 +391,7 @@ class DrawCalls:
             # enabled attributes all, as for a draw the converter makes)
             indices = d.get("indices")
             check_vertex_data(self, no, name, d, instances, indices if isinstance(indices, (bytes, bytearray)) else None,
-                              False)
+                              False, left_out=True)
             return
         if later:
             # Tessellation and geometry shaders run in Mesa with the vertex
