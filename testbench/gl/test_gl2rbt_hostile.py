@@ -2313,8 +2313,12 @@ def test_functions_named_by_apitrace_otherwise_than_the_registry_are_put_in_orde
     # A buffer swap of another argument than apitrace's (round 35's D4).
     ("glXSwapBuffers", [("dpy", 1), ("drawable", 2), ("extra", 5)],
      "glXSwapBuffers's arguments are named (dpy, drawable, extra); apitrace writes (dpy, drawable)"),
+    # A MakeCurrent without its context (round 36's D1: the drawable taken
+    # as the context, read as the last argument).
+    ("glXMakeCurrent", [("dpy", 1), ("drawable", 2)],
+     "glXMakeCurrent's arguments are named (dpy, drawable); apitrace writes (dpy, drawable, ctx)"),
 ], ids=["renamed", "missing", "extra", "registry_names", "short_list", "short_tuple", "no_such_arb_form",
-        "no_such_function", "swap_extra"])
+        "no_such_function", "swap_extra", "make_current_without_context"])
 def test_a_call_whose_arguments_are_not_the_function_s_is_refused(tmp_path, fn, args, words):
     """A reduced capture's call naming a parameter its function lacks,
     leaving one out, adding one, or giving a fixed-length array another

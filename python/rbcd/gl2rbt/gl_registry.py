@@ -231,8 +231,8 @@ def _read_cache(cache):
                 or [4, "GL_TRIANGLES"] not in groups.get("PrimitiveType", []):
             return None
         return data
-    except (OSError, ValueError, RecursionError):
-        return None
+    except (OSError, ValueError, RecursionError, IndexError, TypeError):
+        return None   # (IndexError, TypeError: a sentinel entry of another shape)
 
 
 def _load():

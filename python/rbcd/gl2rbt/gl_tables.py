@@ -23,6 +23,11 @@ SWAP_ARGS = {"glXSwapBuffers": ("dpy", "drawable"), "eglSwapBuffers": ("dpy", "s
              "eglSwapBuffersWithDamageKHR": ("dpy", "surface", "rects", "n_rects"), "wglSwapBuffers": ("hdc",),
              "wglSwapLayerBuffers": ("hdc", "fuPlanes"), "wglSwapMultipleBuffers": ("n", "ps"),
              "CGLFlushDrawable": ("ctx",)}
+# The same of the calls that make a context current (apitrace's names: the
+# context last, as Converter.h_make_current reads it).
+WINDOW_SYSTEM_ARGS = {**SWAP_ARGS, "glXMakeCurrent": ("dpy", "drawable", "ctx"),
+                      "glXMakeContextCurrent": ("dpy", "draw", "read", "ctx"),
+                      "eglMakeCurrent": ("dpy", "draw", "read", "ctx"), "wglMakeCurrent": ("hdc", "hglrc")}
 SWAP_HANDLES = {"glXSwapBuffers": "drawable", "eglSwapBuffers": "surface", "eglSwapBuffersWithDamageEXT": "surface",
                 "eglSwapBuffersWithDamageKHR": "surface", "wglSwapBuffers": "hdc", "wglSwapLayerBuffers": "hdc",
                 "CGLFlushDrawable": "ctx"}

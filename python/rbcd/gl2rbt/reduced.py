@@ -17,7 +17,7 @@ from ..cli import U63
 from .errors import ConvertError, printable
 from .converter import STATE_UPDATES, Converter
 from .gl_registry import APITRACE_ONLY, registry
-from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, SWAP_ARGS, base_name
+from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, WINDOW_SYSTEM_ARGS, base_name
 from .glstate.framebuffers import texture_image_digest
 from .glstate.texture_formats import DIGEST_TAG
 from .glstate.texture_levels import PASSED_OVER_IMAGES
@@ -395,12 +395,13 @@ def in_order(c):
     out, or an array of another length (glVertex3fv of two), is the
     reduced capture's error, as is a name of GL's form the registry lacks
     (glDrawArraysARB), but for the few apitrace records (APITRACE_ONLY).
-    Buffer swaps are held to apitrace's arguments (SWAP_ARGS); the window
-    system's other calls and memcpy are taken as they are, their handlers
-    reading by name."""
+    Buffer swaps and the calls making a context current are held to
+    apitrace's arguments (WINDOW_SYSTEM_ARGS: h_make_current reads the
+    context last); the window system's other calls and memcpy are taken as
+    they are, their handlers reading by name."""
     no, name, args = c[0], c[1], c[2]
-    if name in SWAP_ARGS:
-        sig = tuple((k, None, None, None) for k in SWAP_ARGS[name])
+    if name in WINDOW_SYSTEM_ARGS:
+        sig = tuple((k, None, None, None) for k in WINDOW_SYSTEM_ARGS[name])
     else:
         sig = registry().signature(name) if name.startswith("gl") else None
     if sig is None:
