@@ -7,8 +7,9 @@ from .entities import EntityTracker
 from .errors import ConvertError, RasterStopped, fail_call, printable
 from .geometry import GeometryOutput
 from .gl_registry import named_enumerants
-from .gl_tables import (CALL_FLAG_END_FRAME, CALL_FLAGS_APITRACE, SWAP_HANDLES, COMPAT_ONLY, COMPAT_ONLY_FORMS, END_FRAME_CALLS, IGNORED_PREFIXES,
-                        ES_ONLY_FORMS, MESA_NO_OPS, TEXTURE_CHANGING, TEXTURE_IGNORED, base_name)
+from .gl_tables import (CALL_FLAG_END_FRAME, CALL_FLAGS_APITRACE, COMPAT_ONLY, COMPAT_ONLY_FORMS, END_FRAME_CALLS,
+                        ES_ONLY_FORMS, IGNORED_PREFIXES, MESA_NO_OPS, SWAP_HANDLES, TEXTURE_CHANGING, TEXTURE_IGNORED,
+                        base_name)
 from .glstate import CONVERSION_STATE, SHARED_STATE, GLState
 from .glstate.image_calls import checked_calls, image_call_args
 from .glstate.attributes import AttributeCalls

@@ -28,9 +28,7 @@ SWAP_ARGS = {"glXSwapBuffers": ("dpy", "drawable"), "eglSwapBuffers": ("dpy", "s
 WINDOW_SYSTEM_ARGS = {**SWAP_ARGS, "glXMakeCurrent": ("dpy", "drawable", "ctx"),
                       "glXMakeContextCurrent": ("dpy", "draw", "read", "ctx"),
                       "eglMakeCurrent": ("dpy", "draw", "read", "ctx"), "wglMakeCurrent": ("hdc", "hglrc")}
-SWAP_HANDLES = {"glXSwapBuffers": "drawable", "eglSwapBuffers": "surface", "eglSwapBuffersWithDamageEXT": "surface",
-                "eglSwapBuffersWithDamageKHR": "surface", "wglSwapBuffers": "hdc", "wglSwapLayerBuffers": "hdc",
-                "CGLFlushDrawable": "ctx"}
+SWAP_HANDLES = {f: h for f, args in SWAP_ARGS.items() for h in args if h in ("drawable", "surface", "hdc", "ctx")}
 
 PRIM_TRIANGLES = {"GL_TRIANGLES", "GL_TRIANGLE_STRIP", "GL_TRIANGLE_FAN", "GL_QUADS", "GL_QUAD_STRIP", "GL_POLYGON"}
 PRIM_NO_AREA = {"GL_POINTS", "GL_LINES", "GL_LINE_STRIP", "GL_LINE_LOOP"}
