@@ -44,6 +44,10 @@ END_FRAME = 32   # apitrace's flag on a call that ends a frame
 TRIANGLE = struct.pack("<9f", 4, 4, -10, 40, 4, -10, 4, 40, -10)
 
 
+# glXCreateContextAttribsARB's arguments but its attribute list.
+GLX_CONTEXT_ARGS = [("dpy", 1), ("config", 1), ("share_context", 0), ("direct", 1)]
+
+
 class Calls:
     """A capture's calls, numbered from 1, as apitrace's reader yields them,
     written as a reduced capture (the converter's own format): every call,
@@ -58,6 +62,10 @@ class Calls:
         self.add("glEnableClientState", array="GL_VERTEX_ARRAY")
 
     def add(self, fn, ret=None, flags=0, **args):
+        """A call of `fn` with `args`, in their order (a reduced capture's
+        record must carry its function's every parameter by apitrace's
+        names: GLX_CONTEXT_ARGS are glXCreateContextAttribsARB's but its
+        attribute list)."""
         self.calls.append((len(self.calls) + 1, fn, list(args.items()), ret, flags))
         return self
 

@@ -18,8 +18,8 @@ import time
 import pytest
 
 from conftest import program
-from gl_captures import (END_FRAME, GL2RBT, TRIANGLE, Calls, alive, gl2rbt_timed as gl2rbt, left_behind, peak_mb,
-                         read_trace, refused)
+from gl_captures import (END_FRAME, GL2RBT, GLX_CONTEXT_ARGS, TRIANGLE, Calls, alive, gl2rbt_timed as gl2rbt,
+                         left_behind, peak_mb, read_trace, refused)
 from test_gl2rbt_hostile import ES_FRAGMENT, VS, shader_calls
 
 pytest.importorskip("OpenGL", reason="python3-opengl is missing (scripts/setup.sh --gl)")
@@ -494,7 +494,7 @@ def glx_context(c, attrs, ret=1):
     """shader_calls' capture with its context call's attributes replaced."""
     no, fn, _, _, flags = c.calls[5]
     assert fn == "glXCreateContextAttribsARB"
-    c.calls[5] = (no, fn, [("attrib_list", attrs)], ret, flags)
+    c.calls[5] = (no, fn, GLX_CONTEXT_ARGS + [("attrib_list", attrs)], ret, flags)
     return c
 
 

@@ -704,6 +704,12 @@ def test_a_draw_buffer_list_not_its_count_is_refused(tmp_path):
     r = gl2rbt(tmp_path, c.write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
     refused(r, "glDrawBuffers", "1 buffers, not its count (2)")
     assert left_behind(tmp_path, ["c.xz"]) == []
+    # A tuple is not apitrace's form of the list (round 36's N1: "no
+    # buffers, not its count (1)" of a tuple of one).
+    c = blending([("glDrawBuffers", dict(n=1, bufs=("GL_BACK_LEFT",))), SRC1])
+    r = gl2rbt(tmp_path, c.write(tmp_path / "t.xz"), "-o", tmp_path / "t.rbt")
+    refused(r, "glDrawBuffers", "the buffers are ('GL_BACK_LEFT',), not a list (apitrace's form) of 1")
+    assert left_behind(tmp_path, ["c.xz", "t.xz"]) == []
     got, _ = fragments(tmp_path, blending([BOTH, ("glDrawBuffers", dict(n=9, bufs=None)), SRC1]), "nine")
     assert got == 0, "GL_INVALID_VALUE: the window's two buffers stay"
 

@@ -426,7 +426,8 @@ def shader_calls(vertex_source, core=True, feedback=()):
     """A capture drawing one triangle from a buffer under a program (GL 3.3),
     which records the outputs `feedback` by transform feedback."""
     c = Calls()
-    c.add("glXCreateContextAttribsARB", attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3,
+    c.add("glXCreateContextAttribsARB", dpy=1, config=1, share_context=0, direct=1,
+          attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3,
           "GLX_CONTEXT_MINOR_VERSION_ARB", 3, "GLX_CONTEXT_PROFILE_MASK_ARB",
           "GLX_CONTEXT_CORE_PROFILE_BIT_ARB" if core else "GLX_CONTEXT_COMPATIBILITY_PROFILE_BIT_ARB", 0], ret=1)
     c.add("glCreateShader", type="GL_VERTEX_SHADER", ret=1)
@@ -475,7 +476,8 @@ def test_fixed_function_draws_under_rasterizer_discard_draw_nothing(tmp_path, dr
     R20-15); with it off again, they draw."""
     def capture(discard):
         c = Calls()
-        c.add("glXCreateContextAttribsARB", attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3,
+        c.add("glXCreateContextAttribsARB", dpy=1, config=1, share_context=0, direct=1,
+              attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3,
               "GLX_CONTEXT_MINOR_VERSION_ARB", 3, "GLX_CONTEXT_PROFILE_MASK_ARB",
               "GLX_CONTEXT_COMPATIBILITY_PROFILE_BIT_ARB", 0], ret=1)
         c.add("glEnable" if discard else "glDisable", cap="GL_RASTERIZER_DISCARD")
@@ -1964,9 +1966,9 @@ def test_compatibility_calls_in_a_core_profile(tmp_path):
     refused the display list)."""
     def core(*extra):
         c = Calls()
-        c.add("glXCreateContextAttribsARB", attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3,
-              "GLX_CONTEXT_MINOR_VERSION_ARB", 3, "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0],
-              ret=1)
+        c.add("glXCreateContextAttribsARB", dpy=1, config=1, share_context=0, direct=1,
+              attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 3, "GLX_CONTEXT_MINOR_VERSION_ARB", 3,
+                           "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0], ret=1)
         c.add("glGenVertexArrays", n=1, arrays=[7]).add("glBindVertexArray", array=7)
         for fn, kw in extra:
             c.add(fn, **kw)
@@ -2317,8 +2319,22 @@ def test_functions_named_by_apitrace_otherwise_than_the_registry_are_put_in_orde
     # as the context, read as the last argument).
     ("glXMakeCurrent", [("dpy", 1), ("drawable", 2)],
      "glXMakeCurrent's arguments are named (dpy, drawable); apitrace writes (dpy, drawable, ctx)"),
+    # Window-system functions no registry nor apitrace has, and made-up
+    # arguments to one apitrace records that no registry has (round 36's
+    # D2: passed over, exit 0); the registry's names where apitrace's differ.
+    ("glXFrobnicateMESA", [("dpy", 1)], "glXFrobnicateMESA is no GLX function"),
+    ("eglFrobnicateKHR", [("dpy", 1)], "eglFrobnicateKHR is no EGL function"),
+    ("wglFrobnicateARB", [("hdc", 1)], "wglFrobnicateARB is no WGL function"),
+    ("glGenQueriesANGLE", [("bogus", 1)], "glGenQueriesANGLE's arguments are named (bogus); apitrace writes (n, ids)"),
+    ("glXCreateNewContext", [("dpy", 1), ("config", 1), ("render_type", 0x8014), ("share_list", 0), ("direct", 1)],
+     "apitrace writes (dpy, config, renderType, shareList, direct)"),
+    ("eglCreateContext", [("dpy", 1), ("config", 1), ("attrib_list", None)],
+     "eglCreateContext's arguments are named (dpy, config, attrib_list); apitrace writes (dpy, config, "
+     "share_context, attrib_list)"),
 ], ids=["renamed", "missing", "extra", "registry_names", "short_list", "short_tuple", "no_such_arb_form",
-        "no_such_function", "swap_extra", "make_current_without_context"])
+        "no_such_function", "swap_extra", "make_current_without_context", "no_such_glx_function",
+        "no_such_egl_function", "no_such_wgl_function", "apitrace_only_made_up", "glx_registry_names",
+        "egl_missing"])
 def test_a_call_whose_arguments_are_not_the_function_s_is_refused(tmp_path, fn, args, words):
     """A reduced capture's call naming a parameter its function lacks,
     leaving one out, adding one, or giving a fixed-length array another
@@ -2331,6 +2347,132 @@ def test_a_call_whose_arguments_are_not_the_function_s_is_refused(tmp_path, fn, 
     r = gl2rbt(tmp_path, cap, "-o", tmp_path / "a.rbt")
     refused(r, "a.xz", "call 6: ", words)
     assert left_behind(tmp_path, ["a.xz"]) == []
+
+
+@pytest.mark.parametrize("system", ["glx", "egl"])
+def test_window_system_enumerants_given_by_value_are_the_window_system_s(tmp_path, system):
+    """A context's attribute list given by value, or its profile mask as
+    apitrace's tuple of flags, asks for the context the names ask for: a 3.3
+    core profile, in which a fixed-function draw with no vertex array
+    object draws nothing (round 36's D3: [0x2091, 3, 0x2092, 3, 0x9126, 1]
+    and EGL's alike made a compatibility context, the triangle drawn, exit
+    0); eglBindAPI's API alike. A list holding anything but enumerants and
+    numbers is refused naming the call."""
+    def capture(attrs, api="EGL_OPENGL_API"):
+        c = Calls()
+        if system == "glx":
+            c.add("glXCreateContextAttribsARB", dpy=1, config=1, share_context=0, direct=1, attrib_list=attrs, ret=7)
+            c.add("glXMakeCurrent", dpy=1, drawable=2, ctx=7, ret=1)
+        else:
+            c.add("eglBindAPI", api=api, ret="EGL_TRUE")
+            c.add("eglCreateContext", dpy=1, config=1, share_context=0, attrib_list=attrs, ret=7)
+            c.add("eglMakeCurrent", dpy=1, draw=2, read=2, ctx=7, ret="EGL_TRUE")
+        c.add("glPushDebugGroup", source="GL_DEBUG_SOURCE_APPLICATION", id=5, length=-1, message="rbcd-object")
+        c.add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
+        c.add("glDrawArrays", mode="GL_TRIANGLES", first=0, count=3).add("glPopDebugGroup")
+        return c.swap()
+    if system == "glx":
+        major, minor, mask, core, compat, end = ("GLX_CONTEXT_MAJOR_VERSION_ARB", "GLX_CONTEXT_MINOR_VERSION_ARB",
+                                                 "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_CORE_PROFILE_BIT_ARB",
+                                                 "GLX_CONTEXT_COMPATIBILITY_PROFILE_BIT_ARB", 0)
+        values = [0x2091, 3, 0x2092, 3, 0x9126, 1, 0]
+    else:
+        major, minor, mask, core, compat, end = ("EGL_CONTEXT_MAJOR_VERSION", "EGL_CONTEXT_MINOR_VERSION",
+                                                 "EGL_CONTEXT_OPENGL_PROFILE_MASK",
+                                                 "EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT",
+                                                 "EGL_CONTEXT_OPENGL_COMPATIBILITY_PROFILE_BIT", "EGL_NONE")
+        values = [0x3098, 3, 0x30FB, 3, 0x30FD, 1, 0x3038]
+    named = [major, 3, minor, 3, mask, core, end]
+    compatibility = fragments(tmp_path, capture([major, 3, minor, 3, mask, compat, end]).write(tmp_path / "c.xz"))
+    assert compatibility[0] > 100
+    assert fragments(tmp_path, capture(named).write(tmp_path / "n.xz")) == [0]
+    for i, attrs in enumerate([values, [major, 3, minor, 3, mask, (core,), end], [major, 3, minor, 3, mask, 1, end],
+                               # (an attribute after the list's end is not read)
+                               named[:-1] + [0x3038 if system == "egl" else 0, mask, compat]]):
+        assert fragments(tmp_path, capture(attrs).write(tmp_path / f"v{i}.xz")) == [0], attrs
+    if system == "egl":
+        assert fragments(tmp_path, capture(values, api=0x30A2).write(tmp_path / "api.xz")) == [0]
+    for bad in ([[major], 3, end], [major, 3, "GLX_NO_SUCH_ATTRIBUTE", 1, end], [major, 3, mask, [core], end]):
+        r = gl2rbt(tmp_path, capture(bad).write(tmp_path / "bad.xz"), "-o", tmp_path / "bad.rbt")
+        refused(r, "bad.xz", "call 6: " if system == "glx" else "call 7: ", "the attribute list holds")
+        assert not (tmp_path / "bad.rbt").exists()
+
+
+BUFFER_1 = [("glBindBuffer", dict(target="GL_ARRAY_BUFFER", buffer=1)),
+            ("glBufferData", dict(target="GL_ARRAY_BUFFER", size=36, data=TRIANGLE, usage="GL_STATIC_DRAW"))]
+UNBIND = [("glBindBuffer", dict(target="GL_ARRAY_BUFFER", buffer=0))]
+RECOMPILE = [("glCompileShader", dict(shader=1)), ("glLinkProgram", dict(program=2))]
+
+
+@pytest.mark.parametrize("shaders, before, calls", [
+    # A mapping GL refused, recorded with its NULL (past the data, of a
+    # buffer with no data store): nothing mapped (round 37's D1: refused).
+    (False, BUFFER_1 + UNBIND, BUFFER_1 + [("glMapBufferRange", dict(
+        target="GL_ARRAY_BUFFER", offset=0, length=40, access="GL_MAP_WRITE_BIT", ret=0))] + UNBIND),
+    (False, [], [("glBindBuffer", dict(target="GL_ARRAY_BUFFER", buffer=1)),
+                 ("glMapBuffer", dict(target="GL_ARRAY_BUFFER", access="GL_WRITE_ONLY", ret=0))] + UNBIND),
+    # Instanced draws of no instance without a vertex shader (D2: refused
+    # as not emulated), drawing nothing as Mesa does.
+    (False, [], [("glDrawArraysInstanced", dict(mode="GL_TRIANGLES", first=0, count=3, instancecount=0))]),
+    (False, [], [("glDrawElementsInstanced", dict(mode="GL_TRIANGLES", count=3, type="GL_UNSIGNED_BYTE",
+                                                  indices=bytes([0, 1, 2]), instancecount=0))]),
+    # glShaderSource of a negative count, as apitrace records it (no
+    # strings): GL_INVALID_VALUE, the source stays (D3: refused).
+    (True, RECOMPILE, [("glShaderSource", dict(shader=1, count=-1, string=[], length=None))] + RECOMPILE),
+    (True, RECOMPILE, [("glShaderSource", dict(shader=1, count=-1, string=[], length=[]))] + RECOMPILE),
+    # Calls on names that are no shader or program (D4: refused as never
+    # created): GL_INVALID_VALUE or GL_INVALID_OPERATION, nothing changes.
+    (True, [], [("glShaderSource", dict(shader=99, count=1, string=["garbage"], length=None)),
+                ("glCompileShader", dict(shader=99)), ("glAttachShader", dict(program=2, shader=99)),
+                ("glDetachShader", dict(program=2, shader=99)), ("glLinkProgram", dict(program=99)),
+                ("glBindAttribLocation", dict(program=99, index=1, name="p")),
+                ("glCompileShader", dict(shader=2))]),
+], ids=["map_range_past_the_data", "map_no_data_store", "arrays_no_instance", "elements_no_instance",
+        "source_count_negative", "source_count_negative_lengths", "no_such_shader_or_program"])
+def test_calls_gl_refuses_change_nothing(tmp_path, shaders, before, calls):
+    """A capture with calls GL refuses, which change nothing in Mesa,
+    converts into the bytes of the capture without them."""
+    def capture(extra):
+        c = shader_calls(VS) if shaders else Calls()
+        for fn, args in extra:
+            c.add(fn, **args)
+        if shaders:
+            return shader_draw(c, vao=1)
+        return c.triangle(obj=1).swap()
+    want = trace_bytes(tmp_path, capture(before), "without")
+    assert want.count(b"\nf ") > 100
+    assert trace_bytes(tmp_path, capture(calls), "with") == want
+
+
+@pytest.mark.parametrize("plain, form", [
+    ([("glDepthRange", dict(zNear=0.25, zFar=0.75))], [("glDepthRangeIndexed", dict(index=0, n=0.25, f=0.75))]),
+    ([("glDepthRange", dict(zNear=0.25, zFar=0.75))],
+     [("glDepthRangeArrayv", dict(first=0, count=2, v=[0.25, 0.75, 0.0, 0.5]))]),
+    ([], [("glDepthRangeIndexed", dict(index=1, n=0.25, f=0.75)),
+          ("glDepthRangeArrayv", dict(first=1, count=1, v=[0.25, 0.75])),
+          ("glDepthRangeArrayv", dict(first=0, count=17, v=[0.25, 0.75] * 17))]),
+    ([("glEnable", dict(cap="GL_POLYGON_OFFSET_FILL")), ("glPolygonOffset", dict(factor=2.0, units=40.0))],
+     [("glEnable", dict(cap="GL_POLYGON_OFFSET_FILL")),
+      ("glPolygonOffsetClamp", dict(factor=2.0, units=40.0, clamp=0.0))]),
+], ids=["depth_range_indexed", "depth_range_array", "other_viewports", "offset_clamp_zero"])
+def test_forms_of_emulated_calls_convert_as_they_do(tmp_path, plain, form):
+    """glDepthRangeIndexed and glDepthRangeArrayv of viewport 0 are
+    glDepthRange; of another viewport (selected only by a geometry shader)
+    or past Mesa's 16 they change nothing drawn; glPolygonOffsetClamp with
+    a clamp of 0 is glPolygonOffset (round 37's N1: each refused as not
+    emulated). A clamp of another value is refused naming the call."""
+    def capture(calls):
+        c = Calls()
+        for fn, args in calls:
+            c.add(fn, **args)
+        return c.triangle(obj=1).swap()
+    want = trace_bytes(tmp_path, capture(plain), "plain")
+    assert want != trace_bytes(tmp_path, capture([]), "none") or not plain
+    assert trace_bytes(tmp_path, capture(form), "form") == want
+    if form[-1][0] == "glPolygonOffsetClamp":
+        c = capture(form[:-1] + [("glPolygonOffsetClamp", dict(factor=2.0, units=40.0, clamp=0.5))])
+        r = gl2rbt(tmp_path, c.write(tmp_path / "clamp.xz"), "-o", tmp_path / "clamp.rbt")
+        refused(r, "clamp.xz", "call 7: glPolygonOffsetClamp with a clamp other than 0 is not emulated")
 
 
 # The enumerants test_enumerants_given_by_value_are_the_driver_s gives by value.

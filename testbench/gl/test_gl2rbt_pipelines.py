@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from gl_captures import END_FRAME, TRIANGLE, Calls, gl2rbt_timed as gl2rbt
+from gl_captures import END_FRAME, GLX_CONTEXT_ARGS, TRIANGLE, Calls, gl2rbt_timed as gl2rbt
 from test_gl2rbt_draw_outcomes import ES2_VS, draw, trace
 from test_gl2rbt_hostile import es_triangle, shader_calls
 
@@ -23,9 +23,9 @@ DISCARD_FS = ("#version 410 core\nout vec4 c;\n"
 def context(c, major=4, minor=5):
     no, fn, _, ret, flags = c.calls[5]
     assert fn == "glXCreateContextAttribsARB"
-    c.calls[5] = (no, fn, [("attrib_list", ["GLX_CONTEXT_MAJOR_VERSION_ARB", major, "GLX_CONTEXT_MINOR_VERSION_ARB",
-                                            minor, "GLX_CONTEXT_PROFILE_MASK_ARB",
-                                            "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0])], ret, flags)
+    c.calls[5] = (no, fn, GLX_CONTEXT_ARGS + [("attrib_list", [
+        "GLX_CONTEXT_MAJOR_VERSION_ARB", major, "GLX_CONTEXT_MINOR_VERSION_ARB", minor, "GLX_CONTEXT_PROFILE_MASK_ARB",
+        "GLX_CONTEXT_CORE_PROFILE_BIT_ARB", 0])], ret, flags)
     return c
 
 
@@ -266,7 +266,8 @@ def test_a_compatibility_pipeline_validated_for_fixed_function_vertices(tmp_path
     compute stage alone leaves the draw fixed-function (it had been taken
     for a program in some of its stages: nothing drawn; R21-9)."""
     c = Calls()
-    c.add("glXCreateContextAttribsARB", attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 4,
+    c.add("glXCreateContextAttribsARB", dpy=1, config=1, share_context=0, direct=1,
+          attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 4,
           "GLX_CONTEXT_MINOR_VERSION_ARB", 5, "GLX_CONTEXT_PROFILE_MASK_ARB",
           "GLX_CONTEXT_COMPATIBILITY_PROFILE_BIT_ARB", 0], ret=1)
     c.add("glGenProgramPipelines", n=1, pipelines=[5]).add("glBindProgramPipeline", pipeline=5)

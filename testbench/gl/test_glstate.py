@@ -1268,16 +1268,18 @@ def test_a_call_on_a_texture_that_shares_its_images_reads_the_view_again():
 def test_calls_on_a_deleted_program_change_nothing():
     """glProgramUniform and glGetUniformLocation on a program glDeleteProgram
     freed are GL_INVALID_VALUE: nothing changes (round 13's R13-5: refused
-    as a program never created); a name never created is the capture's
-    error."""
+    as a program never created); on a name never created too (GL's
+    GL_INVALID_VALUE; round 37's D4: refused)."""
     gl = GL()
     gl.glCreateProgram(ret=2)
     gl.glDeleteProgram(2)
     gl.glProgramUniform1f(2, 0, 1.0)
     gl.glGetUniformLocation(program=2, name="x", ret=0)
     assert 2 not in gl.conv.s.programs
-    with pytest.raises(ConvertError, match="program 3 was never created"):
-        gl.glProgramUniform1f(3, 0, 1.0)
+    gl.glProgramUniform1f(3, 0, 1.0)
+    gl.glLinkProgram(3)
+    gl.glBindAttribLocation(program=3, index=0, name="p")
+    assert 3 not in gl.conv.s.programs
 
 
 def test_a_layer_attached_is_another_pass():

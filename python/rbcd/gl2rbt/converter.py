@@ -30,22 +30,31 @@ from .glstate.programs import ProgramCalls
 from .glstate.transform import TransformCalls
 from .glstate.vertex_arrays import VertexArrayCalls
 from .selection import Selection
+from .window_registry import window_registry
 
 MAX_TILES = 1 << 20   # rbcd-gl-raster's bound: a bin per tile (8192 x 8192 in 8 x 8 tiles)
 
 
-def context_is_core(attrs, major_key, minor_key, mask_key, core_bit):
-    """Whether a context created with these attributes (a flat list of
-    names and values, as apitrace records them) is a core profile: 3.2 or
-    later, with the core bit in its profile mask (the default)."""
-    if not isinstance(attrs, list):
+def context_attributes(no, name, attrs, end):
+    """Call `no`'s attribute list (WindowRegistry.attributes: up to `end`),
+    the capture's error where it holds anything but enumerants and
+    numbers."""
+    try:
+        return window_registry().attributes(attrs, end)
+    except ValueError as e:
+        fail_call(no, f"{printable(name)}: the attribute list {e}")
+
+
+def context_is_core(pairs, major_key, minor_key, mask_key, core_bit):
+    """Whether a context created with these attributes (context_attributes'
+    by value) is a core profile: 3.2 or later, with the core bit alone in
+    its profile mask (the default; more than one bit is the window system's
+    error, and no context is made)."""
+    ws = window_registry()
+    version = (pairs.get(ws.value(major_key), 1), pairs.get(ws.value(minor_key), 0))
+    if version < (3, 2):
         return False
-    pairs = dict(zip(attrs[0::2], attrs[1::2]))
-    version = (pairs.get(major_key, 1), pairs.get(minor_key, 0))
-    if not all(isinstance(v, int) for v in version) or version < (3, 2):
-        return False
-    mask = pairs.get(mask_key, core_bit)
-    return mask == core_bit or (isinstance(mask, tuple) and core_bit in mask)
+    return pairs.get(ws.value(mask_key), ws.value(core_bit)) == ws.value(core_bit)
 
 
 # The versions a context can be asked for (GLX_ARB_create_context and its
@@ -178,7 +187,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.vertex_stage_ = None        # Mesa, started at the first draw under a program
         self.replay = None               # Mesa's replay of the capture, for rendered textures (rendered_textures.py)
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)
-        self.egl_api = "EGL_OPENGL_ES_API"
+        self.egl_api = None              # eglBindAPI's API by value (None: EGL_OPENGL_ES_API, the default)
         self.core = False                # a core-profile context: no default vertex array object
         self.last_depth_draw = None      # the frame's last draw with the depth test on
         self.last_depth_wrong = None     # why the converter's depth buffer was wrong for it (CameraDepthCalls)
@@ -432,12 +441,17 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         fail_call(no, f"{printable(name)} is not emulated and may change geometry or visibility")
 
     def h_egl_bind_api(self, no, name, a, args):
-        self.egl_api = a[0] if a else None
+        """eglBindAPI: the API later contexts are of, given by name or by
+        value; an API EGL refuses (EGL_FALSE) changes nothing."""
+        if self.ret in ("EGL_FALSE", 0, False):
+            return
+        self.egl_api = window_registry().value(dict(args).get("api"))
 
     def h_egl_create_context(self, no, name, a, args):
         # EGL's default API is OpenGL ES (eglBindAPI changes it).
-        es = self.egl_api != "EGL_OPENGL_API"
-        attrs = dict(args).get("attrib_list")
+        ws = window_registry()
+        es = self.egl_api != ws.value("EGL_OPENGL_API")
+        attrs = context_attributes(no, name, dict(args).get("attrib_list"), "EGL_NONE")
         self.context_created(dict(args).get("share_context"))
         self.profile_made(es, not es and context_is_core(attrs, "EGL_CONTEXT_MAJOR_VERSION",
                                                           "EGL_CONTEXT_MINOR_VERSION",
@@ -585,17 +599,17 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if not self.ret:
             return
         self.context_created(dict(args).get("share_context"))
-        attrs = dict(args).get("attrib_list")
-        pairs = dict(zip(attrs[0::2], attrs[1::2])) if isinstance(attrs, list) else {}
-        mask = pairs.get("GLX_CONTEXT_PROFILE_MASK_ARB")
-        es = any(bit in (mask if isinstance(mask, tuple) else (mask,))
-                 for bit in ("GLX_CONTEXT_ES2_PROFILE_BIT_EXT", "GLX_CONTEXT_ES_PROFILE_BIT_EXT"))
-        version = (pairs.get("GLX_CONTEXT_MAJOR_VERSION_ARB", 1), pairs.get("GLX_CONTEXT_MINOR_VERSION_ARB", 0))
+        pairs = context_attributes(no, name, dict(args).get("attrib_list"), 0)
+        ws = window_registry()
+        # (GLX_CONTEXT_ES2_PROFILE_BIT_EXT is the same bit)
+        es = pairs.get(ws.value("GLX_CONTEXT_PROFILE_MASK_ARB")) == ws.value("GLX_CONTEXT_ES_PROFILE_BIT_EXT")
+        version = (pairs.get(ws.value("GLX_CONTEXT_MAJOR_VERSION_ARB"), 1),
+                   pairs.get(ws.value("GLX_CONTEXT_MINOR_VERSION_ARB"), 0))
         if version not in (ES_VERSIONS if es else GL_VERSIONS):
             fail_call(no, f"{printable(name)}: a context of {'OpenGL ES' if es else 'OpenGL'} "
                       f"{printable(version[0], 20)}.{printable(version[1], 20)}, a version that does not exist, "
                       "was made")
-        self.profile_made(es, not es and context_is_core(attrs, "GLX_CONTEXT_MAJOR_VERSION_ARB",
+        self.profile_made(es, not es and context_is_core(pairs, "GLX_CONTEXT_MAJOR_VERSION_ARB",
                                                           "GLX_CONTEXT_MINOR_VERSION_ARB",
                                                           "GLX_CONTEXT_PROFILE_MASK_ARB",
                                                           "GLX_CONTEXT_CORE_PROFILE_BIT_ARB"))

@@ -13,9 +13,11 @@ value. Two uses:
 
 Parsing gl.xml takes about 0.4 s; what is read of it is kept in the user's
 cache folder ($XDG_CACHE_HOME/rbcd, else ~/.cache/rbcd: matplotlib keeps
-its font list so), keyed by the registry's size and time, and read back in
-milliseconds. A cache that cannot be written or read is rebuilt, never an
-error."""
+its font list so), keyed by the registry's size and time, its content
+checked against the SHA-256 digest written before it, and read back in
+milliseconds. A cache that cannot be written, read or checked is rebuilt,
+never an error."""
+import hashlib
 import json
 import os
 import stat
@@ -25,7 +27,7 @@ import xml.etree.ElementTree as ET
 from .errors import ToolError
 
 REGISTRY = "/usr/share/khronos-api/gl.xml"
-CACHE_FORMAT = 3   # (one more whenever what _parse keeps changes: VENDOR_SUFFIXES, SUFFIX_RANK, LENGTHS_DIFFER)
+CACHE_FORMAT = 4   # (one more when the file or what _parse keeps changes: VENDOR_SUFFIXES, SUFFIX_RANK, LENGTHS_DIFFER)
 
 # apitrace's parameter names where they differ from the registry's
 # (apitrace 11.1's specs/glapi.py, Debian's): a capture's calls, and so a
@@ -98,13 +100,19 @@ APITRACE_NAMES = {
 }
 # The GL functions apitrace 11.1 records that the registry of 2022 lacks
 # (any other name of GL's form is no GL function).
-APITRACE_ONLY = frozenset({
-    "glAddSwapHintRectWIN", "glBeginQueryANGLE", "glBlendEquationSeparateATI", "glBufferRegionEnabled",
-    "glDeleteBufferRegion", "glDeleteQueriesANGLE", "glDrawBufferRegion", "glEndQueryANGLE", "glFinishRenderAPPLE",
-    "glFlushRenderAPPLE", "glGenQueriesANGLE", "glGetQueryObjecti64vANGLE", "glGetQueryObjectivANGLE",
-    "glGetQueryObjectui64vANGLE", "glGetQueryObjectuivANGLE", "glGetQueryivANGLE", "glIsQueryANGLE",
-    "glNewBufferRegion", "glPNTrianglesfATIX", "glPNTrianglesiATIX", "glPointSizePointerAPPLE", "glQueryCounterANGLE",
-    "glReadBufferRegion", "glSwapAPPLE", "glVertexPointSizefAPPLE"})
+APITRACE_ONLY = {
+    "glAddSwapHintRectWIN": ("x", "y", "width", "height"), "glBeginQueryANGLE": ("target", "id"),
+    "glBlendEquationSeparateATI": ("equationRGB", "equationAlpha"), "glBufferRegionEnabled": (),
+    "glDeleteBufferRegion": ("region",), "glDeleteQueriesANGLE": ("n", "ids"),
+    "glDrawBufferRegion": ("region", "x", "y", "width", "height", "xDest", "yDest"), "glEndQueryANGLE": ("target",),
+    "glFinishRenderAPPLE": (), "glFlushRenderAPPLE": (), "glGenQueriesANGLE": ("n", "ids"),
+    "glGetQueryObjecti64vANGLE": ("id", "pname", "params"), "glGetQueryObjectivANGLE": ("id", "pname", "params"),
+    "glGetQueryObjectui64vANGLE": ("id", "pname", "params"), "glGetQueryObjectuivANGLE": ("id", "pname", "params"),
+    "glGetQueryivANGLE": ("target", "pname", "params"), "glIsQueryANGLE": ("id",), "glNewBufferRegion": ("type",),
+    "glPNTrianglesfATIX": ("pname", "param"), "glPNTrianglesiATIX": ("pname", "param"),
+    "glPointSizePointerAPPLE": ("type", "stride", "pointer"), "glQueryCounterANGLE": ("id", "target"),
+    "glReadBufferRegion": ("region", "x", "y", "width", "height"), "glSwapAPPLE": (),
+    "glVertexPointSizefAPPLE": ("size",)}
 # Fixed array lengths apitrace writes otherwise than the registry states.
 LENGTHS_DIFFER = {"glDrawTexfvOES", "glDrawTexivOES", "glDrawTexsvOES", "glDrawTexxvOES"}
 VENDOR_SUFFIXES = ("_ARB", "_EXT", "_KHR", "_OES", "_NV", "_AMD", "_APPLE", "_ATI", "_SGIX", "_SGIS", "_IMG",
@@ -197,8 +205,9 @@ def _cache_path(st):
 
 def _read_cache(cache):
     """The cached registry, or None where there is none usable: not a
-    regular file (a FIFO is never waited on), too large, not JSON, or not
-    of the shapes _parse makes."""
+    regular file (a FIFO is never waited on), too large, not the SHA-256
+    digest _load wrote before its JSON (an edit by hand, a file cut short),
+    or not of the shapes _parse makes."""
     try:
         fd = os.open(cache, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
     except OSError:
@@ -209,7 +218,11 @@ def _read_cache(cache):
             # (another user's file, in a folder others may write, is not ours)
             if not stat.S_ISREG(st.st_mode) or st.st_size > CACHE_MAX_BYTES or st.st_uid != os.getuid():
                 return None
-            data = json.loads(f.read(CACHE_MAX_BYTES + 1))
+            digest, _, body = f.read(CACHE_MAX_BYTES + 1).partition(b"\n")
+        # (a file edited by hand, or cut short, is not what was written)
+        if digest != hashlib.sha256(body).hexdigest().encode():
+            return None
+        data = json.loads(body)
         if not (isinstance(data, dict) and data.get("format") == CACHE_FORMAT):
             return None
         commands, groups = data.get("commands"), data.get("groups")
@@ -254,10 +267,10 @@ def _load():
     tmp = None
     try:
         os.makedirs(os.path.dirname(cache), mode=0o700, exist_ok=True)
-        with tempfile.NamedTemporaryFile("w", dir=os.path.dirname(cache), suffix=".tmp", delete=False,
-                                         encoding="utf-8") as f:
+        body = json.dumps(data, separators=(",", ":")).encode()
+        with tempfile.NamedTemporaryFile("wb", dir=os.path.dirname(cache), suffix=".tmp", delete=False) as f:
             tmp = f.name
-            json.dump(data, f, separators=(",", ":"))
+            f.write(hashlib.sha256(body).hexdigest().encode() + b"\n" + body)
         os.replace(tmp, cache)
     except OSError:
         if tmp is not None:
@@ -276,8 +289,9 @@ class Registry:
 
     def signature(self, name):
         """The function's parameters as apitrace writes them: ((name, C
-        type, group, fixed length), ...), or None where the registry lacks
-        the function (the window system's, apitrace's own)."""
+        type, group, fixed length), ...), only the names of APITRACE_ONLY's,
+        or None where neither has the function (the window system's:
+        window_registry)."""
         sig = self.signatures.get(name, False)
         if sig is False:
             params = self.commands.get(name)
@@ -288,6 +302,8 @@ class Registry:
                 params = core if core is not None and len(core) == len(names) else None
             if params is not None:
                 sig = tuple((names[i] if names else p[0], p[1], p[2], p[3]) for i, p in enumerate(params))
+            elif name in APITRACE_ONLY:
+                sig = tuple((k, None, None, None) for k in APITRACE_ONLY[name])
             else:
                 sig = None
             self.signatures[name] = sig

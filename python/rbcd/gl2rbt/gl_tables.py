@@ -15,20 +15,12 @@ END_FRAME_CALLS = frozenset({
     "glXSwapBuffers", "eglSwapBuffers", "eglSwapBuffersWithDamageEXT", "eglSwapBuffersWithDamageKHR",
     "wglSwapBuffers", "wglSwapLayerBuffers", "wglSwapMultipleBuffers", "CGLFlushDrawable",
     "glFrameTerminatorGREMEDY"})
-# The arguments of each buffer swap apitrace 11.1 records (the registry has
-# the GL calls' only), and the one naming the window or surface it shows
-# (the frame terminator and wglSwapMultipleBuffers name none alone).
-SWAP_ARGS = {"glXSwapBuffers": ("dpy", "drawable"), "eglSwapBuffers": ("dpy", "surface"),
-             "eglSwapBuffersWithDamageEXT": ("dpy", "surface", "rects", "n_rects"),
-             "eglSwapBuffersWithDamageKHR": ("dpy", "surface", "rects", "n_rects"), "wglSwapBuffers": ("hdc",),
-             "wglSwapLayerBuffers": ("hdc", "fuPlanes"), "wglSwapMultipleBuffers": ("n", "ps"),
-             "CGLFlushDrawable": ("ctx",)}
-# The same of the calls that make a context current (apitrace's names: the
-# context last, as Converter.h_make_current reads it).
-WINDOW_SYSTEM_ARGS = {**SWAP_ARGS, "glXMakeCurrent": ("dpy", "drawable", "ctx"),
-                      "glXMakeContextCurrent": ("dpy", "draw", "read", "ctx"),
-                      "eglMakeCurrent": ("dpy", "draw", "read", "ctx"), "wglMakeCurrent": ("hdc", "hglrc")}
-SWAP_HANDLES = {f: h for f, args in SWAP_ARGS.items() for h in args if h in ("drawable", "surface", "hdc", "ctx")}
+# The argument of each buffer swap naming the window or surface it shows,
+# by apitrace's name (window_registry has their parameters; the frame
+# terminator and wglSwapMultipleBuffers name none alone).
+SWAP_HANDLES = {"glXSwapBuffers": "drawable", "eglSwapBuffers": "surface", "eglSwapBuffersWithDamageEXT": "surface",
+                "eglSwapBuffersWithDamageKHR": "surface", "wglSwapBuffers": "hdc", "wglSwapLayerBuffers": "hdc",
+                "CGLFlushDrawable": "ctx"}
 
 PRIM_TRIANGLES = {"GL_TRIANGLES", "GL_TRIANGLE_STRIP", "GL_TRIANGLE_FAN", "GL_QUADS", "GL_QUAD_STRIP", "GL_POLYGON"}
 PRIM_NO_AREA = {"GL_POINTS", "GL_LINES", "GL_LINE_STRIP", "GL_LINE_LOOP"}

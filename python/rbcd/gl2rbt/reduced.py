@@ -16,13 +16,14 @@ from .apitrace import MAX_RECORD_VALUES, CallReader, PointerType, call_values_wi
 from ..cli import U63
 from .errors import ConvertError, printable
 from .converter import STATE_UPDATES, Converter
-from .gl_registry import APITRACE_ONLY, registry
-from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, WINDOW_SYSTEM_ARGS, base_name
+from .gl_registry import registry
+from .gl_tables import END_FRAME_CALLS, IGNORED_PREFIXES, base_name
 from .glstate.framebuffers import texture_image_digest
 from .glstate.texture_formats import DIGEST_TAG
 from .glstate.texture_levels import PASSED_OVER_IMAGES
 from .glstate.textures import REDUCED_TEXTURES
 from .outputs import SafeText
+from .window_registry import APITRACE_ONLY as WS_APITRACE_ONLY, PREFIXES, WINDOW_SYSTEM_FUNCTION, window_registry
 
 REDUCED_HEADER = ("rbcd-reduced-capture", 5, 0)   # (the source's size: 0, none known)
 # Versions read: 5 keeps the calls that give 1D, 3D and array textures
@@ -387,27 +388,31 @@ GL_FUNCTION = re.compile(r"gl(?!X[A-Z])[A-Z][A-Za-z0-9_]*")
 
 def in_order(c):
     """The call with its arguments as apitrace writes them: the function's
-    parameters (gl_registry: apitrace's names, the prototype's order), each
-    fixed-length array of its length. A record naming them in another order
-    is put in order (handlers read some by position: an altered record with
-    glOrtho's right before its left had been read as a mirrored
-    projection); one naming a parameter the function lacks or leaving one
-    out, or an array of another length (glVertex3fv of two), is the
-    reduced capture's error, as is a name of GL's form the registry lacks
-    (glDrawArraysARB), but for the few apitrace records (APITRACE_ONLY).
-    Buffer swaps and the calls making a context current are held to
-    apitrace's arguments (WINDOW_SYSTEM_ARGS: h_make_current reads the
-    context last); the window system's other calls and memcpy are taken as
-    they are, their handlers reading by name."""
+    parameters (gl_registry, window_registry: apitrace's names, the
+    prototype's order), each fixed-length array of its length. A record
+    naming them in another order is put in order (handlers read some by
+    position: an altered record with glOrtho's right before its left had
+    been read as a mirrored projection; glXMakeCurrent's context is its
+    last); one naming a parameter the function lacks or leaving one out,
+    or an array of another length (glVertex3fv of two), is the reduced
+    capture's error, as is a name of GL's or a window system's form no
+    registry has (glDrawArraysARB, glXFrobnicateMESA) but for the few
+    apitrace records (APITRACE_ONLY). memcpy and other names of neither
+    form are taken as they are (the converter refuses those it has no rule
+    for)."""
     no, name, args = c[0], c[1], c[2]
-    if name in WINDOW_SYSTEM_ARGS:
-        sig = tuple((k, None, None, None) for k in WINDOW_SYSTEM_ARGS[name])
-    else:
-        sig = registry().signature(name) if name.startswith("gl") else None
-    if sig is None:
-        if GL_FUNCTION.fullmatch(name) and name not in APITRACE_ONLY:
+    if WINDOW_SYSTEM_FUNCTION.fullmatch(name) or name in WS_APITRACE_ONLY:
+        params = window_registry().signature(name)
+        if params is None:
+            raise ConvertError(f"call {no}: {printable(name)} is no {PREFIXES[name[:3]]} function "
+                               "(neither its registry nor apitrace has one of that name)")
+        sig = tuple((k, None, None, None) for k in params)
+    elif GL_FUNCTION.fullmatch(name):
+        sig = registry().signature(name)
+        if sig is None:
             # (glDrawArraysARB had been drawn as glDrawArrays, its arguments unchecked)
             raise ConvertError(f"call {no}: {printable(name)} is no GL function (the registry has none of that name)")
+    else:
         return c
     extra = args[-1:] if args and args[-1][0] == REDUCED_TEXTURES else []
     own = args[:len(args) - len(extra)]

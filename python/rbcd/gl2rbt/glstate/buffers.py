@@ -484,6 +484,10 @@ class BufferCalls:
         b = self.bound_buffer(no, name, d.get("target"))
         buf = self.s.buffers.get(b)
         ptr = self.ret
+        if type(ptr) is int and ptr == 0:
+            # NULL: a mapping GL refused (past the buffer's data, a buffer
+            # with no data store, one mapped already) maps nothing.
+            return
         offset, length = d.get("offset", 0), d.get("length")
         if buf is None:
             fail_call(no, f"{name} of a buffer that holds no data")

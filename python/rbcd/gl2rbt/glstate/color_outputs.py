@@ -11,7 +11,7 @@ under a fragment shader that does not declare it.
 import re
 
 from ...cli import I32, U32, integer
-from ..errors import checked, fail_call
+from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import enum_arg
 from .glsl_text import conditional_on
@@ -304,8 +304,10 @@ class ColorOutputCalls:
                 return   # GL_INVALID_VALUE: the list is not read
             if n == 0:
                 bufs = []
-            if not isinstance(bufs, list) or len(bufs) != n:
-                fail_call(no, f"{name}: {len(bufs) if isinstance(bufs, list) else 'no'} buffers, not its count ({n})")
+            if not isinstance(bufs, list):
+                fail_call(no, f"{name}: the buffers are {printable(bufs, 40)}, not a list (apitrace's form) of {n}")
+            if len(bufs) != n:
+                fail_call(no, f"{name}: {len(bufs)} buffers, not its count ({n})")
         else:
             bufs = [d.get("buf", d.get("mode", a[-1] if a else None))]
         names = [buffer_name(b, no, f"{name}: a buffer") for b in bufs]

@@ -515,6 +515,8 @@ class DrawCalls:
         d = self.draw_args(no, name, a, args)
         if d is None:
             return   # GL_INVALID_VALUE
+        if d.get("instancecount", d.get("primcount", 1)) == 0 or d["count"] == 0:
+            return   # no instance or no vertex: Mesa draws nothing, with or without a vertex shader
         if not self.vertex_program():
             if self.core:
                 return   # no vertex shader in a core profile: nothing is drawn (Mesa)

@@ -20,6 +20,13 @@ class PolygonCalls:
     def h_polygon_offset(self, no, name, a, args):
         self.s.offset = (number(a[0], no, "the offset factor"), number(a[1], no, "the offset units"))
 
+    def h_polygon_offset_clamp(self, no, name, a, args):
+        """glPolygonOffsetClamp: a clamp of 0 is glPolygonOffset; another
+        limits the offset, which is not emulated."""
+        if number(a[2], no, "the offset clamp") != 0:
+            fail_call(no, f"{name} with a clamp other than 0 is not emulated")
+        self.h_polygon_offset(no, name, a, args)
+
     def h_provoking_vertex(self, no, name, a, args):
         # Which vertex is flat shading's changes no fragment; it is read for
         # the depth check, whose llvmpipe emulation orders a clipped
@@ -38,6 +45,7 @@ class PolygonCalls:
         "glCullFace": h_cull_face,
         "glFrontFace": h_front_face,
         "glPolygonOffset": h_polygon_offset,
+        "glPolygonOffsetClamp": h_polygon_offset_clamp,
         "glPolygonOffsetx": fixed_point(h_polygon_offset),   # OpenGL ES 1, 16.16 fixed point
         "glPolygonMode": h_polygon_mode,
         "glProvokingVertex": h_provoking_vertex,

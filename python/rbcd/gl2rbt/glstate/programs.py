@@ -160,14 +160,11 @@ class ProgramCalls:
     """self.s.shaders, self.s.programs: capture name -> Shader, Program."""
 
     def program(self, no, name, v):
+        """Program `v` of the call; for a name that is no program (never
+        created, deleted, a shader's), one no one holds: GL_INVALID_VALUE or
+        GL_INVALID_OPERATION, and the call changes nothing."""
         p = self.s.programs.get(name_arg(no, name, v, "program"))
-        if p is None:
-            if v in self.s.deleted_programs:
-                # GL_INVALID_VALUE: the call changes nothing (it changes a
-                # program no one holds).
-                return Program()
-            fail_call(no, f"{name}: program {v} was never created")
-        return p
+        return p if p is not None else Program()
 
     def vertex_program(self):
         """Whether draws now run a vertex shader: the program in use, or
@@ -309,11 +306,21 @@ class ProgramCalls:
 
     def h_shader_source(self, no, name, a, args):
         d = dict(args)
-        sh = self.s.shaders.get(d.get("shader"))
         strings, lengths = d.get("string"), d.get("length")
-        if sh is None or not isinstance(strings, list) or not all(isinstance(s, str) for s in strings) \
-                or d.get("count", len(strings)) != len(strings):
-            fail_call(no, f"{name}: no shader, or sources that are not text or not as many as its count")
+        if not isinstance(strings, list) or not all(isinstance(s, str) for s in strings):
+            fail_call(no, f"{name}: sources that are not text")
+        count = checked(no, integer, d.get("count", len(strings)), f"{name}: the count", *I32)
+        shader = d.get("shader")
+        if type(shader) is not int:   # (h_create_shader_program's own shader is -1)
+            fail_call(no, f"{name}: impossible shader {printable(shader)}")
+        sh = self.s.shaders.get(shader)
+        if sh is None or count < 0:
+            # GL_INVALID_VALUE (no such shader, or a negative count, whose
+            # sources apitrace records as none), GL_INVALID_OPERATION (a
+            # program's name): the source stays
+            return
+        if count != len(strings):
+            fail_call(no, f"{name}: {len(strings)} sources, not its count ({count})")
         if isinstance(lengths, list):
             strings = [s if not isinstance(n, int) or n < 0 else s[:n] for s, n in zip(strings, lengths)]
         total = sum(len(s) for s in strings)
@@ -329,9 +336,9 @@ class ProgramCalls:
         sh.sources = strings
 
     def h_compile_shader(self, no, name, a, args):
-        sh = self.s.shaders.get(a[0] if a else None)
+        sh = self.s.shaders.get(name_arg(no, name, a[0] if a else None, "shader"))
         if sh is None:
-            fail_call(no, f"{name}: no such shader")
+            return   # GL_INVALID_VALUE, or GL_INVALID_OPERATION for a program's name: nothing is compiled
         sh.compiled = "".join(sh.sources)
 
     def h_create_program(self, no, name, a, args):
@@ -343,9 +350,9 @@ class ProgramCalls:
     def h_attach_shader(self, no, name, a, args):
         d = dict(args)
         p = self.program(no, name, d.get("program"))
-        s = d.get("shader")
+        s = name_arg(no, name, d.get("shader"), "shader")
         if s not in self.s.shaders:
-            fail_call(no, f"{name}: shader {printable(s)} was never created")
+            return   # GL_INVALID_VALUE or GL_INVALID_OPERATION: nothing is attached or detached
         (p.shaders.add if name.startswith("glAttach") else p.shaders.discard)(s)
 
     def h_bind_attrib_location(self, no, name, a, args):

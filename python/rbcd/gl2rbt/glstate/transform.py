@@ -4,11 +4,11 @@ import re
 
 import numpy as np
 
-from ...cli import I32, integer
+from ...cli import I32, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import CALL_FLAG_FAKE, MAX_CLIP_PLANES
 from ..glmath import mat_frustum, mat_mul, mat_ortho, mat_rotate, mat_scale, mat_translate
-from . import clamped01, enum_arg, first_of_array, number
+from . import MAX_VIEWPORTS, clamped01, enum_arg, first_of_array, number
 
 # Mesa's limits (llvmpipe, Mesa 22.3): matrix stack depths, the largest
 # viewport, and the range a viewport's corner is clamped to.
@@ -181,6 +181,27 @@ class TransformCalls:
         n, f = [clamped01(v, no, "a depth range bound") for v in a[:2]]
         self.s.depth_range = (n, f)
 
+    def h_depth_range_indexed(self, no, name, a, args):
+        """glDepthRangeIndexed and glDepthRangeArrayv (and their ES and NV
+        forms): viewport 0's range is glDepthRange's (clamped alike); the
+        others are selected only by a geometry shader, which is refused,
+        so they change nothing drawn (as glViewportIndexedf's)."""
+        d = dict(args)
+        if "Array" in name:
+            first = checked(no, integer, d.get("first"), f"{name}: first", *U32)
+            count = checked(no, integer, d.get("count"), f"{name}: count", *I32)
+            v = d.get("v")
+            if not isinstance(v, list) or len(v) < 2 * max(count, 0):
+                fail_call(no, f"{name}: fewer values than two a viewport")
+            if count < 0 or first + count > MAX_VIEWPORTS or first != 0 or count == 0:
+                return   # GL_INVALID_VALUE for the whole call, or no range of viewport 0
+            vals = v[:2]
+        else:
+            if checked(no, integer, d.get("index"), f"{name}: index", *U32) != 0:
+                return   # another viewport's, or GL_INVALID_VALUE past Mesa's 16
+            vals = [d.get("n"), d.get("f")]
+        self.s.depth_range = tuple(clamped01(v, no, "a depth range bound") for v in vals)
+
     def h_clip_plane(self, no, name, a, args):
         plane = a[0]
         m = re.fullmatch(r"GL_CLIP_(?:PLANE|DISTANCE)(\d)", str(plane))
@@ -229,6 +250,9 @@ class TransformCalls:
         "glViewportArrayv": h_viewport_indexed,
         "glClipControl": h_clip_control,
         "glDepthRange": h_depth_range,
+        **dict.fromkeys(("glDepthRangeIndexed", "glDepthRangeIndexedf", "glDepthRangeIndexedfNV",
+                         "glDepthRangeIndexeddNV", "glDepthRangeArrayv", "glDepthRangeArrayfv",
+                         "glDepthRangeArrayfvNV", "glDepthRangeArraydvNV"), h_depth_range_indexed),
         "glDepthRangef": h_depth_range,
         "glClipPlane": h_clip_plane,
     }
