@@ -223,6 +223,19 @@ def test_draws_without_a_swap(tmp_path):
     assert left_behind(tmp_path, ["c.xz"]) == []
 
 
+def test_frames_past_the_capture_s_end_are_said(tmp_path):
+    """--frames reaching past the capture's last frame converts the frames
+    there are and says so in the report (round 37's N4: --frames 0:99 of a
+    one-frame capture said nothing); one within it says nothing of it."""
+    cap = Calls().triangle(obj=1).swap().triangle(obj=1).swap().write(tmp_path / "c.xz")
+    r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--frames", "1:99")
+    assert r.returncode == 0, r.stderr
+    assert "--frames 1:99 reaches past the capture's last frame (1): 1 converted" in r.stdout, r.stdout
+    for frames in ("0:1", "1:", "0:0"):
+        r = gl2rbt(tmp_path, cap, "-o", tmp_path / "c.rbt", "--frames", frames)
+        assert r.returncode == 0 and "reaches past" not in r.stdout + r.stderr, (frames, r.stdout)
+
+
 def test_declared_buffers_cost_nothing_until_written(tmp_path):
     c = Calls()
     for b in range(1, 5):
@@ -1336,7 +1349,7 @@ def test_a_fragment_only_program_is_counted(tmp_path):
     (lambda c: c.add("glUniformMatrix4fv", location=0, count=1, transpose="GL_FALSE", value=[1.0] * 15),
      "15 values, not its count (1) of 16"),
     (lambda c: c.add("memcpy", dest=4096, src=b"abcd", n=8), "its n is not its data's length"),
-    (lambda c: c.add("glShaderSource", shader=1, count=5, string=["x"], length=None), "as many as its count"),
+    (lambda c: c.add("glShaderSource", shader=1, count=5, string=["x"], length=None), "1 sources, not its count (5)"),
     (lambda c: c.add("glBindFramebuffer", target="GL_FRAMEBUFFER", framebuffer=1 << 32), "4294967296 is outside"),
     (lambda c: c.add("glUniform1i", location=1 << 40, v0=1), "the location: 1099511627776 is outside"),
     (lambda c: c.add("glDrawArrays", mode="GL_TRIANGLES", first=0), "glDrawArrays's arguments are named (mode, first)"),
@@ -2356,8 +2369,9 @@ def test_window_system_enumerants_given_by_value_are_the_window_system_s(tmp_pat
     core profile, in which a fixed-function draw with no vertex array
     object draws nothing (round 36's D3: [0x2091, 3, 0x2092, 3, 0x9126, 1]
     and EGL's alike made a compatibility context, the triangle drawn, exit
-    0); eglBindAPI's API alike. A list holding anything but enumerants and
-    numbers is refused naming the call."""
+    0); eglBindAPI's API alike (one EGL lacks, recorded as bound, is
+    refused). A list holding anything but enumerants and numbers is refused
+    naming the call."""
     def capture(attrs, api="EGL_OPENGL_API"):
         c = Calls()
         if system == "glx":
@@ -2392,6 +2406,9 @@ def test_window_system_enumerants_given_by_value_are_the_window_system_s(tmp_pat
         assert fragments(tmp_path, capture(attrs).write(tmp_path / f"v{i}.xz")) == [0], attrs
     if system == "egl":
         assert fragments(tmp_path, capture(values, api=0x30A2).write(tmp_path / "api.xz")) == [0]
+        for api in ("EGL_NO_SUCH_API", 0x1234, None):   # (a call EGL would have refused, recorded as succeeding)
+            r = gl2rbt(tmp_path, capture(named, api=api).write(tmp_path / "api.xz"), "-o", tmp_path / "api.rbt")
+            refused(r, "api.xz", "call 6: eglBindAPI: ", "is no API EGL has")
     for bad in ([[major], 3, end], [major, 3, "GLX_NO_SUCH_ATTRIBUTE", 1, end], [major, 3, mask, [core], end]):
         r = gl2rbt(tmp_path, capture(bad).write(tmp_path / "bad.xz"), "-o", tmp_path / "bad.rbt")
         refused(r, "bad.xz", "call 6: " if system == "glx" else "call 7: ", "the attribute list holds")

@@ -445,7 +445,12 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         value; an API EGL refuses (EGL_FALSE) changes nothing."""
         if self.ret in ("EGL_FALSE", 0, False):
             return
-        self.egl_api = window_registry().value(dict(args).get("api"))
+        ws = window_registry()
+        api = ws.value(dict(args).get("api"))
+        if api not in {ws.value(n) for n in ("EGL_OPENGL_API", "EGL_OPENGL_ES_API", "EGL_OPENVG_API")}:
+            fail_call(no, f"{printable(name)}: {printable(dict(args).get('api'), 40)} is no API EGL has, "
+                      "and the call succeeded")
+        self.egl_api = api
 
     def h_egl_create_context(self, no, name, a, args):
         # EGL's default API is OpenGL ES (eglBindAPI changes it).

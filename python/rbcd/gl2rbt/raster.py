@@ -384,6 +384,10 @@ def report(frames, conv, out):
     print(f"{n} frames: {objs / max(n, 1):.1f} collisionable objects, {frags / max(n, 1):.0f} collisionable "
           f"fragments ({100.0 * culled / max(frags, 1):.1f}% tagged c) and {other / max(n, 1):.0f} other "
           f"fragments a frame", file=out)
+    if conv.last_frame is not None and conv.frame <= conv.last_frame:
+        # (round 37's N4: --frames 0:99 of a one-frame capture said nothing)
+        print(f"--frames {conv.first_frame}:{conv.last_frame} reaches past the capture's last frame "
+              f"({conv.frame - 1}): {n} converted", file=out)
     if conv.partial_frame_dropped:
         print("the capture stops before its last buffer swap: that frame is not converted", file=out)
     if conv.ignored_prims:
