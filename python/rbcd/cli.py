@@ -235,6 +235,16 @@ class Once(argparse.Action):
         setattr(namespace, self.dest, values)
 
 
+class OnceFlag(Once):
+    """A flag (store_true) given once: a second one is the command line's error."""
+
+    def __init__(self, option_strings, dest, default=False, **kw):
+        super().__init__(option_strings, dest, nargs=0, default=default, **kw)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        super().__call__(parser, namespace, True, option_string)
+
+
 def ascii_int(text):
     """An integer in ASCII digits."""
     if not re.fullmatch(r"[+-]?[0-9]{1,18}", text):

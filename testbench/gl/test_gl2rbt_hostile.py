@@ -382,6 +382,9 @@ def test_standard_output_holds_only_the_trace(tmp_path):
     (["--check-depth", "--check-frame", "3"], "unrecognized arguments: --check-frame"),
     (["-o", "a.rbt", "--output", "b.rbt"], "--output is given twice"),
     (["-o", "a.rbt", "--select", "x.toml", "--select", "y.toml"], "--select is given twice"),
+    # A flag twice (round 38's D13: taken).
+    (["-o", "a.rbt", "-q", "--quiet"], "--quiet is given twice"),
+    (["--check-depth", "--check-depth"], "--check-depth is given twice"),
     # The check's options without the check, and empty paths (each had
     # been passed over: no rules applied, no summary written; R20-10).
     (["-o", "a.rbt", "--check-frames", "3"], "--check-frames goes with --check-depth"),
@@ -391,7 +394,7 @@ def test_standard_output_holds_only_the_trace(tmp_path):
     (["-o", "a.rbt", "--geometry", ""], "--geometry: an empty path"),
     (["-o", ""], "-o: an empty path"),
 ], ids=["timeout", "timeout_conversion", "nan", "101", "frames0", "fullwidth", "arabic", "abbreviated", "o_twice",
-        "select_twice", "check_frames_alone", "min_agreement_alone", "select_empty", "summary_empty", "geometry_empty",
+        "select_twice", "quiet_twice", "check_depth_twice", "check_frames_alone", "min_agreement_alone", "select_empty", "summary_empty", "geometry_empty",
         "o_empty"])
 def test_bad_check_options(tmp_path, args, words):
     cap = Calls().triangle(obj=1).swap().write(tmp_path / "c.xz")
@@ -1170,8 +1173,9 @@ def test_compatibility_programs_read_the_captures_matrices_and_vertices(tmp_path
                          vao=7), "glDrawArrays: glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE) at call "),
     (lambda: shader_draw(shader_calls(VS).add("glUniformSubroutinesuiv", shadertype="GL_VERTEX_SHADER", count=1,
                                               indices=[0]), vao=7), "shader subroutines"),
-    (lambda: shader_draw(shader_calls(VS), vao=7).add("glDrawTransformFeedback", mode="GL_TRIANGLES", id=0),
-     "as many vertices as transform feedback object 0 recorded"),
+    # (an object that recorded and ended: one never ended is GL_INVALID_OPERATION, nothing drawn)
+    (lambda: read_buffer(record(feedback_calls()), 1).add("glDrawTransformFeedback", mode="GL_TRIANGLES", id=0)
+     .swap(), "as many vertices as transform feedback object 0 recorded"),
     (lambda: Calls().add("glVertexPointer", size=3, type="GL_FLOAT", stride=0, pointer=TRIANGLE)
      .add("glMultiDrawElementsBaseVertex", mode="GL_TRIANGLES", count=[3], type="GL_UNSIGNED_INT",
           indices=[np.array([0, 1, 2], "<u4").tobytes()], drawcount=1, basevertex=[1]).swap(),
@@ -2344,10 +2348,14 @@ def test_functions_named_by_apitrace_otherwise_than_the_registry_are_put_in_orde
     ("eglCreateContext", [("dpy", 1), ("config", 1), ("attrib_list", None)],
      "eglCreateContext's arguments are named (dpy, config, attrib_list); apitrace writes (dpy, config, "
      "share_context, attrib_list)"),
+    # A name starting as a window system's with more after it (round 38's
+    # D8: passed over, a release ignored).
+    ("glXMakeCurrent ", [("dpy", 1), ("drawable", 0), ("ctx", 0)], "is no GLX function"),
+    ("wglmakeCurrent", [("hdc", 0), ("hglrc", 0)], "wglmakeCurrent is no WGL function"),
 ], ids=["renamed", "missing", "extra", "registry_names", "short_list", "short_tuple", "no_such_arb_form",
         "no_such_function", "swap_extra", "make_current_without_context", "no_such_glx_function",
         "no_such_egl_function", "no_such_wgl_function", "apitrace_only_made_up", "glx_registry_names",
-        "egl_missing"])
+        "egl_missing", "glx_name_with_a_space", "wgl_name_lower_case"])
 def test_a_call_whose_arguments_are_not_the_function_s_is_refused(tmp_path, fn, args, words):
     """A reduced capture's call naming a parameter its function lacks,
     leaving one out, adding one, or giving a fixed-length array another
@@ -2444,8 +2452,21 @@ RECOMPILE = [("glCompileShader", dict(shader=1)), ("glLinkProgram", dict(program
                 ("glDetachShader", dict(program=2, shader=99)), ("glLinkProgram", dict(program=99)),
                 ("glBindAttribLocation", dict(program=99, index=1, name="p")),
                 ("glCompileShader", dict(shader=2))]),
+    # Round 38: glBindAttribLocation past GL_MAX_VERTEX_ATTRIBS (D11:
+    # refused); transform feedback draws GL refuses (D9: refused as not
+    # emulated: an object never generated, the default one never ended, no
+    # instance, an unknown mode); calling lists, which a converted capture
+    # never fills, and glEndList with none open (D10: refused).
+    (True, RECOMPILE, [("glBindAttribLocation", dict(program=2, index=99, name="p"))] + RECOMPILE),
+    (True, [], [("glDrawTransformFeedback", dict(mode="GL_TRIANGLES", id=99)),
+                ("glDrawTransformFeedback", dict(mode="GL_TRIANGLES", id=0)),
+                ("glDrawTransformFeedbackInstanced", dict(mode="GL_TRIANGLES", id=0, instancecount=0)),
+                ("glDrawTransformFeedback", dict(mode=99, id=0))]),
+    (False, [], [("glCallList", dict(list=5)), ("glCallLists", dict(n=0, type="GL_UNSIGNED_BYTE", lists=b"")),
+                 ("glEndList", dict())]),
 ], ids=["map_range_past_the_data", "map_no_data_store", "arrays_no_instance", "elements_no_instance",
-        "source_count_negative", "source_count_negative_lengths", "no_such_shader_or_program"])
+        "source_count_negative", "source_count_negative_lengths", "no_such_shader_or_program",
+        "attribute_index_past_the_maximum", "feedback_draws_gl_refuses", "lists_never_filled"])
 def test_calls_gl_refuses_change_nothing(tmp_path, shaders, before, calls):
     """A capture with calls GL refuses, which change nothing in Mesa,
     converts into the bytes of the capture without them."""
@@ -2490,6 +2511,96 @@ def test_forms_of_emulated_calls_convert_as_they_do(tmp_path, plain, form):
         c = capture(form[:-1] + [("glPolygonOffsetClamp", dict(factor=2.0, units=40.0, clamp=0.5))])
         r = gl2rbt(tmp_path, c.write(tmp_path / "clamp.xz"), "-o", tmp_path / "clamp.rbt")
         refused(r, "clamp.xz", "call 7: glPolygonOffsetClamp with a clamp other than 0 is not emulated")
+
+
+def context_calls(create, current=(("glXMakeCurrent", dict(dpy=1, drawable=2, ctx=7, ret="True")),),
+                  draw=True):
+    """A fixed-function triangle after the window-system calls `create`
+    and `current` ((function, arguments) each)."""
+    c = Calls()
+    for fn, args in list(create) + list(current):
+        c.add(fn, **args)
+    if draw:
+        c.triangle(obj=1)
+    return c.swap()
+
+
+def glx_context(ret, core, major=3):
+    return ("glXCreateContextAttribsARB", dict(dpy=1, config=1, share_context=0, direct=1, ret=ret, attrib_list=[
+        "GLX_CONTEXT_MAJOR_VERSION_ARB", major, "GLX_CONTEXT_MINOR_VERSION_ARB", 3 if major == 3 else 0,
+        "GLX_CONTEXT_PROFILE_MASK_ARB", "GLX_CONTEXT_CORE_PROFILE_BIT_ARB" if core
+        else "GLX_CONTEXT_COMPATIBILITY_PROFILE_BIT_ARB", 0]))
+
+
+def test_contexts_as_the_driver_made_them(tmp_path):
+    """Round 38: a MakeCurrent that failed, as apitrace records GLX's
+    ("False") and WGL's ("FALSE") failure, leaves the context current (D1:
+    taken as done); of two contexts made before the first MakeCurrent,
+    the one made current gives the profile (D2: the last made); a
+    creation that failed (NULL) changes nothing (D3); an OpenGL ES 2 or 3
+    context has no fixed-function pipeline, a draw without a program draws
+    nothing, where ES 1's draws (D4)."""
+    def frags(c, tag):
+        return fragments(tmp_path, c.write(tmp_path / f"{tag}.xz"))
+    compat = context_calls([glx_context(7, False)])
+    assert frags(compat, "compat")[0] > 100
+    for fn, args in (("glXMakeCurrent", dict(dpy=1, drawable=0, ctx=0, ret="False")),
+                     ("glXMakeContextCurrent", dict(dpy=1, draw=0, read=0, ctx=0, ret="False")),
+                     ("wglMakeCurrent", dict(hdc=0, hglrc=0, ret="FALSE"))):
+        failed = context_calls([glx_context(7, False)], [("glXMakeCurrent", dict(dpy=1, drawable=2, ctx=7,
+                                                                                  ret="True")), (fn, args)])
+        assert trace_bytes(tmp_path, failed, "failed") == trace_bytes(tmp_path, compat, "compat"), fn
+    made_first = context_calls([glx_context(7, False), glx_context(8, True)])
+    assert frags(made_first, "two") == frags(compat, "compat")
+    assert frags(context_calls([glx_context(8, True), glx_context(7, False)]), "two_b") == frags(compat, "compat")
+    assert frags(context_calls([glx_context(7, True)]), "core") == [0]
+    egl_failed = context_calls([("eglBindAPI", dict(api="EGL_OPENGL_API", ret="EGL_TRUE")),
+                                ("eglCreateContext", dict(dpy=1, config=1, share_context=0, attrib_list=[
+                                    "EGL_NONE"], ret=7)),
+                                ("eglCreateContext", dict(dpy=1, config=1, share_context=0, attrib_list=[
+                                    "EGL_CONTEXT_MAJOR_VERSION", 4, "EGL_CONTEXT_MINOR_VERSION", 6, "EGL_NONE"],
+                                    ret=0))],
+                               [("eglMakeCurrent", dict(dpy=1, draw=2, read=2, ctx=7, ret="EGL_TRUE"))])
+    assert frags(egl_failed, "egl_failed") == frags(compat, "compat")
+    glx_failed = context_calls([glx_context(7, True), ("glXCreateNewContext", dict(
+        dpy=1, config=1, renderType="GLX_COLOR_INDEX_TYPE", shareList=0, direct=1, ret=0))])
+    assert frags(glx_failed, "glx_failed") == [0]
+    es = [frags(context_calls([("eglBindAPI", dict(api="EGL_OPENGL_ES_API", ret="EGL_TRUE")),
+                               ("eglCreateContext", dict(dpy=1, config=1, share_context=0,
+                                                         attrib_list=["EGL_CONTEXT_CLIENT_VERSION", v, "EGL_NONE"],
+                                                         ret=7))],
+                              [("eglMakeCurrent", dict(dpy=1, draw=2, read=2, ctx=7, ret="EGL_TRUE"))]), f"es{v}")
+          for v in (1, 2, 3)]
+    assert es[0][0] > 100 and es[1:] == [[0], [0]], es
+    glx_es2 = context_calls([("glXCreateContextAttribsARB", dict(dpy=1, config=1, share_context=0, direct=1, ret=7,
+                                                                 attrib_list=["GLX_CONTEXT_MAJOR_VERSION_ARB", 2,
+                                                                              "GLX_CONTEXT_PROFILE_MASK_ARB",
+                                                                              "GLX_CONTEXT_ES2_PROFILE_BIT_EXT", 0]))])
+    assert frags(glx_es2, "glx_es2") == [0]
+
+
+@pytest.mark.parametrize("create, current, words", [
+    # MakeCurrent's drawables not handles (round 38's D5: taken).
+    ([glx_context(7, False)], [("glXMakeCurrent", dict(dpy=1, drawable=2.5, ctx=7, ret="True"))],
+     "call 7: glXMakeCurrent: the drawable 2.5 is not a handle"),
+    ([glx_context(7, False)], [("glXMakeCurrent", dict(dpy=1, drawable="GLX_WINDOW_BIT", ctx=7, ret="True"))],
+     "the drawable GLX_WINDOW_BIT is not a handle"),
+    ([("eglCreateContext", dict(dpy=1, config=1, share_context=0, attrib_list=["EGL_NONE"], ret=7))],
+     [("eglMakeCurrent", dict(dpy=1, draw=2, read=[2], ctx=7, ret="EGL_TRUE"))], "the read [2] is not a handle"),
+    # An EGL context of a version no GL has (D6: taken as core).
+    ([("eglBindAPI", dict(api="EGL_OPENGL_API", ret="EGL_TRUE")),
+      ("eglCreateContext", dict(dpy=1, config=1, share_context=0, attrib_list=[
+          "EGL_CONTEXT_MAJOR_VERSION", 99, "EGL_CONTEXT_MINOR_VERSION", 0, "EGL_NONE"], ret=7))], [],
+     "call 7: eglCreateContext: a context of OpenGL 99.0, a version that does not exist, was made"),
+    # A Bool's "True" as another attribute's value (D7: the core bit).
+    ([("glXCreateContextAttribsARB", dict(dpy=1, config=1, share_context=0, direct=1, ret=7, attrib_list=[
+        "GLX_CONTEXT_MAJOR_VERSION_ARB", 3, "GLX_CONTEXT_MINOR_VERSION_ARB", 3, "GLX_CONTEXT_PROFILE_MASK_ARB",
+        "True", 0]))], [], "call 6: glXCreateContextAttribsARB: the attribute list holds 'True'"),
+], ids=["drawable_float", "drawable_name", "read_list", "egl_version_99", "true_as_a_mask"])
+def test_window_system_records_gl_never_takes_are_refused(tmp_path, create, current, words):
+    r = gl2rbt(tmp_path, context_calls(create, current).write(tmp_path / "c.xz"), "-o", tmp_path / "c.rbt")
+    refused(r, "c.xz", words)
+    assert left_behind(tmp_path, ["c.xz"]) == []
 
 
 # The enumerants test_enumerants_given_by_value_are_the_driver_s gives by value.

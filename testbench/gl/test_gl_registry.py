@@ -215,7 +215,7 @@ def test_window_system_enumerants_by_value():
     assert ws.attributes(["GLX_CONTEXT_OPENGL_NO_ERROR_ARB", "False", 0x2091, 3], 0) == {0x31B3: 0, 0x2091: 3}
     assert ws.attributes(["GLX_CONTEXT_OPENGL_NO_ERROR_ARB", True], 0) == {0x31B3: 1}
     for bad in ([[1], 3], [0x2091, 3.0], [0x2091, 1.0], ["GLX_NO_SUCH", 1], 7, "GLX_NONE", (0x2091, 3), [True, 1],
-                ["False", 1], [0x2091, "Maybe"]):
+                ["False", 1], [0x2091, "Maybe"], [0x9126, "True"], [0x9126, True]):
         with pytest.raises(ValueError):
             ws.attributes(bad, 0)
 
@@ -234,3 +234,22 @@ def test_a_missing_window_system_registry_is_one_line(monkeypatch):
     monkeypatch.setattr(window_registry_module, "XML_REGISTRIES", ("/nonexistent/glx.xml",))
     with pytest.raises(ToolError, match=r"registry /nonexistent/glx.xml is missing .*khronos-api"):
         window_registry()
+
+
+def test_a_cache_is_this_code_s_own(tmp_path, monkeypatch):
+    """The cache file is named by this module's own digest (another build
+    of the converter may read the registry otherwise under the same
+    CACHE_FORMAT: round 38's D12); writing one removes the caches of
+    other keys, never another file."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    monkeypatch.setattr(gl_registry, "_REGISTRY", None)
+    cache = gl_registry._cache_path(os.stat(gl_registry.REGISTRY))
+    with open(gl_registry.__file__, "rb") as f:
+        assert hashlib.sha256(f.read()).hexdigest()[:16] in os.path.basename(cache)
+    os.makedirs(os.path.dirname(cache))
+    stale = tmp_path / "rbcd" / "gl-registry-4-0123456789abcdef-1-2.json"
+    other = tmp_path / "rbcd" / "notes.json"
+    stale.write_bytes(b"x")
+    other.write_bytes(b"y")
+    assert registry().signature("glCullFace")[0][0] == "mode"
+    assert os.path.exists(cache) and not stale.exists() and other.read_bytes() == b"y"

@@ -517,7 +517,7 @@ def test_frames_end_at_swaps_and_unmodelled_calls_are_refused():
     assert kinds == ["header", "F", "D", "E", "F", "D"]
     assert gl.records("E") == [("E", swap)]
     assert gl.records("header")[0][1] == (W, H, 16, 16, 24)
-    for name in ("glCallList", "glBindVertexArray", "glDrawElementsInstanced", "glSomethingNew"):
+    for name in ("glNewList", "glBindVertexArray", "glDrawElementsInstanced", "glSomethingNew"):
         with pytest.raises(ConvertError, match=rf"^call \d+: {name}"):
             getattr(gl, name)(1)
     gl.glUseProgram(3)   # never created: GL_INVALID_VALUE, nothing changes

@@ -7,8 +7,8 @@ import signal
 import sys
 import threading
 
-from ..cli import (ArgumentParser, Once, UsageError, WriteError, ascii_int, escape, exception_text, finite_float,
-                   remove_temporaries, to_standard_output)
+from ..cli import (ArgumentParser, Once, OnceFlag, UsageError, WriteError, ascii_int, escape, exception_text,
+                   finite_float, remove_temporaries, to_standard_output)
 from ..startup import HANDLED, ignore_signals, kept
 from .errors import LAST_WORD, ConvertError, ToolError, printable
 
@@ -60,11 +60,11 @@ def parse_args(argv):
     ap.add_argument("--reduced-out", action=Once, metavar="FILE.xz",
                     help="also write the reduced capture: the calls that can change the unit's input, "
                          "xz-compressed; converting it gives the same outputs as the capture")
-    ap.add_argument("-q", "--quiet", action="store_true", help="no summary on stdout")
+    ap.add_argument("-q", "--quiet", action=OnceFlag, help="no summary on stdout")
     ap.add_argument("--list-draws", action=Once, type=ascii_int, metavar="FRAME",
                     help="list every draw of the capture's frame FRAME and what it became")
     ap.add_argument("--image", action=Once, help="with --list-draws: a PNG of the frame, each visible draw labelled")
-    ap.add_argument("--check-depth", action="store_true",
+    ap.add_argument("--check-depth", action=OnceFlag,
                     help="compare the depth buffer at each checked frame's last 3D draw with Mesa's (glretrace)")
     ap.add_argument("--check-frames", action=Once, type=ascii_int,
                     help="with --check-depth: frames to check, spread over --frames (default 5)")

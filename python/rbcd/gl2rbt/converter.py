@@ -58,9 +58,20 @@ def context_is_core(pairs, major_key, minor_key, mask_key, core_bit):
 
 
 # The versions a context can be asked for (GLX_ARB_create_context and its
-# ES profile extension): no driver makes another.
+# ES profile extension, EGL_KHR_create_context): no driver makes another.
 GL_VERSIONS = {(1, m) for m in range(6)} | {(2, 0), (2, 1)} | {(3, m) for m in range(4)} | {(4, m) for m in range(7)}
 ES_VERSIONS = {(1, 0), (1, 1), (2, 0), (3, 0), (3, 1), (3, 2)}
+# What a failed MakeCurrent returns as apitrace records it: GLX's Bool
+# ("False"), WGL's BOOL ("FALSE"), EGL's EGLBoolean, or a number.
+MAKE_CURRENT_FAILED = ("False", "FALSE", "EGL_FALSE", "GL_FALSE", 0)
+
+
+def check_version(no, name, es, version):
+    """A context made of a version no OpenGL (ES) has is the capture's error."""
+    if version not in (ES_VERSIONS if es else GL_VERSIONS):
+        fail_call(no, f"{printable(name)}: a context of {'OpenGL ES' if es else 'OpenGL'} "
+                  f"{printable(version[0], 20)}.{printable(version[1], 20)}, a version that does not exist, "
+                  "was made")
 
 
 STATE_GROUPS = (TransformCalls, PerFragmentCalls, PolygonCalls, VertexArrayCalls, BufferCalls, AttributeCalls,
@@ -160,7 +171,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.unshared_contexts = set()   # made by eglCreateContext sharing no objects, never current yet
         self.destroyed_contexts = set()  # eglDestroyContext's (a handle may be reused by a later context)
         self.context_states = {}         # context -> its own state (GLState's fields) while another is current
-        self.context_profiles = {}       # context -> (es, core) as it was made
+        self.context_profiles = {}       # context -> (es, core, es2) as it was made
         self.shares = {}                 # context -> the context whose objects it shares
         self.group_states = {}           # share group -> its objects (SHARED_STATE) while another group's are held
         self.flags = 0                   # of the call being handled
@@ -189,6 +200,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.es = False                  # an OpenGL ES capture (EGL with the ES API)
         self.egl_api = None              # eglBindAPI's API by value (None: EGL_OPENGL_ES_API, the default)
         self.core = False                # a core-profile context: no default vertex array object
+        self.es2 = False                 # OpenGL ES 2 or later: no fixed-function pipeline
         self.last_depth_draw = None      # the frame's last draw with the depth test on
         self.last_depth_wrong = None     # why the converter's depth buffer was wrong for it (CameraDepthCalls)
         self.last_depth_bits = None      # the bits of its depth buffer (CameraDepthCalls.depth_bits)
@@ -348,7 +360,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         h = self.HANDLERS.get(base) if name not in MESA_NO_OPS else Converter.h_mesa_no_op
         if base in DrawCalls.HANDLERS and self.draw_context is not None and self.active:
             self.check_draw_context(no)   # before the second context's own state refuses it otherwise
-        if self.core and (base in COMPAT_ONLY or name in COMPAT_ONLY_FORMS) or not self.es and name in ES_ONLY_FORMS:
+        if (self.core or self.es2) and (base in COMPAT_ONLY or name in COMPAT_ONLY_FORMS) \
+                or not self.es and name in ES_ONLY_FORMS:
             h = Converter.h_not_in_core
         bound = self.bindings() if base in REVALIDATING else None
         self.decides = False   # set by a handler whose call has Mesa decide (a successful attachment, ...)
@@ -453,24 +466,39 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         self.egl_api = api
 
     def h_egl_create_context(self, no, name, a, args):
-        # EGL's default API is OpenGL ES (eglBindAPI changes it).
+        """eglCreateContext: a context of the API eglBindAPI bound (OpenGL
+        ES, EGL's default, of EGL_CONTEXT_CLIENT_VERSION, 1 by default, or
+        OpenGL); one the call did not make (EGL_NO_CONTEXT) changes
+        nothing, and one of a version no GL has is the capture's error."""
         ws = window_registry()
         es = self.egl_api != ws.value("EGL_OPENGL_API")
         attrs = context_attributes(no, name, dict(args).get("attrib_list"), "EGL_NONE")
+        if not self.ret:
+            return
+        version = (attrs.get(ws.value("EGL_CONTEXT_MAJOR_VERSION"), 1),
+                   attrs.get(ws.value("EGL_CONTEXT_MINOR_VERSION"), 0))
+        check_version(no, name, es, version)
         self.context_created(dict(args).get("share_context"))
         self.profile_made(es, not es and context_is_core(attrs, "EGL_CONTEXT_MAJOR_VERSION",
                                                           "EGL_CONTEXT_MINOR_VERSION",
                                                           "EGL_CONTEXT_OPENGL_PROFILE_MASK",
-                                                          "EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT"))
+                                                          "EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT"),
+                          es and version[0] >= 2)
 
-    def profile_made(self, es, core):
-        """The API and profile of the context the call made (self.ret): the
-        converter's when no other context is current, else from when it is
-        made current."""
+    def profile_made(self, es, core, es2=False):
+        """The API and profile of the context the call made (self.ret; es2:
+        OpenGL ES 2 or later, which has no fixed-function pipeline): the
+        converter's when no context was made current yet or it is the one
+        current, else from when it is made current."""
         if isinstance(self.ret, int) and not isinstance(self.ret, bool) and self.ret:
-            self.context_profiles[self.ret] = (es, core)
+            self.context_profiles[self.ret] = (es, core, es2)
         if self.state_context is None or self.state_context == self.ret:
-            self.es, self.core = es, core
+            self.es, self.core, self.es2 = es, core, es2
+
+    def use_profile(self, ctx):
+        """Context ctx's API and profile, where the capture shows its making."""
+        if ctx in self.context_profiles:
+            self.es, self.core, self.es2 = self.context_profiles[ctx]
 
     def h_make_current(self, no, name, a, args):
         """glXMakeCurrent, glXMakeContextCurrent, eglMakeCurrent and
@@ -478,9 +506,12 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         ctx = a[-1] if a else None
         if not isinstance(ctx, int) or isinstance(ctx, bool):
             fail_call(no, f"{printable(name)}: the context {printable(ctx, 40)} is not a handle")
-        if self.ret is not None and self.ret in ("EGL_FALSE", "GL_FALSE", 0):
+        if self.ret is not None and self.ret in MAKE_CURRENT_FAILED:
             return   # it failed (a destroyed context, a bad surface): what was current stays current
         d = dict(args)
+        for k in ("drawable", "draw", "read", "hdc"):
+            if k in d and d[k] is not None and (not isinstance(d[k], int) or isinstance(d[k], bool)):
+                fail_call(no, f"{printable(name)}: the {k} {printable(d[k], 40)} is not a handle")
         drawable = d.get("drawable", d.get("draw", d.get("hdc")))
         # (the context and drawables already current: GLX returns at once,
         # and Mesa decides nothing)
@@ -493,8 +524,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         if ctx and ctx != self.state_context:
             if self.state_context in self.destroyed_contexts and ctx in self.unshared_contexts:
                 self.new_context()
-                if ctx in self.context_profiles:
-                    self.es, self.core = self.context_profiles[ctx]
+                self.use_profile(ctx)
             else:
                 self.switch_state(ctx)
             self.state_context = ctx
@@ -510,8 +540,10 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         viewport leave the drawing context's as they were)."""
         old = self.state_context
         if old is None or ctx not in self.context_profiles or old not in self.context_profiles:
-            # The first context: the state so far is its own; or one whose
+            # The first context: the state so far is its own (of its
+            # profile, whichever context was made last); or one whose
             # making the capture does not show: taken as the same context.
+            self.use_profile(ctx)
             return
         fields = vars(self.s)
         self.context_states[old] = {k: v for k, v in fields.items() if k not in SHARED_STATE | CONVERSION_STATE}
@@ -528,8 +560,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
             fresh = fresh or vars(self.initial_state())
             own = {k: v for k, v in fresh.items() if k not in SHARED_STATE | CONVERSION_STATE}
         fields.update(own)
-        if ctx in self.context_profiles:
-            self.es, self.core = self.context_profiles[ctx]
+        self.use_profile(ctx)
 
     def share_group(self, ctx):
         """The context whose objects ctx shares (itself when it shares none)."""
@@ -560,6 +591,8 @@ class Converter(*STATE_GROUPS, GeometryOutput):
     def h_glx_create_old_context(self, no, name, a, args):
         """glXCreateContext and glXCreateNewContext: a compatibility context
         sharing the objects of shareList or share_list."""
+        if not self.ret:
+            return   # no context made (NULL)
         d = dict(args)
         self.context_created(d.get("shareList", d.get("share_list")))
         self.profile_made(False, False)
@@ -610,14 +643,12 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         es = pairs.get(ws.value("GLX_CONTEXT_PROFILE_MASK_ARB")) == ws.value("GLX_CONTEXT_ES_PROFILE_BIT_EXT")
         version = (pairs.get(ws.value("GLX_CONTEXT_MAJOR_VERSION_ARB"), 1),
                    pairs.get(ws.value("GLX_CONTEXT_MINOR_VERSION_ARB"), 0))
-        if version not in (ES_VERSIONS if es else GL_VERSIONS):
-            fail_call(no, f"{printable(name)}: a context of {'OpenGL ES' if es else 'OpenGL'} "
-                      f"{printable(version[0], 20)}.{printable(version[1], 20)}, a version that does not exist, "
-                      "was made")
+        check_version(no, name, es, version)
         self.profile_made(es, not es and context_is_core(pairs, "GLX_CONTEXT_MAJOR_VERSION_ARB",
                                                           "GLX_CONTEXT_MINOR_VERSION_ARB",
                                                           "GLX_CONTEXT_PROFILE_MASK_ARB",
-                                                          "GLX_CONTEXT_CORE_PROFILE_BIT_ARB"))
+                                                          "GLX_CONTEXT_CORE_PROFILE_BIT_ARB"),
+                          es and version[0] >= 2)
 
     # The window system's calls that say which API and profile the capture
     # drew with (the rest of them are passed over).
@@ -637,10 +668,15 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         "glXCreateGLXPbufferSGIX": h_pbuffer_created,
         "eglCreatePbufferSurface": h_pbuffer_created,
     }
+    def h_empty_list(self, no, name, a, args):
+        """glCallList, glCallLists and glEndList: every list a converted
+        capture has is empty (glNewList is refused, and is GL's no-op in a
+        core profile), so calling one draws nothing, and glEndList with no
+        list open is GL_INVALID_OPERATION."""
+
+    LISTS = {"glCallList": h_empty_list, "glCallLists": h_empty_list, "glEndList": h_empty_list}
     # Calls that can change geometry or visibility in ways not emulated.
     REFUSED = {
-        "glCallList": h_refuse,
-        "glCallLists": h_refuse,
         "glNewList": h_refuse,
         "glArrayElement": h_refuse,
         "glEvalMesh1": h_refuse,
@@ -654,7 +690,7 @@ class Converter(*STATE_GROUPS, GeometryOutput):
         "glPushClientAttrib": h_refuse,
         "glPopClientAttrib": h_refuse,
     }
-    HANDLERS = WINDOW_SYSTEM | REFUSED | {k: v for group in STATE_GROUPS for k, v in group.HANDLERS.items()}
+    HANDLERS = WINDOW_SYSTEM | LISTS | REFUSED | {k: v for group in STATE_GROUPS for k, v in group.HANDLERS.items()}
     # The handled texture image, attachment and view calls, their arguments
     # checked before their handler reads them (glstate.image_calls).
     IMAGE_CALLS = checked_calls(HANDLERS)

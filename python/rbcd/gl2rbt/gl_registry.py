@@ -13,10 +13,11 @@ value. Two uses:
 
 Parsing gl.xml takes about 0.4 s; what is read of it is kept in the user's
 cache folder ($XDG_CACHE_HOME/rbcd, else ~/.cache/rbcd: matplotlib keeps
-its font list so), keyed by the registry's size and time, its content
-checked against the SHA-256 digest written before it, and read back in
-milliseconds. A cache that cannot be written, read or checked is rebuilt,
-never an error."""
+its font list so), keyed by the registry's size and time and this
+module's own digest, its content checked against the SHA-256 digest
+written before it, and read back in milliseconds. A cache that cannot be
+written, read or checked is rebuilt, never an error; caches of another
+key are removed when one is written."""
 import hashlib
 import json
 import os
@@ -192,6 +193,17 @@ def _parse(path):
 CACHE_MAX_BYTES = 16 << 20
 
 
+def _code_digest():
+    """The first digits of this module's own SHA-256: a cache is read only
+    by the code that wrote it (another build of the converter may read
+    the registry otherwise under the same CACHE_FORMAT)."""
+    try:
+        with open(__file__, "rb") as f:
+            return hashlib.sha256(f.read()).hexdigest()[:16]
+    except OSError:
+        return "unknown"
+
+
 def _cache_path(st):
     """The cache file for a registry of stat `st`, or None where the user
     has no cache folder (no HOME and no entry in the password database)."""
@@ -200,7 +212,7 @@ def _cache_path(st):
         home = os.path.join(os.path.expanduser("~"), ".cache")
     if not os.path.isabs(home):
         return None
-    return os.path.join(home, "rbcd", f"gl-registry-{CACHE_FORMAT}-{st.st_size}-{st.st_mtime_ns}.json")
+    return os.path.join(home, "rbcd", f"gl-registry-{CACHE_FORMAT}-{_code_digest()}-{st.st_size}-{st.st_mtime_ns}.json")
 
 
 def _read_cache(cache):
@@ -272,6 +284,12 @@ def _load():
             tmp = f.name
             f.write(hashlib.sha256(body).hexdigest().encode() + b"\n" + body)
         os.replace(tmp, cache)
+        # Caches of another registry or another build of this code are
+        # never read again: removed (about 0.7 MB each).
+        folder = os.path.dirname(cache)
+        for other in os.listdir(folder):
+            if other.startswith("gl-registry-") and other.endswith(".json") and other != os.path.basename(cache):
+                os.unlink(os.path.join(folder, other))
     except OSError:
         if tmp is not None:
             try:

@@ -92,7 +92,7 @@ COMPAT_ONLY = {
     "glOrtho", "glFrustum", "glClipPlane", "glVertexPointer", "glEnableClientState", "glDisableClientState",
     "glInterleavedArrays", "glBegin", "glEnd", "glRectf", "glRectd", "glRecti", "glRects", "glRectfv", "glRectdv",
     "glRectiv", "glRectsv", "glRenderMode", "glDrawPixels", "glCopyPixels", "glBitmap", "glPrimitiveRestartNV",
-    "glPrimitiveRestartIndexNV", "glNewList", "glCallList", "glCallLists", "glArrayElement", "glEvalMesh1",
+    "glPrimitiveRestartIndexNV", "glNewList", "glEndList", "glCallList", "glCallLists", "glArrayElement", "glEvalMesh1",
     "glEvalMesh2", "glEvalCoord1f", "glEvalCoord2f", "glEvalPoint1", "glEvalPoint2", "glPushAttrib", "glPopAttrib",
     "glPushClientAttrib", "glPopClientAttrib",
 }

@@ -10,7 +10,6 @@ import io
 import lzma
 import os
 import pickle
-import re
 
 from .apitrace import MAX_RECORD_VALUES, CallReader, PointerType, call_values_within, too_many_values, where
 from ..cli import U63
@@ -23,7 +22,7 @@ from .glstate.texture_formats import DIGEST_TAG
 from .glstate.texture_levels import PASSED_OVER_IMAGES
 from .glstate.textures import REDUCED_TEXTURES
 from .outputs import SafeText
-from .window_registry import APITRACE_ONLY as WS_APITRACE_ONLY, PREFIXES, WINDOW_SYSTEM_FUNCTION, window_registry
+from .window_registry import APITRACE_ONLY as WS_APITRACE_ONLY, PREFIXES, window_registry
 
 REDUCED_HEADER = ("rbcd-reduced-capture", 5, 0)   # (the source's size: 0, none known)
 # Versions read: 5 keeps the calls that give 1D, 3D and array textures
@@ -382,10 +381,6 @@ def read_reduced_calls(path):
         raise ConvertError(f"{where(last)}: the reduced capture does not decode ({printable(e, 80)})")
 
 
-# A GL function's name (the window system's glX calls aside).
-GL_FUNCTION = re.compile(r"gl(?!X[A-Z])[A-Z][A-Za-z0-9_]*")
-
-
 def in_order(c):
     """The call with its arguments as apitrace writes them: the function's
     parameters (gl_registry, window_registry: apitrace's names, the
@@ -395,19 +390,21 @@ def in_order(c):
     been read as a mirrored projection; glXMakeCurrent's context is its
     last); one naming a parameter the function lacks or leaving one out,
     or an array of another length (glVertex3fv of two), is the reduced
-    capture's error, as is a name of GL's or a window system's form no
-    registry has (glDrawArraysARB, glXFrobnicateMESA) but for the few
-    apitrace records (APITRACE_ONLY). memcpy and other names of neither
-    form are taken as they are (the converter refuses those it has no rule
-    for)."""
+    capture's error, as is a name starting as GL's or a window system's
+    that no registry has (glDrawArraysARB, glXFrobnicateMESA, "glXMakeCurrent
+    " with a space) but for the few apitrace records (APITRACE_ONLY).
+    memcpy and other names of neither form are taken as they are (the
+    converter refuses those it has no rule for)."""
     no, name, args = c[0], c[1], c[2]
-    if WINDOW_SYSTEM_FUNCTION.fullmatch(name) or name in WS_APITRACE_ONLY:
+    # (by prefix: a name of the form's start and anything after it, a
+    # trailing space, other letters' case, is checked too, not passed over)
+    if name.startswith(tuple(PREFIXES)) or name in WS_APITRACE_ONLY:
         params = window_registry().signature(name)
         if params is None:
-            raise ConvertError(f"call {no}: {printable(name)} is no {PREFIXES[name[:3]]} function "
-                               "(neither its registry nor apitrace has one of that name)")
+            raise ConvertError(f"call {no}: {printable(name)} is no {PREFIXES.get(name[:3], 'window-system')} "
+                               "function (neither its registry nor apitrace has one of that name)")
         sig = tuple((k, None, None, None) for k in params)
-    elif GL_FUNCTION.fullmatch(name):
+    elif name.startswith("gl"):
         sig = registry().signature(name)
         if sig is None:
             # (glDrawArraysARB had been drawn as glDrawArrays, its arguments unchecked)

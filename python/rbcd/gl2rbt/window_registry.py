@@ -63,6 +63,11 @@ EGL_DEFINE = re.compile(r"^#define\s+(EGL_\w+)\s+(?:EGL_CAST\(\w+,\s*)?(-?0x[0-9
 PARAMETER_NAME = re.compile(r"(\w+)\s*(?:\[\w*\])?\s*$")
 
 
+# The context attributes apitrace writes as a Bool ("False", "True"; its
+# glxapi.py; EGL's EGLBoolean ones it writes by name, EGL_TRUE).
+BOOL_ATTRIBUTES = ("GLX_CONTEXT_OPENGL_NO_ERROR_ARB",)
+
+
 def _bool(x):
     """A Bool attribute's value (GLX_CONTEXT_OPENGL_NO_ERROR_ARB's) as 0 or
     1, given as apitrace writes it ("False", "True") or as Python's bool (a
@@ -165,10 +170,12 @@ class WindowRegistry:
         if not isinstance(attrs, list):
             raise ValueError(f"is {printable(attrs, 40)}, not a list")
         out = {}
+        bools = {self.value(n) for n in BOOL_ATTRIBUTES}
         for i, x in enumerate(attrs):
-            if self.value(x) is None and not (i % 2 and _bool(x) is not None):
+            # (a Bool's "True" or "False" only as the value of a Bool attribute)
+            if self.value(x) is None and not (i % 2 and _bool(x) is not None and self.value(attrs[i - 1]) in bools):
                 raise ValueError(f"holds {printable(repr(x), 40)}, neither a number nor the name of an enumerant "
-                                 "the window system has")
+                                 "the window system has" + (" (nor the value of a Bool attribute)" if i % 2 else ""))
         for k, v in zip(attrs[0::2], attrs[1::2]):
             if self.value(k) == self.value(end):
                 break
@@ -185,6 +192,3 @@ def window_registry():
         _REGISTRY = WindowRegistry()
     return _REGISTRY
 
-
-# A window-system function's name (GLX's, EGL's, WGL's).
-WINDOW_SYSTEM_FUNCTION = re.compile(r"(glX|egl|wgl)[A-Z][A-Za-z0-9_]*")

@@ -172,6 +172,7 @@ class GLState:
         self.feedback_source = None
         self.feedback_mode = None
         self.feedback_objects = {}
+        self.feedback_ended = set()   # the objects ended at least once (Mesa's EndedAnytime)
         # Tessellation (programs.py): vertices a patch, default levels set.
         self.patch_vertices = 3
         self.patch_levels = {}

@@ -518,8 +518,8 @@ class DrawCalls:
         if d.get("instancecount", d.get("primcount", 1)) == 0 or d["count"] == 0:
             return   # no instance or no vertex: Mesa draws nothing, with or without a vertex shader
         if not self.vertex_program():
-            if self.core:
-                return   # no vertex shader in a core profile: nothing is drawn (Mesa)
+            if self.core or self.es2:
+                return   # no vertex shader in a core profile or OpenGL ES 2 and later: nothing is drawn (Mesa)
             fail_call(no, f"{name} without a vertex shader is not emulated")
         self.shader_draw(no, name, d)
 
@@ -707,8 +707,8 @@ class DrawCalls:
             return   # GL_INVALID_VALUE
         if self.vertex_program():
             return self.shader_draw(no, name, d)
-        if self.core:
-            return   # no vertex shader in a core profile: nothing is drawn (Mesa)
+        if self.core or self.es2:
+            return   # no vertex shader in a core profile or OpenGL ES 2 and later: nothing is drawn (Mesa)
         mode, first, count = enum_arg(d["mode"], no, f"{name}: the mode"), d.get("first", 0), d["count"]
         if mode not in PRIM_MODES:
             return   # GL_INVALID_ENUM: no vertex is read
@@ -726,8 +726,8 @@ class DrawCalls:
             return   # GL_INVALID_VALUE
         if self.vertex_program():
             return self.shader_draw(no, name, d)
-        if self.core:
-            return   # no vertex shader in a core profile: nothing is drawn (Mesa)
+        if self.core or self.es2:
+            return   # no vertex shader in a core profile or OpenGL ES 2 and later: nothing is drawn (Mesa)
         mode, count, type_, indices = d["mode"], d["count"], d.get("type"), d.get("indices")
         if enum_arg(mode, no, f"{name}: the mode") not in PRIM_MODES:
             return   # GL_INVALID_ENUM: no index or vertex is read

@@ -22,11 +22,15 @@ deleted buffer from a binding point, while the bound object is active; and
 a draw whose primitives are not of the kind begun (the kind Mesa links for
 a geometry shader's output, or tessellation's, when there is one), or of no
 whole primitive, draws and records nothing."""
-from ...cli import I64, U32, integer
+from ...cli import I32, I64, U32, integer
 from ..errors import checked, fail_call, printable
 from ..gl_tables import base_name
 from . import enum_arg
 from .buffers import FEEDBACK_TARGET as TARGET, binding_ignored
+from .draws import PRIM_MODES
+
+
+MAX_VERTEX_STREAMS = 4   # (Mesa's)
 
 
 class FeedbackObject:
@@ -149,6 +153,7 @@ class FeedbackCalls:
             if v == self.s.feedback[0]:
                 self.h_bind_feedback(no, name, a, [("target", "GL_TRANSFORM_FEEDBACK"), ("id", 0)])
             self.s.feedback_objects.pop(v, None)
+            self.s.feedback_ended.discard(v)
 
     def h_feedback_buffer(self, no, name, a, args):
         """glTransformFeedbackBufferBase/Range (GL 4.5): a binding point of
@@ -187,6 +192,7 @@ class FeedbackCalls:
     def h_end_feedback(self, no, name, a, args):
         if self.s.feedback[1]:   # (else GL_INVALID_OPERATION)
             self.s.feedback = (self.s.feedback[0], False, False)
+            self.s.feedback_ended.add(self.s.feedback[0])
 
     def h_pause_feedback(self, no, name, a, args):
         obj, active, paused = self.s.feedback
@@ -198,7 +204,18 @@ class FeedbackCalls:
 
     def h_draw_feedback(self, no, name, a, args):
         """glDrawTransformFeedback*: as many vertices as a feedback object
-        recorded, which the capture does not hold."""
+        recorded, which the capture does not hold. One GL refuses (an
+        unknown mode, an object never generated or never ended, a stream
+        past Mesa's 4, a negative instance count) or of no instance draws
+        nothing, as in Mesa."""
+        d = dict(args)
+        mode = enum_arg(d.get("mode"), no, f"{name}: the mode")
+        v = self.feedback_object(no, name, d.get("id"))
+        stream = checked(no, integer, d.get("stream", 0), f"{name}: the stream", *U32)
+        instances = checked(no, integer, d.get("instancecount", 1), f"{name}: the instance count", *I32)
+        if mode not in PRIM_MODES or v is None or v not in self.s.feedback_ended or stream >= MAX_VERTEX_STREAMS \
+                or instances <= 0:
+            return   # GL_INVALID_ENUM, _VALUE or _OPERATION, or no instance: nothing is drawn
         self.shader_stores(no, name)
         if not self.active or self.s.rasterizer_discard or not self.renders():
             return

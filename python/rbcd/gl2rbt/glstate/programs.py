@@ -358,9 +358,12 @@ class ProgramCalls:
     def h_bind_attrib_location(self, no, name, a, args):
         d = dict(args)
         p = self.program(no, name, d.get("program"))
-        index, attr = d.get("index"), d.get("name")
-        if not isinstance(index, int) or not 0 <= index < 64 or not isinstance(attr, str):
-            fail_call(no, f"{name}: impossible index or name")
+        index = checked(no, integer, d.get("index"), f"{name}: the index", *U32)
+        attr = d.get("name")
+        if not isinstance(attr, str):
+            fail_call(no, f"{name}: the attribute name {printable(attr, 40)} is not text")
+        if index >= 64:
+            return   # GL_INVALID_VALUE past GL_MAX_VERTEX_ATTRIBS (below 64, Mesa's link answers the same)
         p.bindings[attr] = index
 
     def h_link_program(self, no, name, a, args):
