@@ -121,7 +121,6 @@ class GLState:
         # Shaders and programs (programs.py).
         self.shaders = {}
         self.programs = {}
-        self.deleted_programs = set()   # names glDeleteProgram freed (a call on one is GL_INVALID_VALUE)
         self.program = 0
         self.pipelines = {}    # program pipeline name -> Pipeline
         self.pipeline = 0      # the bound pipeline (draws run it when no program is in use)
@@ -224,7 +223,7 @@ class GLState:
 # a context's own (converter.Converter.h_make_current).
 SHARED_STATE = {
     "buffers", "buffer_versions", "buffer_written", "buffer_held", "buffer_names", "buffer_objects",
-    "immutable_buffers", "mappings", "gpu_buffers", "shaders", "programs", "deleted_programs", "sizes", "formats",
+    "immutable_buffers", "mappings", "gpu_buffers", "shaders", "programs", "sizes", "formats",
     "depth_types",
     "multisampled", "renderbuffer_names", "deleted_images", "texture_targets", "texture_names", "sampler_names",
     "texture_buffers", "texture_images", "texture_calls", "samplers", "views", "reduced_texture_versions",

@@ -345,7 +345,6 @@ class ProgramCalls:
         if not isinstance(self.ret, int):
             fail_call(no, f"{name}: no program name recorded")
         self.s.programs[self.ret] = Program()
-        self.s.deleted_programs.discard(self.ret)
 
     def h_attach_shader(self, no, name, a, args):
         d = dict(args)
@@ -460,7 +459,6 @@ class ProgramCalls:
         v = a[0] if a else None
         if not isinstance(v, int) or isinstance(v, bool) or v not in self.s.programs:
             return   # 0 is ignored; an unknown name is GL_INVALID_VALUE
-        self.s.deleted_programs.add(v)
         if v == self.s.program or self.in_a_pipeline(v) or self.in_use_elsewhere(v):
             self.s.programs[v].deleted = True   # gone once no pipeline nor context uses it
         else:
